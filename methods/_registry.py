@@ -1,0 +1,130 @@
+"""The method registry: ids ``family.name`` mapped to functions with their metadata.
+
+Adding a method = one module with one function decorated by :func:`register`. Third-party
+packages register through the entry-point group ``fitbench.methods``: each entry point names a
+module (or object) whose import runs ``@register``.
+"""
+from __future__ import annotations
+
+import difflib
+import inspect
+import time
+import warnings
+from dataclasses import dataclass, field
+from importlib import metadata
+from typing import Callable
+
+from methods._errors import InvalidInputError, UnknownMethodError
+from methods._validation import validate_points
+
+ENTRY_POINT_GROUP = "fitbench.methods"
+KINDS = ("closed form", "iterative", "convex program")
+#: Minimum number of points a family's methods need (before a method's own stricter rule).
+FAMILY_MIN_POINTS = {"circle": 3, "ellipse": 5}
+
+_REGISTRY: dict[str, "MethodSpec"] = {}
+_plugins_loaded = False
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """A registered method and what a user needs to know about it."""
+
+    id: str
+    family: str
+    name: str
+    summary: str
+    reference: str
+    kind: str
+    defaults: dict
+    min_points: int
+    func: Callable = field(repr=False, compare=False)
+    module: str = ""
+
+    def __call__(self, points, **params):
+        return _run(self, points, params)
+
+
+def register(method_id: str, *, summary: str, reference: str, kind: str, min_points: int | None = None):
+    """Decorator registering ``func(points, **params)`` under ``method_id`` = ``family.name``.
+
+    Default parameters are read from the function's keyword defaults (one source of truth).
+    The decorated name becomes a callable that validates input, merges defaults, times the fit
+    and fills ``method``, ``params`` and ``runtime_s`` of the result.
+    """
+    family, dot, name = method_id.partition(".")
+    if not dot or not family or not name or "." in name:
+        raise ValueError(f"method id must be 'family.name', got {method_id!r}")
+    if kind not in KINDS:
+        raise ValueError(f"{method_id}: kind must be one of {KINDS}, got {kind!r}")
+    if not summary or not reference:
+        raise ValueError(f"{method_id}: a summary and a literature reference are required")
+
+    def decorate(func):
+        sig = inspect.signature(func)
+        defaults = {p.name: p.default for p in sig.parameters.values()
+                    if p.kind == p.KEYWORD_ONLY and p.default is not p.empty}
+        spec = MethodSpec(id=method_id, family=family, name=name, summary=summary, reference=reference,
+                          kind=kind, defaults=defaults,
+                          min_points=min_points or FAMILY_MIN_POINTS.get(family, 1),
+                          func=func, module=func.__module__)
+        existing = _REGISTRY.get(method_id)
+        if existing is not None and existing.module != spec.module:
+            raise ValueError(f"method id {method_id!r} is already registered by {existing.module}")
+        _REGISTRY[method_id] = spec
+        return spec
+
+    return decorate
+
+
+def _run(spec: MethodSpec, points, params: dict):
+    unknown = sorted(set(params) - set(spec.defaults))
+    if unknown:
+        accepted = ", ".join(spec.defaults) or "none"
+        raise InvalidInputError(f"{spec.id} has no parameter {', '.join(map(repr, unknown))}; its parameters are: {accepted}")
+    merged = {**spec.defaults, **params}
+    pts = validate_points(points, min_points=spec.min_points, method=spec.id)
+    t0 = time.perf_counter()
+    result = spec.func(pts, **merged)
+    result.runtime_s = time.perf_counter() - t0
+    result.method = spec.id
+    result.params = merged
+    return result
+
+
+def load_plugins() -> None:
+    """Import every entry point of the ``fitbench.methods`` group once (a broken plugin warns)."""
+    global _plugins_loaded
+    if _plugins_loaded:
+        return
+    _plugins_loaded = True
+    for ep in metadata.entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            ep.load()
+        except Exception as exc:  # a third-party bug must not take the built-in methods down
+            warnings.warn(f"fitbench plugin {ep.name!r} ({ep.value}) failed to load: {exc}", stacklevel=2)
+
+
+def get(method_id: str) -> MethodSpec:
+    """The :class:`MethodSpec` of ``method_id``; unknown ids raise with close suggestions."""
+    load_plugins()
+    try:
+        return _REGISTRY[method_id]
+    except KeyError:
+        text = str(method_id)
+        close = [m for m in _REGISTRY if m.startswith(text) or m.split(".", 1)[1].startswith(text)]
+        close += [m for m in difflib.get_close_matches(text, _REGISTRY, n=3, cutoff=0.5) if m not in close]
+        close = close[:3]
+        hint = f"; did you mean {' or '.join(close)}?" if close else "; 'python -m methods list' shows them all"
+        raise UnknownMethodError(f"unknown method id {method_id!r}{hint}") from None
+
+
+def list_methods(family: str | None = None) -> list[MethodSpec]:
+    """Registered methods, sorted by id, optionally of one family."""
+    load_plugins()
+    return [s for k, s in sorted(_REGISTRY.items()) if family is None or s.family == family]
+
+
+def fit(method_id: str, points, **params):
+    """Fit ``points`` with the registered method ``method_id`` and return its result object."""
+    return _run(get(method_id), points, params)

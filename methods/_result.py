@@ -1,0 +1,88 @@
+"""Result objects: one shape for every method of a family (named fields, never bare tuples)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+
+def _jsonable(value):
+    """Convert numpy scalars/arrays and non-finite floats to plain JSON values (NaN/inf -> None)."""
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    return value
+
+
+@dataclass(kw_only=True)
+class FitResult:
+    """Fields shared by every method's result (cf. scipy's ``OptimizeResult``).
+
+    ``form_error`` and ``residuals`` are defined per family; ``history`` holds the objective per
+    iteration of iterative methods in data units; ``extra`` holds method-specific diagnostics.
+    """
+
+    method: str = ""
+    form_error: float
+    residuals: np.ndarray
+    converged: bool
+    iterations: int | None = None
+    nfev: int | None = None
+    history: list = field(default_factory=list)
+    message: str = ""
+    runtime_s: float = float("nan")
+    params: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        """The JSON-ready dict the CLI prints (``residuals=False`` leaves the per-point array out)."""
+        out = {}
+        for f in fields(self):
+            if f.name == "residuals" and not residuals:
+                continue
+            out[f.name] = _jsonable(getattr(self, f.name))
+        return out
+
+
+@dataclass(kw_only=True)
+class CircleFit(FitResult):
+    """A fitted circle. ``residuals`` are signed radial deviations r_i - R; ``form_error`` is
+    max(r_i) - min(r_i) about ``center`` (the circularity about that centre)."""
+
+    center: tuple
+    radius: float
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        # Put the geometry first: it is what a reader looks for.
+        head = {k: d.pop(k) for k in ("method", "center", "radius", "form_error")}
+        return {**head, **d}
+
+
+def radial_distances(points: np.ndarray, center) -> np.ndarray:
+    """Distances r_i of the points from ``center`` (vectorised, overflow-safe)."""
+    return np.hypot(points[:, 0] - center[0], points[:, 1] - center[1])
+
+
+def circle_result(points: np.ndarray, center, radius: float, *, converged: bool, message: str,
+                  iterations=None, nfev=None, history=None, extra=None) -> CircleFit:
+    """Build a :class:`CircleFit`, computing residuals and form error from the data in data units."""
+    center = (float(center[0]), float(center[1]))
+    radius = float(radius)
+    r = radial_distances(points, center)
+    ok_geometry = all(map(math.isfinite, center)) and math.isfinite(radius)
+    form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
+    return CircleFit(center=center, radius=radius, form_error=form_error, residuals=r - radius,
+                     converged=bool(converged and ok_geometry), iterations=iterations, nfev=nfev,
+                     history=list(history or []), message=message, extra=dict(extra or {}))

@@ -1,0 +1,72 @@
+"""Shared input validation: every method's points pass through :func:`validate_points`."""
+from __future__ import annotations
+
+import numpy as np
+
+from methods._errors import InvalidInputError
+
+#: Singular-value ratio below which a point set counts as collinear (rounding level of float64).
+COLLINEAR_RTOL = 1e-12
+
+
+def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndarray:
+    """Return ``points`` as a C-contiguous float64 (N, 2) array or raise :class:`InvalidInputError`.
+
+    Refuses: wrong shape, NaN/inf, fewer than ``min_points`` points, all points identical,
+    all points on one straight line. O(N): a 2x2 scatter matrix decides identity and collinearity.
+    """
+    who = f"{method}: " if method else ""
+    try:
+        arr = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{who}points are not numeric ({exc}); pass an (N, 2) array of x, y") from None
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        hint = " (it looks transposed: pass points.T)" if arr.ndim == 2 and arr.shape[0] == 2 else ""
+        raise InvalidInputError(f"{who}points must be an (N, 2) array of x, y; got shape {arr.shape}{hint}")
+    n = arr.shape[0]
+    if n < min_points:
+        raise InvalidInputError(f"{who}needs at least {min_points} points, got {n}")
+    finite = np.isfinite(arr).all(axis=1)
+    if not finite.all():
+        bad = np.flatnonzero(~finite)
+        raise InvalidInputError(
+            f"{who}{bad.size} point(s) contain NaN or inf (first at index {bad[0]}); remove or repair them")
+    centred = arr - arr.mean(axis=0)
+    scatter = centred.T @ centred
+    eig = np.linalg.eigvalsh(scatter)  # ascending, >= 0 up to rounding
+    if eig[1] <= 0.0:
+        raise InvalidInputError(f"{who}all {n} points are identical; a curve needs points spread along it")
+    if eig[0] <= (COLLINEAR_RTOL ** 2) * eig[1]:
+        raise InvalidInputError(f"{who}all {n} points lie on one straight line; no circle or ellipse passes through them")
+    return np.ascontiguousarray(arr)
+
+
+def check_choice(name: str, value, choices, method: str = ""):
+    """Refuse a parameter value outside ``choices`` with a message listing them."""
+    if value not in choices:
+        raise InvalidInputError(f"{method}: parameter {name}={value!r} is not one of {', '.join(map(repr, choices))}")
+    return value
+
+
+def check_positive(name: str, value, method: str = "", allow_zero: bool = False):
+    """Refuse a non-numeric, non-finite or non-positive tolerance/count parameter."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{method}: parameter {name}={value!r} is not a number") from None
+    if not np.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise InvalidInputError(f"{method}: parameter {name}={value!r} must be a positive number")
+    return value
+
+
+def check_vector(name: str, value, length: int, method: str = "") -> np.ndarray | None:
+    """Parse an optional parameter vector (start point, simplex steps) of a given length."""
+    if value is None:
+        return None
+    try:
+        vec = np.asarray(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{method}: parameter {name}={value!r} is not a list of {length} numbers") from None
+    if vec.size != length or not np.isfinite(vec).all():
+        raise InvalidInputError(f"{method}: parameter {name} needs {length} finite numbers, got {value!r}")
+    return vec

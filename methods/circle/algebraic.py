@@ -1,0 +1,108 @@
+"""Algebraic circle fits: Kåsa, Pratt, Taubin and Hyper (closed form).
+
+The circle is written as A(x^2 + y^2) + Bx + Cy + D = 0 and the algebraic residuals are
+minimised under a normalisation constraint a^T N a = 1 (Chernov, *Circular and Linear
+Regression*, 2010, ch. 5-7). Pratt, Taubin and Hyper are generalised eigenproblems
+M a = eta N a with M = Z^T Z, Z = [z, x, y, 1]; they are solved stably from the SVD of Z
+(via its QR factor), never from the squared matrix M.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from methods._registry import register
+from methods._result import circle_result
+from methods.circle._frame import Frame, kasa_unit
+
+
+@register("circle.kasa", kind="closed form",
+          summary="Kåsa algebraic least squares: linear system of roundness-paper eq. 7",
+          reference="Pınar & Güllü, roundness paper, eq. 5-7; Kåsa, IEEE Trans. Instrum. Meas. 25 (1976) 8-14")
+def kasa(points):
+    """Minimise S_CA = sum((x_i - xc)^2 + (y_i - yc)^2 - R^2)^2 (circle/ellipse paper eq. 5) by
+    solving the linear least-squares system of roundness-paper eq. 7 for (xc, yc, w)."""
+    frame = Frame.of(points)
+    p = kasa_unit(frame.to_unit(points))
+    if not np.isfinite(p).all():
+        return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
+                             message="Kåsa system gives R^2 <= 0: no real circle fits these points")
+    center, radius = frame.circle_to_data(p)
+    return circle_result(points, center, radius, converged=True, message="closed-form solution")
+
+
+def _eigen_fit(u: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
+    """Solve min a^T Z^T Z a s.t. a^T N a = 1 (smallest positive eigenvalue of M a = eta N a).
+
+    With Z = Q R and R = U S V^T, put a = V S^-1 b: then K b = (1/eta) b with
+    K = S^-1 V^T N V S^-1 symmetric; the wanted a comes from the largest positive eigenvalue of K.
+    Exact data (S_min ~ 0) give a = V[:, -1] directly.
+    """
+    z = np.einsum("ij,ij->i", u, u)
+    Z = np.column_stack([z, u[:, 0], u[:, 1], np.ones(len(u))])
+    R = np.linalg.qr(Z, mode="r")
+    _, s, vt = np.linalg.svd(R)
+    v = vt.T
+    if s[-1] <= 8 * np.finfo(float).eps * s[0]:
+        return v[:, -1], "points lie exactly on a circle (zero algebraic residual)"
+    K = (v.T @ constraint @ v) / np.outer(s, s)
+    mu, b = np.linalg.eigh(K)
+    j = int(np.argmax(mu))
+    if not mu[j] > 0:
+        return np.full(4, np.nan), "no positive generalised eigenvalue: the constraint admits no circle"
+    return v @ (b[:, j] / s), "closed-form solution (generalised eigenvector)"
+
+
+def _circle_from_conic(points, frame: Frame, a: np.ndarray, message: str):
+    A, B, C, D = a
+    disc = B * B + C * C - 4 * A * D
+    if not np.isfinite(a).all() or abs(A) <= 1e-14 * np.sqrt(disc if disc > 0 else 1.0):
+        return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
+                             message=message if not np.isfinite(a).all()
+                             else "best algebraic fit is a straight line (A = 0): the radius is unbounded")
+    if disc <= 0:
+        return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
+                             message="algebraic solution has B^2 + C^2 - 4AD <= 0: no real circle")
+    p = np.array([-B / (2 * A), -C / (2 * A), np.sqrt(disc) / (2 * abs(A))])
+    center, radius = frame.circle_to_data(p)
+    return circle_result(points, center, radius, converged=True, message=message,
+                         extra={"algebraic_parameters_unit_frame": [float(x) for x in a]})
+
+
+def _constraint(kind: str, zbar: float) -> np.ndarray:
+    pratt = np.array([[0, 0, 0, -2], [0, 1, 0, 0], [0, 0, 1, 0], [-2, 0, 0, 0]], dtype=float)
+    taubin = np.diag([4 * zbar, 1.0, 1.0, 0.0])  # data centred: the A*B and A*C terms vanish
+    return {"pratt": pratt, "taubin": taubin, "hyper": 2 * taubin - pratt}[kind]
+
+
+def _constrained_fit(points, kind: str):
+    frame = Frame.of(points)
+    u = frame.to_unit(points)
+    zbar = float(np.mean(np.einsum("ij,ij->i", u, u)))
+    a, message = _eigen_fit(u, _constraint(kind, zbar))
+    return _circle_from_conic(points, frame, a, message)
+
+
+@register("circle.pratt", kind="closed form",
+          summary="Pratt algebraic fit: constraint B^2 + C^2 - 4AD = 1",
+          reference="Pratt, Computer Graphics 21(4) (1987) 145-152; Chernov (2010) sec. 5.5")
+def pratt(points):
+    """Minimise sum (A z_i + B x_i + C y_i + D)^2 subject to B^2 + C^2 - 4AD = 1 (Pratt 1987)."""
+    return _constrained_fit(points, "pratt")
+
+
+@register("circle.taubin", kind="closed form",
+          summary="Taubin algebraic fit: residuals normalised by the mean squared gradient",
+          reference="Taubin, IEEE Trans. PAMI 13 (1991) 1115-1138; Chernov (2010) sec. 5.9")
+def taubin(points):
+    """Minimise sum F_i^2 / mean |grad F_i|^2 for F = A z + B x + C y + D (Taubin 1991), i.e.
+    the constraint 4 A^2 mean(z) + 4AB mean(x) + 4AC mean(y) + B^2 + C^2 = 1."""
+    return _constrained_fit(points, "taubin")
+
+
+@register("circle.hyper", kind="closed form",
+          summary="Hyper (hyperaccurate) algebraic fit: constraint 2 N_Taubin - N_Pratt",
+          reference="Al-Sharadqah & Chernov, Electron. J. Stat. 3 (2009) 886-911, sec. 7")
+def hyper(points):
+    """Algebraic fit with the constraint matrix N_H = 2 N_T - N_P that removes the essential
+    second-order bias (Al-Sharadqah & Chernov 2009); smallest positive eigenvalue of M a = eta N_H a."""
+    return _constrained_fit(points, "hyper")

@@ -1,0 +1,101 @@
+"""Program FCG of the circle/ellipse paper: geometric circle fit by the Nelder–Mead simplex method."""
+from __future__ import annotations
+
+import nlopt
+import numpy as np
+from scipy.optimize import minimize
+
+from methods._errors import InvalidInputError
+from methods._registry import register
+from methods._result import circle_result
+from methods._validation import check_choice, check_positive, check_vector
+from methods.circle._frame import Frame, geometric_residuals, kasa_unit
+
+BACKENDS = ("scipy", "nlopt")
+
+
+def initial_simplex(first_vertex: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    """Vertices s1 and s1 + lambda_j e_j, j = 1..n (the paper's simplex from s1S and lambda, table 2)."""
+    return np.vstack([first_vertex, first_vertex + np.diag(steps)])
+
+
+@register("circle.nelder_mead", kind="iterative",
+          summary="FCG: geometric sum of squares (eq. 9) by Nelder–Mead, simplex from s1S and lambda",
+          reference="Glavonjić, circle/ellipse paper, eq. 8-9 (program FCG, table 2); Nelder & Mead, Comput. J. 7 (1965) 308-313")
+def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-13, fatol=1e-30, max_fev=20000):
+    """Minimise S_CG = sum (sqrt((x_i - xc)^2 + (y_i - yc)^2) - R)^2 (eq. 8-9) with Nelder–Mead.
+
+    The initial simplex is the first vertex s1S = ``start`` = (xc, yc, R) and s1S + lambda_j e_j
+    with ``step`` = lambda (table 2: s1S = (0, 0, 299), lambda = (0.001, 0.001, 0.001) mm), both in
+    data units. Defaults: start = Kåsa's algebraic circle, lambda = 1e-3 x the RMS radius of the data.
+    ``backend`` is ``"scipy"`` (scipy.optimize, ``iterations`` = simplex iterations) or ``"nlopt"``
+    (NLopt's LN_NELDERMEAD with the same simplex; NLopt does not count iterations, so
+    ``iterations`` is None and ``history`` is the best objective after each evaluation).
+    Stops when the simplex is smaller than ``xatol`` and its values differ by at most ``fatol``,
+    both in the unit frame (data centred, RMS radius 1); the paper's epsilon was 1e-9.
+    """
+    name = "circle.nelder_mead"
+    check_choice("backend", backend, BACKENDS, name)
+    check_positive("xatol", xatol, name)
+    check_positive("fatol", fatol, name, allow_zero=True)
+    max_fev = int(check_positive("max_fev", max_fev, name))
+    s1 = check_vector("start", start, 3, name)
+    lam = check_vector("step", step, 3, name)
+    if lam is not None and np.any(lam == 0):
+        raise InvalidInputError(f"{name}: every simplex step lambda_j must be non-zero, got {step!r}")
+    frame = Frame.of(points)
+    u = frame.to_unit(points)
+    x0 = kasa_unit(u) if s1 is None else frame.circle_to_unit(s1)
+    if not np.isfinite(x0).all():
+        x0 = np.array([0.0, 0.0, 1.0])
+    lam_unit = np.full(3, 1e-3) if lam is None else lam / frame.scale
+
+    def objective(p):
+        d = geometric_residuals(u, p)
+        return float(d @ d)
+
+    scale2 = frame.scale ** 2
+    if backend == "scipy":
+        history = []
+
+        def callback(intermediate_result):
+            history.append(float(intermediate_result.fun) * scale2)
+
+        res = minimize(objective, x0, method="Nelder-Mead", callback=callback,
+                       options={"initial_simplex": initial_simplex(x0, lam_unit), "xatol": xatol,
+                                "fatol": fatol, "maxfev": max_fev, "maxiter": max_fev})
+        center, radius = frame.circle_to_data(res.x)
+        return circle_result(points, center, radius, converged=bool(res.success), message=str(res.message),
+                             iterations=int(res.nit), nfev=int(res.nfev), history=history)
+
+    best = {"f": np.inf, "x": x0.copy()}
+    history = []
+
+    def nl_objective(p, grad):
+        f = objective(p)
+        if f < best["f"]:
+            best["f"], best["x"] = f, np.array(p, dtype=float)
+        history.append(best["f"] * scale2)
+        return f
+
+    opt = nlopt.opt(nlopt.LN_NELDERMEAD, 3)
+    opt.set_min_objective(nl_objective)
+    opt.set_initial_step(lam_unit)
+    opt.set_xtol_abs(xatol)
+    opt.set_ftol_abs(fatol if fatol > 0 else 0.0)
+    opt.set_maxeval(max_fev)
+    try:
+        xopt = opt.optimize(x0)
+        code = opt.last_optimize_result()
+        messages = {nlopt.SUCCESS: "success", nlopt.STOPVAL_REACHED: "stopval reached",
+                    nlopt.FTOL_REACHED: "ftol reached", nlopt.XTOL_REACHED: "xtol reached",
+                    nlopt.MAXEVAL_REACHED: "maximum number of evaluations reached",
+                    nlopt.MAXTIME_REACHED: "maximum time reached"}
+        converged = code in (nlopt.SUCCESS, nlopt.FTOL_REACHED, nlopt.XTOL_REACHED)
+        message = f"nlopt: {messages.get(code, f'result code {code}')}"
+    except (nlopt.RoundoffLimited, RuntimeError, ValueError) as exc:
+        xopt = best["x"]  # report where it stopped; converged=False says it is not an optimum
+        converged, message = False, f"nlopt failed: {type(exc).__name__}: {exc}"
+    center, radius = frame.circle_to_data(xopt)
+    return circle_result(points, center, radius, converged=converged, message=message,
+                         iterations=None, nfev=len(history), history=history)

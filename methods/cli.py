@@ -1,0 +1,146 @@
+"""Command line: ``python -m methods list`` and ``python -m methods fit METHOD_ID FILE``.
+
+Bad input ends with one line on stderr and exit status 2, never a traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+import methods
+from methods._errors import InvalidInputError
+
+EXIT_BAD_INPUT = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2 (argparse prints usage over several lines)
+        raise InvalidInputError(f"{message} (see 'python -m methods --help')")
+
+
+def parse_value(key: str, text: str, default, method_id: str):
+    """Coerce a ``--param KEY=VALUE`` string to the type of the parameter's default."""
+    def bad(kind):
+        return InvalidInputError(f"{method_id}: parameter {key}={text!r} is not {kind}")
+    if isinstance(default, bool):
+        low = text.strip().lower()
+        if low in ("1", "true", "yes", "on"):
+            return True
+        if low in ("0", "false", "no", "off"):
+            return False
+        raise bad("a boolean (true/false)")
+    if isinstance(default, int):
+        try:
+            return int(text)
+        except ValueError:
+            raise bad("an integer") from None
+    if isinstance(default, float):
+        try:
+            return float(text)
+        except ValueError:
+            raise bad("a number") from None
+    if isinstance(default, str):
+        return text
+    # default None or a sequence: a number, a list "0,0,299" or "[0,0,299]", or a word
+    stripped = text.strip()
+    if stripped.lower() in ("none", "null", ""):
+        return None
+    try:
+        value = json.loads(stripped if stripped.startswith("[") else f"[{stripped}]")
+    except json.JSONDecodeError:
+        return stripped
+    return value[0] if len(value) == 1 and not stripped.startswith("[") else value
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return "nan" if not math.isfinite(v) else f"{v:.10g}"
+    return str(v)
+
+
+def cmd_list(args) -> int:
+    specs = methods.list_methods(args.family)
+    if args.json:
+        print(json.dumps([{"id": s.id, "family": s.family, "kind": s.kind, "summary": s.summary,
+                           "reference": s.reference, "defaults": {k: _jsonable(v) for k, v in s.defaults.items()}}
+                          for s in specs], indent=1))
+        return 0
+    width = max((len(s.id) for s in specs), default=10)
+    for s in specs:
+        print(f"{s.id:<{width}}  {s.kind:<14}  {s.reference}")
+    return 0
+
+
+def _jsonable(v):
+    from methods._result import _jsonable as j
+    return j(v)
+
+
+def cmd_fit(args) -> int:
+    from datasets import points_from  # imported here: 'list' must work without pandas loaded
+
+    spec = methods.get(args.method)
+    params = {}
+    for item in args.param or []:
+        key, eq, text = item.partition("=")
+        key = key.strip()
+        if not eq or not key:
+            raise InvalidInputError(f"--param needs KEY=VALUE, got {item!r}")
+        if key not in spec.defaults:
+            raise InvalidInputError(f"{spec.id} has no parameter {key!r}; its parameters are: "
+                                    f"{', '.join(spec.defaults) or 'none'}")
+        params[key] = parse_value(key, text, spec.defaults[key], spec.id)
+    source, points = points_from(args.file)
+    result = spec(points, **params)
+    if args.json:
+        d = result.to_dict(residuals=not args.no_residuals)
+        d["source"] = source
+        d["n_points"] = int(np.asarray(points).shape[0])
+        print(json.dumps(d))
+        return 0
+    rows = [("method", result.method), ("data", f"{source} ({len(points)} points)")]
+    if hasattr(result, "center"):
+        rows += [("center x", _fmt(result.center[0])), ("center y", _fmt(result.center[1])),
+                 ("radius", _fmt(result.radius))]
+    rows += [("form error", _fmt(result.form_error)),
+             ("converged", f"{'yes' if result.converged else 'NO'} ({result.message})"),
+             ("iterations", _fmt(result.iterations)), ("evaluations", _fmt(result.nfev)),
+             ("runtime", f"{result.runtime_s * 1e3:.3f} ms"),
+             ("parameters", ", ".join(f"{k}={v!r}" for k, v in result.params.items()) or "-")]
+    for k, v in rows:
+        print(f"{k:<12} {v}")
+    return 0 if result.converged else 1
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="python -m methods", description="fitbench fitting methods")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    pl = sub.add_parser("list", help="one line per registered method: id, kind, reference")
+    pl.add_argument("--family", help="only this family (e.g. circle)")
+    pl.add_argument("--json", action="store_true", help="machine-readable listing with defaults")
+    pl.set_defaults(func=cmd_list)
+    pf = sub.add_parser("fit", help="fit a file or published data set with one method")
+    pf.add_argument("method", metavar="METHOD_ID")
+    pf.add_argument("file", metavar="FILE", help="a points file (x, y) or a published data set name")
+    pf.add_argument("--param", action="append", metavar="KEY=VALUE", help="method parameter (repeatable)")
+    pf.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    pf.add_argument("--no-residuals", action="store_true", help="leave the per-point residuals out of --json")
+    pf.set_defaults(func=cmd_fit)
+    return p
+
+
+def main(argv=None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+        return args.func(args)
+    except InvalidInputError as exc:
+        print(f"fitbench: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except BrokenPipeError:
+        return 0

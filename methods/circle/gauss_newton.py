@@ -9,6 +9,7 @@ from methods._validation import check_choice, check_positive
 from methods.circle._frame import Frame, kasa_unit
 
 STOPPING_CRITERIA = ("objective", "step", "gradient")
+EPS = np.finfo(float).eps
 
 
 @register("circle.gauss_newton", kind="iterative",
@@ -22,7 +23,8 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     The paper lists three stopping criteria; ``stop`` selects one, in the unit frame (data centred,
     RMS radius 1, so the tolerances are relative to the size of the data):
 
-    * ``"objective"`` — 1. the change of F is small: |F_{k-1} - F_k| <= ftol * F_{k-1};
+    * ``"objective"`` — 1. the change of F is small: |F_{k-1} - F_k| <= ftol * F_{k-1} + the
+      rounding noise of F (4 eps sqrt(N F) max r_i);
     * ``"step"`` — 2. the step is small: (Delta^T Delta)^(1/2) <= xtol (the paper's choice, default;
       the paper stops at 1e-4 mm, which is far from the optimum's precision; pass xtol to mimic it);
     * ``"gradient"`` — 3. g = J^T d is small: |g| / N <= gtol.
@@ -59,8 +61,10 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         if stop == "gradient" and np.linalg.norm(jtd) / n <= gtol:
             converged, message = True, f"|J^T d|/N <= gtol={gtol:g}"
             break
-        if stop == "objective" and f_prev is not None and abs(f_prev - f) <= ftol * f_prev + n * 1e-32:
-            converged, message = True, f"|F_(k-1) - F_k| <= ftol={ftol:g} * F_(k-1)"
+        # F is a sum of squared differences of O(1) numbers: its rounding noise is ~2 eps sqrt(N F) r_max
+        noise = 4.0 * EPS * np.sqrt(n * f) * r.max()
+        if stop == "objective" and f_prev is not None and abs(f_prev - f) <= ftol * f_prev + noise:
+            converged, message = True, f"|F_(k-1) - F_k| <= ftol={ftol:g} * F_(k-1) (+ rounding noise of F)"
             break
         try:
             delta = np.linalg.solve(jtj, -jtd)  # normal equations of J Delta = -d (eq. 12)

@@ -1,0 +1,69 @@
+"""The command line: human and JSON output, one-line errors with exit status 2."""
+import json
+import subprocess
+import sys
+
+import pytest
+
+from conftest import REPO
+
+
+def run(*args, cwd=REPO):
+    return subprocess.run([sys.executable, "-m", "methods", *args], capture_output=True, text=True, cwd=cwd)
+
+
+def test_list_one_line_per_method():
+    out = run("list")
+    assert out.returncode == 0
+    lines = out.stdout.strip().splitlines()
+    assert len(lines) >= 8
+    assert any(l.startswith("circle.gauss_newton") and "iterative" in l and "eq." in l for l in lines)
+
+
+def test_fit_published_set_json():
+    out = run("fit", "circle.gauss_newton", "roundness_set2", "--json")
+    assert out.returncode == 0, out.stderr
+    d = json.loads(out.stdout)
+    for key in ("method", "center", "radius", "form_error", "converged", "iterations", "nfev", "runtime_s"):
+        assert key in d
+    assert d["method"] == "circle.gauss_newton" and round(d["form_error"], 4) == 1.7487
+    assert len(d["residuals"]) == 20
+
+
+def test_fit_file_with_params_human_table(tmp_path):
+    f = tmp_path / "arc.csv"
+    f.write_text("x;y\n1;0\n0;1\n-1;0\n0;-1\n0,7071067811865476;0,7071067811865476\n")
+    out = run("fit", "circle.nelder_mead", str(f), "--param", "backend=nlopt", "--param", "start=0,0,2",
+              "--param", "step=0.1,0.1,0.1")
+    assert out.returncode == 0, out.stderr
+    assert "radius" in out.stdout and "backend='nlopt'" in out.stdout and "start=[0, 0, 2]" in out.stdout
+
+
+@pytest.mark.parametrize("args, match", [
+    (("fit", "circle.gauss_newtn", "roundness_set2"), "did you mean circle.gauss_newton"),
+    (("fit", "circle.kasa", "no_such_file.csv"), "no such file"),
+    (("fit", "circle.kasa", "roundness_set2", "--param", "nope=1"), "no parameter 'nope'"),
+    (("fit", "circle.gauss_newton", "roundness_set2", "--param", "max_iter=lots"), "not an integer"),
+    (("fit", "circle.kasa", "roundness_set2", "--param", "novalue"), "KEY=VALUE"),
+    (("frobnicate",), "invalid choice"),
+])
+def test_bad_input_one_line_exit_2(args, match):
+    out = run(*args)
+    assert out.returncode == 2
+    assert out.stdout == ""
+    err = out.stderr.strip().splitlines()
+    assert len(err) == 1 and match in err[0] and "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize("content, match", [
+    ("x,y\n0,0\n1,1\n", "at least 3 points"),
+    ("x,y\n0,0\n1,1\n2,2\n", "straight line"),
+    ("x,y\n1,1\n1,1\n1,1\n", "identical"),
+    ("x,y\n0,0\n1,inf\n2,0\n", "not a finite number"),
+    ("x,y\n0,0\n1,1;\n", "not a number"),
+])
+def test_bad_data_files(tmp_path, content, match):
+    f = tmp_path / "bad.csv"
+    f.write_text(content)
+    out = run("fit", "circle.gauss_newton", str(f))
+    assert out.returncode == 2 and match in out.stderr and "Traceback" not in out.stderr

@@ -71,8 +71,10 @@ class CircleFit(FitResult):
 
 
 def radial_distances(points: np.ndarray, center) -> np.ndarray:
-    """Distances r_i of the points from ``center`` (vectorised, overflow-safe)."""
-    return np.hypot(points[:, 0] - center[0], points[:, 1] - center[1])
+    """Distances r_i of the points from ``center`` (vectorised)."""
+    dx = points[:, 0] - center[0]
+    dy = points[:, 1] - center[1]
+    return np.sqrt(dx * dx + dy * dy)
 
 
 def circle_result(points: np.ndarray, center, radius: float, *, converged: bool, message: str,

@@ -13,7 +13,7 @@ def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndar
     """Return ``points`` as a C-contiguous float64 (N, 2) array or raise :class:`InvalidInputError`.
 
     Refuses: wrong shape, NaN/inf, fewer than ``min_points`` points, all points identical,
-    all points on one straight line. O(N): a 2x2 scatter matrix decides identity and collinearity.
+    all points on one straight line. O(N): the eigenvalues of the 2x2 scatter matrix decide identity and collinearity.
     """
     who = f"{method}: " if method else ""
     try:
@@ -26,17 +26,19 @@ def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndar
     n = arr.shape[0]
     if n < min_points:
         raise InvalidInputError(f"{who}needs at least {min_points} points, got {n}")
-    finite = np.isfinite(arr).all(axis=1)
-    if not finite.all():
-        bad = np.flatnonzero(~finite)
+    if not np.isfinite(arr).all():
+        bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
         raise InvalidInputError(
             f"{who}{bad.size} point(s) contain NaN or inf (first at index {bad[0]}); remove or repair them")
-    centred = arr - arr.mean(axis=0)
-    scatter = centred.T @ centred
-    eig = np.linalg.eigvalsh(scatter)  # ascending, >= 0 up to rounding
-    if eig[1] <= 0.0:
+    x, y = arr[:, 0], arr[:, 1]
+    dx, dy = x - x.mean(), y - y.mean()
+    sxx, syy, sxy = float(dx @ dx), float(dy @ dy), float(dx @ dy)
+    # eigenvalues of the 2x2 scatter matrix in closed form (largest first)
+    half_trace, root = 0.5 * (sxx + syy), float(np.hypot(0.5 * (sxx - syy), sxy))
+    big, small = half_trace + root, max(sxx * syy - sxy * sxy, 0.0) / max(half_trace + root, np.finfo(float).tiny)
+    if big <= 0.0:
         raise InvalidInputError(f"{who}all {n} points are identical; a curve needs points spread along it")
-    if eig[0] <= (COLLINEAR_RTOL ** 2) * eig[1]:
+    if small <= (COLLINEAR_RTOL ** 2) * big:
         raise InvalidInputError(f"{who}all {n} points lie on one straight line; no circle or ellipse passes through them")
     return np.ascontiguousarray(arr)
 

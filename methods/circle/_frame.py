@@ -2,7 +2,8 @@
 
 Every fit works on ``(P - shift) / scale`` with ``shift`` the centroid and ``scale`` the RMS
 distance from it, so that a 299 mm circle centred at (1200, 650) mm, or 10^6 mm away, is as well
-conditioned as the unit circle. Results are mapped back to data units.
+conditioned as the unit circle. Results are mapped back to data units. The unit-frame coordinates
+are kept as two contiguous 1-D arrays ``x``, ``y`` (strided (N, 2) columns are several times slower).
 """
 from __future__ import annotations
 
@@ -15,13 +16,18 @@ import numpy as np
 class Frame:
     shift: np.ndarray
     scale: float
+    x: np.ndarray
+    y: np.ndarray
 
     @classmethod
     def of(cls, points: np.ndarray) -> "Frame":
-        shift = points.mean(axis=0)
-        centred = points - shift
-        scale = float(np.sqrt(np.mean(np.einsum("ij,ij->i", centred, centred))))
-        return cls(shift=shift, scale=scale)
+        x0, y0 = points[:, 0], points[:, 1]
+        mx, my = x0.mean(), y0.mean()
+        x, y = x0 - mx, y0 - my
+        scale = float(np.sqrt((x @ x + y @ y) / len(x)))
+        x /= scale
+        y /= scale
+        return cls(shift=np.array([mx, my]), scale=scale, x=x, y=y)
 
     def to_unit(self, points: np.ndarray) -> np.ndarray:
         return (points - self.shift) / self.scale
@@ -41,13 +47,25 @@ def geometric_residuals(u: np.ndarray, p) -> np.ndarray:
     return np.hypot(u[:, 0] - p[0], u[:, 1] - p[1]) - p[2]
 
 
-def kasa_unit(u: np.ndarray) -> np.ndarray:
+def kasa_xy(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Kåsa's algebraic fit in the unit frame: least squares of the linear system of eq. 7
-    (roundness paper) [2x 2y -1][xc yc w]^T = x^2 + y^2, with w = xc^2 + yc^2 - R^2 (eq. 6)."""
-    k = np.empty((u.shape[0], 3))
-    k[:, :2] = 2.0 * u
-    k[:, 2] = -1.0
-    l = np.einsum("ij,ij->i", u, u)
-    (xc, yc, w), *_ = np.linalg.lstsq(k, l, rcond=None)
+    (roundness paper) [2x 2y -1][xc yc w]^T = x^2 + y^2, with w = xc^2 + yc^2 - R^2 (eq. 6).
+
+    Solved through the R factor of the QR decomposition of [K | L] (as accurate as lstsq on K)."""
+    aug = np.empty((len(x), 4))
+    aug[:, 0] = 2.0 * x
+    aug[:, 1] = 2.0 * y
+    aug[:, 2] = -1.0
+    aug[:, 3] = x * x + y * y
+    r = np.linalg.qr(aug, mode="r")
+    try:
+        xc, yc, w = np.linalg.solve(r[:3, :3], r[:3, 3])
+    except np.linalg.LinAlgError:
+        return np.full(3, np.nan)
     r2 = xc * xc + yc * yc - w
     return np.array([xc, yc, np.sqrt(r2) if r2 > 0 else np.nan])
+
+
+def kasa_unit(u: np.ndarray) -> np.ndarray:
+    """:func:`kasa_xy` for an (N, 2) unit-frame array."""
+    return kasa_xy(np.ascontiguousarray(u[:, 0]), np.ascontiguousarray(u[:, 1]))

@@ -12,7 +12,7 @@ import numpy as np
 
 from methods._registry import register
 from methods._result import circle_result
-from methods.circle._frame import Frame, kasa_unit
+from methods.circle._frame import Frame, kasa_xy
 
 
 @register("circle.kasa", kind="closed form",
@@ -22,7 +22,7 @@ def kasa(points):
     """Minimise S_CA = sum((x_i - xc)^2 + (y_i - yc)^2 - R^2)^2 (circle/ellipse paper eq. 5) by
     solving the linear least-squares system of roundness-paper eq. 7 for (xc, yc, w)."""
     frame = Frame.of(points)
-    p = kasa_unit(frame.to_unit(points))
+    p = kasa_xy(frame.x, frame.y)
     if not np.isfinite(p).all():
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="Kåsa system gives R^2 <= 0: no real circle fits these points")
@@ -30,15 +30,18 @@ def kasa(points):
     return circle_result(points, center, radius, converged=True, message="closed-form solution")
 
 
-def _eigen_fit(u: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
+def _eigen_fit(x: np.ndarray, y: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
     """Solve min a^T Z^T Z a s.t. a^T N a = 1 (smallest positive eigenvalue of M a = eta N a).
 
     With Z = Q R and R = U S V^T, put a = V S^-1 b: then K b = (1/eta) b with
     K = S^-1 V^T N V S^-1 symmetric; the wanted a comes from the largest positive eigenvalue of K.
     Exact data (S_min ~ 0) give a = V[:, -1] directly.
     """
-    z = np.einsum("ij,ij->i", u, u)
-    Z = np.column_stack([z, u[:, 0], u[:, 1], np.ones(len(u))])
+    Z = np.empty((len(x), 4))
+    Z[:, 0] = x * x + y * y
+    Z[:, 1] = x
+    Z[:, 2] = y
+    Z[:, 3] = 1.0
     R = np.linalg.qr(Z, mode="r")
     _, s, vt = np.linalg.svd(R)
     v = vt.T
@@ -76,9 +79,8 @@ def _constraint(kind: str, zbar: float) -> np.ndarray:
 
 def _constrained_fit(points, kind: str):
     frame = Frame.of(points)
-    u = frame.to_unit(points)
-    zbar = float(np.mean(np.einsum("ij,ij->i", u, u)))
-    a, message = _eigen_fit(u, _constraint(kind, zbar))
+    zbar = float(frame.x @ frame.x + frame.y @ frame.y) / len(frame.x)
+    a, message = _eigen_fit(frame.x, frame.y, _constraint(kind, zbar))
     return _circle_from_conic(points, frame, a, message)
 
 

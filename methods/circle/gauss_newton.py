@@ -6,7 +6,7 @@ import numpy as np
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive
-from methods.circle._frame import Frame, kasa_unit
+from methods.circle._frame import Frame, kasa_xy
 
 STOPPING_CRITERIA = ("objective", "step", "gradient")
 EPS = np.finfo(float).eps
@@ -35,10 +35,9 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     frame = Frame.of(points)
-    u = frame.to_unit(points)
-    x, y = u[:, 0], u[:, 1]
-    n = len(u)
-    p = kasa_unit(u)
+    x, y = frame.x, frame.y
+    n = len(x)
+    p = kasa_xy(x, y)
     if not np.isfinite(p).all():  # degenerate algebraic start: fall back to the centroid circle start
         p = np.array([0.0, 0.0, 1.0])
     history, steps = [], []
@@ -47,14 +46,15 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     it = 0
     for it in range(1, max_iter + 1):
         dx, dy = x - p[0], y - p[1]
-        r = np.hypot(dx, dy)
-        if np.any(r == 0):
+        r = np.sqrt(dx * dx + dy * dy)
+        if not r.all():
             message = "an iterate's centre coincides with a data point (Jacobian eq. 9 undefined)"
             break
         d = r - p[2]
         f = float(d @ d)
         history.append(f)
-        c, s = dx / r, dy / r  # J = [-c, -s, -1]
+        inv_r = 1.0 / r
+        c, s = dx * inv_r, dy * inv_r  # J = [-c, -s, -1]
         sc, ss, sd = c.sum(), s.sum(), d.sum()
         jtj = np.array([[c @ c, c @ s, sc], [c @ s, s @ s, ss], [sc, ss, n]])
         jtd = -np.array([c @ d, s @ d, sd])

@@ -7,7 +7,7 @@ from scipy.optimize import least_squares
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_positive
-from methods.circle._frame import Frame, kasa_unit
+from methods.circle._frame import Frame, kasa_xy
 
 
 @register("circle.levenberg_marquardt", kind="iterative",
@@ -22,9 +22,8 @@ def levenberg_marquardt(points, *, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=
         check_positive(key, val, name)
     max_nfev = int(check_positive("max_nfev", max_nfev, name))
     frame = Frame.of(points)
-    u = frame.to_unit(points)
-    x, y = u[:, 0], u[:, 1]
-    p0 = kasa_unit(u)
+    x, y = frame.x, frame.y
+    p0 = kasa_xy(x, y)
     if not np.isfinite(p0).all():
         p0 = np.array([0.0, 0.0, 1.0])
     history = []

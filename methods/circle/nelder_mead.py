@@ -9,7 +9,7 @@ from methods._errors import InvalidInputError
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive, check_vector
-from methods.circle._frame import Frame, geometric_residuals, kasa_unit
+from methods.circle._frame import Frame, kasa_xy
 
 BACKENDS = ("scipy", "nlopt")
 
@@ -47,14 +47,15 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-13, 
     if lam is not None and np.any(lam == 0):
         raise InvalidInputError(f"{name}: every simplex step lambda_j must be non-zero, got {step!r}")
     frame = Frame.of(points)
-    u = frame.to_unit(points)
-    x0 = kasa_unit(u) if s1 is None else frame.circle_to_unit(s1)
+    x, y = frame.x, frame.y
+    x0 = kasa_xy(x, y) if s1 is None else frame.circle_to_unit(s1)
     if not np.isfinite(x0).all():
         x0 = np.array([0.0, 0.0, 1.0])
     lam_unit = np.full(3, 1e-3) if lam is None else lam / frame.scale
 
     def objective(p):
-        d = geometric_residuals(u, p)
+        dx, dy = x - p[0], y - p[1]
+        d = np.sqrt(dx * dx + dy * dy) - p[2]
         return float(d @ d)
 
     scale2 = frame.scale ** 2

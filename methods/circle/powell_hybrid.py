@@ -29,9 +29,8 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
     maxfev = int(check_positive("maxfev", maxfev, name))
     p_start = check_vector("start", start, 3, name)
     frame = Frame.of(points)
-    u = frame.to_unit(points)
-    x, y = u[:, 0], u[:, 1]
-    n = len(u)
+    x, y = frame.x, frame.y
+    n = len(x)
     p0 = np.array([0.0, 0.0, 1.0]) if p_start is None else frame.circle_to_unit(p_start)
     history = []
 

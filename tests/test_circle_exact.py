@@ -66,3 +66,14 @@ def test_gauss_newton_reports_non_convergence():
     pts = circle_points((0, 0), 1, 50, arc=(0, 0.5), noise=0.05, rng=np.random.default_rng(3))
     res = methods.fit("circle.gauss_newton", pts, max_iter=1)
     assert not res.converged and "max_iter=1" in res.message
+
+
+@pytest.mark.parametrize("method_id", ALL)
+@pytest.mark.parametrize("n", [3, 4])
+def test_minimal_point_sets_give_the_circle_through_them(method_id, n):
+    """Three points (and four concyclic ones) determine the circle: every method must return it."""
+    pts = circle_points((1200.0, 650.0), 299.0, n, arc=(0.1, 4.0), endpoint=True)
+    res = methods.fit(method_id, pts)
+    assert res.converged, res.message
+    assert np.abs(np.array(res.center) - (1200.0, 650.0)).max() <= 1e-7
+    assert abs(res.radius - 299.0) <= 1e-7

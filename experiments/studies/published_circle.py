@@ -21,6 +21,16 @@ def _status(res) -> str:
     return "ok" if res.converged else "not converged"
 
 
+def safe_fit(method_id: str, points, params: dict):
+    """Run one fit; a method that raises becomes (None, 'error: ...') so one crash never ends a study."""
+    try:
+        return methods.fit(method_id, points, **params), None
+    except methods.InvalidInputError as exc:
+        return None, f"skipped: {exc}"
+    except Exception as exc:  # a bug in a method (or plugin): record it, go on with the others
+        return None, f"error: {type(exc).__name__}: {exc}"
+
+
 def method_runs(cfg: dict) -> list[tuple[str, dict]]:
     runs = [(mid, {}) for mid in cfg["_methods"]]
     runs += [(v["method"], dict(v.get("params", {}))) for v in cfg.get("variants", [])]
@@ -52,7 +62,13 @@ def run(cfg: dict, log=print) -> tuple[list[dict], dict]:
         log(f"  {'method':<28} {'params':<18} {'circularity':>12} {'minus LSQ':>11} {'centre x':>13} "
             f"{'centre y':>13} {'radius':>12} {'status':<8} {'it':>4} {'median time':>11}")
         for mid, params in method_runs(cfg):
-            res = methods.fit(mid, ds.points, **params)
+            res, problem = safe_fit(mid, ds.points, params)
+            if res is None:
+                rows.append({"study": cfg["name"], "dataset": name, "variant": variant, "n_points": len(ds.points),
+                             "method": mid, "params": json.dumps(params, sort_keys=True),
+                             "status": problem.split(":", 1)[0], "message": problem})
+                log(f"  {mid:<28} {problem}")
+                continue
             t = time_call(lambda: methods.fit(mid, ds.points, **params),
                           min_time_s=timing.get("min_time_s", 0.02), rounds=timing.get("rounds", 5))
             diff = res.form_error - pub_lsq if pub_lsq is not None else None

@@ -58,6 +58,8 @@ def kasa_xy(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     aug[:, 2] = -1.0
     aug[:, 3] = x * x + y * y
     r = np.linalg.qr(aug, mode="r")
+    if r.shape[0] < 4:  # N = 3: pad with zero rows (R^T R = A^T A still holds)
+        r = np.vstack([r, np.zeros((4 - r.shape[0], 4))])
     try:
         xc, yc, w = np.linalg.solve(r[:3, :3], r[:3, 3])
     except np.linalg.LinAlgError:

@@ -43,6 +43,8 @@ def _eigen_fit(x: np.ndarray, y: np.ndarray, constraint: np.ndarray) -> tuple[np
     Z[:, 2] = y
     Z[:, 3] = 1.0
     R = np.linalg.qr(Z, mode="r")
+    if R.shape[0] < 4:  # N = 3: pad with zero rows (R^T R = Z^T Z still holds)
+        R = np.vstack([R, np.zeros((4 - R.shape[0], 4))])
     _, s, vt = np.linalg.svd(R)
     v = vt.T
     if s[-1] <= 8 * np.finfo(float).eps * s[0]:

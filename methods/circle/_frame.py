@@ -71,3 +71,26 @@ def kasa_xy(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 def kasa_unit(u: np.ndarray) -> np.ndarray:
     """:func:`kasa_xy` for an (N, 2) unit-frame array."""
     return kasa_xy(np.ascontiguousarray(u[:, 0]), np.ascontiguousarray(u[:, 1]))
+
+
+def geometric_normal_equations(x, y, p):
+    """Residuals and normal equations at p: (F, J^T J, J^T d, (dx, dy, r, d)) for d_i = r_i - R,
+    J rows [-(x_i - xc)/r_i, -(y_i - yc)/r_i, -1] (roundness paper eq. 10); None if a point is the centre."""
+    dx, dy = x - p[0], y - p[1]
+    r = np.sqrt(dx * dx + dy * dy)
+    if not r.all():
+        return None
+    d = r - p[2]
+    inv_r = 1.0 / r
+    c, s = dx * inv_r, dy * inv_r
+    sc, ss = c.sum(), s.sum()
+    jtj = np.array([[c @ c, c @ s, sc], [c @ s, s @ s, ss], [sc, ss, float(len(x))]])
+    jtd = -np.array([c @ d, s @ d, d.sum()])
+    return float(d @ d), jtj, jtd, (dx, dy, r, d)
+
+
+def algebraic_start(x, y) -> np.ndarray:
+    """Kåsa's circle as the start of an iterative geometric fit (the roundness paper's choice);
+    the unit circle about the centroid when Kåsa's system has no real circle."""
+    p = kasa_xy(x, y)
+    return p if np.isfinite(p).all() else np.array([0.0, 0.0, 1.0])

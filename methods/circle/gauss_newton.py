@@ -6,7 +6,7 @@ import numpy as np
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive
-from methods.circle._frame import Frame, kasa_xy
+from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations
 
 STOPPING_CRITERIA = ("objective", "step", "gradient")
 EPS = np.finfo(float).eps
@@ -37,27 +37,18 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     frame = Frame.of(points)
     x, y = frame.x, frame.y
     n = len(x)
-    p = kasa_xy(x, y)
-    if not np.isfinite(p).all():  # degenerate algebraic start: fall back to the centroid circle start
-        p = np.array([0.0, 0.0, 1.0])
+    p = algebraic_start(x, y)
     history, steps = [], []
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
     f_prev = None
     it = 0
     for it in range(1, max_iter + 1):
-        dx, dy = x - p[0], y - p[1]
-        r = np.sqrt(dx * dx + dy * dy)
-        if not r.all():
+        state = geometric_normal_equations(x, y, p)  # J of eq. 10, as J^T J and J^T d
+        if state is None:
             message = "an iterate's centre coincides with a data point (Jacobian eq. 9 undefined)"
             break
-        d = r - p[2]
-        f = float(d @ d)
+        f, jtj, jtd, (_, _, r, _) = state
         history.append(f)
-        inv_r = 1.0 / r
-        c, s = dx * inv_r, dy * inv_r  # J = [-c, -s, -1]
-        sc, ss, sd = c.sum(), s.sum(), d.sum()
-        jtj = np.array([[c @ c, c @ s, sc], [c @ s, s @ s, ss], [sc, ss, n]])
-        jtd = -np.array([c @ d, s @ d, sd])
         if stop == "gradient" and np.linalg.norm(jtd) / n <= gtol:
             converged, message = True, f"|J^T d|/N <= gtol={gtol:g}"
             break

@@ -6,23 +6,7 @@ import numpy as np
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_positive
-from methods.circle._frame import Frame, kasa_xy
-
-
-def _state(x, y, p):
-    """Residuals and normal equations at p: (F, J^T J, J^T d, (dx, dy, r, d)) for d_i = r_i - R,
-    J rows [-(x_i - xc)/r_i, -(y_i - yc)/r_i, -1] (roundness paper eq. 10); None if a point is the centre."""
-    dx, dy = x - p[0], y - p[1]
-    r = np.sqrt(dx * dx + dy * dy)
-    if not r.all():
-        return None
-    d = r - p[2]
-    inv_r = 1.0 / r
-    c, s = dx * inv_r, dy * inv_r
-    sc, ss = c.sum(), s.sum()
-    jtj = np.array([[c @ c, c @ s, sc], [c @ s, s @ s, ss], [sc, ss, float(len(x))]])
-    jtd = -np.array([c @ d, s @ d, d.sum()])
-    return float(d @ d), jtj, jtd, (dx, dy, r, d)
+from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations as _state
 
 
 def _reduction(arrays, h):
@@ -60,12 +44,10 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
     frame = Frame.of(points)
     x, y = frame.x, frame.y
     n = len(x)
-    p = kasa_xy(x, y)
-    if not np.isfinite(p).all():
-        p = np.array([0.0, 0.0, 1.0])
+    p = algebraic_start(x, y)
     state = _state(x, y, p)
     if state is None:
-        p = p + np.array([1e-6, 1e-6, 0.0])
+        p = p + np.array([1e-6, 1e-6, 0.0])  # start on a data point: nudge it off
         state = _state(x, y, p)
     f, jtj, jtd, arrays = state
     mu, nu = tau * float(np.max(np.diag(jtj))), 2.0

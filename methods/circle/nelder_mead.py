@@ -9,7 +9,7 @@ from methods._errors import InvalidInputError
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive, check_vector
-from methods.circle._frame import Frame, kasa_xy
+from methods.circle._frame import Frame, algebraic_start
 
 BACKENDS = ("scipy", "nlopt")
 
@@ -48,9 +48,7 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-13, 
         raise InvalidInputError(f"{name}: every simplex step lambda_j must be non-zero, got {step!r}")
     frame = Frame.of(points)
     x, y = frame.x, frame.y
-    x0 = kasa_xy(x, y) if s1 is None else frame.circle_to_unit(s1)
-    if not np.isfinite(x0).all():
-        x0 = np.array([0.0, 0.0, 1.0])
+    x0 = algebraic_start(x, y) if s1 is None else frame.circle_to_unit(s1)
     lam_unit = np.full(3, 1e-3) if lam is None else lam / frame.scale
 
     def objective(p):

@@ -88,3 +88,35 @@ def circle_result(points: np.ndarray, center, radius: float, *, converged: bool,
     return CircleFit(center=center, radius=radius, form_error=form_error, residuals=r - radius,
                      converged=bool(converged and ok_geometry), iterations=iterations, nfev=nfev,
                      history=list(history or []), message=message, extra=dict(extra or {}))
+
+
+@dataclass(kw_only=True)
+class ZoneFit(CircleFit):
+    """A circle with the zone of the points about its centre (minimum zone, MIC, MCC, Chebyshev).
+
+    ``inner_radius``/``outer_radius`` are the smallest/largest radial distance about ``center``;
+    ``form_error`` = outer - inner; ``contacts`` = {"outer": [...], "inner": [...]} are the indices
+    of the points on the circles that determine (and certify) the solution."""
+
+    inner_radius: float
+    outer_radius: float
+    contacts: dict
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        head = {k: d.pop(k) for k in ("method", "center", "radius", "inner_radius", "outer_radius",
+                                      "form_error", "contacts")}
+        return {**head, **d}
+
+
+def zone_result(points: np.ndarray, center, radius: float, contacts: dict, *, converged: bool, message: str,
+                iterations=None, nfev=None, history=None, extra=None) -> ZoneFit:
+    """Build a :class:`ZoneFit`; the zone radii come from all points about ``center`` (the final check)."""
+    base = circle_result(points, center, radius, converged=converged, message=message, iterations=iterations,
+                         nfev=nfev, history=history, extra=extra)
+    r = base.residuals + base.radius
+    ok = np.isfinite(r).all()
+    return ZoneFit(**{f.name: getattr(base, f.name) for f in fields(base)},
+                   inner_radius=float(r.min()) if ok else float("nan"),
+                   outer_radius=float(r.max()) if ok else float("nan"),
+                   contacts={k: [int(i) for i in v] for k, v in contacts.items()})

@@ -1,2 +1,3 @@
 """Circle family: importing this package registers its methods."""
-from methods.circle import algebraic, gauss_newton, levenberg_marquardt, nelder_mead, powell_hybrid  # noqa: F401
+from methods.circle import (algebraic, gauss_newton, levenberg_marquardt, minimum_zone,  # noqa: F401
+                            nelder_mead, powell_hybrid)

@@ -1,3 +1,3 @@
 """Circle family: importing this package registers its methods."""
-from methods.circle import (algebraic, gauss_newton, levenberg_marquardt, minimum_zone,  # noqa: F401
-                            nelder_mead, powell_hybrid)
+from methods.circle import (algebraic, chebyshev, extreme_circles, gauss_newton,  # noqa: F401
+                            levenberg_marquardt, minimum_zone, nelder_mead, powell_hybrid)

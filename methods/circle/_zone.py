@@ -137,3 +137,150 @@ def trust_rows(ck, delta, nvar):
         rows += [e, -e]
         b += [ck[j] + delta, delta - ck[j]]
     return rows, b
+
+
+#: candidate centres further than this from the solver's centre (unit frame) are discarded: the
+#: solver is accurate to ~1e-8, and far-away circumcentres of near-collinear points are spurious.
+CANDIDATE_RADIUS = 1e-3
+
+
+def zone_candidates(x, y, outer_c, inner_c, near):
+    """Closed-form centres of the minimum-zone contact configurations: 2 outer + 2 inner (the two
+    bisectors meet), 3 + 1 and 1 + 3 (circumcentres). Rows of ``configs``: 4 point indices and the
+    number of outer contacts."""
+    P = np.column_stack([x, y])
+    cands, configs = [], []
+    po, pi = pairs(outer_c), pairs(inner_c)
+    if len(po) and len(pi):
+        a = np.repeat(po, len(pi), axis=0)
+        b = np.tile(pi, (len(po), 1))
+        cands.append(bisector_centres(P[a[:, 0]], P[a[:, 1]], P[b[:, 0]], P[b[:, 1]]))
+        configs.append(np.column_stack([a, b, np.full(len(a), 2)]))
+    for tri, singles, n_outer in ((triples(outer_c), inner_c, 3), (triples(inner_c), outer_c, 1)):
+        if len(tri) and len(singles):
+            cc = bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]])
+            t = np.tile(tri, (len(singles), 1))
+            s = np.repeat(singles, len(tri))
+            cands.append(np.tile(cc, (len(singles), 1)))
+            rows = np.column_stack([t, s]) if n_outer == 3 else np.column_stack([s, t])
+            configs.append(np.column_stack([rows, np.full(len(t), n_outer)]))
+    return _near(np.vstack(cands), np.vstack(configs), near)
+
+
+def circle_candidates(x, y, idx, near, side: str):
+    """Closed-form centres of circles touching 2 points as a diameter (midpoints) or 3 points
+    (circumcentres), for MCC (side='outer') or MIC (side='inner'). Rows: 3 indices (-1 = none) and
+    the number of outer contacts (all or none)."""
+    P = np.column_stack([x, y])
+    pr, tr = pairs(idx), triples(idx)
+    C = [0.5 * (P[pr[:, 0]] + P[pr[:, 1]])] if len(pr) else []
+    rows = [np.column_stack([pr, np.full(len(pr), -1)])] if len(pr) else []
+    if len(tr):
+        C.append(bisector_centres(P[tr[:, 0]], P[tr[:, 1]], P[tr[:, 1]], P[tr[:, 2]]))
+        rows.append(tr)
+    rows = np.vstack(rows)
+    n_outer = np.where(rows[:, 2] >= 0, 3, 2) if side == "outer" else np.zeros(len(rows), dtype=np.intp)
+    return _near(np.vstack(C), np.column_stack([rows, n_outer]), near)
+
+
+def _near(C, configs, near):
+    keep = np.isfinite(C).all(axis=1) & (np.hypot(C[:, 0] - near[0], C[:, 1] - near[1]) <= CANDIDATE_RADIUS)
+    if not keep.any():  # nothing close: keep all finite candidates (the final check decides)
+        keep = np.isfinite(C).all(axis=1)
+    return C[keep], configs[keep]
+
+
+def candidate_radii(x, y, act, C):
+    """Distances (K, M) from K candidate centres to the M active points."""
+    dx = x[act][None, :] - C[:, 0:1]
+    dy = y[act][None, :] - C[:, 1:2]
+    return np.sqrt(dx * dx + dy * dy)
+
+
+def pick(C, configs, score, minimise: bool):
+    """Best candidate and its (outer, inner) contact index tuples."""
+    score = np.where(np.isfinite(score), score, np.inf if minimise else -np.inf)
+    best = int(np.argmin(score) if minimise else np.argmax(score))
+    row = configs[best]
+    width = row.size - 1
+    members = [int(i) for i in row[:width] if i >= 0]
+    n_outer = int(row[width])
+    if width == 3:  # single-sided (MIC / MCC)
+        return C[best], ((tuple(members), ()) if n_outer else ((), tuple(members)))
+    return C[best], (tuple(members[:n_outer]), tuple(members[n_outer:]))
+
+
+def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_rounds):
+    """The loop shared by the zone methods.
+
+    ``local_solve(out, inn, c) -> (c_approx, solves, solver_iterations, history)`` solves the convex
+    (sub)problem on the active points; ``exact(act, c_approx) -> (c, (outer, inner))`` gives the exact
+    centre from the contact configurations; every point is then checked in one vectorised pass
+    against the contacts' radii on the used ``sides`` ('outer', 'inner'); violators join the active
+    set. ``certify(c, outer, inner) -> (bool, message)`` checks optimality. Raises SolverFailure.
+    """
+    c = start
+    r_all = radii(x, y, c)
+    out = extremes(r_all, max(k, 4), True) if "outer" in sides else np.empty(0, dtype=np.intp)
+    inn = extremes(r_all, max(k, 4), False) if "inner" in sides else np.empty(0, dtype=np.intp)
+    stats = {"solves": 0, "solver_iterations": 0, "history": [], "rounds": 0}
+    for stats["rounds"] in range(1, max_rounds + 1):
+        ck, solves, iters, hist = local_solve(out, inn, c)
+        stats["solves"] += solves
+        stats["solver_iterations"] += iters
+        stats["history"] += hist
+        act = np.union1d(out, inn)
+        c, (oc, ic) = exact(act, ck)
+        r_all = radii(x, y, c)
+        grown = False
+        if "outer" in sides:
+            over = r_all - r_all[list(oc)].max() * (1 + CHECK_RTOL) - 1e-15
+            if (over > 0).any():
+                out, grown = add_violators(out, over, k), True
+        if "inner" in sides:
+            under = r_all[list(ic)].min() * (1 - CHECK_RTOL) - 1e-15 - r_all
+            if (under > 0).any():
+                inn, grown = add_violators(inn, under, k), True
+        if grown:
+            continue
+        ok, message = certify(c, oc, ic)
+        stats["active_points"] = int(np.union1d(out, inn).size)
+        return c, (oc, ic), ok, message, stats
+    stats["active_points"] = int(np.union1d(out, inn).size)
+    return c, ((), ()), False, f"active set not settled within max_rounds={max_rounds}", stats
+
+
+def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max_rounds, radius_rule):
+    """Run :func:`active_set_fit` and build the result in data units (SolverFailure -> converged=False)."""
+    from methods._result import zone_result  # local import: _result does not depend on this module
+
+    x, y = frame.x, frame.y
+    try:
+        c, (oc, ic), ok, message, stats = active_set_fit(x, y, start=start, local_solve=local_solve, exact=exact,
+                                                         certify=certify, sides=sides, k=k, max_rounds=max_rounds)
+    except SolverFailure as exc:
+        c, (oc, ic), ok, message = start, ((), ()), False, f"{exc}; no result is claimed"
+        stats = {"solves": None, "solver_iterations": None, "history": [], "rounds": None, "active_points": None}
+    center, _ = frame.circle_to_data(np.array([c[0], c[1], 1.0]))
+    r_data = radii(points[:, 0], points[:, 1], center)
+    radius = radius_rule(r_data, center)
+    return zone_result(points, center, radius, {"outer": sorted(oc), "inner": sorted(ic)}, converged=ok,
+                       message=message, iterations=stats["solves"], nfev=stats["solver_iterations"],
+                       history=[h * frame.scale for h in stats["history"]],
+                       extra={"certified": ok, "rounds": stats["rounds"], "active_points": stats["active_points"]})
+
+
+def certify_hulls(x, y, *, zero_tol=1e-13):
+    """Certificate factory: minimum zone (both sides) or MIC/MCC (one side against the origin)."""
+    def certify(c, oc, ic):
+        if oc and ic:
+            ok = hulls_meet(directions(x, y, list(oc), c), directions(x, y, list(ic), c))
+            return ok, ("optimal: contacts alternate (conv(outer) meets conv(inner) directions)" if ok else
+                        "stationary zone whose contacts do not satisfy the alternation condition")
+        side = list(oc or ic)
+        if len(side) < 2:
+            return False, "fewer than two contacts: no optimality certificate"
+        ok = hulls_meet(directions(x, y, side, c), np.zeros((1, 2)))
+        return ok, ("optimal: the centre lies in the convex hull of the contacts" if ok else
+                    "the contacts do not surround the centre: not an optimum")
+    return certify

@@ -1,0 +1,92 @@
+"""Minimum circumscribed (MCC) and maximum inscribed (MIC) circles of a roundness profile."""
+from __future__ import annotations
+
+import numpy as np
+
+from methods._registry import register
+from methods._validation import check_positive
+from methods.circle import _zone as z
+from methods.circle._frame import Frame
+from methods.circle.minimum_zone import convex_concave, linearised_inner_rows, outer_cone_rows
+
+
+def _best_single_sided(x, y, act, c, side):
+    r = z.radii(x[act], y[act], c)
+    order = np.argsort(r)
+    m = min(act.size, 8)
+    idx = act[order[::-1][:m]] if side == "outer" else act[order[:m]]
+    C, configs = z.circle_candidates(x, y, idx, c, side)
+    rr = z.candidate_radii(x, y, act, C)
+    if side == "outer":
+        return z.pick(C, configs, rr.max(axis=1), minimise=True)
+    return z.pick(C, configs, rr.min(axis=1), minimise=False)
+
+
+@register("circle.min_circumscribed", kind="convex program",
+          summary="Minimum circumscribed circle (MCC): SOCP (clarabel) on an active set, exact contacts",
+          reference="roundness paper sec. 1 (MDTD, table 1 column MCC); Elzinga & Hearn, Transp. Sci. 6 (1972) 379-394")
+def min_circumscribed(points, *, active_size=16, max_rounds=50):
+    """Smallest circle containing all points: min R s.t. |p_i - c| <= R (second-order cones, one
+    convex program, global optimum). Only the outermost points reach clarabel (active set with a final
+    check of every point); the centre is then solved exactly from its 2 (diameter) or 3 contacts and
+    certified by the centre lying in the convex hull of the contacts.
+    ``radius`` = R; ``form_error`` = R - min_i |p_i - c| (roundness about the MCC centre)."""
+    name = "circle.min_circumscribed"
+    k = int(check_positive("active_size", active_size, name))
+    max_rounds = int(check_positive("max_rounds", max_rounds, name))
+    frame = Frame.of(points)
+    x, y = frame.x, frame.y
+
+    def local_solve(out, inn, c):  # variables (cx, cy, R): min R
+        rows, rhs, cones = outer_cone_rows(x, y, out, 2, 3)
+        sol, _, it = z.clarabel_solve([0.0, 0.0, 1.0], rows, rhs, cones)
+        return sol[:2], 1, it, [sol[2]]
+
+    return z.fit_zone(points, frame, start=z.kasa_normal(x, y), local_solve=local_solve,
+                      exact=lambda act, c: _best_single_sided(x, y, act, c, "outer"),
+                      certify=z.certify_hulls(x, y), sides=("outer",), k=k, max_rounds=max_rounds,
+                      radius_rule=lambda r, c: r.max())
+
+
+@register("circle.max_inscribed", kind="convex program",
+          summary="Maximum inscribed circle (MIC): sequential LP (clarabel) on an active set, exact contacts",
+          reference="roundness paper sec. 1 (MİTD, table 1 column MIC); Toussaint, Int. J. Comput. Inf. Sci. 12 (1983) 347-358")
+def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1e-10, trust_radius=0.5):
+    """Largest circle with no point inside it, centred among the points: max r s.t. |p_i - c| >= r.
+    The constraint is reverse-convex: each step maximises r under its linearisation at the current
+    centre (a lower bound, so feasible), an LP solved by clarabel inside a trust region, until the
+    centre settles; the centre is then solved exactly from its 2 or 3 contacts and certified by lying
+    in their convex hull. Points that do not surround a centre (a partial arc) have no inscribed
+    circle: the result says so with ``converged=False``.
+    ``radius`` = r; ``form_error`` = max_i |p_i - c| - r (roundness about the MIC centre)."""
+    name = "circle.max_inscribed"
+    k = int(check_positive("active_size", active_size, name))
+    max_rounds = int(check_positive("max_rounds", max_rounds, name))
+    max_ccp = int(check_positive("max_ccp", max_ccp, name))
+    check_positive("ccp_tol", ccp_tol, name)
+    check_positive("trust_radius", trust_radius, name)
+    frame = Frame.of(points)
+    x, y = frame.x, frame.y
+
+    def local_solve(out, inn, c):
+        def once(ck):  # variables (cx, cy, r): min -r
+            rows, rhs = linearised_inner_rows(x, y, inn, ck, 2, 3)
+            tr_rows, tr_b = z.trust_rows(ck, trust_radius, 3)
+            sol, _, it = z.clarabel_solve([0.0, 0.0, -1.0], rows + tr_rows, rhs + tr_b,
+                                          [z.clarabel.NonnegativeConeT(len(rows) + 4)])
+            return sol, it
+        return convex_concave(once, c, max_ccp, ccp_tol, lambda s: s[2])
+
+    hull = z.certify_hulls(x, y)
+
+    def certify(c, oc, ic):
+        ok, message = hull(c, oc, ic)
+        if not ok:
+            message += ("; the inscribed circle grows without bound when the points do not surround a "
+                        "centre (a partial arc has no MIC)")
+        return ok, message
+
+    return z.fit_zone(points, frame, start=z.kasa_normal(x, y), local_solve=local_solve,
+                      exact=lambda act, c: _best_single_sided(x, y, act, c, "inner"),
+                      certify=certify, sides=("inner",), k=k, max_rounds=max_rounds,
+                      radius_rule=lambda r, c: r.min())

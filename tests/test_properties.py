@@ -35,11 +35,15 @@ def _tol(method_id, radius):
        angle=st.floats(0, 2 * np.pi), scale=st.floats(1e-2, 1e2))
 def test_similarity_equivariance(method_id, pts, shift, angle, scale):
     base = methods.fit(method_id, pts)
-    assert base.converged, base.message
     c, s = np.cos(angle), np.sin(angle)
     rot = np.array([[c, -s], [s, c]])
     moved = scale * pts @ rot.T + shift
     res = methods.fit(method_id, moved)
+    if method_id == "circle.max_inscribed" and not base.converged:
+        # an arc has no MIC: the refusal itself must be invariant
+        assert not res.converged and "partial arc" in base.message and "partial arc" in res.message
+        return
+    assert base.converged, base.message
     assert res.converged, res.message
     want_center = scale * rot @ np.array(base.center) + shift
     tol = _tol(method_id, scale * base.radius)

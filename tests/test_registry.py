@@ -7,8 +7,9 @@ import pytest
 import methods
 from datasets.synthetic import circle_points
 
-CIRCLE_IDS = ["circle.gauss_newton", "circle.hyper", "circle.kasa", "circle.levenberg_marquardt",
-              "circle.nelder_mead", "circle.powell_hybrid", "circle.pratt", "circle.taubin"]
+CIRCLE_IDS = ["circle.chebyshev_lp", "circle.gauss_newton", "circle.hyper", "circle.kasa",
+              "circle.levenberg_marquardt", "circle.max_inscribed", "circle.min_circumscribed",
+              "circle.minimum_zone", "circle.nelder_mead", "circle.powell_hybrid", "circle.pratt", "circle.taubin"]
 
 
 def test_all_circle_methods_registered_with_metadata():
@@ -17,7 +18,7 @@ def test_all_circle_methods_registered_with_metadata():
     for s in specs:
         assert s.family == "circle" and s.id == f"{s.family}.{s.name}"
         assert s.kind in methods.KINDS
-        assert s.summary and "eq." in s.reference or "(19" in s.reference or "(20" in s.reference
+        assert s.summary and ("eq." in s.reference or "(19" in s.reference or "(20" in s.reference or "ISO" in s.reference)
         assert s.func.__doc__ and len(s.func.__doc__) > 40, f"{s.id} lacks a docstring"
         assert isinstance(s.defaults, dict)
     assert methods.get("circle.gauss_newton").defaults["stop"] == "step"

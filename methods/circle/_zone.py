@@ -13,6 +13,9 @@ import scipy.sparse as sp
 
 #: relative slack of the final check of every point (rounding of radii in the unit frame)
 CHECK_RTOL = 1e-12
+#: a zone narrower than this (unit frame, i.e. relative to the data's size) is an exact circle:
+#: data 10^6 away from the origin are themselves rounded at ~4e-13 of a 299 mm radius
+ZERO_WIDTH = 1e-11
 
 
 def radii(x: np.ndarray, y: np.ndarray, c) -> np.ndarray:
@@ -154,6 +157,9 @@ def zone_candidates(x, y, outer_c, inner_c, near):
     if len(po) and len(pi):
         a = np.repeat(po, len(pi), axis=0)
         b = np.tile(pi, (len(po), 1))
+        distinct = (a[:, :1] != b[:, :1]).all(axis=1) & (a[:, :1] != b[:, 1:]).all(axis=1) & \
+                   (a[:, 1:] != b[:, :1]).all(axis=1) & (a[:, 1:] != b[:, 1:]).all(axis=1)
+        a, b = a[distinct], b[distinct]  # a point cannot be an outer and an inner contact at once
         cands.append(bisector_centres(P[a[:, 0]], P[a[:, 1]], P[b[:, 0]], P[b[:, 1]]))
         configs.append(np.column_stack([a, b, np.full(len(a), 2)]))
     for tri, singles, n_outer in ((triples(outer_c), inner_c, 3), (triples(inner_c), outer_c, 1)):
@@ -161,9 +167,14 @@ def zone_candidates(x, y, outer_c, inner_c, near):
             cc = bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]])
             t = np.tile(tri, (len(singles), 1))
             s = np.repeat(singles, len(tri))
-            cands.append(np.tile(cc, (len(singles), 1)))
+            keep = (t != s[:, None]).all(axis=1)
+            cands.append(np.tile(cc, (len(singles), 1))[keep])
             rows = np.column_stack([t, s]) if n_outer == 3 else np.column_stack([s, t])
-            configs.append(np.column_stack([rows, np.full(len(t), n_outer)]))
+            configs.append(np.column_stack([rows, np.full(len(t), n_outer)])[keep])
+    tri = triples(outer_c)
+    if len(tri):  # 3 + 0: the circle through three points (an exact circle, or N = 3)
+        cands.append(bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]]))
+        configs.append(np.column_stack([tri, np.full(len(tri), -1), np.full(len(tri), 3)]))
     return _near(np.vstack(cands), np.vstack(configs), near)
 
 
@@ -207,6 +218,8 @@ def pick(C, configs, score, minimise: bool):
     n_outer = int(row[width])
     if width == 3:  # single-sided (MIC / MCC)
         return C[best], ((tuple(members), ()) if n_outer else ((), tuple(members)))
+    if len(members) == 3:  # 3 + 0: every point on one circle; the inner contacts are the same points
+        return C[best], (tuple(members), tuple(members))
     return C[best], (tuple(members[:n_outer]), tuple(members[n_outer:]))
 
 
@@ -232,16 +245,21 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
         act = np.union1d(out, inn)
         c, (oc, ic) = exact(act, ck)
         r_all = radii(x, y, c)
-        grown = False
+        before = out.size + inn.size
+        violated = False
         if "outer" in sides:
             over = r_all - r_all[list(oc)].max() * (1 + CHECK_RTOL) - 1e-15
             if (over > 0).any():
-                out, grown = add_violators(out, over, k), True
+                out, violated = add_violators(out, over, k), True
         if "inner" in sides:
             under = r_all[list(ic)].min() * (1 - CHECK_RTOL) - 1e-15 - r_all
             if (under > 0).any():
-                inn, grown = add_violators(inn, under, k), True
-        if grown:
+                inn, violated = add_violators(inn, under, k), True
+        if violated and out.size + inn.size == before:
+            stats["active_points"] = int(np.union1d(out, inn).size)
+            return c, (oc, ic), False, ("the contacts found are not the extreme points about their centre and no "
+                                        "new point can be added: no optimum is claimed"), stats
+        if violated:
             continue
         ok, message = certify(c, oc, ic)
         stats["active_points"] = int(np.union1d(out, inn).size)
@@ -270,9 +288,13 @@ def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max
                        extra={"certified": ok, "rounds": stats["rounds"], "active_points": stats["active_points"]})
 
 
-def certify_hulls(x, y, *, zero_tol=1e-13):
-    """Certificate factory: minimum zone (both sides) or MIC/MCC (one side against the origin)."""
+def certify_hulls(x, y, *, zero_tol=ZERO_WIDTH):
+    """Certificate factory: minimum zone (both sides) or MIC/MCC (one side against the origin);
+    a zone of width <= zero_tol (unit frame) about the centre is an exact circle."""
     def certify(c, oc, ic):
+        r = radii(x, y, c)
+        if r.max() - r.min() <= zero_tol:  # every point is a contact: the zone is a single circle
+            return True, "points lie on one circle (zone width at rounding level)"
         if oc and ic:
             ok = hulls_meet(directions(x, y, list(oc), c), directions(x, y, list(ic), c))
             return ok, ("optimal: contacts alternate (conv(outer) meets conv(inner) directions)" if ok else

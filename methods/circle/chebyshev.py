@@ -60,7 +60,7 @@ def chebyshev_lp(points, *, solver="highs", active_size=16, max_rounds=50):
 
     def certify(c, oc, ic):
         r = z.radii(x, y, c)
-        if r.max() - r.min() <= 1e-13:
+        if r.max() - r.min() <= z.ZERO_WIDTH:
             return True, "points lie on one circle (zero algebraic residual)"
         P = np.column_stack([x, y]) - c
         ok = z.hulls_meet(P[list(oc)], P[list(ic)])

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods._registry import register
+from methods._result import zone_result
 from methods._validation import check_positive
 from methods.circle import _zone as z
 from methods.circle._frame import Frame
@@ -20,6 +21,13 @@ def _best_single_sided(x, y, act, c, side):
     if side == "outer":
         return z.pick(C, configs, rr.max(axis=1), minimise=True)
     return z.pick(C, configs, rr.min(axis=1), minimise=False)
+
+
+def largest_angular_gap(x, y, c) -> float:
+    """Largest angle (radians) between consecutive points seen from c: >= pi means the points lie in
+    a half-plane through c and do not surround it."""
+    t = np.sort(np.arctan2(y - c[1], x - c[0]))
+    return float(max(np.diff(t).max(initial=0.0), 2 * np.pi - (t[-1] - t[0])))
 
 
 @register("circle.min_circumscribed", kind="convex program",
@@ -77,6 +85,15 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
             return sol, it
         return convex_concave(once, c, max_ccp, ccp_tol, lambda s: s[2])
 
+    start = z.kasa_normal(x, y)
+    gap = largest_angular_gap(x, y, start)
+    if gap >= np.pi:
+        center, _ = frame.circle_to_data(np.array([start[0], start[1], 1.0]))
+        r = z.radii(points[:, 0], points[:, 1], center)
+        return zone_result(points, center, r.min(), {"outer": [], "inner": []}, converged=False,
+                           message=(f"the points do not surround a centre (largest angular gap {np.degrees(gap):.1f} deg "
+                                    ">= 180 deg, a partial arc): a maximum inscribed circle does not exist"),
+                           extra={"certified": False, "angular_gap_deg": float(np.degrees(gap))})
     hull = z.certify_hulls(x, y)
 
     def certify(c, oc, ic):
@@ -86,7 +103,7 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
                         "centre (a partial arc has no MIC)")
         return ok, message
 
-    return z.fit_zone(points, frame, start=z.kasa_normal(x, y), local_solve=local_solve,
+    return z.fit_zone(points, frame, start=start, local_solve=local_solve,
                       exact=lambda act, c: _best_single_sided(x, y, act, c, "inner"),
                       certify=certify, sides=("inner",), k=k, max_rounds=max_rounds,
                       radius_rule=lambda r, c: r.min())

@@ -99,14 +99,6 @@ def minimum_zone(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1
         rr = z.candidate_radii(x, y, act, C)
         return z.pick(C, configs, rr.max(axis=1) - rr.min(axis=1), minimise=True)
 
-    base_certify = z.certify_hulls(x, y)
-
-    def certify(c, oc, ic):
-        r = z.radii(x, y, c)
-        if r.max() - r.min() <= 1e-13:
-            return True, "points lie on one circle (zone width at rounding level)"
-        return base_certify(c, oc, ic)
-
     return z.fit_zone(points, frame, start=z.kasa_normal(x, y), local_solve=local_solve, exact=exact,
-                      certify=certify, sides=("outer", "inner"), k=k, max_rounds=max_rounds,
+                      certify=z.certify_hulls(x, y), sides=("outer", "inner"), k=k, max_rounds=max_rounds,
                       radius_rule=lambda r, c: 0.5 * (r.max() + r.min()))

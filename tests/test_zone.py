@@ -1,0 +1,220 @@
+"""Form-error family: minimum zone, Chebyshev LP, MIC, MCC — exact against exhaustive enumeration."""
+from itertools import combinations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial import Delaunay
+
+import datasets
+import methods
+from datasets.synthetic import circle_points
+
+ZONE = ["circle.minimum_zone", "circle.chebyshev_lp", "circle.max_inscribed", "circle.min_circumscribed"]
+
+
+def _centres(P, idx_a, idx_b, idx_c, idx_d):
+    a, b, c, d = P[idx_a], P[idx_b], P[idx_c], P[idx_d]
+    n1, n2 = b - a, d - c
+    h1 = 0.5 * np.einsum("ij,ij->i", n1, a + b)
+    h2 = 0.5 * np.einsum("ij,ij->i", n2, c + d)
+    det = n1[:, 0] * n2[:, 1] - n1[:, 1] * n2[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        C = np.column_stack([(h1 * n2[:, 1] - n1[:, 1] * h2) / det, (n1[:, 0] * h2 - h1 * n2[:, 0]) / det])
+    return C[np.isfinite(C).all(axis=1)]
+
+
+def enumerate_zone_centres(P):
+    """Every candidate centre of a minimum zone: for each 4-subset, the 3 ways of splitting it into
+    2 + 2 (bisector intersections) and the circumcentres of its 4 triples (3 + 1 and 1 + 3)."""
+    quads = np.array(list(combinations(range(len(P)), 4)))
+    out = []
+    for (i, j), (k, l) in (((0, 1), (2, 3)), ((0, 2), (1, 3)), ((0, 3), (1, 2))):
+        out.append(_centres(P, quads[:, i], quads[:, j], quads[:, k], quads[:, l]))
+    tri = np.array(list(combinations(range(len(P)), 3)))
+    out.append(_centres(P, tri[:, 0], tri[:, 1], tri[:, 1], tri[:, 2]))
+    return np.vstack(out), tri
+
+
+def radii_matrix(P, C):
+    return np.hypot(P[None, :, 0] - C[:, 0:1], P[None, :, 1] - C[:, 1:2])
+
+
+def brute_force(P):
+    """Exhaustive optima over all contact configurations: MZC width, algebraic Chebyshev value,
+    MCC radius, MIC radius (centres inside the convex hull)."""
+    P = P - P.mean(axis=0)  # the same translation-free numbers for any position
+    C, tri = enumerate_zone_centres(P)
+    r = radii_matrix(P, C)
+    mz = (r.max(axis=1) - r.min(axis=1)).min()
+    cheb = (r.max(axis=1) ** 2 - r.min(axis=1) ** 2).min()
+    pair = np.array(list(combinations(range(len(P)), 2)))
+    single = np.vstack([0.5 * (P[pair[:, 0]] + P[pair[:, 1]]), C])
+    rs = radii_matrix(P, single)
+    mcc = rs.max(axis=1).min()
+    inside = Delaunay(P).find_simplex(single) >= 0
+    mic = rs.min(axis=1)[inside].max()
+    return mz, cheb, mcc, mic
+
+
+def check_against_brute_force(P):
+    mz, cheb, mcc, mic = brute_force(P)
+    res = {m: methods.fit(m, P) for m in ZONE}
+    for m, r in res.items():
+        assert r.converged, f"{m}: {r.message}"
+        assert r.extra["certified"]
+    assert res["circle.minimum_zone"].form_error == pytest.approx(mz, rel=1e-9, abs=1e-12)
+    cz = res["circle.chebyshev_lp"]
+    assert cz.outer_radius ** 2 - cz.inner_radius ** 2 == pytest.approx(cheb, rel=1e-9, abs=1e-12)
+    assert res["circle.min_circumscribed"].radius == pytest.approx(mcc, rel=1e-12)
+    assert res["circle.max_inscribed"].radius == pytest.approx(mic, rel=1e-12)
+    return res
+
+
+@pytest.mark.parametrize("name", ["roundness_set1", "roundness_set2", "roundness_set3"])
+def test_published_sets_match_exhaustive_enumeration(name):
+    check_against_brute_force(datasets.load(name).points)
+
+
+@st.composite
+def near_circles(draw):
+    n = draw(st.integers(5, 11))
+    seed = draw(st.integers(0, 2**32 - 1))
+    noise = draw(st.sampled_from([1e-4, 1e-3, 1e-2, 5e-2]))
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.uniform(0, 2 * np.pi, n))
+    t[0::max(1, n // 4)] = np.linspace(0, 2 * np.pi, len(t[0::max(1, n // 4)]), endpoint=False)  # surround the centre
+    r = 1 + rng.normal(0, noise, n)
+    centre = rng.uniform(-1e3, 1e3, 2)
+    scale = 10 ** rng.uniform(-1, 3)
+    return centre + scale * np.column_stack([r * np.cos(t), r * np.sin(t)])
+
+
+@settings(max_examples=60, deadline=None)
+@given(P=near_circles())
+def test_random_small_sets_match_exhaustive_enumeration(P):
+    check_against_brute_force(P)
+
+
+def test_published_table1_set2():
+    """Roundness paper, table 1, set 2: Voronoi (minimum zone) 1.6711, MIC 1.7287, MCC 1.7382."""
+    pts = datasets.load("roundness_set2").points
+    pub = datasets.load("roundness_set2").published
+    assert round(methods.fit("circle.minimum_zone", pts).form_error, 4) == pub["Voronoi (minimum zone)"]
+    assert round(methods.fit("circle.max_inscribed", pts).form_error, 4) == pub["MIC"]
+    assert round(methods.fit("circle.min_circumscribed", pts).form_error, 4) == pub["MCC"]
+
+
+@pytest.mark.parametrize("name", ["roundness_set1", "roundness_set2", "roundness_set3"])
+def test_minimum_zone_is_never_wider_than_any_other_centre(name, rng):
+    pts = datasets.load(name).points
+    mz = methods.fit("circle.minimum_zone", pts).form_error
+    for spec in methods.list_methods("circle"):
+        other = methods.fit(spec.id, pts)
+        assert mz <= other.form_error * (1 + 1e-12), spec.id
+    # and no random centre near it does better
+    c = np.array(methods.fit("circle.minimum_zone", pts).center)
+    for scale in (1e-2, 1e-4, 1e-7):
+        C = c + rng.normal(0, scale, (2000, 2))
+        r = radii_matrix(pts, C)
+        assert (r.max(axis=1) - r.min(axis=1)).min() >= mz * (1 - 1e-12)
+
+
+@pytest.mark.parametrize("method_id", ["circle.minimum_zone", "circle.chebyshev_lp", "circle.min_circumscribed",
+                                       "circle.max_inscribed"])
+def test_exact_circle_gives_zero_width(method_id):
+    pts = circle_points((1200.0, 650.0), 299.0, 720)
+    res = methods.fit(method_id, pts)
+    assert res.converged, res.message
+    assert res.form_error <= 1e-9
+    assert np.abs(np.array(res.center) - (1200, 650)).max() <= 1e-8 and abs(res.radius - 299) <= 1e-8
+
+
+@pytest.mark.parametrize("span_deg", [180, 90, 30])
+@pytest.mark.parametrize("method_id", ["circle.minimum_zone", "circle.chebyshev_lp"])
+def test_partial_arcs(method_id, span_deg, rng):
+    span = np.radians(span_deg)
+    exact = circle_points((1200.0, 650.0), 299.0, 400, arc=(0.3, 0.3 + span), endpoint=True)
+    res = methods.fit(method_id, exact)
+    assert res.converged, res.message
+    assert res.form_error <= 1e-9 and abs(res.radius - 299.0) <= 1e-6
+    noisy = circle_points((1200.0, 650.0), 299.0, 400, arc=(0.3, 0.3 + span), noise=0.002, rng=rng, endpoint=True)
+    res = methods.fit(method_id, noisy)
+    assert res.converged, res.message
+    lsq = methods.fit("circle.gauss_newton", noisy)
+    assert res.form_error <= lsq.form_error * (1 + 1e-12) if method_id == "circle.minimum_zone" else True
+    assert 0 < res.form_error < 0.03
+
+
+@pytest.mark.parametrize("span_deg", [180, 90, 30])
+def test_partial_arcs_mcc_and_mic(span_deg, rng):
+    span = np.radians(span_deg)
+    pts = circle_points((0.0, 0.0), 10.0, 200, arc=(0.0, span), noise=1e-3, rng=rng, endpoint=True)
+    mcc = methods.fit("circle.min_circumscribed", pts)
+    assert mcc.converged
+    chord = np.hypot(*(pts[0] - pts[-1]))
+    assert mcc.radius <= 10.01 and mcc.radius >= 0.5 * chord * (1 - 1e-12)
+    mic = methods.fit("circle.max_inscribed", pts)
+    assert not mic.converged and "partial arc" in mic.message
+
+
+def test_contacts_and_json(tmp_path):
+    import json
+    import subprocess
+    import sys
+    from conftest import REPO
+    out = subprocess.run([sys.executable, "-m", "methods", "fit", "circle.minimum_zone", "roundness_set2", "--json"],
+                         capture_output=True, text=True, cwd=REPO)
+    assert out.returncode == 0, out.stderr
+    d = json.loads(out.stdout)
+    assert d["outer_radius"] - d["inner_radius"] == pytest.approx(d["form_error"], abs=1e-12)
+    assert len(d["contacts"]["outer"]) + len(d["contacts"]["inner"]) == 4
+    pts = datasets.load("roundness_set2").points
+    r = np.hypot(*(pts - d["center"]).T)
+    np.testing.assert_allclose(r[d["contacts"]["outer"]], d["outer_radius"], rtol=1e-12)
+    np.testing.assert_allclose(r[d["contacts"]["inner"]], d["inner_radius"], rtol=1e-12)
+
+
+def test_chebyshev_solvers_agree_and_match_full_lp():
+    """Second algorithm: HiGHS on every point (no active set) and clarabel give the same optimum."""
+    from scipy.optimize import linprog
+    pts = circle_points((5.0, -3.0), 2.0, 500, noise=1e-3, rng=np.random.default_rng(7))
+    a = methods.fit("circle.chebyshev_lp", pts, solver="highs")
+    b = methods.fit("circle.chebyshev_lp", pts, solver="clarabel")
+    assert np.abs(np.array(a.center) - b.center).max() < 1e-12
+    m = pts.mean(axis=0)
+    u = pts - m
+    zz = (u ** 2).sum(axis=1)
+    G = np.vstack([np.column_stack([-2 * u, np.ones(500), -np.ones(500)]),
+                   np.column_stack([2 * u, -np.ones(500), -np.ones(500)])])
+    full = linprog([0, 0, 0, 1], A_ub=G, b_ub=np.concatenate([-zz, zz]), bounds=[(None, None)] * 3 + [(0, None)],
+                   method="highs")
+    assert np.abs(full.x[:2] + m - a.center).max() < 1e-7
+    assert 0.5 * (a.outer_radius ** 2 - a.inner_radius ** 2) == pytest.approx(full.x[3], rel=1e-6)
+
+
+def test_solver_failure_is_a_result_not_a_fallback(monkeypatch):
+    import clarabel
+    real = clarabel.DefaultSettings
+
+    def starved():
+        s = real()
+        s.max_iter = 1
+        return s
+
+    monkeypatch.setattr(clarabel, "DefaultSettings", starved)
+    pts = circle_points((0, 0), 1, 50, noise=1e-2, rng=np.random.default_rng(1))
+    for method_id in ("circle.minimum_zone", "circle.min_circumscribed", "circle.max_inscribed"):
+        res = methods.fit(method_id, pts)
+        assert not res.converged and "clarabel" in res.message and "MaxIterations" in res.message
+
+
+def test_large_data_only_extreme_points_reach_the_solver(rng):
+    pts = circle_points((1200.0, 650.0), 299.0, 200_000, noise=0.003, rng=rng)
+    for method_id in ZONE:
+        res = methods.fit(method_id, pts)
+        assert res.converged, f"{method_id}: {res.message}"
+        assert res.extra["active_points"] < 200
+        r = np.hypot(*(pts - res.center).T)
+        assert r.max() - r.min() == pytest.approx(res.form_error, rel=1e-12)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.spatial import Delaunay
+from matplotlib.path import Path
 
 import datasets
 import methods
@@ -43,7 +43,7 @@ def radii_matrix(P, C):
 
 def brute_force(P):
     """Exhaustive optima over all contact configurations: MZC width, algebraic Chebyshev value,
-    MCC radius, MIC radius (centres inside the convex hull)."""
+    MCC radius, MIC radius (centres inside the profile polygon)."""
     P = P - P.mean(axis=0)  # the same translation-free numbers for any position
     C, tri = enumerate_zone_centres(P)
     r = radii_matrix(P, C)
@@ -53,7 +53,8 @@ def brute_force(P):
     single = np.vstack([0.5 * (P[pair[:, 0]] + P[pair[:, 1]]), C])
     rs = radii_matrix(P, single)
     mcc = rs.max(axis=1).min()
-    inside = Delaunay(P).find_simplex(single) >= 0
+    order = np.argsort(np.arctan2(P[:, 1], P[:, 0]))  # the profile: points in angular order about the centroid
+    inside = Path(P[order]).contains_points(single)
     mic = rs.min(axis=1)[inside].max()
     return mz, cheb, mcc, mic
 

@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.path import Path
+from scipy.spatial import Delaunay, QhullError
 
 from methods._registry import register
 from methods._result import zone_result
-from methods._validation import check_positive
+from methods._validation import check_choice, check_positive
 from methods.circle import _zone as z
 from methods.circle._frame import Frame
 from methods.circle.minimum_zone import convex_concave, linearised_inner_rows, outer_cone_rows
@@ -59,14 +61,21 @@ def min_circumscribed(points, *, active_size=16, max_rounds=50):
 @register("circle.max_inscribed", kind="convex program",
           summary="Maximum inscribed circle (MIC): sequential LP (clarabel) on an active set, exact contacts",
           reference="roundness paper sec. 1 (MİTD, table 1 column MIC); Toussaint, Int. J. Comput. Inf. Sci. 12 (1983) 347-358")
-def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1e-10, trust_radius=0.5):
+def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1e-10, trust_radius=0.5,
+                  global_search="auto"):
     """Largest circle with no point inside it, centred among the points: max r s.t. |p_i - c| >= r.
     The constraint is reverse-convex: each step maximises r under its linearisation at the current
     centre (a lower bound, so feasible), an LP solved by clarabel inside a trust region, until the
     centre settles; the centre is then solved exactly from its 2 or 3 contacts and certified by lying
     in their convex hull. Points that do not surround a centre (a partial arc) have no inscribed
     circle: the result says so with ``converged=False``.
-    ``radius`` = r; ``form_error`` = max_i |p_i - c| - r (roundness about the MIC centre)."""
+    ``radius`` = r; ``form_error`` = max_i |p_i - c| - r (roundness about the MIC centre).
+
+    The MIC is multimodal (every Voronoi vertex inside its Delaunay triangle is a local maximum;
+    sparse noisy profiles have several close together). ``global_search`` ("auto": up to
+    50 000 points, "always", "never") then takes the largest empty circle over all Delaunay
+    circumcentres (Qhull) inside the profile polygon (points in angular order about the centroid);
+    ``extra['global_search']`` says whether it ran."""
     name = "circle.max_inscribed"
     k = int(check_positive("active_size", active_size, name))
     max_rounds = int(check_positive("max_rounds", max_rounds, name))
@@ -94,6 +103,7 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
                            message=(f"the points do not surround a centre (largest angular gap {np.degrees(gap):.1f} deg "
                                     ">= 180 deg, a partial arc): a maximum inscribed circle does not exist"),
                            extra={"certified": False, "angular_gap_deg": float(np.degrees(gap))})
+    check_choice("global_search", global_search, ("auto", "always", "never"), name)
     hull = z.certify_hulls(x, y)
 
     def certify(c, oc, ic):
@@ -103,7 +113,43 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
                         "centre (a partial arc has no MIC)")
         return ok, message
 
-    return z.fit_zone(points, frame, start=start, local_solve=local_solve,
-                      exact=lambda act, c: _best_single_sided(x, y, act, c, "inner"),
-                      certify=certify, sides=("inner",), k=k, max_rounds=max_rounds,
-                      radius_rule=lambda r, c: r.min())
+    run_global = global_search == "always" or (global_search == "auto" and len(x) <= GLOBAL_SEARCH_MAX_POINTS)
+
+    def exact(act, c):
+        c_loc, contacts = _best_single_sided(x, y, act, c, "inner")
+        if not run_global:
+            return c_loc, contacts
+        c_glob, tri, _ = largest_empty_circle(x, y)
+        # score by the distance to every point: near-degenerate (cocircular) triangles are not exactly empty
+        if tri is not None and z.radii(x, y, c_glob).min() > z.radii(x, y, c_loc).min() * (1 + 1e-12):
+            return c_glob, ((), tuple(int(i) for i in tri))
+        return c_loc, contacts
+
+    result = z.fit_zone(points, frame, start=start, local_solve=local_solve, exact=exact,
+                        certify=certify, sides=("inner",), k=k, max_rounds=max_rounds,
+                        radius_rule=lambda r, c: r.min())
+    result.extra["global_search"] = run_global
+    return result
+
+
+GLOBAL_SEARCH_MAX_POINTS = 50_000
+
+
+def largest_empty_circle(x, y):
+    """Largest circle with no point inside, centred inside the profile polygon (the points in angular
+    order about their centroid): the best Delaunay circumcentre (Qhull). Returns (centre, triangle, radius)."""
+    P = np.column_stack([x, y])
+    try:
+        tri = Delaunay(P).simplices
+    except QhullError:
+        return None, None, -np.inf
+    C = z.bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]])
+    ok = np.isfinite(C).all(axis=1)
+    m = P.mean(axis=0)
+    order = np.argsort(np.arctan2(y - m[1], x - m[0]))
+    ok[ok] = Path(P[order]).contains_points(C[ok])
+    if not ok.any():
+        return None, None, -np.inf
+    rad = np.where(ok, np.hypot(C[:, 0] - P[tri[:, 0], 0], C[:, 1] - P[tri[:, 0], 1]), -np.inf)
+    best = int(np.argmax(rad))
+    return C[best], tri[best], float(rad[best])

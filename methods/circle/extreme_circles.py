@@ -61,7 +61,7 @@ def min_circumscribed(points, *, active_size=16, max_rounds=50):
 @register("circle.max_inscribed", kind="convex program",
           summary="Maximum inscribed circle (MIC): sequential LP (clarabel) on an active set, exact contacts",
           reference="roundness paper sec. 1 (MİTD, table 1 column MIC); Toussaint, Int. J. Comput. Inf. Sci. 12 (1983) 347-358")
-def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1e-10, trust_radius=0.5,
+def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1e-8, trust_radius=0.5,
                   global_search="auto"):
     """Largest circle with no point inside it, centred among the points: max r s.t. |p_i - c| >= r.
     The constraint is reverse-convex: each step maximises r under its linearisation at the current
@@ -144,12 +144,18 @@ def largest_empty_circle(x, y):
     except QhullError:
         return None, None, -np.inf
     C = z.bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]])
-    ok = np.isfinite(C).all(axis=1)
+    rad = np.hypot(C[:, 0] - P[tri[:, 0], 0], C[:, 1] - P[tri[:, 0], 1])
+    rad[~np.isfinite(rad)] = -np.inf
     m = P.mean(axis=0)
-    order = np.argsort(np.arctan2(y - m[1], x - m[0]))
-    ok[ok] = Path(P[order]).contains_points(C[ok])
-    if not ok.any():
-        return None, None, -np.inf
-    rad = np.where(ok, np.hypot(C[:, 0] - P[tri[:, 0], 0], C[:, 1] - P[tri[:, 0], 1]), -np.inf)
-    best = int(np.argmax(rad))
-    return C[best], tri[best], float(rad[best])
+    profile = Path(P[np.argsort(np.arctan2(y - m[1], x - m[0]))])
+    # the polygon test is O(N) per centre: test the largest circles first, stop at the first inside
+    for lo in range(0, len(rad), 64):
+        cand = np.argsort(rad)[::-1][lo:lo + 64]
+        cand = cand[np.isfinite(rad[cand])]
+        if not cand.size:
+            break
+        inside = profile.contains_points(C[cand])
+        if inside.any():
+            best = int(cand[np.flatnonzero(inside)[0]])
+            return C[best], tri[best], float(rad[best])
+    return None, None, -np.inf

@@ -51,7 +51,7 @@ def convex_concave(solve_once, c, max_ccp, ccp_tol, objective_of):
 @register("circle.minimum_zone", kind="convex program",
           summary="Minimum zone (MZC): SOCP (clarabel) + linearised inner circle, exact contacts, active set",
           reference="ISO 230-4 circular deviation G; ISO 12181; roundness paper sec. 1-2 (MRAD / Voronoi column of table 1)")
-def minimum_zone(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1e-10, trust_radius=0.5):
+def minimum_zone(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1e-8, trust_radius=0.5):
     """Minimum radial separation of two concentric circles enclosing all points (ISO 230-4's G).
 
     Non-convex (the inner circle), solved by a scheme that converges to the exact optimum:
@@ -61,7 +61,8 @@ def minimum_zone(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1
        pass and the worst violators join the active set, until none is left.
     2. Each active problem: min R - r with second-order cones |p_i - c| <= R and the inner constraint
        linearised at the current centre (convex-concave procedure, trust region |c - ck| <= delta);
-       repeated until the centre moves less than ``ccp_tol`` (unit frame).
+       repeated until the centre moves less than ``ccp_tol`` (unit frame; the exact centre comes from
+       step 3, so the convex programs need only find the contacts).
     3. Exactness: the solution has four contacts (2 outer + 2 inner, 3 + 1 or 1 + 3); the centre is
        solved in closed form over the configurations of the near-extreme points and the best is kept.
     4. Certificate: the convex hulls of the outer and inner contact directions intersect (the

@@ -129,6 +129,10 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
                         certify=certify, sides=("inner",), k=k, max_rounds=max_rounds,
                         radius_rule=lambda r, c: r.min())
     result.extra["global_search"] = run_global
+    result.extra["angular_gap_deg"] = float(np.degrees(gap))
+    if not result.converged and gap > np.radians(150):
+        result.message += (f"; the points barely surround a centre (largest angular gap {np.degrees(gap):.1f} deg): "
+                           "the inscribed circle of such a partial arc is ill-defined")
     return result
 
 

@@ -10,6 +10,19 @@ from methods._validation import check_positive, check_vector
 from methods.circle._frame import Frame
 
 
+def three_point_start(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Circle through the points at positions 0, N/3, 2N/3 (unit frame); (0, 0, 1) if collinear."""
+    n = len(x)
+    i, j, k = 0, n // 3, (2 * n) // 3
+    bx, by, cx, cy = x[j] - x[i], y[j] - y[i], x[k] - x[i], y[k] - y[i]
+    d = 2.0 * (bx * cy - by * cx)
+    if abs(d) <= 1e-12 * (bx * bx + by * by + cx * cx + cy * cy):
+        return np.array([0.0, 0.0, 1.0])
+    b2, c2 = bx * bx + by * by, cx * cx + cy * cy
+    ux, uy = (cy * b2 - by * c2) / d, (bx * c2 - cx * b2) / d
+    return np.array([x[i] + ux, y[i] + uy, np.hypot(ux, uy)])
+
+
 @register("circle.powell_hybrid", kind="iterative",
           summary="FCA: grad S_CA = 0 (eq. 6) by MINPACK's Powell hybrid with analytic Jacobian (eq. 7)",
           reference="Glavonjić, circle/ellipse paper, eq. 5-7 (program FCA, table 1); Powell (1970), MINPACK hybrj")
@@ -20,7 +33,9 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
     analytic Jacobian [J] of eq. 7 (the Hessian of S_CA).
 
     ``start`` is the initial estimate p_s = (xc, yc, R) in data units (table 1: (0, 0, 299));
-    default: the centroid with the RMS distance from it. ``xtol`` is the paper's epsilon: relative
+    default: the circle through the points at positions 0, N/3 and 2N/3 of the data (three spread
+    points, the start of Cordero-Dávila & Cornejo, ref. 8 of the roundness paper); the centroid with
+    the RMS distance from it when those three are collinear. ``xtol`` is the paper's epsilon: relative
     error between successive iterates (table 1: 1e-8). ``iterations`` = function evaluations - 1
     (hybrj evaluates the function once per iteration).
     """
@@ -31,7 +46,7 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
     frame = Frame.of(points)
     x, y = frame.x, frame.y
     n = len(x)
-    p0 = np.array([0.0, 0.0, 1.0]) if p_start is None else frame.circle_to_unit(p_start)
+    p0 = three_point_start(x, y) if p_start is None else frame.circle_to_unit(p_start)
     history = []
 
     def equations(p):

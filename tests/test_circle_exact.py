@@ -83,3 +83,18 @@ def test_minimal_point_sets_give_the_circle_through_them(method_id, n):
     assert res.converged, res.message
     assert np.abs(np.array(res.center) - (1200.0, 650.0)).max() <= 1e-7
     assert abs(res.radius - 299.0) <= 1e-7
+
+
+def test_powell_hybrid_reports_minpack_stops_in_its_words():
+    pts = circle_points((3.0, 4.0), 2.0, 50, noise=0.01, rng=np.random.default_rng(0))
+    res = methods.fit("circle.powell_hybrid", pts, maxfev=3)
+    assert not res.converged and "maxfev = 3" in res.message
+
+
+def test_powell_hybrid_at_the_root_of_exact_data_is_converged():
+    """MINPACK may say 'not making good progress' at the exact root (its steps are rounding noise);
+    the equations are then satisfied to rounding and the result says so."""
+    pts = circle_points((-600.5, -428.7), 169.46, 360)
+    res = methods.fit("circle.powell_hybrid", pts)
+    assert res.converged, res.message
+    assert np.abs(np.array(res.center) - (-600.5, -428.7)).max() < 1e-9

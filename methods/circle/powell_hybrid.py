@@ -9,6 +9,8 @@ from methods._result import circle_result
 from methods._validation import check_positive, check_vector
 from methods.circle._frame import Frame
 
+EPS = np.finfo(float).eps
+
 
 def three_point_start(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Circle through the points at positions 0, N/3, 2N/3 (unit frame); (0, 0, 1) if collinear."""
@@ -67,6 +69,15 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
     center, radius = frame.circle_to_data(sol.x)
     ok = bool(sol.success) and np.isfinite(sol.x).all() and abs(sol.x[2]) > 0
     message = sol.message if abs(sol.x[2]) > 0 else "converged to R = 0, a stationary point that is no circle"
+    if not ok and np.isfinite(sol.x).all() and abs(sol.x[2]) > 0:
+        # On (near) exact data MINPACK may stop with 'not making good progress' at the root itself,
+        # its last steps being rounding noise: the equations (6) are then satisfied to rounding.
+        a, b, rr = sol.x
+        du, dv = x - a, y - b
+        rounding = 16 * 4 * EPS * float(np.sum((du * du + dv * dv + rr * rr) * (np.abs(du) + np.abs(dv) + abs(rr))))
+        if np.max(np.abs(sol.fun)) <= rounding:
+            ok = True
+            message = f"equations (6) satisfied to rounding (MINPACK: {sol.message.strip()})"
     return circle_result(points, center, radius, converged=ok, message=message,
                          iterations=max(len(history) - 1, 0), nfev=len(history),
                          history=[h * frame.scale ** 4 for h in history],

@@ -120,3 +120,21 @@ def zone_result(points: np.ndarray, center, radius: float, contacts: dict, *, co
                    inner_radius=float(r.min()) if ok else float("nan"),
                    outer_radius=float(r.max()) if ok else float("nan"),
                    contacts={k: [int(i) for i in v] for k, v in contacts.items()})
+
+
+@dataclass(kw_only=True)
+class EllipseFit(FitResult):
+    """A fitted ellipse. ``semi_axes`` = (a, b) with a >= b; ``angle`` = direction of the a axis in
+    radians, in [0, pi); ``conic`` = (A, B, C, D, E, F) of A x^2 + B xy + C y^2 + D x + E y + F = 0,
+    normalised to 4AC - B^2 = 1 with A + C > 0; ``residuals`` = signed orthogonal distances
+    (positive outside); ``form_error`` = max - min of them."""
+
+    center: tuple
+    semi_axes: tuple
+    angle: float
+    conic: tuple
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        head = {k: d.pop(k) for k in ("method", "center", "semi_axes", "angle", "conic", "form_error")}
+        return {**head, **d}

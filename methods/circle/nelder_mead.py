@@ -1,22 +1,14 @@
 """Program FCG of the circle/ellipse paper: geometric circle fit by the Nelder–Mead simplex method."""
 from __future__ import annotations
 
-import nlopt
 import numpy as np
-from scipy.optimize import minimize
 
+from methods import _simplex as simplex
 from methods._errors import InvalidInputError
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive, check_vector
 from methods.circle._frame import Frame, algebraic_start
-
-BACKENDS = ("scipy", "nlopt")
-
-
-def initial_simplex(first_vertex: np.ndarray, steps: np.ndarray) -> np.ndarray:
-    """Vertices s1 and s1 + lambda_j e_j, j = 1..n (the paper's simplex from s1S and lambda, table 2)."""
-    return np.vstack([first_vertex, first_vertex + np.diag(steps)])
 
 
 @register("circle.nelder_mead", kind="iterative",
@@ -38,7 +30,7 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-13, 
     sqrt(eps * S* / lambda_min(J^T J)); Nelder–Mead cannot do better than that (README, NIST).
     """
     name = "circle.nelder_mead"
-    check_choice("backend", backend, BACKENDS, name)
+    check_choice("backend", backend, simplex.BACKENDS, name)
     check_positive("xatol", xatol, name)
     check_positive("fatol", fatol, name, allow_zero=True)
     max_fev = int(check_positive("max_fev", max_fev, name))
@@ -56,49 +48,7 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-13, 
         d = np.sqrt(dx * dx + dy * dy) - p[2]
         return float(d @ d)
 
-    scale2 = frame.scale ** 2
-    if backend == "scipy":
-        history = []
-
-        def callback(intermediate_result):
-            history.append(float(intermediate_result.fun) * scale2)
-
-        res = minimize(objective, x0, method="Nelder-Mead", callback=callback,
-                       options={"initial_simplex": initial_simplex(x0, lam_unit), "xatol": xatol,
-                                "fatol": fatol, "maxfev": max_fev, "maxiter": max_fev})
-        center, radius = frame.circle_to_data(res.x)
-        return circle_result(points, center, radius, converged=bool(res.success), message=str(res.message),
-                             iterations=int(res.nit), nfev=int(res.nfev), history=history)
-
-    best = {"f": np.inf, "x": x0.copy()}
-    history = []
-
-    def nl_objective(p, grad):
-        f = objective(p)
-        if f < best["f"]:
-            best["f"], best["x"] = f, np.array(p, dtype=float)
-        history.append(best["f"] * scale2)
-        return f
-
-    opt = nlopt.opt(nlopt.LN_NELDERMEAD, 3)
-    opt.set_min_objective(nl_objective)
-    opt.set_initial_step(lam_unit)
-    opt.set_xtol_abs(xatol)
-    # NLopt's ftol_abs means 'one step changed f by less than this', which halts Nelder–Mead on a
-    # single small improvement; only the simplex-size test (xtol_abs) is used with this backend.
-    opt.set_maxeval(max_fev)
-    try:
-        xopt = opt.optimize(x0)
-        code = opt.last_optimize_result()
-        messages = {nlopt.SUCCESS: "success", nlopt.STOPVAL_REACHED: "stopval reached",
-                    nlopt.FTOL_REACHED: "ftol reached", nlopt.XTOL_REACHED: "xtol reached",
-                    nlopt.MAXEVAL_REACHED: "maximum number of evaluations reached",
-                    nlopt.MAXTIME_REACHED: "maximum time reached"}
-        converged = code in (nlopt.SUCCESS, nlopt.FTOL_REACHED, nlopt.XTOL_REACHED)
-        message = f"nlopt: {messages.get(code, f'result code {code}')}"
-    except (nlopt.RoundoffLimited, RuntimeError, ValueError) as exc:
-        xopt = best["x"]  # report where it stopped; converged=False says it is not an optimum
-        converged, message = False, f"nlopt failed: {type(exc).__name__}: {exc}"
-    center, radius = frame.circle_to_data(xopt)
-    return circle_result(points, center, radius, converged=converged, message=message,
-                         iterations=None, nfev=len(history), history=history)
+    run = simplex.nelder_mead(objective, x0, lam_unit, backend=backend, xatol=xatol, fatol=fatol, max_fev=max_fev)
+    center, radius = frame.circle_to_data(run.x)
+    return circle_result(points, center, radius, converged=run.converged, message=run.message,
+                         iterations=run.iterations, nfev=run.nfev, history=[h * frame.scale ** 2 for h in run.history])

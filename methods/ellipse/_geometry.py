@@ -1,0 +1,205 @@
+"""Ellipse geometry shared by the ellipse methods: normalisation, conic <-> geometric parameters
+(including the circle/ellipse paper's eq. 23-25), and the closest point on an ellipse.
+
+Geometric parameters p = (xc, yc, a, b, theta): centre, semi-axes along the rotated x'' and y''
+axes, and the rotation theta of the x'' axis (circle/ellipse paper eq. 10-14, with p_x = a, p_y = b,
+gamma = theta). Results are canonicalised to a >= b and theta in [0, pi).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+EPS = np.finfo(float).eps
+
+
+@dataclass(frozen=True)
+class Frame:
+    """Shift to the centroid, scale to unit RMS distance (as for circles)."""
+
+    shift: np.ndarray
+    scale: float
+    x: np.ndarray
+    y: np.ndarray
+
+    @classmethod
+    def of(cls, points: np.ndarray) -> "Frame":
+        x0, y0 = points[:, 0], points[:, 1]
+        mx, my = x0.mean(), y0.mean()
+        x, y = x0 - mx, y0 - my
+        scale = float(np.sqrt((x @ x + y @ y) / len(x)))
+        return cls(shift=np.array([mx, my]), scale=scale, x=x / scale, y=y / scale)
+
+    def params_to_unit(self, p) -> np.ndarray:
+        p = np.asarray(p, dtype=np.float64)
+        return np.array([(p[0] - self.shift[0]) / self.scale, (p[1] - self.shift[1]) / self.scale,
+                         p[2] / self.scale, p[3] / self.scale, p[4]])
+
+    def params_to_data(self, p) -> np.ndarray:
+        p = np.asarray(p, dtype=np.float64)
+        return np.array([p[0] * self.scale + self.shift[0], p[1] * self.scale + self.shift[1],
+                         p[2] * self.scale, p[3] * self.scale, p[4]])
+
+
+def canonical(p) -> np.ndarray:
+    """(xc, yc, a, b, theta) with a >= b > 0 and theta in [0, pi) (the same ellipse)."""
+    xc, yc, a, b, t = (float(v) for v in p)
+    a, b = abs(a), abs(b)
+    if b > a:
+        a, b, t = b, a, t + np.pi / 2
+    t = float(np.mod(t, np.pi))
+    if t >= np.pi:  # mod can round up to pi
+        t = 0.0
+    return np.array([xc, yc, a, b, t])
+
+
+def params_to_conic(p) -> np.ndarray:
+    """(xc, yc, a, b, theta) -> (A, B, C, D, E, F) normalised to 4AC - B^2 = 1, A + C > 0."""
+    xc, yc, a, b, t = p
+    c, s = np.cos(t), np.sin(t)
+    A = (c / a) ** 2 + (s / b) ** 2
+    C = (s / a) ** 2 + (c / b) ** 2
+    B = 2 * c * s * (1 / a ** 2 - 1 / b ** 2)
+    D = -2 * A * xc - B * yc
+    E = -B * xc - 2 * C * yc
+    F = A * xc ** 2 + B * xc * yc + C * yc ** 2 - 1
+    return normalise_conic(np.array([A, B, C, D, E, F]))
+
+
+def normalise_conic(k) -> np.ndarray:
+    """Scale an ellipse's conic vector to 4AC - B^2 = 1 with A + C > 0."""
+    k = np.asarray(k, dtype=np.float64)
+    disc = 4 * k[0] * k[2] - k[1] ** 2
+    if not disc > 0:
+        raise ValueError("not an ellipse (4AC - B^2 <= 0)")
+    k = k / np.sqrt(disc)
+    return -k if k[0] + k[2] < 0 else k
+
+
+def conic_to_params(k) -> np.ndarray | None:
+    """General conic of an ellipse -> canonical (xc, yc, a, b, theta); None if it is no real ellipse.
+    Centre from the gradient = 0, axes from the eigen-decomposition of [[A, B/2], [B/2, C]]."""
+    A, B, C, D, E, F = (float(v) for v in k)
+    M = np.array([[A, B / 2], [B / 2, C]])
+    det = np.linalg.det(M)
+    if not det > 0:
+        return None
+    xc, yc = np.linalg.solve(M, [-D / 2, -E / 2])
+    Fc = F + 0.5 * (D * xc + E * yc)  # value at the centre
+    w, V = np.linalg.eigh(M)
+    if Fc * w[0] >= 0:  # the conic has no real points (or is degenerate)
+        return None
+    axes = np.sqrt(-Fc / w)  # eigenvalue w[0] <= w[1] -> axes[0] >= axes[1]
+    theta = np.arctan2(V[1, 0], V[0, 0])
+    return canonical([xc, yc, axes[0], axes[1], theta])
+
+
+def paper_gamma_solutions(k) -> dict:
+    """The circle/ellipse paper's conversion (eq. 23-25) of a conic (a, b, c, d, e, f), in its sign
+    convention (a + c < 0, the interior positive, as its table 5), giving both angle solutions:
+    gamma_1 = atan2(b, a - c) / 2 and gamma_2 = gamma_1 + 90 deg, with p_x along gamma and p_y across."""
+    a, b, c, d, e, f = np.asarray(k, dtype=np.float64) * (-1.0 if k[0] + k[2] > 0 else 1.0)
+    out = {}
+    g1 = np.arctan2(b, a - c) / 2  # eq. 23
+    for name, g in (("1", g1), ("2", g1 + np.pi / 2 if g1 <= 0 else g1 - np.pi / 2)):
+        s2, c2 = np.sin(2 * g), np.cos(2 * g)
+        a2 = ((a + c) + b * s2 + (a - c) * c2) / 2  # eq. 24
+        c2_ = ((a + c) - b * s2 - (a - c) * c2) / 2
+        d2 = d * np.cos(g) + e * np.sin(g)
+        e2 = -d * np.sin(g) + e * np.cos(g)
+        with np.errstate(invalid="ignore"):
+            px = np.sqrt(d2 ** 2 + a2 * e2 ** 2 / c2_ - 4 * a2 * f) / (2 * a2)  # eq. 25
+            py = np.sqrt(e2 ** 2 + c2_ * d2 ** 2 / a2 - 4 * c2_ * f) / (2 * c2_)
+        out[f"gamma{name}"] = float(g)
+        out[f"px{name}"] = float(abs(px))
+        out[f"py{name}"] = float(abs(py))
+    xc = (b * e - 2 * c * d) / (4 * a * c - b * b)  # eq. 23
+    yc = (b * d - 2 * a * e) / (4 * a * c - b * b)
+    out["xc"], out["yc"] = float(xc), float(yc)
+    return out
+
+
+def to_local(x, y, p):
+    """Point coordinates in the ellipse frame O' (circle/ellipse paper eq. 14)."""
+    c, s = np.cos(p[4]), np.sin(p[4])
+    dx, dy = x - p[0], y - p[1]
+    return dx * c + dy * s, -dx * s + dy * c
+
+
+def closest_points(u, v, a, b, iterations=60):
+    """Closest points (X, Y) on the axis-aligned ellipse (X/a)^2 + (Y/b)^2 = 1 (a >= b > 0) to the
+    points (u, v), and the signed distances (positive outside). Vectorised and robust for every
+    position: the first-quadrant problem (Eberly, 'Distance from a point to an ellipse', 2013) is
+    the root s of G(s) = (r0 z0 / (s + r0))^2 + (z1 / (s + 1))^2 - 1, r0 = (a/b)^2, z = (|u|/a, |v|/b);
+    G is convex and decreasing on s > -1, so Newton from the right end of its bracket converges
+    monotonically; points on the major axis (z1 = 0) inside the evolute are solved in closed form."""
+    au, av = np.abs(u), np.abs(v)
+    z0, z1 = au / a, av / b
+    r0 = (a / b) ** 2
+    n0 = r0 * z0
+    g = z0 * z0 + z1 * z1 - 1
+    X = np.empty_like(au)
+    Y = np.empty_like(av)
+    on_axis = z1 == 0
+    # general case (z1 > 0), in w = s + 1 > 0 (no cancellation next to the pole s = -1):
+    # G(w) = (n0 / (w + r0 - 1))^2 + (z1 / w)^2 - 1, root in [z1, |(n0, z1)|]; Newton from the right
+    gen = ~on_axis
+    if gen.any():
+        n0g, z1g = n0[gen], z1[gen]
+        lo = z1g
+        w = np.maximum(np.hypot(n0g, z1g), lo)
+        rm1 = r0 - 1.0
+        done = np.zeros(w.shape, dtype=bool)
+        for _ in range(iterations):
+            q0 = n0g / (w + rm1)
+            q1 = z1g / w
+            G = q0 * q0 + q1 * q1 - 1.0
+            dG = -2.0 * (q0 * q0 / (w + rm1) + q1 * q1 / w)
+            w_new = np.maximum(w - G / dG, lo)  # never left of the bracket
+            done = np.abs(w_new - w) <= 4 * EPS * w
+            w = w_new
+            if done.all():
+                break
+        if not done.all():  # slow Newton (points near the centre): finish by bisection in the bracket
+            idx = np.flatnonzero(~done)
+            lo_b, hi_b = lo[idx].copy(), w[idx].copy()
+            n0b, z1b = n0g[idx], z1g[idx]
+            for _ in range(1100):
+                mid = 0.5 * (lo_b + hi_b)
+                pos = (n0b / (mid + rm1)) ** 2 + (z1b / mid) ** 2 - 1.0 > 0
+                stuck = (mid == lo_b) | (mid == hi_b)
+                lo_b = np.where(pos, mid, lo_b)
+                hi_b = np.where(pos, hi_b, mid)
+                if stuck.all():
+                    break
+            w[idx] = 0.5 * (lo_b + hi_b)
+        X[gen] = r0 * au[gen] / (w + rm1)
+        Y[gen] = z1g * b / w
+    if on_axis.any():
+        au_ax = au[on_axis]
+        num = a * au_ax
+        den = a * a - b * b
+        inside_evolute = num < den
+        xa = np.where(inside_evolute, a * a * au_ax / np.where(den > 0, den, 1.0), a)
+        xa = np.minimum(xa, a)
+        X[on_axis] = xa
+        Y[on_axis] = np.where(inside_evolute, b * np.sqrt(np.maximum(1 - (xa / a) ** 2, 0.0)), 0.0)
+    X = np.copysign(X, u)
+    Y = np.copysign(Y, v)
+    d = np.hypot(u - X, v - Y)
+    return X, Y, np.where(g > 0, d, -d)
+
+
+def orthogonal_residuals(x, y, p, iterations=60):
+    """Signed orthogonal distances of the points to the ellipse p = (xc, yc, a, b, theta) and the
+    parameter phi of each closest point (x' = a cos phi, y' = b sin phi, eq. 17)."""
+    xc, yc, a, b, t = p
+    u, v = to_local(x, y, p)
+    if a >= b:
+        X, Y, d = closest_points(u, v, a, b, iterations)
+    else:  # solve with the axes swapped (the solver wants a >= b)
+        Yv, Xu, d = closest_points(v, u, b, a, iterations)
+        X, Y = Xu, Yv
+    phi = np.arctan2(Y / b, X / a)
+    return d, phi

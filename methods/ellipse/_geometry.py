@@ -146,21 +146,32 @@ def closest_points(u, v, a, b, iterations=60):
     # G(w) = (n0 / (w + r0 - 1))^2 + (z1 / w)^2 - 1, root in [z1, |(n0, z1)|]; Newton from the right
     gen = ~on_axis
     if gen.any():
-        n0g, z1g = n0[gen], z1[gen]
+        every = bool(gen.all())
+        n0g, z1g = (n0, z1) if every else (n0[gen], z1[gen])
         lo = z1g
-        w = np.maximum(np.hypot(n0g, z1g), lo)
         rm1 = r0 - 1.0
+        h = np.hypot(n0g, z1g)
+        if rm1 < 0.1:  # near-circle: first-order root h - n0^2 (r0 - 1) / h^2 (Newton then needs ~2 steps)
+            w = np.maximum(h - n0g * n0g * rm1 / (h * h), lo)
+        else:
+            w = np.maximum(h, lo)
         done = np.zeros(w.shape, dtype=bool)
-        for _ in range(iterations):
-            q0 = n0g / (w + rm1)
-            q1 = z1g / w
-            G = q0 * q0 + q1 * q1 - 1.0
-            dG = -2.0 * (q0 * q0 / (w + rm1) + q1 * q1 / w)
-            w_new = np.maximum(w - G / dG, lo)  # never left of the bracket
-            done = np.abs(w_new - w) <= 4 * EPS * w
+        for k in range(iterations):
+            t0 = w + rm1
+            q0s = (n0g / t0) ** 2
+            q1s = (z1g / w) ** 2
+            step = (q0s + q1s - 1.0) / (2.0 * (q0s / t0 + q1s / w))  # -G / G'
+            w_new = np.maximum(w + step, lo)  # never left of the bracket
+            rel = np.abs(w_new - w) / w
             w = w_new
-            if done.all():
+            if rel.max() <= 1e-8:  # quadratic convergence: one more step reaches rounding
+                t0 = w + rm1
+                q0s = (n0g / t0) ** 2
+                q1s = (z1g / w) ** 2
+                w = np.maximum(w + (q0s + q1s - 1.0) / (2.0 * (q0s / t0 + q1s / w)), lo)
+                done[:] = True
                 break
+            done = rel <= 4 * EPS
         if not done.all():  # slow Newton (points near the centre): finish by bisection in the bracket
             idx = np.flatnonzero(~done)
             lo_b, hi_b = lo[idx].copy(), w[idx].copy()
@@ -174,8 +185,12 @@ def closest_points(u, v, a, b, iterations=60):
                 if stuck.all():
                     break
             w[idx] = 0.5 * (lo_b + hi_b)
-        X[gen] = r0 * au[gen] / (w + rm1)
-        Y[gen] = z1g * b / w
+        if every:
+            X = r0 * au / (w + rm1)
+            Y = z1g * b / w
+        else:
+            X[gen] = r0 * au[gen] / (w + rm1)
+            Y[gen] = z1g * b / w
     if on_axis.any():
         au_ax = au[on_axis]
         num = a * au_ax
@@ -187,19 +202,18 @@ def closest_points(u, v, a, b, iterations=60):
         Y[on_axis] = np.where(inside_evolute, b * np.sqrt(np.maximum(1 - (xa / a) ** 2, 0.0)), 0.0)
     X = np.copysign(X, u)
     Y = np.copysign(Y, v)
-    d = np.hypot(u - X, v - Y)
+    dx, dy = u - X, v - Y
+    d = np.sqrt(dx * dx + dy * dy)
     return X, Y, np.where(g > 0, d, -d)
 
 
-def orthogonal_residuals(x, y, p, iterations=60):
-    """Signed orthogonal distances of the points to the ellipse p = (xc, yc, a, b, theta) and the
-    parameter phi of each closest point (x' = a cos phi, y' = b sin phi, eq. 17)."""
+def orthogonal_residuals(x, y, p, iterations=60, with_phi=True):
+    """Signed orthogonal distances of the points to the ellipse p = (xc, yc, a, b, theta) and (if
+    ``with_phi``) the parameter phi of each closest point (x' = a cos phi, y' = b sin phi, eq. 17)."""
     xc, yc, a, b, t = p
     u, v = to_local(x, y, p)
     if a >= b:
         X, Y, d = closest_points(u, v, a, b, iterations)
     else:  # solve with the axes swapped (the solver wants a >= b)
-        Yv, Xu, d = closest_points(v, u, b, a, iterations)
-        X, Y = Xu, Yv
-    phi = np.arctan2(Y / b, X / a)
-    return d, phi
+        Y, X, d = closest_points(v, u, b, a, iterations)
+    return d, (np.arctan2(Y / b, X / a) if with_phi else None)

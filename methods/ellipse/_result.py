@@ -14,7 +14,7 @@ def ellipse_result(points, params, *, converged: bool, message: str, iterations=
     p = canonical(params)
     if not (np.isfinite(p).all() and p[3] > 0):
         return failed(points, f"no valid ellipse: parameters {p.tolist()}")
-    d, _ = orthogonal_residuals(points[:, 0], points[:, 1], p)
+    d, _ = orthogonal_residuals(points[:, 0], points[:, 1], p, with_phi=False)
     conic = params_to_conic(p)
     extra = {**(extra or {}), "paper_gamma_solutions": paper_gamma_solutions(conic)}
     return EllipseFit(center=(float(p[0]), float(p[1])), semi_axes=(float(p[2]), float(p[3])), angle=float(p[4]),

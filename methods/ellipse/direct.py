@@ -68,12 +68,16 @@ def halir_flusser(points):
     4 a1[0] a1[2] - a1[1]^2 > 0. S3 is solved through the QR factor of D2 (no squaring)."""
     frame = Frame.of(points)
     x, y = frame.x, frame.y
-    D1 = np.column_stack([x * x, x * y, y * y])
-    D2 = np.column_stack([x, y, np.ones_like(x)])
-    # T = -(D2^T D2)^-1 D2^T D1 = -lstsq(D2, D1): the least-squares solve avoids forming S3
-    T = -np.linalg.lstsq(D2, D1, rcond=None)[0]
-    R = D1 + D2 @ T  # residual of D1 after projecting out the linear part
-    M = R.T @ R  # = S1 + S2 T
+    # One QR of [D2 | D1]: R11 T = -R12 eliminates the linear part, and R22^T R22 = S1 + S2 T is the
+    # Gram matrix of D1's residual after projecting out D2 (no scatter matrix is ever squared).
+    aug = np.empty((len(x), 6))
+    aug[:, 0], aug[:, 1], aug[:, 2] = x, y, 1.0
+    aug[:, 3], aug[:, 4], aug[:, 5] = x * x, x * y, y * y
+    R = np.linalg.qr(aug, mode="r")
+    if R.shape[0] < 6:
+        R = np.vstack([R, np.zeros((6 - R.shape[0], 6))])
+    T = -np.linalg.solve(R[:3, :3], R[:3, 3:])
+    M = R[3:, 3:].T @ R[3:, 3:]  # = S1 + S2 T
     C1inv = np.array([[0.0, 0.0, 0.5], [0.0, -1.0, 0.0], [0.5, 0.0, 0.0]])
     w, V = np.linalg.eig(C1inv @ M)
     V = V.real

@@ -85,7 +85,7 @@ def geometric_nm(points, *, backend="scipy", start=None, step=None, xatol=1e-10,
         px, py, g, xc, yc = q
         if px <= 0 or py <= 0:
             return np.inf
-        d, _ = orthogonal_residuals(x, y, (xc, yc, px, py, g))
+        d, _ = orthogonal_residuals(x, y, (xc, yc, px, py, g), with_phi=False)
         return float(d @ d)
 
     run = simplex.nelder_mead(objective, x0, lam, backend=backend, xatol=xatol, fatol=fatol, max_fev=max_fev)

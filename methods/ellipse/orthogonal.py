@@ -68,7 +68,7 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
     def jac(p):
         if "p" not in cache or not np.array_equal(cache["p"], p):
             fun(p)
-        d, _ = orthogonal_residuals(x, y, p)
+        d, _ = orthogonal_residuals(x, y, p, with_phi=False)
         history.append(float(d @ d))
         return distance_jacobian(x, y, p, cache["phi"])
 

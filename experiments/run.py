@@ -36,6 +36,8 @@ def run_study(name: str, out: Path, log=print) -> Path:
     pd.DataFrame(rows).to_csv(buf, index=False, float_format="%.17g")
     write_atomic(target / "results.csv", buf.getvalue())
     write_atomic(target / "meta.json", json.dumps(meta, indent=1, default=str) + "\n")
+    if hasattr(study, "figure"):
+        study.figure(rows, findings, target)
     log(f"-> {target / 'results.csv'} ({len(rows)} rows), {target / 'meta.json'}")
     return target
 

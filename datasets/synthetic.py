@@ -31,3 +31,47 @@ def ellipse_points(center=(0.0, 0.0), semi_axes=(2.0, 1.0), angle=0.0, n=100, *,
             raise ValueError("noise needs an explicit numpy Generator (rng) for reproducibility")
         pts = pts + rng.normal(0.0, noise, pts.shape)
     return pts
+
+
+def _circle(rng, *, center=(0.0, 0.0), radius=1.0, n=100, arc_deg=360.0, arc_start_deg=0.0, noise=0.0,
+            noise_model="isotropic"):
+    """Points on a circle (or arc of ``arc_deg`` degrees); Gaussian noise of s.d. ``noise`` per
+    coordinate ('isotropic') or along the radius ('radial')."""
+    start = np.radians(arc_start_deg)
+    span = np.radians(arc_deg)
+    full = arc_deg >= 360.0
+    if noise_model == "radial":
+        pts = circle_points(center, radius, n, arc=(start, start + span), noise=noise, rng=rng, endpoint=not full)
+    elif noise_model == "isotropic":
+        pts = circle_points(center, radius, n, arc=(start, start + span), endpoint=not full)
+        if noise:
+            pts = pts + rng.normal(0.0, noise, pts.shape)
+    else:
+        raise ValueError(f"noise_model must be 'isotropic' or 'radial', got {noise_model!r}")
+    return pts, {"family": "circle", "center": tuple(map(float, center)), "radius": float(radius)}
+
+
+def _ellipse(rng, *, center=(0.0, 0.0), semi_axes=(2.0, 1.0), angle_deg=0.0, n=100, arc_deg=360.0,
+             arc_start_deg=0.0, noise=0.0):
+    """Points on an ellipse (or arc), Gaussian noise of s.d. ``noise`` per coordinate."""
+    start = np.radians(arc_start_deg)
+    full = arc_deg >= 360.0
+    pts = ellipse_points(center, semi_axes, np.radians(angle_deg), n, arc=(start, start + np.radians(arc_deg)),
+                         noise=noise, rng=rng if noise else None, endpoint=not full)
+    a, b = float(max(semi_axes)), float(min(semi_axes))
+    angle = np.radians(angle_deg) + (0.0 if semi_axes[0] >= semi_axes[1] else np.pi / 2)
+    return pts, {"family": "ellipse", "center": tuple(map(float, center)), "semi_axes": (a, b),
+                 "angle": float(np.mod(angle, np.pi))}
+
+
+#: synthetic generators by name: f(rng, **params) -> (points, truth)
+GENERATORS = {"circle": _circle, "ellipse": _ellipse}
+
+
+def generate(name: str, rng: np.random.Generator, **params):
+    """Points and truth from a registered generator (``GENERATORS``)."""
+    try:
+        gen = GENERATORS[name]
+    except KeyError:
+        raise ValueError(f"unknown generator {name!r}; known: {', '.join(GENERATORS)}") from None
+    return gen(rng, **params)

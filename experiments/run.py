@@ -1,8 +1,10 @@
-"""``python -m experiments.run [NAME ...] [--list] [--out DIR]``: run studies, write results/.
+"""``python -m experiments.run [NAME ...] [--list] [--quick] [--jobs N] [--executor local|dask]
+[--scheduler ADDRESS] [--out DIR] [--force] [--seed S]``
 
-Each study writes ``OUT/NAME/results.csv`` (long format, one row per data set x method run; timing
-columns start with ``time_``) and ``OUT/NAME/meta.json`` (provenance and study-level findings),
-both atomically. No NAME runs the default studies.
+Runs studies (no NAME: the default studies) and writes, per study, ``OUT/NAME/results.csv`` (long
+format, one row per run; timing columns start with ``time_``), ``meta.json`` (provenance, counts,
+findings), ``summary.csv``/``summary.md`` and the study's figures. Rows are stored as they finish
+in ``OUT/NAME/rows.sqlite``: an interrupted run resumes; ``--force`` recomputes.
 """
 from __future__ import annotations
 
@@ -10,13 +12,17 @@ import argparse
 import importlib
 import io
 import json
+import os
 import sys
+import time
 from pathlib import Path
 
 import pandas as pd
 
 from experiments import config as configs
+from experiments import engine
 from experiments.provenance import REPO, collect, write_atomic
+from experiments.summary import summarise, to_markdown
 from methods import InvalidInputError
 
 
@@ -24,43 +30,79 @@ def default_studies() -> list[str]:
     return [n for n in configs.available() if configs.load(n).get("default", False)]
 
 
-def run_study(name: str, out: Path, log=print) -> Path:
-    cfg = configs.load(name)
+def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", scheduler=None, force=False,
+              seed=None, log=print) -> Path:
+    cfg = configs.load(name, quick=quick, seed=seed)
     study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
-    log(f"== {name}: {cfg['title']}")
-    rows, findings = study.run(cfg, log=log)
+    target = out / cfg["name"]
+    log(f"== {cfg['name']}: {cfg['title']}" + (" [quick]" if quick else ""))
+    tasks = study.tasks(cfg) if hasattr(study, "tasks") else engine.grid_tasks(cfg, cfg["_where"])
+    engine.prepare(tasks)
+    jobs = min(jobs, cfg.get("max_jobs", jobs))
+    store = engine.RowStore(target / "rows.sqlite")
+    try:
+        rows, counts = engine.run(tasks, store, force=force, jobs=jobs, executor=executor, scheduler=scheduler,
+                                  desc=cfg["name"], log=log)
+    finally:
+        store.close()
+    df = pd.DataFrame(rows).sort_values("task_index").drop(columns=["task_index"]).reset_index(drop=True)
+    findings = study.finalize(df, cfg, target, log) if hasattr(study, "finalize") else {}
+    by = cfg.get("summary_by", ["dataset"] + [c for c in df.columns if c.startswith("data_")] + ["method", "params"])
+    summary = summarise(df, by)
     public_cfg = {k: v for k, v in cfg.items() if not k.startswith("_")}
-    meta = {**collect(public_cfg), "study": name, "n_rows": len(rows), "findings": findings}
-    target = out / name
+    meta = {**collect(public_cfg), "study": cfg["name"], "quick": quick, "executor": executor, "jobs": jobs,
+            "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
+            "findings": findings}
     buf = io.StringIO()
-    pd.DataFrame(rows).to_csv(buf, index=False, float_format="%.17g")
+    df.to_csv(buf, index=False, float_format="%.17g")
     write_atomic(target / "results.csv", buf.getvalue())
+    buf = io.StringIO()
+    summary.to_csv(buf, index=False, float_format="%.10g")
+    write_atomic(target / "summary.csv", buf.getvalue())
+    write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary))
     write_atomic(target / "meta.json", json.dumps(meta, indent=1, default=str) + "\n")
-    if hasattr(study, "figure"):
-        study.figure(rows, findings, target)
-    log(f"-> {target / 'results.csv'} ({len(rows)} rows), {target / 'meta.json'}")
+    bad = {k: v for k, v in meta["status_counts"].items() if k != "ok"}
+    log(f"-> {target}/results.csv ({len(df)} rows" + (f"; {bad}" if bad else "") +
+        f", {counts['wall_s']:.1f} s), summary.csv, summary.md, meta.json")
     return target
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m experiments.run", description=__doc__.splitlines()[0])
-    parser.add_argument("names", nargs="*", metavar="NAME", help="studies to run (default: the default studies)")
+    parser = argparse.ArgumentParser(prog="python -m experiments.run", description="Run fitbench studies.")
+    parser.add_argument("names", nargs="*", metavar="NAME", help="studies (names or .toml paths); default: the default studies")
     parser.add_argument("--list", action="store_true", help="list the studies, one line each")
+    parser.add_argument("--quick", action="store_true", help="the reduced grid of each study (CI size)")
+    parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="parallel workers (default: 2)")
+    parser.add_argument("--executor", choices=("local", "dask"), default="local",
+                        help="local processes, or Dask distributed (a LocalCluster unless --scheduler)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
     parser.add_argument("--out", type=Path, default=REPO / "results", help="output directory (default: results/)")
+    parser.add_argument("--force", action="store_true", help="recompute rows that are already stored")
+    parser.add_argument("--seed", type=int, help="override the studies' base seed")
     args = parser.parse_args(argv)
     try:
         if args.list:
             for name in configs.available():
                 cfg = configs.load(name)
-                print(f"{name:<22} {'default' if cfg.get('default') else '       '}  {cfg['title']}")
+                print(f"{name:<18} {'default' if cfg.get('default') else '       '}  {cfg['title']}")
             return 0
-        for name in args.names or default_studies():
-            run_study(name, args.out)
+        if args.jobs < 1:
+            raise InvalidInputError(f"--jobs must be at least 1, got {args.jobs}")
+        if args.scheduler and args.executor != "dask":
+            raise InvalidInputError("--scheduler needs --executor dask")
+        names = args.names or default_studies()
+        for name in names:  # validate every config before running any
+            configs.load(name, quick=args.quick, seed=args.seed)
+        t0 = time.perf_counter()
+        for name in names:
+            run_study(name, args.out, quick=args.quick, jobs=args.jobs, executor=args.executor,
+                      scheduler=args.scheduler, force=args.force, seed=args.seed)
+        print(f"done: {len(names)} studies in {time.perf_counter() - t0:.0f} s")
     except InvalidInputError as exc:
         print(f"experiments.run: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("experiments.run: interrupted; finished studies are written, rerun to redo the others", file=sys.stderr)
+        print("experiments.run: interrupted; finished rows are stored, run again to resume", file=sys.stderr)
         return 130
     return 0
 

@@ -5,7 +5,7 @@ import numpy as np
 
 from methods._registry import register
 from methods._result import circle_result
-from methods._validation import check_choice, check_positive
+from methods._validation import check_choice, check_positive, check_vector
 from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations
 
 STOPPING_CRITERIA = ("objective", "step", "gradient")
@@ -15,10 +15,10 @@ EPS = np.finfo(float).eps
 @register("circle.gauss_newton", kind="iterative",
           summary="Gauss–Newton geometric least squares from the algebraic start (roundness paper)",
           reference="Pınar & Güllü, roundness paper, eq. 7 (start), 8-10 (Jacobian), 12-13 (step)")
-def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max_iter=100):
+def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max_iter=100, start=None):
     """Minimise F = sum d_i^2, d_i = r_i - R (eq. 3-4), by Gauss–Newton.
 
-    Start: Kåsa's algebraic solution of eq. 7. Each iteration solves J Delta = -d in the least-squares
+    Start: Kåsa's algebraic solution of eq. 7 (the paper's), or ``start`` = (xc, yc, R) in data units. Each iteration solves J Delta = -d in the least-squares
     sense with J of eq. 10 (rows [-(x_i - xc)/r_i, -(y_i - yc)/r_i, -1]) and updates by eq. 13.
     The paper lists three stopping criteria; ``stop`` selects one, in the unit frame (data centred,
     RMS radius 1, so the tolerances are relative to the size of the data):
@@ -34,10 +34,11 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     for key, val in (("xtol", xtol), ("ftol", ftol), ("gtol", gtol)):
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
+    p_start = check_vector("start", start, 3, name)
     frame = Frame.of(points)
     x, y = frame.x, frame.y
     n = len(x)
-    p = algebraic_start(x, y)
+    p = algebraic_start(x, y) if p_start is None else frame.circle_to_unit(p_start)
     history, steps = [], []
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
     f_prev = None

@@ -5,7 +5,7 @@ import numpy as np
 
 from methods._registry import register
 from methods._result import circle_result
-from methods._validation import check_positive
+from methods._validation import check_positive, check_vector
 from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations as _state
 
 
@@ -23,8 +23,9 @@ def _reduction(arrays, h):
           summary="Levenberg–Marquardt geometric least squares (Marquardt scaling, Nielsen damping update)",
           reference="Marquardt, SIAM J. Appl. Math. 11 (1963) 431-441; Madsen, Nielsen & Tingleff (2004) alg. 3.16; "
                     "objective: circle/ellipse paper eq. 8-9")
-def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=200):
-    """Minimise S_CG = sum d_i^2, d_i = r_i - R (circle/ellipse paper eq. 8-9), from Kåsa's start.
+def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=200, start=None):
+    """Minimise S_CG = sum d_i^2, d_i = r_i - R (circle/ellipse paper eq. 8-9), from Kåsa's start
+    (or ``start`` = (xc, yc, R) in data units).
 
     Each iteration solves (J^T J + mu diag(J^T J)) h = -J^T d (Marquardt's scaled damping); a step
     is accepted when F decreases, and mu is updated from the gain ratio rho by Nielsen's rule
@@ -41,10 +42,11 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
     for key, val in (("xtol", xtol), ("gtol", gtol), ("tau", tau)):
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
+    p_start = check_vector("start", start, 3, name)
     frame = Frame.of(points)
     x, y = frame.x, frame.y
     n = len(x)
-    p = algebraic_start(x, y)
+    p = algebraic_start(x, y) if p_start is None else frame.circle_to_unit(p_start)
     state = _state(x, y, p)
     if state is None:
         p = p + np.array([1e-6, 1e-6, 0.0])  # start on a data point: nudge it off

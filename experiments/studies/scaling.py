@@ -1,0 +1,48 @@
+"""Study ``scaling``: runtime against N for every method, with log-log slopes (N >= 1000)."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+
+def finalize(df, cfg, target, log):
+    ok = df[(df["status"] == "ok") & df["time_median_s"].notna()].copy()
+    ok["label"] = ok["method"] + ok["params"].map(lambda p: "" if p == "{}" else " " + p)
+    slopes = {}
+    for label, g in ok.groupby("label", sort=False):
+        big = g[g["data_n"] >= 1000]
+        if len(big) >= 2:
+            slopes[label] = float(np.polyfit(np.log10(big["data_n"]), np.log10(big["time_median_s"]), 1)[0])
+    table = ok.pivot_table(index="label", columns="data_n", values="time_median_s", sort=False)
+    table["slope_N>=1000"] = pd.Series(slopes)
+    table.to_csv(target / "runtime_table.csv", float_format="%.4g")
+    log("  median runtime [ms] by N, and the log-log slope for N >= 1000:")
+    log("  " + f"{'method':<40}" + "".join(f"{int(c):>11}" for c in table.columns[:-1]) + f"{'slope':>8}")
+    for label, vals in table.iterrows():
+        log("  " + f"{label:<40}" + "".join(f"{v * 1e3:11.3f}" if v == v else f"{'-':>11}" for v in vals.iloc[:-1])
+            + (f"{vals.iloc[-1]:8.2f}" if vals.iloc[-1] == vals.iloc[-1] else f"{'-':>8}"))
+    figure(ok, slopes, target)
+    return {"runtime_table": "runtime_table.csv", "slopes": slopes, "figure": "scaling.png"}
+
+
+def figure(ok, slopes, target):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), sharey=True)
+    for label, g in ok.groupby("label", sort=True):
+        ax = axes[0] if label.startswith("circle.") else axes[1]
+        g = g.sort_values("data_n")
+        s = slopes.get(label)
+        ax.loglog(g["data_n"], g["time_median_s"], marker="o", ms=3,
+                  label=label.split(".", 1)[1] + (f" ({s:.2f})" if s is not None else ""))
+    for ax, title in zip(axes, ("circle methods", "ellipse methods")):
+        ax.set_title(f"{title}: median runtime (slope for N ≥ 1000)")
+        ax.set_xlabel("N (points)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[0].set_ylabel("seconds per fit")
+    fig.tight_layout()
+    fig.savefig(target / "scaling.png", dpi=110)
+    plt.close(fig)

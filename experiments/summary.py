@@ -1,0 +1,49 @@
+"""Per-study summary tables (CSV and Markdown) from the long results table."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+ERROR_COLUMNS = ("center_error", "radius_error", "semi_axis_a_error", "semi_axis_b_error", "angle_error")
+
+
+def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
+    """One row per group: runs, share converged, median form error, bias and RMSE of the errors
+    against the truth, median iterations and time."""
+    by = [c for c in by if c in df.columns]
+    groups = []
+    for key, g in df.groupby(by, sort=False, dropna=False):
+        ok = g[g["status"] == "ok"] if "status" in g else g
+        row = dict(zip(by, key if isinstance(key, tuple) else (key,)))
+        row["runs"] = len(g)
+        row["ok_share"] = len(ok) / len(g) if len(g) else np.nan
+        if "form_error" in g:
+            row["form_error_median"] = ok["form_error"].median()
+        for col in ERROR_COLUMNS:
+            if col in g and ok[col].notna().any():
+                v = ok[col].astype(float)
+                if col == "center_error":
+                    row["center_rmse"] = float(np.sqrt(np.mean(v ** 2)))
+                    if "center_error_x" in ok:
+                        row["center_bias"] = float(np.hypot(ok["center_error_x"].mean(), ok["center_error_y"].mean()))
+                else:
+                    name = col.replace("_error", "")
+                    row[f"{name}_bias"] = float(v.mean())
+                    row[f"{name}_rmse"] = float(np.sqrt(np.mean(v ** 2)))
+        if "iterations" in g and ok["iterations"].notna().any():
+            row["iterations_median"] = float(ok["iterations"].median())
+        if "time_median_s" in g and ok["time_median_s"].notna().any():
+            row["time_median_s"] = float(ok["time_median_s"].median())
+        groups.append(row)
+    return pd.DataFrame(groups)
+
+
+def to_markdown(df: pd.DataFrame, floatfmt: str = ".4g") -> str:
+    """A GitHub Markdown table (no extra dependency)."""
+    def fmt(v):
+        if isinstance(v, (float, np.floating)):
+            return "" if not np.isfinite(v) else format(v, floatfmt)
+        return str(v)
+    lines = ["| " + " | ".join(map(str, df.columns)) + " |", "|" + "---|" * len(df.columns)]
+    lines += ["| " + " | ".join(fmt(v) for v in row) + " |" for row in df.itertuples(index=False)]
+    return "\n".join(lines) + "\n"

@@ -46,7 +46,8 @@ def test_similarity_equivariance(method_id, pts, shift, angle, scale):
     assert base.converged, base.message
     assert res.converged, res.message
     want_center = scale * rot @ np.array(base.center) + shift
-    tol = _tol(method_id, scale * base.radius)
+    # plus the rounding of the coordinates themselves (a tiny circle far away is coarsely represented)
+    tol = _tol(method_id, scale * base.radius) + 64 * np.finfo(float).eps * (np.abs(moved).max() + np.abs(pts).max() * scale)
     assert np.abs(np.array(res.center) - want_center).max() <= tol
     assert abs(res.radius - scale * base.radius) <= tol
     assert abs(res.form_error - scale * base.form_error) <= 4 * tol

@@ -10,7 +10,8 @@ Data sets in a config (``[[datasets]]``):
 * ``generator = "circle"`` with fixed ``params = {...}`` and an optional ``grid = {...}`` whose
   values are lists (the cartesian product is taken); synthetic data get ``repetitions`` noise draws;
 * ``published = "roundness_set3"`` (optional ``variant = "drop_repeated_closing_point"``).
-Methods (``[[methods]]``): ``id`` (or ``family.*``), fixed ``params``, optional ``grid``.
+Methods (``[[methods]]``): ``id`` (or ``family.*``), fixed ``params``, optional ``grid``, ``max_n``
+(skip larger data sets) and ``on`` (only the data sets with these labels).
 
 Randomness: the data of (data set entry i, grid point j, repetition r) come from
 ``SeedSequence(seed, spawn_key=(i, j, r))``: every method sees the same noise, whichever worker
@@ -99,7 +100,7 @@ def expand_methods(cfg: dict, where: str) -> list[tuple[str, dict]]:
             entry = {"id": entry}
         if not isinstance(entry, dict) or "id" not in entry:
             raise ConfigError(f"{here}: each method is an id or a table with 'id', got {entry!r}")
-        unknown = set(entry) - {"id", "params", "grid", "max_n"}
+        unknown = set(entry) - {"id", "params", "grid", "max_n", "on"}
         if unknown:
             raise ConfigError(f"{here}: unknown key(s) {', '.join(sorted(unknown))}")
         mid = entry["id"]
@@ -119,7 +120,7 @@ def expand_methods(cfg: dict, where: str) -> list[tuple[str, dict]]:
                 raise ConfigError(f"{here}: {m} has no parameter(s) {', '.join(sorted(bad))}; its parameters are: "
                                   f"{', '.join(methods.get(m).defaults) or 'none'}")
             for params in _grid(fixed, grid, here):
-                out.append((m, {"params": params, "max_n": entry.get("max_n")}))
+                out.append((m, {"params": params, "max_n": entry.get("max_n"), "on": entry.get("on")}))
     unique: dict = {}
     for m, extra in out:  # a later entry for the same method and parameters overrides (e.g. its max_n)
         unique[(m, json.dumps(extra["params"], sort_keys=True))] = (m, extra)
@@ -172,6 +173,8 @@ def grid_tasks(cfg: dict, where: str) -> list[dict]:
         n_rep = 1 if "published" in spec else reps
         for r in range(n_rep):
             for m, extra in runs:
+                if extra["on"] is not None and spec["label"] not in extra["on"]:
+                    continue
                 n = spec.get("params", {}).get("n")
                 if extra["max_n"] is not None and n is not None and n > extra["max_n"]:
                     continue

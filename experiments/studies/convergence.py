@@ -104,12 +104,15 @@ def figure(table, target):
     arcs = list(table["arc_deg"].unique())
     fig, axes = plt.subplots(1, len(arcs), figsize=(5 * len(arcs), 3.6), squeeze=False, sharey=True)
     for j, arc in enumerate(arcs):
-        for (m, p), g in table[table["arc_deg"] == arc].groupby(["method", "params"], sort=False):
+        groups = list(table[table["arc_deg"] == arc].groupby(["method", "params"], sort=False))
+        for k, ((m, p), g) in enumerate(groups):
             label = m.split(".", 1)[1] + ("" if p == "{}" else " " + p.replace('"', "").replace("{", "").replace("}", ""))
-            axes[0, j].semilogx(g["start_distance"], g["success_rate"], marker="o", label=label)
+            # small vertical offsets keep coinciding curves visible
+            axes[0, j].semilogx(g["start_distance"], g["success_rate"] + 0.012 * (k - len(groups) / 2),
+                                marker="osd^v"[k % 5], ms=5, label=label)
         axes[0, j].set_title(f"{arc:.0f}° arc")
         axes[0, j].set_xlabel("start distance from the centre [radii]")
-    axes[0, 0].set_ylabel("success rate")
+    axes[0, 0].set_ylabel("success rate (curves offset by ±0.03 for visibility)")
     axes[0, -1].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(target / "convergence.png", dpi=110)

@@ -7,7 +7,7 @@ import pandas as pd
 
 def finalize(df, cfg, target, log):
     ok = df[(df["status"] == "ok") & df["time_median_s"].notna()].copy()
-    ok["label"] = ok["method"] + ok["params"].map(lambda p: "" if p == "{}" else " " + p)
+    ok["label"] = ok["method"] + ok["params"].map(lambda p: "" if p == "{}" or "start" in p else " " + p)
     slopes = {}
     for label, g in ok.groupby("label", sort=False):
         big = g[g["data_n"] >= 1000]
@@ -31,12 +31,16 @@ def figure(ok, slopes, target):
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), sharey=True)
+    colours = plt.get_cmap("tab20").colors
+    count = {0: 0, 1: 0}
     for label, g in ok.groupby("label", sort=True):
-        ax = axes[0] if label.startswith("circle.") else axes[1]
+        side = 0 if label.startswith("circle.") else 1
+        k = count[side]
+        count[side] += 1
         g = g.sort_values("data_n")
         s = slopes.get(label)
-        ax.loglog(g["data_n"], g["time_median_s"], marker="o", ms=3,
-                  label=label.split(".", 1)[1] + (f" ({s:.2f})" if s is not None else ""))
+        axes[side].loglog(g["data_n"], g["time_median_s"], marker="osd^v<>ph*"[k % 10], ms=4, color=colours[k % 20],
+                          ls="-" if k < 10 else "--", label=label.split(".", 1)[1] + (f" ({s:.2f})" if s is not None else ""))
     for ax, title in zip(axes, ("circle methods", "ellipse methods")):
         ax.set_title(f"{title}: median runtime (slope for N ≥ 1000)")
         ax.set_xlabel("N (points)")

@@ -57,6 +57,8 @@ class MachineErrors:
 class TestConditions:
     """What ISO 230-4 asks to record with a circular test."""
 
+    __test__ = False  # not a pytest test class
+
     nominal_radius: float = 298.997
     nominal_center: tuple = (1200.0, 650.0)
     feed_mm_min: float = 1000.0

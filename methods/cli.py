@@ -125,6 +125,37 @@ def cmd_fit(args) -> int:
     return 0 if result.converged else 1
 
 
+def cmd_circular_test(args) -> int:
+    from datasets import points_from
+    from methods.circular_test import diagnose, evaluate
+    from methods.circular_test.report import polar_plot, text
+
+    _, cw = points_from(args.cw)
+    _, ccw = points_from(args.ccw)
+    center = tuple(args.nominal_center) if args.nominal_center else None
+    conditions = {"nominal_radius": args.nominal_radius, "nominal_center": center, "feed_mm_min": args.feed,
+                  "files": {"cw": str(args.cw), "ccw": str(args.ccw)}, "centre_for_G": args.center}
+    ev = evaluate(cw, ccw, args.nominal_radius, center, center=args.center, conditions=conditions)
+    dg = None
+    if center is not None:
+        dg = diagnose(cw, ccw, args.nominal_radius, center, feed_mm_min=args.feed, cyclic_pitch=args.cyclic_pitch)
+    if args.plot:
+        polar_plot(cw, ccw, ev, args.plot)
+    if args.json:
+        out = {k: ev[k] for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation", "center")}
+        out["diagnostics"] = ({k: v for k, v in dg.items() if not k.startswith("_")} if dg else
+                              "not estimated: give --nominal-center X Y")
+        out["details"] = {k: v for k, v in ev.items() if k not in out}
+        if dg:
+            out["details"]["diagnostics_model"] = dg["_model"]
+        print(json.dumps(_jsonable(out)))
+        return 0
+    print(text(ev, dg))
+    if dg is None:
+        print("diagnostics: not estimated (give --nominal-center X Y)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="python -m methods", description="fitbench fitting methods")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -139,6 +170,18 @@ def build_parser() -> argparse.ArgumentParser:
     pf.add_argument("--json", action="store_true", help="print the result as one JSON object")
     pf.add_argument("--no-residuals", action="store_true", help="leave the per-point residuals out of --json")
     pf.set_defaults(func=cmd_fit)
+    pc = sub.add_parser("circular-test", help="ISO 230-4 evaluation and diagnostics of a CW and a CCW run")
+    pc.add_argument("cw", metavar="CW.csv", help="the clockwise run (x, y)")
+    pc.add_argument("ccw", metavar="CCW.csv", help="the counter-clockwise run (x, y)")
+    pc.add_argument("--nominal-radius", type=float, required=True, metavar="R")
+    pc.add_argument("--nominal-center", type=float, nargs=2, metavar=("X", "Y"),
+                    help="nominal centre (machine coordinates); needed for F about it and for the diagnostics")
+    pc.add_argument("--center", choices=("lsq", "mz"), default="lsq", help="centre for G: least squares or minimum zone")
+    pc.add_argument("--feed", type=float, metavar="MM_PER_MIN", help="feed: gives the servo mismatch in ms")
+    pc.add_argument("--cyclic-pitch", type=float, metavar="MM", help="ball-screw pitch: estimates the cyclic error")
+    pc.add_argument("--json", action="store_true", help="print one JSON object")
+    pc.add_argument("--plot", metavar="FILE", help="write the polar plot (PNG or PDF)")
+    pc.set_defaults(func=cmd_circular_test)
     return p
 
 

@@ -1,0 +1,138 @@
+"""Study ``circular_test``: the circle/ellipse paper's tables 1-5 on a synthetic LOLA HBG 130 test.
+
+The paper's measured traces are not published, so its numbers cannot be refitted; the scenario
+(datasets.circular_test.lola_hbg130) is built from what its tables imply. The comparison therefore
+has three columns: the fitted value, the scenario's exact truth (the circle and ellipse that the
+injected linear errors produce), and the published value for orientation.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+import methods
+from datasets.circular_test import circular_test, lola_hbg130
+from experiments import engine
+from experiments.engine import ConfigError
+
+PAPER = {  # tables 1-5 (centres in um about the nominal centre, radii and axes in mm, angles in deg)
+    "circle.powell_hybrid": {"both": (-11.84, 9.81, 299.0132), "cw": (-11.67, 9.50, 299.0131), "ccw": (-12.00, 10.11, 299.0134)},
+    "circle.nelder_mead": {"both": (-11.83, 9.79, 299.0132), "cw": (-11.72, 9.53, 299.0131), "ccw": (-12.02, 10.06, 299.0134)},
+    "ellipse.algebraic_nm": {"both": (299.0243, 299.0022, -57.96, 32.04, -11.85, 9.81),
+                             "cw": (299.0243, 299.0019, -58.27, 31.47, -11.66, 9.50),
+                             "ccw": (299.0243, 299.0025, -57.36, 32.64, -12.00, 10.11)},
+    "ellipse.geometric_nm": {"both": (299.0241, 299.0024, -57.62, 32.38, -11.97, 9.74),
+                             "cw": (299.0241, 299.0020, -57.96, 32.04, -11.97, 9.34),
+                             "ccw": (299.0242, 299.0027, -57.35, 32.65, -12.10, 10.08)},
+    "ellipse.fitzgibbon": {"both": (299.0243, 299.0022, -57.94, 32.06, -11.85, 9.80)},
+    "ellipse.halir_flusser": {"both": (299.0243, 299.0022, -57.94, 32.06, -11.85, 9.80)},
+}
+PAPER_ISO = {"G_cw": 27.0, "G_ccw": 26.3, "G_b": 27.4, "H": 9.0}  # um (sec. 3.3)
+
+
+def validate(cfg, where):
+    paths = cfg.get("paths", ["both"])
+    if not paths or set(paths) - {"both", "cw", "ccw"}:
+        raise ConfigError(f"{where}: paths must be a list of 'both', 'cw', 'ccw', got {paths!r}")
+    engine.expand_methods(cfg, where)
+
+
+def tasks(cfg):
+    out = []
+    for j, path in enumerate(cfg["paths"]):
+        spec = {"entry": 0, "point": j, "scenario": "lola_hbg130", "path": path, "label": f"lola_hbg130:{path}"}
+        for m, extra in engine.expand_methods(cfg, cfg["_where"]):
+            out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
+                        "stream": [0, 0, 0], "seed": cfg["seed"], "method": m, "params": extra["params"], "timing": None})
+    return out
+
+
+def scenario(seed):
+    cond, err = lola_hbg130()
+    cw, ccw, truth = circular_test(cond, err, seed=seed)
+    return cond, err, cw, ccw
+
+
+def exact_truth(cond, err):
+    """The circle and ellipse that the injected linear errors (scale, squareness, offset) produce."""
+    A = cond.nominal_radius * np.array([[1 + err.scale_x, err.squareness], [0.0, 1 + err.scale_y]])
+    U, s, _ = np.linalg.svd(A)
+    angle = float(np.mod(np.arctan2(U[1, 0], U[0, 0]), np.pi))
+    center = (cond.nominal_center[0] + err.offset_x, cond.nominal_center[1] + err.offset_y)
+    t = np.linspace(0, 2 * np.pi, 20000, endpoint=False)
+    pts = np.asarray(center) + (A @ np.vstack([np.cos(t), np.sin(t)])).T
+    lsq = methods.fit("circle.gauss_newton", pts)
+    return {"family": "ellipse", "center": center, "semi_axes": (float(s[0]), float(s[1])), "angle": angle,
+            "circle_center": lsq.center, "circle_radius": lsq.radius}
+
+
+def execute(task):
+    cond, err, cw, ccw = scenario(task["seed"])
+    pts = {"both": np.vstack([cw, ccw]), "cw": cw, "ccw": ccw}[task["dataset"]["path"]]
+    truth = exact_truth(cond, err)
+    if task["method"].startswith("circle."):
+        truth = {"family": "circle", "center": truth["circle_center"], "radius": truth["circle_radius"]}
+    row = engine.fit_row(task, pts, truth)
+    row["path"] = task["dataset"]["path"]
+    return row
+
+
+def _um(v, ref):
+    return (v - ref) * 1e3
+
+
+def finalize(df, cfg, target, log):
+    from methods.circular_test import diagnose, evaluate
+    from methods.circular_test.report import polar_plot, text
+
+    cond, err, cw, ccw = scenario(cfg["seed"])
+    truth = exact_truth(cond, err)
+    xc0, yc0 = cond.nominal_center
+    lines = []
+    for m in dict.fromkeys(df["method"]):
+        g = df[df["method"] == m]
+        lines.append(f"\n  {m} {g['params'].iloc[0] if g['params'].iloc[0] != '{}' else ''}")
+        if m.startswith("circle."):
+            lines.append(f"    {'path':<6} {'x_c [um]':>9} {'y_c [um]':>9} {'R [mm]':>10} | truth {'x_c':>7} {'y_c':>7} "
+                         f"{'R':>10} | paper {'x_c':>7} {'y_c':>7} {'R':>10}")
+            for r in g.itertuples():
+                p = PAPER.get(m, {}).get(r.path)
+                t = (_um(truth["circle_center"][0], xc0), _um(truth["circle_center"][1], yc0), truth["circle_radius"])
+                lines.append(f"    {r.path:<6} {_um(r.center_x, xc0):9.2f} {_um(r.center_y, yc0):9.2f} {r.radius:10.4f} | "
+                             f"      {t[0]:7.2f} {t[1]:7.2f} {t[2]:10.4f} | " +
+                             (f"      {p[0]:7.2f} {p[1]:7.2f} {p[2]:10.4f}" if p else "      (not published)") +
+                             ("" if r.status == "ok" else f"  [{r.status}]"))
+        else:
+            lines.append(f"    {'path':<6} {'p_x':>9} {'p_y':>9} {'g1 [deg]':>9} {'g2':>7} {'x_c':>7} {'y_c':>7} | truth "
+                         f"{'p_x':>9} {'p_y':>9} {'g(a)':>7} | paper {'p_x':>9} {'p_y':>9} {'g1':>7} {'g2':>7}")
+            for r in g.itertuples():
+                if r.status not in ("ok", "not converged") or r.semi_axis_a != r.semi_axis_a:
+                    lines.append(f"    {r.path:<6} {r.status}: {r.message}")
+                    continue
+                g_a = np.degrees(r.angle)
+                g1, g2 = (g_a - 180 if g_a > 90 else g_a), (g_a - 90)
+                p = PAPER.get(m, {}).get(r.path)
+                lines.append(f"    {r.path:<6} {r.semi_axis_a:9.4f} {r.semi_axis_b:9.4f} {g1:9.2f} {g2:7.2f} "
+                             f"{_um(r.center_x, xc0):7.2f} {_um(r.center_y, yc0):7.2f} | "
+                             f"      {truth['semi_axes'][0]:9.4f} {truth['semi_axes'][1]:9.4f} {np.degrees(truth['angle']):7.2f} | " +
+                             (f"      {p[0]:9.4f} {p[1]:9.4f} {p[2]:7.2f} {p[3]:7.2f}" if p else "      (not published)") +
+                             ("" if r.status == "ok" else f"  [{r.status}]"))
+    ev = evaluate(cw, ccw, cond.nominal_radius, cond.nominal_center, conditions=cond)
+    dg = diagnose(cw, ccw, cond.nominal_radius, cond.nominal_center, feed_mm_min=cond.feed_mm_min)
+    injected = {"squareness": err.squareness * 1e6, "scale_mismatch": (err.scale_x - err.scale_y) * 1e6,
+                "servo_mismatch": err.servo_mismatch * 1e3, "backlash_x": err.backlash_x * 1e3,
+                "backlash_y": err.backlash_y * 1e3, "reversal_spike_x": err.spike_x * 1e3,
+                "reversal_spike_y": err.spike_y * 1e3}
+    lines.append("\n  " + text(ev, dg).replace("\n", "\n  "))
+    lines.append("  published (sec. 3.3): G = 27.0 / 26.3 um, G(b) = 27.4 um, H = 9 um; injected: " +
+                 ", ".join(f"{k} {v:g}" for k, v in injected.items()))
+    for line in lines:
+        log(line)
+    polar_plot(cw, ccw, ev, target / "polar.png", title="LOLA HBG 130 (synthetic scenario)")
+    (target / "tables.txt").write_text("\n".join(lines) + "\n")
+    return {"figure": "polar.png", "tables": "tables.txt",
+            "iso230_4": {k: ev[k] for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation")},
+            "iso230_4_published_um": PAPER_ISO,
+            "diagnostics": {k: v for k, v in dg.items() if not k.startswith("_")}, "injected": injected,
+            "truth_ellipse": {"semi_axes": truth["semi_axes"], "angle_deg": float(np.degrees(truth["angle"]))}}

@@ -1,0 +1,189 @@
+"""Circular tests (ISO 230-4): figures by their definitions, diagnostics recover injected sources,
+the paper's elliptic path, the CLI."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.optimize import least_squares
+
+from conftest import REPO
+from datasets.circular_test import MachineErrors, TestConditions, circular_test, lola_hbg130
+from methods import InvalidInputError
+from methods.circular_test import diagnose, evaluate
+
+COND = TestConditions(nominal_radius=150.0, nominal_center=(300.0, 200.0), feed_mm_min=2000.0, sampling_hz=100.0,
+                      start_angle_deg=17.0, run_in_deg=20.0, run_out_deg=20.0)
+ALL = dict(squareness=50e-6, scale_x=30e-6, scale_y=-10e-6, lag_x=0.002, lag_y=0.0015, backlash_x=0.006,
+           backlash_y=0.004, spike_x=0.005, spike_y=0.004, spike_tau=0.1, cyclic_amplitude=0.002, cyclic_pitch=10.0)
+
+
+def independent_lsq_centre(pts):
+    """Geometric least-squares centre by scipy (a second algorithm), from the centroid."""
+    f = lambda p: np.hypot(pts[:, 0] - p[0], pts[:, 1] - p[1]) - p[2]  # noqa: E731
+    c0 = pts.mean(axis=0)
+    p = least_squares(f, [*c0, np.hypot(*(pts - c0).T).mean()], xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+    return p[:2]
+
+
+def ptp_about(pts, c):
+    r = np.hypot(pts[:, 0] - c[0], pts[:, 1] - c[1])
+    return r.max() - r.min()
+
+
+def test_iso_figures_by_their_definitions():
+    cw, ccw, _ = circular_test(COND, MachineErrors(noise=0.0005, **ALL), seed=3)
+    ev = evaluate(cw, ccw, 150.0, (300.0, 200.0))
+    assert ev["G_cw"] == pytest.approx(ptp_about(cw, independent_lsq_centre(cw)), abs=1e-9)
+    assert ev["G_ccw"] == pytest.approx(ptp_about(ccw, independent_lsq_centre(ccw)), abs=1e-9)
+    both = np.vstack([cw, ccw])
+    assert ev["G_b"] == pytest.approx(ptp_about(both, independent_lsq_centre(both)), abs=1e-9)
+    r = np.hypot(both[:, 0] - 300.0, both[:, 1] - 200.0) - 150.0
+    assert ev["F_max"] == pytest.approx(r.max(), abs=1e-12) and ev["F_min"] == pytest.approx(r.min(), abs=1e-12)
+    assert ev["mean_radial_deviation"] == pytest.approx(r.mean(), abs=1e-12)
+    # H: nearest-angle pairing of the two runs (an independent discretisation) agrees to the sampling step
+    c = independent_lsq_centre(both)
+    a1 = np.arctan2(cw[:, 1] - c[1], cw[:, 0] - c[0])
+    a2 = np.arctan2(ccw[:, 1] - c[1], ccw[:, 0] - c[0])
+    r1, r2 = np.hypot(*(cw - c).T), np.hypot(*(ccw - c).T)
+    diff = np.abs(np.angle(np.exp(1j * (a1[:, None] - a2[None, :]))))
+    h = np.max(np.abs(r1 - r2[np.argmin(diff, axis=1)]))
+    assert ev["H"] == pytest.approx(h, rel=0.15)
+    # without a nominal centre, F is about the least-squares centre of both runs
+    ev2 = evaluate(cw, ccw, 150.0)
+    r = np.hypot(*(both - c).T) - 150.0
+    assert ev2["F_max"] == pytest.approx(r.max(), abs=1e-9) and "least-squares" in ev2["F_about"]
+
+
+def test_minimum_zone_option():
+    cw, ccw, _ = circular_test(COND, MachineErrors(noise=0.0005, **ALL), seed=4)
+    lsq = evaluate(cw, ccw, 150.0, center="lsq")
+    mz = evaluate(cw, ccw, 150.0, center="mz")
+    for key in ("G_cw", "G_ccw", "G_b"):
+        assert mz[key] <= lsq[key] + 1e-12
+    assert mz["center_kind"] == "mz"
+
+
+def test_exact_circle_gives_zero_figures():
+    cw, ccw, _ = circular_test(COND, MachineErrors(), seed=0)
+    ev = evaluate(cw, ccw, 150.0, (300.0, 200.0))
+    for key in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min"):
+        assert abs(ev[key]) < 1e-9
+
+
+SINGLE = {
+    "squareness": (dict(squareness=50e-6), 50.0),
+    "scale_mismatch": (dict(scale_x=30e-6, scale_y=-10e-6), 40.0),
+    "servo_mismatch": (dict(lag_x=0.002, lag_y=0.0015), 0.5),
+    "backlash_x": (dict(backlash_x=0.006), 6.0),
+    "backlash_y": (dict(backlash_y=0.004), 4.0),
+    "reversal_spike_x": (dict(spike_x=0.005, spike_tau=0.1), 5.0),
+    "reversal_spike_y": (dict(spike_y=0.004, spike_tau=0.2), 4.0),
+    "cyclic_error": (dict(cyclic_amplitude=0.002, cyclic_pitch=10.0), 2.0),
+}
+
+
+@pytest.mark.parametrize("name", SINGLE)
+def test_each_diagnostic_recovers_its_source_alone(name):
+    kw, want = SINGLE[name]
+    cw, ccw, _ = circular_test(COND, MachineErrors(noise=0.0003, **kw), seed=5)
+    dg = diagnose(cw, ccw, 150.0, (300.0, 200.0), feed_mm_min=2000.0, cyclic_pitch=10.0)
+    assert dg[name]["value"] == pytest.approx(want, rel=0.10)
+    for other, (_, w) in SINGLE.items():  # and the others stay small
+        if other != name:
+            assert abs(dg[other]["value"]) < 0.1 * w + 5 * dg[other]["u"], other
+
+
+def test_all_diagnostics_recover_their_sources_together():
+    cw, ccw, _ = circular_test(COND, MachineErrors(noise=0.0003, **ALL), seed=6)
+    dg = diagnose(cw, ccw, 150.0, (300.0, 200.0), feed_mm_min=2000.0, cyclic_pitch=10.0)
+    want = {"squareness": 50.0, "scale_mismatch": 40.0, "servo_mismatch": 0.5, "backlash_x": 6.0, "backlash_y": 4.0,
+            "reversal_spike_x": 5.0, "reversal_spike_y": 4.0, "cyclic_error": 2.0}
+    for name, w in want.items():
+        assert dg[name]["value"] == pytest.approx(w, rel=0.10), name
+        assert dg[name]["u"] > 0 and dg[name]["unit"]
+
+
+def test_servo_mismatch_without_feed_is_a_radial_amplitude():
+    cw, ccw, _ = circular_test(COND, MachineErrors(lag_x=0.002, lag_y=0.0015, noise=0.0003), seed=7)
+    dg = diagnose(cw, ccw, 150.0, (300.0, 200.0))
+    v = 2000.0 / 60.0
+    assert dg["servo_mismatch"]["unit"] == "um"
+    assert dg["servo_mismatch"]["value"] == pytest.approx(v * 0.0005 * 1e3, rel=0.05)
+    assert dg["cyclic_error"]["value"] is None and "pitch" in dg["cyclic_error"]["note"]
+
+
+def test_lola_scenario_paths_are_the_papers_ellipse():
+    """Tables 3-5: p_x - p_y = 22.1 um, inclination 32.04 deg, the same in both directions."""
+    import methods
+    cond, err = lola_hbg130()
+    cw, ccw, _ = circular_test(cond, err, seed=2004)
+    assert len(cw) == len(ccw) and abs(len(cw) - 3358) < 40  # about 3358 points per direction
+    for pts in (cw, ccw, np.vstack([cw, ccw])):
+        e = methods.fit("ellipse.halir_flusser", pts)
+        assert (e.semi_axes[0] - e.semi_axes[1]) * 1e3 == pytest.approx(22.1, rel=0.05)
+        assert np.degrees(e.angle) == pytest.approx(32.04, abs=0.3)
+        c = methods.fit("circle.gauss_newton", pts)
+        assert c.radius == pytest.approx(299.0132, abs=2e-4)
+        assert (c.center[0] - 1200.0) * 1e3 == pytest.approx(-11.84, abs=0.1)
+        assert (c.center[1] - 650.0) * 1e3 == pytest.approx(9.81, abs=0.1)
+    dg = diagnose(cw, ccw, cond.nominal_radius, cond.nominal_center, feed_mm_min=cond.feed_mm_min)
+    assert dg["squareness"]["value"] == pytest.approx(err.squareness * 1e6, rel=0.05)
+    assert dg["scale_mismatch"]["value"] == pytest.approx((err.scale_x - err.scale_y) * 1e6, rel=0.05)
+    assert dg["reversal_spike_y"]["value"] == pytest.approx(err.spike_y * 1e3, rel=0.10)
+    assert abs(dg["servo_mismatch"]["value"]) < 0.05
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ct")
+    cond, err = lola_hbg130()
+    cw, ccw, _ = circular_test(cond, err, seed=2004)
+    np.savetxt(d / "cw.csv", cw, delimiter=",", header="x,y", comments="", fmt="%.9f")
+    np.savetxt(d / "ccw.csv", ccw, delimiter=",", header="x,y", comments="", fmt="%.9f")
+    np.savetxt(d / "other.csv", cw + [5.0, 0.0], delimiter=",", header="x,y", comments="", fmt="%.9f")
+    (d / "bad.csv").write_text("x,y\n1,2\n3,oops\n")
+    return d
+
+
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "methods", "circular-test", *map(str, args)], capture_output=True,
+                          text=True, cwd=REPO)
+
+
+def test_cli_json_and_plot(files, tmp_path):
+    out = run_cli(files / "cw.csv", files / "ccw.csv", "--nominal-radius", 298.997, "--nominal-center", 1200, 650,
+                  "--feed", 1000, "--json", "--plot", tmp_path / "p.png")
+    assert out.returncode == 0, out.stderr
+    d = json.loads(out.stdout)
+    for key in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation", "center", "diagnostics"):
+        assert key in d
+    names = {"squareness", "scale_mismatch", "servo_mismatch", "backlash_x", "backlash_y", "reversal_spike_x",
+             "reversal_spike_y", "cyclic_error"}
+    assert names <= set(d["diagnostics"])
+    for name in names - {"cyclic_error"}:
+        assert {"value", "unit", "u"} <= set(d["diagnostics"][name])
+    assert (tmp_path / "p.png").stat().st_size > 10_000
+    human = run_cli(files / "cw.csv", files / "ccw.csv", "--nominal-radius", 298.997, "--center", "mz")
+    assert human.returncode == 0 and "G(b)" in human.stdout and "not estimated" in human.stdout
+
+
+@pytest.mark.parametrize("args, match", [
+    (("bad.csv", "ccw.csv", "--nominal-radius", 298.997), "line 3: 'oops' is not a number"),
+    (("cw.csv", "other.csv", "--nominal-radius", 298.997), "do not describe the same circle"),
+    (("cw.csv", "ccw.csv", "--nominal-radius", 150.0), "far from the nominal radius"),
+    (("cw.csv", "ccw.csv"), "--nominal-radius"),
+    (("cw.csv", "missing.csv", "--nominal-radius", 298.997), "no such file"),
+])
+def test_cli_bad_input(files, args, match):
+    args = [files / a if str(a).endswith(".csv") else a for a in args]
+    out = run_cli(*args)
+    assert out.returncode == 2 and match in out.stderr and "Traceback" not in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1
+
+
+def test_partial_run_is_refused():
+    cw, ccw, _ = circular_test(COND, MachineErrors(), seed=0)
+    with pytest.raises(InvalidInputError, match="does not go round"):
+        evaluate(cw[: len(cw) // 2], ccw, 150.0)

@@ -40,17 +40,20 @@ class MethodSpec:
     min_points: int
     func: Callable = field(repr=False, compare=False)
     module: str = ""
+    validator: Callable | None = field(default=None, repr=False, compare=False)
 
     def __call__(self, points, **params):
         return _run(self, points, params)
 
 
-def register(method_id: str, *, summary: str, reference: str, kind: str, min_points: int | None = None):
+def register(method_id: str, *, summary: str, reference: str, kind: str, min_points: int | None = None,
+             validator: Callable | None = None):
     """Decorator registering ``func(points, **params)`` under ``method_id`` = ``family.name``.
 
     Default parameters are read from the function's keyword defaults (one source of truth).
     The decorated name becomes a callable that validates input, merges defaults, times the fit
-    and fills ``method``, ``params`` and ``runtime_s`` of the result.
+    and fills ``method``, ``params`` and ``runtime_s`` of the result. Families whose input is not an
+    (N, 2) point array (e.g. ``positioning``) pass their own ``validator(data, method_id)``.
     """
     family, dot, name = method_id.partition(".")
     if not dot or not family or not name or "." in name:
@@ -67,7 +70,7 @@ def register(method_id: str, *, summary: str, reference: str, kind: str, min_poi
         spec = MethodSpec(id=method_id, family=family, name=name, summary=summary, reference=reference,
                           kind=kind, defaults=defaults,
                           min_points=min_points or FAMILY_MIN_POINTS.get(family, 1),
-                          func=func, module=func.__module__)
+                          func=func, module=func.__module__, validator=validator)
         existing = _REGISTRY.get(method_id)
         if existing is not None and existing.module != spec.module:
             raise ValueError(f"method id {method_id!r} is already registered by {existing.module}")
@@ -83,7 +86,10 @@ def _run(spec: MethodSpec, points, params: dict):
         accepted = ", ".join(spec.defaults) or "none"
         raise InvalidInputError(f"{spec.id} has no parameter {', '.join(map(repr, unknown))}; its parameters are: {accepted}")
     merged = {**spec.defaults, **params}
-    pts = validate_points(points, min_points=spec.min_points, method=spec.id)
+    if spec.validator is not None:
+        pts = spec.validator(points, spec.id)
+    else:
+        pts = validate_points(points, min_points=spec.min_points, method=spec.id)
     t0 = time.perf_counter()
     result = spec.func(pts, **merged)
     result.runtime_s = time.perf_counter() - t0

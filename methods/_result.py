@@ -34,8 +34,8 @@ class FitResult:
     """
 
     method: str = ""
-    form_error: float
-    residuals: np.ndarray
+    form_error: float = float("nan")
+    residuals: np.ndarray = field(default_factory=lambda: np.empty(0))
     converged: bool
     iterations: int | None = None
     nfev: int | None = None
@@ -138,3 +138,19 @@ class EllipseFit(FitResult):
         d = super().to_dict(residuals)
         head = {k: d.pop(k) for k in ("method", "center", "semi_axes", "angle", "conic", "form_error")}
         return {**head, **d}
+
+
+@dataclass(kw_only=True)
+class PositioningFit(FitResult):
+    """Positioning of an NC axis: ISO 230-2 ``figures`` (A, E, M, R, B, ...), ``per_target`` arrays,
+    and, for the polynomial models, ``polynomial`` = {"up"/"down": {"coefficients" (increasing powers of
+    the position, input unit), "covariance", "degree"}}. ``residuals`` = mean deviations minus the model."""
+
+    figures: dict = field(default_factory=dict)
+    per_target: dict = field(default_factory=dict)
+    polynomial: dict = field(default_factory=dict)
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        figures = d.pop("figures")
+        return {"method": d.pop("method"), **figures, **d}

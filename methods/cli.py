@@ -156,6 +156,40 @@ def cmd_circular_test(args) -> int:
     return 0
 
 
+def cmd_positioning(args) -> int:
+    from methods.positioning import read_csv
+    from methods.positioning.report import plot
+
+    data = read_csv(args.file)
+    res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=args.instrument_u,
+                      mpe=args.mpe)
+    if args.standard != "iso230-2:2014":
+        res.figures = methods.fit("positioning.iso230_2", data, standard=args.standard).figures
+    if args.plot:
+        plot(res, args.plot, title=str(args.file))
+    if args.json:
+        out = dict(res.figures)
+        out["per_target"] = {k: v for k, v in res.per_target.items()}
+        out["polynomial"] = {d: {"coefficients": p["coefficients"], "covariance": p["covariance"],
+                                 "degree": p["degree"], "U_at_targets": p["U_at_targets"], "k": p["k"]}
+                             for d, p in res.polynomial.items()}
+        out["u_delta"] = res.extra["u_delta"]
+        print(json.dumps(_jsonable(out)))
+        return 0
+    f = res.figures
+    print(f"ISO 230-2 ({f['standard']}, k = {f['k']:g}): {f['targets']} targets x {f['runs']} runs")
+    for key in ("A", "A_up", "A_down", "E", "E_up", "E_down", "M", "R", "R_up", "R_down", "B", "B_mean"):
+        print(f"  {key:<7} {f[key]:.6g}")
+    for key in ("Ps", "U", "Pa", "P"):
+        if key in f:
+            print(f"  {key:<7} {f[key]:.6g}")
+    print(f"model: degree-{args.degree} polynomial by GLS, u(delta) = {res.extra['u_delta']:.4g}")
+    for d, p in res.polynomial.items():
+        coefs = ", ".join(f"{c:.6g}" for c in p["coefficients"])
+        print(f"  {d:<5} coefficients (increasing powers of P): {coefs}; max U(P_i) = {p['U_at_targets'].max():.4g}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="python -m methods", description="fitbench fitting methods")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -182,6 +216,16 @@ def build_parser() -> argparse.ArgumentParser:
     pc.add_argument("--json", action="store_true", help="print one JSON object")
     pc.add_argument("--plot", metavar="FILE", help="write the polar plot (PNG or PDF)")
     pc.set_defaults(func=cmd_circular_test)
+    pp = sub.add_parser("positioning", help="ISO 230-2 positioning figures and the GLS polynomial model")
+    pp.add_argument("file", metavar="FILE", help="long table: target, direction (+/-), run, actual or deviation")
+    pp.add_argument("--degree", type=int, default=3, help="degree of the polynomial (default 3)")
+    g = pp.add_mutually_exclusive_group()
+    g.add_argument("--instrument-u", type=float, metavar="U", help="standard uncertainty of the instrument, u(delta)")
+    g.add_argument("--mpe", type=float, metavar="MPE", help="the instrument's maximum permissible error (rectangular)")
+    pp.add_argument("--standard", choices=("iso230-2:2014", "iso230-2:1988", "vdi3441"), default="iso230-2:2014")
+    pp.add_argument("--json", action="store_true", help="print one JSON object")
+    pp.add_argument("--plot", metavar="FILE", help="write the plot (figures 2 and 3 of the paper)")
+    pp.set_defaults(func=cmd_positioning)
     return p
 
 

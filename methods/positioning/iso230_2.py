@@ -1,0 +1,57 @@
+"""ISO 230-2 evaluation of positioning (positioning paper sec. 2-3; ISO 230-2:1997/2006/2014, k = 2),
+with the 1988 edition's +-3s variant and VDI/DGQ 3441 as options."""
+from __future__ import annotations
+
+import numpy as np
+
+from methods._registry import register
+from methods._result import PositioningFit
+from methods._validation import check_choice
+from methods.positioning.data import PositioningData, validate
+
+STANDARDS = ("iso230-2:2014", "iso230-2:1988", "vdi3441")
+
+
+def figures(data: PositioningData, standard: str = "iso230-2:2014") -> tuple[dict, dict]:
+    """(axis figures, per-target arrays). ISO 230-2 with k = 2 (1997-2014) or k = 3 (1988):
+    x_i = mean unidirectional deviation, s_i its estimator of the standard uncertainty, B_i = x_i up -
+    x_i down, R_i up = 2k s_i up, R_i = max(k s_up + k s_down + |B_i|, R_i up, R_i down),
+    E up = max - min of x_i up, E = max - min over both, M = max - min of (x_up + x_down)/2,
+    A up = max(x_up + k s_up) - min(x_up - k s_up), A over both directions."""
+    k = 3.0 if standard == "iso230-2:1988" else 2.0
+    xu, xd = data.up.mean(axis=1), data.down.mean(axis=1)
+    su, sd = data.up.std(axis=1, ddof=1), data.down.std(axis=1, ddof=1)
+    B_i = xu - xd
+    Ru_i, Rd_i = 2 * k * su, 2 * k * sd
+    R_i = np.maximum(k * su + k * sd + np.abs(B_i), np.maximum(Ru_i, Rd_i))
+    xm = 0.5 * (xu + xd)
+    per = {"targets": data.targets, "mean_up": xu, "mean_down": xd, "s_up": su, "s_down": sd, "B_i": B_i,
+           "R_i_up": Ru_i, "R_i_down": Rd_i, "R_i": R_i, "mean_bidirectional": xm}
+    fig = {"A_up": float(np.max(xu + k * su) - np.min(xu - k * su)),
+           "A_down": float(np.max(xd + k * sd) - np.min(xd - k * sd)),
+           "A": float(max(np.max(xu + k * su), np.max(xd + k * sd)) - min(np.min(xu - k * su), np.min(xd - k * sd))),
+           "E_up": float(np.ptp(xu)), "E_down": float(np.ptp(xd)),
+           "E": float(max(xu.max(), xd.max()) - min(xu.min(), xd.min())),
+           "M": float(np.ptp(xm)), "R_up": float(Ru_i.max()), "R_down": float(Rd_i.max()), "R": float(R_i.max()),
+           "B": float(np.max(np.abs(B_i))), "B_mean": float(np.mean(B_i)), "k": k, "standard": standard,
+           "targets": len(data.targets), "runs": data.runs}
+    if standard == "vdi3441":
+        # VDI/DGQ 3441: scatter Ps_i = 6 s_i (s pooled over both directions), reversal span U_i = |B_i|,
+        # Pa = range of the bidirectional means, P = max(x_i + (U_i + Ps_i)/2) - min(x_i - (U_i + Ps_i)/2)
+        pooled = np.sqrt(0.5 * (su ** 2 + sd ** 2))
+        Ps_i, U_i = 6 * pooled, np.abs(B_i)
+        half = 0.5 * (U_i + Ps_i)
+        fig.update(Ps=float(Ps_i.max()), U=float(U_i.max()), Pa=float(np.ptp(xm)),
+                   P=float(np.max(xm + half) - np.min(xm - half)))
+        per.update(Ps_i=Ps_i, U_i=U_i)
+    return fig, per
+
+
+@register("positioning.iso230_2", kind="closed form", validator=validate,
+          summary="ISO 230-2 positioning figures: A, E, M, R, B per direction (k = 2; 1988 and VDI 3441 options)",
+          reference="ISO 230-2:2014 (1997) sec. 2-3; positioning paper (Kureková et al.) sec. 2-3")
+def iso230_2(data, *, standard="iso230-2:2014"):
+    """The standard's point-wise evaluation at the target positions (no model between them)."""
+    check_choice("standard", standard, STANDARDS, "positioning.iso230_2")
+    fig, per = figures(data, standard)
+    return PositioningFit(figures=fig, per_target=per, converged=True, message=f"{standard} figures")

@@ -1,0 +1,116 @@
+"""The positioning paper's model: a polynomial through the mean deviations by generalised least
+squares with the covariance U(x) = diag(u^2(P_i)) + u^2(delta) 1 1^T (its eq. 2 and 8-10), and the
+expanded uncertainty U(P) = k sqrt(x(P)^T Cov x(P)) of the deviation anywhere on the travel."""
+from __future__ import annotations
+
+import numpy as np
+from numpy.polynomial import polynomial as npoly
+
+from methods._errors import InvalidInputError
+from methods._registry import register
+from methods._result import PositioningFit
+from methods._validation import check_positive
+from methods.positioning.data import PositioningData, validate
+from methods.positioning.iso230_2 import figures
+
+
+def instrument_uncertainty(instrument_u=None, mpe=None) -> float:
+    """u(delta): given directly, or from the instrument's maximum permissible error (rectangular, MPE / sqrt 3)."""
+    if instrument_u is not None and mpe is not None:
+        raise InvalidInputError("give the instrument's standard uncertainty or its MPE, not both")
+    if mpe is not None:
+        return float(check_positive("mpe", mpe, "positioning", allow_zero=True)) / np.sqrt(3.0)
+    return float(check_positive("instrument_u", instrument_u or 0.0, "positioning", allow_zero=True))
+
+
+def _to_position_basis(coef_t, cov_t, mid, half):
+    """Coefficients in t = (P - mid) / half -> increasing powers of P, with the covariance."""
+    deg = len(coef_t) - 1
+    sub = np.array([-mid / half, 1.0 / half])  # t as a polynomial in P
+    T = np.zeros((deg + 1, deg + 1))
+    for j in range(deg + 1):
+        poly_p = npoly.polypow(sub, j) if j else np.array([1.0])
+        T[: len(poly_p), j] = poly_p
+    return T @ coef_t, T @ cov_t @ T.T
+
+
+def fit_direction(targets, x, s, n, degree, u_delta, weighting="gls"):
+    """One direction: coefficients (in t), covariance, scaling; 'gls' = the paper's model, 'ols' = ordinary
+    least squares with its own residual variance."""
+    m = len(targets)
+    if degree + 1 > m:
+        raise InvalidInputError(f"a degree-{degree} polynomial needs at least {degree + 1} targets, got {m}")
+    mid, half = 0.5 * (targets.max() + targets.min()), 0.5 * (targets.max() - targets.min())
+    t = (targets - mid) / half
+    X = np.vander(t, degree + 1, increasing=True)
+    if weighting == "ols":
+        coef, *_ = np.linalg.lstsq(X, x, rcond=None)
+        dof = m - degree - 1
+        res = x - X @ coef
+        sigma2 = float(res @ res / dof) if dof > 0 else np.nan
+        cov = sigma2 * np.linalg.inv(X.T @ X)
+        return coef, cov, mid, half
+    u2 = (s ** 2) / n  # eq. 10: type A uncertainty of the mean
+    U = np.diag(u2) + u_delta ** 2 * np.ones((m, m))  # eq. 8-9
+    try:
+        L = np.linalg.cholesky(U)
+    except np.linalg.LinAlgError:
+        raise InvalidInputError("the covariance U(x) is singular (zero scatter at a target and u(delta) = 0): "
+                                "give the instrument's uncertainty (--instrument-u or --mpe)") from None
+    Xw = np.linalg.solve(L, X)
+    xw = np.linalg.solve(L, x)
+    coef, *_ = np.linalg.lstsq(Xw, xw, rcond=None)
+    cov = np.linalg.inv(Xw.T @ Xw)
+    return coef, cov, mid, half
+
+
+def evaluate_band(poly: dict, P, k=2.0):
+    """Model value and expanded uncertainty U(P) = k sqrt(x(P)^T Cov x(P)) at positions P."""
+    P = np.atleast_1d(np.asarray(P, dtype=float))
+    t = (P - poly["mid"]) / poly["half"]
+    X = np.vander(t, poly["degree"] + 1, increasing=True)
+    value = X @ poly["coef_t"]
+    var = np.einsum("ij,jk,ik->i", X, poly["cov_t"], X)
+    return value, k * np.sqrt(np.maximum(var, 0.0))
+
+
+def _model(data: PositioningData, degree, u_delta, weighting, k):
+    fig, per = figures(data)
+    poly, residuals = {}, []
+    for d, x, s, arr in (("up", per["mean_up"], per["s_up"], data.up), ("down", per["mean_down"], per["s_down"], data.down)):
+        coef_t, cov_t, mid, half = fit_direction(data.targets, x, s, arr.shape[1], degree, u_delta, weighting)
+        coef_p, cov_p = _to_position_basis(coef_t, cov_t, mid, half)
+        entry = {"coefficients": coef_p, "covariance": cov_p, "degree": degree, "coef_t": coef_t, "cov_t": cov_t,
+                 "mid": mid, "half": half, "k": k}
+        value, U = evaluate_band(entry, data.targets, k)
+        entry["U_at_targets"] = U
+        residuals.append(x - value)
+        poly[d] = entry
+    return fig, per, poly, np.concatenate(residuals)
+
+
+@register("positioning.gls_polynomial", kind="closed form", validator=validate,
+          summary="The paper's model: polynomial through the mean deviations by GLS, U(x) = diag(u^2) + u^2(delta) 11^T",
+          reference="Kureková et al., positioning paper, eq. 2 and 5-10")
+def gls_polynomial(data, *, degree=3, instrument_u=None, mpe=None, k=2.0):
+    """Per direction, the polynomial (degree 3 by default, eq. 2) through the mean deviations with
+    generalised least squares under U(x) = diag(u^2(P_i)) + u^2(delta) 1 1^T (eq. 8-9), u(P_i) by type A
+    (eq. 10) and u(delta) from ``instrument_u`` or ``mpe`` (rectangular: MPE / sqrt 3). Coefficients
+    and covariance in increasing powers of the position; U(P) = k sqrt(x^T Cov x) anywhere on the travel."""
+    degree = int(check_positive("degree", degree, "positioning.gls_polynomial", allow_zero=True))
+    ud = instrument_uncertainty(instrument_u, mpe)
+    fig, per, poly, res = _model(data, degree, ud, "gls", float(k))
+    return PositioningFit(figures=fig, per_target=per, polynomial=poly, residuals=res, converged=True,
+                          message=f"GLS degree {degree}, u(delta) = {ud:g}", extra={"u_delta": ud})
+
+
+@register("positioning.ols_polynomial", kind="closed form", validator=validate,
+          summary="Polynomial through the mean deviations by ordinary least squares (baseline for the GLS model)",
+          reference="positioning paper eq. 2 with ordinary least squares (comparison)")
+def ols_polynomial(data, *, degree=3, k=2.0):
+    """The same polynomial by ordinary least squares, its covariance from the residual variance (ignores
+    the instrument's common error and the per-target scatter)."""
+    degree = int(check_positive("degree", degree, "positioning.ols_polynomial", allow_zero=True))
+    fig, per, poly, res = _model(data, degree, 0.0, "ols", float(k))
+    return PositioningFit(figures=fig, per_target=per, polynomial=poly, residuals=res, converged=True,
+                          message=f"OLS degree {degree}")

@@ -151,7 +151,11 @@ def code_hash(method_id: str) -> str:
 
 def task_key(task: dict) -> str:
     ident = {k: task[k] for k in ("kind", "dataset", "stream", "seed", "method", "params", "timing")}
-    ident.update(code=code_hash(task["method"]), engine=ENGINE_VERSION,
+    method = task["method"]
+    study = importlib.import_module(f"experiments.studies.{task['kind']}")
+    if hasattr(study, "task_key_method"):  # tasks whose 'method' is not a registry id name the code they run
+        method = study.task_key_method(task)
+    ident.update(code=code_hash(method), engine=ENGINE_VERSION,
                  extra={k: v for k, v in task.items() if k.startswith("x_")})
     return hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode()).hexdigest()[:24]
 

@@ -51,7 +51,18 @@ def fit_direction(targets, x, s, n, degree, u_delta, weighting="gls"):
         cov = sigma2 * np.linalg.inv(X.T @ X)
         return coef, cov, mid, half
     u2 = (s ** 2) / n  # eq. 10: type A uncertainty of the mean
-    U = np.diag(u2) + u_delta ** 2 * np.ones((m, m))  # eq. 8-9
+    if np.all(u2 > 0):
+        # U(x) = D + u^2(delta) 1 1^T (eq. 8-9). The polynomial has a constant term (1 = X e0), so
+        # x = X (beta + delta e0) + eps: the GLS estimate is the weighted least-squares one under D and
+        # Cov = Cov_WLS + u^2(delta) e0 e0^T exactly. Computed this way it stays accurate for any u(delta)
+        # (the dense U is ill-conditioned once u(delta) >> u(P_i)).
+        sw = 1.0 / np.sqrt(u2)
+        Xw = X * sw[:, None]
+        coef, *_ = np.linalg.lstsq(Xw, x * sw, rcond=None)
+        cov = np.linalg.inv(Xw.T @ Xw)
+        cov[0, 0] += u_delta ** 2
+        return coef, cov, mid, half
+    U = np.diag(u2) + u_delta ** 2 * np.ones((m, m))  # zero scatter at a target: the dense form
     try:
         L = np.linalg.cholesky(U)
     except np.linalg.LinAlgError:

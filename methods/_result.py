@@ -154,3 +154,16 @@ class PositioningFit(FitResult):
         d = super().to_dict(residuals)
         figures = d.pop("figures")
         return {"method": d.pop("method"), **figures, **d}
+
+
+@dataclass(kw_only=True)
+class MagnifyFit(FitResult):
+    """A magnified contouring-error trajectory: ``points`` (one per measured point, in order),
+    ``reference_points`` r~(k); ``residuals`` = contouring errors |p - r~|; ``form_error`` = the largest."""
+
+    points: np.ndarray
+    reference_points: np.ndarray
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        return {"method": d.pop("method"), "points": d.pop("points"), **d}

@@ -94,5 +94,5 @@ EXAMPLES = {"corner_inside_convex": lambda: corner_path("inside", "left"),
             "corner_outside_concave": lambda: corner_path("inside", "right"),
             "square_corner_servo": lambda: square_corner(convex=True),
             "segments_and_arcs": segments_and_arcs,
-            "free_form_0.1mm": free_form,
+            "free_form_0.1mm": lambda: free_form(wn=40.0),
             "circle_quadrant_glitches": circle_glitches}

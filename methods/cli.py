@@ -190,6 +190,46 @@ def cmd_positioning(args) -> int:
     return 0
 
 
+def cmd_magnify(args) -> int:
+    from datasets import read_points
+    from methods.magnify import MagnifyInput
+
+    data = MagnifyInput(read_points(args.reference), read_points(args.measured))
+    params = {"eta": args.eta}
+    if args.method == "offset":
+        params["delta"] = args.delta
+        params["selection"] = args.selection
+    elif args.delta is not None:
+        raise InvalidInputError("--delta is a parameter of --method offset")
+    res = methods.fit(f"magnify.{args.method}", data, **params)
+    if args.plot:
+        plot_magnified(data, res, args.plot, args.eta)
+    if args.json:
+        d = res.to_dict(residuals=not args.no_residuals)
+        print(json.dumps(d))
+        return 0
+    print(f"method       {res.method} ({res.message})")
+    print(f"points       {len(res.points)}; largest contouring error {res.form_error:.6g}")
+    print(f"continuity   {res.extra['continuity']:.3g} (largest magnified step / (eta x largest measured step))")
+    print(f"loops        {res.extra['self_intersections']} self-intersections of the magnified trajectory")
+    return 0
+
+
+def plot_magnified(data, res, path, eta):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 6))
+    ax.plot(*data.reference.T, color="0.5", lw=1, label="reference")
+    ax.plot(*res.points.T, lw=0.8, label=f"{res.method}, eta = {eta:g}")
+    ax.set_aspect("equal")
+    ax.legend(fontsize=8)
+    ax.set_title(f"continuity {res.extra['continuity']:.2f}, loops {res.extra['self_intersections']}", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="python -m methods", description="fitbench fitting methods")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -226,6 +266,18 @@ def build_parser() -> argparse.ArgumentParser:
     pp.add_argument("--json", action="store_true", help="print one JSON object")
     pp.add_argument("--plot", metavar="FILE", help="write the plot (figures 2 and 3 of the paper)")
     pp.set_defaults(func=cmd_positioning)
+    pm = sub.add_parser("magnify", help="magnified contouring-error trajectory (nearest or contour-parallel offset)")
+    pm.add_argument("reference", metavar="REFERENCE.csv", help="reference polyline (x, y; arcs as fine polylines)")
+    pm.add_argument("measured", metavar="MEASURED.csv", help="measured trajectory (x, y), in order")
+    pm.add_argument("--eta", type=float, required=True, metavar="E", help="magnification")
+    pm.add_argument("--delta", type=float, metavar="D", help="offset distance (> the largest error; default twice it)")
+    pm.add_argument("--method", choices=("offset", "nearest"), default="offset")
+    pm.add_argument("--selection", choices=("same_side", "nearest_of_both"), default="same_side",
+                    help="offset method: the offset on the point's side, or the paper's printed step (2)")
+    pm.add_argument("--json", action="store_true", help="print one JSON object (points: the magnified trajectory)")
+    pm.add_argument("--no-residuals", action="store_true", help="leave the per-point errors out of --json")
+    pm.add_argument("--plot", metavar="FILE", help="write a plot")
+    pm.set_defaults(func=cmd_magnify)
     return p
 
 

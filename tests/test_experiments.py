@@ -237,7 +237,8 @@ def test_quick_published_study(tmp_path):
     assert "time_median_s" in rows and rows["time_median_s"].notna().all()
 
 
-@pytest.mark.parametrize("name", ["noise", "convergence", "ellipse_angle", "scaling", "circular_test", "positioning"])
+@pytest.mark.parametrize("name", ["noise", "convergence", "ellipse_angle", "scaling", "circular_test", "positioning",
+                                  "magnification"])
 def test_quick_default_studies_run(tmp_path, name):
     target = run_study(name, tmp_path, quick=True, jobs=2, log=lambda *a: None)
     meta = json.loads((target / "meta.json").read_text())

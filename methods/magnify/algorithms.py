@@ -80,6 +80,10 @@ def offset(data, *, eta=1000.0, delta=None, selection="same_side"):
                                 f"error ({emax:g}); choose a larger --delta")
     q_left = line.offset_curve(delta, join_style="round")
     q_right = line.offset_curve(-delta, join_style="round")
+    for q_side, name in ((q_left, "left"), (q_right, "right")):
+        if q_side.is_empty:
+            raise InvalidInputError(f"magnify.offset: delta = {delta:g} is too large for this reference: its {name} "
+                                    "offset vanishes (delta exceeds the size of its features); choose a smaller --delta")
     a, b = _nearest_on(q_left, pts_geom), _nearest_on(q_right, pts_geom)
     if selection == "same_side":
         use_left = side > 0

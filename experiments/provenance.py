@@ -55,7 +55,7 @@ def collect(config: dict) -> dict:
             versions[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
             versions[pkg] = None
-    status = _git("status", "--porcelain")
+    status = _git("status", "--porcelain", "--", ".", ":!results", ":!paper")  # outputs do not make the code dirty
     return {
         "git_commit": _git("rev-parse", "HEAD"),
         "git_dirty": bool(status) if status is not None else None,

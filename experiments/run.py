@@ -4,7 +4,8 @@
 Runs studies (no NAME: the default studies) and writes, per study, ``OUT/NAME/results.csv`` (long
 format, one row per run; timing columns start with ``time_``), ``meta.json`` (provenance, counts,
 findings), ``summary.csv``/``summary.md`` and the study's figures. Rows are stored as they finish
-in ``OUT/NAME/rows.sqlite``: an interrupted run resumes; ``--force`` recomputes.
+in ``OUT/NAME/rows.sqlite``: an interrupted run resumes; ``--force`` recomputes. At the end the report
+is rebuilt (``paper/`` for the default ``results/``, else ``OUT/paper``; ``python -m experiments.report``).
 """
 from __future__ import annotations
 
@@ -98,6 +99,9 @@ def main(argv=None) -> int:
             run_study(name, args.out, quick=args.quick, jobs=args.jobs, executor=args.executor,
                       scheduler=args.scheduler, force=args.force, seed=args.seed)
         print(f"done: {len(names)} studies in {time.perf_counter() - t0:.0f} s")
+        from experiments.report import build
+        paper = REPO / "paper" if args.out.resolve() == (REPO / "results").resolve() else args.out / "paper"
+        build(args.out, paper)
     except InvalidInputError as exc:
         print(f"experiments.run: error: {exc}", file=sys.stderr)
         return 2

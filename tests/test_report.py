@@ -1,0 +1,82 @@
+"""The comparison report: built from results only; missing and failed studies shown; HTML renders in
+headless Chromium with every image loaded; LaTeX fragments compile where a toolchain exists."""
+import json
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from experiments.report import build
+from experiments.run import run_study
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("report")
+    results = root / "results"
+    for name in ("published", "magnification", "ellipse_angle"):
+        run_study(name, results, quick=True, jobs=1, log=lambda *a: None)
+    # a study whose rows failed: flip the status counts of a copy
+    shutil.copytree(results / "ellipse_angle", results / "broken_study")
+    meta = json.loads((results / "broken_study" / "meta.json").read_text())
+    meta["status_counts"] = {"ok": 3, "error": 2}
+    (results / "broken_study" / "meta.json").write_text(json.dumps(meta))
+    return build(results, root / "paper", log=lambda *a: None)
+
+
+def test_sections_tables_figures(built):
+    md = (built / "report.md").read_text()
+    assert md.startswith("# fitbench: comparison report")
+    for section in ("Roundness paper", "Circle/ellipse paper", "Positioning paper", "Magnification paper"):
+        assert f"## {section}" in md
+    assert "*Table published-1:" in md and "| roundness_set2 | MIC | 1.7287 |" in md
+    assert md.count("![") >= 3
+    for png in built.glob("figures/*.png"):
+        assert png.with_suffix(".pdf").exists() and png.stat().st_size > 10_000
+
+
+def test_missing_and_failed_studies_are_shown(built):
+    md = (built / "report.md").read_text()
+    assert "**Missing**: no results" in md and "python -m experiments.run noise" in md
+    assert "(`broken_study`)" in md and "**failed rows: 2 of" in md
+    assert "No study yet" in md  # the multilateration part, not built yet
+
+
+def test_latex_fragments(built, tmp_path):
+    tex = sorted(built.glob("tables/*.tex"))
+    assert tex and all(r"\toprule" in t.read_text() and r"\bottomrule" in t.read_text() for t in tex)
+    latex = shutil.which("pdflatex")
+    if latex is None:
+        pytest.skip("no LaTeX toolchain (pdflatex) on this machine: the fragments' compilation is not checked")
+    doc = tmp_path / "doc.tex"
+    doc.write_text("\\documentclass{article}\\usepackage{booktabs}\\usepackage[utf8]{inputenc}\\begin{document}\n"
+                   + "\n".join(f"\\input{{{t}}}" for t in tex) + "\n\\end{document}\n")
+    out = subprocess.run([latex, "-interaction=nonstopmode", "-halt-on-error", doc.name], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stdout[-2000:]
+
+
+CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def test_html_renders_in_headless_chromium(built, tmp_path):
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        pytest.skip("Debian's chromium is not installed (.ci/run installs it: apt-get install chromium)")
+    url = (built / "report.html").as_uri()
+    dom = subprocess.run([chromium, *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'profile'}",
+                          "--virtual-time-budget=5000", "--dump-dom", url], capture_output=True, text=True, timeout=120)
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    m = re.search(r'data-images="(\d+)/(\d+)"', dom.stdout)
+    assert m, "the page's load handler did not run"
+    loaded, total = map(int, m.groups())
+    assert total >= 3 and loaded == total
+    shot = tmp_path / "shot.png"
+    subprocess.run([chromium, *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'profile2'}", "--window-size=1200,2400",
+                    f"--screenshot={shot}", url], capture_output=True, text=True, timeout=120)
+    import matplotlib.image as mpimg
+    img = mpimg.imread(shot)
+    assert img.std() > 0.05  # not blank

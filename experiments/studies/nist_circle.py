@@ -59,4 +59,25 @@ def finalize(df, cfg, target, log):
         summary[f"{m} {p}"] = s
         log(f"  {m:<28} {p if p != '{}' else '-':<22} {s['max_error']:10.1e} {s['median_error']:12.1e} "
             f"{s['sets_over_1e-9']:>11} {s['not_converged']:>13}")
-    return {"summary": summary}
+    figure(summary, target)
+    return {"summary": summary, "figure": "nist_errors.png"}
+
+
+def figure(summary, target):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    labels = [k.replace(" {}", "").replace("circle.", "").replace('{"backend": "nlopt"}', "(nlopt)") for k in summary]
+    fig, ax = plt.subplots(figsize=(8, 3.6))
+    ax.bar(range(len(summary)), [v["max_error"] for v in summary.values()], color="tab:blue", label="largest")
+    ax.bar(range(len(summary)), [v["median_error"] for v in summary.values()], color="tab:orange", width=0.5,
+           label="median")
+    ax.axhline(1e-9, color="k", ls="--", lw=0.8, label="1e-9 mm")
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(summary)), labels, rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel("error against NIST [mm]")
+    ax.set_title("NIST Circle2d, 30 sets: largest and median error of centre and radius", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(target / "nist_errors.png", dpi=110)
+    plt.close(fig)

@@ -76,4 +76,30 @@ def finalize(df, cfg, target, log):
             c = compare(ds, variant or "as published", column, method_id, pub, samples, rng)
             log(f"  {column:<27} [{method_id}] published {pub}: {c['verdict']}")
             out.append(c)
-    return {"published_vs_reproduced": out}
+    figure(out, target)
+    return {"published_vs_reproduced": out, "figure": "published.png"}
+
+
+def figure(rows, target):
+    """Published against reproduced circularity, with the 99 % range the printed digits allow."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, len(rows), figsize=(1.5 * len(rows) + 1, 3.6))
+    for ax, r in zip(np.atleast_1d(axes), rows):
+        ax.errorbar([0], [r["rounding_median"]], yerr=[[r["rounding_median"] - r["rounding_p0_5"]],
+                                                       [r["rounding_p99_5"] - r["rounding_median"]]],
+                    fmt="none", ecolor="0.6", capsize=6, lw=2, label="99 % rounding range")
+        ax.plot([0], [r["reproduced_value"]], "o", color="tab:blue", label="reproduced")
+        ax.plot([0], [r["published"]], "x", color="tab:red", ms=9, label="published")
+        ax.set_xticks([])
+        set_name = r["dataset"].replace("roundness_", "") + ("*" if r["variant"] != "as published" else "")
+        ax.set_title(f"{set_name}\n{r['column'].split(' ')[0]}", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.ticklabel_format(axis="y", useOffset=False)
+    np.atleast_1d(axes)[0].legend(fontsize=6, loc="lower left")
+    fig.suptitle("Roundness paper, table 1: published vs reproduced circularity [mm] (*: repeated point dropped)",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(target / "published.png", dpi=110)
+    plt.close(fig)

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from methods._frame import unit_frame
+
 
 @dataclass(frozen=True)
 class Frame:
@@ -21,13 +23,8 @@ class Frame:
 
     @classmethod
     def of(cls, points: np.ndarray) -> "Frame":
-        x0, y0 = points[:, 0], points[:, 1]
-        mx, my = x0.mean(), y0.mean()
-        x, y = x0 - mx, y0 - my
-        scale = float(np.sqrt((x @ x + y @ y) / len(x)))
-        x /= scale
-        y /= scale
-        return cls(shift=np.array([mx, my]), scale=scale, x=x, y=y)
+        shift, scale, x, y = unit_frame(points)
+        return cls(shift=shift, scale=scale, x=x, y=y)
 
     def to_unit(self, points: np.ndarray) -> np.ndarray:
         return (points - self.shift) / self.scale

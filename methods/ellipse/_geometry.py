@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from methods._frame import unit_frame
+
 EPS = np.finfo(float).eps
 
 
@@ -25,11 +27,8 @@ class Frame:
 
     @classmethod
     def of(cls, points: np.ndarray) -> "Frame":
-        x0, y0 = points[:, 0], points[:, 1]
-        mx, my = x0.mean(), y0.mean()
-        x, y = x0 - mx, y0 - my
-        scale = float(np.sqrt((x @ x + y @ y) / len(x)))
-        return cls(shift=np.array([mx, my]), scale=scale, x=x / scale, y=y / scale)
+        shift, scale, x, y = unit_frame(points)
+        return cls(shift=shift, scale=scale, x=x, y=y)
 
     def params_to_unit(self, p) -> np.ndarray:
         p = np.asarray(p, dtype=np.float64)

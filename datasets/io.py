@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 
 from methods import InvalidInputError
+from methods._validation import read_text_file
 
 COMMENT_PREFIXES = ("#", "%")
 
@@ -38,13 +39,7 @@ def read_points(path, columns: tuple[str, str] = ("x", "y")) -> np.ndarray:
     number of fields and every used field must be a finite number.
     """
     name = os.fspath(path)
-    try:
-        with open(name, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except FileNotFoundError:
-        raise DataFileError(f"{name}: no such file (give a path or a data set name from 'datasets.list()')") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataFileError(f"{name}: cannot be read as text ({exc})") from None
+    text = read_text_file(name, error=DataFileError, missing_hint="give a path or a data set name from 'datasets.list()'")
 
     lines = [(i + 1, ln.strip()) for i, ln in enumerate(text.splitlines())]
     body = [(i, ln) for i, ln in lines if ln and not ln.startswith(COMMENT_PREFIXES)]

@@ -1,6 +1,8 @@
 """The unit frame every method works in: shift to the centroid, scale to unit RMS distance from it."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 
@@ -14,3 +16,21 @@ def unit_frame(points: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.nd
     x /= scale
     y /= scale
     return np.array([mx, my]), scale, x, y
+
+
+@dataclass(frozen=True)
+class UnitFrame:
+    """The unit frame of a point set; the families add their own parameter conversions."""
+
+    shift: np.ndarray
+    scale: float
+    x: np.ndarray
+    y: np.ndarray
+
+    @classmethod
+    def of(cls, points: np.ndarray):
+        shift, scale, x, y = unit_frame(points)
+        return cls(shift=shift, scale=scale, x=x, y=y)
+
+    def to_unit(self, points: np.ndarray) -> np.ndarray:
+        return (points - self.shift) / self.scale

@@ -72,3 +72,14 @@ def check_vector(name: str, value, length: int, method: str = "") -> np.ndarray 
     if vec.size != length or not np.isfinite(vec).all():
         raise InvalidInputError(f"{method}: parameter {name} needs {length} finite numbers, got {value!r}")
     return vec
+
+
+def read_text_file(path, *, error=InvalidInputError, missing_hint: str = "") -> str:
+    """A text file's content, or ``error`` with one line saying why it cannot be read."""
+    try:
+        with open(path, encoding="utf-8-sig") as fh:
+            return fh.read()
+    except FileNotFoundError:
+        raise error(f"{path}: no such file{f' ({missing_hint})' if missing_hint else ''}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(f"{path}: cannot be read as text ({exc})") from None

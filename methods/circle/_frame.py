@@ -7,27 +7,13 @@ are kept as two contiguous 1-D arrays ``x``, ``y`` (strided (N, 2) columns are s
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from methods._frame import unit_frame
+from methods._frame import UnitFrame
 
 
-@dataclass(frozen=True)
-class Frame:
-    shift: np.ndarray
-    scale: float
-    x: np.ndarray
-    y: np.ndarray
-
-    @classmethod
-    def of(cls, points: np.ndarray) -> "Frame":
-        shift, scale, x, y = unit_frame(points)
-        return cls(shift=shift, scale=scale, x=x, y=y)
-
-    def to_unit(self, points: np.ndarray) -> np.ndarray:
-        return (points - self.shift) / self.scale
+class Frame(UnitFrame):
+    """The unit frame with the circle parameters' conversions (xc, yc, R)."""
 
     def circle_to_unit(self, p) -> np.ndarray:
         """(xc, yc, R) in data units -> unit frame."""

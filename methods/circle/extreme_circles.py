@@ -10,7 +10,7 @@ from methods._result import zone_result
 from methods._validation import check_choice, check_positive
 from methods.circle import _zone as z
 from methods.circle._frame import Frame
-from methods.circle.minimum_zone import convex_concave, linearised_inner_rows, outer_cone_rows
+from methods.circle.minimum_zone import check_ccp_params, convex_concave, linearised_inner_rows, outer_cone_rows
 
 
 def _best_single_sided(x, y, act, c, side):
@@ -77,11 +77,7 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
     circumcentres (Qhull) inside the profile polygon (points in angular order about the centroid);
     ``extra['global_search']`` says whether it ran."""
     name = "circle.max_inscribed"
-    k = int(check_positive("active_size", active_size, name))
-    max_rounds = int(check_positive("max_rounds", max_rounds, name))
-    max_ccp = int(check_positive("max_ccp", max_ccp, name))
-    check_positive("ccp_tol", ccp_tol, name)
-    check_positive("trust_radius", trust_radius, name)
+    k, max_rounds, max_ccp = check_ccp_params(name, active_size, max_rounds, max_ccp, ccp_tol, trust_radius)
     frame = Frame.of(points)
     x, y = frame.x, frame.y
 

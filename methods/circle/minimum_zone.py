@@ -32,6 +32,14 @@ def outer_cone_rows(x, y, out, R_column: int, nvar: int):
     return rows, rhs, [clarabel.SecondOrderConeT(3) for _ in out]
 
 
+def check_ccp_params(name, active_size, max_rounds, max_ccp, ccp_tol, trust_radius):
+    """The shared settings of the convex-concave zone methods: (active_size, max_rounds, max_ccp) as ints."""
+    for key, val in (("ccp_tol", ccp_tol), ("trust_radius", trust_radius)):
+        check_positive(key, val, name)
+    return (int(check_positive("active_size", active_size, name)), int(check_positive("max_rounds", max_rounds, name)),
+            int(check_positive("max_ccp", max_ccp, name)))
+
+
 def convex_concave(solve_once, c, max_ccp, ccp_tol, objective_of):
     """Repeat a linearised convex program until the centre moves less than ccp_tol."""
     solves = iters = 0
@@ -74,11 +82,7 @@ def minimum_zone(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1
     optimal status gives ``converged=False`` with clarabel's words.
     """
     name = "circle.minimum_zone"
-    k = int(check_positive("active_size", active_size, name))
-    max_rounds = int(check_positive("max_rounds", max_rounds, name))
-    max_ccp = int(check_positive("max_ccp", max_ccp, name))
-    check_positive("ccp_tol", ccp_tol, name)
-    check_positive("trust_radius", trust_radius, name)
+    k, max_rounds, max_ccp = check_ccp_params(name, active_size, max_rounds, max_ccp, ccp_tol, trust_radius)
     frame = Frame.of(points)
     x, y = frame.x, frame.y
 

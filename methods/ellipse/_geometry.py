@@ -7,28 +7,15 @@ gamma = theta). Results are canonicalised to a >= b and theta in [0, pi).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from methods._frame import unit_frame
+from methods._frame import UnitFrame
 
 EPS = np.finfo(float).eps
 
 
-@dataclass(frozen=True)
-class Frame:
+class Frame(UnitFrame):
     """Shift to the centroid, scale to unit RMS distance (as for circles)."""
-
-    shift: np.ndarray
-    scale: float
-    x: np.ndarray
-    y: np.ndarray
-
-    @classmethod
-    def of(cls, points: np.ndarray) -> "Frame":
-        shift, scale, x, y = unit_frame(points)
-        return cls(shift=shift, scale=scale, x=x, y=y)
 
     def params_to_unit(self, p) -> np.ndarray:
         p = np.asarray(p, dtype=np.float64)

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 
 from methods._errors import InvalidInputError
+from methods._validation import read_text_file
 
 UP = {"+", "up", "u", "positive", "pos", "↑"}
 DOWN = {"-", "down", "d", "negative", "neg", "↓"}
@@ -87,13 +88,7 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None) -> PositioningD
 
 def read_csv(path) -> PositioningData:
     """Read a positioning CSV (comma, semicolon or whitespace separated, '#' comments)."""
-    try:
-        with open(path, encoding="utf-8-sig") as fh:
-            raw = fh.read()
-    except FileNotFoundError:
-        raise InvalidInputError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InvalidInputError(f"{path}: cannot be read as text ({exc})") from None
+    raw = read_text_file(path)
     kept, lines = [], []
     for k, line in enumerate(raw.splitlines(), start=1):
         if line.strip() and not line.lstrip().startswith("#"):

@@ -167,3 +167,24 @@ class MagnifyFit(FitResult):
     def to_dict(self, residuals: bool = True) -> dict:
         d = super().to_dict(residuals)
         return {"method": d.pop("method"), "points": d.pop("points"), **d}
+
+
+@dataclass(kw_only=True)
+class MultilaterationFit(FitResult):
+    """Multilateration: ``stations`` (K, 4) = [x, y, z, L] per station in input order (given or located),
+    ``points`` (N, 3) actual positions and ``volumetric_errors`` = points - nominal, one row per nominal point in
+    order of first appearance; ``condition_numbers`` of every linear system solved (SVD and the paper's
+    Theorem 1 lower estimate); ``residuals`` (N, K) = ||X_a,i - LT(k)|| - (L_k + P_i(k)) (NaN: not measured);
+    ``form_error`` = the largest volumetric error magnitude."""
+
+    station_ids: list
+    stations: np.ndarray
+    points: np.ndarray
+    volumetric_errors: np.ndarray
+    condition_numbers: dict = field(default_factory=dict)
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        head = {k: d.pop(k) for k in ("method", "station_ids", "stations", "points", "volumetric_errors",
+                                      "condition_numbers")}
+        return {**head, **d}

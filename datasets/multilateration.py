@@ -104,3 +104,16 @@ def simulate(*, stations=6, grid=(5, 4, 4), offsets=TOOL_OFFSETS, errors: ErrorM
     truth = {"stations": S, "axes": axes, "offsets": offs, "nominal": nominal, "actual": actual,
              "volumetric_errors": vol, "model": model, "sigma": sigma}
     return data, truth
+
+
+def write_example(folder, *, stations=6, noise: float = 1.0, seed: int = 0) -> tuple:
+    """Write ``measurements.csv`` and ``stations.csv`` (the true stations) of one simulated campaign to
+    ``folder``; returns their paths. For trying ``python -m methods multilaterate``."""
+    from pathlib import Path
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    data, truth = simulate(stations=stations, noise=noise, rng=np.random.default_rng(seed))
+    meas, st = folder / "measurements.csv", folder / "stations.csv"
+    data.to_frame().to_csv(meas, index=False, float_format="%.9f")
+    data.with_stations(truth["stations"]).stations_frame().to_csv(st, index=False, float_format="%.9f")
+    return meas, st

@@ -1,4 +1,4 @@
-"""Command line: ``python -m methods list`` and ``python -m methods fit METHOD_ID FILE``.
+"""Command line: ``python -m methods list``, ``fit METHOD_ID FILE`` and the machine-test subcommands.
 
 Bad input ends with one line on stderr and exit status 2, never a traceback.
 """
@@ -215,6 +215,40 @@ def cmd_magnify(args) -> int:
     return 0
 
 
+def cmd_multilaterate(args) -> int:
+    from methods.multilateration import read_csv
+
+    data = read_csv(args.file, args.stations)
+    method = args.method if "." in args.method else f"multilateration.{args.method}"
+    spec = methods.get(method)
+    if spec.family != "multilateration":
+        raise InvalidInputError(f"{method} is not a multilateration method; "
+                                f"'python -m methods list --family multilateration' lists them")
+    res = spec(data, **({"max_iter": args.max_iter} if args.max_iter is not None and "max_iter" in spec.defaults else {}))
+    if args.json:
+        d = res.to_dict(residuals=not args.no_residuals)
+        d["nominal_points"] = _jsonable(data.points)
+        d["stations_given"] = data.known_stations is not None
+        print(json.dumps(d))
+        return 0 if res.converged else 1
+    vol = np.linalg.norm(res.volumetric_errors, axis=1)
+    known = data.known_stations is not None
+    print(f"method       {res.method} ({res.message})")
+    print(f"data         {args.file}: {len(data.stations)} stations, {len(data.points)} points, "
+          f"{int(data.mask.sum())} lengths; stations {'given' if known else 'located (step 1)'}")
+    print(f"{'station':<10} {'x':>14} {'y':>14} {'z':>14} {'L':>12}")
+    for sid, st in zip(res.station_ids, res.stations):
+        print(f"{sid:<10} {st[0]:14.6f} {st[1]:14.6f} {st[2]:14.6f} {st[3]:12.6f}")
+    print(f"volumetric   largest |error| {vol.max() * 1e3:.3f} um, RMS {np.sqrt(np.mean(vol ** 2)) * 1e3:.3f} um")
+    r = res.residuals[np.isfinite(res.residuals)]
+    print(f"residuals    RMS {np.sqrt(np.mean(r ** 2)) * 1e3:.4f} um of the lengths")
+    for step, c in res.condition_numbers.items():
+        print(f"kappa        {step:<16} median {np.median(c['svd']):.3g} (SVD), Theorem 1 lower estimate "
+              f"{np.median(c['theorem1']):.3g}: {c['system']}")
+    print(f"converged    {'yes' if res.converged else 'NO'}; runtime {res.runtime_s * 1e3:.2f} ms")
+    return 0 if res.converged else 1
+
+
 def plot_magnified(data, res, path, eta):
     import matplotlib
     matplotlib.use("Agg")
@@ -278,6 +312,15 @@ def build_parser() -> argparse.ArgumentParser:
     pm.add_argument("--no-residuals", action="store_true", help="leave the per-point errors out of --json")
     pm.add_argument("--plot", metavar="FILE", help="write a plot")
     pm.set_defaults(func=cmd_magnify)
+    pu = sub.add_parser("multilaterate", help="stations, actual points and volumetric errors from tracking-interferometer lengths")
+    pu.add_argument("file", metavar="MEASUREMENTS.csv", help="columns station, x, y, z (nominal point), length")
+    pu.add_argument("--method", default="case_a_distance", metavar="ID",
+                    help="multilateration method id or its short name (default case_a_distance, the paper's eq. 7)")
+    pu.add_argument("--stations", metavar="FILE", help="known stations: columns station, x, y, z, L (skips step 1)")
+    pu.add_argument("--max-iter", type=int, metavar="N", help="iteration limit of the iterative methods")
+    pu.add_argument("--json", action="store_true", help="print one JSON object")
+    pu.add_argument("--no-residuals", action="store_true", help="leave the length residuals out of --json")
+    pu.set_defaults(func=cmd_multilaterate)
     return p
 
 

@@ -67,15 +67,16 @@ def _read_table(path, need: tuple[str, ...]):
         raise InvalidInputError(f"{path}: no data lines (need a header {','.join(need)} and one row per measurement)")
     sep = ";" if ";" in kept[0] else "," if "," in kept[0] else r"\s+"
     try:
-        df = pd.read_csv(io.StringIO("\n".join(kept)), sep=sep, engine="python", dtype=str)
+        df = pd.read_csv(io.StringIO("\n".join(kept)), sep=sep, engine="python", dtype=str, keep_default_na=False)
     except pd.errors.ParserError as exc:
         raise InvalidInputError(f"{path}: malformed table ({str(exc).splitlines()[0]})") from None
     df.columns = [str(c).strip().lower() if str(c).strip().lower() != "l" else "L" for c in df.columns]
     missing = [c for c in need if c not in df.columns]
     if missing:
         raise InvalidInputError(f"{path}: missing column(s) {', '.join(missing)}; the header must name {', '.join(need)}")
-    if df[list(need)].isna().any().any():
-        k = int(np.flatnonzero(df[list(need)].isna().any(axis=1).to_numpy())[0])
+    empty = (df[list(need)].isna() | (df[list(need)].apply(lambda c: c.str.strip()) == "")).any(axis=1).to_numpy()
+    if empty.any():
+        k = int(np.flatnonzero(empty)[0])
         raise InvalidInputError(f"{path} line {lines[k + 1]}: missing field(s)")
     line_of = np.array(lines[1:])
     numeric = {}

@@ -57,7 +57,8 @@ def table(out, name="tiny"):
 def test_list_and_defaults(capsys):
     assert main(["--list"]) == 0
     out = capsys.readouterr().out
-    for name in ("published", "noise", "convergence", "scaling", "ellipse_angle", "circular_test", "nist_circle"):
+    for name in ("published", "noise", "convergence", "scaling", "ellipse_angle", "circular_test", "nist_circle",
+                 "multilateration"):
         assert name in out
     assert {"published", "noise", "convergence", "scaling"} <= {
         n for n in configs.available() if configs.load(n).get("default")}
@@ -238,7 +239,7 @@ def test_quick_published_study(tmp_path):
 
 
 @pytest.mark.parametrize("name", ["noise", "convergence", "ellipse_angle", "scaling", "circular_test", "positioning",
-                                  "magnification"])
+                                  "magnification", "multilateration"])
 def test_quick_default_studies_run(tmp_path, name):
     target = run_study(name, tmp_path, quick=True, jobs=2, log=lambda *a: None)
     meta = json.loads((target / "meta.json").read_text())

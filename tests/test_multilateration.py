@@ -311,3 +311,34 @@ def test_dataframe_input_and_parameters():
     with pytest.raises(InvalidInputError, match="no parameter"):
         methods.fit("multilateration.case_b_linear", data, max_iter=3)
     assert mcv754_errors().degree == 3
+
+
+# ---------------------------------------------------------------- the study
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    from experiments.run import run_study
+    target = run_study("multilateration", tmp_path_factory.mktemp("ml"), quick=True, jobs=1, log=lambda *a: None)
+    return target, pd.read_csv(target / "results.csv"), json.loads((target / "meta.json").read_text())
+
+
+def test_study_rows_and_findings(study):
+    target, rows, meta = study
+    assert set(rows["status"]) == {"ok"} and rows["converged"].all()
+    f = meta["findings"]
+    acc = pd.DataFrame(f["accuracy"])
+    exact = acc[acc["dataset"].str.contains("exact lengths")]
+    # exact lengths: given stations -> every scheme exact; located -> only the joint adjustment is
+    assert (exact[exact["stations"] == "known"]["volumetric_error_max_um"] < 1e-3).all()
+    located = exact[exact["stations"] == "located"].set_index("method")
+    assert located.loc["joint", "aligned_error_rms_um"] < 1e-3
+    assert (located.drop(index="joint")["aligned_error_rms_um"] > 1.0).all()
+    # the condition numbers the paper reports: Case B as published >> Case A; centring brings it down
+    six = acc[(acc["dataset"] == f["stations_table"]["scenario"]) & (acc["stations"] == "located")].set_index("method")
+    assert six.loc["case_b_linear", "kappa_stations"] > 1e4 * six.loc["case_a_distance", "kappa_stations"]
+    assert six.loc["case_b_centred", "kappa_stations"] < 1e3
+    assert six.loc["case_b_linear", "kappa_stations_theorem1"] > 1e3
+    assert len(f["stations_table"]["rows"]) == 7 * 6          # six schemes + truth, six stations
+    for name in (f["figure"], f["example"]):
+        assert (target / name).stat().st_size > 10_000
+    assert {w["best"] for w in f["winner"] if "machine errors" in w["scenario"] and w["stations"] == "located"} == {"joint"}

@@ -1,5 +1,6 @@
 """The experiments engine: configs, determinism across runs and executors, resume, retries."""
 import json
+import os
 import signal
 import sqlite3
 import subprocess
@@ -245,3 +246,13 @@ def test_quick_default_studies_run(tmp_path, name):
     meta = json.loads((target / "meta.json").read_text())
     assert meta["n_rows"] > 0 and meta["findings"]
     assert (target / meta["findings"]["figure"]).stat().st_size > 10_000
+
+
+def test_workers_get_one_blas_thread_and_the_environment_is_restored(monkeypatch):
+    from experiments.engine import BLAS_THREAD_VARS, _one_blas_thread_per_worker
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    monkeypatch.setenv("OMP_NUM_THREADS", "3")                 # a user's choice is kept
+    with _one_blas_thread_per_worker():
+        assert os.environ["OPENBLAS_NUM_THREADS"] == "1" and os.environ["OMP_NUM_THREADS"] == "3"
+    assert "OPENBLAS_NUM_THREADS" not in os.environ and os.environ["OMP_NUM_THREADS"] == "3"
+    assert "MKL_NUM_THREADS" in BLAS_THREAD_VARS

@@ -225,11 +225,17 @@ def cmd_multilaterate(args) -> int:
         raise InvalidInputError(f"{method} is not a multilateration method; "
                                 f"'python -m methods list --family multilateration' lists them")
     res = spec(data, **({"max_iter": args.max_iter} if args.max_iter is not None and "max_iter" in spec.defaults else {}))
+    ident = _identify(data, res, args.degree) if args.identify else None
     if args.json:
         d = res.to_dict(residuals=not args.no_residuals)
         d["nominal_points"] = _jsonable(data.points)
         d["stations_given"] = data.known_stations is not None
-        print(json.dumps(d))
+        if ident is not None:
+            d["geometric_errors"] = {"degree": ident.model.degree, "travel": list(ident.model.travel),
+                                     "basis": "coefficient of (axis position / travel)^j; E[XYZ]* and T* in mm, "
+                                              "E[ABC]*, squareness and R* in rad",
+                                     "parameters": ident.as_table(), "residual_rms": ident.residual_rms}
+        print(json.dumps(_jsonable(d)))
         return 0 if res.converged else 1
     vol = np.linalg.norm(res.volumetric_errors, axis=1)
     known = data.known_stations is not None
@@ -246,7 +252,28 @@ def cmd_multilaterate(args) -> int:
         print(f"kappa        {step:<16} median {np.median(c['svd']):.3g} (SVD), Theorem 1 lower estimate "
               f"{np.median(c['theorem1']):.3g}: {c['system']}")
     print(f"converged    {'yes' if res.converged else 'NO'}; runtime {res.runtime_s * 1e3:.2f} ms")
+    if ident is not None:
+        travel = ", ".join(f"{t:g}" for t in ident.model.travel)
+        print(f"geometric errors (ISO 230-1 names), coefficients of (position / travel)^j, travels {travel} mm; "
+              f"fit residual RMS {ident.residual_rms * 1e3:.3f} um")
+        for row in ident.as_table():
+            name = row["parameter"]
+            linear = (name[0] == "E" and name[1] in "XYZ") or name[0] == "T"
+            unit, scale = ("um", 1e3) if linear else ("urad", 1e6)
+            print(f"  {row['parameter']:<7} {row['value'] * scale:12.4f} +- {row['u'] * scale:.4f} {unit}")
     return 0 if res.converged else 1
+
+
+def _identify(data, res, degree):
+    """The 21 geometric errors from the volumetric errors (kinematic chain of the multilateration paper)."""
+    from methods.multilateration.kinematics import identify
+    if data.offsets is None:
+        raise InvalidInputError("--identify needs the tool offsets: add columns xp, yp, zp to the measurements "
+                                "(0, 0, 0 for the bare reflector; at least two non-parallel offsets)")
+    axes = data.points - data.offsets
+    travel = np.max(np.abs(axes), axis=0)
+    travel[travel == 0] = 1.0
+    return identify(axes, data.offsets, res.volumetric_errors, degree=degree, travel=tuple(travel), rigid=True)
 
 
 def plot_magnified(data, res, path, eta):
@@ -318,6 +345,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="multilateration method id or its short name (default case_a_distance, the paper's eq. 7)")
     pu.add_argument("--stations", metavar="FILE", help="known stations: columns station, x, y, z, L (skips step 1)")
     pu.add_argument("--max-iter", type=int, metavar="N", help="iteration limit of the iterative methods")
+    pu.add_argument("--identify", action="store_true",
+                    help="also identify the 18 component and 3 squareness errors (needs columns xp, yp, zp)")
+    pu.add_argument("--degree", type=int, default=3, help="polynomial degree of the component errors (default 3)")
     pu.add_argument("--json", action="store_true", help="print one JSON object")
     pu.add_argument("--no-residuals", action="store_true", help="leave the length residuals out of --json")
     pu.set_defaults(func=cmd_multilaterate)

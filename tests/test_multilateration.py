@@ -342,3 +342,37 @@ def test_study_rows_and_findings(study):
     for name in (f["figure"], f["example"]):
         assert (target / name).stat().st_size > 10_000
     assert {w["best"] for w in f["winner"] if "machine errors" in w["scenario"] and w["stations"] == "located"} == {"joint"}
+
+
+def test_cli_identify_gives_back_the_21_errors(tmp_path, capsys):
+    meas, st = write_example(tmp_path, stations=6, noise=0.0)
+    assert main(["multilaterate", str(meas), "--stations", str(st), "--identify", "--json", "--no-residuals"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    ge = out["geometric_errors"]
+    got = {p["parameter"]: p["value"] for p in ge["parameters"]}
+    model = mcv754_errors()
+    travel = ge["travel"]                                  # from the data: the largest |axis position| per axis
+    assert travel == [750.0, 500.0, 550.0]
+    assert got["EXX^1"] == pytest.approx(model.coefficients["EXX"][0], rel=1e-6)
+    assert got["EBY^2"] == pytest.approx(model.coefficients["EBY"][1], rel=1e-6)
+    assert got["C0Y"] == pytest.approx(model.squareness["C0Y"], rel=1e-6)
+    assert abs(got["TX"]) < 1e-8 and abs(got["RZ"]) < 1e-10          # the CSV holds 9 decimals
+    assert main(["multilaterate", str(meas), "--stations", str(st), "--identify"]) == 0
+    text = capsys.readouterr().out
+    assert "C0Y" in text and "urad" in text and "RZ" in text
+
+
+def test_cli_identify_needs_tool_offsets(tmp_path, capsys):
+    meas, _ = write_example(tmp_path)
+    df = pd.read_csv(meas)
+    df.drop(columns=["xp", "yp", "zp"]).to_csv(tmp_path / "bare.csv", index=False)
+    assert main(["multilaterate", str(tmp_path / "bare.csv"), "--identify"]) == 2
+    assert "xp, yp, zp" in capsys.readouterr().err
+    df.drop(columns=["zp"]).to_csv(tmp_path / "partial.csv", index=False)
+    assert main(["multilaterate", str(tmp_path / "partial.csv")]) == 2
+    assert "all of xp, yp, zp or none" in capsys.readouterr().err
+    clash = df.copy()
+    clash.loc[7, "xp"] = 5.0                                # the same nominal point with another offset
+    clash.to_csv(tmp_path / "clash.csv", index=False)
+    assert main(["multilaterate", str(tmp_path / "clash.csv")]) == 2
+    assert "two different tool offsets" in capsys.readouterr().err

@@ -1,6 +1,8 @@
 """Multilateration measurements: one length per (station, nominal point), and optionally known stations.
 
-Measurements CSV: ``station, x, y, z, length`` (nominal point, measured length P_i(k) in mm, eq. 5).
+Measurements CSV: ``station, x, y, z, length`` (nominal point, measured length P_i(k) in mm, eq. 5), and
+optionally ``xp, yp, zp``: the tool (reflector) offset of that point, needed to identify the geometric errors
+(the axis position is the nominal point minus the offset).
 Stations CSV: ``station, x, y, z, L`` (position and dead-path offset L_k). Stations keep their order of
 first appearance, points the order of first appearance of their nominal (x, y, z).
 """
@@ -25,6 +27,7 @@ class MultilaterationData:
     points: np.ndarray            # (N, 3) nominal
     lengths: np.ndarray           # (N, K)
     known_stations: np.ndarray | None = None
+    offsets: np.ndarray | None = None     # (N, 3) tool offsets when given
 
     @property
     def mask(self) -> np.ndarray:
@@ -34,15 +37,20 @@ class MultilaterationData:
         i, k = np.nonzero(self.mask)
         order = np.lexsort((i, k))
         i, k = i[order], k[order]
-        return pd.DataFrame({"station": np.asarray(self.stations, dtype=object)[k], "x": self.points[i, 0],
-                             "y": self.points[i, 1], "z": self.points[i, 2], "length": self.lengths[i, k]})
+        df = pd.DataFrame({"station": np.asarray(self.stations, dtype=object)[k], "x": self.points[i, 0],
+                           "y": self.points[i, 1], "z": self.points[i, 2], "length": self.lengths[i, k]})
+        if self.offsets is not None:
+            for c, name in enumerate(("xp", "yp", "zp")):
+                df[name] = self.offsets[i, c]
+        return df
 
     def stations_frame(self) -> pd.DataFrame:
         s = self.known_stations
         return pd.DataFrame({"station": list(self.stations), "x": s[:, 0], "y": s[:, 1], "z": s[:, 2], "L": s[:, 3]})
 
     def with_stations(self, stations) -> "MultilaterationData":
-        return MultilaterationData(self.stations, self.points, self.lengths, _check_stations(stations, len(self.stations)))
+        return MultilaterationData(self.stations, self.points, self.lengths, _check_stations(stations, len(self.stations)),
+                                   self.offsets)
 
 
 def _check_stations(stations, k):
@@ -56,7 +64,7 @@ def _check_stations(stations, k):
     return s
 
 
-def _read_table(path, need: tuple[str, ...]):
+def _read_table(path, need: tuple[str, ...], optional: tuple[str, ...] = ()):
     raw = read_text_file(path)
     kept, lines = [], []
     for k, line in enumerate(raw.splitlines(), start=1):
@@ -80,7 +88,10 @@ def _read_table(path, need: tuple[str, ...]):
         raise InvalidInputError(f"{path} line {lines[k + 1]}: missing field(s)")
     line_of = np.array(lines[1:])
     numeric = {}
-    for c in need[1:]:
+    present = [c for c in optional if c in df.columns]
+    if present and len(present) != len(optional):
+        raise InvalidInputError(f"{path}: give all of {', '.join(optional)} or none (found {', '.join(present)})")
+    for c in list(need[1:]) + present:
         col = pd.to_numeric(df[c], errors="coerce").to_numpy(dtype=float)
         bad = np.flatnonzero(~np.isfinite(col))
         if bad.size:
@@ -120,12 +131,25 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, known_stations=
         raise InvalidInputError(f"{name} line {lines[r]}: station {st[r]} measured point ({xyz[r, 0]:g}, {xyz[r, 1]:g}, "
                                 f"{xyz[r, 2]:g}) twice; keep one length per station and point (or average them)")
     lengths[ii, kk] = length
-    return MultilaterationData(stations, points, lengths, _check_stations(known_stations, len(stations)))
+    offsets = None
+    if all(c in cols for c in ("xp", "yp", "zp")):
+        off = np.column_stack([pd.to_numeric(df[cols[c]], errors="coerce").to_numpy(float) for c in ("xp", "yp", "zp")])
+        bad = np.flatnonzero(~np.all(np.isfinite(off), axis=1))
+        if bad.size:
+            raise InvalidInputError(f"{name} line {lines[bad[0]]}: xp, yp, zp must be finite numbers")
+        offsets = np.full(points.shape, np.nan)
+        offsets[ii] = off
+        clash = np.flatnonzero(np.any(offsets[ii] != off, axis=1))
+        if clash.size:
+            r = int(clash[0])
+            raise InvalidInputError(f"{name} line {lines[r]}: point ({xyz[r, 0]:g}, {xyz[r, 1]:g}, {xyz[r, 2]:g}) appears "
+                                    f"with two different tool offsets")
+    return MultilaterationData(stations, points, lengths, _check_stations(known_stations, len(stations)), offsets)
 
 
 def read_csv(path, stations_path=None) -> MultilaterationData:
     """Read a measurements CSV and, optionally, a stations CSV (station, x, y, z, L)."""
-    st, num, lines = _read_table(path, ("station", "x", "y", "z", "length"))
+    st, num, lines = _read_table(path, ("station", "x", "y", "z", "length"), optional=("xp", "yp", "zp"))
     df = pd.DataFrame({"station": st, **num})
     data = from_frame(df, str(path), lines=lines)
     if stations_path is None:

@@ -83,3 +83,27 @@ def read_text_file(path, *, error=InvalidInputError, missing_hint: str = "") -> 
         raise error(f"{path}: no such file{f' ({missing_hint})' if missing_hint else ''}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise error(f"{path}: cannot be read as text ({exc})") from None
+
+
+def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True):
+    """A delimited text table (comma, semicolon or whitespace separated; blank and '#' lines skipped) as a
+    DataFrame of strings, with the file's line number of each data row. Errors are one line."""
+    import io
+
+    import pandas as pd
+
+    raw = read_text_file(path)
+    kept, lines = [], []
+    for k, line in enumerate(raw.splitlines(), start=1):
+        if line.strip() and not line.lstrip().startswith("#"):
+            kept.append(line)
+            lines.append(k)
+    if len(kept) < 2:
+        raise InvalidInputError(f"{path}: no data lines{f' ({no_data_hint})' if no_data_hint else ''}")
+    sep = ";" if ";" in kept[0] else "," if "," in kept[0] else r"\s+"
+    try:
+        df = pd.read_csv(io.StringIO("\n".join(kept)), sep=sep, engine="python", dtype=str,
+                         keep_default_na=keep_default_na)
+    except pd.errors.ParserError as exc:
+        raise InvalidInputError(f"{path}: malformed table ({str(exc).splitlines()[0]})") from None
+    return df, lines[1:]

@@ -8,14 +8,13 @@ first appearance, points the order of first appearance of their nominal (x, y, z
 """
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from methods._errors import InvalidInputError
-from methods._validation import read_text_file
+from methods._validation import read_table
 
 
 @dataclass(frozen=True)
@@ -65,19 +64,8 @@ def _check_stations(stations, k):
 
 
 def _read_table(path, need: tuple[str, ...], optional: tuple[str, ...] = ()):
-    raw = read_text_file(path)
-    kept, lines = [], []
-    for k, line in enumerate(raw.splitlines(), start=1):
-        if line.strip() and not line.lstrip().startswith("#"):
-            kept.append(line)
-            lines.append(k)
-    if len(kept) < 2:
-        raise InvalidInputError(f"{path}: no data lines (need a header {','.join(need)} and one row per measurement)")
-    sep = ";" if ";" in kept[0] else "," if "," in kept[0] else r"\s+"
-    try:
-        df = pd.read_csv(io.StringIO("\n".join(kept)), sep=sep, engine="python", dtype=str, keep_default_na=False)
-    except pd.errors.ParserError as exc:
-        raise InvalidInputError(f"{path}: malformed table ({str(exc).splitlines()[0]})") from None
+    df, line_of = read_table(path, keep_default_na=False,
+                             no_data_hint=f"need a header {','.join(need)} and one row per measurement")
     df.columns = [str(c).strip().lower() if str(c).strip().lower() != "l" else "L" for c in df.columns]
     missing = [c for c in need if c not in df.columns]
     if missing:
@@ -85,8 +73,8 @@ def _read_table(path, need: tuple[str, ...], optional: tuple[str, ...] = ()):
     empty = (df[list(need)].isna() | (df[list(need)].apply(lambda c: c.str.strip()) == "")).any(axis=1).to_numpy()
     if empty.any():
         k = int(np.flatnonzero(empty)[0])
-        raise InvalidInputError(f"{path} line {lines[k + 1]}: missing field(s)")
-    line_of = np.array(lines[1:])
+        raise InvalidInputError(f"{path} line {line_of[k]}: missing field(s)")
+    line_of = np.array(line_of)
     numeric = {}
     present = [c for c in optional if c in df.columns]
     if present and len(present) != len(optional):

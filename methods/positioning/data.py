@@ -1,14 +1,13 @@
 """Positioning measurements (ISO 230-2): a long table target / direction / run / deviation."""
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from methods._errors import InvalidInputError
-from methods._validation import read_text_file
+from methods._validation import read_table
 
 UP = {"+", "up", "u", "positive", "pos", "↑"}
 DOWN = {"-", "down", "d", "negative", "neg", "↓"}
@@ -88,23 +87,11 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None) -> PositioningD
 
 def read_csv(path) -> PositioningData:
     """Read a positioning CSV (comma, semicolon or whitespace separated, '#' comments)."""
-    raw = read_text_file(path)
-    kept, lines = [], []
-    for k, line in enumerate(raw.splitlines(), start=1):
-        if line.strip() and not line.lstrip().startswith("#"):
-            kept.append(line)
-            lines.append(k)
-    if len(kept) < 2:
-        raise InvalidInputError(f"{path}: no data lines")
-    sep = ";" if ";" in kept[0] else "," if "," in kept[0] else r"\s+"
-    try:
-        df = pd.read_csv(io.StringIO("\n".join(kept)), sep=sep, engine="python", dtype=str)
-    except pd.errors.ParserError as exc:
-        raise InvalidInputError(f"{path}: malformed table ({str(exc).splitlines()[0]})") from None
+    df, lines = read_table(path)
     if df.isna().any().any():
         k = int(np.flatnonzero(df.isna().any(axis=1).to_numpy())[0])
-        raise InvalidInputError(f"{path} line {lines[k + 1]}: missing field(s)")
-    return from_frame(df, str(path), lines=np.array(lines[1:]))
+        raise InvalidInputError(f"{path} line {lines[k]}: missing field(s)")
+    return from_frame(df, str(path), lines=np.array(lines))
 
 
 def validate(data, method_id="") -> PositioningData:

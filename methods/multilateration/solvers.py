@@ -122,18 +122,24 @@ def stations_case_a(points, lengths, init, *, squared: bool, max_iter: int = 100
 def stations_case_b(points, lengths):
     """Case B (eq. 9-11) as published: the 5 x 5 normal system in (x_LT, y_LT, z_LT, L_k, C_k), unscaled."""
     Q, P, w = _masked(points, lengths)
-    x, y, z = Q[..., 0] * w, Q[..., 1] * w, Q[..., 2] * w
-    Pw = P * w
-    g = (np.einsum("kni,kni->kn", Q, Q) - P ** 2) * w      # |X_i|^2 - P_i^2
-    V = np.stack([x, y, z, Pw], axis=2)                     # (K, N, 4)
-    A = np.zeros((P.shape[0], 5, 5))
-    A[:, :4, :4] = 2 * np.einsum("kni,knj->kij", V, V)
-    A[:, :4, 4] = -V.sum(axis=1)
-    A[:, 4, :4] = V.sum(axis=1)
-    A[:, 4, 4] = -w.sum(axis=1) / 2
-    b = np.concatenate([np.einsum("kni,kn->ki", V, g), 0.5 * g.sum(axis=1)[:, None]], axis=1)
-    sol = _solve(A, b, "Case B station system (eq. 11)")
-    return sol[:, :4], A
+    V = np.concatenate([Q, P[..., None]], axis=2) * w[..., None]   # (K, N, 4): x_i, y_i, z_i, P_i
+    g = (np.einsum("kni,kni->kn", Q, Q) - P ** 2) * w              # |X_i|^2 - P_i^2
+    A, b = _extremal_system(V, g, w)
+    return _solve(A, b, "Case B station system (eq. 11)")[:, :4], A
+
+
+def _extremal_system(V, g, w):
+    """The paper's 'extremal principle' normal system for unknowns (v, C) of the residuals
+    g_i - 2 V_i . v + C, written as printed (eq. 11 and section 3.2): rows [2 sum V V^T, -sum V | sum V g]
+    and [sum V, -n / 2 | sum g / 2], stacked over the leading axis."""
+    m = V.shape[2]
+    A = np.zeros((V.shape[0], m + 1, m + 1))
+    A[:, :m, :m] = 2 * np.einsum("bni,bnj->bij", V, V)
+    A[:, :m, m] = -V.sum(axis=1)
+    A[:, m, :m] = V.sum(axis=1)
+    A[:, m, m] = -w.sum(axis=1) / 2
+    b = np.concatenate([np.einsum("bni,bn->bi", V, g), 0.5 * g.sum(axis=1)[:, None]], axis=1)
+    return A, b
 
 
 def stations_centred(points, lengths):
@@ -203,12 +209,7 @@ def points_case_b(stations, lengths):
     S = stations[:, :3]
     Sw = S[None] * w[..., None]                              # (N, K, 3)
     g = (np.sum(S ** 2, axis=1)[None] - rho ** 2) * w        # |LT|^2 - (L + P)^2
-    A = np.zeros((w.shape[0], 4, 4))
-    A[:, :3, :3] = 2 * np.einsum("nki,nkj->nij", Sw, Sw)
-    A[:, :3, 3] = -Sw.sum(axis=1)
-    A[:, 3, :3] = Sw.sum(axis=1)
-    A[:, 3, 3] = -w.sum(axis=1) / 2
-    b = np.concatenate([np.einsum("nki,nk->ni", Sw, g), 0.5 * g.sum(axis=1)[:, None]], axis=1)
+    A, b = _extremal_system(Sw, g, w)
     return _solve(A, b, "Case B point system")[:, :3], A
 
 

@@ -66,6 +66,7 @@ class TestConditions:
     start_angle_deg: float = 239.0
     run_in_deg: float = 0.0
     run_out_deg: float = 0.0
+    arc_deg: float = 360.0          # ISO 230-4 partial arcs (e.g. 220 deg in a vertical plane)
     plane: str = "X/Y"
     machine: str = "synthetic"
     extra: dict = field(default_factory=dict)
@@ -90,7 +91,8 @@ def trace(direction: str, cond: TestConditions, err: MachineErrors, rng: np.rand
     v = cond.feed_mm_min / 60.0
     omega = v / R
     run_in, run_out = np.radians(cond.run_in_deg), np.radians(cond.run_out_deg)
-    total_angle = 2 * np.pi + run_in + run_out
+    arc = np.radians(cond.arc_deg)
+    total_angle = arc + run_in + run_out
     dt = 1.0 / cond.sampling_hz
     t = np.arange(0.0, total_angle / omega, dt)
     theta = np.radians(cond.start_angle_deg) - d * run_in + d * omega * t
@@ -118,10 +120,11 @@ def trace(direction: str, cond: TestConditions, err: MachineErrors, rng: np.rand
         dy = dy + rng.normal(0.0, err.noise, t.shape)
     pts = np.column_stack([x + dx + err.offset_x, y + dy + err.offset_y])
     swept = d * (theta - theta[0])
-    evaluated = (swept >= run_in - 1e-12) & (swept < run_in + 2 * np.pi)
+    end = (swept < run_in + arc) if cond.arc_deg >= 360 else (swept <= run_in + arc + 1e-12)
+    evaluated = (swept >= run_in - 1e-12) & end
     info = {"t": t[evaluated], "commanded": np.column_stack([x, y])[evaluated], "theta": theta[evaluated],
             "direction": direction, "run_in": pts[swept < run_in - 1e-12],
-            "run_out": pts[swept >= run_in + 2 * np.pi]}
+            "run_out": pts[(swept >= run_in - 1e-12) & ~end]}
     return pts[evaluated], info
 
 

@@ -114,5 +114,5 @@ def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, sk
         raise InvalidInputError(f"{path}: malformed table ({str(exc).splitlines()[0]})") from None
     if decimal_comma:
         df = df.apply(lambda col: col.str.replace(r"^\s*([+-]?\d*),(\d+(?:[eE][+-]?\d+)?)\s*$", r"\1.\2", regex=True)
-                      if col.dtype == object else col)
+                      if pd.api.types.is_string_dtype(col) or col.dtype == object else col)
     return df, lines[1:]

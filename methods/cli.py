@@ -122,9 +122,11 @@ def add_reader_options(p, *, columns=True):
         g.add_argument("--plane", choices=("xy", "yz", "zx"), help="the plane's two named columns (x,y / y,z / z,x)")
 
 
-def header_line(command: str, unit: str, extra: str = "") -> str:
-    return (f"fitbench {version()} {command}: input unit {canonical(unit)}"
-            f"{' (converted to mm)' if canonical(unit) != 'mm' else ''}; lengths printed in µm{extra}")
+def header_line(command: str, unit: str, extra: str = "", deviation_unit: str | None = None) -> str:
+    units = canonical(unit) + (f", deviations {canonical(deviation_unit)}" if deviation_unit else "")
+    converted = canonical(unit) != "mm" or (deviation_unit and canonical(deviation_unit) != "mm")
+    return (f"fitbench {version()} {command}: input unit {units}{' (converted to mm)' if converted else ''}; "
+            f"lengths printed in µm{extra}")
 
 
 def parse_value(key: str, text: str, default, method_id: str):
@@ -391,6 +393,7 @@ def cmd_positioning(args) -> int:
     if args.json:
         out = dict(res.figures)
         out["units"] = dict(JSON_UNITS, input_unit=canonical(args.unit),
+                            input_deviation_unit=canonical(args.deviation_unit or args.unit),
                             polynomial="coefficients of increasing powers of the position P in mm: mm / mm^k")
         out["per_target"] = {k: v for k, v in res.per_target.items()}
         out["polynomial"] = {d: {"coefficients": p["coefficients"], "covariance": p["covariance"],
@@ -399,8 +402,7 @@ def cmd_positioning(args) -> int:
         out["u_delta"] = res.extra["u_delta"]
         print(json.dumps(_jsonable(out)))
         return 0
-    print(header_line("positioning", args.unit if args.deviation_unit is None else
-                      f"{canonical(args.unit)} (deviations {canonical(args.deviation_unit)})"))
+    print(header_line("positioning", args.unit, deviation_unit=args.deviation_unit))
     print(text(res, degree=args.degree))
     if comp is not None:
         for fmt, path in args.compensation:

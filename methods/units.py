@@ -63,7 +63,7 @@ def warn_implausible(what: str, size_mm: float, limit_mm: float, declared: str, 
     if np.isfinite(size_mm) and size_mm > limit_mm:
         guess = likely_unit(size_mm, typical_mm if typical_mm else limit_mm / 10)
         hint = f"; is the file in {guess}? (--unit {guess.replace('µ', 'u')})" if guess else ""
-        warnings.warn(f"{what} of {size_mm:.6g} mm (read as {canonical(declared)}) is implausible{hint}",
+        warnings.warn(f"{what} up to {size_mm:.6g} mm (read as {canonical(declared)}) are implausible{hint}",
                       UnitWarning, stacklevel=3)
         return True
     return False

@@ -14,8 +14,8 @@ Layouts read (``read_csv``):
   a clear message: the ISO 230-2 figures computed here are the bidirectional ones.
 
 Units: ``unit`` for the targets (and ``actual``), ``deviation_unit`` for the deviations (default:
-``unit``); everything is returned in mm. Deviations implausible for the declared unit (beyond 1 % of
-the travel, or all below 10 nm) give a warning naming the likely unit.
+``unit``); everything is returned in mm. Deviations implausible for the declared unit (beyond 0.1 % of
+the travel and 0.1 mm, or all below 10 nm) give a warning naming the likely unit.
 """
 from __future__ import annotations
 
@@ -94,8 +94,8 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
                                 f"(larger than {MAX_ABS_DEVIATION_MM:g} mm); check the file and --unit")
     travel = float(np.ptp(numeric["target"])) if len(dev) else 0.0
     peak = float(np.max(np.abs(dev))) if len(dev) else 0.0
-    if travel > 0 and not warn_implausible("positioning deviations", peak, 0.01 * travel, dev_unit,
-                                           typical_mm=1e-4 * travel):
+    if travel > 0 and not warn_implausible("positioning deviations", peak, max(1e-3 * travel, 0.1), dev_unit,
+                                           typical_mm=1e-5 * travel):
         if 0 < peak < 1e-5:
             import warnings
             warnings.warn(f"positioning deviations of at most {peak * 1e6:.3g} nm (read as {canonical(dev_unit)}) are "

@@ -16,6 +16,7 @@ run-out arcs (not part of the evaluated trace). Each error source moves the actu
   dx = A sin(2 pi x / p), dy = A sin(2 pi y / p), in absolute machine coordinates;
 * ``straightness_y`` (mm): the X axis' straightness in Y, dy = S ((x - x_c) / R)^2;
 * ``vibration_y`` (mm) with ``vibration_hz``: dy = A sin(2 pi f t) (the paper saw 4 Hz on Y);
+* ``drift_x``, ``drift_y`` (mm/s): slow thermal drift of the axes during the run, dx = drift_x t;
 * ``noise`` (mm): Gaussian, per coordinate;
 * ``offset_x``, ``offset_y`` (mm): the instrument's centre away from the nominal centre (set-up).
 """
@@ -43,6 +44,8 @@ class MachineErrors:
     straightness_y: float = 0.0
     vibration_y: float = 0.0
     vibration_hz: float = 4.0
+    drift_x: float = 0.0
+    drift_y: float = 0.0
     noise: float = 0.0
     offset_x: float = 0.0
     offset_y: float = 0.0
@@ -113,6 +116,9 @@ def trace(direction: str, cond: TestConditions, err: MachineErrors, rng: np.rand
         dy += err.straightness_y * ((x - xc) / R) ** 2
     if err.vibration_y:
         dy += err.vibration_y * np.sin(2 * np.pi * err.vibration_hz * t)
+    if err.drift_x or err.drift_y:
+        dx = dx + err.drift_x * t
+        dy = dy + err.drift_y * t
     if err.noise:
         if rng is None:
             raise ValueError("noise needs an explicit numpy Generator (rng)")

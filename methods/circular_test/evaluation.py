@@ -45,8 +45,12 @@ def radii(points, center):
 def _check_run(points, name, nominal_radius, center):
     r = radii(points, center)
     if abs(np.median(r) - nominal_radius) > RADIUS_TOLERANCE * nominal_radius:
-        raise InvalidInputError(f"{name} run: the data's radius ({np.median(r):.6g}) is far from the nominal radius "
-                                f"{nominal_radius:g} (more than {RADIUS_TOLERANCE:.0%}); check --nominal-radius and units")
+        from methods.units import likely_unit
+        guess = likely_unit(float(np.median(r)), nominal_radius)
+        hint = f"; is the file in {guess}? (--unit {guess.replace('µ', 'u')})" if guess else ""
+        raise InvalidInputError(f"{name} run: the data's radius ({np.median(r):.6g} mm) is far from the nominal radius "
+                                f"{nominal_radius:g} mm (more than {RADIUS_TOLERANCE:.0%}); check --nominal-radius and "
+                                f"--unit{hint}")
     arc, gap = coverage_deg(points, center)
     if arc < MIN_ARC_DEG:
         raise InvalidInputError(f"{name} run: it covers an arc of {arc:.0f} deg; an evaluation needs at least "

@@ -35,9 +35,15 @@ def contribution_um(name: str, item: dict, R_mm: float, feed_mm_min: float | Non
     return abs(v)
 
 
-def ranked(dg: dict, R_mm: float, feed_mm_min=None) -> list:
+def _label(name: str, plane: str | None) -> str:
+    """The label with the plane's axis letters (X, Y for 'xy'; Z, X for 'zx'; Y, Z for 'yz')."""
+    a, b = (plane or "xy").upper()[:2] if plane and len(plane) >= 2 else ("X", "Y")
+    return LABELS[name].replace("X-Y", "#1-#2").replace(" X", " #1").replace(" Y", " #2").replace("#1", a).replace("#2", b)
+
+
+def ranked(dg: dict, R_mm: float, feed_mm_min=None, plane: str | None = None) -> list:
     """[(label, item, contribution µm or None)] sorted by contribution, the largest first."""
-    rows = [(LABELS[n], dg[n], contribution_um(n, dg[n], R_mm, feed_mm_min)) for n in LABELS if n in dg]
+    rows = [(_label(n, plane), dg[n], contribution_um(n, dg[n], R_mm, feed_mm_min)) for n in LABELS if n in dg]
     return sorted(rows, key=lambda r: (r[2] is None, -(r[2] or 0.0)))
 
 
@@ -73,7 +79,8 @@ def text(ev: dict, dg: dict | None) -> str:
         feed = (ev.get("conditions") or {}).get("feed_mm_min")
         lines += ["diagnostics (least squares on the error signatures; value +- standard uncertainty), ranked by "
                   "their contribution to the circular deviation (peak-to-valley, µm)"]
-        for label, item, contrib in ranked(dg, ev["nominal_radius"], feed):
+        plane = (ev.get("conditions") or {}).get("plane")
+        for label, item, contrib in ranked(dg, ev["nominal_radius"], feed, plane):
             if item["value"] is None:
                 lines.append(f"  {label:<22}  {item.get('note', 'not estimated')}")
             else:
@@ -175,7 +182,7 @@ def polar_plot(cw, ccw, ev: dict, path, magnification: float | None = None, titl
              f"  F max / min  {ev['F_max'] * um:+.2f} / {ev['F_min'] * um:+.2f} µm"]
     if diagnostics:
         lines += ["", "Diagnostics (ranked, contribution µm)"]
-        for label, item, contrib in ranked(diagnostics, R, cond.get("feed_mm_min")):
+        for label, item, contrib in ranked(diagnostics, R, cond.get("feed_mm_min"), cond.get("plane")):
             if item["value"] is None:
                 lines.append(f"  {label:<20} n/a")
             else:

@@ -377,7 +377,7 @@ def cmd_positioning(args) -> int:
         raise InvalidInputError(f"--degree must be >= 0, got {args.degree}")
     data = read_csv(args.file, unit=args.unit, deviation_unit=args.deviation_unit, skip_rows=args.skip_rows)
     res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
-    if args.standard != "iso230-2:2014":
+    if args.standard != "iso230-2:2014" or len(data.directions) == 1:
         other = methods.fit("positioning.iso230_2", data, standard=args.standard)
         res.figures, res.per_target = other.figures, other.per_target
     comp = None
@@ -406,7 +406,7 @@ def cmd_positioning(args) -> int:
     print(text(res, degree=args.degree))
     if comp is not None:
         for fmt, path in args.compensation:
-            print(f"compensation table ({fmt}, {len(comp)} points every {args.interval:g} mm, from the "
+            print(f"compensation table ({fmt}, {len(comp)} points every {comp.attrs['interval_mm']:g} mm, from the "
                   f"{args.compensation_from}) written to {path}")
     return 0
 

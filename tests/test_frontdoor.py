@@ -212,12 +212,26 @@ def test_wide_laser_exports_match_the_long_format(tmp_path, direction_column):
     np.testing.assert_allclose(got.down, data.down, atol=1e-7)
 
 
-def test_unidirectional_wide_export_is_refused_clearly(tmp_path):
+def test_unidirectional_wide_export_gives_the_unidirectional_figures(tmp_path):
+    """A wide export without directions is a unidirectional (+) test: A, E, R of that direction by their
+    definitions (k = 2), no M or B; VDI 3441 refused; the model and the plot work on the one direction."""
+    from methods.positioning import read_csv
     p = tmp_path / "uni.csv"
-    p.write_text("target,run 1,run 2\n0,1,2\n100,2,3\n200,1,1\n")
-    with pytest.raises(InvalidInputError, match="unidirectional"):
-        from methods.positioning import read_csv
-        read_csv(p)
+    p.write_text("target,run 1,run 2,run 3\n0,1,2,1.5\n100,2,3,2.2\n200,1,1,1.4\n300,0,1,0.5\n")
+    data = read_csv(p, deviation_unit="um")
+    assert data.directions == ("up",) and data.down is None
+    x = np.array([[1, 2, 1.5], [2, 3, 2.2], [1, 1, 1.4], [0, 1, 0.5]]) * 1e-3
+    m, s = x.mean(axis=1), x.std(axis=1, ddof=1)
+    res = methods.fit("positioning.gls_polynomial", data, degree=2)
+    f = res.figures
+    assert f["A"] == pytest.approx(np.max(m + 2 * s) - np.min(m - 2 * s), abs=1e-15)
+    assert f["E_up"] == pytest.approx(np.ptp(m)) and f["R"] == pytest.approx(4 * s.max())
+    assert "M" not in f and "B" not in f and f["directions"] == "unidirectional (up)"
+    assert set(res.polynomial) == {"up"}
+    with pytest.raises(InvalidInputError, match="both approach directions"):
+        methods.fit("positioning.iso230_2", data, standard="vdi3441")
+    out = cli("positioning", p, "--deviation-unit", "um", "--degree", 2, "--plot", tmp_path / "u.png")
+    assert out.returncode == 0 and "unidirectional (up)" in out.stdout and (tmp_path / "u.png").stat().st_size > 5000
 
 
 def test_decimal_commas_in_positioning_and_multilateration_readers(tmp_path):

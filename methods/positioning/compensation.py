@@ -10,6 +10,8 @@ not in the table: controllers take it as a separate backlash parameter; it is wr
 
 Writers (``WRITERS``):
 
+A unidirectional test gives the table of its one direction (the other column is empty, B unknown).
+
 * ``csv``: generic CSV, one row per position, lengths in mm (``position_mm, deviation_mm,
   deviation_up_mm, deviation_down_mm, compensation_mm``).
 * ``siemens-eec``: SINUMERIK interpolatory compensation (LEC/EEC) as an MPF/INI part program setting the
@@ -57,29 +59,36 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     if n + 1 > 100_000:
         raise InvalidInputError(f"--interval {interval:g} mm gives {n + 1} points; choose a coarser interval")
     pos = P[0] + interval * np.arange(n + 1)
+    dirs = data.directions
+    curves = {}
     if source == "model":
         if not res.polynomial:
             raise InvalidInputError("--compensation-from model needs the GLS polynomial (positioning.gls_polynomial)")
-        up = evaluate_band(res.polynomial["up"], pos)[0]
-        down = evaluate_band(res.polynomial["down"], pos)[0]
+        for d in dirs:
+            curves[d] = evaluate_band(res.polynomial[d], pos)[0]
     elif source == "mean":
-        up = np.interp(pos, P, res.per_target["mean_up"])
-        down = np.interp(pos, P, res.per_target["mean_down"])
+        for d in dirs:
+            curves[d] = np.interp(pos, P, res.per_target[f"mean_{d}"])
     else:
         raise InvalidInputError(f"--compensation-from must be 'model' or 'mean', got {source!r}")
-    mean = 0.5 * (up + down)
+    up = curves.get("up", np.full_like(pos, np.nan))
+    down = curves.get("down", np.full_like(pos, np.nan))
+    mean = np.mean([curves[d] for d in dirs], axis=0)
     table = pd.DataFrame({"position_mm": pos, "deviation_mm": mean, "deviation_up_mm": up,
                           "deviation_down_mm": down, "compensation_mm": -mean})
-    table.attrs.update(interval_mm=float(interval), source=source, backlash_mm=float(np.mean(up - down)))
+    table.attrs.update(interval_mm=float(interval), source=source,
+                       backlash_mm=float(np.mean(up - down)) if len(dirs) == 2 else float("nan"))
     return table
 
 
 def _header(table, comment: str) -> list[str]:
-    return [f"{comment} fitbench pitch-error compensation: c(P) = -(mean bidirectional deviation), from the "
-            f"{table.attrs.get('source', '?')}",
+    uni = not np.isfinite(table.attrs.get("backlash_mm", float("nan")))
+    return [f"{comment} fitbench pitch-error compensation: c(P) = -({'deviation of the one direction measured' if uni else 'mean bidirectional deviation'}), "
+            f"from the {table.attrs.get('source', '?')}",
             f"{comment} {len(table)} points, {table.position_mm.iloc[0]:g} to {table.position_mm.iloc[-1]:g} mm every "
-            f"{table.attrs.get('interval_mm', float('nan')):g} mm; mean reversal value B = "
-            f"{table.attrs.get('backlash_mm', float('nan')) * 1e3:.2f} µm (set as backlash separately)",
+            f"{table.attrs.get('interval_mm', float('nan')):g} mm; mean reversal value B = " +
+            (f"{table.attrs['backlash_mm'] * 1e3:.2f} µm (set as backlash separately)" if not uni else
+             "unknown (unidirectional test)"),
             f"{comment} check the controller's sign convention with a verification run"]
 
 

@@ -10,8 +10,9 @@ Layouts read (``read_csv``):
   tabular exports of Renishaw LaserXL/CARTO (a column of deviations per run and direction beside the
   target positions, errors often in µm) as shown in public calibration reports; the exact column titles
   of each software version are not publicly specified, hence the tolerant matching (confidence: medium
-  for the layout, low for the exact titles). Unidirectional tests (one direction only) are refused with
-  a clear message: the ISO 230-2 figures computed here are the bidirectional ones.
+  for the layout, low for the exact titles). Run columns without any direction (``target, run 1, run 2``)
+  are a unidirectional test approached in the + direction; a long table may hold one direction only:
+  then only the unidirectional figures (A, E, R of that direction) are evaluated.
 
 Units: ``unit`` for the targets (and ``actual``), ``deviation_unit`` for the deviations (default:
 ``unit``); everything is returned in mm. Deviations implausible for the declared unit (beyond 0.1 % of
@@ -46,13 +47,18 @@ class PositioningData:
     """Deviations x[i, j] (target i, run j) for each direction, in the input unit."""
 
     targets: np.ndarray   # (m,)
-    up: np.ndarray        # (m, n) deviations approaching in the + direction
-    down: np.ndarray      # (m, n) deviations approaching in the - direction
+    up: np.ndarray | None     # (m, n) deviations approaching in the + direction (None: unidirectional test, - only)
+    down: np.ndarray | None   # (m, n) deviations approaching in the - direction (None: unidirectional test, + only)
     unit: str = ""
 
     @property
     def runs(self) -> int:
-        return self.up.shape[1]
+        return (self.up if self.up is not None else self.down).shape[1]
+
+    @property
+    def directions(self) -> tuple:
+        """The approach directions measured: ('up', 'down') for a bidirectional test."""
+        return tuple(d for d in ("up", "down") if getattr(self, d) is not None)
 
 
 def _direction(value, lineno, name):
@@ -111,11 +117,10 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
     if targets.size < 2:
         raise InvalidInputError(f"{name}: needs at least two target positions, got {targets.size}")
     runs = None
-    arrays = {}
-    for d in ("up", "down"):
+    arrays = {"up": None, "down": None}
+    present = [d for d in ("up", "down") if (table["direction"] == d).any()]
+    for d in present:
         sub = table[table["direction"] == d]
-        if sub.empty:
-            raise InvalidInputError(f"{name}: no measurements in the {d} direction (ISO 230-2 approaches every target both ways)")
         piv = sub.pivot(index="target", columns="run", values="dev").reindex(targets)
         for t, row in piv.iterrows():
             count = int(row.notna().sum())
@@ -158,12 +163,9 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.
                 raise InvalidInputError(f"{name}: column {cols[k]!r} names a direction and the file has a direction column")
             direction = df.iloc[:, d_col].to_numpy()
         else:
-            if tag is None:
-                raise InvalidInputError(f"{name}: run column {cols[k]!r} has no direction (+/-, up/down, fwd/rev) and the "
-                                        "file has no direction column; a unidirectional test is not evaluated "
-                                        "(the ISO 230-2 figures computed here are bidirectional)")
-            direction = np.full(len(df), "+" if tag.lower() in ("+", "up", "u", "fwd", "forward", "pos", "↑", "hin")
-                                else "-")
+            # no direction anywhere: a unidirectional test approached in the + direction
+            direction = np.full(len(df), "+" if tag is None or tag.lower() in ("+", "up", "u", "fwd", "forward", "pos",
+                                                                                "↑", "hin") else "-")
         rows.append(pd.DataFrame({"target": df.iloc[:, t].to_numpy(), "direction": direction, "run": run,
                                   "deviation": df.iloc[:, k].to_numpy(), "_line": lines}))
     long = pd.concat(rows, ignore_index=True)

@@ -26,7 +26,8 @@ def text(res, degree: int | None = None) -> str:
     f, per = res.figures, res.per_target
     std = f["standard"]
     um = 1e3
-    lines = [f"{TITLES.get(std, std)}: {f['targets']} targets x {f['runs']} runs (all values in µm)"]
+    lines = [f"{TITLES.get(std, std)}: {f['targets']} targets x {f['runs']} runs, {f.get('directions', 'bidirectional')} "
+             "(all values in µm)"]
     if std == "vdi3441":
         lines += [f"  P  (positional uncertainty)        {f['P'] * um:10.3f}",
                   f"  Pa (positional deviation)          {f['Pa'] * um:10.3f}",
@@ -38,15 +39,20 @@ def text(res, degree: int | None = None) -> str:
                  "E_down": "systematic deviation ↓", "M": "mean bidirectional positional deviation",
                  "R": "repeatability, bidirectional", "R_up": "repeatability ↑", "R_down": "repeatability ↓",
                  "B": "reversal value", "B_mean": "mean reversal value"}
+        if f.get("directions", "bidirectional") != "bidirectional":
+            names = {k: v.replace(", bidirectional", f", {f['directions']}") for k, v in names.items()}
         for key, label in names.items():
-            lines.append(f"  {key:<7} {label:<40} {f[key] * um:10.3f}")
+            if key in f:
+                lines.append(f"  {key:<7} {label:<40} {f[key] * um:10.3f}")
     lines.append("per target (µm; target in mm)")
-    head = f"  {'target':>10} {'mean ↑':>9} {'mean ↓':>9} {'s ↑':>7} {'s ↓':>7} {'B_i':>8} {'R_i':>8} {'x̄_i':>9}"
-    lines.append(head)
+    cols = [(f"mean {ARROW[d]}", f"mean_{d}", 9) for d in ("up", "down") if f"mean_{d}" in per] + \
+           [(f"s {ARROW[d]}", f"s_{d}", 7) for d in ("up", "down") if f"s_{d}" in per] + \
+           [(n, k, 8) for n, k in (("B_i", "B_i"), ("R_i", "R_i"), ("x̄_i", "mean_bidirectional")) if k in per]
+    if "R_i" not in per:
+        cols += [(f"R_i {ARROW[d]}", f"R_i_{d}", 8) for d in ("up", "down") if f"R_i_{d}" in per]
+    lines.append(f"  {'target':>10} " + " ".join(f"{n:>{w}}" for n, _, w in cols))
     for i, t in enumerate(per["targets"]):
-        lines.append(f"  {t:10.3f} {per['mean_up'][i] * um:9.3f} {per['mean_down'][i] * um:9.3f} "
-                     f"{per['s_up'][i] * um:7.3f} {per['s_down'][i] * um:7.3f} {per['B_i'][i] * um:8.3f} "
-                     f"{per['R_i'][i] * um:8.3f} {per['mean_bidirectional'][i] * um:9.3f}")
+        lines.append(f"  {t:10.3f} " + " ".join(f"{per[k][i] * um:{w}.3f}" for _, k, w in cols))
     if res.polynomial:
         ud = res.extra.get("u_delta", 0.0)
         lines.append(f"model: degree-{degree if degree is not None else next(iter(res.polynomial.values()))['degree']} "
@@ -74,29 +80,30 @@ def plot(result, path, title: str = "", *, data=None, save=None) -> dict:
     fig, axes = plt.subplots(1, 2, figsize=(13, 5), sharey=True)
     ax = axes[0]
     colours = {"up": "tab:blue", "down": "tab:red"}
+    dirs = [d for d in ("up", "down") if f"mean_{d}" in per]
     if data is not None:
-        for d in ("up", "down"):
+        for d in dirs:
             arr = getattr(data, d)
             for j in range(arr.shape[1]):
                 ax.plot(P, arr[:, j] * um, lw=0.5, alpha=0.5, color=colours[d],
                         label=f"runs {ARROW[d]}" if j == 0 else None)
-    for d in ("up", "down"):
+    for d in dirs:
         x, s = per[f"mean_{d}"], per[f"s_{d}"]
         ax.plot(P, x * um, "o-", color=colours[d], ms=4, lw=1.4, label=f"mean {ARROW[d]}")
         ax.fill_between(P, (x - k * s) * um, (x + k * s) * um, color=colours[d], alpha=0.15, label=f"±{k:g}s {ARROW[d]}")
-    ax.plot(P, per["mean_bidirectional"] * um, "k-", lw=1.2, label="mean bidirectional")
+    if "mean_bidirectional" in per:
+        ax.plot(P, per["mean_bidirectional"] * um, "k-", lw=1.2, label="mean bidirectional")
     if figs.get("standard") == "vdi3441":
         notes = [f"P = {figs['P'] * um:.2f} µm", f"Pa = {figs['Pa'] * um:.2f} µm", f"Ps = {figs['Ps'] * um:.2f} µm",
                  f"U = {figs['U'] * um:.2f} µm"]
     else:
-        notes = [f"A = {figs['A'] * um:.2f} µm", f"E = {figs['E'] * um:.2f} µm", f"B = {figs['B'] * um:.2f} µm",
-                 f"M = {figs['M'] * um:.2f} µm", f"R = {figs['R'] * um:.2f} µm"]
+        notes = [f"{key} = {figs[key] * um:.2f} µm" for key in ("A", "E", "B", "M", "R") if key in figs]
     ax.text(0.02, 0.98, "\n".join(notes), transform=ax.transAxes, va="top", ha="left", fontsize=9,
             family="monospace", bbox=dict(boxstyle="round", fc="white", ec="0.6", alpha=0.9))
     ax.set_title(f"{TITLES.get(figs.get('standard'), figs.get('standard'))}: {figs['targets']} targets x "
                  f"{figs['runs']} runs", fontsize=10)
     grid = np.linspace(P.min(), P.max(), 400)
-    for d in ("up", "down"):
+    for d in dirs:
         axes[1].plot(P, per[f"mean_{d}"] * um, "o", color=colours[d], ms=4)
         if d in (result.polynomial or {}):
             v, U = evaluate_band(result.polynomial[d], grid, result.polynomial[d]["k"])

@@ -566,3 +566,28 @@ def test_fitbench_delegates_and_names_a_missing_module(monkeypatch, capsys):
     assert fc.main(["verify"]) == 2
     assert "experiments.no_such_module is missing" in capsys.readouterr().err
     assert fc.main(["list", "--family", "circle"]) == 0
+
+
+def test_fit_reads_any_plane_and_unit_and_says_so(tmp_path):
+    t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    p = tmp_path / "yz_um.csv"
+    pd.DataFrame({"t": t, "y": 5000 + 2000 * np.cos(t), "z": -1000 + 2000 * np.sin(t)}).to_csv(p, index=False)
+    out = cli("fit", "circle.gauss_newton", p, "--plane", "yz", "--unit", "um", "--json")
+    assert out.returncode == 0, out.stderr
+    d = json.loads(out.stdout)
+    assert d["radius"] == pytest.approx(2.0, abs=1e-12) and d["center"] == pytest.approx([5.0, -1.0], abs=1e-12)
+    assert d["units"]["length"] == "mm" and d["units"]["input_unit"] == "µm"
+    human = cli("fit", "circle.gauss_newton", p, "--plane", "yz", "--unit", "um")
+    assert human.stdout.startswith("input unit µm (converted to mm)")
+    one_error_line(cli("fit", "circle.gauss_newton", p), "which two columns")
+
+
+def test_circular_test_file_in_micrometres(lola, tmp_path):
+    d, cond, cw, ccw = lola
+    save_xy(tmp_path / "cw.csv", cw * 1e3, fmt="%.6f")
+    save_xy(tmp_path / "ccw.csv", ccw * 1e3, fmt="%.6f")
+    base = ("--nominal-radius", cond.nominal_radius, "--json")
+    ref = json.loads(cli("circular-test", d / "cw.csv", d / "ccw.csv", *base).stdout)
+    got = json.loads(cli("circular-test", tmp_path / "cw.csv", tmp_path / "ccw.csv", *base, "--unit", "um").stdout)
+    assert got["G_b"] == pytest.approx(ref["G_b"], abs=1e-6) and got["units"]["input_unit"] == "µm"
+    one_error_line(cli("circular-test", tmp_path / "cw.csv", tmp_path / "ccw.csv", *base[:2]), "is the file in µm?")

@@ -31,7 +31,15 @@ ERR = MachineErrors(squareness=40e-6, scale_x=25e-6, scale_y=-5e-6, lag_x=0.002,
 
 
 def cli(*args):
-    return subprocess.run([sys.executable, "-m", "methods", *map(str, args)], capture_output=True, text=True, cwd=REPO)
+    """``python -m methods ARGS`` in this process (an uncaught exception fails the test like a traceback would);
+    the subprocess form is covered by tests/test_cli.py and the --version test below."""
+    import contextlib
+    import io
+    from types import SimpleNamespace
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in args])
+    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
 
 
 def one_error_line(out, match):

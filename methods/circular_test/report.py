@@ -102,8 +102,7 @@ def _nice_division(span_um: float) -> float:
     return float(10 ** (exp + 1))
 
 
-def polar_plot(cw, ccw, ev: dict, path, magnification: float | None = None, title: str = "", *, diagnostics=None,
-               conditions=None, save=None):
+def polar_plot(cw, ccw, ev: dict, path, title: str = "", *, diagnostics=None, conditions=None, save=None):
     """Both runs as radial deviation (µm) about the evaluation centre, drawn on a polar grid whose
     rings are a fixed number of µm apart (the scale is printed: µm per division); the nominal circle is
     the ring 0; the G band (min and max radius of both runs) shaded; start (o) and direction (arrow)

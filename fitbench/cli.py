@@ -3,6 +3,10 @@
 ``run``, ``report`` and ``verify`` hand their arguments to ``experiments.run.main``,
 ``experiments.report.main`` and ``experiments.verify.main`` (imported only when used, by module name);
 every other subcommand is ``methods.cli`` (``python -m methods``). ``--version`` works everywhere.
+
+Output folders not given on the command line are relative to the current directory (``results/`` for
+``run``; ``results/`` and ``paper/`` for ``report``), never inside the installed package (the
+``python -m experiments.*`` forms default to the repository's folders).
 """
 from __future__ import annotations
 
@@ -10,6 +14,9 @@ import importlib
 import sys
 
 from fitbench import __version__
+
+#: folders a delegated subcommand gets relative to the current directory unless given: name -> [(option, folder)]
+CWD_DEFAULTS = {"run": [("--out", "results")], "report": [("--results", "results"), ("--out", "paper")]}
 
 #: subcommands delegated to the experiment modules: name -> (module, one-line help)
 DELEGATED = {"run": ("experiments.run", "run studies (python -m experiments.run)"),
@@ -33,6 +40,10 @@ def main(argv=None) -> int:
                       file=sys.stderr)
                 return 2
             raise
+        if not any(a in ("-h", "--help") for a in rest):
+            for option, folder in CWD_DEFAULTS.get(name, []):
+                if not any(a == option or a.startswith(option + "=") for a in rest):
+                    rest = [*rest, option, folder]
         try:
             return int(module.main(rest) or 0)
         except SystemExit as exc:  # argparse's --help / errors inside the delegated module

@@ -599,3 +599,17 @@ def test_circular_test_file_in_micrometres(lola, tmp_path):
     got = json.loads(cli("circular-test", tmp_path / "cw.csv", tmp_path / "ccw.csv", *base, "--unit", "um").stdout)
     assert got["G_b"] == pytest.approx(ref["G_b"], abs=1e-6) and got["units"]["input_unit"] == "µm"
     one_error_line(cli("circular-test", tmp_path / "cw.csv", tmp_path / "ccw.csv", *base[:2]), "is the file in µm?")
+
+
+def test_fitbench_run_and_report_default_folders_are_relative_to_the_cwd(monkeypatch):
+    import types
+    import fitbench.cli as fc
+    seen = {}
+    fake = types.ModuleType("fake_experiments")
+    fake.main = lambda argv: seen.setdefault("argv", argv) and 0
+    monkeypatch.setitem(sys.modules, "fake_experiments", fake)
+    monkeypatch.setitem(fc.DELEGATED, "run", ("fake_experiments", "x"))
+    monkeypatch.setitem(fc.DELEGATED, "report", ("fake_experiments", "x"))
+    assert fc.main(["run", "published"]) == 0 and seen.pop("argv") == ["published", "--out", "results"]
+    assert fc.main(["run", "published", "--out=X"]) == 0 and seen.pop("argv") == ["published", "--out=X"]
+    assert fc.main(["report"]) == 0 and seen.pop("argv") == ["--results", "results", "--out", "paper"]

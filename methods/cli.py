@@ -351,6 +351,8 @@ def build_parser() -> argparse.ArgumentParser:
     pu.add_argument("--json", action="store_true", help="print one JSON object")
     pu.add_argument("--no-residuals", action="store_true", help="leave the length residuals out of --json")
     pu.set_defaults(func=cmd_multilaterate)
+    from methods.roundness import cli as roundness_cli
+    roundness_cli.add_parser(sub)
     return p
 
 

@@ -281,3 +281,53 @@ def test_evaluate_pure_function_matches_registered():
     d = res.to_dict(residuals=False)
     assert d["references"]["lsci"]["RONt"] == res.form_error and "points" not in d
     json.dumps(d)
+
+
+# ------------------------------------------------------------------ CLI
+
+def _write_profile(tmp_path, unit_scale=1.0):
+    pts, _, _ = lobed(720, [(3, 2e-3, 0.2), (5, 1e-3, 1.0)], center=(30.0, -5.0), radius=12.5)
+    f = tmp_path / f"profile_{unit_scale:g}.csv"
+    np.savetxt(f, pts * unit_scale, delimiter=",", header="x,y", comments="")
+    return f
+
+
+def test_cli_table_json_units_and_plot(tmp_path, capsys):
+    from methods.cli import main
+    f = _write_profile(tmp_path)
+    png = tmp_path / "r.png"
+    assert main(["roundness", str(f), "--cutoff", "15", "--plot", str(png)]) in (0, 1)
+    out = capsys.readouterr().out
+    assert "RONt [µm]" in out and "minimum zone circles (MZCI)" in out and "15 UPR Gaussian" in out
+    assert png.stat().st_size > 10_000
+    # the same profile in µm gives the same JSON (lengths in mm) as in mm
+    f_um = _write_profile(tmp_path, 1e3)
+    main(["roundness", str(f), "--cutoff", "15", "--reference", "lsci", "--json"])
+    d_mm = json.loads(capsys.readouterr().out)
+    main(["roundness", str(f_um), "--unit", "µm", "--cutoff", "15", "--reference", "lsci", "--json"])
+    d_um = json.loads(capsys.readouterr().out)
+    assert d_mm["units"]["lengths"] == "mm" and d_um["input_unit"] == "µm"
+    assert d_um["references"]["lsci"]["RONt"] == pytest.approx(d_mm["references"]["lsci"]["RONt"], rel=1e-9)
+    # lobes 3 and 5 (phases 0.2, 1.0) filtered: RONt about LSCI = the peak-to-valley of the exact filtered
+    # profile, to the sampling of 720 points (max - min of samples misses the extremes by <= A (k h)^2 / 8 ~ 1e-3)
+    t = np.linspace(0, 2 * np.pi, 200000)
+    exact = 2e-3 * transmission(3, 15.0) * np.cos(3 * t + 0.2) + 1e-3 * transmission(5, 15.0) * np.cos(5 * t + 1.0)
+    assert d_mm["references"]["lsci"]["RONt"] == pytest.approx(np.ptp(exact), rel=1e-3)
+
+
+@pytest.mark.parametrize("argv,match", [(["--cutoff", "0"], "positive number of UPR"),
+                                        (["--cutoff", "abc"], "not a number of UPR"),
+                                        (["--reference", "lsq"], "invalid choice")])
+def test_cli_bad_input_one_line_exit_2(tmp_path, capsys, argv, match):
+    from methods.cli import main
+    f = _write_profile(tmp_path)
+    assert main(["roundness", str(f), *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert match in err and "\n" not in err and err.startswith("fitbench: error:")
+
+
+def test_cli_undersampled_warns_on_stderr(capsys):
+    from methods.cli import main
+    main(["roundness", "roundness_set1", "--cutoff", "15"])
+    cap = capsys.readouterr()
+    assert "fitbench: warning: 25 points per revolution" in cap.err

@@ -142,8 +142,8 @@ def figure(table: pd.DataFrame, path):
         x = np.arange(len(g))
         for k in REFS:
             ax.plot(x, g[f"RONt_{k}_um"], marker="o", ms=3, label=k.upper())
-        ax.set_xticks(x, g["cutoff_upr"], fontsize=7)
-        ax.set_xlabel("cut-off [UPR]", fontsize=8)
+        ax.set_xticks(x, [c.replace(".0", "") for c in g["cutoff_upr"]], fontsize=7)
+        ax.set_xlabel("cut-off [UPR] (none = unfiltered)", fontsize=8)
         ax.set_title(p, fontsize=8)
     axes[0][0].set_ylabel("RONt [µm]")
     axes[0][0].legend(fontsize=7)

@@ -122,6 +122,9 @@ def plot(res, path, title: str = "") -> None:
     colors = {"lsci": "tab:blue", "mzci": "tab:red", "mici": "tab:green", "mcci": "tab:purple"}
     for kind, c in curves.items():
         r = res.references[kind]
+        if not r["converged"]:  # drawn faint and labelled: its solver claimed no optimum
+            ax.plot(t_fine, c, color="0.6", lw=0.6, ls=":", label=f"{kind.upper()}: not certified by {r['method']}")
+            continue
         ax.plot(t_fine, c, color=colors[kind], lw=0.9, ls="--",
                 label=f"{kind.upper()}: RONt {r['RONt'] * 1e3:.3f} µm")
         if kind == "mzci":
@@ -131,7 +134,7 @@ def plot(res, path, title: str = "") -> None:
                     color=colors[kind], lw=0.6, ls=":")
     cut = "unfiltered" if res.cutoff_upr is None else f"Gaussian {res.cutoff_upr:g} UPR"
     ax.set_title(f"{title}\n{cut}, {step:g} µm/div", fontsize=9)
-    ax.legend(loc="upper left", bbox_to_anchor=(-0.25, -0.02), fontsize=7, ncol=2)
+    ax.legend(loc="upper left", bbox_to_anchor=(-0.25, -0.08), fontsize=7, ncol=2)
 
     bx = fig.add_subplot(1, 2, 2)
     k = np.asarray(res.spectrum["upr"])

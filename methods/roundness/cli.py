@@ -65,7 +65,7 @@ def report(res, source: str) -> str:
     """The instrument-style table: one row per reference circle, lengths in µm (centre and radius in mm)."""
     cut = "none (unfiltered)" if res.cutoff_upr is None else f"{res.cutoff_upr:g} UPR Gaussian (ISO 16610-21)"
     lines = [f"data          {source} ({res.n_points} points)",
-             f"filter        {cut}; {res.filter_path}",
+             f"filter        {cut}" + ("" if res.cutoff_upr is None else f"; {res.filter_path}"),
              f"raw LSCI      centre ({res.raw_lsci['center'][0]:.6f}, {res.raw_lsci['center'][1]:.6f}) mm, "
              f"radius {res.raw_lsci['radius']:.6f} mm (deviations filtered about it)", ""]
     head = (f"{'reference':<38} {'RONt [µm]':>10} {'RONp [µm]':>10} {'RONv [µm]':>10} {'RONq [µm]':>10} "

@@ -617,9 +617,15 @@ def add_fit(sub):
     pf.set_defaults(func=cmd_fit)
 
 
+def add_roundness(sub):
+    """ISO 12181 roundness: the parser and command live in methods/roundness/cli.py."""
+    from methods.roundness import cli as roundness_cli
+    roundness_cli.add_parser(sub)
+
+
 #: the subcommands: name -> function adding its parser (another module may add an entry)
 SUBCOMMANDS = {"list": add_list, "fit": add_fit, "circular-test": add_circular_test, "positioning": add_positioning,
-               "magnify": add_magnify, "multilaterate": add_multilaterate}
+               "magnify": add_magnify, "multilaterate": add_multilaterate, "roundness": add_roundness}
 
 
 def build_parser(prog: str = PROG, extra_commands: dict | None = None) -> argparse.ArgumentParser:

@@ -10,11 +10,10 @@ import warnings
 import numpy as np
 
 from methods._errors import InvalidInputError
+from methods.units import UNIT_CHOICES, to_mm
 from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff, transmission
 
-#: Millimetres per unit of the input file.
-UNIT_TO_MM = {"nm": 1e-6, "um": 1e-3, "µm": 1e-3, "mm": 1.0, "m": 1e3, "in": 25.4}
 
 
 def add_parser(subparsers):
@@ -26,7 +25,7 @@ def add_parser(subparsers):
                         "1500 or any positive value (ISO 16610-21)")
     p.add_argument("--reference", choices=("lsci", "mzci", "mici", "mcci", "all"), default="all",
                    help="reference circle(s) (default: all four)")
-    p.add_argument("--unit", choices=tuple(UNIT_TO_MM), default="mm", help="length unit of the file (default mm)")
+    p.add_argument("--unit", choices=UNIT_CHOICES, default="mm", help="length unit of the file (default mm)")
     p.add_argument("--json", action="store_true", help="print one JSON object (lengths in mm)")
     p.add_argument("--plot", metavar="PNG", help="write the polar plot and the harmonic spectrum")
     p.set_defaults(func=run)
@@ -39,7 +38,7 @@ def run(args) -> int:
 
     cutoff = parse_cutoff(args.cutoff, "--cutoff")
     source, points = points_from(args.file)
-    points = np.asarray(points, dtype=float) * UNIT_TO_MM[args.unit]
+    points = to_mm(np.asarray(points, dtype=float), args.unit)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UndersampledWarning)
         res = methods.fit("roundness.iso12181", points, cutoff_upr=cutoff, reference=args.reference)

@@ -113,6 +113,13 @@ def method_style(method_id: str, *, line: bool = True) -> dict:
     return kw
 
 
+def category_styles(labels) -> dict[str, dict]:
+    """Distinct colour and marker for each of a few categories that are not registry methods (bands,
+    scenarios, variants), in the order given: {label: {'color', 'marker', 'label'}}."""
+    return {lab: {"color": PALETTE[k % len(PALETTE)], "marker": MARKERS[k % len(MARKERS)], "label": lab}
+            for k, lab in enumerate(dict.fromkeys(labels))}
+
+
 def short_label(method_id: str) -> str:
     """``circle.gauss_newton`` -> ``gauss_newton``; a variant keeps its parameters."""
     return method_id.split(".", 1)[1] if "." in method_id.split(" ", 1)[0] else method_id
@@ -122,9 +129,9 @@ def plain_number(value: float, _pos=None) -> str:
     """A tick label as a plain number: 0.001, 0.5, 1, 1.4, 20, 1000 (never 1.4×10⁰)."""
     if value == 0:
         return "0"
-    text = f"{value:.6g}"
+    text = f"{value:.6g}".replace("-", "\u2212")         # a typographic minus
     if "e" in text:                                   # very large/small: fall back to a power of ten
-        mant, exp = text.split("e")
+        mant, exp = f"{value:.6g}".split("e")
         exp = int(exp)
         return f"$10^{{{exp}}}$" if float(mant) == 1 else f"${mant}\\times10^{{{exp}}}$"
     return text
@@ -138,6 +145,10 @@ def plain_log_ticks(ax, axis: str = "both", *, minor: bool | None = None) -> Non
 
     for name in ("x", "y") if axis == "both" else (axis,):
         a = ax.xaxis if name == "x" else ax.yaxis
+        if a.get_scale() == "symlog":
+            a.set_major_formatter(FuncFormatter(plain_number))
+            a.set_minor_formatter(NullFormatter())
+            continue
         if a.get_scale() != "log":
             continue
         lo, hi = sorted(ax.get_xlim() if name == "x" else ax.get_ylim())

@@ -176,3 +176,45 @@ def test_ordinal():
     assert percentile_phrase(90.3) == "percentile 90.3" and percentile_phrase(91) == "the 91st percentile"
     with pytest.raises(ValueError):
         ordinal(-1)
+
+
+@needs_pdflatex
+def test_report_tex_includes_fragments_and_figures_and_compiles(tmp_path):
+    """paper/report.tex from the jinja2 template: sections, findings text with maths, \\input tables,
+    figures with captions; compiles (twice, for the table of contents) without an overfull box > 1 pt."""
+    from experiments.render import figures as F
+    from experiments.render.document import write_report_tex
+    (tmp_path / "tables").mkdir()
+    frags = {"ml-errors": multilateration_tables()[0], "published": published_table(),
+             "magnification": magnification_table()}
+    for name, frag in frags.items():
+        (tmp_path / "tables" / f"{name}.tex").write_text(frag, encoding="utf-8")
+    F.noise_kcr(_csv("noise", "kcr.csv"), tmp_path / "figures" / "noise.png")
+    sections = [{"title": "Roundness paper (Pınar & Güllü)", "label": "roundness", "studies": [
+        {"title": "Published data", "findings": "Kåsa's radius bias on the 45° arc is large; at "
+                                                "$\\sigma = 0.05\\,R$ the geometric fits stay within 2 % of the bound.",
+         "items": [{"kind": "table", "file": "tables/published.tex"},
+                   {"kind": "figure", "file": "figures/noise.png", "label": "noise",
+                    "caption": "Radius RMSE / KCR bound and radius bias / σ against σ / R (100 points)."}]}]},
+        {"title": "Magnification and multilateration", "studies": [
+            {"title": "Tables", "items": [{"kind": "table", "file": "tables/magnification.tex"},
+                                          {"kind": "table", "file": "tables/ml-errors.tex"}]}]}]
+    path = write_report_tex(tmp_path, sections, provenance="commit abc, 2 cores")
+    src = path.read_text()
+    assert r"\tableofcontents" in src and r"\input{tables/published.tex}" in src and r"\label{fig:noise}" in src
+    assert "$\\sigma = 0.05\\,R$" in src and "Kåsa" in src
+    result = compile_pdf(src, tmp_path, name="report", runs=2)
+    assert result["ok"], result["errors"][:3]
+    wide = [(pt, line) for kind, pt, line in result["overfull"] if kind == "h" and pt > MAX_OVERFULL_PT]
+    assert not wide, wide[:3]
+    assert (tmp_path / "report.toc").read_text().count("contentsline") >= 4
+
+
+def test_report_tex_refuses_missing_files_and_captionless_figures(tmp_path):
+    from experiments.render.document import render_report_tex, write_report_tex
+    with pytest.raises(FileNotFoundError, match="missing"):
+        write_report_tex(tmp_path, [{"title": "A", "studies": [{"title": "s", "items": [
+            {"kind": "table", "file": "tables/none.tex"}]}]}])
+    with pytest.raises(ValueError, match="no caption"):
+        render_report_tex([{"title": "A", "studies": [{"title": "s", "items": [
+            {"kind": "figure", "file": "f.png"}]}]}])

@@ -197,19 +197,19 @@ def magnification_trajectories(panels: list[dict], path):
                 params["delta"] = params.pop("delta_emax") * emax * (eta if params.pop("delta_times_eta", False) else 1)
             res = methods.fit(pnl["method"], data, eta=eta, **params)
             ax.plot(*data.reference.T, color="0.55", lw=1.0, label="reference path")
-            ax.plot(*res.points.T, color=style.PALETTE[0], lw=0.9, label=f"measured error × η")
+            ax.plot(*res.points.T, color=style.PALETTE[0], lw=0.9, label="magnified path (error × η)")
             if pnl.get("box"):
                 x0, x1, y0, y1 = pnl["box"]
                 ax.set_xlim(x0, x1)
                 ax.set_ylim(y0, y1)
             ax.set_aspect("equal", adjustable="datalim")
-            ax.set_title(f"{pnl.get('title', pnl['method'])}\ncontinuity {res.extra['continuity']:.2f}, "
+            ax.set_title(f"{pnl.get('title', pnl['method'])}\nη = {eta:g}: continuity {res.extra['continuity']:.2f}, "
                          f"loops {res.extra['self_intersections']}", fontsize=8)
             ax.set_xlabel("x [mm]")
             ax.set_ylabel("y [mm]")
         for ax in axes.ravel()[len(panels):]:
             ax.set_visible(False)
-        style.legend_outside(fig, axes=[axes[0, 0]], title=f"η: magnification")
+        style.legend_outside(fig, axes=[axes[0, 0]])
         return style.save(fig, path)
 
 
@@ -233,6 +233,7 @@ def multilateration_conditioning(accuracy: pd.DataFrame, path, *, scenario: str 
             ax.plot(xs, g[f"kappa_{step}_theorem1"], "v", color=style.PALETTE[1], label="Theorem 1 lower estimate")
             ax.axhline(100, color="0.2", ls="--", lw=0.8, label="100: the paper's 'satisfactory'")
             ax.set_yscale("log")
+            style.plain_log_ticks(ax, "y")
             ax.set_title(title)
             ax.set_ylabel("condition number")
         axes[2].plot(xs, g["aligned_error_rms_um"], "s", color=style.PALETTE[2], label="volumetric error RMS")

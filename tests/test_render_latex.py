@@ -57,6 +57,7 @@ def published_table() -> str:
     if not meta.exists():
         pytest.skip(f"{meta} is missing: run python -m experiments.run published")
     pub = pd.DataFrame(json.loads(meta.read_text())["findings"]["published_vs_reproduced"])
+    pub["difference_um"] = 1e3 * pub["difference"]
     pub["set"] = pub["dataset"] + np.where(pub["variant"] == "as published", "", " (closing point dropped)")
     pub["explanation"] = [
         "reproduced" if r.reproduced else
@@ -64,7 +65,7 @@ def published_table() -> str:
          f"{percentile_phrase(r.published_percentile, 0)}" if r.explained_by_rounding else "not explained")
         for r in pub.itertuples()]
     return latex_table(pub, [C("set", group=True), C("column", width="3.3cm"), C("published", unit="mm", decimals=7),
-                        C("reproduced_value", "reproduced", "mm", decimals=7), C("difference", unit="mm", digits=2),
+                        C("reproduced_value", "reproduced", "mm", decimals=7), C("difference_um", "difference", unit="µm", digits=2),
                         C("explanation", width="5.2cm")],
                        caption="Roundness paper, table 1: published against reproduced circularity",
                        label="published")

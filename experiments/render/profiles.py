@@ -95,9 +95,13 @@ def plot_profiles(tables: dict[str, pd.DataFrame], path=None, *, tau_max: float 
     curves, a method's colour/marker from ``style.method_style``, one legend outside the panels."""
     import matplotlib.pyplot as plt
     with style.figure_style():
-        fig, axes = plt.subplots(1, len(tables), figsize=style.size(1.0, 0.5 if len(tables) > 1 else 0.6),
+        ncol = min(2, len(tables))
+        nrow = int(np.ceil(len(tables) / ncol))
+        fig, axes = plt.subplots(nrow, ncol, figsize=style.size(1.0, 0.42 * nrow if ncol > 1 else 0.6),
                                  sharey=True, squeeze=False)
-        for ax, (name, table) in zip(axes[0], tables.items()):
+        for ax in axes.ravel()[len(tables):]:
+            ax.set_visible(False)
+        for ax, (name, table) in zip(axes.ravel(), tables.items()):
             r = performance_ratios(table)
             fin = r.to_numpy()[np.isfinite(r.to_numpy())]
             top = tau_max or min(2.0 ** 12, max(2.0, float(np.nanmax(fin)) * 1.2 if len(fin) else 2.0))
@@ -117,7 +121,8 @@ def plot_profiles(tables: dict[str, pd.DataFrame], path=None, *, tau_max: float 
             dropped = table.attrs.get("dropped_problems", 0)
             ax.set_title(f"{name}\n{len(table)} problems" + (f" ({dropped} incomplete dropped)" if dropped else ""),
                          fontsize=8.5)
-        axes[0, 0].set_ylabel(r"share of problems $\rho_s(\tau)$")
+        for row in axes:
+            row[0].set_ylabel(r"share of problems $\rho_s(\tau)$")
         if title:
             fig.suptitle(title)
         style.legend_outside(fig, axes=[axes[0, 0]], where="below")

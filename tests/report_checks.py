@@ -99,14 +99,17 @@ def check_html_report(html_path: Path, *, min_figures: int = 1, min_tables: int 
 
 
 def screenshot(html_path: Path, png: Path, *, width: int = 1200, height: int = 1600, scroll_to: str | None = None):
-    """A PNG screenshot of the report (optionally scrolled to the element with id ``scroll_to``)."""
+    """A PNG screenshot of the report; with ``scroll_to`` (an element id) the page starts at that element
+    (everything above it is hidden in a temporary copy: scrolling is unreliable in headless screenshots)."""
     html_path = Path(html_path).resolve()
     target = html_path
     if scroll_to:
         text = html_path.read_text(encoding="utf-8")
         target = html_path.with_name(f".shot-{html_path.name}")
-        js = (f"<script>window.addEventListener('load',function(){{var e=document.getElementById('{scroll_to}');"
-              "if(e){e.scrollIntoView();}});</script>")
+        js = ("<script>(function(){var e=document.getElementById('" + scroll_to + "');"
+              "if(!e){return;}while(e.parentElement&&e.parentElement!==document.body){e=e.parentElement;}"
+              "var p=e.previousElementSibling;while(p){p.style.display='none';p=p.previousElementSibling;}})();"
+              "</script>")
         target.write_text(text.replace("</body>", js + "</body>"), encoding="utf-8")
     try:
         proc = _run([f"--screenshot={Path(png).resolve()}", f"--window-size={width},{height}",

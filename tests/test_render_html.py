@@ -32,6 +32,12 @@ def test_profile_by_hand():
     assert rho["circle.minimum_zone"].tolist() == pytest.approx([2 / 3, 2 / 3, 1.0, 1.0])
 
 
+def test_ties_are_not_decided_by_rounding():
+    t = pd.DataFrame({"a": [1.0, 1.0], "b": [1.0 + 1e-12, 3.0]})
+    assert profile(t, [1.0])["b"].iloc[0] == 0.5
+    assert profile(t, [1.0], rtol=0.0)["b"].iloc[0] == 0.0
+
+
 def test_problem_table_from_rows():
     rows = pd.DataFrame({"study": "s", "dataset": ["a", "a", "b", "b", "c"], "data_stream": "0",
                          "method": ["m.x", "m.y", "m.x", "m.y", "m.x"], "params": "{}",
@@ -51,6 +57,8 @@ def test_coloured_table():
     assert html.count("<tr>") == 4 and "failed" in html and "Cell colour" in html
     assert ratio_colour(1.0) != ratio_colour(3.0) != ratio_colour(np.inf)
     assert 'data-ratio="4.0"' in html and 'data-ratio="inf"' in html
+    from experiments.render.html_tables import format_number
+    assert [format_number(v) for v in (2080.0, 0.0123, 4.07e8, -1.5e-5)] == ["2080", "0.0123", "4.07×10⁸", "-1.50×10⁻⁵"]
     with pytest.raises(ValueError):
         coloured_table(pd.DataFrame({"a": [-1.0]}))
 

@@ -26,6 +26,21 @@ def ratio_colour(ratio: float) -> str:
     return BANDS[-1][1]
 
 
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def format_number(v: float, digits: int = 3) -> str:
+    """``digits`` significant digits as a plain number (2080, 0.0123), or 4.07×10⁸ outside 1e-3..1e5."""
+    a = abs(v)
+    if a != 0 and (a >= 1e5 or a < 1e-3):
+        m, e = f"{v:.{digits - 1}e}".split("e")
+        return f"{m}×10{str(int(e)).translate(_SUPERSCRIPT)}"
+    if a == 0:
+        return "0"
+    dec = max(0, digits - 1 - int(np.floor(np.log10(a))))
+    return f"{v:.{dec}f}"
+
+
 def _text_colour(bg: str) -> str:
     r, g, b = (int(bg[i:i + 2], 16) for i in (1, 3, 5))
     return "#000" if 0.299 * r + 0.587 * g + 0.114 * b > 140 else "#fff"
@@ -34,7 +49,8 @@ def _text_colour(bg: str) -> str:
 def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None = None, digits: int = 3,
                    floor: float = 0.0, table_id: str | None = None) -> str:
     """HTML ``<table>`` of ``table`` (rows: problems/data sets, columns: methods; lower is better, NaN or inf
-    = failed) with each cell coloured by its ratio to the row's best, plus a legend of the colours."""
+    = failed) with each cell coloured by its ratio to the row's best, plus a legend of the colours. ``unit``
+    is shown once, in the corner cell; the table scrolls sideways on a narrow screen."""
     if table.empty:
         raise ValueError("coloured_table: the table is empty (no problems or no methods)")
     values = table.apply(pd.to_numeric, errors="coerce").to_numpy(float)
@@ -44,14 +60,15 @@ def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None =
     best = np.min(cost, axis=1, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.where(np.isfinite(cost) & (best > 0), cost / best, np.where(np.isfinite(cost), 1.0, np.inf))
-    unit_txt = f" [{html.escape(unit)}]" if unit else ""
-    out = [f'<table{f" id={chr(34)}{html.escape(table_id)}{chr(34)}" if table_id else ""} class="ranked" '
+    corner = html.escape(str(table.index.name or "")) + (f" [{html.escape(unit)}]" if unit else "")
+    out = ['<div style="overflow-x:auto">', f'<table{f" id={chr(34)}{html.escape(table_id)}{chr(34)}" if table_id else ""} class="ranked" '
            'style="border-collapse:collapse;font-size:0.85em;margin:0.5em 0">']
     if caption:
         out.append(f'<caption style="caption-side:top;text-align:left;padding:0 0 4px 0">{caption}</caption>')
     th = 'style="border:1px solid #999;padding:3px 6px;background:#eee;text-align:{}"'
-    out.append("<thead><tr>" + f"<th {th.format('left')}>{html.escape(str(table.index.name or ''))}</th>"
-               + "".join(f"<th {th.format('center')}>{html.escape(str(c))}{unit_txt}</th>" for c in table.columns)
+    out.append("<thead><tr>" + f"<th {th.format('left')}>{corner}</th>"
+               + "".join(f"<th {th.format('center')}>{html.escape(str(c)).replace('_', '_<wbr>')}</th>"
+                         for c in table.columns)
                + "</tr></thead><tbody>")
     for i, idx in enumerate(table.index):
         cells = [f'<th scope="row" {th.format("left")}>{html.escape(str(idx))}</th>']
@@ -59,7 +76,7 @@ def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None =
             v, r = values[i, j], ratio[i, j]
             bg = ratio_colour(r)
             if np.isfinite(v):
-                text = f"{v:.{digits}g} <small>({r:.3g}×)</small>" if np.isfinite(r) else f"{v:.{digits}g}"
+                text = f"{format_number(v, digits)}<br><small>{r:.3g}×</small>"
                 title = f"{v:.6g}{unit and ' ' + unit}, {r:.4g} × the best of this row"
             else:
                 text, title = "failed", "failed or not converged"
@@ -67,7 +84,7 @@ def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None =
                          f'style="border:1px solid #999;padding:3px 6px;text-align:right;background:{bg};'
                          f'color:{_text_colour(bg)}">{text}</td>')
         out.append("<tr>" + "".join(cells) + "</tr>")
-    out.append("</tbody></table>")
+    out.append("</tbody></table></div>")
     return "\n".join(out) + "\n" + legend()
 
 

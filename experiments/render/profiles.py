@@ -66,8 +66,13 @@ def problem_table(rows: pd.DataFrame, *, metric: str, problem=("study", "dataset
     return table
 
 
-def performance_ratios(table: pd.DataFrame) -> pd.DataFrame:
-    """r_{p,s} = t_{p,s} / min_s t_{p,s}; inf where the method failed, and on a problem every method failed."""
+TIE_RTOL = 1e-6   #: costs within this relative distance of the best are ties (ratio 1)
+
+
+def performance_ratios(table: pd.DataFrame, rtol: float = TIE_RTOL) -> pd.DataFrame:
+    """r_{p,s} = t_{p,s} / min_s t_{p,s}; inf where the method failed, and on a problem every method failed.
+    Ratios below 1 + ``rtol`` count as 1: two fits that land on the same optimum differ in the last digits,
+    and which of them is "best" must not be decided by rounding."""
     t = table.to_numpy(float)
     if np.any(t <= 0):
         raise ValueError("performance ratios need positive costs: give problem_table a floor > 0 for errors that "
@@ -75,12 +80,13 @@ def performance_ratios(table: pd.DataFrame) -> pd.DataFrame:
     best = np.min(t, axis=1, keepdims=True)
     with np.errstate(invalid="ignore"):
         r = np.where(np.isfinite(best), t / best, np.inf)
+    r = np.where(r <= 1.0 + rtol, 1.0, r)
     return pd.DataFrame(r, index=table.index, columns=table.columns)
 
 
-def profile(table: pd.DataFrame, taus=None) -> pd.DataFrame:
+def profile(table: pd.DataFrame, taus=None, rtol: float = TIE_RTOL) -> pd.DataFrame:
     """rho_s(tau) for every method (columns) at the ratios ``taus`` (index; default every distinct ratio)."""
-    r = performance_ratios(table)
+    r = performance_ratios(table, rtol)
     finite = r.to_numpy()[np.isfinite(r.to_numpy())]
     if taus is None:
         taus = np.unique(np.concatenate([[1.0], finite]))
@@ -92,7 +98,8 @@ def profile(table: pd.DataFrame, taus=None) -> pd.DataFrame:
 
 def plot_profiles(tables: dict[str, pd.DataFrame], path=None, *, tau_max: float | None = None, title=None):
     """One panel per table (e.g. {'accuracy': ..., 'runtime': ...}): rho_s(tau) against log2(tau) as step
-    curves, a method's colour/marker from ``style.method_style``, one legend outside the panels."""
+    curves, a method's colour/marker from ``style.method_style``, one legend outside the panels. Returns the
+    written path (the figure is closed), or the open figure when ``path`` is None."""
     import matplotlib.pyplot as plt
     with style.figure_style():
         ncol = min(2, len(tables))
@@ -127,5 +134,5 @@ def plot_profiles(tables: dict[str, pd.DataFrame], path=None, *, tau_max: float 
             fig.suptitle(title)
         style.legend_outside(fig, axes=[axes[0, 0]], where="below")
         if path is not None:
-            style.save(fig, path)
+            return style.save(fig, path)
         return fig

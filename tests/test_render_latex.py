@@ -64,7 +64,7 @@ def published_table() -> str:
         (f"printed digits allow {r.rounding_p0_5:.6f}..{r.rounding_p99_5:.6f} mm (99 %); published at "
          f"{percentile_phrase(r.published_percentile, 0)}" if r.explained_by_rounding else "not explained")
         for r in pub.itertuples()]
-    return latex_table(pub, [C("set", group=True), C("column", width="3.3cm"), C("published", unit="mm", decimals=7),
+    return latex_table(pub, [C("set", group=True), C("column", width="3.3cm"), C("published", unit="mm", exact=True),
                         C("reproduced_value", "reproduced", "mm", decimals=7), C("difference_um", "difference", unit="µm", digits=2),
                         C("explanation", width="5.2cm")],
                        caption="Roundness paper, table 1: published against reproduced circularity",
@@ -148,7 +148,9 @@ def test_numbers_units_and_text():
                        "err": [-0.0123, 12.5], "n": [10, 2000]})
     frag = latex_table(df, [C("method"), C("kappa", r"$\kappa_2$"), C("err", "error", "um"), C("n", kind="integer")],
                        caption=r"Errors at $\sigma = 0.01\,R$ in µm; 91st percentile", label="t")
-    assert "4.07e8" in frag and "4.07e+08" not in frag                 # siunitx parses and prints 4.07 x 10^8
+    assert "4.07e8" in frag and "4.07e+08" not in frag
+    exact = latex_table(pd.DataFrame({"p": [0.029807, 1.7487]}), [C("p", exact=True)], caption="x", label="x")
+    assert "0.029807 \\" in exact and "1.7487 \\" in exact and "S[table-format=1.6]" in exact                 # siunitx parses and prints 4.07 x 10^8
     assert r"\si{\micro\metre}" in frag and " um" not in frag
     assert r"$\kappa_2$" in frag and r"$\sigma = 0.01\,R$" in frag    # maths kept
     assert r"circle.gauss\_newton" in frag and r"\textmu{}m" in frag
@@ -192,8 +194,8 @@ def test_report_tex_includes_fragments_and_figures_and_compiles(tmp_path):
         (tmp_path / "tables" / f"{name}.tex").write_text(frag, encoding="utf-8")
     F.noise_kcr(_csv("noise", "kcr.csv"), tmp_path / "figures" / "noise.png")
     sections = [{"title": "Roundness paper (Pınar & Güllü)", "label": "roundness", "studies": [
-        {"title": "Published data", "findings": "Kåsa's radius bias on the 45° arc is large; at "
-                                                "$\\sigma = 0.05\\,R$ the geometric fits stay within 2 % of the bound.",
+        {"title": "Published data", "findings": "Sample findings text (not a result): Kåsa, 45°, "
+                                                "maths $\\sigma = 0.05\\,R$ and 2 %.",
          "items": [{"kind": "table", "file": "tables/published.tex"},
                    {"kind": "figure", "file": "figures/noise.png", "label": "noise",
                     "caption": "Radius RMSE / KCR bound and radius bias / σ against σ / R (100 points)."}]}]},

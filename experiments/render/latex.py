@@ -50,7 +50,8 @@ class TableTooWide(ValueError):
 class Column:
     """How one DataFrame column is shown. ``digits``: significant digits of numbers (default 3);
     ``decimals`` fixes the decimals instead; ``exponent`` forces (True) or forbids (False) 4.07e8 form
-    (default: chosen from the data's range); ``width``: a ``p{}`` width for text (e.g. '4cm'); ``group``:
+    (default: chosen from the data's range); ``exact``: each number as given (0.029807 stays 0.029807,
+    without padding zeros that would claim digits the source does not have); ``width``: a ``p{}`` width for text (e.g. '4cm'); ``group``:
     repeated consecutive values shown once; ``missing``: what an empty cell shows (explain it in ``notes``)."""
     name: str
     header: str | None = None
@@ -62,6 +63,7 @@ class Column:
     width: str | None = None
     group: bool = False
     missing: str = "--"
+    exact: bool = False          #: print each number as given (shortest round-trip form, e.g. published values)
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -118,6 +120,8 @@ def _format_numbers(values: np.ndarray, col: Column) -> tuple[list[str | None], 
                                         and np.max(np.abs(finite)) < 1e9 and col.decimals is None)
     if integer:
         strs = [None if not np.isfinite(v) else f"{int(round(v))}" for v in values]
+    elif col.exact:
+        strs = [None if not np.isfinite(v) else repr(float(v)) for v in values]
     elif col.decimals is not None and not col.exponent:
         strs = [None if not np.isfinite(v) else f"{v:.{col.decimals}f}" for v in values]
     else:

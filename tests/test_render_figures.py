@@ -6,7 +6,6 @@ import json
 from pathlib import Path
 
 import matplotlib
-import numpy as np
 import pandas as pd
 import pytest
 
@@ -87,3 +86,21 @@ def test_method_colour_is_stable():
            "circle.levenberg_marquardt", "circle.nelder_mead", "circle.powell_hybrid", "circle.minimum_zone",
            "circle.chebyshev_lp", "circle.max_inscribed", "circle.min_circumscribed"]
     assert len({(style.method_style(m)["color"], style.method_style(m)["marker"]) for m in ids}) == len(ids)
+
+
+def test_legend_outside_right_and_pdf(tmp_path):
+    import matplotlib.pyplot as plt
+    with style.figure_style():
+        fig, ax = plt.subplots(figsize=style.size(0.8, 0.5))
+        for m in ("circle.kasa", "circle.taubin"):
+            ax.plot([1, 10, 100], [1, 2, 3], **style.method_style(m))
+        ax.set_xscale("log")
+        style.plain_log_ticks(ax, "x")
+        legend = style.legend_outside(fig, where="right")
+        fig.canvas.draw()
+        r = fig.canvas.get_renderer()
+        assert not legend.get_window_extent(r).overlaps(ax.get_window_extent(r))
+        labels = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
+        assert {"1", "10", "100"} <= set(labels) and not any("$" in t for t in labels)
+        path = style.save(fig, tmp_path / "f.png", pdf=True)
+    assert path.exists() and path.with_suffix(".pdf").read_bytes()[:4] == b"%PDF"

@@ -221,3 +221,13 @@ def test_report_tex_refuses_missing_files_and_captionless_figures(tmp_path):
     with pytest.raises(ValueError, match="no caption"):
         render_report_tex([{"title": "A", "studies": [{"title": "s", "items": [
             {"kind": "figure", "file": "f.png"}]}]}])
+
+
+@needs_pdflatex
+def test_multirow_grouping_compiles(tmp_path):
+    df = pd.DataFrame({"scenario": ["six stations, noise"] * 3 + ["four stations"] * 2,
+                       "method": ["a", "b", "c", "a", "b"], "error": [1.5, 2.25, 30.0, 0.001, 4e-6]})
+    frag = latex_table(df, [C("scenario", group=True, width="3cm"), C("method"), C("error", unit="µm")],
+                       caption="grouped with multirow", label="mr", group_style="multirow")
+    assert frag.count(r"\multirow") == 2
+    _assert_compiles_within_page([frag], tmp_path, "mr")

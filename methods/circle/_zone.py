@@ -266,37 +266,63 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
             if (under > 0).any():
                 inn, violated = add_violators(inn, under, k), True
         if violated and out.size + inn.size == before:
-            stats["active_points"] = int(np.union1d(out, inn).size)
+            stats["active"] = np.union1d(out, inn)
+            stats["active_points"] = int(stats["active"].size)
             return c, (oc, ic), False, ("the contacts found are not the extreme points about their centre and no "
                                         "new point can be added: no optimum is claimed"), stats
         if violated:
             continue
         ok, message = certify(c, oc, ic)
-        stats["active_points"] = int(np.union1d(out, inn).size)
+        stats["active"] = np.union1d(out, inn)
+        stats["active_points"] = int(stats["active"].size)
         return c, (oc, ic), ok, message, stats
-    stats["active_points"] = int(np.union1d(out, inn).size)
+    stats["active"] = np.union1d(out, inn)
+    stats["active_points"] = int(stats["active"].size)
     return c, ((), ()), False, f"active set not settled within max_rounds={max_rounds}", stats
 
 
-def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max_rounds, radius_rule):
-    """Run :func:`active_set_fit` and build the result in data units (SolverFailure -> converged=False)."""
+def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max_rounds, radius_rule,
+             proof="convex", global_search="always"):
+    """Run :func:`active_set_fit` and build the result in data units (SolverFailure -> converged=False).
+
+    ``proof``: "convex" (the program is convex: its optimality condition is a global certificate),
+    "zone" or "inscribed" (non-convex: the local certificate is followed, unless
+    ``global_search == "never"``, by the branch and bound of :mod:`methods.circle._global`).
+    ``extra["certified"]`` is "global", "local" or False and the message says which and why."""
     from methods._result import zone_result  # local import: _result does not depend on this module
+    from methods.circle import _global
 
     x, y = frame.x, frame.y
+
+    def run(s):
+        return active_set_fit(x, y, start=s, local_solve=local_solve, exact=exact, certify=certify, sides=sides,
+                              k=k, max_rounds=max_rounds)
+    info = {}
     try:
-        c, (oc, ic), ok, message, stats = active_set_fit(x, y, start=start, local_solve=local_solve, exact=exact,
-                                                         certify=certify, sides=sides, k=k, max_rounds=max_rounds)
+        c, (oc, ic), ok, message, stats = run(start)
+        if proof == "convex":
+            certified = "global" if ok else False
+            if ok:
+                message = f"certified global optimum of a convex program over all centres ({message})"
+        elif global_search == "never":
+            certified = "local" if ok else False
+            if ok:
+                message = f"local optimum only ({message}); the global search was not run (global_search='never')"
+        else:
+            c, (oc, ic), ok, certified, message, info = _global.globalise(
+                x, y, kind=proof, c=c, contacts=(oc, ic), ok=ok, message=message, stats=stats, rerun=run,
+                hulls_meet=hulls_meet, scale=frame.scale)
     except SolverFailure as exc:
-        c, (oc, ic), ok, message = start, ((), ()), False, f"{exc}; no result is claimed"
+        c, (oc, ic), ok, certified, message = start, ((), ()), False, False, f"{exc}; no result is claimed"
         stats = {"solves": None, "solver_iterations": None, "history": [], "rounds": None, "active_points": None}
     center, _ = frame.circle_to_data(np.array([c[0], c[1], 1.0]))
     r_data = radii(points[:, 0], points[:, 1], center)
     radius = radius_rule(r_data, center)
-    ok = bool(ok)
-    return zone_result(points, center, radius, {"outer": sorted(oc), "inner": sorted(ic)}, converged=ok,
+    return zone_result(points, center, radius, {"outer": sorted(oc), "inner": sorted(ic)}, converged=bool(ok),
                        message=message, iterations=stats["solves"], nfev=stats["solver_iterations"],
                        history=[h * frame.scale for h in stats["history"]],
-                       extra={"certified": ok, "rounds": stats["rounds"], "active_points": stats["active_points"]})
+                       extra={"certified": certified, "rounds": stats["rounds"], "active_points": stats["active_points"],
+                              **{f"global_{k}": v for k, v in info.items()}})
 
 
 def certify_hulls(x, y, *, zero_tol=ZERO_WIDTH):

@@ -230,14 +230,15 @@ def _unit_directions(x, y, idx, c):
     return d / np.hypot(d[:, 0], d[:, 1])[:, None]
 
 
-def alternating_contacts(x, y, c, O, I, hulls_meet, limit: int = 12):
+def alternating_contacts(x, y, c, O, I, hulls_meet, limit: int = 12, normalise: bool = True):
     """An alternating choice among the tied contacts: (outer, inner) index tuples whose directions'
     convex hulls meet (2 + 2, 3 + 1 or 1 + 3; for the MIC, O is empty and the hull of 2 or 3 inner
     contacts must hold the centre), or None. Searches the ``limit`` most extreme ties of each side."""
     from itertools import combinations
     O, I = list(O[:limit]), list(I[:limit])
-    EO = dict(zip(O, _unit_directions(x, y, O, c))) if O else {}
-    EI = dict(zip(I, _unit_directions(x, y, I, c)))
+    vec = _unit_directions if normalise else (lambda x, y, idx, c: np.column_stack([x[idx] - c[0], y[idx] - c[1]]))
+    EO = dict(zip(O, vec(x, y, O, c))) if O else {}
+    EI = dict(zip(I, vec(x, y, I, c)))
     if not O:
         for m in (2, 3):
             for t in combinations(I, m):
@@ -298,7 +299,7 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
             f0 = f
         eps = EPS_REL * abs(f0) + EPS_ABS
         if zone:
-            W = least_width_lower_bound(x[S], y[S], rho)
+            W = least_width_exact(x[S], y[S])  # a subset's least width bounds the data's from below
             if W > f0:
                 region = rho + rho * rho / (2 * (W - f0 + eps))
                 info["region"] = "all of R^2"

@@ -233,6 +233,19 @@ def pick(C, configs, score, minimise: bool):
     return C[best], (tuple(members[:n_outer]), tuple(members[n_outer:]))
 
 
+def relabel_extremes(x, y, act, c, contacts):
+    """Among tied candidate configurations the one picked may name a contact that is not extreme about
+    the (right) centre: name the extreme active points instead (same counts)."""
+    oc, ic = contacts
+    r = radii(x[act], y[act], c)
+    order = np.argsort(r)
+    if oc and r.max() > r[np.searchsorted(act, list(oc))].max() * (1 + CHECK_RTOL):
+        oc = tuple(int(i) for i in act[order[::-1][:len(oc)]])
+    if ic and r.min() < r[np.searchsorted(act, list(ic))].min() * (1 - CHECK_RTOL):
+        ic = tuple(int(i) for i in act[order[:len(ic)]])
+    return c, (oc, ic)
+
+
 def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_rounds):
     """The loop shared by the zone methods.
 
@@ -253,7 +266,7 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
         stats["solver_iterations"] += iters
         stats["history"] += hist
         act = np.union1d(out, inn)
-        c, (oc, ic) = exact(act, ck)
+        c, (oc, ic) = relabel_extremes(x, y, act, *exact(act, ck))
         r_all = radii(x, y, c)
         before = out.size + inn.size
         violated = False
@@ -340,6 +353,10 @@ def certify_hulls(x, y, *, zero_tol=ZERO_WIDTH):
         if len(side) < 2:
             return False, "fewer than two contacts: no optimality certificate"
         ok = hulls_meet(directions(x, y, side, c), np.zeros((1, 2)))
+        if not ok:  # ties: look for 2 or 3 tied contacts that surround the centre
+            from methods.circle._global import TIE_ABS, alternating_contacts
+            tied = np.flatnonzero(r >= r.max() - TIE_ABS) if oc else np.flatnonzero(r <= r.min() + TIE_ABS)
+            ok = alternating_contacts(x, y, c, np.empty(0, dtype=np.intp), tied, hulls_meet) is not None
         return ok, ("optimal: the centre lies in the convex hull of the contacts" if ok else
                     "the contacts do not surround the centre: not an optimum")
     return certify

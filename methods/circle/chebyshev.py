@@ -8,6 +8,7 @@ from methods._registry import register
 from methods._validation import check_choice, check_positive
 from methods.circle import _zone as z
 from methods.circle._frame import Frame
+from methods.circle._global import alternating_contacts
 
 SOLVERS = ("highs", "clarabel")
 
@@ -64,6 +65,11 @@ def chebyshev_lp(points, *, solver="highs", active_size=16, max_rounds=50):
             return True, "points lie on one circle (zero algebraic residual)"
         P = np.column_stack([x, y]) - c
         ok = z.hulls_meet(P[list(oc)], P[list(ic)])
+        if not ok:  # ties (symmetric lobes): look for an alternating choice among the tied contacts
+            r2 = r * r
+            tol = 4e-14 * r2.max()
+            tied_out, tied_in = np.flatnonzero(r2 >= r2.max() - tol), np.flatnonzero(r2 <= r2.min() + tol)
+            ok = alternating_contacts(x, y, c, tied_out, tied_in, z.hulls_meet, normalise=False) is not None
         return ok, ("optimal: conv(outer contacts) meets conv(inner contacts)" if ok else
                     "LP contacts do not satisfy the optimality condition")
 

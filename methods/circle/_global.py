@@ -29,7 +29,7 @@ the centre, seeded by the fast local solution (c*, f*), all in the unit frame:
   polygon farther than the box's half-diagonal from every edge), candidate centres must be inside.
 
 A box is discarded when its bound shows it cannot beat the incumbent by more than
-eps = EPS_REL f* + EPS_ABS (unit frame); "global" therefore means: no centre in the stated region has
+eps = EPS_REL f* + EPS_ABS + 4 TIE_REL max r (unit frame; :func:`resolution`); "global" therefore means: no centre in the stated region has
 a width below f* - eps (MIC: a radius above f* + eps), where f* is attained by the reported centre.
 """
 from __future__ import annotations
@@ -41,8 +41,8 @@ import numpy as np
 #: relative and absolute (unit-frame) resolution of the global certificate
 EPS_REL = 1e-10
 EPS_ABS = 1e-13
-#: contacts within this (unit frame) of the extreme radius count as tied contacts
-TIE_ABS = 2e-14
+#: contacts within TIE_REL x the largest radius of the extreme radius count as tied (rounding of radii)
+TIE_REL = 1e-14
 #: region radius (multiples of the data radius about the centroid) when no far-field bound exists
 FALLBACK_RADIUS = 10.0
 MAX_LEVELS = 90
@@ -91,6 +91,32 @@ def box_distance_bounds(cx, cy, h, xs, ys):
     dmin = np.hypot(np.maximum(dx - h, 0.0), np.maximum(dy - h, 0.0))
     dmax = np.hypot(dx + h, dy + h)
     return dmin, dmax, np.hypot(dx, dy)
+
+
+def pair_bound(cx, cy, h, xs, ys, dc, k: int = 4):
+    """A first-order lower bound of the width over each box, from pairs (i outer, j inner) of the k
+    farthest and k nearest working points about the box centre c_B (|d| = |c - c_B| <= sqrt(2) h):
+    r_i(c) >= D_i - e_i.d (convexity) and r_j(c) <= D_j - e_j.d + |d|^2 / (2 (D_j - |d|)), so
+    width(c) >= r_i - r_j >= D_i - D_j - h |e_i - e_j|_1 - h^2 / (D_j - sqrt(2) h).
+    Much tighter than the distance intervals when i and j are seen in similar directions (short arcs)."""
+    m = dc.shape[1]
+    k = min(k, m)
+    if k < 1:
+        return np.full(len(cx), -np.inf)
+    rows = np.arange(len(cx))[:, None]
+    far = np.argpartition(dc, m - k, axis=1)[:, m - k:]
+    near = np.argpartition(dc, k - 1, axis=1)[:, :k]
+    Di, Dj = dc[rows, far], dc[rows, near]                     # (K, k)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        exi, eyi = (xs[far] - cx[:, None]) / Di, (ys[far] - cy[:, None]) / Di
+        exj, eyj = (xs[near] - cx[:, None]) / Dj, (ys[near] - cy[:, None]) / Dj
+        room = Dj - np.sqrt(2.0) * h
+        quad = np.where(room > 0, h * h / room, np.inf)
+        lb = (Di[:, :, None] - Dj[:, None, :]
+              - h * (np.abs(exi[:, :, None] - exj[:, None, :]) + np.abs(eyi[:, :, None] - eyj[:, None, :]))
+              - quad[:, None, :])
+    lb = np.where(np.isfinite(lb), lb, -np.inf)
+    return lb.reshape(len(cx), -1).max(axis=1)
 
 
 @dataclass
@@ -144,14 +170,13 @@ class ProfilePolygon:
         return out
 
 
-def branch_and_bound(x, y, *, kind: str, c0, f0: float, S, ball: float, region: float,
+def branch_and_bound(x, y, *, kind: str, c0, f0: float, S, ball: float, region: float, eps: float,
                      polygon: ProfilePolygon | None = None) -> Outcome:
     """Prove that no centre in the disc |c| <= region beats the incumbent (c0, f0) by more than eps,
     or find a centre that does. ``kind``: "zone" (minimise max r - min r) or "inscribed" (maximise
     min r over centres inside ``polygon``). Boxes inside the ball |c - c0| <= ``ball`` are known not
     to beat f0 (the local bound of the module docstring)."""
     zone = kind == "zone"
-    eps = EPS_REL * abs(f0) + EPS_ABS
     S = np.unique(np.asarray(S, dtype=np.intp))
     xs, ys = x[S], y[S]
     g = 8
@@ -169,7 +194,7 @@ def branch_and_bound(x, y, *, kind: str, c0, f0: float, S, ball: float, region: 
         while True:
             dmin, dmax, dc = box_distance_bounds(cx, cy, h, xs, ys)
             if zone:
-                bound = dmin.max(axis=1) - dmax.min(axis=1)
+                bound = np.maximum(dmin.max(axis=1) - dmax.min(axis=1), pair_bound(cx, cy, h, xs, ys, dc))
                 keep = bound < f0 - eps
                 centre_val = dc.max(axis=1) - dc.min(axis=1)
                 suspect = keep & (centre_val < f0 - eps)
@@ -220,9 +245,16 @@ def branch_and_bound(x, y, *, kind: str, c0, f0: float, S, ball: float, region: 
                    boxes=boxes, levels=MAX_LEVELS, full_passes=full, working_set=S)
 
 
+def resolution(f: float, r_max: float) -> float:
+    """eps of the certificate (unit frame): EPS_REL f + EPS_ABS + 4 TIE_REL r_max (the tied contacts'
+    radii differ by up to TIE_REL r_max, which the local ball bound may lose twice)."""
+    return EPS_REL * abs(f) + EPS_ABS + 4 * TIE_REL * r_max
+
+
 def _tied(r: np.ndarray):
-    """Indices of the tied outer and inner contacts (within TIE_ABS of the extreme radii)."""
-    return np.flatnonzero(r >= r.max() - TIE_ABS), np.flatnonzero(r <= r.min() + TIE_ABS)
+    """Indices of the tied outer and inner contacts (within TIE_REL x max r of the extreme radii)."""
+    tol = TIE_REL * r.max()
+    return np.flatnonzero(r >= r.max() - tol), np.flatnonzero(r <= r.min() + tol)
 
 
 def _unit_directions(x, y, idx, c):
@@ -297,7 +329,7 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
             kappa = growth_rate(_unit_directions(x, y, I, c), None)
             ball = 0.9 * 2 * kappa * f / (1 + 2 * kappa) if kappa > 0 else 0.0
             f0 = f
-        eps = EPS_REL * abs(f0) + EPS_ABS
+        eps = resolution(f0, r.max())
         if zone:
             W = least_width_exact(x[S], y[S])  # a subset's least width bounds the data's from below
             if W > f0:
@@ -311,7 +343,7 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
             region = rho
             info["region"] = "centres inside the profile polygon (points joined in angular order about their centroid)"
         outcome = branch_and_bound(x, y, kind=kind, c0=np.asarray(c, dtype=float), f0=f0, S=S, ball=ball,
-                                   region=region, polygon=polygon)
+                                   region=region, eps=eps, polygon=polygon)
         info["boxes"] += outcome.boxes
         info["full_passes"] += outcome.full_passes
         S = outcome.working_set
@@ -332,7 +364,6 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
     if outcome is not None and not outcome.certified and len(x) <= EXACT_MAX_POINTS:
         cb, fb = exact_enumeration(x, y, kind, polygon)
         f, _ = _value(x, y, c, zone)
-        eps = EPS_REL * abs(f) + EPS_ABS
         if cb is not None and ((fb < f) if zone else (fb > f or not valid)):
             c, contacts, ok, message, valid = cb, ((), ()), False, "exact enumeration", True
             f = fb
@@ -355,11 +386,11 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
         contacts = alt
     elif zone and f <= 1e-11:
         pass
-    local = valid and (alt is not None or (zone and f <= 1e-11))
+    local = valid and (alt is not None or bool(ok) or (zone and f <= 1e-11))
     what = "zone narrower" if zone else "empty circle larger"
     if valid and outcome is not None and outcome.certified:
         certified = "global"
-        eps = (EPS_REL * abs(f) + EPS_ABS) * scale
+        eps = resolution(f, r.max()) * scale
         msg = (f"certified global optimum over {info['region']}{exact_note}: no centre there gives a {what} by more "
                f"than {eps:.2g} {unit} (branch and bound over the centre: {info['boxes']} boxes, "
                f"{info['full_passes']} extra passes over the points")

@@ -354,8 +354,9 @@ def certify_hulls(x, y, *, zero_tol=ZERO_WIDTH):
             return False, "fewer than two contacts: no optimality certificate"
         ok = hulls_meet(directions(x, y, side, c), np.zeros((1, 2)))
         if not ok:  # ties: look for 2 or 3 tied contacts that surround the centre
-            from methods.circle._global import TIE_ABS, alternating_contacts
-            tied = np.flatnonzero(r >= r.max() - TIE_ABS) if oc else np.flatnonzero(r <= r.min() + TIE_ABS)
+            from methods.circle._global import TIE_REL, alternating_contacts
+            tol = TIE_REL * r.max()
+            tied = np.flatnonzero(r >= r.max() - tol) if oc else np.flatnonzero(r <= r.min() + tol)
             ok = alternating_contacts(x, y, c, np.empty(0, dtype=np.intp), tied, hulls_meet) is not None
         return ok, ("optimal: the centre lies in the convex hull of the contacts" if ok else
                     "the contacts do not surround the centre: not an optimum")

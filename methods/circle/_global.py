@@ -471,14 +471,25 @@ def exact_enumeration(x, y, kind: str, polygon: ProfilePolygon | None = None):
 
 
 def least_width_exact(x, y) -> float:
-    """The least width of a small point set: over the edge normals of its convex hull."""
-    from scipy.spatial import ConvexHull, QhullError
+    """The least width of a point set over all directions. It is attained normal to an edge of the
+    convex hull, i.e. to some pair of points, and no direction gives less: so up to 200 points the
+    minimum over all pairs' normals (vectorised), beyond that over the hull edges (Qhull)."""
     P = np.column_stack([x, y])
-    try:
-        H = P[ConvexHull(P).vertices]
-    except QhullError:
+    if len(P) <= 200:
+        H = P
+        i, j = np.triu_indices(len(H), 1)
+        e = H[j] - H[i]
+    else:
+        from scipy.spatial import ConvexHull, QhullError
+        try:
+            H = P[ConvexHull(P).vertices]
+        except QhullError:
+            return 0.0
+        e = np.roll(H, -1, axis=0) - H
+    n = np.hypot(e[:, 0], e[:, 1])
+    e, n = e[n > 0], n[n > 0]
+    if not len(e):
         return 0.0
-    e = np.roll(H, -1, axis=0) - H
-    nrm = np.column_stack([-e[:, 1], e[:, 0]]) / np.hypot(e[:, 0], e[:, 1])[:, None]
+    nrm = np.column_stack([-e[:, 1], e[:, 0]]) / n[:, None]
     proj = nrm @ H.T
     return float((proj.max(axis=1) - proj.min(axis=1)).min())

@@ -1,6 +1,10 @@
 """Shared machinery of the zone methods (minimum zone, MIC, MCC, Chebyshev): active sets,
 closed-form centres of contact configurations, optimality certificates, the clarabel interface.
 
+The certificates here are LOCAL for the non-convex minimum zone and MIC (alternating / surrounding
+contacts); :func:`fit_zone` adds the global stage of :mod:`methods.circle._global` for those, and reports
+``extra["certified"]`` as "global", "local" or False.
+
 All work happens in the unit frame of :class:`~methods.circle._frame.Frame` (1-D arrays x, y).
 """
 from __future__ import annotations

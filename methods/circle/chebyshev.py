@@ -30,7 +30,9 @@ def chebyshev_lp(points, *, solver="highs", active_size=16, max_rounds=50):
     zone about (a, b) of least R^2 - r^2 (R^2 = rho^2 + t, r^2 = rho^2 - t), which Witzgall & Howard
     found to be very close to the minimum zone. Active set on the extreme points with a final check of
     every point; the LP's four contacts give the exact centre, certified by conv(outer contact points)
-    meeting conv(inner contact points) (the LP's optimality condition).
+    meeting conv(inner contact points) (the LP's optimality condition, searched among tied contacts): the
+    LP is convex, so this certifies the global optimum of the algebraic objective over all (a, b, w)
+    (``extra['certified'] == "global"``), not the minimum zone.
     ``radius`` = rho = sqrt((R^2 + r^2)/2); ``form_error`` = R - r about (a, b)."""
     name = "circle.chebyshev_lp"
     check_choice("solver", solver, SOLVERS, name)

@@ -37,7 +37,8 @@ def min_circumscribed(points, *, active_size=16, max_rounds=50):
     """Smallest circle containing all points: min R s.t. |p_i - c| <= R (second-order cones, one
     convex program, global optimum). Only the outermost points reach clarabel (active set with a final
     check of every point); the centre is then solved exactly from its 2 (diameter) or 3 contacts and
-    certified by the centre lying in the convex hull of the contacts.
+    certified by the centre lying in the convex hull of the contacts (searched among tied contacts): the
+    program is convex, so this is a global certificate over all centres (``extra['certified'] == "global"``).
     ``radius`` = R; ``form_error`` = R - min_i |p_i - c| (roundness about the MCC centre)."""
     name = "circle.min_circumscribed"
     k = int(check_positive("active_size", active_size, name))

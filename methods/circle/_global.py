@@ -390,11 +390,15 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
     what = "zone narrower" if zone else "empty circle larger"
     if valid and outcome is not None and outcome.certified:
         certified = "global"
-        eps = resolution(f, r.max()) * scale
-        msg = (f"certified global optimum over {info['region']}{exact_note}: no centre there gives a {what} by more "
-               f"than {eps:.2g} {unit} (branch and bound over the centre: {info['boxes']} boxes, "
-               f"{info['full_passes']} extra passes over the points")
-        msg += f", local solver restarted {info['restarts']} time(s) from better centres)" if info["restarts"] else ")"
+        eps = (resolution(f, r.max()) + (f if zone and f <= 1e-11 else 0.0)) * scale  # width >= 0 bounds a zero zone
+        if zone and f <= 1e-11:
+            msg = (f"certified global optimum: the points lie on one circle (zone width {f * scale:.2g} {unit}, at "
+                   "rounding level; no zone is narrower than 0)")
+        else:
+            msg = (f"certified global optimum over {info['region']}{exact_note}: no centre there gives a {what} by more "
+                   f"than {eps:.2g} {unit} (branch and bound over the centre: {info['boxes']} boxes, "
+                   f"{info['full_passes']} extra passes over the points")
+            msg += f", local solver restarted {info['restarts']} time(s) from better centres)" if info["restarts"] else ")"
         if f > 1e-11:
             msg += ("; contacts alternate" if alt is not None else
                     "; the contacts found do not alternate (a tie the local test cannot resolve)")

@@ -293,6 +293,60 @@ def _value(x, y, c, zone):
     return (r.max() - r.min() if zone else r.min()), r
 
 
+def _first_hit(x, y, c, u, p1):
+    """Along c + t u (t > 0), the first t at which some point becomes as near as p1 (the nearest point
+    at c; |c + t u - p_i|^2 - |c + t u - p_1|^2 is linear in t), and that point."""
+    gx, gy = x - x[p1], y - y[p1]
+    slope = 2 * (u[0] * gx + u[1] * gy)                        # decrease rate of the squared-distance gap
+    gap = (x - c[0]) ** 2 + (y - c[1]) ** 2 - ((x[p1] - c[0]) ** 2 + (y[p1] - c[1]) ** 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(slope > 0, gap / slope, np.inf)
+    t[p1] = np.inf
+    j = int(np.argmin(t))
+    return float(t[j]), j
+
+
+def polish_inscribed(x, y, c, polygon: ProfilePolygon, steps: int = 12):
+    """Grow the empty circle from an admissible centre c to the exact local MIC nearby: move directly
+    away from the nearest point until a second is as near, then along their bisector (away from both)
+    until a third is; while the contacts do not surround the centre, continue along the bisector of the
+    pair that leaves the obtuse contact behind. Each step is one vectorised pass. Returns (centre,
+    radius); the start itself if the walk leaves the profile polygon or does not improve."""
+    c0 = np.asarray(c, dtype=float)
+    f0, r = _value(x, y, c0, False)
+    c = c0.copy()
+    p1 = int(np.argmin(r))
+    u = c - np.array([x[p1], y[p1]])
+    if not np.hypot(*u) > 0:
+        return c0, f0
+    u /= np.hypot(*u)
+    t, p2 = _first_hit(x, y, c, u, p1)
+    if not np.isfinite(t):
+        return c0, f0
+    c = c + t * u
+    pair = (p1, p2)
+    for _ in range(steps):
+        a, b = pair
+        v = np.array([-(y[b] - y[a]), x[b] - x[a]])
+        v /= np.hypot(*v)
+        if v @ (c - 0.5 * np.array([x[a] + x[b], y[a] + y[b]])) < 0:
+            v = -v                                                  # away from the pair's midpoint
+        t, p3 = _first_hit(x, y, c, v, a)
+        if not np.isfinite(t):
+            break
+        c = c + t * v
+        E = np.array([[x[i] - c[0], y[i] - c[1]] for i in (a, b, p3)])
+        E /= np.hypot(E[:, 0], E[:, 1])[:, None]
+        if growth_rate(E, None) > 0:                                # the three contacts surround c: a local MIC
+            break
+        # keep the pair whose bisector leads on: drop the contact the other two see across the centre
+        pair = max(((a, p3), (b, p3), (a, b)), key=lambda q: -(E[[a, b, p3].index(q[0])] @ E[[a, b, p3].index(q[1])]))
+    f, _ = _value(x, y, c, False)
+    if f > f0 and polygon.contains(c[None, :])[0]:
+        return c, f
+    return c0, f0
+
+
 def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet, scale, unit="data units"):
     """The global stage of :mod:`methods.circle._zone`'s fits (see the module docstring).
 
@@ -351,6 +405,10 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
             break
         info["restarts"] += 1
         fb, _ = _value(x, y, outcome.better, zone)
+        if not zone:  # the MIC's local LP can walk out of a lobed profile: climb by exact candidates instead
+            c, f = polish_inscribed(x, y, outcome.better, polygon)
+            contacts, ok, message, valid = ((), ()), False, "polished from the branch and bound", True
+            continue
         c2, contacts2, ok2, message2, stats2 = rerun(outcome.better)
         f2, _ = _value(x, y, c2, zone)
         inside2 = zone or polygon.contains(np.asarray(c2, dtype=float)[None, :])[0]

@@ -160,3 +160,17 @@ def test_dense_trace_is_globally_certified():
     for mid in ("circle.minimum_zone", "circle.max_inscribed"):
         res = methods.fit(mid, P)
         assert res.extra["certified"] == "global", res.message
+
+
+def test_dense_lobed_mic_is_not_lost_outside_the_profile():
+    """A 7-lobe profile (r = 10 + 0.5 cos 7t, 3358 points): the local LP walks out of the profile
+    (radius 6.4 at (-9.9, 12.4)); the global stage must return the MIC about the centre, radius at least
+    the nearest point's distance from the origin (an admissible centre)."""
+    rng = np.random.default_rng(2)
+    t = rng.uniform(0, 2 * np.pi, 3358)
+    r = 10 + 0.5 * np.cos(7 * t)
+    P = np.column_stack([r * np.cos(t), r * np.sin(t)])
+    res = methods.fit("circle.max_inscribed", P)
+    assert res.converged and res.extra["certified"] == "global", res.message
+    assert res.radius >= np.hypot(P[:, 0], P[:, 1]).min() * (1 - 1e-12)
+    assert np.hypot(*res.center) < 0.01

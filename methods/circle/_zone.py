@@ -322,6 +322,9 @@ def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max
             if ok:
                 message = f"certified global optimum of a convex program over all centres ({message})"
         elif global_search == "never":
+            if ok and proof == "inscribed" and not _global.ProfilePolygon(x, y).contains(np.asarray(c)[None, :])[0]:
+                ok, message = False, ("the local centre lies outside the profile polygon (points in angular order "
+                                      "about their centroid): not an inscribed circle")
             certified = "local" if ok else False
             if ok:
                 message = f"local optimum only ({message}); the global search was not run (global_search='never')"

@@ -211,6 +211,13 @@ def base_row(task: dict) -> dict:
     return row
 
 
+#: columns a generic row may have besides those of base_row (status, counts, every metric, timing)
+RESULT_COLUMNS = ("status", "message", "converged", "iterations", "nfev", "form_error", "residual_rms", "center_x",
+                  "center_y", "radius", "semi_axis_a", "semi_axis_b", "angle", "inner_radius", "outer_radius",
+                  "center_error_x", "center_error_y", "center_error", "radius_error", "semi_axis_a_error",
+                  "semi_axis_b_error", "angle_error", "task_index")
+
+
 def fit_row(task: dict, points, truth) -> dict:
     """Fit, measure, time: the generic row of a task (exceptions become status 'error')."""
     row = base_row(task)
@@ -282,5 +289,7 @@ def run(tasks: list[dict], store: RowStore, *, force: bool, jobs: int, executor:
     t0 = time.perf_counter()
     execute(todo, store, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc)
     counts["wall_s"] = time.perf_counter() - t0
-    rows = store.get(keys)
+    stored = store.get_by_key(keys)
+    # the order of the rows is the order of the tasks of this config, whatever order they were stored in
+    rows = [{**stored[t["key"]], "task_index": t["index"]} for t in tasks if t["key"] in stored]
     return rows, counts

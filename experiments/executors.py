@@ -3,7 +3,10 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import sys
+import threading
+import time
 
 from experiments.store import RowStore
 
@@ -59,27 +62,98 @@ def _one_blas_thread_per_worker():
                 os.environ[v] = val
 
 
+def _die_with_parent(parent_pid: int) -> None:
+    """Worker initializer: the worker ends when the run that started it ends, however it ends.
+
+    On Linux the kernel sends SIGKILL to the worker when its parent dies (``prctl(PR_SET_PDEATHSIG)``
+    through ctypes); elsewhere a daemon thread polls ``os.getppid()`` every 0.5 s. A worker ignores
+    Ctrl-C (SIGINT reaches the whole process group): the parent stops the pool and prints one line.
+    When the workers are gone, the multiprocessing resource tracker sees its pipe close and exits too."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    armed = False
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+            libc = ctypes.CDLL(None, use_errno=True)
+            armed = libc.prctl(1, signal.SIGKILL, 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            armed = False
+    if os.getppid() != parent_pid:  # the parent died before the guard was armed
+        os._exit(1)
+    if not armed:
+        def watch():
+            while os.getppid() == parent_pid:
+                time.sleep(0.5)
+            os._exit(1)
+        threading.Thread(target=watch, daemon=True, name="fitbench-parent-watchdog").start()
+
+
+def _stop_pool(pool) -> None:
+    """Stop a ProcessPoolExecutor now: cancel what is pending and end the running workers."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(Exception):
+            proc.terminate()
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(Exception):
+            proc.join(timeout=5)
+
+
 def _run_processes(tasks, store, jobs, bar):
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor, as_completed
     with _one_blas_thread_per_worker():
-        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"))
+        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"),
+                                   initializer=_die_with_parent, initargs=(os.getpid(),))
         try:
             futures = {pool.submit(_run_task, t): t for t in tasks}
             for fut in as_completed(futures):
                 store.put(futures[fut]["key"], fut.result())
                 bar.update()
         except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)
+            _stop_pool(pool)
             raise
         pool.shutdown()
+
+
+#: how long a connection to a Dask scheduler may take before the run gives up (seconds)
+DASK_CONNECT_TIMEOUT_S = 5
+
+
+def connect_dask(scheduler: str):
+    """A Client of the scheduler at ``scheduler`` (``tcp://host:port``...), or InvalidInputError in one line
+    within :data:`DASK_CONNECT_TIMEOUT_S` seconds."""
+    from distributed import Client
+    from distributed.comm import parse_address
+    from methods import InvalidInputError
+    address = scheduler.strip()
+    try:
+        scheme, loc = parse_address(address, strict=True)
+        host, _, port = loc.rpartition(":")
+        if scheme in ("tcp", "tls") and (not host or not port.isdigit()):
+            raise ValueError("needs host:port")
+    except (ValueError, TypeError) as exc:
+        raise InvalidInputError(f"--scheduler {scheduler!r} is not a scheduler address such as tcp://host:8786 ({exc})") from None
+    import logging
+    quiet = [logging.getLogger(n) for n in ("distributed", "distributed.client", "distributed.core", "distributed.comm")]
+    levels = [lg.level for lg in quiet]
+    for lg in quiet:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        return Client(address, timeout=DASK_CONNECT_TIMEOUT_S)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InvalidInputError(f"no Dask scheduler answered at {address} within {DASK_CONNECT_TIMEOUT_S} s "
+                                f"({type(exc).__name__}); start one (dask scheduler) or check the address") from None
+    finally:
+        for lg, level in zip(quiet, levels):
+            lg.setLevel(level)
 
 
 def _run_dask(tasks, store, jobs, scheduler, bar):
     from distributed import Client, LocalCluster, as_completed
     cluster = None
-    if scheduler:
-        client = Client(scheduler)
+    if scheduler is not None:
+        client = connect_dask(scheduler)
     else:
         with _one_blas_thread_per_worker():
             cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
@@ -89,8 +163,12 @@ def _run_dask(tasks, store, jobs, scheduler, bar):
         futures = client.map(_run_task, tasks, pure=False)
         index = {f.key: t for f, t in zip(futures, tasks)}
         for fut in as_completed(futures):
-            store.put(index[fut.key]["key"], fut.result())
+            store.put(index[fut.key]["key"], fut.result())  # rows are written by the client, not the workers
             bar.update()
+    except BaseException:
+        with contextlib.suppress(Exception):
+            client.cancel(futures)
+        raise
     finally:
         client.close()
         if cluster is not None:

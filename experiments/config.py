@@ -66,6 +66,10 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
     except ModuleNotFoundError:
         raise ConfigError(f"{where}: kind: unknown kind {cfg['kind']!r} (a module in experiments/studies/)") from None
     schema.check_values(cfg, where)
+    if not hasattr(study, "tasks"):  # the generic grid: data sets x methods
+        for key in ("datasets", "methods"):
+            if not cfg.get(key):
+                raise ConfigError(f"{where}: {key}: missing; the study kind {cfg['kind']!r} needs at least one [[{key}]] table")
     cfg["_where"] = where
     cfg["_quick"] = quick
     if hasattr(study, "validate"):

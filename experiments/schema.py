@@ -134,10 +134,17 @@ def _message(error) -> str:
     return error.message
 
 
+# TOML keeps integers and floats apart: an "integer" is an int (JSON Schema would accept 1e9 as one)
+_Validator = jsonschema.validators.extend(
+    jsonschema.Draft202012Validator,
+    type_checker=jsonschema.Draft202012Validator.TYPE_CHECKER.redefine(
+        "integer", lambda checker, v: isinstance(v, int) and not isinstance(v, bool)))
+
+
 def check_structure(cfg: dict, where: str) -> None:
     """Raise ConfigError for the first structural problem (unknown key, wrong type, missing table)."""
     from experiments.engine import ConfigError
-    validator = jsonschema.Draft202012Validator(config_schema())
+    validator = _Validator(config_schema())
     errors = sorted(validator.iter_errors(cfg), key=lambda e: (list(map(str, e.absolute_path)), e.validator))
     if errors:
         err = errors[0]

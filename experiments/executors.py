@@ -88,6 +88,21 @@ def _die_with_parent(parent_pid: int) -> None:
         threading.Thread(target=watch, daemon=True, name="fitbench-parent-watchdog").start()
 
 
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c():
+    """Start workers with SIGINT ignored (an ignored signal stays ignored across exec, and Python then
+    installs no KeyboardInterrupt handler): Ctrl-C reaches the whole process group, and a worker still
+    importing must not print a traceback. The parent's own handler is restored at once."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def _stop_pool(pool) -> None:
     """Stop a ProcessPoolExecutor now: cancel what is pending and end the running workers."""
     pool.shutdown(wait=False, cancel_futures=True)
@@ -106,7 +121,8 @@ def _run_processes(tasks, store, jobs, bar):
         pool = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"),
                                    initializer=_die_with_parent, initargs=(os.getpid(),))
         try:
-            futures = {pool.submit(_run_task, t): t for t in tasks}
+            with _workers_ignore_ctrl_c():
+                futures = {pool.submit(_run_task, t): t for t in tasks}  # the workers start here
             for fut in as_completed(futures):
                 store.put(futures[fut]["key"], fut.result())
                 bar.update()

@@ -124,11 +124,12 @@ def _message(error) -> str:
         if len(present) != 1:
             return (f"give exactly one data source ({', '.join(DATASET_SOURCES)}), "
                     f"got {', '.join(present) or 'none'}")
-        sub = [e for e in error.context if present[0] in e.schema.get("properties", {}) or
-               present[0] in e.schema.get("required", [])]
+        alternative = list(DATASET_SOURCES).index(present[0])
+        sub = [e for e in error.context if e.relative_schema_path and e.relative_schema_path[0] == alternative]
         if sub:
             best = jsonschema.exceptions.best_match(sub)
-            return (_path(best) + ": " if best.absolute_path != error.absolute_path else "") + _message(best)
+            where = ".".join(str(p) for p in best.relative_path)
+            return (where + ": " if where else "") + _message(best)
     if v == "anyOf" and "description" in error.schema:
         return f"must be {error.schema['description']}, got {error.instance!r}"
     return error.message

@@ -113,8 +113,6 @@ def wait_rows(proc, db: Path, at_least: int, timeout=120):
     raise AssertionError("no rows were stored in time")
 
 
-NON_TIMING_DROP = ("message",)
-
 
 def non_timing(path: Path) -> pd.DataFrame:
     df = pd.read_csv(path)

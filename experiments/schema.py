@@ -67,6 +67,10 @@ TOP_LEVEL: dict[str, dict] = {
     "examples": {"type": "object", "minProperties": 1},
     "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
     "positions_per_test": _POSITIVE_INT,
+    "cutoffs": {"type": "array", "minItems": 1, "items": {"anyOf": [{"type": "number", "exclusiveMinimum": 0},
+                                                                   {"const": "none"}]}},
+    "published": {"type": "array", "minItems": 1, "items": {"type": "string"}},
+    "synthetic": {"type": "array", "minItems": 1, "items": {"type": "object"}},
 }
 REQUIRED = ("name", "title", "kind")
 NOT_IN_QUICK = ("name", "kind", "default", "quick")

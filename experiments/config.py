@@ -52,6 +52,7 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
     except ModuleNotFoundError:
         raise ConfigError(f"{where}: unknown kind {cfg['kind']!r} (a module in experiments/studies/)") from None
     cfg["_where"] = where
+    cfg["_dir"] = str(path.resolve().parent)
     cfg["_quick"] = quick
     if hasattr(study, "validate"):
         study.validate(cfg, where)

@@ -35,10 +35,6 @@ def tasks(cfg):
     return out
 
 
-def task_key_method(task):
-    return "magnify.offset"
-
-
 def run_variant(name, label, eta):
     ref, meas = EXAMPLES[name]()
     data = MagnifyInput(ref, meas)

@@ -39,10 +39,6 @@ def tasks(cfg):
     return out
 
 
-def task_key_method(task):  # bands are not registry methods: the engine hashes the positioning family instead
-    return "positioning.gls_polynomial"
-
-
 def execute(task):
     s = task["dataset"]["scenario"]
     rng = np.random.default_rng(np.random.SeedSequence(task["seed"], spawn_key=tuple(task["stream"])))

@@ -33,6 +33,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 ENTRY_POINT_GROUP = "fitbench.datasets"
 
 
@@ -133,6 +135,47 @@ def _register_builtins():
         truth = {"family": "circle", "center": [float(Decimal(v)) for v in ref["center"]],
                  "radius": float(Decimal(ref["diameter"])) / 2}
         return read_points(folder / f"{name}.csv"), truth
+
+    _register_simulators()
+
+
+def _register_simulators():
+    """The machine-tool simulators: their data are the inputs of the circular-test, positioning,
+    magnification and multilateration methods (truth: what the simulator injected)."""
+    from datasets import circular_test as ct
+    from datasets import contouring
+    from datasets import multilateration as ml
+    from datasets import positioning as pos
+
+    @register_source("circular_test", random=True,
+                     summary="ISO 230-4 circular test of the LOLA HBG 130 scenario (both runs, or one path)")
+    def circular_test(rng, *, scenario="lola_hbg130", path="both"):
+        """Points of a simulated circular test; ``path`` is 'both', 'cw' or 'ccw'."""
+        if scenario != "lola_hbg130" or path not in ("both", "cw", "ccw"):
+            raise ValueError("circular_test: scenario must be 'lola_hbg130' and path 'both', 'cw' or 'ccw'")
+        cond, err = ct.lola_hbg130()
+        cw, ccw, truth = ct.circular_test(cond, err, seed=int(rng.integers(2 ** 63)))
+        return {"both": np.vstack([cw, ccw]), "cw": cw, "ccw": ccw}[path], truth
+
+    def positioning(rng, **params):
+        """A simulated axis test (``datasets.positioning.axis_test`` parameters)."""
+        return pos.axis_test(rng=rng, **params)
+
+    positioning.__signature__ = inspect.signature(pos.axis_test)
+    register_source("positioning", random=True, summary="ISO 230-2 positioning test of a simulated axis")(positioning)
+
+    @register_source("contouring", random=False, summary="a reference and a measured contouring trajectory")
+    def contouring_example(rng=None, *, example):
+        """Example ``example`` of ``datasets.contouring.EXAMPLES`` as a magnify input."""
+        from methods.magnify import MagnifyInput
+        ref, meas = contouring.EXAMPLES[example]()
+        return MagnifyInput(ref, meas), None
+
+    @register_source("multilateration", random=True, summary="a simulated multilateration campaign")
+    def multilateration(rng, *, stations=6, grid=(5, 4, 4), noise=1.0, errors="default"):
+        """A simulated campaign (``datasets.multilateration.simulate``; errors = 'none' for a perfect machine)."""
+        return ml.simulate(rng=rng, stations=tuple(stations) if isinstance(stations, list) else stations,
+                           grid=tuple(grid), noise=noise, errors=None if errors == "none" else errors)
 
 
 def nist_folder() -> Path:

@@ -54,6 +54,8 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
     cfg["_where"] = where
     cfg["_dir"] = str(path.resolve().parent)
     cfg["_quick"] = quick
+    from experiments.study import validate as validate_declarations
+    validate_declarations(cfg, where)
     if hasattr(study, "validate"):
         study.validate(cfg, where)
     return cfg

@@ -136,3 +136,23 @@ def finalize(df, cfg, target, log):
             "iso230_4_published_um": PAPER_ISO,
             "diagnostics": {k: v for k, v in dg.items() if not k.startswith("_")}, "injected": injected,
             "truth_ellipse": {"semi_axes": truth["semi_axes"], "angle_deg": float(np.degrees(truth["angle"]))}}
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    iso = f.get("iso230_4", {})
+    pub = f.get("iso230_4_published_um", {})
+    rows = [{"figure": k, "synthetic scenario [um]": round(iso[k] * 1e3, 2), "published [um]": pub.get(k, "")}
+            for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation") if k in iso]
+    out.append(("ISO 230-4 figures of the synthetic LOLA HBG 130 test (the paper's measured data are not published)",
+                pd.DataFrame(rows)))
+    dg, inj = f.get("diagnostics", {}), f.get("injected", {})
+    rows = [{"source": k, "estimate": round(v["value"], 3) if v["value"] is not None else "",
+             "u": round(v["u"], 3) if v["u"] is not None else "", "unit": v["unit"],
+             "injected": round(inj[k], 3) if k in inj else ""} for k, v in dg.items()]
+    out.append(("Diagnostics: error sources estimated from the two runs against the injected ones", pd.DataFrame(rows)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

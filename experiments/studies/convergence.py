@@ -117,3 +117,20 @@ def figure(table, target):
     fig.tight_layout()
     fig.savefig(target / "convergence.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    t = pd.read_csv(folder / "success.csv")
+    for arc, g in t.groupby("arc_deg", sort=False):
+        piv = g.pivot_table(index=["method", "params"], columns="start_distance", values="success_rate", sort=False)
+        piv.columns = [f"{c:g} R" for c in piv.columns]
+        piv = piv.reset_index()
+        piv["method"] = piv["method"] + piv["params"].map(lambda p: "" if p == "{}" else " " + p.replace('"', ""))
+        out.append((f"Convergence from distant starts ({arc:.0f}° arc): success rate by start distance",
+                    piv.drop(columns=["params"]).round(2)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

@@ -103,3 +103,16 @@ def figures(cfg, target):
     fig.tight_layout()
     fig.savefig(target / "magnification.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    df = pd.read_csv(folder / "results.csv")
+    df["cell"] = df.apply(lambda r: "skipped" if r["status"] != "ok" else f"{r['continuity']:.2f} / {int(r['loops'])}", axis=1)
+    piv = df.pivot_table(index="dataset", columns="method", values="cell", aggfunc="first", sort=False).reset_index()
+    out.append(("Continuity (about 1 or less: continuous) / loops of the magnified trajectories", piv))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

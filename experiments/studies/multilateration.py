@@ -286,3 +286,37 @@ def figure_kappa(acc, target):
     plt.close(fig)
 
 
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    st = f.get("stations_table", {})
+    t = pd.DataFrame(st.get("rows", []))
+    if len(t):
+        t = t[t["method"] != "truth"][["method", "station", "dx_um", "dy_um", "dz_um", "dL_um"]].round(3)
+        out.append((f"Stations located by each scheme, one campaign ({st.get('scenario', '')}): difference from the "
+                    "truth [um] (the paper's tables 5-9; the joint adjustment in its gauge)", t))
+    acc = pd.DataFrame(f.get("accuracy", []))
+    if len(acc):
+        keep = ["dataset", "stations", "method", "runs", "station_error_um", "volumetric_error_rms_um",
+                "aligned_error_rms_um", "model_error_rms_um", "kappa_stations", "kappa_stations_theorem1",
+                "kappa_points", "kappa_points_theorem1"]
+        acc = acc[[c for c in keep if c in acc.columns]].rename(columns={
+            "dataset": "scenario", "stations": "stations are", "station_error_um": "station [um]",
+            "volumetric_error_rms_um": "vol. RMS [um]", "aligned_error_rms_um": "aligned RMS [um]",
+            "model_error_rms_um": "21-error map RMS [um]", "kappa_stations": "kappa st.",
+            "kappa_stations_theorem1": "Thm 1 st.", "kappa_points": "kappa pt.", "kappa_points_theorem1": "Thm 1 pt."})
+        for c in acc.columns[4:]:
+            acc[c] = acc[c].map(lambda v: "" if pd.isna(v) else f"{v:.3g}")
+        out.append(("Median over the Monte Carlo runs: largest station error, volumetric-error error (RMS, and after "
+                    "the best rigid alignment), error of the map from the 21 identified errors, condition numbers", acc))
+    out.append(("Most accurate scheme per scenario (median aligned RMS [um])", pd.DataFrame(f.get("winner", [])).round(3)))
+    r = pd.DataFrame(f.get("rounding", []))
+    if len(r):
+        for c in r.columns[2:]:
+            r[c] = r[c].map(lambda v: f"{v:.3g}")
+        out.append(("Exact lengths: what the published Case B's conditioning costs in double precision (its points "
+                    "against the centred solution of the same equations) and its error against the truth [um]", r))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

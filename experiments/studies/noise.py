@@ -88,3 +88,19 @@ def figure(table: pd.DataFrame, target) -> None:
     fig.tight_layout()
     fig.savefig(target / "noise_kcr.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    t = pd.read_csv(folder / "kcr.csv")
+    t = t[(t["noise"] == t["noise"].max()) & (t["n"] == t["n"].max())]
+    piv = t.pivot_table(index="method", columns="arc_deg", values="radius_rmse_over_kcr", sort=False)
+    piv = piv[sorted(piv.columns, reverse=True)].reset_index()
+    piv.columns = ["method"] + [f"{c:.0f}° arc" for c in piv.columns[1:]]
+    out.append((f"Radius RMSE / KCR bound at sigma = {t['noise'].max():g} R, N = {t['n'].max()} (1 = the statistical limit)",
+                piv.round(2)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

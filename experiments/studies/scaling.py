@@ -50,3 +50,18 @@ def figure(ok, slopes, target):
     fig.tight_layout()
     fig.savefig(target / "scaling.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    t = pd.read_csv(folder / "runtime_table.csv")
+    t = t.rename(columns={t.columns[0]: "method"})
+    for c in t.columns[1:-1]:
+        t[c] = (t[c] * 1e3).round(3)
+    t.columns = ["method"] + [f"N={int(float(c))} [ms]" for c in t.columns[1:-1]] + ["slope"]
+    out.append(("Median runtime per fit against N, and the log-log slope for N >= 1000", t.round(3)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

@@ -11,8 +11,9 @@ A study is one TOML file (``experiments/configs/NAME.toml``, or any path)::
     summary_by = ["dataset", "data_arc_deg", "method", "params"]   # never data_stream / repetition
 
     [report]
-    section = "My comparisons"           # sections appear in the order of their first study
-    order = 100                          # studies sort by order, then name (default 1000)
+    section = "My comparisons"           # the report section (heading) this study belongs to
+    order = 100                          # place in the report (default 1000; ties: by name); a section
+                                         # sits where its first study does
     findings = "{best_method} has the smallest radius RMSE ({best_value:.3g} mm)."  # optional, from values
 
     [[datasets]]
@@ -318,6 +319,7 @@ def analyse(study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tuple[dict
         findings = json.loads(json.dumps(findings, default=str))  # what meta.json holds
         tables = study.report_tables(target, findings) if hasattr(study, "report_tables") else []
         analysis = Analysis(tables=list(tables), values={})
+    analysis.values = {"n_rows": len(df), "n_ok": int((df["status"] == "ok").sum()), **analysis.values}
     analysis.tables += [declared_table(df, t) for t in cfg.get("tables", [])]
     for f in cfg.get("figures", []):
         analysis.figures.append(declared_figure(df, f, target, len(analysis.figures) + 1))

@@ -6,10 +6,14 @@ A task is a plain dict (picklable, sent to workers):
 ``{"index", "key", "study", "kind", "dataset": {...}, "repetition", "stream", "seed", "method",
 "params", "timing": {...} | None, ...study-specific keys}``.
 
-Data sets in a config (``[[datasets]]``):
-* ``generator = "circle"`` with fixed ``params = {...}`` and an optional ``grid = {...}`` whose
-  values are lists (the cartesian product is taken); synthetic data get ``repetitions`` noise draws;
-* ``published = "roundness_set3"`` (optional ``variant = "drop_repeated_closing_point"``).
+Data sets in a config (``[[datasets]]``), from the data-source registry ``datasets.sources``:
+* ``source = "circle"`` (or the older ``generator = "circle"``; any registered source, plugins included)
+  with fixed ``params = {...}`` and an optional ``grid = {...}`` whose values are lists (the cartesian
+  product is taken); a random source gets ``repetitions`` draws, a fixed one a single repetition;
+* ``published = "roundness_set3"`` (optional ``variant = "drop_repeated_closing_point"``);
+* ``file = "trace.csv"`` (relative to the TOML; optional ``truth = { center = [..], radius = .. }``).
+
+Cache keys (``task_key``) hash the task and all code its row depends on (``experiments.codehash``).
 Methods (``[[methods]]``): ``id`` (or ``family.*``), fixed ``params``, optional ``grid``, ``max_n``
 (skip larger data sets) and ``on`` (only the data sets with these labels).
 
@@ -114,15 +118,17 @@ def expand_datasets(cfg: dict, where: str) -> list[dict]:
         gen = entry.get("source", entry.get("generator"))
         try:
             source = sources.get_source(gen)
-        except KeyError as exc:
-            raise ConfigError(f"{here}: {exc.args[0]}") from None
+        except KeyError:
+            what = "generator" if "generator" in entry else "data source"
+            known = ", ".join(s.name for s in sources.list_sources() if s.name not in ("published", "file"))
+            raise ConfigError(f"{here}: unknown {what} {gen!r}; known: {known}") from None
         if gen in ("published", "file"):
             raise ConfigError(f"{here}: write {gen} = ... instead of source = {gen!r}")
         allowed = set(source.parameters)
         fixed, grid = dict(entry.get("params", {})), dict(entry.get("grid", {}))
         bad = (set(fixed) | set(grid)) - allowed
         if bad:
-            raise ConfigError(f"{here}: data source {gen!r} has no parameter(s) {', '.join(sorted(bad))}; "
+            raise ConfigError(f"{here}: {'generator' if 'generator' in entry else 'data source'} {gen!r} has no parameter(s) {', '.join(sorted(bad))}; "
                               f"its parameters are: {', '.join(sorted(allowed))}")
         key = "generator" if "generator" in entry else "source"
         for j, params in enumerate(_grid(fixed, grid, here)):

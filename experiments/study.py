@@ -57,8 +57,10 @@ per table under ``target/tables/``; everything atomically.
 """
 from __future__ import annotations
 
+import contextlib
 import io
 import json
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -248,6 +250,25 @@ def save_figure(fig, path: Path, **kwargs) -> None:
     write_bytes_atomic(path, buf.getvalue())
 
 
+def save_csv(df: pd.DataFrame, path: Path, **kwargs) -> None:
+    """``df.to_csv(path, **kwargs)``, written atomically."""
+    buf = io.StringIO()
+    df.to_csv(buf, **kwargs)
+    write_atomic(path, buf.getvalue())
+
+
+@contextlib.contextmanager
+def atomic_path(path: Path):
+    """A temporary path in ``path``'s folder for a writer that takes a file name (e.g. a plot function);
+    it replaces ``path`` only when the writer finished."""
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     import os
     import tempfile
@@ -268,8 +289,9 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
 def remove_leftover_tmp(folder: Path) -> None:
     """Remove ``*.tmp`` files an interrupted atomic write left behind."""
     if folder.is_dir():
-        for p in folder.rglob(".*.tmp"):
-            p.unlink(missing_ok=True)
+        for pattern in (".*.tmp", ".*.tmp.*"):
+            for p in folder.rglob(pattern):
+                p.unlink(missing_ok=True)
 
 
 def write_manifest(target: Path, cfg: dict, analysis: Analysis, summary: pd.DataFrame) -> None:
@@ -318,7 +340,8 @@ def analyse(study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tuple[dict
         findings = study.finalize(df, cfg, target, log) if hasattr(study, "finalize") else {}
         findings = json.loads(json.dumps(findings, default=str))  # what meta.json holds
         tables = study.report_tables(target, findings) if hasattr(study, "report_tables") else []
-        analysis = Analysis(tables=list(tables), values={})
+        scalars = {k: v for k, v in findings.items() if isinstance(v, (int, float, str, bool))}
+        analysis = Analysis(tables=list(tables), values=scalars)
     analysis.values = {"n_rows": len(df), "n_ok": int((df["status"] == "ok").sum()), **analysis.values}
     analysis.tables += [declared_table(df, t) for t in cfg.get("tables", [])]
     for f in cfg.get("figures", []):

@@ -75,8 +75,11 @@ def run(args, cwd, env_extra=None):
 def test_toml_only_study_from_the_command_line(tmp_path):
     study = write_study(tmp_path / "elsewhere")
     out = tmp_path / "out"
+    (out / "toml_only").mkdir(parents=True)
+    (out / "toml_only" / ".summary.csv.x1.tmp").write_text("left by a kill during an atomic write")
     proc = run([str(study), "--out", str(out), "--jobs", "1"], cwd=REPO)
     assert proc.returncode == 0, proc.stderr
+    assert not list((out / "toml_only").glob("*.tmp")) and not list((out / "toml_only").glob(".*.tmp"))
     df = pd.read_csv(out / "toml_only" / "results.csv")
     # 1 file (one repetition) + 2 arcs x 3 repetitions, 2 methods each
     assert len(df) == (1 + 2 * 3) * 2 and set(df["status"]) == {"ok"}

@@ -15,6 +15,8 @@ import methods
 from datasets.circular_test import circular_test, lola_hbg130
 from experiments import engine
 from experiments.engine import ConfigError
+from experiments.study import atomic_path
+from experiments.provenance import write_atomic
 
 PAPER = {  # tables 1-5 (centres in um about the nominal centre, radii and axes in mm, angles in deg)
     "circle.powell_hybrid": {"both": (-11.84, 9.81, 299.0132), "cw": (-11.67, 9.50, 299.0131), "ccw": (-12.00, 10.11, 299.0134)},
@@ -129,8 +131,9 @@ def finalize(df, cfg, target, log):
                  ", ".join(f"{k} {v:g}" for k, v in injected.items()))
     for line in lines:
         log(line)
-    polar_plot(cw, ccw, ev, target / "polar.png", title="LOLA HBG 130 (synthetic scenario)")
-    (target / "tables.txt").write_text("\n".join(lines) + "\n")
+    with atomic_path(target / "polar.png") as tmp:
+        polar_plot(cw, ccw, ev, tmp, title="LOLA HBG 130 (synthetic scenario)")
+    write_atomic(target / "tables.txt", "\n".join(lines) + "\n")
     return {"figure": "polar.png", "tables": "tables.txt",
             "iso230_4": {k: ev[k] for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation")},
             "iso230_4_published_um": PAPER_ISO,

@@ -14,6 +14,7 @@ import numpy as np
 from datasets.synthetic import ellipse_points
 from methods.ellipse._geometry import orthogonal_residuals
 from methods.ellipse.orthogonal import distance_jacobian
+from experiments.study import save_figure
 
 
 def predicted_angle_sd(points, p, sigma):
@@ -60,7 +61,7 @@ def figure(summary, target, sigma, n, _):
     ax.legend(fontsize=8)
     fig.tight_layout()
     target.mkdir(parents=True, exist_ok=True)
-    fig.savefig(target / "angle_conditioning.png", dpi=120)
+    save_figure(fig, target / "angle_conditioning.png", dpi=120)
     plt.close(fig)
 
 

@@ -9,6 +9,7 @@ import methods
 from datasets.contouring import EXAMPLES
 from experiments.engine import ConfigError
 from methods.magnify import MagnifyInput
+from experiments.study import save_csv, save_figure
 
 VARIANTS = {  # label -> (method, selection, delta rule)
     "nearest (conventional)": ("magnify.nearest", None, None),
@@ -63,7 +64,7 @@ def execute(task):
 
 def finalize(df, cfg, target, log):
     table = df.pivot_table(index="dataset", columns="method", values=["continuity", "loops"], sort=False)
-    table.to_csv(target / "metrics.csv", float_format="%.4g")
+    save_csv(table, target / "metrics.csv", float_format="%.4g")
     labels = list(VARIANTS)
     log("  continuity (<= ~1: continuous) / loops, per example and algorithm:")
     log("  " + f"{'example':<26}" + "".join(f"{lab[:22]:>24}" for lab in labels))
@@ -101,7 +102,7 @@ def figures(cfg, target):
             ax.set_title(f"{name}: {label}\ncontinuity {res.extra['continuity']:.2f}, loops {res.extra['self_intersections']}",
                          fontsize=8)
     fig.tight_layout()
-    fig.savefig(target / "magnification.png", dpi=110)
+    save_figure(fig, target / "magnification.png", dpi=110)
     plt.close(fig)
 
 

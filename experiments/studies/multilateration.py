@@ -19,6 +19,7 @@ from datasets import multilateration as sim
 from experiments.engine import ConfigError
 from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_matrix, identify
 from methods.multilateration.solvers import kabsch
+from experiments.study import save_csv, save_figure
 
 SCENARIO_KEYS = {"stations", "noise", "errors", "grid"}
 MODES = ("located", "known")
@@ -79,7 +80,8 @@ def execute(task):
     t0 = time.perf_counter()
     res = methods.fit(task["method"], data)
     row["runtime_s"] = time.perf_counter() - t0
-    row.update(status="ok", message="" if res.converged else res.message, converged=res.converged)
+    row.update(status="ok" if res.converged else "not converged", message="" if res.converged else res.message,
+               converged=res.converged)
     row.update(metrics(res, data, truth, mode))
     return row
 
@@ -133,7 +135,7 @@ def finalize(df, cfg, target, log):
     cols = [c for c in cols if c in ok.columns]
     acc = ok.groupby(["dataset", "stations", "method"], sort=False)[cols].median().reset_index()
     acc.insert(3, "runs", ok.groupby(["dataset", "stations", "method"], sort=False).size().to_numpy())
-    acc.to_csv(target / "accuracy.csv", index=False, float_format="%.6g")
+    save_csv(acc, target / "accuracy.csv", index=False, float_format="%.6g")
     log(f"  {'scenario':<62} {'stations':<8} {'method':<16} {'station um':>10} {'vol RMS um':>10} {'aligned':>8} "
         f"{'kappa st':>9} {'kappa pt':>9}")
     for r in acc.itertuples():
@@ -181,7 +183,7 @@ def stations_table(cfg, target):
         rows.append({"method": "truth", "station": sid, "x": st[0], "y": st[1], "z": st[2], "L": st[3],
                      "dx_um": 0.0, "dy_um": 0.0, "dz_um": 0.0, "dL_um": 0.0})
     table = pd.DataFrame(rows)
-    table.to_csv(target / "stations_table.csv", index=False, float_format="%.6f")
+    save_csv(table, target / "stations_table.csv", index=False, float_format="%.6f")
     return {"scenario": s["label"], "rows": table.to_dict(orient="records")}
 
 
@@ -255,7 +257,7 @@ def figure_axis_line(cfg, target):
     axes[0].legend(fontsize=7)
     fig.suptitle(f"{s['label']}: stations located by each scheme", fontsize=9)
     fig.tight_layout()
-    fig.savefig(target / "x_axis.png", dpi=110)
+    save_figure(fig, target / "x_axis.png", dpi=110)
     plt.close(fig)
 
 
@@ -282,7 +284,7 @@ def figure_kappa(acc, target):
     ax2.legend(fontsize=7, loc="upper right")
     fig.suptitle(scen, fontsize=9)
     fig.tight_layout()
-    fig.savefig(target / "multilateration.png", dpi=110)
+    save_figure(fig, target / "multilateration.png", dpi=110)
     plt.close(fig)
 
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from experiments import engine
 from experiments.engine import ConfigError
+from experiments.study import save_figure
 
 
 def _folder() -> Path:
@@ -79,7 +80,7 @@ def figure(summary, target):
     ax.set_title("NIST Circle2d, 30 sets: largest and median error of centre and radius", fontsize=9)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(target / "nist_errors.png", dpi=110)
+    save_figure(fig, target / "nist_errors.png", dpi=110)
     plt.close(fig)
 
 

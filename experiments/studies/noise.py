@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from datasets.synthetic import circle_points
+from experiments.study import save_csv, save_figure
 
 
 def kcr_bound(arc_deg: float, n: int, sigma: float, radius: float = 1.0) -> tuple[float, float]:
@@ -40,7 +41,7 @@ def finalize(df, cfg, target, log):
             r["radius_bias_over_sigma"] = r["radius_bias"] / noise
         rows.append(r)
     table = pd.DataFrame(rows)
-    table.to_csv(target / "kcr.csv", index=False, float_format="%.6g")
+    save_csv(table, target / "kcr.csv", index=False, float_format="%.6g")
     figure(table, target)
     worst = table[table["noise"] == table["noise"].max()]
     log("  radius RMSE / KCR bound at the largest noise (1.00 = the statistical limit):")
@@ -86,7 +87,7 @@ def figure(table: pd.DataFrame, target) -> None:
     fig.suptitle("Least-squares estimators: radius RMSE against the KCR bound (top), radius bias (bottom); "
                  "dashed: algebraic fits")
     fig.tight_layout()
-    fig.savefig(target / "noise_kcr.png", dpi=110)
+    save_figure(fig, target / "noise_kcr.png", dpi=110)
     plt.close(fig)
 
 

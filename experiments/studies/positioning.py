@@ -11,6 +11,7 @@ import methods
 from datasets.positioning import axis_test
 from experiments.engine import ConfigError
 from methods.positioning.model import evaluate_band
+from experiments.study import save_csv, save_figure, atomic_path
 
 BANDS = ("iso230-2 point-wise (mean +- 2s)", "OLS cubic", "GLS cubic (paper)")
 
@@ -67,7 +68,7 @@ def finalize(df, cfg, target, log):
                                                               error_rms_um=("error_rms", "mean")).reset_index()
     table["halfwidth_um"] *= 1e3
     table["error_rms_um"] *= 1e3
-    table.to_csv(target / "coverage.csv", index=False, float_format="%.4g")
+    save_csv(table, target / "coverage.csv", index=False, float_format="%.4g")
     log(f"  {'scenario':<55} {'band':<34} {'coverage':>8} {'half-width':>10} {'RMS error':>9}")
     for r in table.itertuples():
         log(f"  {r.dataset:<55} {r.method:<34} {r.coverage:8.3f} {r.halfwidth_um:8.2f} um {r.error_rms_um:7.2f} um")
@@ -81,7 +82,8 @@ def example(cfg, target):
     s = cfg["scenarios"][-1]
     data, _ = axis_test(rng=np.random.default_rng(cfg["seed"]), **s["params"])
     res = methods.fit("positioning.gls_polynomial", data, instrument_u=s.get("instrument_u"), mpe=s.get("mpe"))
-    plot(res, target / "example.png", title=f"synthetic axis: {s['label']}")
+    with atomic_path(target / "example.png") as tmp:
+        plot(res, tmp, title=f"synthetic axis: {s['label']}")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -98,7 +100,7 @@ def example(cfg, target):
     ax.set_ylim(0, 1.05)
     ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
-    fig.savefig(target / "positioning.png", dpi=110)
+    save_figure(fig, target / "positioning.png", dpi=110)
     plt.close(fig)
 
 

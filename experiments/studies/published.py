@@ -8,6 +8,7 @@ import numpy as np
 
 import datasets
 import methods
+from experiments.study import save_figure
 
 #: table 1 columns of the roundness paper and the method that reproduces each
 PUBLISHED_COLUMNS = {"LSQ (paper's Gauss-Newton)": "circle.gauss_newton",
@@ -101,7 +102,7 @@ def figure(rows, target):
     fig.suptitle("Roundness paper, table 1: published vs reproduced circularity [mm] (*: repeated point dropped)",
                  fontsize=9)
     fig.tight_layout()
-    fig.savefig(target / "published.png", dpi=110)
+    save_figure(fig, target / "published.png", dpi=110)
     plt.close(fig)
 
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from experiments.study import save_csv, save_figure
 
 
 def finalize(df, cfg, target, log):
@@ -15,7 +16,7 @@ def finalize(df, cfg, target, log):
             slopes[label] = float(np.polyfit(np.log10(big["data_n"]), np.log10(big["time_median_s"]), 1)[0])
     table = ok.pivot_table(index="label", columns="data_n", values="time_median_s", sort=False)
     table["slope_N>=1000"] = pd.Series(slopes)
-    table.to_csv(target / "runtime_table.csv", float_format="%.4g")
+    save_csv(table, target / "runtime_table.csv", float_format="%.4g")
     log("  median runtime [ms] by N, and the log-log slope for N >= 1000:")
     log("  " + f"{'method':<40}" + "".join(f"{int(c):>11}" for c in table.columns[:-1]) + f"{'slope':>8}")
     for label, vals in table.iterrows():
@@ -48,7 +49,7 @@ def figure(ok, slopes, target):
         ax.legend(fontsize=7)
     axes[0].set_ylabel("seconds per fit")
     fig.tight_layout()
-    fig.savefig(target / "scaling.png", dpi=110)
+    save_figure(fig, target / "scaling.png", dpi=110)
     plt.close(fig)
 
 

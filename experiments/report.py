@@ -235,8 +235,9 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_table, rend
                     md += [f"**Broken table**: {exc}.", ""]
                     continue
                 n_table += 1
-                unit = f" Unit: {t['unit']}." if t.get("unit") else ""
-                caption = f"{t.get('caption', '')}{unit}"
+                caption = str(t.get("caption", "")).rstrip()
+                if t.get("unit"):
+                    caption += ("" if caption.endswith(".") else ".") + f" Unit: {t['unit']}."
                 fmt = f".{int(t.get('digits', 7))}g"
                 write_atomic(out / "tables" / f"table-{n_table}.tex", render_latex(table, caption, f"table-{n_table}", fmt))
                 md += [f"*Table {n_table}: {caption}*", "", render_md(table, fmt), ""]

@@ -32,7 +32,8 @@ def analyse(df, cfg, target, log):
         shown[c] = shown[c] * 1e3
     shown.columns = ["method"] + [f"N={int(c)} [ms]" for c in n_cols] + ["slope"]
     values = {"slopes": slopes, "largest_n": int(max(n_cols))}
-    findings = ""
+    findings = (f"This run has fewer than two sizes N >= 1000 (largest N = {values['largest_n']}): "
+                "no slopes are estimated.")
     if slopes:
         lo, hi = min(slopes, key=slopes.get), max(slopes, key=slopes.get)
         values.update(flattest=lo, flattest_slope=slopes[lo], steepest=hi, steepest_slope=slopes[hi])

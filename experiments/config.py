@@ -71,7 +71,10 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
             if not cfg.get(key):
                 raise ConfigError(f"{where}: {key}: missing; the study kind {cfg['kind']!r} needs at least one [[{key}]] table")
     cfg["_where"] = where
+    cfg["_dir"] = str(path.resolve().parent)
     cfg["_quick"] = quick
+    from experiments.study import validate as validate_declarations
+    validate_declarations(cfg, where)
     if hasattr(study, "validate"):
         study.validate(cfg, where)
     return cfg

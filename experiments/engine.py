@@ -6,10 +6,14 @@ A task is a plain dict (picklable, sent to workers):
 ``{"index", "key", "study", "kind", "dataset": {...}, "repetition", "stream", "seed", "method",
 "params", "timing": {...} | None, ...study-specific keys}``.
 
-Data sets in a config (``[[datasets]]``):
-* ``generator = "circle"`` with fixed ``params = {...}`` and an optional ``grid = {...}`` whose
-  values are lists (the cartesian product is taken); synthetic data get ``repetitions`` noise draws;
-* ``published = "roundness_set3"`` (optional ``variant = "drop_repeated_closing_point"``).
+Data sets in a config (``[[datasets]]``), from the data-source registry ``datasets.sources``:
+* ``source = "circle"`` (or the older ``generator = "circle"``; any registered source, plugins included)
+  with fixed ``params = {...}`` and an optional ``grid = {...}`` whose values are lists (the cartesian
+  product is taken); a random source gets ``repetitions`` draws, a fixed one a single repetition;
+* ``published = "roundness_set3"`` (optional ``variant = "drop_repeated_closing_point"``);
+* ``file = "trace.csv"`` (relative to the TOML; optional ``truth = { center = [..], radius = .. }``).
+
+Cache keys (``task_key``) hash the task and all code its row depends on (``experiments.codehash``).
 Methods (``[[methods]]``): ``id`` (or ``family.*``), fixed ``params``, optional ``grid``, ``max_n``
 (skip larger data sets) and ``on`` (only the data sets with these labels).
 
@@ -31,7 +35,7 @@ import numpy as np
 
 import datasets
 import methods
-from datasets.synthetic import GENERATORS, generate
+from datasets import sources
 from experiments.metrics import metrics
 from experiments.timing import time_call
 from methods import InvalidInputError
@@ -54,18 +58,35 @@ def _grid(fixed: dict, grid: dict, where: str) -> list[dict]:
     return [{**fixed, **dict(zip(keys, combo))} for combo in itertools.product(*(grid[k] for k in keys))] or [dict(fixed)]
 
 
+def _source_of(spec: dict) -> str:
+    """The registered data source of an expanded data set spec."""
+    if "published" in spec:
+        return "published"
+    if "file" in spec:
+        return "file"
+    return spec.get("source") or spec["generator"]
+
+
 def expand_datasets(cfg: dict, where: str) -> list[dict]:
-    """Data set specs: one per grid point of each [[datasets]] entry, with its index pair."""
+    """Data set specs: one per grid point of each [[datasets]] entry, with its index pair.
+
+    An entry names its source with exactly one of ``source = "NAME"`` (any registered source,
+    ``datasets.sources``), ``generator = "circle"`` (the same, kept for old configs), ``published = "set"``
+    (with optional ``variant``) or ``file = "path"`` (relative to the TOML; optional ``truth`` table)."""
+    sources.load_plugins()
+    base_dir = Path(cfg.get("_dir", "."))
     out = []
     for i, entry in enumerate(cfg.get("datasets", [])):
         here = f"{where} datasets[{i}]"
         if not isinstance(entry, dict):
-            raise ConfigError(f"{here}: each data set is a table with 'generator' or 'published', got {entry!r}")
-        unknown = set(entry) - {"generator", "published", "variant", "params", "grid", "label"}
+            raise ConfigError(f"{here}: each data set is a table with 'source', 'generator', 'published' or 'file', "
+                              f"got {entry!r}")
+        unknown = set(entry) - {"source", "generator", "published", "file", "truth", "variant", "params", "grid", "label"}
         if unknown:
             raise ConfigError(f"{here}: unknown key(s) {', '.join(sorted(unknown))}")
-        if ("generator" in entry) == ("published" in entry):
-            raise ConfigError(f"{here}: give exactly one of 'generator' and 'published'")
+        given = [k for k in ("source", "generator", "published", "file") if k in entry]
+        if len(given) != 1:
+            raise ConfigError(f"{here}: give exactly one of 'source', 'generator', 'published' and 'file'")
         if "published" in entry:
             name = entry["published"]
             if name not in datasets.list():
@@ -76,17 +97,39 @@ def expand_datasets(cfg: dict, where: str) -> list[dict]:
             out.append({"entry": i, "point": 0, "published": name, "variant": variant,
                         "label": entry.get("label", name + (f":{variant}" if variant else ""))})
             continue
-        gen = entry["generator"]
-        if gen not in GENERATORS:
-            raise ConfigError(f"{here}: unknown generator {gen!r}; known: {', '.join(GENERATORS)}")
-        allowed = set(inspect.signature(GENERATORS[gen]).parameters) - {"rng"}
+        if "file" in entry:
+            if not isinstance(entry["file"], str) or not entry["file"]:
+                raise ConfigError(f"{here}: file must be a path (relative to the TOML), got {entry['file']!r}")
+            path = (base_dir / entry["file"]).resolve()
+            if not path.is_file():
+                raise ConfigError(f"{here}: no data file {path} (file = {entry['file']!r} is relative to the TOML)")
+            truth = entry.get("truth")
+            if truth is not None and not isinstance(truth, dict):
+                raise ConfigError(f"{here}: truth must be a table (e.g. {{ center = [0, 0], radius = 1 }})")
+            spec = {"entry": i, "point": 0, "file": str(path), "label": entry.get("label", Path(entry["file"]).stem)}
+            if truth is not None:
+                spec["truth"] = truth
+            out.append(spec)
+            continue
+        gen = entry.get("source", entry.get("generator"))
+        try:
+            source = sources.get_source(gen)
+        except KeyError:
+            what = "generator" if "generator" in entry else "data source"
+            known = ", ".join(s.name for s in sources.list_sources() if s.name not in ("published", "file"))
+            raise ConfigError(f"{here}: unknown {what} {gen!r}; known: {known}") from None
+        if gen in ("published", "file"):
+            raise ConfigError(f"{here}: write {gen} = ... instead of source = {gen!r}")
+        allowed = set(source.parameters)
         fixed, grid = dict(entry.get("params", {})), dict(entry.get("grid", {}))
         bad = (set(fixed) | set(grid)) - allowed
         if bad:
-            raise ConfigError(f"{here}: generator {gen!r} has no parameter(s) {', '.join(sorted(bad))}; "
+            raise ConfigError(f"{here}: {'generator' if 'generator' in entry else 'data source'} {gen!r} has no parameter(s) {', '.join(sorted(bad))}; "
                               f"its parameters are: {', '.join(sorted(allowed))}")
+        key = "generator" if "generator" in entry else "source"
         for j, params in enumerate(_grid(fixed, grid, here)):
-            out.append({"entry": i, "point": j, "generator": gen, "params": params, "label": entry.get("label", gen)})
+            out.append({"entry": i, "point": j, key: gen, "params": params, "label": entry.get("label", gen),
+                        **({} if source.random else {"fixed": True})})
     return out
 
 
@@ -127,33 +170,34 @@ def expand_methods(cfg: dict, where: str) -> list[tuple[str, dict]]:
 
 # ---------------------------------------------------------------- cache keys
 
-_code_hashes: dict[str, str] = {}
+def task_code(task: dict) -> dict:
+    """Hashes of all code (and data files) a task's row depends on (see ``experiments.codehash``): the
+    method's module and its imports, the data source, the metrics and the study's own module."""
+    from experiments import codehash
+    study = f"experiments.studies.{task['kind']}"
+    method = methods.get(task["method"]).module if task["method"] in _method_ids() else None
+    return {"method": codehash.code_hash(method) if method else None,
+            "source": source_hash(task["dataset"]) if _has_source(task["dataset"]) else None,
+            "metrics": codehash.code_hash("experiments.metrics", "experiments.timing"),
+            "study": codehash.code_hash(study)}
 
 
-def code_hash(method_id: str) -> str:
-    """Hash of the code a method runs: its family package (or plugin module) and fitbench's core."""
-    module = methods.get(method_id).module
-    if module in _code_hashes:
-        return _code_hashes[module]
-    path = Path(inspect.getfile(importlib.import_module(module))).resolve()
-    builtin = REPO / "methods" in path.parents
-    files = sorted(path.parent.glob("*.py")) if builtin else [path]  # the family package, or the plugin
-    files += sorted((REPO / "methods").glob("_*.py"))
-    h = hashlib.sha256()
-    for f in files:
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
-    _code_hashes[module] = h.hexdigest()[:16]
-    return _code_hashes[module]
+def _has_source(spec: dict) -> bool:
+    """Specs built by a study's own ``tasks`` may carry no registered source (its code is the study's)."""
+    try:
+        sources.get_source(_source_of(spec))
+    except KeyError:
+        return False
+    return True
+
+
+def _method_ids() -> set[str]:
+    return {s.id for s in methods.list_methods()}
 
 
 def task_key(task: dict) -> str:
     ident = {k: task[k] for k in ("kind", "dataset", "stream", "seed", "method", "params", "timing")}
-    method = task["method"]
-    study = importlib.import_module(f"experiments.studies.{task['kind']}")
-    if hasattr(study, "task_key_method"):  # tasks whose 'method' is not a registry id name the code they run
-        method = study.task_key_method(task)
-    ident.update(code=code_hash(method), engine=ENGINE_VERSION,
+    ident.update(code=task_code(task), engine=ENGINE_VERSION,
                  extra={k: v for k, v in task.items() if k.startswith("x_")})
     return hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode()).hexdigest()[:24]
 
@@ -172,7 +216,7 @@ def grid_tasks(cfg: dict, where: str) -> list[dict]:
             raise ConfigError(f"{where}: timing has unknown key(s) {', '.join(sorted(bad))} (min_time_s, rounds)")
     tasks = []
     for spec in specs:
-        n_rep = 1 if "published" in spec else reps
+        n_rep = 1 if ("published" in spec or "file" in spec or spec.get("fixed")) else reps
         for r in range(n_rep):
             for m, extra in runs:
                 if extra["on"] is not None and spec["label"] not in extra["on"]:
@@ -189,14 +233,30 @@ def grid_tasks(cfg: dict, where: str) -> list[dict]:
 # ---------------------------------------------------------------- running one task (in a worker)
 
 def load_data(spec: dict, seed: int, stream: list[int]):
-    """Points and truth of a data set spec (synthetic data from its own seed stream)."""
+    """Data and truth of a data set spec, from its registered source (random sources draw from the
+    spec's own seed stream)."""
     if "published" in spec:
-        ds = datasets.load(spec["published"], drop_repeated_closing_point=spec.get("variant") == "drop_repeated_closing_point")
-        return ds.points, None
+        return sources.get_source("published").load(None, name=spec["published"], variant=spec.get("variant"))
     if "file" in spec:
-        return datasets.read_points(spec["file"]), spec.get("truth")
+        return sources.get_source("file").load(None, path=spec["file"], truth=spec.get("truth"))
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=tuple(stream)))
-    return generate(spec["generator"], rng, **spec["params"])
+    return sources.get_source(_source_of(spec)).load(rng, **spec["params"])
+
+
+def source_hash(spec: dict) -> str:
+    """Hash of a data set's source code (with its imports) and of the data files it reads."""
+    from experiments import codehash
+    source = sources.get_source(_source_of(spec))
+    parts = [codehash.code_hash(source.module)]
+    if source.files is not None:
+        if "published" in spec:
+            files = source.files(spec["published"], spec.get("variant"))
+        elif "file" in spec:
+            files = source.files(spec["file"])
+        else:
+            files = source.files(**spec["params"])
+        parts += [codehash.file_hash(str(f)) for f in files]
+    return ":".join(parts)
 
 
 def base_row(task: dict) -> dict:

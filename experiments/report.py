@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import base64
+import hashlib
 import html
 import json
 import re
@@ -20,17 +21,7 @@ import pandas as pd
 
 from experiments import config as configs
 from experiments.provenance import REPO, write_atomic
-
-#: the studies in reading order, by source paper
-SECTIONS = [
-    ("Roundness paper (Pınar & Güllü): least squares, minimum zone, MIC, MCC",
-     ["published", "nist_circle", "noise", "convergence", "scaling"]),
-    ("Circle/ellipse paper (Glavonjić): circular tests, ellipse fits", ["circular_test", "ellipse_angle"]),
-    ("Positioning paper (Kureková et al.): ISO 230-2 and the polynomial model", ["positioning"]),
-    ("Magnification paper (Ibaraki & Matsubara)", ["magnification"]),
-    ("Multilateration paper (Holub et al.): the four schemes, two better ones, the 21 errors", ["multilateration"]),
-]
-
+from methods import InvalidInputError
 
 # ---------------------------------------------------------------- tables
 
@@ -61,115 +52,7 @@ def md_table(df: pd.DataFrame, floatfmt: str = ".7g") -> str:
     return "\n".join(out)
 
 
-def study_tables(name: str, folder: Path, meta: dict) -> list[tuple[str, pd.DataFrame]]:
-    """The tables a reader wants from each study (captions first)."""
-    f = meta.get("findings", {})
-    out = []
-    if name == "published":
-        rows = [{"set": r["dataset"] + ("" if r["variant"] == "as published" else f" ({r['variant']})"),
-                 "column": r["column"], "published": r["published"], "reproduced": round(r["reproduced_value"], 7),
-                 "difference": round(r["difference"], 7),
-                 "explanation": "reproduced" if r["reproduced"] else
-                 (f"rounding of the printed coordinates: 99 % range {r['rounding_p0_5']:.6f}..{r['rounding_p99_5']:.6f}, "
-                  f"published at the {r['published_percentile']:.0f}th percentile" if r["explained_by_rounding"]
-                  else "NOT explained")}
-                for r in f.get("published_vs_reproduced", [])]
-        out.append(("Roundness paper, table 1: published against reproduced circularity [mm]", pd.DataFrame(rows)))
-    elif name == "nist_circle":
-        rows = [{"method": k, "max error [mm]": v["max_error"], "median error [mm]": v["median_error"],
-                 "sets > 1e-9": v["sets_over_1e-9"], "not converged": v["not_converged"]}
-                for k, v in f.get("summary", {}).items()]
-        out.append(("NIST Circle2d (30 sets): error against the reference least-squares circle", pd.DataFrame(rows)))
-    elif name == "noise":
-        t = pd.read_csv(folder / "kcr.csv")
-        t = t[(t["noise"] == t["noise"].max()) & (t["n"] == t["n"].max())]
-        piv = t.pivot_table(index="method", columns="arc_deg", values="radius_rmse_over_kcr", sort=False)
-        piv = piv[sorted(piv.columns, reverse=True)].reset_index()
-        piv.columns = ["method"] + [f"{c:.0f}° arc" for c in piv.columns[1:]]
-        out.append((f"Radius RMSE / KCR bound at sigma = {t['noise'].max():g} R, N = {t['n'].max()} (1 = the statistical limit)",
-                    piv.round(2)))
-    elif name == "convergence":
-        t = pd.read_csv(folder / "success.csv")
-        for arc, g in t.groupby("arc_deg", sort=False):
-            piv = g.pivot_table(index=["method", "params"], columns="start_distance", values="success_rate", sort=False)
-            piv.columns = [f"{c:g} R" for c in piv.columns]
-            piv = piv.reset_index()
-            piv["method"] = piv["method"] + piv["params"].map(lambda p: "" if p == "{}" else " " + p.replace('"', ""))
-            out.append((f"Convergence from distant starts ({arc:.0f}° arc): success rate by start distance",
-                        piv.drop(columns=["params"]).round(2)))
-    elif name == "scaling":
-        t = pd.read_csv(folder / "runtime_table.csv")
-        t = t.rename(columns={t.columns[0]: "method"})
-        for c in t.columns[1:-1]:
-            t[c] = (t[c] * 1e3).round(3)
-        t.columns = ["method"] + [f"N={int(float(c))} [ms]" for c in t.columns[1:-1]] + ["slope"]
-        out.append(("Median runtime per fit against N, and the log-log slope for N >= 1000", t.round(3)))
-    elif name == "ellipse_angle":
-        out.append(("Angle of a near-circle: RMS angle error [deg] against a - b, and the first-order prediction",
-                    pd.DataFrame(f.get("summary", [])).round(4)))
-    elif name == "circular_test":
-        iso = f.get("iso230_4", {})
-        pub = f.get("iso230_4_published_um", {})
-        rows = [{"figure": k, "synthetic scenario [um]": round(iso[k] * 1e3, 2), "published [um]": pub.get(k, "")}
-                for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation") if k in iso]
-        out.append(("ISO 230-4 figures of the synthetic LOLA HBG 130 test (the paper's measured data are not published)",
-                    pd.DataFrame(rows)))
-        dg, inj = f.get("diagnostics", {}), f.get("injected", {})
-        rows = [{"source": k, "estimate": round(v["value"], 3) if v["value"] is not None else "",
-                 "u": round(v["u"], 3) if v["u"] is not None else "", "unit": v["unit"],
-                 "injected": round(inj[k], 3) if k in inj else ""} for k, v in dg.items()]
-        out.append(("Diagnostics: error sources estimated from the two runs against the injected ones", pd.DataFrame(rows)))
-    elif name == "positioning":
-        t = pd.DataFrame(f.get("coverage", []))
-        if len(t):
-            t = t.rename(columns={"dataset": "scenario", "method": "band", "halfwidth_um": "half-width [um]",
-                                  "error_rms_um": "RMS error [um]"}).round(3)
-        out.append(("Coverage of the true deviation curve by the bands (1000 synthetic axes per scenario)", t))
-    elif name == "magnification":
-        df = pd.read_csv(folder / "results.csv")
-        df["cell"] = df.apply(lambda r: "skipped" if r["status"] != "ok" else f"{r['continuity']:.2f} / {int(r['loops'])}", axis=1)
-        piv = df.pivot_table(index="dataset", columns="method", values="cell", aggfunc="first", sort=False).reset_index()
-        out.append(("Continuity (about 1 or less: continuous) / loops of the magnified trajectories", piv))
-    elif name == "multilateration":
-        st = f.get("stations_table", {})
-        t = pd.DataFrame(st.get("rows", []))
-        if len(t):
-            t = t[t["method"] != "truth"][["method", "station", "dx_um", "dy_um", "dz_um", "dL_um"]].round(3)
-            out.append((f"Stations located by each scheme, one campaign ({st.get('scenario', '')}): difference from the "
-                        "truth [um] (the paper's tables 5-9; the joint adjustment in its gauge)", t))
-        acc = pd.DataFrame(f.get("accuracy", []))
-        if len(acc):
-            keep = ["dataset", "stations", "method", "runs", "station_error_um", "volumetric_error_rms_um",
-                    "aligned_error_rms_um", "model_error_rms_um", "kappa_stations", "kappa_stations_theorem1",
-                    "kappa_points", "kappa_points_theorem1"]
-            acc = acc[[c for c in keep if c in acc.columns]].rename(columns={
-                "dataset": "scenario", "stations": "stations are", "station_error_um": "station [um]",
-                "volumetric_error_rms_um": "vol. RMS [um]", "aligned_error_rms_um": "aligned RMS [um]",
-                "model_error_rms_um": "21-error map RMS [um]", "kappa_stations": "kappa st.",
-                "kappa_stations_theorem1": "Thm 1 st.", "kappa_points": "kappa pt.", "kappa_points_theorem1": "Thm 1 pt."})
-            for c in acc.columns[4:]:
-                acc[c] = acc[c].map(lambda v: "" if pd.isna(v) else f"{v:.3g}")
-            out.append(("Median over the Monte Carlo runs: largest station error, volumetric-error error (RMS, and after "
-                        "the best rigid alignment), error of the map from the 21 identified errors, condition numbers", acc))
-        out.append(("Most accurate scheme per scenario (median aligned RMS [um])", pd.DataFrame(f.get("winner", [])).round(3)))
-        r = pd.DataFrame(f.get("rounding", []))
-        if len(r):
-            for c in r.columns[2:]:
-                r[c] = r[c].map(lambda v: f"{v:.3g}")
-            out.append(("Exact lengths: what the published Case B's conditioning costs in double precision (its points "
-                        "against the centred solution of the same equations) and its error against the truth [um]", r))
-    return [(c, t) for c, t in out if t is not None and len(t)]
-
-
 # ---------------------------------------------------------------- figures
-
-def figure_files(folder: Path, meta: dict) -> list[Path]:
-    names = []
-    for key, value in meta.get("findings", {}).items():
-        if key in ("figure", "example") and isinstance(value, str):
-            names.append(value)
-    return [folder / n for n in names if (folder / n).exists()]
-
 
 def export_figure(png: Path, out_dir: Path, stem: str) -> tuple[Path, Path]:
     """Copy the PNG and write a PDF of it (for authors' own documents)."""
@@ -199,23 +82,109 @@ def _shown(path: Path) -> str:
         return str(path)
 
 
-def study_status(folder: Path) -> tuple[str, dict | None]:
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+class BrokenStudy(Exception):
+    """A study folder the report cannot use; the message says why."""
+
+
+def _read_json(path: Path) -> dict:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise BrokenStudy(f"{path.name} is unreadable ({type(exc).__name__}: {exc})") from None
+    if not isinstance(data, dict):
+        raise BrokenStudy(f"{path.name} is not a JSON object")
+    return data
+
+
+def is_study_folder(folder: Path) -> bool:
+    """A folder the runner wrote (not, e.g., a paper/ build under the same --out)."""
+    return folder.is_dir() and any((folder / f).exists() for f in ("meta.json", "results.csv", "rows.sqlite"))
+
+
+def load_study(folder: Path) -> tuple[dict, dict]:
+    """(meta, manifest) of a finished study; BrokenStudy says what is wrong."""
     if not (folder / "meta.json").exists() or not (folder / "results.csv").exists():
-        return "missing", None
-    meta = json.loads((folder / "meta.json").read_text())
-    counts = meta.get("status_counts", {})
-    if counts.get("error"):
-        return f"failed rows: {counts['error']} of {meta.get('n_rows')}", meta
-    return "ok", meta
+        raise BrokenStudy("unfinished: no meta.json or results.csv (the run was interrupted; run it again)")
+    meta = _read_json(folder / "meta.json")
+    try:
+        with open(folder / "results.csv", "rb") as fh:
+            digest = hashlib.sha256(fh.read()).hexdigest()
+    except OSError as exc:
+        raise BrokenStudy(f"results.csv is unreadable ({exc})") from None
+    if meta.get("results_sha256") and meta["results_sha256"] != digest:
+        raise BrokenStudy("results.csv does not match meta.json (truncated or edited after the run)")
+    if not (folder / "report.json").exists():
+        raise BrokenStudy("no report.json (written by an older runner; run the study again)")
+    return meta, _read_json(folder / "report.json")
 
 
-def build(results: Path, out: Path, log=print) -> Path:
+def _figure_path(folder: Path, name) -> Path:
+    """A declared figure, confined to the study folder, checked to be a PNG."""
+    if not isinstance(name, str):
+        raise BrokenStudy(f"figure entry {name!r} is not a file name")
+    path = (folder / name).resolve()
+    if folder.resolve() not in path.parents:
+        raise BrokenStudy(f"figure {name!r} lies outside the study folder")
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(8)
+    except OSError:
+        raise BrokenStudy(f"figure {name!r} is missing") from None
+    if head != PNG_MAGIC:
+        raise BrokenStudy(f"figure {name!r} is not a PNG")
+    return path
+
+
+def _anchor(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-")
+
+
+def _clear_previous_build(out: Path) -> None:
+    """Tables and figures of an earlier build never mix with this one."""
+    for sub, patterns in (("tables", ("*.tex",)), ("figures", ("*.png", "*.pdf"))):
+        for pattern in patterns:
+            for p in (out / sub).glob(pattern) if (out / sub).is_dir() else []:
+                p.unlink()
+    for p in out.glob(".*.tmp"):
+        p.unlink()
+
+
+def build(results: Path, out: Path, log=print, *, render_latex=latex_table, render_md=md_table) -> Path:
+    """Build the report from every study folder in ``results`` and every default study (missing ones
+    are shown as missing). ``render_latex``/``render_md`` render one table (swap in another renderer)."""
     out.mkdir(parents=True, exist_ok=True)
     (out / "tables").mkdir(exist_ok=True)
-    known = {n: configs.load(n) for n in configs.available()}
-    present = {p.name for p in results.iterdir() if p.is_dir()} if results.exists() else set()
-    listed = [s for _, studies in SECTIONS for s in studies]
-    extra = sorted(present - set(listed))
+    _clear_previous_build(out)
+    known = {}
+    for n in configs.available():
+        try:
+            known[n] = configs.load(n)
+        except InvalidInputError:
+            continue
+    present = sorted(p.name for p in results.iterdir() if is_study_folder(p)) if results.exists() else []
+    names = present + [n for n, c in known.items() if c.get("default") and n not in present]
+    entries = []  # (section, order, name, title, meta | None, manifest | None, problem | None)
+    for name in names:
+        cfg = known.get(name, {})
+        problem, meta, manifest = None, None, None
+        if name not in present:
+            problem = "missing"
+        else:
+            try:
+                meta, manifest = load_study(results / name)
+            except BrokenStudy as exc:
+                problem = str(exc)
+        decl = manifest or {**cfg.get("report", {}), "title": cfg.get("title", name)}
+        entries.append((decl.get("section", "Other studies"), decl.get("order", 1000), name,
+                        decl.get("title", name), meta, manifest, problem))
+    section_order = {}
+    for sec, order, name, *_ in sorted(entries, key=lambda e: (e[1], e[2])):
+        section_order.setdefault(sec, len(section_order))
+    entries.sort(key=lambda e: (section_order[e[0]], e[1], e[2]))
+
     md = ["# fitbench: comparison report", "",
           f"Built from `{_shown(results)}` by `python -m experiments.report`; reproduce everything with "
           "`python -m experiments.run` (the default studies) and "
@@ -224,35 +193,67 @@ def build(results: Path, out: Path, log=print) -> Path:
     from experiments.verify import verdict_markdown
     md += verdict_markdown(results) + [""]
     # --- end of hook
-    html_parts = []
+    if any(e[4] and e[4].get("quick") for e in entries):
+        md += ["**Note:** studies marked *quick run* ran the reduced `--quick` grid; their numbers are not the "
+               "published comparison.", ""]
+    md += ["## Contents", ""]
+    for sec in section_order:
+        md.append(f"- [{sec}](#{_anchor(sec)})")
+        md += [f"  - [{e[3]}](#study-{_anchor(e[2])})" for e in entries if e[0] == sec]
+    md.append("")
     provenance = None
-    for title, studies in SECTIONS + ([("Other studies", extra)] if extra else []):
-        md += [f"## {title}", ""]
-        if not studies:
-            md += ["*No study yet: this part of the framework is not built (see the issue tracker).*", ""]
-            continue
-        for name in studies:
-            cfg_title = known.get(name, {}).get("title", name)
-            status, meta = study_status(results / name)
-            md += [f"### {cfg_title} (`{name}`)", ""]
-            if meta is None:
+    n_table = n_figure = 0
+    for sec in section_order:
+        md += [f"## {sec} {{#{_anchor(sec)}}}", ""]
+        for sec_, _, name, title, meta, manifest, problem in entries:
+            if sec_ != sec:
+                continue
+            md += [f"### {title} (`{name}`) {{#study-{_anchor(name)}}}", ""]
+            if problem == "missing":
                 default = known.get(name, {}).get("default", False)
                 md += [f"**Missing**: no results in `{_shown(results / name)}`. Run `python -m experiments.run {name}`"
                        + ("" if default else " (not a default study)") + ".", ""]
                 continue
+            if problem:
+                md += [f"**Broken**: {problem}.", ""]
+                continue
             provenance = provenance or meta
-            if status != "ok":
-                md += [f"**{status}**: the table below holds what ran; the failed rows are in `results.csv`.", ""]
-            md += [f"{meta.get('n_rows')} rows; commit `{(meta.get('git_commit') or '?')[:10]}`"
-                   f"{' (dirty)' if meta.get('git_dirty') else ''}, {meta.get('date')}, config hash `{meta.get('config_hash')}`.", ""]
-            for k, (caption, table) in enumerate(study_tables(name, results / name, meta)):
-                label = f"{name}-{k + 1}"
-                write_atomic(out / "tables" / f"{label}.tex", latex_table(table, caption, label))
-                md += [f"*Table {label}: {caption}*", "", md_table(table), ""]
-            for k, png in enumerate(figure_files(results / name, meta)):
-                stem = f"{name}-{png.stem}"
-                dst_png, _ = export_figure(png, out / "figures", stem)
-                md += [f"![{name}: {png.stem}](figures/{dst_png.name})", ""]
+            counts = meta.get("status_counts", {}) if isinstance(meta.get("status_counts"), dict) else {}
+            if counts.get("error"):
+                md += [f"**failed rows: {counts['error']} of {meta.get('n_rows')}**: the tables below hold what ran; "
+                       "the failed rows are in `results.csv`.", ""]
+            plugins = meta.get("plugins") or {}
+            md += [f"{meta.get('n_rows')} rows{'; *quick run* (reduced grid)' if meta.get('quick') else ''}; "
+                   f"commit `{(meta.get('git_commit') or '?')[:10]}`"
+                   f"{' (dirty)' if meta.get('git_dirty') else ''}, {meta.get('date')}, config hash `{meta.get('config_hash')}`"
+                   + (f"; plugins: {', '.join(f'{k} {v}' for k, v in plugins.items())}" if plugins else "") + ".", ""]
+            if manifest.get("findings"):
+                md += [f"**Findings.** {manifest['findings']}", ""]
+            for t in manifest.get("tables", []):
+                try:
+                    path = (results / name / t["file"]).resolve()
+                    if (results / name).resolve() not in path.parents:
+                        raise BrokenStudy(f"table {t['file']!r} lies outside the study folder")
+                    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+                except (OSError, ValueError, KeyError, TypeError, BrokenStudy, pd.errors.ParserError) as exc:
+                    md += [f"**Broken table**: {exc}.", ""]
+                    continue
+                n_table += 1
+                caption = str(t.get("caption", "")).rstrip()
+                if t.get("unit"):
+                    caption += ("" if caption.endswith(".") else ".") + f" Unit: {t['unit']}."
+                fmt = f".{int(t.get('digits', 7))}g"
+                write_atomic(out / "tables" / f"table-{n_table}.tex", render_latex(table, caption, f"table-{n_table}", fmt))
+                md += [f"*Table {n_table}: {caption}*", "", render_md(table, fmt), ""]
+            for f in manifest.get("figures", []):
+                try:
+                    png = _figure_path(results / name, f.get("file") if isinstance(f, dict) else None)
+                except BrokenStudy as exc:
+                    md += [f"**Broken figure**: {exc}.", ""]
+                    continue
+                n_figure += 1
+                dst_png, _ = export_figure(png, out / "figures", f"figure-{n_figure}")
+                md += [f"![Figure {n_figure}: {f.get('caption', '')}](figures/{dst_png.name})", ""]
     if provenance:
         v = provenance.get("versions", {})
         md += ["## Provenance", "",
@@ -263,8 +264,7 @@ def build(results: Path, out: Path, log=print) -> Path:
     text = "\n".join(md)
     write_atomic(out / "report.md", text)
     write_atomic(out / "report.html", to_html(text, out))
-    log(f"report: {out / 'report.md'}, {out / 'report.html'}, {len(list((out / 'tables').glob('*.tex')))} LaTeX tables, "
-        f"{len(list((out / 'figures').glob('*.png'))) if (out / 'figures').exists() else 0} figures")
+    log(f"report: {out / 'report.md'}, {out / 'report.html'}, {n_table} tables, {n_figure} figures")
     return out
 
 
@@ -276,7 +276,8 @@ def to_html(markdown: str, out: Path) -> str:
         s = html.escape(s)
         s = re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", s)
         s = re.sub(r"\*(.+?)\*", r"<em>\1</em>", s)
-        return re.sub(r"`(.+?)`", r"<code>\1</code>", s)
+        s = re.sub(r"`(.+?)`", r"<code>\1</code>", s)
+        return re.sub(r"\[(.+?)\]\((#[\w-]+)\)", r'<a href="\2">\1</a>', s)
 
     def flush():
         if table:
@@ -295,7 +296,12 @@ def to_html(markdown: str, out: Path) -> str:
         m = re.match(r"!\[(.*?)\]\((.*?)\)", line)
         if line.startswith("#"):
             level = len(line) - len(line.lstrip("#"))
-            body.append(f"<h{level}>{inline(line[level:].strip())}</h{level}>")
+            head = re.match(r"(.*?)\s*\{#([\w-]+)\}$", line[level:].strip())
+            text, ident = (head.group(1), head.group(2)) if head else (line[level:].strip(), "")
+            body.append(f"<h{level}" + (f' id="{ident}"' if ident else "") + f">{inline(text)}</h{level}>")
+        elif line.lstrip().startswith("- "):
+            indent = len(line) - len(line.lstrip())
+            body.append(f'<div style="margin-left:{indent}em">&bull; {inline(line.strip()[2:])}</div>')
         elif m:
             data = base64.b64encode((out / m.group(2)).read_bytes()).decode()
             body.append(f'<figure><img alt="{html.escape(m.group(1))}" src="data:image/png;base64,{data}">'
@@ -318,8 +324,10 @@ def main(argv=None) -> int:
     from experiments.verify import _version  # --version (engine)
     parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {_version()})")
     parser.add_argument("--results", type=Path, default=REPO / "results")
-    parser.add_argument("--out", type=Path, default=REPO / "paper")
+    parser.add_argument("--out", type=Path, help="default: paper/ beside the results folder")
     args = parser.parse_args(argv)
+    if args.out is None:
+        args.out = args.results.resolve().parent / "paper"
     if not args.results.is_dir():
         print(f"experiments.report: error: no results folder {args.results}; run python -m experiments.run first",
               file=sys.stderr)

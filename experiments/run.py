@@ -10,6 +10,7 @@ is rebuilt (``paper/`` for the default ``results/``, else ``OUT/paper``; ``pytho
 from __future__ import annotations
 
 import argparse
+import hashlib
 import importlib
 import io
 import json
@@ -24,8 +25,11 @@ import pandas as pd
 
 from experiments import config as configs
 from experiments import engine
+from experiments import study as contract
+from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
 from experiments.summary import summarise, to_markdown
+import methods
 from methods import InvalidInputError
 
 
@@ -66,6 +70,28 @@ def check_summary_by(cfg: dict, study, tasks: list[dict]) -> None:
                                   f"the rows have: {', '.join(sorted(known))}")
 
 
+def summary_columns(cfg: dict, df) -> list[str]:
+    """The summary's grouping: the study's ``summary_by``, else the data set, its parameters, the method
+    and its parameters — never the per-repetition data stream (a summary averages over repetitions)."""
+    default = ["dataset"] + [c for c in df.columns if c.startswith("data_") and c != "data_stream"] + ["method", "params"]
+    return [c for c in cfg.get("summary_by", default) if c not in ("data_stream", "repetition")]
+
+
+def plugin_distributions(tasks: list[dict]) -> dict[str, str]:
+    """{distribution: version} of every plugin method or data source the study's tasks use."""
+    from datasets import sources
+    from experiments.codehash import distributions_of
+    mods = set()
+    for t in tasks:
+        if t["method"] in {s.id for s in methods.list_methods()}:
+            mods.add(methods.get(t["method"]).module)
+        try:
+            mods.add(sources.get_source(engine._source_of(t["dataset"])).module)
+        except KeyError:
+            pass
+    return distributions_of(sorted(mods))
+
+
 def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", scheduler=None, force=False,
               seed=None, log=print, max_rows=configs.MAX_ROWS) -> Path:
     cfg = configs.load(name, quick=quick, seed=seed)
@@ -86,25 +112,31 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     finally:
         store.close()
     df = pd.DataFrame(rows).sort_values("task_index").drop(columns=["task_index"]).reset_index(drop=True)
-    findings = study.finalize(df, cfg, target, log) if hasattr(study, "finalize") else {}
+    remove_leftover_tmp(target)
+    buf = io.StringIO()
+    df.to_csv(buf, index=False, float_format="%.17g")
+    write_atomic(target / "results.csv", buf.getvalue())
+    results_sha256 = hashlib.sha256(buf.getvalue().encode("utf-8")).hexdigest()
+    t0 = time.perf_counter()
+    log("   analysis, tables and figures ...")
+    findings, analysis = contract.analyse(study, df, cfg, target, log)
+    log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
     if cfg.get("summary_by") and set(cfg["summary_by"]) - set(df.columns):
         raise configs.ConfigError(f"{cfg['_where']}: summary_by: no row has the column(s) "
                                   f"{', '.join(sorted(set(cfg['summary_by']) - set(df.columns)))}; "
                                   f"the rows have: {', '.join(df.columns)}")
-    by = cfg.get("summary_by", ["dataset"] + [c for c in df.columns if c.startswith("data_")] + ["method", "params"])
-    summary = summarise(df, by)
+    summary = summarise(df, summary_columns(cfg, df))
     public_cfg = {k: v for k, v in cfg.items() if not k.startswith("_")}
     meta = {**collect(public_cfg), "study": cfg["name"], "quick": quick, "executor": executor, "jobs": jobs,
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
-            "findings": findings}
-    buf = io.StringIO()
-    df.to_csv(buf, index=False, float_format="%.17g")
-    write_atomic(target / "results.csv", buf.getvalue())
+            "plugins": plugin_distributions(tasks), "results_sha256": results_sha256, "findings": findings}
+    contract.write_manifest(target, cfg, analysis, summary)
     buf = io.StringIO()
     summary.to_csv(buf, index=False, float_format="%.10g")
     write_atomic(target / "summary.csv", buf.getvalue())
     write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary))
     write_atomic(target / "meta.json", json.dumps(meta, indent=1, default=str) + "\n")
+    remove_leftover_tmp(target)
     bad = {k: v for k, v in meta["status_counts"].items() if k != "ok"}
     log(f"-> {target}/results.csv ({len(df)} rows" + (f"; {bad}" if bad else "") +
         f", {counts['wall_s']:.1f} s), summary.csv, summary.md, meta.json")
@@ -200,7 +232,10 @@ def main(argv=None) -> int:
         print(f"done: {len(names)} studies in {time.perf_counter() - t0:.0f} s")
         from experiments.report import build
         paper = Path("paper") if args.out == DEFAULT_OUT else args.out / "paper"
+        t1 = time.perf_counter()
+        print("report ...")
         build(args.out, paper)
+        print(f"report done ({time.perf_counter() - t1:.0f} s)")
     except InvalidInputError as exc:
         print(f"experiments.run: error: {exc}", file=sys.stderr)
         return 2

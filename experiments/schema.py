@@ -29,6 +29,9 @@ DATASET_SOURCES: dict[str, dict] = {
     "generator": {"generator": {"type": "string"}, "params": _PARAMS, "grid": _GRID, "label": {"type": "string"}},
     "published": {"published": {"type": "string"},
                   "variant": {"enum": ["drop_repeated_closing_point"]}, "label": {"type": "string"}},
+    "source": {"source": {"type": "string"}, "params": _PARAMS, "grid": _GRID, "label": {"type": "string"}},
+    "file": {"file": {"type": "string", "minLength": 1, "description": "a points file, relative to the TOML"},
+             "truth": {"type": "object"}, "label": {"type": "string"}},
 }
 
 _METHOD_ENTRY = {
@@ -59,6 +62,29 @@ TOP_LEVEL: dict[str, dict] = {
                "properties": {"min_time_s": {"type": "number", "exclusiveMinimum": 0},
                               "rounds": _POSITIVE_INT}},
     "quick": {"type": "object"},  # checked as overrides: see config_schema()
+    # the report contract (experiments/study.py): the section, the declared tables and figures
+    "report": {"type": "object", "additionalProperties": False,
+               "properties": {"section": {"type": "string", "minLength": 1}, "order": {"type": "integer"},
+                              "findings": {"type": "string"}}},
+    "tables": {"type": "array", "items": {
+        "type": "object", "required": ["caption", "rows", "values"], "additionalProperties": False,
+        "properties": {"caption": {"type": "string", "minLength": 1},
+                       "rows": {"anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}],
+                                "description": "a column name or a list of them"},
+                       "values": {"anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}],
+                                  "description": "a column name or a list of them"},
+                       "columns": {"type": "string"},
+                       "aggregate": {"enum": ["mean", "median", "max", "min", "std", "count", "rmse", "ok_share"]},
+                       "unit": {"type": "string"}, "digits": {"type": "integer", "minimum": 0},
+                       "where": {"type": "object"}}}},
+    "figures": {"type": "array", "items": {
+        "type": "object", "required": ["caption"], "additionalProperties": False,
+        "properties": {"caption": {"type": "string", "minLength": 1}, "plot": {"type": "string"},
+                       "file": {"type": "string"}, "x": {"type": "string"}, "y": {"type": "string"},
+                       "by": {"type": "string"}, "aggregate": {"type": "string"}, "logx": {"type": "boolean"},
+                       "logy": {"type": "boolean"}, "xlabel": {"type": "string"}, "ylabel": {"type": "string"},
+                       "args": {"type": "object"}, "width": {"type": "number", "exclusiveMinimum": 0},
+                       "height": {"type": "number", "exclusiveMinimum": 0}, "where": {"type": "object"}}}},
     # study-specific keys (their study module's validate() checks the values)
     "rounding": {"type": "object", "properties": {"samples": _POSITIVE_INT}},
     "paths": {"type": "array", "items": {"enum": ["both", "cw", "ccw"]}, "minItems": 1},

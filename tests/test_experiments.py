@@ -244,8 +244,13 @@ def test_quick_published_study(tmp_path):
 def test_quick_default_studies_run(tmp_path, name):
     target = run_study(name, tmp_path, quick=True, jobs=2, log=lambda *a: None)
     meta = json.loads((target / "meta.json").read_text())
-    assert meta["n_rows"] > 0 and meta["findings"]
-    assert (target / meta["findings"]["figure"]).stat().st_size > 10_000
+    assert meta["n_rows"] > 0 and meta["findings"] and meta["quick"] is True
+    manifest = json.loads((target / "report.json").read_text())  # what the report renders (the study contract)
+    assert manifest["tables"] and manifest["figures"] and manifest["quick"] is True
+    for t in manifest["tables"]:
+        assert len(pd.read_csv(target / t["file"])) > 0 and t["caption"]
+    for f in manifest["figures"]:
+        assert (target / f["file"]).stat().st_size > 10_000 and f["caption"]
 
 
 def test_workers_get_one_blas_thread_and_the_environment_is_restored(monkeypatch):

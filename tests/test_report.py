@@ -23,7 +23,33 @@ def built(tmp_path_factory):
     meta = json.loads((results / "broken_study" / "meta.json").read_text())
     meta["status_counts"] = {"ok": 3, "error": 2}
     (results / "broken_study" / "meta.json").write_text(json.dumps(meta))
-    return build(results, root / "paper", log=lambda *a: None)
+    # a study whose meta.json is a JSON list, and one whose declared figures escape its folder or are no PNG
+    shutil.copytree(results / "published", results / "list_meta")
+    (results / "list_meta" / "meta.json").write_text("[1, 2]")
+    shutil.copytree(results / "published", results / "bad_figures")
+    manifest = json.loads((results / "bad_figures" / "report.json").read_text())
+    (results / "bad_figures" / "fake.png").write_text("not a png")
+    manifest["figures"] = [{"caption": "escapes", "file": "../magnification/magnification.png"},
+                           {"caption": "fake", "file": "fake.png"}]
+    (results / "bad_figures" / "report.json").write_text(json.dumps(manifest))
+    (results / "paper").mkdir()  # an earlier build under --out: not a study
+    (results / "paper" / "report.md").write_text("old")
+    paper = root / "paper"
+    (paper / "tables").mkdir(parents=True)
+    (paper / "tables" / "table-99.tex").write_text("an earlier build")
+    (results / "leftover").mkdir()
+    return build(results, paper, log=lambda *a: None)
+
+
+def test_broken_studies_shown_with_reason_rest_built(built):
+    md = (built / "report.md").read_text()
+    assert "(`list_meta`)" in md and "**Broken**: meta.json is not a JSON object" in md
+    section = md.split("(`bad_figures`)")[1].split("### ")[0]
+    assert "**Broken figure**: figure '../magnification/magnification.png' lies outside the study folder" in section
+    assert "**Broken figure**: figure 'fake.png' is not a PNG" in section and "*Table " in section
+    assert "(`paper`)" not in md and "(`leftover`)" not in md  # folders that are not studies
+    assert not (built / "tables" / "table-99.tex").exists()  # never mix builds
+    assert len(list(built.glob("tables/*.tex"))) == md.count("*Table ")
 
 
 def test_sections_tables_figures(built):
@@ -31,7 +57,7 @@ def test_sections_tables_figures(built):
     assert md.startswith("# fitbench: comparison report")
     for section in ("Roundness paper", "Circle/ellipse paper", "Positioning paper", "Magnification paper"):
         assert f"## {section}" in md
-    assert "*Table published-1:" in md and "| roundness_set2 | MIC | 1.7287 |" in md
+    assert "*Table 1:" in md and "| roundness_set2 | MIC | 1.7287 |" in md
     for name in ("published", "magnification", "ellipse_angle"):  # a table and a figure per study
         section = md.split(f"(`{name}`)")[1].split("### ")[0]
         assert "*Table " in section and "![" in section, name

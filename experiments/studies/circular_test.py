@@ -15,6 +15,8 @@ import methods
 from datasets.circular_test import circular_test, lola_hbg130
 from experiments import engine
 from experiments.engine import ConfigError
+from experiments.study import atomic_path
+from experiments.provenance import write_atomic
 
 PAPER = {  # tables 1-5 (centres in um about the nominal centre, radii and axes in mm, angles in deg)
     "circle.powell_hybrid": {"both": (-11.84, 9.81, 299.0132), "cw": (-11.67, 9.50, 299.0131), "ccw": (-12.00, 10.11, 299.0134)},
@@ -129,10 +131,31 @@ def finalize(df, cfg, target, log):
                  ", ".join(f"{k} {v:g}" for k, v in injected.items()))
     for line in lines:
         log(line)
-    polar_plot(cw, ccw, ev, target / "polar.png", title="LOLA HBG 130 (synthetic scenario)")
-    (target / "tables.txt").write_text("\n".join(lines) + "\n")
+    with atomic_path(target / "polar.png") as tmp:
+        polar_plot(cw, ccw, ev, tmp, title="LOLA HBG 130 (synthetic scenario)")
+    write_atomic(target / "tables.txt", "\n".join(lines) + "\n")
     return {"figure": "polar.png", "tables": "tables.txt",
             "iso230_4": {k: ev[k] for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation")},
             "iso230_4_published_um": PAPER_ISO,
             "diagnostics": {k: v for k, v in dg.items() if not k.startswith("_")}, "injected": injected,
             "truth_ellipse": {"semi_axes": truth["semi_axes"], "angle_deg": float(np.degrees(truth["angle"]))}}
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    iso = f.get("iso230_4", {})
+    pub = f.get("iso230_4_published_um", {})
+    rows = [{"figure": k, "synthetic scenario [um]": round(iso[k] * 1e3, 2), "published [um]": pub.get(k, "")}
+            for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation") if k in iso]
+    out.append(("ISO 230-4 figures of the synthetic LOLA HBG 130 test (the paper's measured data are not published)",
+                pd.DataFrame(rows)))
+    dg, inj = f.get("diagnostics", {}), f.get("injected", {})
+    rows = [{"source": k, "estimate": round(v["value"], 3) if v["value"] is not None else "",
+             "u": round(v["u"], 3) if v["u"] is not None else "", "unit": v["unit"],
+             "injected": round(inj[k], 3) if k in inj else ""} for k, v in dg.items()]
+    out.append(("Diagnostics: error sources estimated from the two runs against the injected ones", pd.DataFrame(rows)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

@@ -13,6 +13,7 @@ import pandas as pd
 import methods
 from experiments import engine
 from experiments.engine import ConfigError
+from experiments.study import save_csv, save_figure
 
 
 def validate(cfg, where):
@@ -84,7 +85,7 @@ def finalize(df, cfg, target, log):
                      "iterations_median": float(ok["iterations"].median()) if len(ok) and ok["iterations"].notna().any() else np.nan,
                      "nfev_median": float(ok["nfev"].median()) if len(ok) else np.nan})
     table = pd.DataFrame(rows)
-    table.to_csv(target / "success.csv", index=False, float_format="%.4g")
+    save_csv(table, target / "success.csv", index=False, float_format="%.4g")
     log("  success rate by start distance (radii):")
     for arc, ta in table.groupby("arc_deg", sort=False):
         piv = ta.pivot_table(index=["method", "params"], columns="start_distance", values="success_rate", sort=False)
@@ -115,5 +116,22 @@ def figure(table, target):
     axes[0, 0].set_ylabel("success rate (curves offset by ±0.03 for visibility)")
     axes[0, -1].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(target / "convergence.png", dpi=110)
+    save_figure(fig, target / "convergence.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    t = pd.read_csv(folder / "success.csv")
+    for arc, g in t.groupby("arc_deg", sort=False):
+        piv = g.pivot_table(index=["method", "params"], columns="start_distance", values="success_rate", sort=False)
+        piv.columns = [f"{c:g} R" for c in piv.columns]
+        piv = piv.reset_index()
+        piv["method"] = piv["method"] + piv["params"].map(lambda p: "" if p == "{}" else " " + p.replace('"', ""))
+        out.append((f"Convergence from distant starts ({arc:.0f}° arc): success rate by start distance",
+                    piv.drop(columns=["params"]).round(2)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

@@ -14,6 +14,7 @@ import numpy as np
 from datasets.synthetic import ellipse_points
 from methods.ellipse._geometry import orthogonal_residuals
 from methods.ellipse.orthogonal import distance_jacobian
+from experiments.study import save_figure
 
 
 def predicted_angle_sd(points, p, sigma):
@@ -60,5 +61,16 @@ def figure(summary, target, sigma, n, _):
     ax.legend(fontsize=8)
     fig.tight_layout()
     target.mkdir(parents=True, exist_ok=True)
-    fig.savefig(target / "angle_conditioning.png", dpi=120)
+    save_figure(fig, target / "angle_conditioning.png", dpi=120)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    out.append(("Angle of a near-circle: RMS angle error [deg] against a - b, and the first-order prediction",
+                pd.DataFrame(f.get("summary", [])).round(4)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

@@ -9,6 +9,7 @@ import methods
 from datasets.contouring import EXAMPLES
 from experiments.engine import ConfigError
 from methods.magnify import MagnifyInput
+from experiments.study import save_csv, save_figure
 
 VARIANTS = {  # label -> (method, selection, delta rule)
     "nearest (conventional)": ("magnify.nearest", None, None),
@@ -33,10 +34,6 @@ def tasks(cfg):
                         "repetition": 0, "stream": [i, 0, 0], "seed": cfg["seed"], "method": label, "params": {},
                         "timing": None, "x_eta": float(eta)})
     return out
-
-
-def task_key_method(task):
-    return "magnify.offset"
 
 
 def run_variant(name, label, eta):
@@ -67,7 +64,7 @@ def execute(task):
 
 def finalize(df, cfg, target, log):
     table = df.pivot_table(index="dataset", columns="method", values=["continuity", "loops"], sort=False)
-    table.to_csv(target / "metrics.csv", float_format="%.4g")
+    save_csv(table, target / "metrics.csv", float_format="%.4g")
     labels = list(VARIANTS)
     log("  continuity (<= ~1: continuous) / loops, per example and algorithm:")
     log("  " + f"{'example':<26}" + "".join(f"{lab[:22]:>24}" for lab in labels))
@@ -105,5 +102,18 @@ def figures(cfg, target):
             ax.set_title(f"{name}: {label}\ncontinuity {res.extra['continuity']:.2f}, loops {res.extra['self_intersections']}",
                          fontsize=8)
     fig.tight_layout()
-    fig.savefig(target / "magnification.png", dpi=110)
+    save_figure(fig, target / "magnification.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    df = pd.read_csv(folder / "results.csv")
+    df["cell"] = df.apply(lambda r: "skipped" if r["status"] != "ok" else f"{r['continuity']:.2f} / {int(r['loops'])}", axis=1)
+    piv = df.pivot_table(index="dataset", columns="method", values="cell", aggfunc="first", sort=False).reset_index()
+    out.append(("Continuity (about 1 or less: continuous) / loops of the magnified trajectories", piv))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

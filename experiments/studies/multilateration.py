@@ -9,9 +9,7 @@ of the 21 geometric errors identified from the volumetric errors, runtime.
 """
 from __future__ import annotations
 
-import hashlib
 import time
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -21,10 +19,10 @@ from datasets import multilateration as sim
 from experiments.engine import ConfigError
 from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_matrix, identify
 from methods.multilateration.solvers import kabsch
+from experiments.study import save_csv, save_figure
 
 SCENARIO_KEYS = {"stations", "noise", "errors", "grid"}
 MODES = ("located", "known")
-_SIM_HASH = hashlib.sha256(Path(sim.__file__).read_bytes()).hexdigest()[:16]
 
 
 def validate(cfg, where):
@@ -62,7 +60,7 @@ def tasks(cfg):
                                                                                       "params": s["params"]},
                                 "repetition": r, "stream": [i, 0, r], "seed": cfg["seed"],
                                 "method": f"multilateration.{m}", "params": {}, "timing": None,
-                                "x_mode": mode, "x_simulator": _SIM_HASH})
+                                "x_mode": mode})
     return out
 
 
@@ -82,7 +80,8 @@ def execute(task):
     t0 = time.perf_counter()
     res = methods.fit(task["method"], data)
     row["runtime_s"] = time.perf_counter() - t0
-    row.update(status="ok", message="" if res.converged else res.message, converged=res.converged)
+    row.update(status="ok" if res.converged else "not converged", message="" if res.converged else res.message,
+               converged=res.converged)
     row.update(metrics(res, data, truth, mode))
     return row
 
@@ -136,7 +135,7 @@ def finalize(df, cfg, target, log):
     cols = [c for c in cols if c in ok.columns]
     acc = ok.groupby(["dataset", "stations", "method"], sort=False)[cols].median().reset_index()
     acc.insert(3, "runs", ok.groupby(["dataset", "stations", "method"], sort=False).size().to_numpy())
-    acc.to_csv(target / "accuracy.csv", index=False, float_format="%.6g")
+    save_csv(acc, target / "accuracy.csv", index=False, float_format="%.6g")
     log(f"  {'scenario':<62} {'stations':<8} {'method':<16} {'station um':>10} {'vol RMS um':>10} {'aligned':>8} "
         f"{'kappa st':>9} {'kappa pt':>9}")
     for r in acc.itertuples():
@@ -184,7 +183,7 @@ def stations_table(cfg, target):
         rows.append({"method": "truth", "station": sid, "x": st[0], "y": st[1], "z": st[2], "L": st[3],
                      "dx_um": 0.0, "dy_um": 0.0, "dz_um": 0.0, "dL_um": 0.0})
     table = pd.DataFrame(rows)
-    table.to_csv(target / "stations_table.csv", index=False, float_format="%.6f")
+    save_csv(table, target / "stations_table.csv", index=False, float_format="%.6f")
     return {"scenario": s["label"], "rows": table.to_dict(orient="records")}
 
 
@@ -258,7 +257,7 @@ def figure_axis_line(cfg, target):
     axes[0].legend(fontsize=7)
     fig.suptitle(f"{s['label']}: stations located by each scheme", fontsize=9)
     fig.tight_layout()
-    fig.savefig(target / "x_axis.png", dpi=110)
+    save_figure(fig, target / "x_axis.png", dpi=110)
     plt.close(fig)
 
 
@@ -285,7 +284,41 @@ def figure_kappa(acc, target):
     ax2.legend(fontsize=7, loc="upper right")
     fig.suptitle(scen, fontsize=9)
     fig.tight_layout()
-    fig.savefig(target / "multilateration.png", dpi=110)
+    save_figure(fig, target / "multilateration.png", dpi=110)
     plt.close(fig)
 
 
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    st = f.get("stations_table", {})
+    t = pd.DataFrame(st.get("rows", []))
+    if len(t):
+        t = t[t["method"] != "truth"][["method", "station", "dx_um", "dy_um", "dz_um", "dL_um"]].round(3)
+        out.append((f"Stations located by each scheme, one campaign ({st.get('scenario', '')}): difference from the "
+                    "truth [um] (the paper's tables 5-9; the joint adjustment in its gauge)", t))
+    acc = pd.DataFrame(f.get("accuracy", []))
+    if len(acc):
+        keep = ["dataset", "stations", "method", "runs", "station_error_um", "volumetric_error_rms_um",
+                "aligned_error_rms_um", "model_error_rms_um", "kappa_stations", "kappa_stations_theorem1",
+                "kappa_points", "kappa_points_theorem1"]
+        acc = acc[[c for c in keep if c in acc.columns]].rename(columns={
+            "dataset": "scenario", "stations": "stations are", "station_error_um": "station [um]",
+            "volumetric_error_rms_um": "vol. RMS [um]", "aligned_error_rms_um": "aligned RMS [um]",
+            "model_error_rms_um": "21-error map RMS [um]", "kappa_stations": "kappa st.",
+            "kappa_stations_theorem1": "Thm 1 st.", "kappa_points": "kappa pt.", "kappa_points_theorem1": "Thm 1 pt."})
+        for c in acc.columns[4:]:
+            acc[c] = acc[c].map(lambda v: "" if pd.isna(v) else f"{v:.3g}")
+        out.append(("Median over the Monte Carlo runs: largest station error, volumetric-error error (RMS, and after "
+                    "the best rigid alignment), error of the map from the 21 identified errors, condition numbers", acc))
+    out.append(("Most accurate scheme per scenario (median aligned RMS [um])", pd.DataFrame(f.get("winner", [])).round(3)))
+    r = pd.DataFrame(f.get("rounding", []))
+    if len(r):
+        for c in r.columns[2:]:
+            r[c] = r[c].map(lambda v: f"{v:.3g}")
+        out.append(("Exact lengths: what the published Case B's conditioning costs in double precision (its points "
+                    "against the centred solution of the same equations) and its error against the truth [um]", r))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

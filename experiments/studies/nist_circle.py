@@ -15,6 +15,7 @@ import numpy as np
 
 from experiments import engine
 from experiments.engine import ConfigError
+from experiments.study import save_figure
 
 
 def _folder() -> Path:
@@ -79,5 +80,18 @@ def figure(summary, target):
     ax.set_title("NIST Circle2d, 30 sets: largest and median error of centre and radius", fontsize=9)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(target / "nist_errors.png", dpi=110)
+    save_figure(fig, target / "nist_errors.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    rows = [{"method": k, "max error [mm]": v["max_error"], "median error [mm]": v["median_error"],
+             "sets > 1e-9": v["sets_over_1e-9"], "not converged": v["not_converged"]}
+            for k, v in f.get("summary", {}).items()]
+    out.append(("NIST Circle2d (30 sets): error against the reference least-squares circle", pd.DataFrame(rows)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from datasets.synthetic import circle_points
+from experiments.study import save_csv, save_figure
 
 
 def kcr_bound(arc_deg: float, n: int, sigma: float, radius: float = 1.0) -> tuple[float, float]:
@@ -40,8 +41,9 @@ def finalize(df, cfg, target, log):
             r["radius_bias_over_sigma"] = r["radius_bias"] / noise
         rows.append(r)
     table = pd.DataFrame(rows)
-    table.to_csv(target / "kcr.csv", index=False, float_format="%.6g")
-    figure(table, target)
+    save_csv(table, target / "kcr.csv", index=False, float_format="%.6g")
+    zone = set(df.loc[df["inner_radius"].notna(), "method"]) if "inner_radius" in df else set()
+    figure(table, target, zone_methods=zone)
     worst = table[table["noise"] == table["noise"].max()]
     log("  radius RMSE / KCR bound at the largest noise (1.00 = the statistical limit):")
     piv = worst.pivot_table(index="method", columns="arc_deg", values="radius_rmse_over_kcr", aggfunc="mean")
@@ -54,17 +56,17 @@ def finalize(df, cfg, target, log):
                                                   for m, vals in piv.iterrows()}}
 
 
-def figure(table: pd.DataFrame, target) -> None:
+def figure(table: pd.DataFrame, target, zone_methods=frozenset()) -> None:
+    """The least-squares estimators (every method whose result is not a zone, plugins included; the zone
+    methods estimate other circles, their rows are in kcr.csv); dashed: closed-form fits (method metadata)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     n = table["n"].max()
-    # the least-squares estimators: the zone methods estimate other circles (their rows are in kcr.csv)
-    lsq = {"circle.kasa", "circle.pratt", "circle.taubin", "circle.hyper", "circle.powell_hybrid",
-           "circle.gauss_newton", "circle.levenberg_marquardt", "circle.nelder_mead"}
-    algebraic = {"circle.kasa", "circle.pratt", "circle.taubin", "circle.hyper", "circle.powell_hybrid"}
-    t = table[(table["n"] == n) & table["params"].eq("{}") & table["method"].isin(lsq)]
+    import methods
+    closed_form = {s.id for s in methods.list_methods() if s.kind == "closed form"}
+    t = table[(table["n"] == n) & table["params"].eq("{}") & ~table["method"].isin(zone_methods)]
     arcs = sorted(t["arc_deg"].unique(), reverse=True)
     colours = plt.get_cmap("tab10").colors
     fig, axes = plt.subplots(2, len(arcs), figsize=(3.2 * len(arcs), 6.2), sharex=True, squeeze=False)
@@ -72,7 +74,7 @@ def figure(table: pd.DataFrame, target) -> None:
         ta = t[t["arc_deg"] == arc]
         for k, (m, g) in enumerate(ta.groupby("method", sort=True)):
             g = g.sort_values("noise")
-            kw = dict(ls="--" if m in algebraic else "-", marker="osd^v<>p"[k % 8], ms=4, color=colours[k % 10],
+            kw = dict(ls="--" if m in closed_form else "-", marker="osd^v<>p"[k % 8], ms=4, color=colours[k % 10],
                       label=m.split(".", 1)[1])
             axes[0, j].loglog(g["noise"], g["radius_rmse_over_kcr"], **kw)
             axes[1, j].semilogx(g["noise"], g["radius_bias_over_sigma"], **kw)
@@ -84,7 +86,23 @@ def figure(table: pd.DataFrame, target) -> None:
     axes[1, 0].set_ylabel("radius bias / σ")
     axes[0, -1].legend(fontsize=6, loc="upper left")
     fig.suptitle("Least-squares estimators: radius RMSE against the KCR bound (top), radius bias (bottom); "
-                 "dashed: algebraic fits")
+                 "dashed: closed-form fits")
     fig.tight_layout()
-    fig.savefig(target / "noise_kcr.png", dpi=110)
+    save_figure(fig, target / "noise_kcr.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    t = pd.read_csv(folder / "kcr.csv")
+    t = t[(t["noise"] == t["noise"].max()) & (t["n"] == t["n"].max())]
+    piv = t.pivot_table(index="method", columns="arc_deg", values="radius_rmse_over_kcr", sort=False)
+    piv = piv[sorted(piv.columns, reverse=True)].reset_index()
+    piv.columns = ["method"] + [f"{c:.0f}° arc" for c in piv.columns[1:]]
+    out.append((f"Radius RMSE / KCR bound at sigma = {t['noise'].max():g} R, N = {t['n'].max()} (1 = the statistical limit)",
+                piv.round(2)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

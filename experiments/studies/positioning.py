@@ -11,6 +11,7 @@ import methods
 from datasets.positioning import axis_test
 from experiments.engine import ConfigError
 from methods.positioning.model import evaluate_band
+from experiments.study import save_csv, save_figure, atomic_path
 
 BANDS = ("iso230-2 point-wise (mean +- 2s)", "OLS cubic", "GLS cubic (paper)")
 
@@ -37,10 +38,6 @@ def tasks(cfg):
                             "stream": [i, 0, r], "seed": cfg["seed"], "method": band, "params": {}, "timing": None,
                             "x_positions": cfg.get("positions_per_test", 50)})
     return out
-
-
-def task_key_method(task):  # bands are not registry methods: the engine hashes the positioning family instead
-    return "positioning.gls_polynomial"
 
 
 def execute(task):
@@ -71,7 +68,7 @@ def finalize(df, cfg, target, log):
                                                               error_rms_um=("error_rms", "mean")).reset_index()
     table["halfwidth_um"] *= 1e3
     table["error_rms_um"] *= 1e3
-    table.to_csv(target / "coverage.csv", index=False, float_format="%.4g")
+    save_csv(table, target / "coverage.csv", index=False, float_format="%.4g")
     log(f"  {'scenario':<55} {'band':<34} {'coverage':>8} {'half-width':>10} {'RMS error':>9}")
     for r in table.itertuples():
         log(f"  {r.dataset:<55} {r.method:<34} {r.coverage:8.3f} {r.halfwidth_um:8.2f} um {r.error_rms_um:7.2f} um")
@@ -85,7 +82,8 @@ def example(cfg, target):
     s = cfg["scenarios"][-1]
     data, _ = axis_test(rng=np.random.default_rng(cfg["seed"]), **s["params"])
     res = methods.fit("positioning.gls_polynomial", data, instrument_u=s.get("instrument_u"), mpe=s.get("mpe"))
-    plot(res, target / "example.png", title=f"synthetic axis: {s['label']}")
+    with atomic_path(target / "example.png") as tmp:
+        plot(res, tmp, title=f"synthetic axis: {s['label']}")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -102,5 +100,19 @@ def example(cfg, target):
     ax.set_ylim(0, 1.05)
     ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
-    fig.savefig(target / "positioning.png", dpi=110)
+    save_figure(fig, target / "positioning.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    t = pd.DataFrame(f.get("coverage", []))
+    if len(t):
+        t = t.rename(columns={"dataset": "scenario", "method": "band", "halfwidth_um": "half-width [um]",
+                              "error_rms_um": "RMS error [um]"}).round(3)
+    out.append(("Coverage of the true deviation curve by the bands (1000 synthetic axes per scenario)", t))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

@@ -8,6 +8,7 @@ import numpy as np
 
 import datasets
 import methods
+from experiments.study import save_figure
 
 #: table 1 columns of the roundness paper and the method that reproduces each
 PUBLISHED_COLUMNS = {"LSQ (paper's Gauss-Newton)": "circle.gauss_newton",
@@ -101,5 +102,23 @@ def figure(rows, target):
     fig.suptitle("Roundness paper, table 1: published vs reproduced circularity [mm] (*: repeated point dropped)",
                  fontsize=9)
     fig.tight_layout()
-    fig.savefig(target / "published.png", dpi=110)
+    save_figure(fig, target / "published.png", dpi=110)
     plt.close(fig)
+
+
+def report_tables(folder, f):
+    """The tables a reader wants from this study (moved here from the report, which names no study)."""
+    import pandas as pd
+
+    from experiments.study import Table
+    out = []
+    rows = [{"set": r["dataset"] + ("" if r["variant"] == "as published" else f" ({r['variant']})"),
+             "column": r["column"], "published": r["published"], "reproduced": round(r["reproduced_value"], 7),
+             "difference": round(r["difference"], 7),
+             "explanation": "reproduced" if r["reproduced"] else
+             (f"rounding of the printed coordinates: 99 % range {r['rounding_p0_5']:.6f}..{r['rounding_p99_5']:.6f}, "
+              f"published at the {r['published_percentile']:.0f}th percentile" if r["explained_by_rounding"]
+              else "NOT explained")}
+            for r in f.get("published_vs_reproduced", [])]
+    out.append(("Roundness paper, table 1: published against reproduced circularity [mm]", pd.DataFrame(rows)))
+    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

@@ -1,0 +1,190 @@
+"""Data sources: a registry like the methods' one. A study's ``[[datasets]]`` entry names a source and
+its parameters; the source returns ``(data, truth)`` — the data a method fits (an (N, 2) array of points
+for circles and ellipses) and the known truth as a dict (``None`` for measured data).
+
+Built in: ``circle`` and ``ellipse`` (synthetic generators with known truth, ``datasets.synthetic``),
+``published`` (a published set shipped with fitbench), ``file`` (any file ``datasets.read_points``
+reads; a relative path is relative to the study's TOML) and ``nist`` (one set of the NIST Circle2d
+folder given by ``FITBENCH_NIST_DIR``, truth = NIST's reference least-squares circle).
+
+A random source draws only from the ``rng`` it is given (the engine derives it from the study seed and
+the (entry, grid point, repetition) stream), so every method sees the same data; a non-random source
+gets one repetition. Adding a source::
+
+    from datasets.sources import register_source
+
+    @register_source("outliers", random=True, summary="circle with 10 % gross outliers")
+    def outliers(rng, *, n=100, share=0.1):
+        ...
+        return points, {"family": "circle", "center": (0.0, 0.0), "radius": 1.0}
+
+Third-party packages register sources through the entry-point group ``fitbench.datasets`` (the entry
+point names a module that registers on import); the engine loads them before it checks any config.
+"""
+from __future__ import annotations
+
+import inspect
+import json
+import os
+import warnings
+from dataclasses import dataclass, field
+from decimal import Decimal
+from importlib import metadata
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+ENTRY_POINT_GROUP = "fitbench.datasets"
+
+
+@dataclass(frozen=True)
+class DataSource:
+    """A registered data source: ``load(rng, **params) -> (data, truth | None)``."""
+
+    name: str
+    load: Callable = field(repr=False)
+    random: bool
+    summary: str
+    module: str
+    #: data files the output depends on, given the params (hashed into the cache key)
+    files: Callable[..., list] | None = field(default=None, repr=False)
+
+    @property
+    def parameters(self) -> list[str]:
+        return [p for p in inspect.signature(self.load).parameters if p != "rng"]
+
+
+_REGISTRY: dict[str, DataSource] = {}
+_plugins_loaded = False
+
+
+def register_source(name: str, *, random: bool, summary: str, files: Callable | None = None):
+    """Register ``func(rng, **params) -> (data, truth)`` as data source ``name``."""
+    def deco(func):
+        if name in _REGISTRY and _REGISTRY[name].load is not func:
+            raise ValueError(f"data source {name!r} is already registered (by {_REGISTRY[name].module})")
+        _REGISTRY[name] = DataSource(name=name, load=func, random=random, summary=summary,
+                                     module=func.__module__, files=files)
+        return func
+    return deco
+
+
+def load_plugins() -> None:
+    """Import every entry point of ``fitbench.datasets`` once (a broken plugin warns)."""
+    global _plugins_loaded
+    if _plugins_loaded:
+        return
+    _plugins_loaded = True
+    for ep in metadata.entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            ep.load()
+        except Exception as exc:  # a third-party bug must not take the built-in sources down
+            warnings.warn(f"fitbench data source plugin {ep.name!r} ({ep.value}) failed to load: {exc}", stacklevel=2)
+
+
+def get_source(name: str) -> DataSource:
+    load_plugins()
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise KeyError(f"unknown data source {name!r}; known: {', '.join(sorted(_REGISTRY))}") from None
+
+
+def list_sources() -> list[DataSource]:
+    load_plugins()
+    return [s for _, s in sorted(_REGISTRY.items())]
+
+
+# ---------------------------------------------------------------- built-in sources
+
+def _register_builtins():
+    import datasets
+    from datasets.io import read_points
+    from datasets.synthetic import GENERATORS
+
+    for gen_name, gen in GENERATORS.items():
+        register_source(gen_name, random=True, summary=(gen.__doc__ or "").strip().splitlines()[0])(gen)
+
+    def _published_files(name, variant=None):
+        return [datasets.PUBLISHED_DIR / f"{name}.csv", datasets.PUBLISHED_DIR / f"{name}.json"]
+
+    @register_source("published", random=False, summary="a published data set shipped with fitbench",
+                     files=_published_files)
+    def published(rng=None, *, name, variant=None):
+        """Points of a published set (``variant = "drop_repeated_closing_point"`` drops a repeated last point)."""
+        ds = datasets.load(name, drop_repeated_closing_point=variant == "drop_repeated_closing_point")
+        return ds.points, None
+
+    @register_source("file", random=False, summary="points read from a file (CSV, whitespace, ...)",
+                     files=lambda path, truth=None: [path])
+    def file(rng=None, *, path, truth=None):
+        """Points of ``path`` (any format ``datasets.read_points`` reads), with an optional truth table."""
+        return read_points(path), truth
+
+    def _nist_files(name):
+        folder = nist_folder()
+        return [folder / f"{name}.csv", folder / f"{name}.json"]
+
+    @register_source("nist", random=False, summary="a NIST Circle2d set (FITBENCH_NIST_DIR)", files=_nist_files)
+    def nist(rng=None, *, name):
+        """Points of NIST set ``name``; truth = NIST's reference least-squares circle (certified digits)."""
+        folder = nist_folder()
+        meta = json.loads((folder / f"{name}.json").read_text())
+        ref = meta["reference_least_squares"]
+        truth = {"family": "circle", "center": [float(Decimal(v)) for v in ref["center"]],
+                 "radius": float(Decimal(ref["diameter"])) / 2}
+        return read_points(folder / f"{name}.csv"), truth
+
+    _register_simulators()
+
+
+def _register_simulators():
+    """The machine-tool simulators: their data are the inputs of the circular-test, positioning,
+    magnification and multilateration methods (truth: what the simulator injected)."""
+    from datasets import circular_test as ct
+    from datasets import contouring
+    from datasets import multilateration as ml
+    from datasets import positioning as pos
+
+    @register_source("circular_test", random=True,
+                     summary="ISO 230-4 circular test of the LOLA HBG 130 scenario (both runs, or one path)")
+    def circular_test(rng, *, scenario="lola_hbg130", path="both"):
+        """Points of a simulated circular test; ``path`` is 'both', 'cw' or 'ccw'."""
+        if scenario != "lola_hbg130" or path not in ("both", "cw", "ccw"):
+            raise ValueError("circular_test: scenario must be 'lola_hbg130' and path 'both', 'cw' or 'ccw'")
+        cond, err = ct.lola_hbg130()
+        cw, ccw, truth = ct.circular_test(cond, err, seed=int(rng.integers(2 ** 63)))
+        return {"both": np.vstack([cw, ccw]), "cw": cw, "ccw": ccw}[path], truth
+
+    def positioning(rng, **params):
+        """A simulated axis test (``datasets.positioning.axis_test`` parameters)."""
+        return pos.axis_test(rng=rng, **params)
+
+    positioning.__signature__ = inspect.signature(pos.axis_test)
+    register_source("positioning", random=True, summary="ISO 230-2 positioning test of a simulated axis")(positioning)
+
+    @register_source("contouring", random=False, summary="a reference and a measured contouring trajectory")
+    def contouring_example(rng=None, *, example):
+        """Example ``example`` of ``datasets.contouring.EXAMPLES`` as a magnify input."""
+        from methods.magnify import MagnifyInput
+        ref, meas = contouring.EXAMPLES[example]()
+        return MagnifyInput(ref, meas), None
+
+    @register_source("multilateration", random=True, summary="a simulated multilateration campaign")
+    def multilateration(rng, *, stations=6, grid=(5, 4, 4), noise=1.0, errors="default"):
+        """A simulated campaign (``datasets.multilateration.simulate``; errors = 'none' for a perfect machine)."""
+        return ml.simulate(rng=rng, stations=tuple(stations) if isinstance(stations, list) else stations,
+                           grid=tuple(grid), noise=noise, errors=None if errors == "none" else errors)
+
+
+def nist_folder() -> Path:
+    """The NIST Circle2d folder (``FITBENCH_NIST_DIR``)."""
+    folder = os.environ.get("FITBENCH_NIST_DIR")
+    if not folder or not Path(folder).is_dir():
+        raise FileNotFoundError("set FITBENCH_NIST_DIR to the folder of the NIST Circle2d sets "
+                                "(nist_cir2d_*.csv with their .json)")
+    return Path(folder)
+
+
+_register_builtins()

@@ -1,0 +1,142 @@
+"""The cache key covers all code a row depends on: edit a copy of the repository (or of a plugin) and
+the resumed run recomputes the rows, instead of serving stale ones; an edit elsewhere recomputes nothing."""
+import os
+import re
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from conftest import REPO
+
+STUDY = """
+name = "keyed"
+title = "cache key test"
+kind = "{kind}"
+seed = 3
+repetitions = 2
+
+[[datasets]]
+generator = "circle"
+params = {{ center = [1.0, 2.0], radius = 3.0, noise = 0.01, n = 15 }}
+
+[[methods]]
+id = "{method}"
+"""
+
+
+@pytest.fixture
+def repo_copy(tmp_path):
+    dst = tmp_path / "repo"
+    for part in ("methods", "datasets", "experiments"):
+        shutil.copytree(REPO / part, dst / part, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    shutil.copy(REPO / "pyproject.toml", dst)
+    return dst
+
+
+def run(repo, study, out, extra_path=()):
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([*map(str, extra_path), str(repo)])}
+    proc = subprocess.run([sys.executable, "-m", "experiments.run", str(study), "--out", str(out), "--jobs", "1"],
+                          cwd=repo, env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    m = re.search(r"(\d+) rows: (\d+) already stored, (\d+) to run", proc.stdout)
+    assert m, proc.stdout
+    return int(m.group(1)), int(m.group(3))
+
+
+def append(path, text="\n# edited by the cache-key test\n"):
+    path.write_text(path.read_text() + text)
+
+
+@pytest.mark.parametrize("edited", ["experiments/metrics.py", "datasets/synthetic.py", "experiments/studies/grid.py",
+                                    "methods/circle/algebraic.py", "methods/_result.py"])
+def test_editing_code_a_row_depends_on_recomputes_it(repo_copy, tmp_path, edited):
+    study = tmp_path / "keyed.toml"
+    study.write_text(STUDY.format(kind="grid", method="circle.kasa"))
+    out = tmp_path / "out"
+    assert run(repo_copy, study, out) == (2, 2)
+    assert run(repo_copy, study, out) == (2, 0)  # resumed: nothing to do
+    append(repo_copy / "experiments/report.py")  # not code of any row
+    assert run(repo_copy, study, out) == (2, 0)
+    append(repo_copy / edited)
+    assert run(repo_copy, study, out) == (2, 2), f"editing {edited} must recompute the rows"
+
+
+def test_editing_a_file_source_recomputes(repo_copy, tmp_path):
+    (tmp_path / "pts.csv").write_text("x,y\n1,0\n0,1\n-1,0\n0,-1.001\n")
+    study = tmp_path / "keyed.toml"
+    study.write_text(STUDY.format(kind="grid", method="circle.kasa").split("[[datasets]]")[0]
+                     + '[[datasets]]\nfile = "pts.csv"\n\n[[methods]]\nid = "circle.kasa"\n')
+    out = tmp_path / "out"
+    assert run(repo_copy, study, out) == (1, 1)
+    assert run(repo_copy, study, out) == (1, 0)
+    (tmp_path / "pts.csv").write_text("x,y\n1,0\n0,1\n-1,0\n0,-1.002\n")
+    assert run(repo_copy, study, out) == (1, 1)
+
+
+PLUGIN = '''
+"""A plugin fitter whose radius rule lives in a helper module of the same distribution."""
+import numpy as np
+from methods import register
+from methods._result import circle_result
+from fitbench_keyed_helper import radius_of
+
+
+@register("circle.keyed_plugin", kind="closed form", summary="centroid, helper radius (cache-key test)",
+          reference="fitbench cache-key test")
+def keyed(points):
+    c = points.mean(axis=0)
+    return circle_result(points, c, radius_of(points, c), converged=True, message="closed form")
+'''
+
+HELPER = '''
+import numpy as np
+
+
+def radius_of(points, c):
+    return float(np.hypot(*(points - c).T).mean())
+'''
+
+
+def test_editing_a_plugin_helper_module_recomputes(repo_copy, tmp_path):
+    src = tmp_path / "plugin_src"
+    src.mkdir()
+    (src / "fitbench_keyed_plugin.py").write_text(PLUGIN)
+    (src / "fitbench_keyed_helper.py").write_text(HELPER)
+    (src / "pyproject.toml").write_text(textwrap.dedent('''
+        [build-system]
+        requires = ["setuptools>=61"]
+        build-backend = "setuptools.build_meta"
+        [project]
+        name = "fitbench-keyed-plugin"
+        version = "0.0.1"
+        [project.entry-points."fitbench.methods"]
+        keyed = "fitbench_keyed_plugin"
+        [tool.setuptools]
+        py-modules = ["fitbench_keyed_plugin", "fitbench_keyed_helper"]
+    '''))
+    site = tmp_path / "site"
+    proc = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
+                           "--quiet", "--target", str(site), str(src)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    study = tmp_path / "keyed.toml"
+    study.write_text(STUDY.format(kind="grid", method="circle.keyed_plugin"))
+    out = tmp_path / "out"
+    assert run(repo_copy, study, out, [site]) == (2, 2)
+    assert run(repo_copy, study, out, [site]) == (2, 0)
+    append(site / "fitbench_keyed_helper.py")  # the plugin module itself is unchanged
+    assert run(repo_copy, study, out, [site]) == (2, 2)
+
+
+def test_study_code_of_a_custom_study_is_keyed(repo_copy, tmp_path):
+    """A study module with its own analysis code (here: positioning's quick grid) is keyed on it and on the
+    simulator it imports, without any per-study workaround."""
+    from experiments import codehash
+    files = {str(p.relative_to(REPO)) for p in codehash.files_of("experiments.studies.positioning")}
+    assert {"experiments/studies/positioning.py", "datasets/positioning.py", "methods/positioning/model.py"} <= files
+    files = {str(p.relative_to(REPO)) for p in codehash.files_of("experiments.studies.multilateration")}
+    assert "datasets/multilateration.py" in files
+    assert {str(p.relative_to(REPO)) for p in codehash.files_of("experiments.metrics")} == \
+        {"experiments/__init__.py", "experiments/metrics.py"}

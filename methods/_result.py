@@ -82,9 +82,11 @@ def circle_result(points: np.ndarray, center, radius: float, *, converged: bool,
     """Build a :class:`CircleFit`, computing residuals and form error from the data in data units."""
     center = (float(center[0]), float(center[1]))
     radius = float(radius)
-    r = radial_distances(points, center)
+    with np.errstate(over="ignore", invalid="ignore"):  # a degenerate circle far away: NaN/inf, no warning
+        r = radial_distances(points, center)
     ok_geometry = all(map(math.isfinite, center)) and math.isfinite(radius)
-    form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
+    with np.errstate(over="ignore", invalid="ignore"):
+        form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
     return CircleFit(center=center, radius=radius, form_error=form_error, residuals=r - radius,
                      converged=bool(converged and ok_geometry), iterations=iterations, nfev=nfev,
                      history=list(history or []), message=message, extra=dict(extra or {}))

@@ -56,24 +56,81 @@ def kasa_unit(u: np.ndarray) -> np.ndarray:
     return kasa_xy(np.ascontiguousarray(u[:, 0]), np.ascontiguousarray(u[:, 1]))
 
 
+def _buffer(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The (3, N) buffer whose rows 0, 1 are x, y (the unit frame's layout), or a new one."""
+    base = x.base
+    if (isinstance(base, np.ndarray) and base.shape == (3, len(x)) and base.flags.c_contiguous
+            and np.shares_memory(base[0], x) and x.ctypes.data == base[0].ctypes.data
+            and y.ctypes.data == base[1].ctypes.data):
+        return base
+    buf = np.empty((3, len(x)))
+    buf[0], buf[1] = x, y
+    return buf
+
+
+def moments(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """M = Z^T Z / N for Z = [z, x, y, 1], z = x^2 + y^2, in one sweep (unit-frame data: centred and
+    scaled, so the moments are O(1) and M is as well conditioned as the circle's shape allows).
+
+    z is written into the free third row of the frame's buffer and the six second moments come
+    from one matrix product of that (3, N) buffer with itself."""
+    n = len(x)
+    buf = _buffer(x, y)
+    z = buf[2]
+    np.multiply(x, x, out=z)
+    z += y * y
+    g = buf @ buf.T  # [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]
+    sx, sy, sz = buf.sum(axis=1)
+    return np.array([[g[2, 2], g[0, 2], g[1, 2], sz],
+                     [g[0, 2], g[0, 0], g[0, 1], sx],
+                     [g[1, 2], g[0, 1], g[1, 1], sy],
+                     [sz, sx, sy, float(n)]]) / n
+
+
+def kasa_moments(m: np.ndarray) -> np.ndarray:
+    """Kåsa's circle (roundness paper eq. 7: least squares of [2x 2y -1][xc yc w]^T = x^2 + y^2,
+    w = xc^2 + yc^2 - R^2) from the moment matrix of :func:`moments`: its 3x3 normal equations."""
+    ata = np.array([[4 * m[1, 1], 4 * m[1, 2], -2 * m[1, 3]],
+                    [4 * m[1, 2], 4 * m[2, 2], -2 * m[2, 3]],
+                    [-2 * m[1, 3], -2 * m[2, 3], m[3, 3]]])
+    atl = np.array([2 * m[0, 1], 2 * m[0, 2], -m[0, 3]])
+    try:
+        xc, yc, w = np.linalg.solve(ata, atl)
+    except np.linalg.LinAlgError:
+        return np.full(3, np.nan)
+    r2 = xc * xc + yc * yc - w
+    return np.array([xc, yc, np.sqrt(r2) if r2 > 0 else np.nan])
+
+
 def geometric_normal_equations(x, y, p):
-    """Residuals and normal equations at p: (F, J^T J, J^T d, (dx, dy, r, d)) for d_i = r_i - R,
-    J rows [-(x_i - xc)/r_i, -(y_i - yc)/r_i, -1] (roundness paper eq. 10); None if a point is the centre."""
-    dx, dy = x - p[0], y - p[1]
-    r = np.sqrt(dx * dx + dy * dy)
-    if not r.all():
+    """Residuals and normal equations at p in one sweep: (F, J^T J, J^T d, (c, s, r, d)) for
+    d_i = r_i - R, J rows [-c_i, -s_i, -1], c_i = (x_i - xc)/r_i, s_i = (y_i - yc)/r_i
+    (roundness paper eq. 10); None if a point is the centre. The six products come from one
+    matrix product of the (3, N) array [c; s; d] with itself."""
+    n = len(x)
+    buf = np.empty((3, n))
+    c, s, d = buf
+    np.subtract(x, p[0], out=c)
+    np.subtract(y, p[1], out=s)
+    r = c * c
+    np.multiply(s, s, out=d)
+    r += d
+    np.sqrt(r, out=r)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c /= r
+        s /= r
+    np.subtract(r, p[2], out=d)
+    g = buf @ buf.T
+    sc, ss, sd = buf.sum(axis=1)
+    if not (np.isfinite(g).all() and np.isfinite(sc) and np.isfinite(ss)):
         return None
-    d = r - p[2]
-    inv_r = 1.0 / r
-    c, s = dx * inv_r, dy * inv_r
-    sc, ss = c.sum(), s.sum()
-    jtj = np.array([[c @ c, c @ s, sc], [c @ s, s @ s, ss], [sc, ss, float(len(x))]])
-    jtd = -np.array([c @ d, s @ d, d.sum()])
-    return float(d @ d), jtj, jtd, (dx, dy, r, d)
+    jtj = np.array([[g[0, 0], g[0, 1], sc], [g[0, 1], g[1, 1], ss], [sc, ss, float(n)]])
+    jtd = -np.array([g[0, 2], g[1, 2], sd])
+    return float(g[2, 2]), jtj, jtd, (c, s, r, d)
 
 
 def algebraic_start(x, y) -> np.ndarray:
     """Kåsa's circle as the start of an iterative geometric fit (the roundness paper's choice);
     the unit circle about the centroid when Kåsa's system has no real circle."""
-    p = kasa_xy(x, y)
+    p = kasa_moments(moments(x, y))
     return p if np.isfinite(p).all() else np.array([0.0, 0.0, 1.0])

@@ -40,12 +40,14 @@ def unit_frame(points: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.nd
     n = pts.shape[0]
     buf = np.empty((3, n))
     x, y = buf[0], buf[1]
-    total = pts.sum(axis=0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = pts.sum(axis=0)
     if np.isfinite(total).all():
         shift = total / n
         np.subtract(pts[:, 0], shift[0], out=x)
         np.subtract(pts[:, 1], shift[1], out=y)
-        ss = float(x @ x + y @ y)
+        with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+            ss = float(x @ x + y @ y)
         if SAFE_LOW < ss < SAFE_HIGH:
             scale = float(np.sqrt(ss / n))
             x /= scale

@@ -71,10 +71,17 @@ class CircleFit(FitResult):
 
 
 def radial_distances(points: np.ndarray, center) -> np.ndarray:
-    """Distances r_i of the points from ``center`` (vectorised)."""
+    """Distances r_i of the points from ``center`` (vectorised); exact to rounding at any float64 scale
+    (np.hypot, free of under/overflow, is used when a squared distance would leave the normal range)."""
     dx = points[:, 0] - center[0]
     dy = points[:, 1] - center[1]
-    return np.sqrt(dx * dx + dy * dy)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        r = dx * dx
+        r += dy * dy
+        np.sqrt(r, out=r)
+    if r.size and not (1e-145 < r.min() and r.max() < 1e150):
+        r = np.hypot(dx, dy)
+    return r
 
 
 def circle_result(points: np.ndarray, center, radius: float, *, converged: bool, message: str,

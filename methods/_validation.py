@@ -64,7 +64,9 @@ def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndar
     if n < min_points:
         raise InvalidInputError(f"{who}needs at least {min_points} points, got {n}{masked}")
     arr = np.ascontiguousarray(arr)
-    if not np.isfinite(arr.sum()):  # one cheap sweep; the elementwise test only when it fails
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = arr.sum()
+    if not np.isfinite(total):  # one cheap sweep; the elementwise test only when it fails
         bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
         if bad.size:
             raise InvalidInputError(

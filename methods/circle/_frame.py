@@ -20,6 +20,11 @@ class Frame(UnitFrame):
         p = np.asarray(p, dtype=np.float64)
         return np.array([(p[0] - self.shift[0]) / self.scale, (p[1] - self.shift[1]) / self.scale, p[2] / self.scale])
 
+    def power(self, k: int) -> float:
+        """scale**k for converting objective values to data units; inf/0 (no exception) when out of range."""
+        with np.errstate(over="ignore", under="ignore"):
+            return float(np.float64(self.scale) ** k)
+
     def circle_to_data(self, p) -> tuple[np.ndarray, float]:
         """(xc, yc, R) in the unit frame -> (center, radius) in data units."""
         return np.asarray(p[:2]) * self.scale + self.shift, abs(float(p[2])) * self.scale

@@ -64,8 +64,11 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         except np.linalg.LinAlgError:
             message = "singular Gauss–Newton system (J^T J not invertible)"
             break
-        # the step's own rounding noise: the error of J^T d (~4 eps sqrt(sum (r_i + R)^2)) through (J^T J)^-1
-        step_noise = 8.0 * EPS * np.sqrt(f + 4.0 * n * p[2] * p[2]) / max(np.linalg.eigvalsh(jtj)[0], EPS * n)
+        # the decrease of F this step promises, against F's rounding noise (8 eps sqrt(F sum (r_i + R)^2)):
+        # below it, and not shrinking any more, steps are rounding noise and can never reach xtol
+        promised = float(-delta @ jtd)
+        s2 = max(f - 4.0 * abs(p[2]) * float(jtd[2]) + 4.0 * n * p[2] * p[2], 0.0)
+        f_noise = 8.0 * EPS * np.sqrt(f * s2) + 16.0 * EPS * EPS * s2
         p = p + delta  # eq. 13
         if not np.isfinite(p).all():
             message = "Gauss–Newton diverged (non-finite iterate)"
@@ -74,10 +77,13 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         steps.append(step)
         f_prev = f
         state = geometric_normal_equations(x, y, p)
-        if stop == "step" and step <= max(xtol, step_noise):
+        if stop == "step" and step <= xtol:
+            converged, message = True, f"(Delta^T Delta)^(1/2) <= xtol={xtol:g}"
+            break
+        if stop == "step" and promised <= f_noise and len(steps) > 1 and step >= 0.5 * steps[-2]:
             converged = True
-            message = (f"(Delta^T Delta)^(1/2) <= xtol={xtol:g}" if step <= xtol else
-                       f"(Delta^T Delta)^(1/2) = {step:.1e} <= its rounding noise {step_noise:.1e} (> xtol={xtol:g})")
+            message = (f"(Delta^T Delta)^(1/2) = {step:.1e} stopped shrinking with a promised decrease of F "
+                       f"below its rounding noise (xtol={xtol:g} is below the resolution)")
             break
     if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
         check = stationarity.geometric_from_state(p, state if np.isfinite(p).all() else None)
@@ -86,7 +92,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     else:
         check = None
     center, radius = frame.circle_to_data(p)
-    scale2 = frame.scale ** 2
+    scale2 = frame.power(2)
     extra = {"step_norms": [s * frame.scale for s in steps], "stop": stop}
     if check is not None:
         extra.update(check.extra(scale2))

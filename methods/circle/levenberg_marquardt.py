@@ -90,7 +90,7 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         check = stationarity.geometric_from_state(p, (f, jtj, jtd, arrays))
         converged = check.ok
         message = f"{message}; {check.text}"
-        extra.update(check.extra(frame.scale ** 2))
+        extra.update(check.extra(frame.power(2)))
     center, radius = frame.circle_to_data(p)
     return circle_result(points, center, radius, converged=converged, message=message, iterations=it,
-                         nfev=nfev, history=[v * frame.scale ** 2 for v in history], extra=extra)
+                         nfev=nfev, history=[v * frame.power(2) for v in history], extra=extra)

@@ -77,9 +77,9 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-15, 
         message += f"; gave up after {nfev} of max_fev={max_fev} evaluations"
     center, radius = frame.circle_to_data(p)
     return circle_result(points, center, radius, converged=converged, message=message,
-                         iterations=iterations, nfev=nfev, history=[h * frame.scale ** 2 for h in history],
-                         extra={"restarts": restarts, "xatol_used": xat * frame.scale, "fatol_used": fat * frame.scale ** 2,
-                                "simplex_stop": bool(run.converged), **check.extra(frame.scale ** 2)})
+                         iterations=iterations, nfev=nfev, history=[h * frame.power(2) for h in history],
+                         extra={"restarts": restarts, "xatol_used": xat * frame.scale, "fatol_used": fat * frame.power(2),
+                                "simplex_stop": bool(run.converged), **check.extra(frame.power(2))})
 
 
 #: evaluations per Nelder–Mead run (a converging run from Kåsa's start needs 100-600) and restarts at most

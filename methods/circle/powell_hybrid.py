@@ -77,8 +77,8 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
     ok = stopped and check.ok
     message = f"{minpack}; {check.text}" if stopped or check.degenerate else minpack
     extra = {"njev": int(getattr(sol, "njev", 0) or 0), "residual_equations": [float(v) for v in sol.fun],
-             "minpack_status": int(sol.status), **check.extra(frame.scale ** 4)}
+             "minpack_status": int(sol.status), **check.extra(frame.power(4))}
     center, radius = frame.circle_to_data(sol.x) if np.isfinite(sol.x).all() else ((np.nan, np.nan), np.nan)
     return circle_result(points, center, radius, converged=ok, message=message,
                          iterations=max(len(history) - 1, 0), nfev=len(history),
-                         history=[h * frame.scale ** 4 for h in history], extra=extra)
+                         history=[h * frame.power(4) for h in history], extra=extra)

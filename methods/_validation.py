@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods._errors import InvalidInputError
-from methods._frame import offer_frame, unit_frame
+from methods._frame import dot, offer_frame, unit_frame
 
 #: Singular-value ratio (smaller / larger principal spread) below which a point set counts as
 #: collinear; raised to the rounding of the coordinates themselves (8 eps max|X| / spread) when that
@@ -79,14 +79,14 @@ def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndar
         if scale == 0.0 or bool((arr == arr[0]).all()):
             raise InvalidInputError(f"{who}all {n} points are identical; a curve needs points spread along it")
     # principal spreads of the unit-frame data (trace = N): all O(1) numbers, no under/overflow
-    sxx, syy, sxy = float(x @ x) / n, float(y @ y) / n, float(x @ y) / n
+    sxx, syy, sxy = dot(x, x) / n, dot(y, y) / n, dot(x, y) / n
     big = 0.5 * (sxx + syy) + float(np.hypot(0.5 * (sxx - syy), sxy))
     small = max(sxx * syy - sxy * sxy, 0.0) / big
     rtol = max(COLLINEAR_RTOL, 8 * EPS * coord / scale)
     if small <= 1e-8 * big:  # det suffers cancellation: measure the spread across the principal axis
         theta = 0.5 * np.arctan2(2 * sxy, sxx - syy)
         across = np.cos(theta) * y - np.sin(theta) * x
-        small = float(across @ across) / n
+        small = dot(across, across) / n
     if small <= rtol * rtol * big:
         raise InvalidInputError(f"{who}all {n} points lie on one straight line (to {rtol:.0e} of their spread); "
                                 "no circle or ellipse passes through them")

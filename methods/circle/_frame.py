@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from methods._frame import UnitFrame
+from methods._frame import UnitFrame, dot
 
 
 class Frame(UnitFrame):
@@ -77,18 +77,18 @@ def moments(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """M = Z^T Z / N for Z = [z, x, y, 1], z = x^2 + y^2, in one sweep (unit-frame data: centred and
     scaled, so the moments are O(1) and M is as well conditioned as the circle's shape allows).
 
-    z is written into the free third row of the frame's buffer and the six second moments come
-    from one matrix product of that (3, N) buffer with itself."""
+    z is written into the free third row of the frame's buffer; the six second moments are sums of
+    products (:func:`methods._frame.dot`, no temporaries)."""
     n = len(x)
     buf = _buffer(x, y)
     z = buf[2]
     np.multiply(x, x, out=z)
     z += y * y
-    g = buf @ buf.T  # [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]
+    zz, zx, zy, xx, yy, xy = dot(z, z), dot(z, x), dot(z, y), dot(x, x), dot(y, y), dot(x, y)
     sx, sy, sz = buf.sum(axis=1)
-    return np.array([[g[2, 2], g[0, 2], g[1, 2], sz],
-                     [g[0, 2], g[0, 0], g[0, 1], sx],
-                     [g[1, 2], g[0, 1], g[1, 1], sy],
+    return np.array([[zz, zx, zy, sz],
+                     [zx, xx, xy, sx],
+                     [zy, xy, yy, sy],
                      [sz, sx, sy, float(n)]]) / n
 
 
@@ -110,8 +110,8 @@ def kasa_moments(m: np.ndarray) -> np.ndarray:
 def geometric_normal_equations(x, y, p):
     """Residuals and normal equations at p in one sweep: (F, J^T J, J^T d, (c, s, r, d)) for
     d_i = r_i - R, J rows [-c_i, -s_i, -1], c_i = (x_i - xc)/r_i, s_i = (y_i - yc)/r_i
-    (roundness paper eq. 10); None if a point is the centre. The six products come from one
-    matrix product of the (3, N) array [c; s; d] with itself."""
+    (roundness paper eq. 10); None if a point is the centre. One sweep: c, s, d in one (3, N) buffer,
+    six sums of products and three sums."""
     n = len(x)
     buf = np.empty((3, n))
     c, s, d = buf
@@ -125,13 +125,13 @@ def geometric_normal_equations(x, y, p):
         c /= r
         s /= r
     np.subtract(r, p[2], out=d)
-    g = buf @ buf.T
+    cc, cs, ss_, cd, sd_, dd = dot(c, c), dot(c, s), dot(s, s), dot(c, d), dot(s, d), dot(d, d)
     sc, ss, sd = buf.sum(axis=1)
-    if not (np.isfinite(g).all() and np.isfinite(sc) and np.isfinite(ss)):
+    if not np.isfinite([cc, cs, ss_, sc, ss]).all():
         return None
-    jtj = np.array([[g[0, 0], g[0, 1], sc], [g[0, 1], g[1, 1], ss], [sc, ss, float(n)]])
-    jtd = -np.array([g[0, 2], g[1, 2], sd])
-    return float(g[2, 2]), jtj, jtd, (c, s, r, d)
+    jtj = np.array([[cc, cs, sc], [cs, ss_, ss], [sc, ss, float(n)]])
+    jtd = -np.array([cd, sd_, sd])
+    return dd, jtj, jtd, (c, s, r, d)
 
 
 def algebraic_start(x, y) -> np.ndarray:

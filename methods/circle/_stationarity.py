@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from methods._frame import dot
+
 EPS = float(np.finfo(float).eps)
 #: a local solver started at an accepted point cannot lower F by more than this fraction (+ rounding)
 REL_DECREASE = 1e-9
@@ -83,11 +85,11 @@ def geometric(x: np.ndarray, y: np.ndarray, p) -> Stationarity:
         return _refuse("the centre coincides with a data point (S_CG not differentiable there)")
     d = r - p[2]
     c, s = dx / r, dy / r
-    jtj = np.array([[c @ c, c @ s, c.sum()], [c @ s, s @ s, s.sum()], [c.sum(), s.sum(), float(len(x))]])
-    g = np.array([c @ d, s @ d, d.sum()])
-    f = float(d @ d)
+    jtj = np.array([[dot(c, c), dot(c, s), c.sum()], [dot(c, s), dot(s, s), s.sum()], [c.sum(), s.sum(), float(len(x))]])
+    g = np.array([dot(c, d), dot(s, d), d.sum()])
+    f = dot(d, d)
     delta = 4 * EPS * (r + abs(p[2]))
-    noise = 2 * float(np.abs(d) @ delta) + float(delta @ delta)
+    noise = 2 * dot(np.abs(d), delta) + dot(delta, delta)
     return _decide(g, jtj, f, noise, "S_CG")
 
 
@@ -101,12 +103,12 @@ def algebraic(x: np.ndarray, y: np.ndarray, p) -> Stationarity:
     q = du * du + dv * dv
     e = q - p[2] * p[2]
     # residual Jacobian rows -2 [du, dv, R]
-    jtj = 4 * np.array([[du @ du, du @ dv, p[2] * du.sum()], [du @ dv, dv @ dv, p[2] * dv.sum()],
+    jtj = 4 * np.array([[dot(du, du), dot(du, dv), p[2] * du.sum()], [dot(du, dv), dot(dv, dv), p[2] * dv.sum()],
                         [p[2] * du.sum(), p[2] * dv.sum(), p[2] * p[2] * len(x)]])
-    g = -2 * np.array([e @ du, e @ dv, p[2] * e.sum()])
-    f = float(e @ e)
+    g = -2 * np.array([dot(e, du), dot(e, dv), p[2] * e.sum()])
+    f = dot(e, e)
     delta = 4 * EPS * (q + p[2] * p[2])
-    noise = 2 * float(np.abs(e) @ delta) + float(delta @ delta)
+    noise = 2 * dot(np.abs(e), delta) + dot(delta, delta)
     return _decide(g, jtj, f, noise, "S_CA")
 
 

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from methods._frame import dot
+
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_positive, check_vector
@@ -18,7 +20,7 @@ def _reduction(arrays, h):
     ndx, ndy = dx - h[0], dy - h[1]
     rn = np.sqrt(ndx * ndx + ndy * ndy)
     delta = (-h[0] * (2 * dx - h[0]) - h[1] * (2 * dy - h[1])) / (rn + r) - h[2]
-    return -float(delta @ (2 * d + delta))
+    return -dot(delta, 2 * d + delta)
 
 
 @register("circle.levenberg_marquardt", kind="iterative",

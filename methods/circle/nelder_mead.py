@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from methods._frame import dot
+
 from methods import _simplex as simplex
 from methods._errors import InvalidInputError
 from methods._registry import register
@@ -47,7 +49,7 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-15, 
     def objective(p):
         dx, dy = x - p[0], y - p[1]
         d = np.sqrt(dx * dx + dy * dy) - p[2]
-        return float(d @ d)
+        return dot(d, d)
 
     # Stopping tolerances at the objective's resolution (README, NIST): values of S_CG scatter by their
     # rounding noise once the simplex is small, so asking for a smaller simplex makes the stop a matter of
@@ -101,10 +103,10 @@ def _resolution_tolerances(x, y, p, xatol: float, fatol: float) -> tuple[float, 
     d = r - p[2]
     w = r + abs(float(p[2]))
     eps = np.finfo(float).eps
-    noise = 4 * eps * float(np.sqrt((d * d) @ (w * w))) + eps * eps * float(w @ w)
+    noise = 4 * eps * np.sqrt(dot(d * d, w * w)) + eps * eps * dot(w, w)
     with np.errstate(divide="ignore", invalid="ignore"):
         c, s = dx / r, dy / r
-    jtj = np.array([[c @ c, c @ s, c.sum()], [c @ s, s @ s, s.sum()], [c.sum(), s.sum(), float(len(x))]])
+    jtj = np.array([[dot(c, c), dot(c, s), c.sum()], [dot(c, s), dot(s, s), s.sum()], [c.sum(), s.sum(), float(len(x))]])
     if not np.isfinite(jtj).all():
         return xatol, fatol
     lam_min = max(float(np.linalg.eigvalsh(jtj)[0]), eps * len(x))

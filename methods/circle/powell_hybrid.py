@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import numpy as np
+
+from methods._frame import dot
 from scipy.optimize import root
 
 from methods._registry import register
@@ -56,12 +58,12 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
         a, b, rr = p
         du, dv = x - a, y - b
         e = du * du + dv * dv - rr * rr
-        history.append(float(e @ e))
+        history.append(dot(e, e))
         se, su, sv = e.sum(), du.sum(), dv.sum()
-        f = -4.0 * np.array([e @ du, e @ dv, rr * se])
+        f = -4.0 * np.array([dot(e, du), dot(e, dv), rr * se])
         jac = np.array([
-            [4.0 * (2.0 * (du @ du) + se), 8.0 * (du @ dv), 8.0 * rr * su],
-            [8.0 * (du @ dv), 4.0 * (2.0 * (dv @ dv) + se), 8.0 * rr * sv],
+            [4.0 * (2.0 * dot(du, du) + se), 8.0 * dot(du, dv), 8.0 * rr * su],
+            [8.0 * dot(du, dv), 4.0 * (2.0 * dot(dv, dv) + se), 8.0 * rr * sv],
             [8.0 * rr * su, 8.0 * rr * sv, -4.0 * se + 8.0 * rr * rr * n],
         ])
         return f, jac

@@ -90,7 +90,7 @@ def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndar
     if small <= rtol * rtol * big:
         raise InvalidInputError(f"{who}all {n} points lie on one straight line (to {rtol:.0e} of their spread); "
                                 "no circle or ellipse passes through them")
-    offer_frame(arr, (shift, scale, x, y))
+    offer_frame(arr, (shift, scale, x, y), total)
     return arr
 
 

@@ -107,17 +107,19 @@ def kasa_moments(m: np.ndarray) -> np.ndarray:
     return np.array([xc, yc, np.sqrt(r2) if r2 > 0 else np.nan])
 
 
-def geometric_normal_equations(x, y, p):
+def geometric_normal_equations(x, y, p, work: np.ndarray | None = None):
     """Residuals and normal equations at p in one sweep: (F, J^T J, J^T d, (c, s, r, d)) for
     d_i = r_i - R, J rows [-c_i, -s_i, -1], c_i = (x_i - xc)/r_i, s_i = (y_i - yc)/r_i
-    (roundness paper eq. 10); None if a point is the centre. One sweep: c, s, d in one (3, N) buffer,
-    six sums of products and three sums."""
+    (roundness paper eq. 10); None if a point is the centre. ``work``: an optional (4, N) array the
+    rows c, s, d, r are written into (an iteration reuses it: no allocation per sweep); six sums of
+    products and three sums."""
     n = len(x)
-    buf = np.empty((3, n))
-    c, s, d = buf
+    if work is None:
+        work = np.empty((4, n))
+    c, s, d, r = work
     np.subtract(x, p[0], out=c)
     np.subtract(y, p[1], out=s)
-    r = c * c
+    np.multiply(c, c, out=r)
     np.multiply(s, s, out=d)
     r += d
     np.sqrt(r, out=r)
@@ -126,7 +128,7 @@ def geometric_normal_equations(x, y, p):
         s /= r
     np.subtract(r, p[2], out=d)
     cc, cs, ss_, cd, sd_, dd = dot(c, c), dot(c, s), dot(s, s), dot(c, d), dot(s, d), dot(d, d)
-    sc, ss, sd = buf.sum(axis=1)
+    sc, ss, sd = work[:3].sum(axis=1)
     if not np.isfinite([cc, cs, ss_, sc, ss]).all():
         return None
     jtj = np.array([[cc, cs, sc], [cs, ss_, ss], [sc, ss, float(n)]])

@@ -33,6 +33,7 @@ def kasa(points):
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="Kåsa system gives R^2 <= 0: no real circle fits these points")
     center, radius = frame.circle_to_data(p)
+    del frame  # the result's residual sweep does not need the unit-frame copy
     return circle_result(points, center, radius, converged=True, message="closed-form solution")
 
 
@@ -83,6 +84,7 @@ def _constrained_fit(points, kind: str):
     frame = Frame.of(points)
     m = moments(frame.x, frame.y)
     a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])))
+    frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))  # release the copy
     return _circle_from_conic(points, frame, a, message)
 
 

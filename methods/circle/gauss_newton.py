@@ -42,7 +42,8 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     p = algebraic_start(x, y) if p_start is None else frame.circle_to_unit(p_start)
     history, steps = [], []
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
-    state = geometric_normal_equations(x, y, p)  # J of eq. 10, as J^T J and J^T d: one sweep
+    work = np.empty((4, n))  # one workspace for every sweep (peak memory: frame + 4 N numbers)
+    state = geometric_normal_equations(x, y, p, work)  # J of eq. 10, as J^T J and J^T d: one sweep
     f_prev = None
     it = 0
     for it in range(1, max_iter + 1):
@@ -76,7 +77,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         step = float(np.linalg.norm(delta))
         steps.append(step)
         f_prev = f
-        state = geometric_normal_equations(x, y, p)
+        state = geometric_normal_equations(x, y, p, work)
         if stop == "step" and step <= xtol:
             converged, message = True, f"(Delta^T Delta)^(1/2) <= xtol={xtol:g}"
             break
@@ -93,7 +94,9 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         check = None
     center, radius = frame.circle_to_data(p)
     scale2 = frame.power(2)
-    extra = {"step_norms": [s * frame.scale for s in steps], "stop": stop}
+    scale = frame.scale
+    del work, state, x, y, frame  # the result's residual sweep needs none of them
+    extra = {"step_norms": [s * scale for s in steps], "stop": stop}
     if check is not None:
         extra.update(check.extra(scale2))
     return circle_result(points, center, radius, converged=converged, message=message, iterations=it,

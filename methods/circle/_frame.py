@@ -20,6 +20,11 @@ class Frame(UnitFrame):
         p = np.asarray(p, dtype=np.float64)
         return np.array([(p[0] - self.shift[0]) / self.scale, (p[1] - self.shift[1]) / self.scale, p[2] / self.scale])
 
+    @property
+    def ulp(self) -> float:
+        """The rounding of the data's coordinates in the unit frame: eps max(1, |shift| / scale)."""
+        return float(np.finfo(float).eps) * max(1.0, float(np.abs(self.shift).max()) / self.scale)
+
     def power(self, k: int) -> float:
         """scale**k for converting objective values to data units; inf/0 (no exception) when out of range."""
         with np.errstate(over="ignore", under="ignore"):

@@ -9,7 +9,8 @@ returned point p the Gauss–Newton model of F promises the decrease
                                         to first order; D = 0 exactly at a stationary point).
 
 p is accepted when D <= ``REL_DECREASE`` * F + the rounding noise of F (every e_i carries an absolute
-error ~4 eps (|terms|)), in the unit frame (data centred, RMS radius 1), so the test does not depend
+error ~4 eps (|terms|)) + trace(J^T J) (1024 ulp)^2 (moving the circle by 1024 ulps = 2.3e-13 of the data: exact data
+have F ~ 0, where a relative test means nothing; ``ulp`` = eps max(1, |shift| / scale) in the unit frame), in the unit frame (data centred, RMS radius 1), so the test does not depend
 on the unit or the position of the data. A point whose radius collapses (R < ``MIN_RADIUS`` of the
 data's size) or whose centre runs off to infinity (R > ``MAX_RADIUS``: the points are then a
 straight line to the precision of the fit) is reported as degenerate, never as converged.
@@ -27,6 +28,8 @@ EPS = float(np.finfo(float).eps)
 REL_DECREASE = 1e-9
 #: unit-frame radii outside (MIN_RADIUS, MAX_RADIUS) are degenerate circles
 MIN_RADIUS, MAX_RADIUS = 1e-8, 1e8
+#: a point this many ulps of the data (unit frame; 1024 eps = 2.3e-13 of its size) from the optimum counts as the optimum
+DATA_ULPS = 1024
 
 
 @dataclass(frozen=True)
@@ -56,8 +59,10 @@ def _degenerate(p) -> str | None:
     return None
 
 
-def _decide(g, jtj, f, noise, label) -> Stationarity:
-    tol = REL_DECREASE * f + noise
+def _decide(g, jtj, f, noise, label, ulp) -> Stationarity:
+    # + the decrease of moving the circle by DATA_ULPS ulps of the data: below it the data, rounded to
+    # float64, do not define the circle any better (exact data have F ~ 0, where 1e-9 F means nothing)
+    tol = REL_DECREASE * f + noise + float(np.trace(jtj)) * (DATA_ULPS * ulp) ** 2
     try:
         h = np.linalg.lstsq(jtj, g, rcond=None)[0]
         dec = float(g @ h)
@@ -66,7 +71,7 @@ def _decide(g, jtj, f, noise, label) -> Stationarity:
     ok = bool(np.isfinite(dec) and dec <= tol)
     word = "stationary" if ok else "NOT stationary"
     text = (f"{word}: Gauss–Newton decrease of {label} at the returned point {dec:.1e} "
-            f"{'<=' if ok else '>'} 1e-9 F + rounding = {tol:.1e} (unit frame)")
+            f"{'<=' if ok else '>'} 1e-9 F + rounding + 1024 data ulps = {tol:.1e} (unit frame)")
     return Stationarity(ok, False, dec, tol, f, text)
 
 
@@ -74,7 +79,7 @@ def _refuse(reason: str) -> Stationarity:
     return Stationarity(False, True, float("nan"), float("nan"), float("nan"), reason)
 
 
-def geometric(x: np.ndarray, y: np.ndarray, p) -> Stationarity:
+def geometric(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity:
     """Stationarity of S_CG = sum (r_i - R)^2 at unit-frame p = (xc, yc, R)."""
     reason = _degenerate(p)
     if reason:
@@ -90,10 +95,10 @@ def geometric(x: np.ndarray, y: np.ndarray, p) -> Stationarity:
     f = dot(d, d)
     delta = 4 * EPS * (r + abs(p[2]))
     noise = 2 * dot(np.abs(d), delta) + dot(delta, delta)
-    return _decide(g, jtj, f, noise, "S_CG")
+    return _decide(g, jtj, f, noise, "S_CG", ulp)
 
 
-def algebraic(x: np.ndarray, y: np.ndarray, p) -> Stationarity:
+def algebraic(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity:
     """Stationarity of S_CA = sum ((x_i - xc)^2 + (y_i - yc)^2 - R^2)^2 at unit-frame p; its
     stationary point R = 0 (dS/dR = -4 R sum e_i vanishes there) is reported as degenerate."""
     reason = _degenerate(p)
@@ -109,10 +114,10 @@ def algebraic(x: np.ndarray, y: np.ndarray, p) -> Stationarity:
     f = dot(e, e)
     delta = 4 * EPS * (q + p[2] * p[2])
     noise = 2 * dot(np.abs(e), delta) + dot(delta, delta)
-    return _decide(g, jtj, f, noise, "S_CA")
+    return _decide(g, jtj, f, noise, "S_CA", ulp)
 
 
-def geometric_from_state(p, state) -> Stationarity:
+def geometric_from_state(p, state, ulp: float = EPS) -> Stationarity:
     """:func:`geometric` from the normal equations at p that an iteration already computed
     (``methods.circle._frame.geometric_normal_equations``), so the check costs no extra sweep.
     The rounding noise of F is bounded by Cauchy–Schwarz: 8 eps sqrt(F sum (r_i + R)^2) + 16 eps^2
@@ -126,4 +131,4 @@ def geometric_from_state(p, state) -> Stationarity:
     rr = abs(float(p[2]))
     s2 = max(f - 4 * rr * float(jtd[2]) + 4 * jtj[2, 2] * rr * rr, 0.0)
     noise = 8 * EPS * np.sqrt(f * s2) + 16 * EPS * EPS * s2
-    return _decide(-jtd, jtj, f, noise, "S_CG")
+    return _decide(-jtd, jtj, f, noise, "S_CG", ulp)

@@ -87,7 +87,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
                        f"below its rounding noise (xtol={xtol:g} is below the resolution)")
             break
     if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
-        check = stationarity.geometric_from_state(p, state if np.isfinite(p).all() else None)
+        check = stationarity.geometric_from_state(p, state if np.isfinite(p).all() else None, frame.ulp)
         converged = check.ok
         message = f"{message}; {check.text}"
     else:

@@ -67,7 +67,7 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-15, 
         iterations = None if run.iterations is None else iterations + run.iterations
         nfev += run.nfev
         p = run.x
-        check = stationarity.geometric(x, y, p)
+        check = stationarity.geometric(x, y, p, frame.ulp)
         if check.ok or check.degenerate or restarts >= MAX_RESTARTS or nfev >= max_fev:
             break
         restarts += 1

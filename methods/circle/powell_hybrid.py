@@ -74,7 +74,7 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
     # MINPACK's own stop (status 1: xtol met; 3: xtol too small; 4, 5: no progress, which on exact data
     # happens at the root itself) is necessary; the flag then needs the point to be a non-degenerate
     # stationary point of S_CA (its R = 0 stationary point and a centre at infinity are refused).
-    check = stationarity.algebraic(x, y, sol.x)
+    check = stationarity.algebraic(x, y, sol.x, frame.ulp)
     stopped = int(sol.status) in (1, 3, 4, 5)
     ok = stopped and check.ok
     message = f"{minpack}; {check.text}" if stopped or check.degenerate else minpack

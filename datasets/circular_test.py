@@ -16,6 +16,7 @@ run-out arcs (not part of the evaluated trace). Each error source moves the actu
   dx = A sin(2 pi x / p), dy = A sin(2 pi y / p), in absolute machine coordinates;
 * ``straightness_y`` (mm): the X axis' straightness in Y, dy = S ((x - x_c) / R)^2;
 * ``vibration_y`` (mm) with ``vibration_hz``: dy = A sin(2 pi f t) (the paper saw 4 Hz on Y);
+* ``drift_x``, ``drift_y`` (mm/s): slow thermal drift of the axes during the run, dx = drift_x t;
 * ``noise`` (mm): Gaussian, per coordinate;
 * ``offset_x``, ``offset_y`` (mm): the instrument's centre away from the nominal centre (set-up).
 """
@@ -43,6 +44,8 @@ class MachineErrors:
     straightness_y: float = 0.0
     vibration_y: float = 0.0
     vibration_hz: float = 4.0
+    drift_x: float = 0.0
+    drift_y: float = 0.0
     noise: float = 0.0
     offset_x: float = 0.0
     offset_y: float = 0.0
@@ -66,6 +69,7 @@ class TestConditions:
     start_angle_deg: float = 239.0
     run_in_deg: float = 0.0
     run_out_deg: float = 0.0
+    arc_deg: float = 360.0          # ISO 230-4 partial arcs (e.g. 220 deg in a vertical plane)
     plane: str = "X/Y"
     machine: str = "synthetic"
     extra: dict = field(default_factory=dict)
@@ -90,7 +94,8 @@ def trace(direction: str, cond: TestConditions, err: MachineErrors, rng: np.rand
     v = cond.feed_mm_min / 60.0
     omega = v / R
     run_in, run_out = np.radians(cond.run_in_deg), np.radians(cond.run_out_deg)
-    total_angle = 2 * np.pi + run_in + run_out
+    arc = np.radians(cond.arc_deg)
+    total_angle = arc + run_in + run_out
     dt = 1.0 / cond.sampling_hz
     t = np.arange(0.0, total_angle / omega, dt)
     theta = np.radians(cond.start_angle_deg) - d * run_in + d * omega * t
@@ -111,6 +116,9 @@ def trace(direction: str, cond: TestConditions, err: MachineErrors, rng: np.rand
         dy += err.straightness_y * ((x - xc) / R) ** 2
     if err.vibration_y:
         dy += err.vibration_y * np.sin(2 * np.pi * err.vibration_hz * t)
+    if err.drift_x or err.drift_y:
+        dx = dx + err.drift_x * t
+        dy = dy + err.drift_y * t
     if err.noise:
         if rng is None:
             raise ValueError("noise needs an explicit numpy Generator (rng)")
@@ -118,10 +126,11 @@ def trace(direction: str, cond: TestConditions, err: MachineErrors, rng: np.rand
         dy = dy + rng.normal(0.0, err.noise, t.shape)
     pts = np.column_stack([x + dx + err.offset_x, y + dy + err.offset_y])
     swept = d * (theta - theta[0])
-    evaluated = (swept >= run_in - 1e-12) & (swept < run_in + 2 * np.pi)
+    end = (swept < run_in + arc) if cond.arc_deg >= 360 else (swept <= run_in + arc + 1e-12)
+    evaluated = (swept >= run_in - 1e-12) & end
     info = {"t": t[evaluated], "commanded": np.column_stack([x, y])[evaluated], "theta": theta[evaluated],
             "direction": direction, "run_in": pts[swept < run_in - 1e-12],
-            "run_out": pts[swept >= run_in + 2 * np.pi]}
+            "run_out": pts[(swept >= run_in - 1e-12) & ~end]}
     return pts[evaluated], info
 
 

@@ -5,19 +5,40 @@ import importlib
 import tomllib
 from pathlib import Path
 
+from experiments import schema
 from experiments.engine import ConfigError
 
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
-REQUIRED = ("name", "title", "kind")
 
 
 def available() -> dict[str, Path]:
     return {p.stem: p for p in sorted(CONFIG_DIR.glob("*.toml"))}
 
 
+#: The largest grid a run expands without ``--max-rows`` (each row is one fit; 10^6 rows is hours of work).
+MAX_ROWS = 1_000_000
+
+
+def _read(path: Path, where: str) -> dict:
+    if path.is_dir():
+        raise ConfigError(f"{where}: is a directory, not a TOML file")
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{where}: not UTF-8 text (byte {exc.start}); save the config as UTF-8") from None
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot be read ({exc.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{where}: not valid TOML ({exc})") from None
+
+
 def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
     """The config of study ``name`` (or of a .toml path), with its ``[quick]`` table applied when
-    ``quick`` and ``seed`` overriding its seed. Errors name the file, the key and the problem."""
+    ``quick`` and ``seed`` overriding its seed. Everything is checked before a row runs: the structure
+    (experiments/schema.py), the values of data-source and method parameters, the study's own rules.
+    Errors name the file, the key and the problem in one line."""
     path = Path(name)
     if path.suffix == ".toml" and path.exists():
         stem = path.stem
@@ -28,31 +49,61 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
                               f"({', '.join(configs) or 'none'})")
         path, stem = configs[name], name
     where = path.name
-    try:
-        cfg = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{where}: not valid TOML ({exc})") from None
-    for key in REQUIRED:
-        if key not in cfg:
-            raise ConfigError(f"{where}: missing required key {key!r}")
+    cfg = _read(path, where)
+    schema.check_structure(cfg, where)
     if cfg["name"] != stem:
         raise ConfigError(f"{where}: name = {cfg['name']!r} must match the file name {stem!r}")
     quick_table = cfg.pop("quick", {})
-    if not isinstance(quick_table, dict):
-        raise ConfigError(f"{where}: [quick] must be a table of overrides")
     if quick:
         cfg.update(quick_table)
     if seed is not None:
+        if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+            raise ConfigError(f"--seed must be a non-negative integer, got {seed!r}")
         cfg["seed"] = seed
     cfg.setdefault("seed", 0)
-    if not isinstance(cfg["seed"], int):
-        raise ConfigError(f"{where}: seed must be an integer, got {cfg['seed']!r}")
     try:
         study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
     except ModuleNotFoundError:
-        raise ConfigError(f"{where}: unknown kind {cfg['kind']!r} (a module in experiments/studies/)") from None
+        raise ConfigError(f"{where}: kind: unknown kind {cfg['kind']!r} (a module in experiments/studies/)") from None
+    schema.check_values(cfg, where)
+    if not hasattr(study, "tasks"):  # the generic grid: data sets x methods
+        for key in ("datasets", "methods"):
+            if not cfg.get(key):
+                raise ConfigError(f"{where}: {key}: missing; the study kind {cfg['kind']!r} needs at least one [[{key}]] table")
     cfg["_where"] = where
     cfg["_quick"] = quick
     if hasattr(study, "validate"):
         study.validate(cfg, where)
     return cfg
+
+
+def _grid_size(entry) -> int:
+    size = 1
+    for values in (entry.get("grid", {}) if isinstance(entry, dict) else {}).values():
+        size *= len(values)
+    return size
+
+
+def count_rows(cfg: dict) -> int:
+    """An upper bound of the rows of the generic grid, from the config alone (nothing expanded):
+    data-set grid points x repetitions x method grid points. A study that multiplies its rows further
+    (its own ``tasks``) is checked again on the expanded task list."""
+    import methods
+    reps = cfg.get("repetitions", 1)
+    n_data = 0
+    for entry in cfg.get("datasets", []):
+        n_data += _grid_size(entry) * (1 if "published" in entry else reps)
+    if not cfg.get("datasets"):
+        n_data = max(len(cfg.get("scenarios", [])), 1) * reps
+    n_methods = 0
+    for entry in cfg.get("methods", []):
+        mid = entry if isinstance(entry, str) else entry["id"]
+        ids = len(methods.list_methods(mid[:-2])) if mid.endswith(".*") else 1
+        n_methods += ids * _grid_size(entry)
+    return n_data * max(n_methods, 1)
+
+
+def check_rows(cfg: dict, n_rows: int, max_rows: int) -> None:
+    if n_rows > max_rows:
+        raise ConfigError(f"{cfg['_where']}: the grid has {n_rows:,} rows, more than the limit of {max_rows:,}; "
+                          f"shrink the grid or pass --max-rows {n_rows}")

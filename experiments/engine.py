@@ -19,15 +19,11 @@ runs it, so all non-timing columns are deterministic for a config and seed.
 """
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import importlib
 import inspect
 import itertools
 import json
-import os
-import sqlite3
-import sys
 import time
 from pathlib import Path
 
@@ -215,6 +211,13 @@ def base_row(task: dict) -> dict:
     return row
 
 
+#: columns a generic row may have besides those of base_row (status, counts, every metric, timing)
+RESULT_COLUMNS = ("status", "message", "converged", "iterations", "nfev", "form_error", "residual_rms", "center_x",
+                  "center_y", "radius", "semi_axis_a", "semi_axis_b", "angle", "inner_radius", "outer_radius",
+                  "center_error_x", "center_error_y", "center_error", "radius_error", "semi_axis_a_error",
+                  "semi_axis_b_error", "angle_error", "task_index")
+
+
 def fit_row(task: dict, points, truth) -> dict:
     """Fit, measure, time: the generic row of a task (exceptions become status 'error')."""
     row = base_row(task)
@@ -259,132 +262,9 @@ def _plain(row: dict) -> dict:
     return out
 
 
-# ---------------------------------------------------------------- the row store
-
-class RowStore:
-    """Finished rows by cache key in SQLite: one committed transaction per row (atomic, crash-safe)."""
-
-    def __init__(self, path: Path):
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self.db = sqlite3.connect(path)
-        self.db.execute("PRAGMA journal_mode=WAL")
-        self.db.execute("PRAGMA synchronous=NORMAL")  # WAL: a commit survives a crash of the program
-        self.db.execute("CREATE TABLE IF NOT EXISTS rows (key TEXT PRIMARY KEY, status TEXT, row TEXT)")
-        self.db.commit()
-
-    def done(self, keys: list[str]) -> dict[str, str]:
-        """Status of the stored rows among ``keys``."""
-        out = {}
-        for i in range(0, len(keys), 500):
-            chunk = keys[i:i + 500]
-            q = f"SELECT key, status FROM rows WHERE key IN ({','.join('?' * len(chunk))})"
-            out.update(dict(self.db.execute(q, chunk).fetchall()))
-        return out
-
-    def put(self, key: str, row: dict) -> None:
-        with self.db:
-            self.db.execute("INSERT OR REPLACE INTO rows VALUES (?, ?, ?)", (key, row.get("status"), json.dumps(row)))
-
-    def get(self, keys: list[str]) -> list[dict]:
-        rows = {}
-        for i in range(0, len(keys), 500):
-            chunk = keys[i:i + 500]
-            q = f"SELECT key, row FROM rows WHERE key IN ({','.join('?' * len(chunk))})"
-            rows.update({k: json.loads(r) for k, r in self.db.execute(q, chunk).fetchall()})
-        return [rows[k] for k in keys if k in rows]
-
-    def forget(self, keys: list[str]) -> None:
-        with self.db:
-            self.db.executemany("DELETE FROM rows WHERE key = ?", [(k,) for k in keys])
-
-    def close(self):
-        self.db.close()
-
-
-# ---------------------------------------------------------------- executors
-
-def _progress(total: int, desc: str):
-    from tqdm import tqdm
-    return tqdm(total=total, desc=desc, unit="row", disable=not sys.stderr.isatty(), leave=False, dynamic_ncols=True)
-
-
-def execute(tasks: list[dict], store: RowStore, *, jobs: int, executor: str, scheduler: str | None, desc: str):
-    """Run tasks and store each row as it finishes. KeyboardInterrupt cancels what is pending; what
-    finished stays stored."""
-    if not tasks:
-        return
-    bar = _progress(len(tasks), desc)
-    try:
-        if executor == "dask":
-            _run_dask(tasks, store, jobs, scheduler, bar)
-        elif jobs <= 1:
-            for t in tasks:
-                store.put(t["key"], run_task(t))
-                bar.update()
-        else:
-            _run_processes(tasks, store, jobs, bar)
-    finally:
-        bar.close()
-
-
-BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-@contextlib.contextmanager
-def _one_blas_thread_per_worker():
-    """Workers inherit the environment when they start (lazily, at the first submit): one BLAS thread each,
-    unless the user chose otherwise. With several workers, multi-threaded BLAS on small matrices
-    oversubscribes the cores (the multilateration study ran 3x slower with 2 workers x 2 OpenBLAS threads
-    on 2 cores)."""
-    saved = {v: os.environ.get(v) for v in BLAS_THREAD_VARS}
-    for var in BLAS_THREAD_VARS:
-        os.environ.setdefault(var, "1")
-    try:
-        yield
-    finally:
-        for v, val in saved.items():
-            if val is None:
-                os.environ.pop(v, None)
-            else:
-                os.environ[v] = val
-
-
-def _run_processes(tasks, store, jobs, bar):
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-    with _one_blas_thread_per_worker():
-        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"))
-        try:
-            futures = {pool.submit(run_task, t): t for t in tasks}
-            for fut in as_completed(futures):
-                store.put(futures[fut]["key"], fut.result())
-                bar.update()
-        except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
-        pool.shutdown()
-
-
-def _run_dask(tasks, store, jobs, scheduler, bar):
-    from distributed import Client, LocalCluster, as_completed
-    cluster = None
-    if scheduler:
-        client = Client(scheduler)
-    else:
-        with _one_blas_thread_per_worker():
-            cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=40)
-        client = Client(cluster)
-    try:
-        futures = client.map(run_task, tasks, pure=False)
-        index = {f.key: t for f, t in zip(futures, tasks)}
-        for fut in as_completed(futures):
-            store.put(index[fut.key]["key"], fut.result())
-            bar.update()
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+# Row store and executors live in their own modules (re-exported here).
+from experiments.store import RowStore  # noqa: E402,F401
+from experiments.executors import BLAS_THREAD_VARS, _one_blas_thread_per_worker, execute  # noqa: E402,F401
 
 
 def prepare(tasks: list[dict]) -> list[dict]:
@@ -409,5 +289,7 @@ def run(tasks: list[dict], store: RowStore, *, force: bool, jobs: int, executor:
     t0 = time.perf_counter()
     execute(todo, store, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc)
     counts["wall_s"] = time.perf_counter() - t0
-    rows = store.get(keys)
+    stored = store.get_by_key(keys)
+    # the order of the rows is the order of the tasks of this config, whatever order they were stored in
+    rows = [{**stored[t["key"]], "task_index": t["index"]} for t in tasks if t["key"] in stored]
     return rows, counts

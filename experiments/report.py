@@ -220,6 +220,10 @@ def build(results: Path, out: Path, log=print) -> Path:
           f"Built from `{_shown(results)}` by `python -m experiments.report`; reproduce everything with "
           "`python -m experiments.run` (the default studies) and "
           "`FITBENCH_NIST_DIR=... python -m experiments.run nist_circle`.", ""]
+    # --- hook of experiments.verify (engine): the last reproducibility verdict, when there is one
+    from experiments.verify import verdict_markdown
+    md += verdict_markdown(results) + [""]
+    # --- end of hook
     html_parts = []
     provenance = None
     for title, studies in SECTIONS + ([("Other studies", extra)] if extra else []):
@@ -311,6 +315,8 @@ def to_html(markdown: str, out: Path) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.report", description="Build paper/ from results/.")
+    from experiments.verify import _version  # --version (engine)
+    parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {_version()})")
     parser.add_argument("--results", type=Path, default=REPO / "results")
     parser.add_argument("--out", type=Path, default=REPO / "paper")
     args = parser.parse_args(argv)

@@ -14,7 +14,9 @@ import importlib
 import io
 import json
 import os
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -22,7 +24,7 @@ import pandas as pd
 
 from experiments import config as configs
 from experiments import engine
-from experiments.provenance import REPO, collect, write_atomic
+from experiments.provenance import collect, write_atomic
 from experiments.summary import summarise, to_markdown
 from methods import InvalidInputError
 
@@ -31,16 +33,53 @@ def default_studies() -> list[str]:
     return [n for n in configs.available() if configs.load(n).get("default", False)]
 
 
+#: what an interrupt message names: the row store of the study that was running
+_CURRENT: dict = {}
+DEFAULT_OUT = Path("results")  # relative to the working directory, never inside the installed package
+
+
+def confined(out: Path, name: str) -> Path:
+    """``out/name``, refused unless it lies inside ``out`` (a name is never a path)."""
+    target = (out / name).resolve()
+    if target.parent != out.resolve() or not name or name in (".", ".."):
+        raise InvalidInputError(f"study name {name!r} would write outside --out {out}; a name is a plain word")
+    return out / name
+
+
+def check_summary_by(cfg: dict, study, tasks: list[dict]) -> None:
+    """Refuse summary_by columns no row will have, before any row runs. The columns are known from the
+    tasks (identity, data and parameter columns), the generic fit (status, metrics, timing) and, for a
+    study with its own ``execute``, the ``ROW_COLUMNS`` it may declare."""
+    by = cfg.get("summary_by")
+    if not by:
+        return
+    known = set(engine.RESULT_COLUMNS)
+    for t in tasks[:10000]:
+        known |= set(engine.base_row(t))
+    if hasattr(study, "execute"):
+        if not hasattr(study, "ROW_COLUMNS"):
+            return  # its columns are known only after it ran: checked then (finish)
+        known |= set(study.ROW_COLUMNS)
+    unknown = [c for c in by if c not in known]
+    if unknown:
+        raise configs.ConfigError(f"{cfg['_where']}: summary_by: no row will have the column(s) {', '.join(unknown)}; "
+                                  f"the rows have: {', '.join(sorted(known))}")
+
+
 def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", scheduler=None, force=False,
-              seed=None, log=print) -> Path:
+              seed=None, log=print, max_rows=configs.MAX_ROWS) -> Path:
     cfg = configs.load(name, quick=quick, seed=seed)
     study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
-    target = out / cfg["name"]
+    target = confined(out, cfg["name"])
     log(f"== {cfg['name']}: {cfg['title']}" + (" [quick]" if quick else ""))
+    configs.check_rows(cfg, configs.count_rows(cfg), max_rows)
     tasks = study.tasks(cfg) if hasattr(study, "tasks") else engine.grid_tasks(cfg, cfg["_where"])
+    configs.check_rows(cfg, len(tasks), max_rows)
+    check_summary_by(cfg, study, tasks)
     engine.prepare(tasks)
     jobs = min(jobs, cfg.get("max_jobs", jobs))
-    store = engine.RowStore(target / "rows.sqlite")
+    store = engine.RowStore(target / "rows.sqlite", log=log)
+    _CURRENT["store"] = target / "rows.sqlite"
     try:
         rows, counts = engine.run(tasks, store, force=force, jobs=jobs, executor=executor, scheduler=scheduler,
                                   desc=cfg["name"], log=log)
@@ -48,6 +87,10 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
         store.close()
     df = pd.DataFrame(rows).sort_values("task_index").drop(columns=["task_index"]).reset_index(drop=True)
     findings = study.finalize(df, cfg, target, log) if hasattr(study, "finalize") else {}
+    if cfg.get("summary_by") and set(cfg["summary_by"]) - set(df.columns):
+        raise configs.ConfigError(f"{cfg['_where']}: summary_by: no row has the column(s) "
+                                  f"{', '.join(sorted(set(cfg['summary_by']) - set(df.columns)))}; "
+                                  f"the rows have: {', '.join(df.columns)}")
     by = cfg.get("summary_by", ["dataset"] + [c for c in df.columns if c.startswith("data_")] + ["method", "params"])
     summary = summarise(df, by)
     public_cfg = {k: v for k, v in cfg.items() if not k.startswith("_")}
@@ -68,19 +111,66 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     return target
 
 
+def _version() -> str:
+    from importlib import metadata
+    try:
+        return metadata.version("fitbench")
+    except metadata.PackageNotFoundError:
+        return "unknown (fitbench is not installed)"
+
+
+def usable_jobs(jobs: int, log=print) -> int:
+    """``jobs``, capped at the cores this process may use (more workers only compete for them)."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:
+        cores = os.cpu_count() or 1
+    if jobs > cores:
+        log(f"--jobs {jobs} capped at {cores}: the cores available to this run")
+        return cores
+    return jobs
+
+
+def check_out(out: Path) -> None:
+    """--out must be a folder we can write into (created when missing)."""
+    if out.exists() and not out.is_dir():
+        raise InvalidInputError(f"--out {out} is a file, not a folder; give a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / f".write-test-{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise InvalidInputError(f"--out {out} cannot be written ({exc.strerror}); give a folder you can write") from None
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so that the run stops the way Ctrl-C stops it."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.run", description="Run fitbench studies.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {_version()})")
     parser.add_argument("names", nargs="*", metavar="NAME", help="studies (names or .toml paths); default: the default studies")
     parser.add_argument("--list", action="store_true", help="list the studies, one line each")
     parser.add_argument("--quick", action="store_true", help="the reduced grid of each study (CI size)")
-    parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="parallel workers (default: 2)")
+    parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
+                        help="parallel workers (default: 2; capped at the cores available)")
     parser.add_argument("--executor", choices=("local", "dask"), default="local",
                         help="local processes, or Dask distributed (a LocalCluster unless --scheduler)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
-    parser.add_argument("--out", type=Path, default=REPO / "results", help="output directory (default: results/)")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT,
+                        help="output folder (default: results/ in the current folder)")
     parser.add_argument("--force", action="store_true", help="recompute rows that are already stored")
     parser.add_argument("--seed", type=int, help="override the studies' base seed")
+    parser.add_argument("--max-rows", type=int, default=configs.MAX_ROWS,
+                        help=f"refuse a study with more rows than this (default: {configs.MAX_ROWS:,})")
     args = parser.parse_args(argv)
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if threading.current_thread() is threading.main_thread() else None
     try:
         if args.list:
             for name in configs.available():
@@ -89,25 +179,40 @@ def main(argv=None) -> int:
             return 0
         if args.jobs < 1:
             raise InvalidInputError(f"--jobs must be at least 1, got {args.jobs}")
-        if args.scheduler and args.executor != "dask":
+        if args.max_rows < 1:
+            raise InvalidInputError(f"--max-rows must be at least 1, got {args.max_rows}")
+        if args.scheduler is not None and args.executor != "dask":
             raise InvalidInputError("--scheduler needs --executor dask")
+        if args.scheduler is not None and not args.scheduler.strip():
+            raise InvalidInputError("--scheduler is empty; give an address such as tcp://host:8786, "
+                                    "or leave it out for a local Dask cluster")
         names = args.names or default_studies()
-        for name in names:  # validate every config before running any
-            configs.load(name, quick=args.quick, seed=args.seed)
+        for name in names:  # validate every config (and its size) before running any
+            cfg = configs.load(name, quick=args.quick, seed=args.seed)
+            configs.check_rows(cfg, configs.count_rows(cfg), args.max_rows)
+            confined(args.out, cfg["name"])
+        check_out(args.out)
+        jobs = args.jobs if args.scheduler else usable_jobs(args.jobs)
         t0 = time.perf_counter()
         for name in names:
-            run_study(name, args.out, quick=args.quick, jobs=args.jobs, executor=args.executor,
-                      scheduler=args.scheduler, force=args.force, seed=args.seed)
+            run_study(name, args.out, quick=args.quick, jobs=jobs, executor=args.executor,
+                      scheduler=args.scheduler, force=args.force, seed=args.seed, max_rows=args.max_rows)
         print(f"done: {len(names)} studies in {time.perf_counter() - t0:.0f} s")
         from experiments.report import build
-        paper = REPO / "paper" if args.out.resolve() == (REPO / "results").resolve() else args.out / "paper"
+        paper = Path("paper") if args.out == DEFAULT_OUT else args.out / "paper"
         build(args.out, paper)
     except InvalidInputError as exc:
         print(f"experiments.run: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("experiments.run: interrupted; finished rows are stored, run again to resume", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        store = _CURRENT.get("store")
+        kept = f"finished rows are kept in {store}" if store else "no rows had run"
+        print(f"\nexperiments.run: {what}; {kept}; run the same command again to resume", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
     return 0
 
 

@@ -11,7 +11,7 @@ from methods._result import (CircleFit, EllipseFit, FitResult, MagnifyFit, Multi
                              ZoneFit)
 from methods._validation import validate_points
 
-from methods import circle, ellipse, magnify, multilateration, positioning  # noqa: E402,F401  (registers the built-in methods)
+from methods import circle, ellipse, magnify, multilateration, positioning, roundness  # noqa: E402,F401  (registers the built-in methods)
 
 __all__ = ["InvalidInputError", "UnknownMethodError", "MethodSpec", "register", "get", "list_methods",
            "fit", "load_plugins", "FitResult", "CircleFit", "ZoneFit", "EllipseFit", "validate_points", "ENTRY_POINT_GROUP", "KINDS"]

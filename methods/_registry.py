@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import difflib
 import inspect
+import math
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -41,19 +42,74 @@ class MethodSpec:
     func: Callable = field(repr=False, compare=False)
     module: str = ""
     validator: Callable | None = field(default=None, repr=False, compare=False)
+    param_checks: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def check_params(self, params: dict) -> None:
+        """Refuse parameter values before any data is fitted (see :func:`check_param`)."""
+        unknown = sorted(set(params) - set(self.defaults))
+        if unknown:
+            raise InvalidInputError(f"{self.id} has no parameter {', '.join(map(repr, unknown))}; "
+                                    f"its parameters are: {', '.join(self.defaults) or 'none'}")
+        for name, value in params.items():
+            problem = check_param(name, value, self.defaults[name], self.param_checks.get(name))
+            if problem:
+                raise InvalidInputError(f"{self.id}: parameter {name}={value!r} {problem}")
 
     def __call__(self, points, **params):
         return _run(self, points, params)
 
 
+def _is_real(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _positive(v):
+    return None if _is_real(v) and v > 0 and math.isfinite(v) else "must be a positive finite number"
+
+
+#: Checks by parameter-name convention, applied to every method (a method's own ``param_checks`` win):
+#: tolerances are positive finite numbers, iteration/evaluation budgets positive integers.
+PARAM_CONVENTIONS: list[tuple[Callable[[str], bool], Callable]] = [
+    (lambda n: n.endswith("tol"), _positive),
+    (lambda n: n.startswith("max_") or n == "maxfev", _positive),
+]
+
+
+def check_param(name: str, value, default, check: Callable | None = None) -> str | None:
+    """The problem with ``value`` for a parameter whose default is ``default`` (None when fine): the value
+    must have the default's type (bool, int, float accepting ints, str; a None default accepts anything),
+    be finite when numeric, and pass ``check(value) -> problem | None`` (declared at :func:`register`)
+    or the name convention of :data:`PARAM_CONVENTIONS`."""
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            return f"must be true or false (the default is {default!r})"
+    elif isinstance(default, int):
+        if isinstance(value, bool) or not isinstance(value, int):
+            return f"must be an integer (the default is {default!r})"
+    elif isinstance(default, float):
+        if not _is_real(value):
+            return f"must be a number (the default is {default!r})"
+        if not math.isfinite(value):
+            return "must be finite"
+    elif isinstance(default, str) and not isinstance(value, str):
+        return f"must be a string (the default is {default!r})"
+    if value is None:
+        return None
+    if check is None:
+        check = next((c for match, c in PARAM_CONVENTIONS if match(name)), None)
+    return check(value) if check is not None else None
+
+
 def register(method_id: str, *, summary: str, reference: str, kind: str, min_points: int | None = None,
-             validator: Callable | None = None):
+             validator: Callable | None = None, param_checks: dict | None = None):
     """Decorator registering ``func(points, **params)`` under ``method_id`` = ``family.name``.
 
     Default parameters are read from the function's keyword defaults (one source of truth).
     The decorated name becomes a callable that validates input, merges defaults, times the fit
     and fills ``method``, ``params`` and ``runtime_s`` of the result. Families whose input is not an
     (N, 2) point array (e.g. ``positioning``) pass their own ``validator(data, method_id)``.
+    ``param_checks`` maps a parameter name to ``check(value) -> problem or None``, used by
+    :meth:`MethodSpec.check_params` before a config runs (see :func:`check_param`).
     """
     family, dot, name = method_id.partition(".")
     if not dot or not family or not name or "." in name:
@@ -70,7 +126,8 @@ def register(method_id: str, *, summary: str, reference: str, kind: str, min_poi
         spec = MethodSpec(id=method_id, family=family, name=name, summary=summary, reference=reference,
                           kind=kind, defaults=defaults,
                           min_points=min_points or FAMILY_MIN_POINTS.get(family, 1),
-                          func=func, module=func.__module__, validator=validator)
+                          func=func, module=func.__module__, validator=validator,
+                          param_checks=dict(param_checks or {}))
         existing = _REGISTRY.get(method_id)
         if existing is not None and existing.module != spec.module:
             raise ValueError(f"method id {method_id!r} is already registered by {existing.module}")

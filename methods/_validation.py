@@ -136,25 +136,34 @@ def read_text_file(path, *, error=InvalidInputError, missing_hint: str = "") -> 
         raise error(f"{path}: cannot be read as text ({exc})") from None
 
 
-def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True):
-    """A delimited text table (comma, semicolon or whitespace separated; blank and '#' lines skipped) as a
-    DataFrame of strings, with the file's line number of each data row. Errors are one line."""
+def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, skip_rows: int = 0):
+    """A delimited text table (comma, semicolon, tab or whitespace separated; blank and '#' lines skipped;
+    ``skip_rows`` preamble lines dropped; a semicolon or tab file may use decimal commas, which are
+    turned into points) as a DataFrame of strings, with the file's line number of each data row.
+    Errors are one line."""
     import io
+    import re
 
     import pandas as pd
 
+    if skip_rows < 0:
+        raise InvalidInputError(f"--skip-rows must be >= 0, got {skip_rows}")
     raw = read_text_file(path)
     kept, lines = [], []
     for k, line in enumerate(raw.splitlines(), start=1):
-        if line.strip() and not line.lstrip().startswith("#"):
+        if k > skip_rows and line.strip() and not line.lstrip().startswith(("#", "%", "//")):
             kept.append(line)
             lines.append(k)
     if len(kept) < 2:
         raise InvalidInputError(f"{path}: no data lines{f' ({no_data_hint})' if no_data_hint else ''}")
-    sep = ";" if ";" in kept[0] else "," if "," in kept[0] else r"\s+"
+    sep = ";" if ";" in kept[0] else "," if "," in kept[0] else "\t" if "\t" in kept[0] else r"\s+"
+    decimal_comma = sep in (";", "\t", r"\s+") and any(re.search(r"\d,\d", ln) for ln in kept[1:51])
     try:
         df = pd.read_csv(io.StringIO("\n".join(kept)), sep=sep, engine="python", dtype=str,
                          keep_default_na=keep_default_na)
     except pd.errors.ParserError as exc:
         raise InvalidInputError(f"{path}: malformed table ({str(exc).splitlines()[0]})") from None
+    if decimal_comma:
+        df = df.apply(lambda col: col.str.replace(r"^\s*([+-]?\d*),(\d+(?:[eE][+-]?\d+)?)\s*$", r"\1.\2", regex=True)
+                      if pd.api.types.is_string_dtype(col) or col.dtype == object else col)
     return df, lines[1:]

@@ -1,25 +1,132 @@
-"""Command line: ``python -m methods list``, ``fit METHOD_ID FILE`` and the machine-test subcommands.
+"""Command line: ``fitbench`` / ``python -m methods``: ``list``, ``fit METHOD_ID FILE`` and the
+machine-test subcommands (circular-test, positioning, magnify, multilaterate).
 
-Bad input ends with one line on stderr and exit status 2, never a traceback.
+Bad input ends with one line on stderr and exit status 2, never a traceback; warnings (a likely unit
+mix-up, a swapped pair of runs, a nominal centre far from the data) are lines ``fitbench: warning: ...``
+on stderr. Units: every reader takes ``--unit`` (its file's length unit, default mm); options on the
+command line are in mm (lengths), mm/min (feed) and degrees (angles); printed output is in µm, µrad and
+°; JSON in mm and rad with a ``units`` field. Subcommands are one table (``SUBCOMMANDS``): adding one is
+a function ``add_NAME(sub)`` that builds its parser and sets ``func``.
 """
 from __future__ import annotations
 
 import argparse
 import json
 import math
+import os
 import sys
+import tempfile
+import warnings
+from pathlib import Path
 
 import numpy as np
 
 import methods
 from methods._errors import InvalidInputError
+from methods.units import JSON_UNITS, UNIT_CHOICES, canonical
 
 EXIT_BAD_INPUT = 2
 
 
+PROG = "python -m methods"
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, exit 2 (argparse prints usage over several lines)
-        raise InvalidInputError(f"{message} (see 'python -m methods --help')")
+        raise InvalidInputError(f"{message} (see '{self.prog.split()[0] if self.prog.startswith('fitbench') else PROG} --help')")
+
+
+def version() -> str:
+    from fitbench import __version__
+    return __version__
+
+
+def warn(message: str) -> None:
+    print(f"fitbench: warning: {message}", file=sys.stderr)
+
+
+def finite(name: str, value, *, positive: bool = False, allow_none: bool = True):
+    """A command-line number: finite (and > 0 with ``positive``), else a one-line error."""
+    if value is None and allow_none:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or (positive and v <= 0):
+        raise InvalidInputError(f"{name} must be a {'positive' if positive else 'finite'} number, got {value!r}")
+    return v
+
+
+def check_plot_path(path) -> Path | None:
+    """Refuse, before any computation, a plot file in a missing folder or with a format matplotlib cannot write."""
+    if path is None:
+        return None
+    path = Path(path)
+    import matplotlib
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+    formats = Figure().canvas.get_supported_filetypes()
+    ext = path.suffix.lower().lstrip(".")
+    if ext not in formats:
+        raise InvalidInputError(f"--plot {path}: unknown image format {path.suffix or '(none)'!r}; "
+                                f"use one of .{', .'.join(sorted(formats))}")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise InvalidInputError(f"--plot {path}: the folder {parent} does not exist; create it first")
+    return path
+
+
+def save_figure(fig, path, dpi=120) -> None:
+    """Write a matplotlib figure atomically (a temporary file in the same folder, then a rename)."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=dpi, format=path.suffix.lower().lstrip("."))
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def write_text_atomic(path, text: str) -> None:
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise InvalidInputError(f"{path}: the folder {parent} does not exist; create it first")
+    fd, tmp = tempfile.mkstemp(dir=parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def add_reader_options(p, *, columns=True):
+    """--unit, --skip-rows (and --columns / --plane): the options of every file reader."""
+    p.add_argument("--unit", default="mm", choices=UNIT_CHOICES,
+                   help="length unit of the input file(s) (default mm); results are printed in µm")
+    p.add_argument("--skip-rows", type=int, default=0, metavar="N",
+                   help="skip N lines at the top of each file (the instrument's preamble)")
+    if columns:
+        g = p.add_mutually_exclusive_group()
+        g.add_argument("--columns", nargs=2, metavar=("A", "B"),
+                       help="the two coordinate columns (header names or 0-based numbers; default x y)")
+        g.add_argument("--plane", choices=("xy", "yz", "zx"), help="the plane's two named columns (x,y / y,z / z,x)")
+
+
+def header_line(command: str, unit: str, extra: str = "", deviation_unit: str | None = None) -> str:
+    units = canonical(unit) + (f", deviations {canonical(deviation_unit)}" if deviation_unit else "")
+    converted = canonical(unit) != "mm" or (deviation_unit and canonical(deviation_unit) != "mm")
+    return (f"fitbench {version()} {command}: input unit {units}{' (converted to mm)' if converted else ''}; "
+            f"lengths printed in µm{extra}")
 
 
 def parse_value(key: str, text: str, default, method_id: str):
@@ -96,14 +203,24 @@ def cmd_fit(args) -> int:
             raise InvalidInputError(f"{spec.id} has no parameter {key!r}; its parameters are: "
                                     f"{', '.join(spec.defaults) or 'none'}")
         params[key] = parse_value(key, text, spec.defaults[key], spec.id)
-    source, points = points_from(args.file)
+    from pathlib import Path as _P
+    if _P(args.file).exists() or args.unit != "mm" or args.columns or args.plane or args.skip_rows:
+        from datasets import read_points
+        source = str(args.file)
+        points = read_points(args.file, tuple(args.columns) if args.columns else ("x", "y"), plane=args.plane,
+                             unit=args.unit, skip_rows=args.skip_rows)
+    else:
+        source, points = points_from(args.file)
     result = spec(points, **params)
     if args.json:
         d = result.to_dict(residuals=not args.no_residuals)
         d["source"] = source
         d["n_points"] = int(np.asarray(points).shape[0])
+        d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(args.unit)}
         print(json.dumps(d))
         return 0
+    print(f"input unit {canonical(args.unit)}{' (converted to mm)' if canonical(args.unit) != 'mm' else ''}; "
+          "lengths below in mm")
     rows = [("method", result.method), ("data", f"{source} ({len(points)} points)")]
     if hasattr(result, "center"):
         rows += [("center x", _fmt(result.center[0])), ("center y", _fmt(result.center[1]))]
@@ -114,7 +231,7 @@ def cmd_fit(args) -> int:
                  ("contacts", f"outer {result.contacts['outer']}, inner {result.contacts['inner']}")]
     if hasattr(result, "semi_axes"):
         rows += [("semi-axes", f"a = {_fmt(result.semi_axes[0])}, b = {_fmt(result.semi_axes[1])}"),
-                 ("angle", f"{_fmt(result.angle)} rad ({_fmt(math.degrees(result.angle))} deg, direction of a)")]
+                 ("angle", f"{_fmt(result.angle)} rad ({_fmt(math.degrees(result.angle))}°, direction of a)")]
     rows += [("form error", _fmt(result.form_error)),
              ("converged", f"{'yes' if result.converged else 'NO'} ({result.message})"),
              ("iterations", _fmt(result.iterations)), ("evaluations", _fmt(result.nfev)),
@@ -125,50 +242,159 @@ def cmd_fit(args) -> int:
     return 0 if result.converged else 1
 
 
-def cmd_circular_test(args) -> int:
-    from datasets import points_from
-    from methods.circular_test import diagnose, evaluate
-    from methods.circular_test.report import polar_plot, text
+# ----------------------------------------------------------------------------------------- circular test
+def _read_circular_runs(args):
+    """{'cw': points, 'ccw': points} as the user labelled them, from one file (direction/run column) or two."""
+    from datasets.io import read_runs
+    kw = dict(columns=tuple(args.columns) if args.columns else None, plane=args.plane, unit=args.unit,
+              skip_rows=args.skip_rows, angle_unit=args.angle_unit, nominal_radius=args.nominal_radius,
+              nominal_center=tuple(args.nominal_center) if args.nominal_center else (0.0, 0.0))
+    if len(args.files) > 2:
+        raise InvalidInputError(f"give one file holding both runs or two files (CW then CCW), got {len(args.files)}")
+    files = [read_runs(f, **kw) for f in args.files]
+    if len(files) == 2:
+        for f in files:
+            if len(f.runs) != 1:
+                raise InvalidInputError(f"{f.source}: holds {len(f.runs)} runs; with two files give one run per file")
+        return {"cw": files[0].runs[0][1], "ccw": files[1].runs[0][1]}, files[0].kind, True
+    runs = files[0].runs
+    if len(runs) != 2:
+        raise InvalidInputError(f"{files[0].source}: one run only; give the CCW run as a second file or a file with a "
+                                "direction (cw/ccw) or run column holding both")
+    tags = [t for t, _ in runs]
+    if set(tags) == {"cw", "ccw"}:
+        return {t: pts for t, pts in runs}, files[0].kind, True
+    return {"cw": runs[0][1], "ccw": runs[1][1]}, files[0].kind, False  # labels from the point order
 
-    _, cw = points_from(args.cw)
-    _, ccw = points_from(args.ccw)
+
+def cmd_circular_test(args) -> int:
+    from methods.circular_test import diagnose, evaluate
+    from methods.circular_test.report import diagnostics_json, polar_plot, text
+    from methods.circular_test.runs import check_nominal, check_pair, trim
+
+    R = finite("--nominal-radius", args.nominal_radius, positive=True, allow_none=False)
+    if args.nominal_center is not None:
+        args.nominal_center = [finite("--nominal-center", v) for v in args.nominal_center]
+    feed = finite("--feed", args.feed, positive=True)
+    pitch = finite("--cyclic-pitch", args.cyclic_pitch, positive=True)
+    arc = finite("--arc", args.arc, positive=True)
+    plot_path = check_plot_path(args.plot)
+    runs, kind, labelled = _read_circular_runs(args)
+    for name, pts in runs.items():
+        if len(pts) < 10:
+            raise InvalidInputError(f"circular test ({name.upper()} run): needs at least 10 points, got {len(pts)}")
+    center0 = tuple(args.nominal_center) if args.nominal_center else \
+        tuple(methods.fit("circle.gauss_newton", np.vstack(list(runs.values()))).center)
+    trimmed = {}
+    notes = []
+    for name in ("cw", "ccw"):
+        runs[name], rep = trim(runs[name], center0, arc_deg=arc, lead_in_deg=args.lead_in, lead_out_deg=args.lead_out)
+        trimmed[name] = rep
+        if rep["overrun_trimmed_points"] or rep["lead_removed_points"]:
+            notes.append(f"{name.upper()} run: recorded {rep['recorded_arc_deg']:.1f}°, "
+                         f"{rep['lead_removed_points']} lead-in/out point(s) removed, "
+                         f"{rep['overrun_trimmed_points']} point(s) of overrun beyond {arc:g}° trimmed; "
+                         f"{rep['evaluated_arc_deg']:.1f}° evaluated")
+    if labelled:
+        runs, pair_warnings = check_pair(runs, center0, as_given=args.as_given)
+    else:
+        from methods.circular_test.runs import direction
+        first = "cw" if direction(runs["cw"], center0)[0] == "cw" else "ccw"
+        runs = {"cw": runs["cw"], "ccw": runs["ccw"]} if first == "cw" else {"cw": runs["ccw"], "ccw": runs["cw"]}
+        runs, pair_warnings = check_pair(runs, center0, as_given=False)
+        notes.append("directions read from the point order of each run")
+    for w in pair_warnings:
+        warn(w)
     center = tuple(args.nominal_center) if args.nominal_center else None
-    conditions = {"nominal_radius": args.nominal_radius, "nominal_center": center, "feed_mm_min": args.feed,
-                  "files": {"cw": str(args.cw), "ccw": str(args.ccw)}, "centre_for_G": args.center}
-    ev = evaluate(cw, ccw, args.nominal_radius, center, center=args.center, conditions=conditions)
+    conditions = {"nominal_radius_mm": R, "nominal_center_mm": center, "feed_mm_min": feed, "plane": args.plane or "xy",
+                  "machine": args.machine, "date": args.date, "files": [str(f) for f in args.files],
+                  "centre_for_G": args.center, "input_unit": canonical(args.unit), "nominal_arc_deg": arc,
+                  "trimming": trimmed}
+    ev = evaluate(runs["cw"], runs["ccw"], R, center, center=args.center, conditions=conditions)
+    both = methods.fit("circle.gauss_newton", np.vstack([runs["cw"], runs["ccw"]]))
+    for w in check_nominal(both.center, both.radius, center, R):
+        warn(w)
     dg = None
     if center is not None:
-        dg = diagnose(cw, ccw, args.nominal_radius, center, feed_mm_min=args.feed, cyclic_pitch=args.cyclic_pitch)
-    if args.plot:
-        polar_plot(cw, ccw, ev, args.plot)
+        dg = diagnose(runs["cw"], runs["ccw"], R, center, feed_mm_min=feed, cyclic_pitch=pitch, partial=ev["partial_arc"])
+    if plot_path:
+        polar_plot(runs["cw"], runs["ccw"], ev, plot_path, diagnostics=dg, conditions=conditions, save=save_figure)
     if args.json:
         out = {k: ev[k] for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation", "center")}
-        out["diagnostics"] = ({k: v for k, v in dg.items() if not k.startswith("_")} if dg else
-                              "not estimated: give --nominal-center X Y")
+        out["units"] = dict(JSON_UNITS, input_unit=canonical(args.unit))
+        out["diagnostics"] = (diagnostics_json(dg) if dg else "not estimated: give --nominal-center X Y")
         out["details"] = {k: v for k, v in ev.items() if k not in out}
+        out["notes"] = notes
         if dg:
             out["details"]["diagnostics_model"] = dg["_model"]
         print(json.dumps(_jsonable(out)))
         return 0
+    print(header_line("circular-test", args.unit, "; options in mm, mm/min and degrees"))
+    for n in notes:
+        print(f"note: {n}")
     print(text(ev, dg))
     if dg is None:
         print("diagnostics: not estimated (give --nominal-center X Y)")
     return 0
 
 
+def add_circular_test(sub):
+    pc = sub.add_parser("circular-test", help="ISO 230-4 evaluation and diagnostics of a CW and a CCW run")
+    pc.add_argument("files", nargs="+", metavar="FILE",
+                    help="CW.csv CCW.csv, or one file with both runs (a direction or run column); x, y columns or "
+                         "angle + radial deviation")
+    pc.add_argument("--nominal-radius", type=float, required=True, metavar="R_MM", help="nominal radius (mm)")
+    pc.add_argument("--nominal-center", type=float, nargs=2, metavar=("X", "Y"),
+                    help="nominal centre in machine coordinates (mm); needed for F about it and for the diagnostics")
+    pc.add_argument("--center", choices=("lsq", "mz"), default="lsq", help="centre for G: least squares or minimum zone")
+    pc.add_argument("--feed", type=float, metavar="MM_PER_MIN", help="feed (mm/min): gives the servo mismatch in ms")
+    pc.add_argument("--cyclic-pitch", type=float, metavar="MM", help="ball-screw pitch (mm): estimates the cyclic error")
+    pc.add_argument("--arc", type=float, default=360.0, metavar="DEG",
+                    help="nominal arc of each run (default 360; ISO 230-4 partial arcs >= 90): overrun beyond it is trimmed")
+    pc.add_argument("--lead-in", type=float, default=0.0, metavar="DEG", help="remove this arc at the start of each run")
+    pc.add_argument("--lead-out", type=float, default=0.0, metavar="DEG", help="remove this arc at the end of each run")
+    pc.add_argument("--as-given", action="store_true",
+                    help="keep the CW/CCW labels even when the point order says otherwise (only warn)")
+    pc.add_argument("--angle-unit", choices=("deg", "rad"), help="angle column of an angle + radial-deviation file")
+    pc.add_argument("--machine", default="", help="machine name for the plot's test-conditions panel")
+    pc.add_argument("--date", default="", help="test date for the plot's test-conditions panel")
+    add_reader_options(pc)
+    pc.add_argument("--json", action="store_true", help="print one JSON object (mm, rad; see its 'units')")
+    pc.add_argument("--plot", metavar="FILE", help="write the polar plot (.png, .pdf, .svg)")
+    pc.set_defaults(func=cmd_circular_test)
+
+
+# ----------------------------------------------------------------------------------------- positioning
 def cmd_positioning(args) -> int:
     from methods.positioning import read_csv
-    from methods.positioning.report import plot
+    from methods.positioning.compensation import WRITERS, compensation_table
+    from methods.positioning.report import plot, text
 
-    data = read_csv(args.file)
-    res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=args.instrument_u,
-                      mpe=args.mpe)
-    if args.standard != "iso230-2:2014":
-        res.figures = methods.fit("positioning.iso230_2", data, standard=args.standard).figures
-    if args.plot:
-        plot(res, args.plot, title=str(args.file))
+    plot_path = check_plot_path(args.plot)
+    instrument_u = finite("--instrument-u", args.instrument_u)
+    mpe = finite("--mpe", args.mpe)
+    if args.degree < 0:
+        raise InvalidInputError(f"--degree must be >= 0, got {args.degree}")
+    data = read_csv(args.file, unit=args.unit, deviation_unit=args.deviation_unit, skip_rows=args.skip_rows)
+    res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
+    if args.standard != "iso230-2:2014" or len(data.directions) == 1:
+        other = methods.fit("positioning.iso230_2", data, standard=args.standard)
+        res.figures, res.per_target = other.figures, other.per_target
+    comp = None
+    if args.compensation:
+        interval = finite("--interval", args.interval, positive=True)
+        comp = compensation_table(res, data, interval=interval, source=args.compensation_from)
+        for fmt, path in args.compensation:
+            if fmt not in WRITERS:
+                raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
+            write_text_atomic(path, WRITERS[fmt](comp, axis=args.axis))
+    if plot_path:
+        plot(res, plot_path, title=str(args.file), data=data, save=save_figure)
     if args.json:
         out = dict(res.figures)
+        out["units"] = dict(JSON_UNITS, input_unit=canonical(args.unit),
+                            input_deviation_unit=canonical(args.deviation_unit or args.unit),
+                            polynomial="coefficients of increasing powers of the position P in mm: mm / mm^k")
         out["per_target"] = {k: v for k, v in res.per_target.items()}
         out["polynomial"] = {d: {"coefficients": p["coefficients"], "covariance": p["covariance"],
                                  "degree": p["degree"], "U_at_targets": p["U_at_targets"], "k": p["k"]}
@@ -176,49 +402,101 @@ def cmd_positioning(args) -> int:
         out["u_delta"] = res.extra["u_delta"]
         print(json.dumps(_jsonable(out)))
         return 0
-    f = res.figures
-    print(f"ISO 230-2 ({f['standard']}, k = {f['k']:g}): {f['targets']} targets x {f['runs']} runs")
-    for key in ("A", "A_up", "A_down", "E", "E_up", "E_down", "M", "R", "R_up", "R_down", "B", "B_mean"):
-        print(f"  {key:<7} {f[key]:.6g}")
-    for key in ("Ps", "U", "Pa", "P"):
-        if key in f:
-            print(f"  {key:<7} {f[key]:.6g}")
-    print(f"model: degree-{args.degree} polynomial by GLS, u(delta) = {res.extra['u_delta']:.4g}")
-    for d, p in res.polynomial.items():
-        coefs = ", ".join(f"{c:.6g}" for c in p["coefficients"])
-        print(f"  {d:<5} coefficients (increasing powers of P): {coefs}; max U(P_i) = {p['U_at_targets'].max():.4g}")
+    print(header_line("positioning", args.unit, deviation_unit=args.deviation_unit))
+    print(text(res, degree=args.degree))
+    if comp is not None:
+        for fmt, path in args.compensation:
+            print(f"compensation table ({fmt}, {len(comp)} points every {comp.attrs['interval_mm']:g} mm, from the "
+                  f"{args.compensation_from}) written to {path}")
     return 0
 
 
+def add_positioning(sub):
+    pp = sub.add_parser("positioning", help="ISO 230-2 positioning figures and the GLS polynomial model")
+    pp.add_argument("file", metavar="FILE",
+                    help="long table (target, direction, run, actual or deviation) or a wide laser export "
+                         "(target, then one column per run: run1 / run1+ run1- / ...)")
+    pp.add_argument("--degree", type=int, default=3, help="degree of the polynomial (default 3)")
+    g = pp.add_mutually_exclusive_group()
+    g.add_argument("--instrument-u", type=float, metavar="U_MM", help="standard uncertainty of the instrument (mm)")
+    g.add_argument("--mpe", type=float, metavar="MPE_MM", help="the instrument's maximum permissible error (mm, rectangular)")
+    pp.add_argument("--standard", choices=("iso230-2:2014", "iso230-2:1988", "vdi3441"), default="iso230-2:2014")
+    pp.add_argument("--deviation-unit", choices=UNIT_CHOICES,
+                    help="unit of the deviation columns when it differs from --unit (laser exports: targets in mm, "
+                         "errors in µm)")
+    add_reader_options(pp, columns=False)
+    pp.add_argument("--compensation", nargs=2, action="append", metavar=("FORMAT", "FILE"),
+                    help="write a compensation table: FORMAT csv, siemens-eec or fanuc-pitch (repeatable)")
+    pp.add_argument("--interval", type=float, default=None, metavar="MM",
+                    help="compensation point spacing (mm; default: the target spacing)")
+    pp.add_argument("--compensation-from", choices=("model", "mean"), default="model",
+                    help="compensation values from the GLS polynomial (default) or the mean deviations at the targets")
+    pp.add_argument("--axis", default="X1", help="axis name in the controller's table (default X1)")
+    pp.add_argument("--json", action="store_true", help="print one JSON object (mm; see its 'units')")
+    pp.add_argument("--plot", metavar="FILE", help="write the plot (.png, .pdf, .svg)")
+    pp.set_defaults(func=cmd_positioning)
+
+
+# ----------------------------------------------------------------------------------------- magnify
 def cmd_magnify(args) -> int:
     from datasets import read_points
     from methods.magnify import MagnifyInput
 
-    data = MagnifyInput(read_points(args.reference), read_points(args.measured))
-    params = {"eta": args.eta}
+    eta = finite("--eta", args.eta, positive=True, allow_none=False)
+    plot_path = check_plot_path(args.plot)
+    cols = tuple(args.columns) if args.columns else ("x", "y")
+    data = MagnifyInput(read_points(args.reference, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows),
+                        read_points(args.measured, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows))
+    params = {"eta": eta}
     if args.method == "offset":
-        params["delta"] = args.delta
+        params["delta"] = finite("--delta", args.delta, positive=True)
         params["selection"] = args.selection
     elif args.delta is not None:
         raise InvalidInputError("--delta is a parameter of --method offset")
     res = methods.fit(f"magnify.{args.method}", data, **params)
-    if args.plot:
-        plot_magnified(data, res, args.plot, args.eta)
+    if plot_path:
+        plot_magnified(data, res, plot_path, eta)
     if args.json:
         d = res.to_dict(residuals=not args.no_residuals)
+        d["units"] = {"length": "mm", "input_unit": canonical(args.unit)}
         print(json.dumps(d))
         return 0
+    print(header_line("magnify", args.unit))
     print(f"method       {res.method} ({res.message})")
-    print(f"points       {len(res.points)}; largest contouring error {res.form_error:.6g}")
+    print(f"points       {len(res.points)}; largest contouring error {res.form_error * 1e3:.3f} µm")
     print(f"continuity   {res.extra['continuity']:.3g} (largest magnified step / (eta x largest measured step))")
     print(f"loops        {res.extra['self_intersections']} self-intersections of the magnified trajectory")
     return 0
 
 
+def add_magnify(sub):
+    pm = sub.add_parser("magnify", help="magnified contouring-error trajectory (nearest or contour-parallel offset)")
+    pm.add_argument("reference", metavar="REFERENCE.csv", help="reference polyline (x, y; arcs as fine polylines)")
+    pm.add_argument("measured", metavar="MEASURED.csv", help="measured trajectory (x, y), in order")
+    pm.add_argument("--eta", type=float, required=True, metavar="E", help="magnification (a positive number)")
+    pm.add_argument("--delta", type=float, metavar="D_MM", help="offset distance (mm; > the largest error; default twice it)")
+    pm.add_argument("--method", choices=("offset", "nearest"), default="offset")
+    pm.add_argument("--selection", choices=("same_side", "nearest_of_both"), default="same_side",
+                    help="offset method: the offset on the point's side, or the paper's printed step (2)")
+    add_reader_options(pm)
+    pm.add_argument("--json", action="store_true", help="print one JSON object (points: the magnified trajectory, mm)")
+    pm.add_argument("--no-residuals", action="store_true", help="leave the per-point errors out of --json")
+    pm.add_argument("--plot", metavar="FILE", help="write a plot (.png, .pdf, .svg)")
+    pm.set_defaults(func=cmd_magnify)
+
+
+# ----------------------------------------------------------------------------------------- multilateration
 def cmd_multilaterate(args) -> int:
     from methods.multilateration import read_csv
 
-    data = read_csv(args.file, args.stations)
+    if args.max_iter is not None and args.max_iter < 1:
+        raise InvalidInputError(f"--max-iter must be a positive integer, got {args.max_iter}")
+    if args.degree < 1:
+        raise InvalidInputError(f"--degree must be a positive integer (the component errors' polynomial degree), "
+                                f"got {args.degree}")
+    if args.errors_csv and not args.identify:
+        raise InvalidInputError("--errors-csv needs --identify (the 21 errors come from the identification)")
+    data = read_csv(args.file, args.stations, unit=args.unit, skip_rows=args.skip_rows)
     method = args.method if "." in args.method else f"multilateration.{args.method}"
     spec = methods.get(method)
     if spec.family != "multilateration":
@@ -226,8 +504,12 @@ def cmd_multilaterate(args) -> int:
                                 f"'python -m methods list --family multilateration' lists them")
     res = spec(data, **({"max_iter": args.max_iter} if args.max_iter is not None and "max_iter" in spec.defaults else {}))
     ident = _identify(data, res, args.degree) if args.identify else None
+    if ident is not None and args.errors_csv:
+        from methods.multilateration.export import errors_csv
+        write_text_atomic(args.errors_csv, errors_csv(ident))
     if args.json:
         d = res.to_dict(residuals=not args.no_residuals)
+        d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(args.unit)}
         d["nominal_points"] = _jsonable(data.points)
         d["stations_given"] = data.known_stations is not None
         if ident is not None:
@@ -239,15 +521,16 @@ def cmd_multilaterate(args) -> int:
         return 0 if res.converged else 1
     vol = np.linalg.norm(res.volumetric_errors, axis=1)
     known = data.known_stations is not None
+    print(header_line("multilaterate", args.unit, "; station coordinates in mm"))
     print(f"method       {res.method} ({res.message})")
     print(f"data         {args.file}: {len(data.stations)} stations, {len(data.points)} points, "
           f"{int(data.mask.sum())} lengths; stations {'given' if known else 'located (step 1)'}")
-    print(f"{'station':<10} {'x':>14} {'y':>14} {'z':>14} {'L':>12}")
+    print(f"{'station':<10} {'x [mm]':>14} {'y [mm]':>14} {'z [mm]':>14} {'L [mm]':>12}")
     for sid, st in zip(res.station_ids, res.stations):
         print(f"{sid:<10} {st[0]:14.6f} {st[1]:14.6f} {st[2]:14.6f} {st[3]:12.6f}")
-    print(f"volumetric   largest |error| {vol.max() * 1e3:.3f} um, RMS {np.sqrt(np.mean(vol ** 2)) * 1e3:.3f} um")
+    print(f"volumetric   largest |error| {vol.max() * 1e3:.3f} µm, RMS {np.sqrt(np.mean(vol ** 2)) * 1e3:.3f} µm")
     r = res.residuals[np.isfinite(res.residuals)]
-    print(f"residuals    RMS {np.sqrt(np.mean(r ** 2)) * 1e3:.4f} um of the lengths")
+    print(f"residuals    RMS {np.sqrt(np.mean(r ** 2)) * 1e3:.4f} µm of the lengths")
     for step, c in res.condition_numbers.items():
         print(f"kappa        {step:<16} median {np.median(c['svd']):.3g} (SVD), Theorem 1 lower estimate "
               f"{np.median(c['theorem1']):.3g}: {c['system']}")
@@ -255,13 +538,32 @@ def cmd_multilaterate(args) -> int:
     if ident is not None:
         travel = ", ".join(f"{t:g}" for t in ident.model.travel)
         print(f"geometric errors (ISO 230-1 names), coefficients of (position / travel)^j, travels {travel} mm; "
-              f"fit residual RMS {ident.residual_rms * 1e3:.3f} um")
+              f"fit residual RMS {ident.residual_rms * 1e3:.3f} µm")
         for row in ident.as_table():
             name = row["parameter"]
             linear = (name[0] == "E" and name[1] in "XYZ") or name[0] == "T"
-            unit, scale = ("um", 1e3) if linear else ("urad", 1e6)
+            unit, scale = ("µm", 1e3) if linear else ("µrad", 1e6)
             print(f"  {row['parameter']:<7} {row['value'] * scale:12.4f} +- {row['u'] * scale:.4f} {unit}")
+        if args.errors_csv:
+            print(f"the 21 errors written to {args.errors_csv}")
     return 0 if res.converged else 1
+
+
+def add_multilaterate(sub):
+    pu = sub.add_parser("multilaterate", help="stations, actual points and volumetric errors from tracking-interferometer lengths")
+    pu.add_argument("file", metavar="MEASUREMENTS.csv", help="columns station, x, y, z (nominal point), length")
+    pu.add_argument("--method", default="case_a_distance", metavar="ID",
+                    help="multilateration method id or its short name (default case_a_distance, the paper's eq. 7)")
+    pu.add_argument("--stations", metavar="FILE", help="known stations: columns station, x, y, z, L (skips step 1)")
+    pu.add_argument("--max-iter", type=int, metavar="N", help="iteration limit of the iterative methods (>= 1)")
+    pu.add_argument("--identify", action="store_true",
+                    help="also identify the 18 component and 3 squareness errors (needs columns xp, yp, zp)")
+    pu.add_argument("--degree", type=int, default=3, help="polynomial degree of the component errors (default 3, >= 1)")
+    pu.add_argument("--errors-csv", metavar="FILE", help="with --identify: write the 21 errors (ISO 230-1 names) as CSV")
+    add_reader_options(pu, columns=False)
+    pu.add_argument("--json", action="store_true", help="print one JSON object (mm, rad)")
+    pu.add_argument("--no-residuals", action="store_true", help="leave the length residuals out of --json")
+    pu.set_defaults(func=cmd_multilaterate)
 
 
 def _identify(data, res, degree):
@@ -282,82 +584,75 @@ def plot_magnified(data, res, path, eta):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 6))
     ax.plot(*data.reference.T, color="0.5", lw=1, label="reference")
-    ax.plot(*res.points.T, lw=0.8, label=f"{res.method}, eta = {eta:g}")
+    ax.plot(*res.points.T, lw=0.8, label=f"{res.method}, magnification {eta:g}")
     ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
     ax.legend(fontsize=8)
-    ax.set_title(f"continuity {res.extra['continuity']:.2f}, loops {res.extra['self_intersections']}", fontsize=9)
+    ax.set_title(f"continuity {res.extra['continuity']:.2f}, loops {res.extra['self_intersections']}; "
+                 f"largest error {res.form_error * 1e3:.2f} µm", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        save_figure(fig, path)
+    finally:
+        plt.close(fig)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="python -m methods", description="fitbench fitting methods")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+# ----------------------------------------------------------------------------------------- the table
+def add_list(sub):
     pl = sub.add_parser("list", help="one line per registered method: id, kind, reference")
     pl.add_argument("--family", help="only this family (e.g. circle)")
     pl.add_argument("--json", action="store_true", help="machine-readable listing with defaults")
     pl.set_defaults(func=cmd_list)
+
+
+def add_fit(sub):
     pf = sub.add_parser("fit", help="fit a file or published data set with one method")
     pf.add_argument("method", metavar="METHOD_ID")
     pf.add_argument("file", metavar="FILE", help="a points file (x, y) or a published data set name")
     pf.add_argument("--param", action="append", metavar="KEY=VALUE", help="method parameter (repeatable)")
+    add_reader_options(pf)
     pf.add_argument("--json", action="store_true", help="print the result as one JSON object")
     pf.add_argument("--no-residuals", action="store_true", help="leave the per-point residuals out of --json")
     pf.set_defaults(func=cmd_fit)
-    pc = sub.add_parser("circular-test", help="ISO 230-4 evaluation and diagnostics of a CW and a CCW run")
-    pc.add_argument("cw", metavar="CW.csv", help="the clockwise run (x, y)")
-    pc.add_argument("ccw", metavar="CCW.csv", help="the counter-clockwise run (x, y)")
-    pc.add_argument("--nominal-radius", type=float, required=True, metavar="R")
-    pc.add_argument("--nominal-center", type=float, nargs=2, metavar=("X", "Y"),
-                    help="nominal centre (machine coordinates); needed for F about it and for the diagnostics")
-    pc.add_argument("--center", choices=("lsq", "mz"), default="lsq", help="centre for G: least squares or minimum zone")
-    pc.add_argument("--feed", type=float, metavar="MM_PER_MIN", help="feed: gives the servo mismatch in ms")
-    pc.add_argument("--cyclic-pitch", type=float, metavar="MM", help="ball-screw pitch: estimates the cyclic error")
-    pc.add_argument("--json", action="store_true", help="print one JSON object")
-    pc.add_argument("--plot", metavar="FILE", help="write the polar plot (PNG or PDF)")
-    pc.set_defaults(func=cmd_circular_test)
-    pp = sub.add_parser("positioning", help="ISO 230-2 positioning figures and the GLS polynomial model")
-    pp.add_argument("file", metavar="FILE", help="long table: target, direction (+/-), run, actual or deviation")
-    pp.add_argument("--degree", type=int, default=3, help="degree of the polynomial (default 3)")
-    g = pp.add_mutually_exclusive_group()
-    g.add_argument("--instrument-u", type=float, metavar="U", help="standard uncertainty of the instrument, u(delta)")
-    g.add_argument("--mpe", type=float, metavar="MPE", help="the instrument's maximum permissible error (rectangular)")
-    pp.add_argument("--standard", choices=("iso230-2:2014", "iso230-2:1988", "vdi3441"), default="iso230-2:2014")
-    pp.add_argument("--json", action="store_true", help="print one JSON object")
-    pp.add_argument("--plot", metavar="FILE", help="write the plot (figures 2 and 3 of the paper)")
-    pp.set_defaults(func=cmd_positioning)
-    pm = sub.add_parser("magnify", help="magnified contouring-error trajectory (nearest or contour-parallel offset)")
-    pm.add_argument("reference", metavar="REFERENCE.csv", help="reference polyline (x, y; arcs as fine polylines)")
-    pm.add_argument("measured", metavar="MEASURED.csv", help="measured trajectory (x, y), in order")
-    pm.add_argument("--eta", type=float, required=True, metavar="E", help="magnification")
-    pm.add_argument("--delta", type=float, metavar="D", help="offset distance (> the largest error; default twice it)")
-    pm.add_argument("--method", choices=("offset", "nearest"), default="offset")
-    pm.add_argument("--selection", choices=("same_side", "nearest_of_both"), default="same_side",
-                    help="offset method: the offset on the point's side, or the paper's printed step (2)")
-    pm.add_argument("--json", action="store_true", help="print one JSON object (points: the magnified trajectory)")
-    pm.add_argument("--no-residuals", action="store_true", help="leave the per-point errors out of --json")
-    pm.add_argument("--plot", metavar="FILE", help="write a plot")
-    pm.set_defaults(func=cmd_magnify)
-    pu = sub.add_parser("multilaterate", help="stations, actual points and volumetric errors from tracking-interferometer lengths")
-    pu.add_argument("file", metavar="MEASUREMENTS.csv", help="columns station, x, y, z (nominal point), length")
-    pu.add_argument("--method", default="case_a_distance", metavar="ID",
-                    help="multilateration method id or its short name (default case_a_distance, the paper's eq. 7)")
-    pu.add_argument("--stations", metavar="FILE", help="known stations: columns station, x, y, z, L (skips step 1)")
-    pu.add_argument("--max-iter", type=int, metavar="N", help="iteration limit of the iterative methods")
-    pu.add_argument("--identify", action="store_true",
-                    help="also identify the 18 component and 3 squareness errors (needs columns xp, yp, zp)")
-    pu.add_argument("--degree", type=int, default=3, help="polynomial degree of the component errors (default 3)")
-    pu.add_argument("--json", action="store_true", help="print one JSON object")
-    pu.add_argument("--no-residuals", action="store_true", help="leave the length residuals out of --json")
-    pu.set_defaults(func=cmd_multilaterate)
+
+
+def add_roundness(sub):
+    """ISO 12181 roundness: the parser and command live in methods/roundness/cli.py."""
+    from methods.roundness import cli as roundness_cli
+    roundness_cli.add_parser(sub)
+
+
+#: the subcommands: name -> function adding its parser (another module may add an entry)
+SUBCOMMANDS = {"list": add_list, "fit": add_fit, "circular-test": add_circular_test, "positioning": add_positioning,
+               "magnify": add_magnify, "multilaterate": add_multilaterate, "roundness": add_roundness}
+
+
+def build_parser(prog: str = PROG, extra_commands: dict | None = None) -> argparse.ArgumentParser:
+    p = _Parser(prog=prog, description="fitbench: fitting methods of machine-tool metrology")
+    p.add_argument("--version", action="version", version=f"fitbench {version()}")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add in SUBCOMMANDS.values():
+        add(sub)
+    for name, help_text in (extra_commands or {}).items():
+        sub.add_parser(name, help=help_text, add_help=False)
+    for action in sub.choices.values():
+        action.add_argument("--version", action="version", version=f"fitbench {version()}",
+                            help="print the version and exit") if "--version" not in action._option_string_actions else None
     return p
 
 
-def main(argv=None) -> int:
+def main(argv=None, prog: str = PROG, extra_commands: dict | None = None) -> int:
     try:
-        args = build_parser().parse_args(argv)
-        return args.func(args)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", category=UserWarning)
+            try:
+                args = build_parser(prog, extra_commands).parse_args(argv)
+                return args.func(args)
+            finally:
+                for w in caught:
+                    if issubclass(w.category, UserWarning):
+                        warn(str(w.message))
     except InvalidInputError as exc:
         print(f"fitbench: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

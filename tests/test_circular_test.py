@@ -142,7 +142,7 @@ def files(tmp_path_factory):
     cw, ccw, _ = circular_test(cond, err, seed=2004)
     np.savetxt(d / "cw.csv", cw, delimiter=",", header="x,y", comments="", fmt="%.9f")
     np.savetxt(d / "ccw.csv", ccw, delimiter=",", header="x,y", comments="", fmt="%.9f")
-    np.savetxt(d / "other.csv", cw + [5.0, 0.0], delimiter=",", header="x,y", comments="", fmt="%.9f")
+    np.savetxt(d / "other.csv", ccw + [5.0, 0.0], delimiter=",", header="x,y", comments="", fmt="%.9f")
     (d / "bad.csv").write_text("x,y\n1,2\n3,oops\n")
     return d
 
@@ -183,7 +183,10 @@ def test_cli_bad_input(files, args, match):
     assert len(out.stderr.strip().splitlines()) == 1
 
 
-def test_partial_run_is_refused():
+def test_arc_under_90_degrees_is_refused():
+    """ISO 230-4 partial arcs are evaluated from 90 deg up; a shorter run is refused with the arc it covers."""
     cw, ccw, _ = circular_test(COND, MachineErrors(), seed=0)
-    with pytest.raises(InvalidInputError, match="does not go round"):
-        evaluate(cw[: len(cw) // 2], ccw, 150.0)
+    with pytest.raises(InvalidInputError, match="covers an arc of 8[0-9] deg"):
+        evaluate(cw[: int(len(cw) * 85 / 360)], ccw, 150.0)
+    half = evaluate(cw[: len(cw) // 2], ccw, 150.0)   # a 180 deg arc is a partial arc now, not an error
+    assert half["partial_arc"] and 175 < half["arc_deg"]["cw"] <= 180

@@ -359,7 +359,7 @@ def test_cli_identify_gives_back_the_21_errors(tmp_path, capsys):
     assert abs(got["TX"]) < 1e-8 and abs(got["RZ"]) < 1e-10          # the CSV holds 9 decimals
     assert main(["multilaterate", str(meas), "--stations", str(st), "--identify"]) == 0
     text = capsys.readouterr().out
-    assert "C0Y" in text and "urad" in text and "RZ" in text
+    assert "C0Y" in text and "µrad" in text and "RZ" in text
 
 
 def test_cli_identify_needs_tool_offsets(tmp_path, capsys):

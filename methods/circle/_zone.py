@@ -1,6 +1,10 @@
 """Shared machinery of the zone methods (minimum zone, MIC, MCC, Chebyshev): active sets,
 closed-form centres of contact configurations, optimality certificates, the clarabel interface.
 
+The certificates here are LOCAL for the non-convex minimum zone and MIC (alternating / surrounding
+contacts); :func:`fit_zone` adds the global stage of :mod:`methods.circle._global` for those, and reports
+``extra["certified"]`` as "global", "local" or False.
+
 All work happens in the unit frame of :class:`~methods.circle._frame.Frame` (1-D arrays x, y).
 """
 from __future__ import annotations
@@ -233,6 +237,19 @@ def pick(C, configs, score, minimise: bool):
     return C[best], (tuple(members[:n_outer]), tuple(members[n_outer:]))
 
 
+def relabel_extremes(x, y, act, c, contacts):
+    """Among tied candidate configurations the one picked may name a contact that is not extreme about
+    the (right) centre: name the extreme active points instead (same counts)."""
+    oc, ic = contacts
+    r = radii(x[act], y[act], c)
+    order = np.argsort(r)
+    if oc and r.max() > r[np.searchsorted(act, list(oc))].max() * (1 + CHECK_RTOL):
+        oc = tuple(int(i) for i in act[order[::-1][:len(oc)]])
+    if ic and r.min() < r[np.searchsorted(act, list(ic))].min() * (1 - CHECK_RTOL):
+        ic = tuple(int(i) for i in act[order[:len(ic)]])
+    return c, (oc, ic)
+
+
 def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_rounds):
     """The loop shared by the zone methods.
 
@@ -253,7 +270,7 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
         stats["solver_iterations"] += iters
         stats["history"] += hist
         act = np.union1d(out, inn)
-        c, (oc, ic) = exact(act, ck)
+        c, (oc, ic) = relabel_extremes(x, y, act, *exact(act, ck))
         r_all = radii(x, y, c)
         before = out.size + inn.size
         violated = False
@@ -266,37 +283,66 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
             if (under > 0).any():
                 inn, violated = add_violators(inn, under, k), True
         if violated and out.size + inn.size == before:
-            stats["active_points"] = int(np.union1d(out, inn).size)
+            stats["active"] = np.union1d(out, inn)
+            stats["active_points"] = int(stats["active"].size)
             return c, (oc, ic), False, ("the contacts found are not the extreme points about their centre and no "
                                         "new point can be added: no optimum is claimed"), stats
         if violated:
             continue
         ok, message = certify(c, oc, ic)
-        stats["active_points"] = int(np.union1d(out, inn).size)
+        stats["active"] = np.union1d(out, inn)
+        stats["active_points"] = int(stats["active"].size)
         return c, (oc, ic), ok, message, stats
-    stats["active_points"] = int(np.union1d(out, inn).size)
+    stats["active"] = np.union1d(out, inn)
+    stats["active_points"] = int(stats["active"].size)
     return c, ((), ()), False, f"active set not settled within max_rounds={max_rounds}", stats
 
 
-def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max_rounds, radius_rule):
-    """Run :func:`active_set_fit` and build the result in data units (SolverFailure -> converged=False)."""
+def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max_rounds, radius_rule,
+             proof="convex", global_search="always"):
+    """Run :func:`active_set_fit` and build the result in data units (SolverFailure -> converged=False).
+
+    ``proof``: "convex" (the program is convex: its optimality condition is a global certificate),
+    "zone" or "inscribed" (non-convex: the local certificate is followed, unless
+    ``global_search == "never"``, by the branch and bound of :mod:`methods.circle._global`).
+    ``extra["certified"]`` is "global", "local" or False and the message says which and why."""
     from methods._result import zone_result  # local import: _result does not depend on this module
+    from methods.circle import _global
 
     x, y = frame.x, frame.y
+
+    def run(s):
+        return active_set_fit(x, y, start=s, local_solve=local_solve, exact=exact, certify=certify, sides=sides,
+                              k=k, max_rounds=max_rounds)
+    info = {}
     try:
-        c, (oc, ic), ok, message, stats = active_set_fit(x, y, start=start, local_solve=local_solve, exact=exact,
-                                                         certify=certify, sides=sides, k=k, max_rounds=max_rounds)
+        c, (oc, ic), ok, message, stats = run(start)
+        if proof == "convex":
+            certified = "global" if ok else False
+            if ok:
+                message = f"certified global optimum of a convex program over all centres ({message})"
+        elif global_search == "never":
+            if ok and proof == "inscribed" and not _global.ProfilePolygon(x, y).contains(np.asarray(c)[None, :])[0]:
+                ok, message = False, ("the local centre lies outside the profile polygon (points in angular order "
+                                      "about their centroid): not an inscribed circle")
+            certified = "local" if ok else False
+            if ok:
+                message = f"local optimum only ({message}); the global search was not run (global_search='never')"
+        else:
+            c, (oc, ic), ok, certified, message, info = _global.globalise(
+                x, y, kind=proof, c=c, contacts=(oc, ic), ok=ok, message=message, stats=stats, rerun=run,
+                hulls_meet=hulls_meet, scale=frame.scale)
     except SolverFailure as exc:
-        c, (oc, ic), ok, message = start, ((), ()), False, f"{exc}; no result is claimed"
+        c, (oc, ic), ok, certified, message = start, ((), ()), False, False, f"{exc}; no result is claimed"
         stats = {"solves": None, "solver_iterations": None, "history": [], "rounds": None, "active_points": None}
     center, _ = frame.circle_to_data(np.array([c[0], c[1], 1.0]))
     r_data = radii(points[:, 0], points[:, 1], center)
     radius = radius_rule(r_data, center)
-    ok = bool(ok)
-    return zone_result(points, center, radius, {"outer": sorted(oc), "inner": sorted(ic)}, converged=ok,
+    return zone_result(points, center, radius, {"outer": sorted(oc), "inner": sorted(ic)}, converged=bool(ok),
                        message=message, iterations=stats["solves"], nfev=stats["solver_iterations"],
                        history=[h * frame.scale for h in stats["history"]],
-                       extra={"certified": ok, "rounds": stats["rounds"], "active_points": stats["active_points"]})
+                       extra={"certified": certified, "rounds": stats["rounds"], "active_points": stats["active_points"],
+                              **{f"global_{k}": v for k, v in info.items()}})
 
 
 def certify_hulls(x, y, *, zero_tol=ZERO_WIDTH):
@@ -314,6 +360,11 @@ def certify_hulls(x, y, *, zero_tol=ZERO_WIDTH):
         if len(side) < 2:
             return False, "fewer than two contacts: no optimality certificate"
         ok = hulls_meet(directions(x, y, side, c), np.zeros((1, 2)))
+        if not ok:  # ties: look for 2 or 3 tied contacts that surround the centre
+            from methods.circle._global import TIE_REL, alternating_contacts
+            tol = TIE_REL * r.max()
+            tied = np.flatnonzero(r >= r.max() - tol) if oc else np.flatnonzero(r <= r.min() + tol)
+            ok = alternating_contacts(x, y, c, np.empty(0, dtype=np.intp), tied, hulls_meet) is not None
         return ok, ("optimal: the centre lies in the convex hull of the contacts" if ok else
                     "the contacts do not surround the centre: not an optimum")
     return certify

@@ -8,6 +8,7 @@ from methods._registry import register
 from methods._validation import check_choice, check_positive
 from methods.circle import _zone as z
 from methods.circle._frame import Frame
+from methods.circle._global import alternating_contacts
 
 SOLVERS = ("highs", "clarabel")
 
@@ -29,7 +30,9 @@ def chebyshev_lp(points, *, solver="highs", active_size=16, max_rounds=50):
     zone about (a, b) of least R^2 - r^2 (R^2 = rho^2 + t, r^2 = rho^2 - t), which Witzgall & Howard
     found to be very close to the minimum zone. Active set on the extreme points with a final check of
     every point; the LP's four contacts give the exact centre, certified by conv(outer contact points)
-    meeting conv(inner contact points) (the LP's optimality condition).
+    meeting conv(inner contact points) (the LP's optimality condition, searched among tied contacts): the
+    LP is convex, so this certifies the global optimum of the algebraic objective over all (a, b, w)
+    (``extra['certified'] == "global"``), not the minimum zone.
     ``radius`` = rho = sqrt((R^2 + r^2)/2); ``form_error`` = R - r about (a, b)."""
     name = "circle.chebyshev_lp"
     check_choice("solver", solver, SOLVERS, name)
@@ -64,6 +67,11 @@ def chebyshev_lp(points, *, solver="highs", active_size=16, max_rounds=50):
             return True, "points lie on one circle (zero algebraic residual)"
         P = np.column_stack([x, y]) - c
         ok = z.hulls_meet(P[list(oc)], P[list(ic)])
+        if not ok:  # ties (symmetric lobes): look for an alternating choice among the tied contacts
+            r2 = r * r
+            tol = 4e-14 * r2.max()
+            tied_out, tied_in = np.flatnonzero(r2 >= r2.max() - tol), np.flatnonzero(r2 <= r2.min() + tol)
+            ok = alternating_contacts(x, y, c, tied_out, tied_in, z.hulls_meet, normalise=False) is not None
         return ok, ("optimal: conv(outer contacts) meets conv(inner contacts)" if ok else
                     "LP contacts do not satisfy the optimality condition")
 

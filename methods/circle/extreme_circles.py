@@ -2,8 +2,6 @@
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.path import Path
-from scipy.spatial import Delaunay, QhullError
 
 from methods._registry import register
 from methods._result import zone_result
@@ -39,7 +37,8 @@ def min_circumscribed(points, *, active_size=16, max_rounds=50):
     """Smallest circle containing all points: min R s.t. |p_i - c| <= R (second-order cones, one
     convex program, global optimum). Only the outermost points reach clarabel (active set with a final
     check of every point); the centre is then solved exactly from its 2 (diameter) or 3 contacts and
-    certified by the centre lying in the convex hull of the contacts.
+    certified by the centre lying in the convex hull of the contacts (searched among tied contacts): the
+    program is convex, so this is a global certificate over all centres (``extra['certified'] == "global"``).
     ``radius`` = R; ``form_error`` = R - min_i |p_i - c| (roundness about the MCC centre)."""
     name = "circle.min_circumscribed"
     k = int(check_positive("active_size", active_size, name))
@@ -62,7 +61,7 @@ def min_circumscribed(points, *, active_size=16, max_rounds=50):
           summary="Maximum inscribed circle (MIC): sequential LP (clarabel) on an active set, exact contacts",
           reference="roundness paper sec. 1 (MİTD, table 1 column MIC); Toussaint, Int. J. Comput. Inf. Sci. 12 (1983) 347-358")
 def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1e-8, trust_radius=0.5,
-                  global_search="auto"):
+                  global_search="always"):
     """Largest circle with no point inside it, centred among the points: max r s.t. |p_i - c| >= r.
     The constraint is reverse-convex: each step maximises r under its linearisation at the current
     centre (a lower bound, so feasible), an LP solved by clarabel inside a trust region, until the
@@ -71,11 +70,15 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
     circle: the result says so with ``converged=False``.
     ``radius`` = r; ``form_error`` = max_i |p_i - c| - r (roundness about the MIC centre).
 
-    The MIC is multimodal (every Voronoi vertex inside its Delaunay triangle is a local maximum;
-    sparse noisy profiles have several close together). ``global_search`` ("auto": up to
-    50 000 points, "always", "never") then takes the largest empty circle over all Delaunay
-    circumcentres (Qhull) inside the profile polygon (points in angular order about the centroid);
-    ``extra['global_search']`` says whether it ran."""
+    The MIC is defined for centres inside the profile polygon (the points joined in angular order
+    about their centroid): a centre outside it has no inscribed circle. It is multimodal (every Voronoi
+    vertex inside its Delaunay triangle is a local maximum; sparse noisy profiles have several close
+    together), so the local certificate (the tied contacts surround the centre) proves a LOCAL maximum
+    only. With ``global_search="always"`` (default) a branch and bound over the centre
+    (:mod:`methods.circle._global`) proves that no centre inside the profile polygon gives an empty
+    circle larger by more than 1e-10 x r + 1e-13 x the data's RMS radius; a better centre restarts the
+    local solver there, and a local centre outside the polygon is never returned as a MIC.
+    ``extra['certified']``: "global", "local" or False; ``converged`` is True for either certificate."""
     name = "circle.max_inscribed"
     k, max_rounds, max_ccp = check_ccp_params(name, active_size, max_rounds, max_ccp, ccp_tol, trust_radius)
     frame = Frame.of(points)
@@ -99,7 +102,7 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
                            message=(f"the points do not surround a centre (largest angular gap {np.degrees(gap):.1f} deg "
                                     ">= 180 deg, a partial arc): a maximum inscribed circle does not exist"),
                            extra={"certified": False, "angular_gap_deg": float(np.degrees(gap))})
-    check_choice("global_search", global_search, ("auto", "always", "never"), name)
+    check_choice("global_search", global_search, ("always", "never"), name)
     hull = z.certify_hulls(x, y)
 
     def certify(c, oc, ic):
@@ -109,53 +112,12 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
                         "centre (a partial arc has no MIC)")
         return ok, message
 
-    run_global = global_search == "always" or (global_search == "auto" and len(x) <= GLOBAL_SEARCH_MAX_POINTS)
-
-    def exact(act, c):
-        c_loc, contacts = _best_single_sided(x, y, act, c, "inner")
-        if not run_global:
-            return c_loc, contacts
-        c_glob, tri, _ = largest_empty_circle(x, y)
-        # score by the distance to every point: near-degenerate (cocircular) triangles are not exactly empty
-        if tri is not None and z.radii(x, y, c_glob).min() > z.radii(x, y, c_loc).min() * (1 + 1e-12):
-            return c_glob, ((), tuple(int(i) for i in tri))
-        return c_loc, contacts
-
-    result = z.fit_zone(points, frame, start=start, local_solve=local_solve, exact=exact,
+    result = z.fit_zone(points, frame, start=start, local_solve=local_solve,
+                        exact=lambda act, c: _best_single_sided(x, y, act, c, "inner"),
                         certify=certify, sides=("inner",), k=k, max_rounds=max_rounds,
-                        radius_rule=lambda r, c: r.min())
-    result.extra["global_search"] = run_global
+                        radius_rule=lambda r, c: r.min(), proof="inscribed", global_search=global_search)
     result.extra["angular_gap_deg"] = float(np.degrees(gap))
     if not result.converged and gap > np.radians(150):
         result.message += (f"; the points barely surround a centre (largest angular gap {np.degrees(gap):.1f} deg): "
                            "the inscribed circle of such a partial arc is ill-defined")
     return result
-
-
-GLOBAL_SEARCH_MAX_POINTS = 50_000
-
-
-def largest_empty_circle(x, y):
-    """Largest circle with no point inside, centred inside the profile polygon (the points in angular
-    order about their centroid): the best Delaunay circumcentre (Qhull). Returns (centre, triangle, radius)."""
-    P = np.column_stack([x, y])
-    try:
-        tri = Delaunay(P).simplices
-    except QhullError:
-        return None, None, -np.inf
-    C = z.bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]])
-    rad = np.hypot(C[:, 0] - P[tri[:, 0], 0], C[:, 1] - P[tri[:, 0], 1])
-    rad[~np.isfinite(rad)] = -np.inf
-    m = P.mean(axis=0)
-    profile = Path(P[np.argsort(np.arctan2(y - m[1], x - m[0]))])
-    # the polygon test is O(N) per centre: test the largest circles first, stop at the first inside
-    for lo in range(0, len(rad), 64):
-        cand = np.argsort(rad)[::-1][lo:lo + 64]
-        cand = cand[np.isfinite(rad[cand])]
-        if not cand.size:
-            break
-        inside = profile.contains_points(C[cand])
-        if inside.any():
-            best = int(cand[np.flatnonzero(inside)[0]])
-            return C[best], tri[best], float(rad[best])
-    return None, None, -np.inf

@@ -9,6 +9,11 @@
 * F_max, F_min (radial deviation): the largest and smallest deviation of the path from the nominal
   radius, about the nominal centre when given, else the least-squares centre of both runs.
 * mean radial deviation: the mean of those deviations.
+
+Partial arcs (ISO 230-4 allows arcs smaller than 360 deg, e.g. in vertical planes where the
+ballbar's fixture blocks part of the circle: 180 deg or 220 deg): G, G(b) and F are evaluated on the
+arc measured (the least-squares centre of an arc of at least 90 deg is well determined); H on the
+angles both runs cover. Arcs under ``MIN_ARC_DEG`` are refused.
 """
 from __future__ import annotations
 
@@ -22,7 +27,15 @@ from methods._validation import validate_points
 
 RADIUS_TOLERANCE = 0.05     # the data's mean radius may differ from the nominal radius by 5 % at most
 RUNS_TOLERANCE = 0.01       # the two runs' circles may differ by 1 % of the radius at most
-MAX_ANGULAR_GAP_DEG = 30.0  # a run must go round (no gap wider than this)
+MAX_ANGULAR_GAP_DEG = 30.0  # a run with no angular gap wider than this counts as a full circle
+MIN_ARC_DEG = 90.0          # the shortest arc evaluated (ISO 230-4 partial arcs)
+
+
+def coverage_deg(points, center) -> tuple[float, float]:
+    """(arc covered, largest angular gap) in degrees of points about ``center``."""
+    a = np.sort(np.degrees(np.arctan2(points[:, 1] - center[1], points[:, 0] - center[0])))
+    gap = max(np.diff(a).max(initial=0.0), 360.0 - (a[-1] - a[0]))
+    return float(360.0 - gap), float(gap)
 
 
 def radii(points, center):
@@ -32,13 +45,17 @@ def radii(points, center):
 def _check_run(points, name, nominal_radius, center):
     r = radii(points, center)
     if abs(np.median(r) - nominal_radius) > RADIUS_TOLERANCE * nominal_radius:
-        raise InvalidInputError(f"{name} run: the data's radius ({np.median(r):.6g}) is far from the nominal radius "
-                                f"{nominal_radius:g} (more than {RADIUS_TOLERANCE:.0%}); check --nominal-radius and units")
-    a = np.sort(np.degrees(np.arctan2(points[:, 1] - center[1], points[:, 0] - center[0])))
-    gap = max(np.diff(a).max(initial=0.0), 360.0 - (a[-1] - a[0]))
-    if gap > MAX_ANGULAR_GAP_DEG:
-        raise InvalidInputError(f"{name} run: it does not go round the circle (an angular gap of {gap:.0f} deg); "
-                                "a circular test needs the full path")
+        from methods.units import likely_unit
+        guess = likely_unit(float(np.median(r)), nominal_radius)
+        hint = f"; is the file in {guess}? (--unit {guess.replace('µ', 'u')})" if guess else ""
+        raise InvalidInputError(f"{name} run: the data's radius ({np.median(r):.6g} mm) is far from the nominal radius "
+                                f"{nominal_radius:g} mm (more than {RADIUS_TOLERANCE:.0%}); check --nominal-radius and "
+                                f"--unit{hint}")
+    arc, gap = coverage_deg(points, center)
+    if arc < MIN_ARC_DEG:
+        raise InvalidInputError(f"{name} run: it covers an arc of {arc:.0f} deg; an evaluation needs at least "
+                                f"{MIN_ARC_DEG:g} deg of arc (ISO 230-4 partial arcs) or the full circle")
+    return arc, gap
 
 
 def _zone(points, center_kind):
@@ -53,14 +70,30 @@ def _zone(points, center_kind):
     return np.array(res.center), res.form_error
 
 
-def hysteresis(cw, ccw, center, samples=3600):
-    """Largest |r_cw(theta) - r_ccw(theta)| over a common angle grid (periodic linear interpolation)."""
-    grid = np.linspace(-np.pi, np.pi, samples, endpoint=False)
-    out = []
+def hysteresis(cw, ccw, center, samples=3600, partial=False):
+    """Largest |r_cw(theta) - r_ccw(theta)| over a common angle grid (periodic linear interpolation; for
+    partial arcs linear interpolation over the angles both runs cover)."""
+    if not partial:
+        grid = np.linspace(-np.pi, np.pi, samples, endpoint=False)
+        out = []
+        for pts in (cw, ccw):
+            ang = np.arctan2(pts[:, 1] - center[1], pts[:, 0] - center[0])
+            order = np.argsort(ang)
+            out.append(np.interp(grid, ang[order], radii(pts, center)[order], period=2 * np.pi))
+        return float(np.max(np.abs(out[0] - out[1])))
+    both = np.vstack([cw, ccw])
+    ref = np.arctan2(np.mean(both[:, 1] - center[1]), np.mean(both[:, 0] - center[0]))  # middle of the arc
+    angs, rads = [], []
     for pts in (cw, ccw):
-        ang = np.arctan2(pts[:, 1] - center[1], pts[:, 0] - center[0])
+        ang = np.angle(np.exp(1j * (np.arctan2(pts[:, 1] - center[1], pts[:, 0] - center[0]) - ref)))
         order = np.argsort(ang)
-        out.append(np.interp(grid, ang[order], radii(pts, center)[order], period=2 * np.pi))
+        angs.append(ang[order])
+        rads.append(radii(pts, center)[order])
+    lo, hi = max(a[0] for a in angs), min(a[-1] for a in angs)
+    if hi <= lo:
+        raise InvalidInputError("the CW and CCW runs cover no common arc: H cannot be evaluated")
+    grid = np.linspace(lo, hi, samples)
+    out = [np.interp(grid, a, r) for a, r in zip(angs, rads)]
     return float(np.max(np.abs(out[0] - out[1])))
 
 
@@ -74,8 +107,11 @@ def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = 
     ccw = validate_points(ccw, min_points=10, method="circular test (CCW run)")
     both = np.vstack([cw, ccw])
     c_both = np.array(methods.fit("circle.gauss_newton", both).center)
+    arcs = {}
     for pts, name in ((cw, "CW"), (ccw, "CCW")):
-        _check_run(pts, name, nominal_radius, nominal_center if nominal_center is not None else c_both)
+        arcs[name.lower()], _ = _check_run(pts, name, nominal_radius,
+                                           nominal_center if nominal_center is not None else c_both)
+    partial = any(360.0 - a > MAX_ANGULAR_GAP_DEG for a in arcs.values())
     fits = {name: methods.fit("circle.gauss_newton", pts) for name, pts in (("cw", cw), ("ccw", ccw))}
     dc = np.hypot(*(np.array(fits["cw"].center) - fits["ccw"].center))
     dr = abs(fits["cw"].radius - fits["ccw"].radius)
@@ -85,7 +121,7 @@ def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = 
     c_cw, G_cw = _zone(cw, center)
     c_ccw, G_ccw = _zone(ccw, center)
     c_b, G_b = _zone(both, center)
-    H = hysteresis(cw, ccw, c_both)
+    H = hysteresis(cw, ccw, c_both, partial=partial)
     f_center = np.asarray(nominal_center, dtype=float) if nominal_center is not None else c_both
     dev = radii(both, f_center) - nominal_radius
     if is_dataclass(conditions):
@@ -97,4 +133,5 @@ def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = 
             "F_about": "nominal centre" if nominal_center is not None else "least-squares centre of both runs",
             "H_about": "least-squares centre of both runs (ISO 230-4:1996)",
             "nominal_radius": float(nominal_radius), "n_points": {"cw": len(cw), "ccw": len(ccw)},
-            "conditions": conditions or {}}
+            "conditions": conditions or {}, "partial_arc": bool(partial),
+            "arc_deg": {k: round(v, 3) for k, v in arcs.items()}}

@@ -1,5 +1,7 @@
-"""Report of one circular test: the ISO 230-4 figures, the diagnostics table, and a polar plot of
-both runs with magnified radial deviation."""
+"""Report of one circular test: the ISO 230-4 figures, the diagnostics table ranked by contribution, and
+a polar plot read like ballbar software's: radial deviation magnified about the nominal circle with a
+scale in µm per division, the G band (minimum and maximum circles), start and direction markers of both
+runs, a test-conditions panel and the diagnostics ranked by their contribution to the circular deviation."""
 from __future__ import annotations
 
 import numpy as np
@@ -7,62 +9,190 @@ import numpy as np
 LABELS = {"squareness": "squareness", "scale_mismatch": "scale mismatch X-Y", "servo_mismatch": "servo mismatch X-Y",
           "backlash_x": "backlash X", "backlash_y": "backlash Y", "reversal_spike_x": "reversal spike X",
           "reversal_spike_y": "reversal spike Y", "cyclic_error": "cyclic error"}
+#: human unit of each diagnostics unit, and the factor to the JSON's (mm, rad, s, ratio)
+HUMAN_UNIT = {"um": "µm", "urad": "µrad", "um/m": "µm/m", "ms": "ms"}
+TO_JSON = {"um": (1e-3, "mm"), "urad": (1e-6, "rad"), "um/m": (1e-6, "1 (m/m)"), "ms": (1e-3, "s")}
+
+
+def contribution_um(name: str, item: dict, R_mm: float, feed_mm_min: float | None) -> float | None:
+    """Peak-to-valley of the radial deviation a source causes on the circle (µm): the ranking of the report.
+    Squareness a and scale mismatch s give R a / 2 and R s / 2 amplitude (peak-to-valley R a, R s); servo
+    mismatch tau gives w R tau (w = feed / R) peak-to-valley; backlash b of an axis a step of b; a spike or
+    cyclic error of amplitude h about h (spike) and 2 h (cyclic)."""
+    v = item.get("value")
+    if v is None:
+        return None
+    if name == "squareness":
+        return abs(v) * 1e-6 * R_mm * 1e3
+    if name == "scale_mismatch":
+        return abs(v) * 1e-6 * R_mm * 1e3
+    if name == "servo_mismatch":
+        if item["unit"] == "ms" and feed_mm_min:
+            return abs(v) * 1e-3 * (feed_mm_min / 60.0) * 1e3
+        return 2 * abs(v)
+    if name == "cyclic_error":
+        return 2 * abs(v)
+    return abs(v)
+
+
+def _label(name: str, plane: str | None) -> str:
+    """The label with the plane's axis letters (X, Y for 'xy'; Z, X for 'zx'; Y, Z for 'yz')."""
+    a, b = (plane or "xy").upper()[:2] if plane and len(plane) >= 2 else ("X", "Y")
+    return LABELS[name].replace("X-Y", "#1-#2").replace(" X", " #1").replace(" Y", " #2").replace("#1", a).replace("#2", b)
+
+
+def ranked(dg: dict, R_mm: float, feed_mm_min=None, plane: str | None = None) -> list:
+    """[(label, item, contribution µm or None)] sorted by contribution, the largest first."""
+    rows = [(_label(n, plane), dg[n], contribution_um(n, dg[n], R_mm, feed_mm_min)) for n in LABELS if n in dg]
+    return sorted(rows, key=lambda r: (r[2] is None, -(r[2] or 0.0)))
+
+
+def diagnostics_json(dg: dict) -> dict:
+    """The diagnostics in the JSON's units (mm, rad, s, ratio)."""
+    out = {}
+    for k, item in dg.items():
+        if k.startswith("_"):
+            continue
+        f, unit = TO_JSON[item["unit"]]
+        d = {"value": None if item["value"] is None else item["value"] * f, "unit": unit,
+             "u": None if item["u"] is None else item["u"] * f}
+        if "note" in item:
+            d["note"] = item["note"]
+        out[k] = d
+    return out
 
 
 def text(ev: dict, dg: dict | None) -> str:
     um = 1e3
-    lines = ["ISO 230-4 circular test",
-             f"  nominal radius          {ev['nominal_radius']:.6g}",
-             f"  centre ({ev['center_kind']})          ({ev['center'][0]:.6f}, {ev['center'][1]:.6f})",
-             f"  G  CW / CCW             {ev['G_cw'] * um:.2f} / {ev['G_ccw'] * um:.2f} um",
-             f"  G(b)                    {ev['G_b'] * um:.2f} um",
-             f"  H (1996)                {ev['H'] * um:.2f} um",
-             f"  F max / F min           {ev['F_max'] * um:+.2f} / {ev['F_min'] * um:+.2f} um ({ev['F_about']})",
-             f"  mean radial deviation   {ev['mean_radial_deviation'] * um:+.2f} um"]
+    arc = ev.get("arc_deg", {})
+    partial = ev.get("partial_arc", False)
+    lines = ["ISO 230-4 circular test" + (f" (partial arc: CW {arc.get('cw', 0):.1f}°, CCW {arc.get('ccw', 0):.1f}°)"
+                                          if partial else ""),
+             f"  nominal radius          {ev['nominal_radius']:.6g} mm",
+             f"  centre ({ev['center_kind']})          ({ev['center'][0]:.6f}, {ev['center'][1]:.6f}) mm",
+             f"  G  CW / CCW             {ev['G_cw'] * um:.2f} / {ev['G_ccw'] * um:.2f} µm",
+             f"  G(b)                    {ev['G_b'] * um:.2f} µm",
+             f"  H (1996)                {ev['H'] * um:.2f} µm{' (over the common arc)' if partial else ''}",
+             f"  F max / F min           {ev['F_max'] * um:+.2f} / {ev['F_min'] * um:+.2f} µm ({ev['F_about']})",
+             f"  mean radial deviation   {ev['mean_radial_deviation'] * um:+.2f} µm"]
     if dg:
-        lines += ["diagnostics (least squares on the error signatures; value +- standard uncertainty)"]
-        for name, label in LABELS.items():
-            item = dg[name]
+        feed = (ev.get("conditions") or {}).get("feed_mm_min")
+        lines += ["diagnostics (least squares on the error signatures; value +- standard uncertainty), ranked by "
+                  "their contribution to the circular deviation (peak-to-valley, µm)"]
+        plane = (ev.get("conditions") or {}).get("plane")
+        for label, item, contrib in ranked(dg, ev["nominal_radius"], feed, plane):
             if item["value"] is None:
                 lines.append(f"  {label:<22}  {item.get('note', 'not estimated')}")
             else:
-                lines.append(f"  {label:<22}  {item['value']:+10.3f} +- {item['u']:.3f} {item['unit']}")
+                unit = HUMAN_UNIT.get(item["unit"], item["unit"])
+                lines.append(f"  {label:<22}  {item['value']:+10.3f} +- {item['u']:.3f} {unit:<5}  "
+                             f"contribution {contrib:7.2f} µm")
         m = dg["_model"]
-        lines.append(f"  residual RMS {m['residual_rms_um']:.2f} um; spike decay {m['spike_decay_deg']:.2f} deg")
+        lines.append(f"  residual RMS {m['residual_rms_um']:.2f} µm; spike decay {m['spike_decay_deg']:.2f}°")
     return "\n".join(lines)
 
 
-def polar_plot(cw, ccw, ev: dict, path, magnification: float | None = None, title: str = "") -> float:
-    """Both runs as radial deviation from the nominal radius, magnified, around the nominal circle.
-    Returns the magnification used."""
+def _nice_division(span_um: float) -> float:
+    """A 1-2-5 step (µm) so that the span covers about 4 divisions."""
+    raw = max(span_um / 4.0, 1e-6)
+    exp = np.floor(np.log10(raw))
+    for m in (1, 2, 5, 10):
+        if m * 10 ** exp >= raw:
+            return float(m * 10 ** exp)
+    return float(10 ** (exp + 1))
+
+
+def polar_plot(cw, ccw, ev: dict, path, title: str = "", *, diagnostics=None, conditions=None, save=None):
+    """Both runs as radial deviation (µm) about the evaluation centre, drawn on a polar grid whose
+    rings are a fixed number of µm apart (the scale is printed: µm per division); the nominal circle is
+    the ring 0; the G band (min and max radius of both runs) shaded; start (o) and direction (arrow)
+    markers; a panel of test conditions and the ranked diagnostics. Returns the figure's scale dict
+    {'um_per_division', 'divisions'}."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    c = ev["center"]  # about the least-squares (or minimum-zone) centre of both runs, as ballbar reports
+    c = ev["center"]
     R = ev["nominal_radius"]
-    devs = []
-    for pts in (cw, ccw):
+    cond = dict(ev.get("conditions") or {})
+    cond.update(conditions or {})
+    runs = []
+    for pts, label, colour in ((cw, "CW (G02)", "tab:blue"), (ccw, "CCW (G03)", "tab:red")):
+        pts = np.asarray(pts, float)
         ang = np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0])
-        devs.append((ang, np.hypot(pts[:, 0] - c[0], pts[:, 1] - c[1]) - R))
-    span = max(np.abs(d).max() for _, d in devs) or 1e-9
-    if magnification is None:
-        magnification = 0.25 * R / span  # the largest deviation drawn at a quarter of the plot radius
-    fig = plt.figure(figsize=(6, 6))
-    ax = fig.add_subplot(projection="polar")
+        dev_um = (np.hypot(pts[:, 0] - c[0], pts[:, 1] - c[1]) - R) * 1e3
+        runs.append((ang, dev_um, label, colour))
+    lo = min(d.min() for _, d, _, _ in runs)
+    hi = max(d.max() for _, d, _, _ in runs)
+    div = _nice_division(max(hi - lo, 1e-3))
+    # rings: from below the smallest to above the largest deviation, in whole divisions
+    r0 = np.floor(lo / div) - 1
+    n_div = int(np.ceil(hi / div) - r0 + 1)
+    base = r0 * div                                        # the radius drawn at the plot centre (µm)
+    fig = plt.figure(figsize=(11.5, 7.2))
+    ax = fig.add_axes([0.04, 0.08, 0.56, 0.84], projection="polar")
     ring = np.linspace(0, 2 * np.pi, 721)
-    ax.plot(ring, np.ones_like(ring), color="0.5", lw=0.8, label=f"nominal circle R = {R:g}")
-    for (ang, dev), label, colour in zip(devs, ("CW (G02)", "CCW (G03)"), ("tab:blue", "tab:red")):
-        order = np.argsort(ang)
-        ax.plot(ang[order], 1 + magnification * dev[order] / R, lw=0.8, color=colour, label=label)
-    ax.set_rticks([])
-    ax.set_ylim(0, 1.35)
-    ax.set_title((title + "\n" if title else "") +
-                 f"radial deviation magnified x{magnification:.0f} about the {ev['center_kind']} centre\n"
-                 f"G = {ev['G_cw'] * 1e3:.1f} / {ev['G_ccw'] * 1e3:.1f} um (CW/CCW), G(b) = {ev['G_b'] * 1e3:.1f} um, "
-                 f"H = {ev['H'] * 1e3:.1f} um", fontsize=9)
-    ax.legend(loc="lower left", fontsize=8, bbox_to_anchor=(-0.1, -0.1))
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return magnification
+    ax.fill_between(ring, lo - base, hi - base, color="0.88", alpha=0.5, lw=0)
+    ax.plot(ring, np.full_like(ring, lo - base), color="0.55", lw=0.8)
+    ax.plot(ring, np.full_like(ring, hi - base), color="0.55", lw=0.8,
+            label=f"G band, min/max circles: {hi - lo:.2f} µm")
+    ax.plot(ring, np.full_like(ring, -base), color="0.2", lw=1.2, ls="--", label=f"nominal circle R = {R:g} mm (0 µm)")
+    outer = n_div * div
+    for i, (ang, dev, label, colour) in enumerate(runs):
+        ax.plot(ang, dev - base, lw=0.8, color=colour, label=label)
+        # start marker on the trace, and an arrow just outside the trace along the direction of travel
+        ax.plot(ang[0], dev[0] - base, "o", color=colour, ms=9, mfc="white", mec=colour, mew=2, zorder=5,
+                label=f"{label.split()[0]} start")
+        a = np.unwrap(ang)
+        k = int(np.searchsorted(np.abs(a - a[0]), np.radians(25.0)))
+        k = min(max(k, 1), len(ang) - 1)
+        r_arrow = outer * (0.93 - 0.05 * i)
+        ax.annotate("", xy=(ang[k], r_arrow), xytext=(ang[0], r_arrow),
+                    arrowprops=dict(arrowstyle="-|>", color=colour, lw=2.0, mutation_scale=16,
+                                    connectionstyle=f"arc3,rad={0.12 if a[k] > a[0] else -0.12}"))
+    ticks = np.arange(1, n_div + 1) * div
+    ax.set_rticks(ticks)
+    ax.set_yticklabels([f"{base + t:+.3g} µm" for t in ticks], fontsize=7)
+    ax.set_rlim(0, outer)
+    ax.set_rlabel_position(112.5)
+    ax.set_thetagrids(np.arange(0, 360, 45), labels=[f"{a}°" for a in range(0, 360, 45)])
+    ax.set_title((title + "\n" if title else "") + f"radial deviation about the {ev['center_kind']} centre: "
+                 f"scale {div:g} µm/div", fontsize=10)
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower left", fontsize=8, bbox_to_anchor=(0.64, 0.02), frameon=False)
+    # the panel: test conditions, results, diagnostics ranked
+    um = 1e3
+    arc = ev.get("arc_deg", {})
+    centre = cond.get("nominal_center_mm") or cond.get("nominal_center")
+    lines = ["Test conditions",
+             f"  machine      {cond.get('machine') or '-'}",
+             f"  date         {cond.get('date') or '-'}",
+             f"  plane        {str(cond.get('plane') or 'xy').upper()}",
+             f"  radius       {R:g} mm",
+             f"  centre       {'(' + ', '.join(f'{v:g}' for v in centre) + ') mm' if centre else '-'}",
+             f"  feed         {str(cond.get('feed_mm_min')) + ' mm/min' if cond.get('feed_mm_min') else '-'}",
+             f"  arc          CW {arc.get('cw', 360):.0f}°, CCW {arc.get('ccw', 360):.0f}°",
+             f"  scale        {div:g} µm/div",
+             "",
+             "Results (ISO 230-4)",
+             f"  G CW / CCW   {ev['G_cw'] * um:.2f} / {ev['G_ccw'] * um:.2f} µm",
+             f"  G(b)         {ev['G_b'] * um:.2f} µm",
+             f"  H            {ev['H'] * um:.2f} µm",
+             f"  F max / min  {ev['F_max'] * um:+.2f} / {ev['F_min'] * um:+.2f} µm"]
+    if diagnostics:
+        lines += ["", "Diagnostics (ranked, contribution µm)"]
+        for label, item, contrib in ranked(diagnostics, R, cond.get("feed_mm_min"), cond.get("plane")):
+            if item["value"] is None:
+                lines.append(f"  {label:<20} n/a")
+            else:
+                unit = HUMAN_UNIT.get(item["unit"], item["unit"])
+                lines.append(f"  {label:<20} {item['value']:+8.2f} {unit:<5} {contrib:6.2f}")
+    fig.text(0.64, 0.92, "\n".join(lines), va="top", ha="left", family="monospace", fontsize=8.5)
+    try:
+        if save is not None:
+            save(fig, path)
+        else:
+            fig.savefig(path, dpi=120)
+    finally:
+        plt.close(fig)
+    return {"um_per_division": div, "divisions": n_div, "figure_text": lines}

@@ -20,7 +20,7 @@ import shapely
 from methods._errors import InvalidInputError
 from methods._registry import register
 from methods._result import MagnifyFit
-from methods._validation import check_choice
+from methods._validation import check_choice, check_positive
 from methods.magnify.data import MagnifyInput, continuity, self_intersections, validate
 
 
@@ -41,6 +41,11 @@ def _nearest_on(geom, pts_geom):
     return shapely.get_coordinates(shapely.shortest_line(geom, pts_geom))[0::2]
 
 
+def _eta(eta, method_id) -> float:
+    """The magnification: a finite positive number (issue 16 item 18: nan, inf, 0, -5 and 'abc' refused)."""
+    return float(check_positive("eta", eta, method_id))
+
+
 def _finish(data: MagnifyInput, r, eta, extra, message):
     p = data.measured
     mag = r + eta * (p - r)
@@ -56,6 +61,7 @@ def _finish(data: MagnifyInput, r, eta, extra, message):
 def nearest(data, *, eta=1000.0):
     """The commercial software's algorithm: discontinuous wherever the nearest point of R jumps (corners,
     finely segmented paths)."""
+    eta = _eta(eta, "magnify.nearest")
     line = data.line
     pts_geom = shapely.points(data.measured)
     r, _, _ = _signed_error(line, pts_geom, data.measured)
@@ -69,6 +75,7 @@ def offset(data, *, eta=1000.0, delta=None, selection="same_side"):
     """Steps (1)-(4) of the paper with offsets from shapely (exact, round joins). ``delta`` must exceed
     the largest contouring error (default: twice it). ``selection``: ``"same_side"`` (default, continuous
     at corners) or ``"nearest_of_both"`` (step (2) as printed)."""
+    eta = _eta(eta, "magnify.offset")
     check_choice("selection", selection, ("same_side", "nearest_of_both"), "magnify.offset")
     line = data.line
     pts_geom = shapely.points(data.measured)

@@ -63,8 +63,8 @@ def _check_stations(stations, k):
     return s
 
 
-def _read_table(path, need: tuple[str, ...], optional: tuple[str, ...] = ()):
-    df, line_of = read_table(path, keep_default_na=False,
+def _read_table(path, need: tuple[str, ...], optional: tuple[str, ...] = (), skip_rows: int = 0):
+    df, line_of = read_table(path, keep_default_na=False, skip_rows=skip_rows,
                              no_data_hint=f"need a header {','.join(need)} and one row per measurement")
     df.columns = [str(c).strip().lower() if str(c).strip().lower() != "l" else "L" for c in df.columns]
     missing = [c for c in need if c not in df.columns]
@@ -135,14 +135,22 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, known_stations=
     return MultilaterationData(stations, points, lengths, _check_stations(known_stations, len(stations)), offsets)
 
 
-def read_csv(path, stations_path=None) -> MultilaterationData:
-    """Read a measurements CSV and, optionally, a stations CSV (station, x, y, z, L)."""
-    st, num, lines = _read_table(path, ("station", "x", "y", "z", "length"), optional=("xp", "yp", "zp"))
+def read_csv(path, stations_path=None, *, unit: str = "mm", skip_rows: int = 0) -> MultilaterationData:
+    """Read a measurements CSV and, optionally, a stations CSV (station, x, y, z, L); comma, semicolon
+    (with decimal commas), tab or whitespace separated. ``unit``: the files' length unit (returned in mm)."""
+    from methods.units import mm_per
+    f = mm_per(unit)
+    st, num, lines = _read_table(path, ("station", "x", "y", "z", "length"), optional=("xp", "yp", "zp"),
+                                 skip_rows=skip_rows)
+    if f != 1.0:
+        num = {k: v * f for k, v in num.items()}
     df = pd.DataFrame({"station": st, **num})
     data = from_frame(df, str(path), lines=lines)
     if stations_path is None:
         return data
-    sst, snum, slines = _read_table(stations_path, ("station", "x", "y", "z", "L"))
+    sst, snum, slines = _read_table(stations_path, ("station", "x", "y", "z", "L"), skip_rows=skip_rows)
+    if f != 1.0:
+        snum = {k: v * f for k, v in snum.items()}
     pos = {}
     for r, s in enumerate(sst):
         if s in pos:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from methods._errors import InvalidInputError
 from methods._registry import register
 from methods._result import PositioningFit
 from methods._validation import check_choice
@@ -19,6 +20,8 @@ def figures(data: PositioningData, standard: str = "iso230-2:2014") -> tuple[dic
     E up = max - min of x_i up, E = max - min over both, M = max - min of (x_up + x_down)/2,
     A up = max(x_up + k s_up) - min(x_up - k s_up), A over both directions."""
     k = 3.0 if standard == "iso230-2:1988" else 2.0
+    if len(data.directions) == 1:
+        return _unidirectional(data, standard, k)
     xu, xd = data.up.mean(axis=1), data.down.mean(axis=1)
     su, sd = data.up.std(axis=1, ddof=1), data.down.std(axis=1, ddof=1)
     B_i = xu - xd
@@ -34,7 +37,7 @@ def figures(data: PositioningData, standard: str = "iso230-2:2014") -> tuple[dic
            "E": float(max(xu.max(), xd.max()) - min(xu.min(), xd.min())),
            "M": float(np.ptp(xm)), "R_up": float(Ru_i.max()), "R_down": float(Rd_i.max()), "R": float(R_i.max()),
            "B": float(np.max(np.abs(B_i))), "B_mean": float(np.mean(B_i)), "k": k, "standard": standard,
-           "targets": len(data.targets), "runs": data.runs}
+           "targets": len(data.targets), "runs": data.runs, "directions": "bidirectional"}
     if standard == "vdi3441":
         # VDI/DGQ 3441: scatter Ps_i = 6 s_i (s pooled over both directions), reversal span U_i = |B_i|,
         # Pa = range of the bidirectional means, P = max(x_i + (U_i + Ps_i)/2) - min(x_i - (U_i + Ps_i)/2)
@@ -44,6 +47,22 @@ def figures(data: PositioningData, standard: str = "iso230-2:2014") -> tuple[dic
         fig.update(Ps=float(Ps_i.max()), U=float(U_i.max()), Pa=float(np.ptp(xm)),
                    P=float(np.max(xm + half) - np.min(xm - half)))
         per.update(Ps_i=Ps_i, U_i=U_i)
+    return fig, per
+
+
+def _unidirectional(data: PositioningData, standard: str, k: float) -> tuple[dict, dict]:
+    """ISO 230-2 unidirectional figures of the one direction measured: A, E, R of that direction (and
+    the same values under the axis keys A, E, R); M and B need both directions and are absent."""
+    if standard == "vdi3441":
+        raise InvalidInputError("VDI/DGQ 3441 needs both approach directions; this test has one")
+    d = data.directions[0]
+    arr = getattr(data, d)
+    x, s = arr.mean(axis=1), arr.std(axis=1, ddof=1)
+    R_i = 2 * k * s
+    per = {"targets": data.targets, f"mean_{d}": x, f"s_{d}": s, f"R_i_{d}": R_i}
+    A, E, R = float(np.max(x + k * s) - np.min(x - k * s)), float(np.ptp(x)), float(R_i.max())
+    fig = {f"A_{d}": A, f"E_{d}": E, f"R_{d}": R, "A": A, "E": E, "R": R, "k": k, "standard": standard,
+           "targets": len(data.targets), "runs": data.runs, "directions": f"unidirectional ({d})"}
     return fig, per
 
 

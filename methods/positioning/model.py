@@ -88,7 +88,8 @@ def evaluate_band(poly: dict, P, k=2.0):
 def _model(data: PositioningData, degree, u_delta, weighting, k):
     fig, per = figures(data)
     poly, residuals = {}, []
-    for d, x, s, arr in (("up", per["mean_up"], per["s_up"], data.up), ("down", per["mean_down"], per["s_down"], data.down)):
+    for d in data.directions:
+        x, s, arr = per[f"mean_{d}"], per[f"s_{d}"], getattr(data, d)
         coef_t, cov_t, mid, half = fit_direction(data.targets, x, s, arr.shape[1], degree, u_delta, weighting)
         coef_p, cov_p = _to_position_basis(coef_t, cov_t, mid, half)
         entry = {"coefficients": coef_p, "covariance": cov_p, "degree": degree, "coef_t": coef_t, "cov_t": cov_t,

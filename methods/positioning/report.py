@@ -1,42 +1,131 @@
-"""Plots like the positioning paper's figures 2 and 3: mean deviations with their +-k s bounds
-(the standard's point-wise view) and the fitted polynomial with its expanded-uncertainty band."""
+"""Text report and plots of a positioning test: the axis figures, the per-target table, the polynomial
+in readable units, and a plot like laser-interferometer software's (every run, the mean bidirectional
+curves, the ±k s bands, A/E/B/M/R annotated) beside the model with its expanded-uncertainty band
+(the positioning paper's figures 2 and 3)."""
 from __future__ import annotations
 
 import numpy as np
 
 from methods.positioning.model import evaluate_band
 
+ARROW = {"up": "↑", "down": "↓"}
+TITLES = {"iso230-2:2014": "ISO 230-2:2014 (k = 2)", "iso230-2:1988": "ISO 230-2:1988 (k = 3)",
+          "vdi3441": "VDI/DGQ 3441"}
 
-def plot(result, path, title: str = "") -> None:
+
+def coefficients_readable(poly: dict) -> list[tuple[int, float, str]]:
+    """The polynomial's coefficients c_k (mm / mm^k, increasing powers of P in mm) as µm per m^k:
+    c_k [µm/m^k] = c_k [mm/mm^k] x 1e3 x 1e3^k, with the unit string."""
+    out = []
+    for k, c in enumerate(poly["coefficients"]):
+        out.append((k, float(c) * 1e3 * (1e3 ** k), "µm" if k == 0 else ("µm/m" if k == 1 else f"µm/m^{k}")))
+    return out
+
+
+def text(res, degree: int | None = None) -> str:
+    f, per = res.figures, res.per_target
+    std = f["standard"]
+    um = 1e3
+    lines = [f"{TITLES.get(std, std)}: {f['targets']} targets x {f['runs']} runs, {f.get('directions', 'bidirectional')} "
+             "(all values in µm)"]
+    if std == "vdi3441":
+        lines += [f"  P  (positional uncertainty)        {f['P'] * um:10.3f}",
+                  f"  Pa (positional deviation)          {f['Pa'] * um:10.3f}",
+                  f"  Ps (largest positional scatter)    {f['Ps'] * um:10.3f}",
+                  f"  U  (largest reversal span)         {f['U'] * um:10.3f}"]
+    else:
+        names = {"A": "accuracy, bidirectional", "A_up": "accuracy ↑", "A_down": "accuracy ↓",
+                 "E": "systematic deviation, bidirectional", "E_up": "systematic deviation ↑",
+                 "E_down": "systematic deviation ↓", "M": "mean bidirectional positional deviation",
+                 "R": "repeatability, bidirectional", "R_up": "repeatability ↑", "R_down": "repeatability ↓",
+                 "B": "reversal value", "B_mean": "mean reversal value"}
+        if f.get("directions", "bidirectional") != "bidirectional":
+            names = {k: v.replace(", bidirectional", f", {f['directions']}") for k, v in names.items()}
+        for key, label in names.items():
+            if key in f:
+                lines.append(f"  {key:<7} {label:<40} {f[key] * um:10.3f}")
+    lines.append("per target (µm; target in mm)")
+    cols = [(f"mean {ARROW[d]}", f"mean_{d}", 9) for d in ("up", "down") if f"mean_{d}" in per] + \
+           [(f"s {ARROW[d]}", f"s_{d}", 7) for d in ("up", "down") if f"s_{d}" in per] + \
+           [(n, k, 8) for n, k in (("B_i", "B_i"), ("R_i", "R_i"), ("x̄_i", "mean_bidirectional")) if k in per]
+    if "R_i" not in per:
+        cols += [(f"R_i {ARROW[d]}", f"R_i_{d}", 8) for d in ("up", "down") if f"R_i_{d}" in per]
+    lines.append(f"  {'target':>10} " + " ".join(f"{n:>{w}}" for n, _, w in cols))
+    for i, t in enumerate(per["targets"]):
+        lines.append(f"  {t:10.3f} " + " ".join(f"{per[k][i] * um:{w}.3f}" for _, k, w in cols))
+    if res.polynomial:
+        ud = res.extra.get("u_delta", 0.0)
+        lines.append(f"model: degree-{degree if degree is not None else next(iter(res.polynomial.values()))['degree']} "
+                     f"polynomial by GLS in the position P (mm), u(delta) = {ud * um:.4g} µm; coefficients c_k of P^k "
+                     "in µm per m^k (P in m)")
+        for d, p in res.polynomial.items():
+            coefs = ", ".join(f"{c:+.4g} {u}" for _, c, u in coefficients_readable(p))
+            lines.append(f"  {ARROW.get(d, d)} {coefs}; max U(P_i) = {p['U_at_targets'].max() * um:.3f} µm "
+                         f"(k = {p['k']:g})")
+    return "\n".join(lines)
+
+
+def plot(result, path, title: str = "", *, data=None, save=None) -> dict:
+    """Left: every run (thin), the mean deviations of each direction, the mean bidirectional curve, the
+    ±k s bands and the figures A, E, B, M, R annotated; right: the model with U(P). Returns the axes'
+    labels (for tests)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    per, fig_k = result.per_target, result.figures.get("k", 2.0)
+    per, figs = result.per_target, result.figures
+    k = figs.get("k", 2.0)
     P = per["targets"]
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.4), sharey=True)
-    for ax, d, colour in ((axes[0], "up", "tab:blue"), (axes[0], "down", "tab:red")):
+    um = 1e3
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5), sharey=True)
+    ax = axes[0]
+    colours = {"up": "tab:blue", "down": "tab:red"}
+    dirs = [d for d in ("up", "down") if f"mean_{d}" in per]
+    if data is not None:
+        for d in dirs:
+            arr = getattr(data, d)
+            for j in range(arr.shape[1]):
+                ax.plot(P, arr[:, j] * um, lw=0.5, alpha=0.5, color=colours[d],
+                        label=f"runs {ARROW[d]}" if j == 0 else None)
+    for d in dirs:
         x, s = per[f"mean_{d}"], per[f"s_{d}"]
-        ax.plot(P, x * 1e3, "o-", color=colour, ms=4, label=f"mean deviation {'↑' if d == 'up' else '↓'}")
-        ax.plot(P, (x + fig_k * s) * 1e3, "--", color=colour, lw=0.8)
-        ax.plot(P, (x - fig_k * s) * 1e3, "--", color=colour, lw=0.8, label=f"±{fig_k:g}s {'↑' if d == 'up' else '↓'}")
-    axes[0].set_title("ISO 230-2: point-wise (linear between targets)")
+        ax.plot(P, x * um, "o-", color=colours[d], ms=4, lw=1.4, label=f"mean {ARROW[d]}")
+        ax.fill_between(P, (x - k * s) * um, (x + k * s) * um, color=colours[d], alpha=0.15, label=f"±{k:g}s {ARROW[d]}")
+    if "mean_bidirectional" in per:
+        ax.plot(P, per["mean_bidirectional"] * um, "k-", lw=1.2, label="mean bidirectional")
+    if figs.get("standard") == "vdi3441":
+        notes = [f"P = {figs['P'] * um:.2f} µm", f"Pa = {figs['Pa'] * um:.2f} µm", f"Ps = {figs['Ps'] * um:.2f} µm",
+                 f"U = {figs['U'] * um:.2f} µm"]
+    else:
+        notes = [f"{key} = {figs[key] * um:.2f} µm" for key in ("A", "E", "B", "M", "R") if key in figs]
+    ax.text(0.02, 0.98, "\n".join(notes), transform=ax.transAxes, va="top", ha="left", fontsize=9,
+            family="monospace", bbox=dict(boxstyle="round", fc="white", ec="0.6", alpha=0.9))
+    ax.set_title(f"{TITLES.get(figs.get('standard'), figs.get('standard'))}: {figs['targets']} targets x "
+                 f"{figs['runs']} runs", fontsize=10)
     grid = np.linspace(P.min(), P.max(), 400)
-    for d, colour in (("up", "tab:blue"), ("down", "tab:red")):
-        axes[1].plot(P, per[f"mean_{d}"] * 1e3, "o", color=colour, ms=4)
-        if d in result.polynomial:
+    for d in dirs:
+        axes[1].plot(P, per[f"mean_{d}"] * um, "o", color=colours[d], ms=4)
+        if d in (result.polynomial or {}):
             v, U = evaluate_band(result.polynomial[d], grid, result.polynomial[d]["k"])
-            axes[1].plot(grid, v * 1e3, color=colour, label=f"degree-{result.polynomial[d]['degree']} fit {'↑' if d == 'up' else '↓'}")
-            axes[1].fill_between(grid, (v - U) * 1e3, (v + U) * 1e3, color=colour, alpha=0.2,
+            axes[1].plot(grid, v * um, color=colours[d],
+                         label=f"degree-{result.polynomial[d]['degree']} fit {ARROW[d]}")
+            axes[1].fill_between(grid, (v - U) * um, (v + U) * um, color=colours[d], alpha=0.2,
                                  label=f"U(P), k = {result.polynomial[d]['k']:g}")
-    axes[1].set_title("model: fitted curve and expanded uncertainty anywhere on the travel")
-    for ax in axes:
-        ax.set_xlabel("target position P")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+    axes[1].set_title("model: fitted curve and expanded uncertainty anywhere on the travel", fontsize=10)
+    for a in axes:
+        a.set_xlabel("target position P [mm]")
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7, loc="lower right")
     axes[0].set_ylabel("positional deviation [µm]")
     if title:
-        fig.suptitle(title)
+        fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    labels = {"x": axes[0].get_xlabel(), "y": axes[0].get_ylabel(), "notes": notes}
+    try:
+        if save is not None:
+            save(fig, path)
+        else:
+            fig.savefig(path, dpi=110)
+    finally:
+        plt.close(fig)
+    return labels

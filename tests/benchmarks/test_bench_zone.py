@@ -9,6 +9,9 @@ user would reach for, measured in the same run:
 * ``highs_all_points``: the algebraic Chebyshev LP with every point in HiGHS — N <= 10^5 (at 10^6
   the 2 x 10^6-row LP is not generated).
 
+* the ratios to today's (pre-certificate) code are measured from main's worktree in a separate process:
+  ``cd /tmp && python zone_time.py /work/main; python zone_time.py /work/wt-zone`` (see /work/notes/zone.md).
+
 Run:  python -m pytest tests/benchmarks/test_bench_zone.py --benchmark-enable --benchmark-group-by=group
 """
 import numpy as np
@@ -42,6 +45,7 @@ def test_fitbench(benchmark, trace, method_id):
     res = _run(benchmark, n, methods.fit, method_id, pts)
     assert res.converged, res.message
     assert 0 < res.form_error < 0.06
+    benchmark.extra_info["certified"] = res.extra.get("certified")
 
 
 def test_one_pass(benchmark, trace):

@@ -1,0 +1,245 @@
+"""``python -m experiments.verify [STUDY ...] [--results DIR] [--against DIR] [--quick] [--jobs N]``
+
+Reproducibility verdict: runs the studies (into a temporary folder) or reads a finished run (``--against``)
+and compares every non-timing column of each ``results.csv`` with the committed one (``--results``; default
+``results/``, or ``results/quick`` with ``--quick``), with the tolerances declared with the metrics
+(``experiments.metrics.TOLERANCES``: exact for ids, statuses and counts; relative + absolute per metric).
+Rows are matched by their identity (study, data set, data stream, repetition, seed, method, parameters).
+
+Prints one line per study and a table of the columns outside tolerance with their worst rows; writes the
+verdict atomically to ``RESULTS/verify.json`` (:func:`last_verdict` reads it for the report).
+Exit status: 0 all agree, 1 some values differ, 2 bad input (missing folder or study, unreadable table).
+"""
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import json
+import math
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from experiments.metrics import CHAOTIC, tolerance
+from experiments.provenance import write_atomic
+from methods import InvalidInputError
+
+VERDICT_FILE = "verify.json"
+#: columns that identify a row (those present are used; data_* and param_* columns are added)
+IDENTITY = ("study", "dataset", "data_stream", "repetition", "seed", "method", "params")
+WORST_ROWS = 3
+
+
+def _read(folder: Path, study: str, which: str) -> pd.DataFrame:
+    path = folder / study / "results.csv"
+    if not path.is_file():
+        raise InvalidInputError(f"{which} {folder} has no {study}/results.csv; run python -m experiments.run {study}"
+                                f" --out {folder} first, or name the studies it has")
+    try:
+        df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError) as exc:
+        raise InvalidInputError(f"{path} cannot be read as a table ({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
+    if "status" not in df.columns or "method" not in df.columns:
+        raise InvalidInputError(f"{path} is not a results table of experiments.run (no status/method column)")
+    return df
+
+
+def identity_columns(df: pd.DataFrame) -> list[str]:
+    return [c for c in df.columns if c in IDENTITY or c.startswith(("data_", "param_"))]
+
+
+def _keyed(df: pd.DataFrame, ident: list[str]) -> pd.DataFrame:
+    df = df.copy()
+    shown = [c for c in ident if c != "study"]
+    key = (df[shown].astype(str).apply(lambda col: col.name + "=" + col).agg(", ".join, axis=1) if shown
+           else pd.Series([""] * len(df), index=df.index))
+    df["_occurrence"] = key.groupby(key).cumcount()  # rows with one identity: matched in order
+    df["_key"] = key + " #" + df["_occurrence"].astype(str)
+    return df.set_index("_key")
+
+
+def _number(values: pd.Series) -> np.ndarray | None:
+    """The column as floats ('' is NaN), or None when it is not numeric."""
+    v = values.replace({"": "nan", "True": "1", "False": "0"})
+    try:
+        return v.astype(float).to_numpy()
+    except (TypeError, ValueError):
+        return None
+
+
+def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> dict:
+    """Every column outside its tolerance, with its worst rows: {study, rows, columns, problems: [...]}."""
+    ident = identity_columns(committed)
+    a, b = _keyed(committed, ident), _keyed(fresh, [c for c in ident if c in fresh.columns])
+    problems = []
+    missing = a.index.difference(b.index)
+    extra = b.index.difference(a.index)
+    for label, keys in (("row missing in this run", missing), ("row not in the committed results", extra)):
+        if len(keys):
+            problems.append({"column": "(rows)", "n_rows": int(len(keys)), "problem": label,
+                             "worst": [{"row": k, "committed": "", "this_run": "", "difference": ""}
+                                       for k in list(keys)[:WORST_ROWS]]})
+    common = a.index.intersection(b.index)
+    a, b = a.loc[common], b.loc[common]
+    compared = 0
+    for col in committed.columns:
+        if col.startswith("_") or col in ident:
+            continue
+        methods = a["method"] if "method" in a else pd.Series([""] * len(a), index=a.index)
+        if col not in b.columns:
+            if tolerance(col, study) is not None:
+                problems.append({"column": col, "n_rows": int(len(a)), "problem": "column missing in this run", "worst": []})
+            continue
+        tols = [tolerance(col, study, m) for m in methods]
+        keep = np.array([t is not None for t in tols])
+        if not keep.any():
+            continue
+        compared += 1
+        old, new = a[col], b[col]
+        x, y = _number(old), _number(new)
+        if x is not None and y is not None:
+            rtol = np.array([t.rtol if t else 0.0 for t in tols])
+            atol = np.array([t.atol if t else 0.0 for t in tols])
+            both_nan = np.isnan(x) & np.isnan(y)
+            diff = np.abs(y - x)
+            ok = both_nan | (diff <= atol + rtol * np.abs(x))
+            excess = np.where(ok, 0.0, np.where(np.isnan(diff), np.inf, diff / np.maximum(atol + rtol * np.abs(x), 1e-300)))
+        else:
+            ok = (old.to_numpy() == new.to_numpy())
+            excess = np.where(ok, 0.0, np.inf)
+            diff = None
+        bad = ~ok & keep
+        if bad.any():
+            order = np.argsort(-excess[bad], kind="stable")[:WORST_ROWS]
+            idx = np.flatnonzero(bad)[order]
+            t = tols[idx[0]]
+            problems.append({
+                "column": col, "n_rows": int(bad.sum()),
+                "problem": "differs" if t.rtol == t.atol == 0 else f"outside rtol={t.rtol:g}, atol={t.atol:g}",
+                "worst": [{"row": a.index[i], "committed": old.iloc[i], "this_run": new.iloc[i],
+                           "difference": "" if diff is None else f"{diff[i]:.3g}"} for i in idx]})
+    return {"study": study, "rows": int(len(committed)), "columns": compared, "agree": not problems, "problems": problems}
+
+
+def _table(problems: list[tuple[str, dict]]) -> str:
+    head = ["study", "column", "rows outside", "problem", "worst row (identity)", "committed", "this run", "|difference|"]
+    lines = []
+    for study, p in problems:
+        worst = p["worst"] or [{"row": "", "committed": "", "this_run": "", "difference": ""}]
+        for k, w in enumerate(worst):
+            lines.append([study if k == 0 else "", p["column"] if k == 0 else "", str(p["n_rows"]) if k == 0 else "",
+                          p["problem"] if k == 0 else "", w["row"], str(w["committed"]), str(w["this_run"]), str(w["difference"])])
+    widths = [max(len(h), *(len(r[i]) for r in lines)) for i, h in enumerate(head)]
+    fmt = lambda r: "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip()  # noqa: E731
+    return "\n".join([fmt(head), fmt(["-" * w for w in widths])] + [fmt(r) for r in lines])
+
+
+def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
+    """Compare ``against`` with the committed ``results``; the verdict dict (also written to RESULTS/verify.json)."""
+    reports = []
+    for study in studies:
+        committed = _read(results, study, "--results")
+        fresh = _read(against, study, "--against")
+        reports.append(compare_study(study, committed, fresh))
+    for r in reports:
+        n_bad = sum(p["n_rows"] for p in r["problems"])
+        log(f"{r['study']}: " + (f"agree ({r['rows']} rows, {r['columns']} columns within their tolerances)" if r["agree"]
+                                  else f"DIFFER: {len(r['problems'])} column(s) outside tolerance, {n_bad} value(s)"))
+    bad = [(r["study"], p) for r in reports for p in r["problems"]]
+    if bad:
+        log("")
+        log(_table(bad))
+    if CHAOTIC:
+        log("wider tolerances declared for methods chaotic by nature: " +
+            "; ".join(f"{s}/{m}/{c}: rtol={t.rtol:g} atol={t.atol:g} ({t.why})" for (s, m, c), t in CHAOTIC.items()))
+    verdict = {"agree": not bad, "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+               "results": str(results), "against": str(against), "studies": reports}
+    write_atomic(results / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
+    return verdict
+
+
+def last_verdict(results: Path) -> dict | None:
+    """The verdict of the last ``experiments.verify`` against ``results`` (None when there is none or it is unreadable)."""
+    try:
+        verdict = json.loads((Path(results) / VERDICT_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return verdict if isinstance(verdict, dict) and "agree" in verdict else None
+
+
+def verdict_markdown(results: Path) -> list[str]:
+    """Lines for the report: the last verdict in one sentence, with the studies that differ."""
+    v = last_verdict(results)
+    if v is None:
+        return ["No reproducibility verdict yet: run `python -m experiments.verify`."]
+    studies = v.get("studies", [])
+    differ = [s.get("study", "?") for s in studies if not s.get("agree")]
+    when = v.get("date", "?")
+    if not differ:
+        return [f"Reproducibility: `python -m experiments.verify` on {when}: all {len(studies)} studies agree with "
+                f"these results within the declared tolerances."]
+    return [f"Reproducibility: `python -m experiments.verify` on {when}: {len(differ)} of {len(studies)} studies "
+            f"differ beyond the declared tolerances ({', '.join(differ)}); see `verify.json`."]
+
+
+def _version() -> str:
+    from importlib import metadata
+    try:
+        return metadata.version("fitbench")
+    except metadata.PackageNotFoundError:
+        return "unknown (fitbench is not installed)"
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m experiments.verify",
+                                     description="Check that a run reproduces the committed results within declared tolerances.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {_version()})")
+    parser.add_argument("studies", nargs="*", metavar="STUDY", help="studies to check (default: every study in --results)")
+    parser.add_argument("--results", type=Path, help="committed results (default: results/, or results/quick with --quick)")
+    parser.add_argument("--against", type=Path, help="a finished run to check (default: run the studies now, in a temporary folder)")
+    parser.add_argument("--quick", action="store_true", help="the quick grids (compared with results/quick)")
+    parser.add_argument("--jobs", type=int, default=2, help="workers when the studies are run (default: 2)")
+    args = parser.parse_args(argv)
+    results = args.results or (Path("results/quick") if args.quick else Path("results"))
+    try:
+        if not results.is_dir():
+            raise InvalidInputError(f"--results {results} is not a folder of committed results"
+                                    + (" (the quick results are generated with python -m experiments.run --quick "
+                                       "--out results/quick and committed)" if args.quick else ""))
+        if args.against is not None and not args.against.is_dir():
+            raise InvalidInputError(f"--against {args.against} is not a folder of results")
+        studies = args.studies or sorted(p.parent.name for p in results.glob("*/results.csv"))
+        if not studies:
+            raise InvalidInputError(f"--results {results} holds no study (no */results.csv)")
+        for s in studies:
+            meta_path = results / s / "meta.json"
+            if meta_path.is_file():
+                try:
+                    committed_quick = bool(json.loads(meta_path.read_text(encoding="utf-8")).get("quick"))
+                except (ValueError, AttributeError):
+                    raise InvalidInputError(f"{meta_path} is not readable JSON") from None
+                if committed_quick != args.quick:
+                    raise InvalidInputError(f"{results}/{s} holds a {'quick' if committed_quick else 'full'} run; "
+                                            f"{'add' if committed_quick else 'drop'} --quick or choose another --results")
+        if args.against is not None:
+            verdict = verify(studies, results, args.against)
+        else:
+            from experiments import run as runner
+            with tempfile.TemporaryDirectory(prefix="fitbench-verify-") as tmp:
+                for s in studies:
+                    runner.run_study(s, Path(tmp), quick=args.quick, jobs=runner.usable_jobs(args.jobs))
+                verdict = verify(studies, results, Path(tmp))
+    except InvalidInputError as exc:
+        print(f"experiments.verify: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\nexperiments.verify: interrupted; no verdict written", file=sys.stderr)
+        return 130
+    return 0 if verdict["agree"] else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

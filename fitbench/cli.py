@@ -1,0 +1,52 @@
+"""The ``fitbench`` command: ``fitbench SUBCOMMAND ...``.
+
+``run``, ``report`` and ``verify`` hand their arguments to ``experiments.run.main``,
+``experiments.report.main`` and ``experiments.verify.main`` (imported only when used, by module name);
+every other subcommand is ``methods.cli`` (``python -m methods``). ``--version`` works everywhere.
+
+Output folders not given on the command line are relative to the current directory (``results/`` for
+``run``; ``results/`` and ``paper/`` for ``report``), never inside the installed package (the
+``python -m experiments.*`` forms default to the repository's folders).
+"""
+from __future__ import annotations
+
+import importlib
+import sys
+
+from fitbench import __version__
+
+#: folders a delegated subcommand gets relative to the current directory unless given: name -> [(option, folder)]
+CWD_DEFAULTS = {"run": [("--out", "results")], "report": [("--results", "results"), ("--out", "paper")]}
+
+#: subcommands delegated to the experiment modules: name -> (module, one-line help)
+DELEGATED = {"run": ("experiments.run", "run studies (python -m experiments.run)"),
+             "report": ("experiments.report", "build the comparison report (python -m experiments.report)"),
+             "verify": ("experiments.verify", "check results against another machine's (python -m experiments.verify)")}
+
+
+def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0] in DELEGATED:
+        name, rest = argv[0], argv[1:]
+        if "--version" in rest:
+            print(f"fitbench {__version__}")
+            return 0
+        module_name = DELEGATED[name][0]
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name and module_name.startswith(exc.name):
+                print(f"fitbench: error: '{name}' is not available in this installation ({module_name} is missing)",
+                      file=sys.stderr)
+                return 2
+            raise
+        if not any(a in ("-h", "--help") for a in rest):
+            for option, folder in CWD_DEFAULTS.get(name, []):
+                if not any(a == option or a.startswith(option + "=") for a in rest):
+                    rest = [*rest, option, folder]
+        try:
+            return int(module.main(rest) or 0)
+        except SystemExit as exc:  # argparse's --help / errors inside the delegated module
+            return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    from methods.cli import main as methods_main
+    return methods_main(argv, prog="fitbench", extra_commands={k: v[1] for k, v in DELEGATED.items()})

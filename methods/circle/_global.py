@@ -1,0 +1,557 @@
+"""Global certificates for the minimum zone and the maximum inscribed circle (MIC).
+
+Both objectives are non-convex in the centre c, so a local optimality condition (alternating
+contacts) proves only a local optimum. This module proves a *global* one by branch and bound over
+the centre, seeded by the fast local solution (c*, f*), all in the unit frame:
+
+* **Rigorous box bounds.** For a square box B and any point p_i, the exact least and greatest
+  distances dmin_i(B), dmax_i(B) from B to p_i bound r_i(c) = |p_i - c| for every c in B. Hence for
+  every c in B, over ANY subset S of the points:
+  width(c) = max_i r_i - min_i r_i >= max_S dmin_i - min_S dmax_i      (minimum zone),
+  min_i r_i(c) <= min_S dmax_i                                          (MIC).
+  A subset gives a valid bound, so the bounds use a small working set S (the local solver's active
+  points); where S is too weak to discard a box, the width of ALL points at the box centre is
+  computed once (one vectorised pass): either that centre beats the incumbent (the local solution
+  was not global: the local solver is restarted there) or its extreme points join S.
+* **A certified ball around c*.** With the tied contacts at c* (outer O, inner I, unit directions e),
+  r_i(c* + d) = r_i(c*) - e_i.d + q_i with 0 <= q_i <= |d|^2 / (2 (r_i - |d|)) (convexity of |.|), so
+  width(c* + d) >= f* + kappa |d| - |d|^2 / (2 (r_in - |d|)), kappa = min_{|d|=1} max_O(-e.d) + max_I(e.d),
+  and width >= f* on |d| <= 2 kappa r_in / (1 + 2 kappa) (kappa > 0 exactly when the contacts strictly
+  alternate). Likewise for the MIC with kappa = min_{|d|=1} max_I e.d (contacts surround c*).
+* **Far field (minimum zone).** With the origin at the centroid, rho >= max |p_i| and W the least
+  width of the points over all directions, every centre at distance t > rho has
+  width >= W - rho^2 / (2 (t - rho)); so no centre beyond T = rho + rho^2 / (2 (W - f*)) can do better, and
+  the search region is the disc |c| <= T: the certificate then holds over ALL of R^2. When W <= f*
+  (nearly straight data: the zone of a straight line is as good) no finite T exists; the region is then
+  the disc of radius ``FALLBACK_RADIUS`` x rho about the centroid, and the message says so.
+* **MIC region.** The MIC is defined for centres inside the profile polygon (the points joined in
+  angular order about their centroid); boxes wholly outside it are discarded (a box centre outside the
+  polygon farther than the box's half-diagonal from every edge), candidate centres must be inside.
+
+A box is discarded when its bound shows it cannot beat the incumbent by more than
+eps = EPS_REL f* + EPS_ABS + 4 TIE_REL max r (unit frame; :func:`resolution`); "global" therefore means: no centre in the stated region has
+a width below f* - eps (MIC: a radius above f* + eps), where f* is attained by the reported centre.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: relative and absolute (unit-frame) resolution of the global certificate
+EPS_REL = 1e-10
+EPS_ABS = 1e-13
+#: contacts within TIE_REL x the largest radius of the extreme radius count as tied (rounding of radii)
+TIE_REL = 1e-14
+#: region radius (multiples of the data radius about the centroid) when no far-field bound exists
+FALLBACK_RADIUS = 10.0
+MAX_LEVELS = 90
+MAX_BOXES = 20_000
+MAX_FULL_PASSES = 400
+
+
+def growth_rate(A: np.ndarray, B: np.ndarray | None) -> float:
+    """kappa = min over unit d of max_{a in A} a.d + max_{b in B} b.d (B None: the second term is 0).
+
+    The function is convex and positively homogeneous, linear on each arc between its breakpoints;
+    its minimum on the unit circle is therefore at a breakpoint (d orthogonal to a difference of two
+    vectors of one set) or at the minimiser -l/|l| of one linear piece l = a + b."""
+    B = np.zeros((1, 2)) if B is None or len(B) == 0 else B
+    cands = []
+    for V in (A, B):
+        if len(V) > 1:
+            i, j = np.triu_indices(len(V), 1)
+            diff = V[i] - V[j]
+            nrm = np.column_stack([-diff[:, 1], diff[:, 0]])
+            cands += [nrm, -nrm]
+    pieces = (A[:, None, :] + B[None, :, :]).reshape(-1, 2)
+    cands.append(-pieces)
+    D = np.vstack(cands)
+    n = np.hypot(D[:, 0], D[:, 1])
+    D = D[n > 0] / n[n > 0, None]
+    if not len(D):
+        return 0.0
+    return float(((D @ A.T).max(axis=1) + (D @ B.T).max(axis=1)).min())
+
+
+def least_width_lower_bound(x: np.ndarray, y: np.ndarray, rho: float, m: int = 2048) -> float:
+    """A lower bound of min over directions u of (max p.u - min p.u) for the points (x, y) (any subset
+    of the data gives a lower bound of the data's), sampled at m directions: between samples the
+    extent changes by at most 2 rho |dtheta| (|d(p.u)/dtheta| <= |p| <= rho)."""
+    t = np.arange(m) * (np.pi / m)
+    proj = np.outer(np.cos(t), x) + np.outer(np.sin(t), y)
+    return float((proj.max(axis=1) - proj.min(axis=1)).min() - rho * np.pi / m)
+
+
+def box_distance_bounds(cx, cy, h, xs, ys):
+    """Least and greatest distances (K, M) from the K square boxes (centres cx, cy, half-side h) to the
+    M points (xs, ys), and the distances from the box centres."""
+    dx = np.abs(xs[None, :] - cx[:, None])
+    dy = np.abs(ys[None, :] - cy[:, None])
+    dmin = np.hypot(np.maximum(dx - h, 0.0), np.maximum(dy - h, 0.0))
+    dmax = np.hypot(dx + h, dy + h)
+    return dmin, dmax, np.hypot(dx, dy)
+
+
+def pair_bound(cx, cy, h, xs, ys, dc, k: int = 4):
+    """A first-order lower bound of the width over each box, from pairs (i outer, j inner) of the k
+    farthest and k nearest working points about the box centre c_B (|d| = |c - c_B| <= sqrt(2) h):
+    r_i(c) >= D_i - e_i.d (convexity) and r_j(c) <= D_j - e_j.d + |d|^2 / (2 (D_j - |d|)), so
+    width(c) >= r_i - r_j >= D_i - D_j - h |e_i - e_j|_1 - h^2 / (D_j - sqrt(2) h).
+    Much tighter than the distance intervals when i and j are seen in similar directions (short arcs)."""
+    m = dc.shape[1]
+    k = min(k, m)
+    if k < 1:
+        return np.full(len(cx), -np.inf)
+    rows = np.arange(len(cx))[:, None]
+    far = np.argpartition(dc, m - k, axis=1)[:, m - k:]
+    near = np.argpartition(dc, k - 1, axis=1)[:, :k]
+    Di, Dj = dc[rows, far], dc[rows, near]                     # (K, k)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        exi, eyi = (xs[far] - cx[:, None]) / Di, (ys[far] - cy[:, None]) / Di
+        exj, eyj = (xs[near] - cx[:, None]) / Dj, (ys[near] - cy[:, None]) / Dj
+        room = Dj - np.sqrt(2.0) * h
+        quad = np.where(room > 0, h * h / room, np.inf)
+        lb = (Di[:, :, None] - Dj[:, None, :]
+              - h * (np.abs(exi[:, :, None] - exj[:, None, :]) + np.abs(eyi[:, :, None] - eyj[:, None, :]))
+              - quad[:, None, :])
+    lb = np.where(np.isfinite(lb), lb, -np.inf)
+    return lb.reshape(len(cx), -1).max(axis=1)
+
+
+@dataclass
+class Outcome:
+    certified: bool
+    better: np.ndarray | None = None       # a centre that beats the incumbent (the local optimum is not global)
+    reason: str = ""
+    boxes: int = 0
+    levels: int = 0
+    full_passes: int = 0
+    working_set: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.intp))
+
+
+class ProfilePolygon:
+    """The points joined in angular order about the centroid (the origin of the unit frame), built on
+    first use."""
+
+    def __init__(self, x, y):
+        self.x, self.y = x, y
+        self._path = None
+
+    def _build(self):
+        if self._path is None:
+            from matplotlib.path import Path
+            order = np.argsort(np.arctan2(self.y, self.x))
+            V = np.column_stack([self.x[order], self.y[order]])
+            self._path = Path(V, closed=False)
+            self._a = V
+            self._b = np.roll(V, -1, axis=0)
+        return self._path
+
+    def contains(self, C: np.ndarray) -> np.ndarray:
+        from matplotlib.path import Path
+        self._build()
+        return Path(np.vstack([self._a, self._a[:1]])).contains_points(C)
+
+    def boundary_distance(self, C: np.ndarray) -> np.ndarray:
+        """Distance from each centre to the polygon's boundary (all edges; vectorised)."""
+        self._build()
+        a, b = self._a, self._b
+        ab = b - a
+        L2 = np.maximum((ab * ab).sum(axis=1), 1e-300)
+        out = np.empty(len(C))
+        for s in range(0, len(C), 256):
+            P = C[s:s + 256]
+            t = np.clip(((P[:, None, 0] - a[None, :, 0]) * ab[None, :, 0] +
+                         (P[:, None, 1] - a[None, :, 1]) * ab[None, :, 1]) / L2[None, :], 0.0, 1.0)
+            qx = a[None, :, 0] + t * ab[None, :, 0] - P[:, None, 0]
+            qy = a[None, :, 1] + t * ab[None, :, 1] - P[:, None, 1]
+            out[s:s + 256] = np.sqrt((qx * qx + qy * qy).min(axis=1))
+        return out
+
+
+def branch_and_bound(x, y, *, kind: str, c0, f0: float, S, ball: float, region: float, eps: float,
+                     polygon: ProfilePolygon | None = None) -> Outcome:
+    """Prove that no centre in the disc |c| <= region beats the incumbent (c0, f0) by more than eps,
+    or find a centre that does. ``kind``: "zone" (minimise max r - min r) or "inscribed" (maximise
+    min r over centres inside ``polygon``). Boxes inside the ball |c - c0| <= ``ball`` are known not
+    to beat f0 (the local bound of the module docstring)."""
+    zone = kind == "zone"
+    S = np.unique(np.asarray(S, dtype=np.intp))
+    xs, ys = x[S], y[S]
+    g = 8
+    h = region / g
+    ticks = -region + h * (2 * np.arange(g) + 1)
+    cx, cy = (a.ravel() for a in np.meshgrid(ticks, ticks))
+    boxes = full = 0
+    for level in range(MAX_LEVELS):
+        # discard boxes outside the region disc or inside the certified ball
+        far = np.hypot(np.maximum(np.abs(cx) - h, 0.0), np.maximum(np.abs(cy) - h, 0.0)) >= region
+        near = np.hypot(np.abs(cx - c0[0]) + h, np.abs(cy - c0[1]) + h) <= ball
+        keep = ~(far | near)
+        cx, cy = cx[keep], cy[keep]
+        boxes += cx.size
+        while True:
+            dmin, dmax, dc = box_distance_bounds(cx, cy, h, xs, ys)
+            if zone:
+                bound = np.maximum(dmin.max(axis=1) - dmax.min(axis=1), pair_bound(cx, cy, h, xs, ys, dc))
+                keep = bound < f0 - eps
+                centre_val = dc.max(axis=1) - dc.min(axis=1)
+                suspect = keep & (centre_val < f0 - eps)
+            else:
+                bound = dmax.min(axis=1)
+                keep = bound > f0 + eps
+                centre_val = dc.min(axis=1)
+                suspect = keep & (centre_val > f0 + eps)
+                if suspect.any():  # a candidate centre must lie inside the profile
+                    idx = np.flatnonzero(suspect)
+                    suspect[idx[~polygon.contains(np.column_stack([cx[idx], cy[idx]]))]] = False
+            if not suspect.any():
+                break
+            j = int(np.flatnonzero(suspect)[np.argmin(centre_val[suspect]) if zone else np.argmax(centre_val[suspect])])
+            c = np.array([cx[j], cy[j]])
+            dx, dy = x - c[0], y - c[1]
+            r = np.sqrt(dx * dx + dy * dy)
+            full += 1
+            val = r.max() - r.min() if zone else r.min()
+            if (val < f0 - eps) if zone else (val > f0 + eps):
+                return Outcome(False, better=c, reason="a better centre was found", boxes=boxes, levels=level,
+                               full_passes=full, working_set=S)
+            new = [int(np.argmax(r)), int(np.argmin(r))] if zone else [int(np.argmin(r))]
+            S = np.union1d(S, new)
+            xs, ys = x[S], y[S]
+            if full >= MAX_FULL_PASSES:
+                return Outcome(False, reason=f"the working set did not settle within {MAX_FULL_PASSES} passes",
+                               boxes=boxes, levels=level, full_passes=full, working_set=S)
+        cx, cy = cx[keep], cy[keep]
+        if not zone and cx.size:  # boxes wholly outside the profile polygon hold no admissible centre
+            C = np.column_stack([cx, cy])
+            out = ~polygon.contains(C)
+            if out.any():
+                idx = np.flatnonzero(out)
+                wholly = polygon.boundary_distance(C[idx]) > h * np.sqrt(2.0) * (1 + 1e-12)
+                drop = np.zeros(cx.size, dtype=bool)
+                drop[idx[wholly]] = True
+                cx, cy = cx[~drop], cy[~drop]
+        if not cx.size:
+            return Outcome(True, boxes=boxes, levels=level + 1, full_passes=full, working_set=S)
+        if cx.size * 4 > MAX_BOXES:
+            return Outcome(False, reason=f"more than {MAX_BOXES} boxes remain open at level {level}",
+                           boxes=boxes, levels=level + 1, full_passes=full, working_set=S)
+        h *= 0.5
+        cx = np.concatenate([cx - h, cx + h, cx - h, cx + h])
+        cy = np.concatenate([cy - h, cy - h, cy + h, cy + h])
+    return Outcome(False, reason=f"boxes remain open after {MAX_LEVELS} bisection levels (half-side {h:.1e})",
+                   boxes=boxes, levels=MAX_LEVELS, full_passes=full, working_set=S)
+
+
+def resolution(f: float, r_max: float) -> float:
+    """eps of the certificate (unit frame): EPS_REL f + EPS_ABS + 4 TIE_REL r_max (the tied contacts'
+    radii differ by up to TIE_REL r_max, which the local ball bound may lose twice)."""
+    return EPS_REL * abs(f) + EPS_ABS + 4 * TIE_REL * r_max
+
+
+def _tied(r: np.ndarray):
+    """Indices of the tied outer and inner contacts (within TIE_REL x max r of the extreme radii)."""
+    tol = TIE_REL * r.max()
+    return np.flatnonzero(r >= r.max() - tol), np.flatnonzero(r <= r.min() + tol)
+
+
+def _unit_directions(x, y, idx, c):
+    d = np.column_stack([x[idx] - c[0], y[idx] - c[1]])
+    return d / np.hypot(d[:, 0], d[:, 1])[:, None]
+
+
+def alternating_contacts(x, y, c, O, I, hulls_meet, limit: int = 12, normalise: bool = True):
+    """An alternating choice among the tied contacts: (outer, inner) index tuples whose directions'
+    convex hulls meet (2 + 2, 3 + 1 or 1 + 3; for the MIC, O is empty and the hull of 2 or 3 inner
+    contacts must hold the centre), or None. Searches the ``limit`` most extreme ties of each side."""
+    from itertools import combinations
+    O, I = list(O[:limit]), list(I[:limit])
+    vec = _unit_directions if normalise else (lambda x, y, idx, c: np.column_stack([x[idx] - c[0], y[idx] - c[1]]))
+    EO = dict(zip(O, vec(x, y, O, c))) if O else {}
+    EI = dict(zip(I, vec(x, y, I, c)))
+    if not O:
+        for m in (2, 3):
+            for t in combinations(I, m):
+                if hulls_meet(np.array([EI[i] for i in t]), np.zeros((1, 2))):
+                    return (), tuple(int(i) for i in t)
+        return None
+    for mo, mi in ((2, 2), (3, 1), (1, 3)):
+        for to in combinations(O, mo):
+            for ti in combinations(I, mi):
+                if set(to) & set(ti):
+                    continue
+                if hulls_meet(np.array([EO[i] for i in to]), np.array([EI[i] for i in ti])):
+                    return tuple(int(i) for i in to), tuple(int(i) for i in ti)
+    return None
+
+
+def _value(x, y, c, zone):
+    dx, dy = x - c[0], y - c[1]
+    r = np.sqrt(dx * dx + dy * dy)
+    return (r.max() - r.min() if zone else r.min()), r
+
+
+def _first_hit(x, y, c, u, p1):
+    """Along c + t u (t > 0), the first t at which some point becomes as near as p1 (the nearest point
+    at c; |c + t u - p_i|^2 - |c + t u - p_1|^2 is linear in t), and that point."""
+    gx, gy = x - x[p1], y - y[p1]
+    slope = 2 * (u[0] * gx + u[1] * gy)                        # decrease rate of the squared-distance gap
+    gap = (x - c[0]) ** 2 + (y - c[1]) ** 2 - ((x[p1] - c[0]) ** 2 + (y[p1] - c[1]) ** 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(slope > 0, gap / slope, np.inf)
+    t[p1] = np.inf
+    j = int(np.argmin(t))
+    return float(t[j]), j
+
+
+def polish_inscribed(x, y, c, polygon: ProfilePolygon, steps: int = 12):
+    """Grow the empty circle from an admissible centre c to the exact local MIC nearby: move directly
+    away from the nearest point until a second is as near, then along their bisector (away from both)
+    until a third is; while the contacts do not surround the centre, continue along the bisector of the
+    pair that leaves the obtuse contact behind. Each step is one vectorised pass. Returns (centre,
+    radius); the start itself if the walk leaves the profile polygon or does not improve."""
+    c0 = np.asarray(c, dtype=float)
+    f0, r = _value(x, y, c0, False)
+    c = c0.copy()
+    p1 = int(np.argmin(r))
+    u = c - np.array([x[p1], y[p1]])
+    if not np.hypot(*u) > 0:
+        return c0, f0
+    u /= np.hypot(*u)
+    t, p2 = _first_hit(x, y, c, u, p1)
+    if not np.isfinite(t):
+        return c0, f0
+    c = c + t * u
+    pair = (p1, p2)
+    for _ in range(steps):
+        a, b = pair
+        v = np.array([-(y[b] - y[a]), x[b] - x[a]])
+        v /= np.hypot(*v)
+        if v @ (c - 0.5 * np.array([x[a] + x[b], y[a] + y[b]])) < 0:
+            v = -v                                                  # away from the pair's midpoint
+        t, p3 = _first_hit(x, y, c, v, a)
+        if not np.isfinite(t):
+            break
+        c = c + t * v
+        E = np.array([[x[i] - c[0], y[i] - c[1]] for i in (a, b, p3)])
+        E /= np.hypot(E[:, 0], E[:, 1])[:, None]
+        if growth_rate(E, None) > 0:                                # the three contacts surround c: a local MIC
+            break
+        # keep the pair whose bisector leads on: drop the contact the other two see across the centre
+        pair = max(((a, p3), (b, p3), (a, b)), key=lambda q: -(E[[a, b, p3].index(q[0])] @ E[[a, b, p3].index(q[1])]))
+    f, _ = _value(x, y, c, False)
+    if f > f0 and polygon.contains(c[None, :])[0]:
+        return c, f
+    return c0, f0
+
+
+def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet, scale, unit="data units"):
+    """The global stage of :mod:`methods.circle._zone`'s fits (see the module docstring).
+
+    ``rerun(start)`` runs the local solver from another start and returns what
+    ``active_set_fit`` returns. Returns (centre, contacts, converged, certified, message, info) with
+    certified one of "global", "local", False."""
+    zone = kind == "zone"
+    polygon = None if zone else ProfilePolygon(x, y)
+    S = np.asarray(stats.get("active", np.empty(0, dtype=np.intp)), dtype=np.intp)
+    # the points extreme along x, y, x + y, x - y: they keep the working set's extent (far-field bound) honest
+    ext = [f(v) for v in (x, y, x + y, x - y) for f in (np.argmax, np.argmin)]
+    S = np.union1d(S, ext)
+    info = {"boxes": 0, "full_passes": 0, "restarts": 0, "region": None}
+    valid = True
+    if not zone and not polygon.contains(np.asarray(c, dtype=float)[None, :])[0]:
+        valid = False  # the local centre is outside the profile: not an admissible MIC
+    outcome = None
+    for _ in range(10):
+        f, r = _value(x, y, c, zone)
+        if zone and f <= 1e-11:
+            outcome = Outcome(True, reason="zero width")
+            info["region"] = "all of R^2 (a zone of zero width)"
+            break
+        rho = float(np.hypot(c[0], c[1]) + r.max())  # >= max |p_i| about the centroid (the origin)
+        O, I = _tied(r)
+        if not valid:
+            f0, ball = 0.0, 0.0
+        elif zone:
+            kappa = growth_rate(-_unit_directions(x, y, O, c), _unit_directions(x, y, I, c))
+            r_in = r.min()
+            ball = 0.9 * 2 * kappa * r_in / (1 + 2 * kappa) if kappa > 0 else 0.0
+            f0 = f
+        else:
+            kappa = growth_rate(_unit_directions(x, y, I, c), None)
+            ball = 0.9 * 2 * kappa * f / (1 + 2 * kappa) if kappa > 0 else 0.0
+            f0 = f
+        eps = resolution(f0, r.max())
+        if zone:
+            W = least_width_exact(x[S], y[S])  # a subset's least width bounds the data's from below
+            if W > f0:
+                region = rho + rho * rho / (2 * (W - f0 + eps))
+                info["region"] = "all of R^2"
+            else:
+                region = FALLBACK_RADIUS * rho
+                info["region"] = (f"centres within {region * scale:.6g} {unit} of the centroid (the points are nearly "
+                                  "straight: a straight zone at infinity is about as narrow)")
+        else:
+            region = rho
+            info["region"] = "centres inside the profile polygon (points joined in angular order about their centroid)"
+        outcome = branch_and_bound(x, y, kind=kind, c0=np.asarray(c, dtype=float), f0=f0, S=S, ball=ball,
+                                   region=region, eps=eps, polygon=polygon)
+        info["boxes"] += outcome.boxes
+        info["full_passes"] += outcome.full_passes
+        S = outcome.working_set
+        if outcome.better is None:
+            break
+        info["restarts"] += 1
+        fb, _ = _value(x, y, outcome.better, zone)
+        if not zone:  # the MIC's local LP can walk out of a lobed profile: climb by exact candidates instead
+            c, f = polish_inscribed(x, y, outcome.better, polygon)
+            contacts, ok, message, valid = ((), ()), False, "polished from the branch and bound", True
+            continue
+        c2, contacts2, ok2, message2, stats2 = rerun(outcome.better)
+        f2, _ = _value(x, y, c2, zone)
+        inside2 = zone or polygon.contains(np.asarray(c2, dtype=float)[None, :])[0]
+        if inside2 and ((f2 <= fb) if zone else (f2 >= fb)):
+            c, contacts, ok, message = c2, contacts2, ok2, message2
+            S = np.union1d(S, stats2.get("active", []))
+        else:  # keep the better centre itself (no exact contact configuration there)
+            c, contacts, ok, message = outcome.better, ((), ()), False, "centre from the branch and bound"
+        valid = True
+    exact_note = ""
+    if outcome is not None and not outcome.certified and len(x) <= EXACT_MAX_POINTS:
+        cb, fb = exact_enumeration(x, y, kind, polygon)
+        f, _ = _value(x, y, c, zone)
+        if cb is not None and ((fb < f) if zone else (fb > f or not valid)):
+            c, contacts, ok, message, valid = cb, ((), ()), False, "exact enumeration", True
+            f = fb
+        if zone:
+            W = least_width_exact(x, y)
+            if f < W:
+                outcome = Outcome(True)
+                info["region"] = "all of R^2"
+            else:
+                outcome = Outcome(False, reason=("every finite centre is beaten by a straight zone (centre at "
+                                                 f"infinity): least strip width {W * scale:.6g} {unit}"))
+        elif valid:
+            outcome = Outcome(True)
+        exact_note = " by exact enumeration of the Voronoi-overlay vertices (branch and bound inconclusive)"
+        info["exact_enumeration"] = True
+    f, r = _value(x, y, c, zone)
+    O, I = _tied(r)
+    alt = alternating_contacts(x, y, c, O if zone else np.empty(0, dtype=np.intp), I, hulls_meet)
+    if alt is not None:
+        contacts = alt
+    elif zone and f <= 1e-11:
+        pass
+    local = valid and (alt is not None or bool(ok) or (zone and f <= 1e-11))
+    what = "zone narrower" if zone else "empty circle larger"
+    if valid and outcome is not None and outcome.certified:
+        certified = "global"
+        eps = (resolution(f, r.max()) + (f if zone and f <= 1e-11 else 0.0)) * scale  # width >= 0 bounds a zero zone
+        if zone and f <= 1e-11:
+            msg = (f"certified global optimum: the points lie on one circle (zone width {f * scale:.2g} {unit}, at "
+                   "rounding level; no zone is narrower than 0)")
+        else:
+            msg = (f"certified global optimum over {info['region']}{exact_note}: no centre there gives a {what} by more "
+                   f"than {eps:.2g} {unit} (branch and bound over the centre: {info['boxes']} boxes, "
+                   f"{info['full_passes']} extra passes over the points")
+            msg += f", local solver restarted {info['restarts']} time(s) from better centres)" if info["restarts"] else ")"
+        if f > 1e-11:
+            msg += ("; contacts alternate" if alt is not None else
+                    "; the contacts found do not alternate (a tie the local test cannot resolve)")
+    elif local:
+        certified = "local"
+        msg = (f"local optimum only (tied contacts alternate: {'conv(outer) meets conv(inner) directions' if zone else 'the contacts surround the centre'}); "
+               f"no global certificate: {outcome.reason if outcome is not None else 'not attempted'}")
+    else:
+        certified = False
+        msg = message if valid else "no admissible centre inside the profile was found"
+        msg += f"; no global certificate: {outcome.reason if outcome is not None else 'not attempted'}"
+    info.pop("region") if info["region"] is None else None
+    return c, contacts, certified in ("global", "local"), certified, msg, info
+
+
+#: below this many points a failed branch and bound falls back to the exact enumeration
+EXACT_MAX_POINTS = 60
+
+
+def _equidistant(a, b, c, d):
+    """Centres z with |z - a| = |z - b| and |z - c| = |z - d| (rows; non-finite when parallel)."""
+    n1, n2 = b - a, d - c
+    h1 = 0.5 * ((b * b).sum(axis=1) - (a * a).sum(axis=1))
+    h2 = 0.5 * ((d * d).sum(axis=1) - (c * c).sum(axis=1))
+    det = n1[:, 0] * n2[:, 1] - n1[:, 1] * n2[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.column_stack([(h1 * n2[:, 1] - n1[:, 1] * h2) / det, (n1[:, 0] * h2 - h1 * n2[:, 0]) / det])
+
+
+def exact_enumeration(x, y, kind: str, polygon: ProfilePolygon | None = None):
+    """The exact global optimum for small N (Voronoi-overlay vertices enumerated directly).
+
+    Minimum zone: the optimum over R^2, when attained, has four active contacts: 2 + 2 (the two
+    bisectors meet: a vertex of the overlay of the nearest- and farthest-point Voronoi diagrams),
+    3 + 1 or 1 + 3 (a circumcentre). MIC over the profile polygon: a Voronoi vertex (circumcentre)
+    inside the polygon, or a bisector of two points crossing a polygon edge. Returns (centre, value)."""
+    from itertools import combinations
+    P = np.column_stack([x, y])
+    n = len(P)
+    tri = np.array(list(combinations(range(n), 3)), dtype=np.intp)
+    C = [_equidistant(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]])]
+    if kind == "zone":
+        q = np.array(list(combinations(range(n), 4)), dtype=np.intp)
+        for (i, j), (k, l) in (((0, 1), (2, 3)), ((0, 2), (1, 3)), ((0, 3), (1, 2))):
+            C.append(_equidistant(P[q[:, i]], P[q[:, j]], P[q[:, k]], P[q[:, l]]))
+    else:
+        polygon._build()
+        a, b = polygon._a, polygon._b
+        pr = np.array(list(combinations(range(n), 2)), dtype=np.intp)
+        A = np.repeat(pr, len(a), axis=0)
+        E = np.tile(np.arange(len(a)), len(pr))
+        u, v = P[A[:, 0]], P[A[:, 1]]
+        s0, s1 = a[E], b[E]
+        nrm = v - u
+        den = (nrm * (s1 - s0)).sum(axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (0.5 * ((v * v).sum(axis=1) - (u * u).sum(axis=1)) - (nrm * s0).sum(axis=1)) / den
+        ok = np.isfinite(t) & (t >= 0) & (t <= 1)
+        edge_pts = s0[ok] + t[ok, None] * (s1[ok] - s0[ok])
+    C = np.vstack(C)
+    C = C[np.isfinite(C).all(axis=1)]
+    if kind != "zone":
+        C = C[polygon.contains(C)]
+        C = np.vstack([C, edge_pts])
+    best_c, best = None, np.inf if kind == "zone" else -np.inf
+    for s in range(0, len(C), 4096):
+        B = C[s:s + 4096]
+        R = np.hypot(x[None, :] - B[:, 0:1], y[None, :] - B[:, 1:2])
+        val = R.max(axis=1) - R.min(axis=1) if kind == "zone" else R.min(axis=1)
+        j = int(np.argmin(val) if kind == "zone" else np.argmax(val))
+        if (val[j] < best) if kind == "zone" else (val[j] > best):
+            best, best_c = float(val[j]), B[j]
+    return best_c, best
+
+
+def least_width_exact(x, y) -> float:
+    """The least width of a point set over all directions. It is attained normal to an edge of the
+    convex hull, i.e. to some pair of points, and no direction gives less: so up to 200 points the
+    minimum over all pairs' normals (vectorised), beyond that over the hull edges (Qhull)."""
+    P = np.column_stack([x, y])
+    if len(P) <= 200:
+        H = P
+        i, j = np.triu_indices(len(H), 1)
+        e = H[j] - H[i]
+    else:
+        from scipy.spatial import ConvexHull, QhullError
+        try:
+            H = P[ConvexHull(P).vertices]
+        except QhullError:
+            return 0.0
+        e = np.roll(H, -1, axis=0) - H
+    n = np.hypot(e[:, 0], e[:, 1])
+    e, n = e[n > 0], n[n > 0]
+    if not len(e):
+        return 0.0
+    nrm = np.column_stack([-e[:, 1], e[:, 0]]) / n[:, None]
+    proj = nrm @ H.T
+    return float((proj.max(axis=1) - proj.min(axis=1)).min())

@@ -1,0 +1,109 @@
+"""What a careful operator checks before evaluating a circular test (ISO 230-4), from the data alone.
+
+* The direction of each run is read from the order of its points: the unwrapped polar angle about
+  the centre increases for a counter-clockwise (G03) run and decreases for a clockwise (G02) run, as
+  seen in the plane's own axes (first axis to the right, second up).
+* Lead-in and lead-out arcs (the feed-in/feed-out segments ballbar software records around the data
+  arc) are removed by angle swept from the start and before the end; overrun beyond the nominal arc
+  (e.g. 380 deg recorded for a 360 deg test) is trimmed and reported. The arc swept is measured along the
+  point order, so the result does not depend on where the run starts.
+* A nominal centre or radius far from the data's own least-squares circle gives F values dominated by
+  the set-up error: warned with the fitted values (threshold ``NOMINAL_WARN_FRACTION`` of the radius).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from methods._errors import InvalidInputError
+
+#: nominal centre or radius further than this fraction of the radius from the fitted circle: a warning
+#: (2e-4 R = 60 µm at R = 300 mm, 20 µm for a 100 mm ballbar: well above a careful set-up)
+NOMINAL_WARN_FRACTION = 2e-4
+MIN_ARC_DEG = 90.0
+
+
+def unwrapped_angle(points, center) -> np.ndarray:
+    """Polar angle of each point about ``center`` along the point order, unwrapped (rad)."""
+    ang = np.arctan2(points[:, 1] - center[1], points[:, 0] - center[0])
+    return np.unwrap(ang)
+
+
+def direction(points, center) -> tuple[str, float]:
+    """('ccw' or 'cw', signed angle swept in degrees) of a run from the order of its points."""
+    a = unwrapped_angle(points, center)
+    swept = float(np.degrees(a[-1] - a[0]))
+    return ("ccw" if swept > 0 else "cw"), swept
+
+
+def trim(points, center, *, arc_deg: float | None = 360.0, lead_in_deg: float = 0.0, lead_out_deg: float = 0.0):
+    """Drop ``lead_in_deg`` of arc at the start and ``lead_out_deg`` at the end (along the point order),
+    then anything beyond ``arc_deg`` of swept arc (overrun). Returns (points, report dict)."""
+    for v, n in ((lead_in_deg, "--lead-in"), (lead_out_deg, "--lead-out")):
+        if not (np.isfinite(v) and v >= 0):
+            raise InvalidInputError(f"{n} must be a non-negative angle in degrees, got {v!r}")
+    if arc_deg is not None and not (np.isfinite(arc_deg) and MIN_ARC_DEG <= arc_deg <= 360.0):
+        raise InvalidInputError(f"--arc must be between {MIN_ARC_DEG:g} and 360 degrees, got {arc_deg!r}")
+    a = unwrapped_angle(points, center)
+    swept = np.degrees(np.abs(a - a[0]))        # monotone for a clean run; max-accumulate for noise
+    swept = np.maximum.accumulate(swept)
+    total = float(swept[-1])
+    keep = (swept >= lead_in_deg - 1e-9) & (swept <= total - lead_out_deg + 1e-9)
+    n_lead = int(len(points) - keep.sum())
+    pts = points[keep]
+    sw = swept[keep] - (swept[keep][0] if keep.any() else 0.0)
+    overrun = 0
+    if arc_deg is not None and len(pts):
+        within = sw < arc_deg - 1e-9 if arc_deg >= 360.0 else sw <= arc_deg + 1e-9
+        overrun = int(len(pts) - within.sum())
+        pts, sw = pts[within], sw[within]
+    report = {"recorded_arc_deg": total, "lead_removed_points": n_lead, "overrun_trimmed_points": overrun,
+              "evaluated_arc_deg": float(sw[-1]) if len(sw) else 0.0}
+    return pts, report
+
+
+def check_pair(runs: dict, center, *, as_given: bool = False) -> tuple[dict, list]:
+    """``runs`` = {'cw': points, 'ccw': points} as labelled by the user: returns them in the right slots
+    and the warnings. Identical runs are refused; both runs in one direction are refused; a swapped pair
+    is swapped back with a warning (``as_given`` keeps the labels and only warns)."""
+    cw, ccw = runs["cw"], runs["ccw"]
+    if cw.shape == ccw.shape and np.array_equal(cw, ccw):
+        raise InvalidInputError("the CW and CCW runs are the same data (the same file twice?); give one run in "
+                                "each direction")
+    d_cw, s_cw = direction(cw, center)
+    d_ccw, s_ccw = direction(ccw, center)
+    warnings = []
+    if d_cw == d_ccw:
+        msg = (f"both runs go {d_cw.upper()} by their point order (swept {s_cw:+.0f} and {s_ccw:+.0f} deg); "
+               "a circular test needs one CW (G02) and one CCW (G03) run")
+        if not as_given:
+            raise InvalidInputError(msg + " (--as-given to evaluate anyway)")
+        warnings.append(msg + "; evaluated as labelled (--as-given)")
+        return {"cw": cw, "ccw": ccw}, warnings
+    if d_cw == "ccw":
+        if as_given:
+            warnings.append("the run given as CW goes CCW by its point order (and the other CW); evaluated as labelled "
+                            "(--as-given): backlash and servo mismatch have the wrong sign")
+            return {"cw": cw, "ccw": ccw}, warnings
+        warnings.append("the runs were given in the wrong order (the first goes CCW, the second CW by their point "
+                        "order); swapped back (--as-given to keep the labels)")
+        return {"cw": ccw, "ccw": cw}, warnings
+    return {"cw": cw, "ccw": ccw}, warnings
+
+
+def check_nominal(fitted_center, fitted_radius, nominal_center, nominal_radius) -> list:
+    """Warnings when the nominal centre or radius is far from the data's least-squares circle."""
+    out = []
+    lim = NOMINAL_WARN_FRACTION * nominal_radius
+    if nominal_center is not None:
+        off = float(np.hypot(*(np.asarray(fitted_center) - np.asarray(nominal_center, float))))
+        if off > lim:
+            out.append(f"the nominal centre ({nominal_center[0]:.4f}, {nominal_center[1]:.4f}) mm is {off * 1e3:.1f} µm "
+                       f"from the data's fitted centre ({fitted_center[0]:.4f}, {fitted_center[1]:.4f}) mm "
+                       f"(more than {NOMINAL_WARN_FRACTION:g} R = {lim * 1e3:.0f} µm): F about it is dominated by the "
+                       "set-up; check --nominal-center")
+    dr = float(fitted_radius - nominal_radius)
+    if abs(dr) > lim:
+        out.append(f"the nominal radius {nominal_radius:.4f} mm differs from the data's fitted radius "
+                   f"{fitted_radius:.4f} mm by {dr * 1e3:+.1f} µm (more than {NOMINAL_WARN_FRACTION:g} R = "
+                   f"{lim * 1e3:.0f} µm): F is dominated by it; check --nominal-radius (and the ballbar's calibration)")
+    return out

@@ -1,0 +1,136 @@
+"""Issue 16 items 1-3: every config problem refused before a row runs, in one line naming file, key and problem."""
+from __future__ import annotations
+
+import pytest
+
+from experiments import config as configs
+from experiments import run as runner
+from experiments.engine import ConfigError
+
+GOOD = '''name = "{name}"
+title = "a small study"
+kind = "grid"
+seed = 3
+repetitions = 2
+summary_by = ["data_n", "method"]
+
+[[datasets]]
+generator = "circle"
+params = {{ center = [1.0, 2.0], radius = 5.0, noise = 0.01 }}
+grid = {{ n = [10, 20] }}
+
+[[methods]]
+id = "circle.kasa"
+[[methods]]
+id = "circle.gauss_newton"
+'''
+
+
+def write(tmp_path, text, name="study"):
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_good_config_loads_and_every_shipped_config_is_valid(tmp_path):
+    cfg = configs.load(str(write(tmp_path, GOOD.format(name="study"))))
+    assert cfg["repetitions"] == 2 and configs.count_rows(cfg) == 2 * 2 * 2
+    for name in configs.available():
+        for quick in (False, True):
+            configs.load(name, quick=quick)
+
+
+def _sub(old, new):
+    text = GOOD.format(name="study")
+    assert old in text
+    return text.replace(old, new, 1)
+
+
+BAD = [
+    ("top-level typo", _sub("repetitions = 2", "repetitons = 2"), "repetitons"),
+    ("repetitions bool", _sub("repetitions = 2", "repetitions = true"), "repetitions"),
+    ("repetitions float", _sub("repetitions = 2", "repetitions = 1e9"), "repetitions"),
+    ("negative seed", _sub("seed = 3", "seed = -1"), "seed"),
+    ("params as list", _sub("params = {", "params = [1, 2]\nx = {"), "datasets[0]"),
+    ("methods = 5", GOOD.format(name="study").split("[[methods]]")[0] + "methods = 5\n", "methods"),
+    ("id = 5", _sub('id = "circle.kasa"', "id = 5"), "methods[0]"),
+    ("summary_by = 5", _sub('summary_by = ["data_n", "method"]', "summary_by = 5"), "summary_by"),
+    ("no datasets", GOOD.format(name="study").replace("[[datasets]]", "[unused]").replace(
+        'generator = "circle"\nparams', "# x\nx"), "datasets"),
+    ("no methods", GOOD.format(name="study").split("[[methods]]")[0], "methods"),
+    ("timing rounds 0", GOOD.format(name="study") + "[timing]\nrounds = 0\n", "timing.rounds"),
+    ("n string", _sub("grid = { n = [10, 20] }", 'grid = { n = ["12"] }'), "n = '12'"),
+    ("n negative", _sub("grid = { n = [10, 20] }", "grid = { n = [-5] }"), "n = -5"),
+    ("noise negative", _sub("noise = 0.01", "noise = -0.01"), "noise = -0.01"),
+    ("radius inf", _sub("radius = 5.0", "radius = inf"), "radius"),
+    ("center string", _sub("center = [1.0, 2.0]", 'center = "here"'), "center = 'here'"),
+    ("xtol negative", _sub('id = "circle.gauss_newton"', 'id = "circle.gauss_newton"\nparams = { xtol = -1 }'), "xtol=-1"),
+    ("method grid bad", _sub('id = "circle.gauss_newton"', 'id = "circle.gauss_newton"\ngrid = { max_iter = [10, 2.5] }'),
+     "max_iter=2.5"),
+    ("unknown generator param", _sub("noise = 0.01", "nois = 0.01"), "nois"),
+    ("quick overrides name", GOOD.format(name="study") + '[quick]\nname = "../../escape"\n', "quick"),
+    ("quick wrong type", GOOD.format(name="study") + "[quick]\nrepetitions = 0\n", "quick.repetitions"),
+    ("two sources", _sub('generator = "circle"', 'generator = "circle"\npublished = "roundness_set1"'), "exactly one"),
+]
+
+
+@pytest.mark.parametrize("case,text,key", BAD, ids=[c[0] for c in BAD])
+def test_bad_config_is_refused_in_one_line_naming_file_and_key(tmp_path, case, text, key):
+    with pytest.raises(ConfigError) as info:
+        cfg = configs.load(str(write(tmp_path, text)), quick=True)
+        configs.check_rows(cfg, configs.count_rows(cfg), configs.MAX_ROWS)
+    msg = str(info.value)
+    assert "\n" not in msg and msg.startswith("study.toml: "), msg
+    assert key in msg, msg
+
+
+def test_non_utf8_and_directory_configs(tmp_path):
+    (tmp_path / "bin.toml").write_bytes(b'name = "bin"\ntitle = "\xff\xfe"\n')
+    with pytest.raises(ConfigError, match="bin.toml: not UTF-8"):
+        configs.load(str(tmp_path / "bin.toml"))
+    (tmp_path / "dir.toml").mkdir()
+    with pytest.raises(ConfigError, match="dir.toml: is a directory"):
+        configs.load(str(tmp_path / "dir.toml"))
+
+
+def test_output_paths_are_confined_to_out(tmp_path):
+    assert runner.confined(tmp_path, "noise") == tmp_path / "noise"
+    for name in ("../escape", "/abs/path", "..", "a/b"):
+        with pytest.raises(runner.InvalidInputError, match="outside --out"):
+            runner.confined(tmp_path, name)
+
+
+def test_grid_size_is_counted_before_expansion(tmp_path, capsys):
+    text = _sub('summary_by = ["data_n", "method"]', "").replace(", noise = 0.01", "").replace(
+        "grid = { n = [10, 20] }", "grid = { n = [%s], noise = [%s] }" % (
+            ", ".join(str(10 + i) for i in range(1000)), ", ".join(f"0.{i + 1}" for i in range(9))))
+    path = write(tmp_path, text.replace("repetitions = 2", "repetitions = 1000000000"))
+    cfg = configs.load(str(path))
+    assert configs.count_rows(cfg) == 1000 * 9 * 1000000000 * 2
+    code = runner.main([str(path), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "more than the limit" in err and "--max-rows" in err and "\n" not in err
+    assert not (tmp_path / "out" / "study").exists()
+    # --max-rows lowers or raises the limit
+    small = write(tmp_path, GOOD.format(name="small"), name="small")
+    assert runner.main([str(small), "--out", str(tmp_path / "out"), "--max-rows", "7"]) == 2
+    assert "8 rows" in capsys.readouterr().err
+
+
+def test_unknown_summary_by_column_refused_before_any_row(tmp_path, capsys):
+    path = write(tmp_path, _sub('summary_by = ["data_n", "method"]', 'summary_by = ["data_nn", "method"]'))
+    code = runner.main([str(path), "--out", str(tmp_path / "out"), "--jobs", "1"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "study.toml: summary_by" in err and "data_nn" in err and "\n" not in err
+    assert not (tmp_path / "out" / "study" / "rows.sqlite").exists()  # nothing ran
+
+
+def test_method_registry_parameter_hook():
+    import methods
+    spec = methods.get("circle.gauss_newton")
+    spec.check_params({"xtol": 1e-9, "max_iter": 50})
+    for bad in ({"xtol": -1}, {"xtol": "1e-9"}, {"max_iter": 2.5}, {"max_iter": True}, {"xtol": float("nan")}):
+        with pytest.raises(methods.InvalidInputError, match="circle.gauss_newton: parameter"):
+            spec.check_params(bad)
+    for m in methods.list_methods():  # every method's defaults pass its own checks
+        m.check_params(dict(m.defaults))

@@ -1,0 +1,91 @@
+"""Issue 14 "scale out for real": a Dask scheduler and two workers as separate processes on 127.0.0.1, started in
+another folder than the client's; the rows of a small study are identical (non-timing columns) to a local run."""
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
+
+STUDY = '''name = "cluster"
+title = "dask cluster test"
+kind = "grid"
+seed = 17
+repetitions = 3
+
+[[datasets]]
+generator = "circle"
+params = { center = [10.0, -3.0], radius = 2.0, noise = 0.01 }
+grid = { n = [12, 40] }
+
+[[methods]]
+id = "circle.kasa"
+[[methods]]
+id = "circle.levenberg_marquardt"
+[[methods]]
+id = "circle.nelder_mead"
+'''
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def non_timing(path: Path) -> pd.DataFrame:
+    df = pd.read_csv(path)
+    return df[[c for c in df.columns if not c.startswith("time_")]]
+
+
+@pytest.mark.skipif(DASK is None, reason="the dask command line (package distributed) is not installed")
+def test_study_on_a_separate_scheduler_and_workers_matches_local_run(tmp_path):
+    client_dir, worker_dir = tmp_path / "client", tmp_path / "elsewhere"
+    client_dir.mkdir()
+    worker_dir.mkdir()
+    cfg = client_dir / "cluster.toml"
+    cfg.write_text(STUDY, encoding="utf-8")
+    env = dict(os.environ, PYTHONPATH=str(REPO), OPENBLAS_NUM_THREADS="1")  # workers: fitbench importable, nothing else
+    port = free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    procs = [subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                              cwd=worker_dir, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        time.sleep(2)
+        for _ in range(2):
+            procs.append(subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-dashboard",
+                                           "--local-directory", str(worker_dir)],
+                                          cwd=worker_dir, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        from distributed import Client
+        with Client(address, timeout=30) as c:
+            c.wait_for_workers(2, timeout=120)
+            assert all(Path(d) != client_dir for d in c.run(os.getcwd).values())
+        common = [sys.executable, "-m", "experiments.run", str(cfg)]
+        dask_run = subprocess.run(common + ["--executor", "dask", "--scheduler", address, "--out", "dask_out"],
+                                  cwd=client_dir, env=env, capture_output=True, text=True, timeout=300)
+        assert dask_run.returncode == 0, dask_run.stderr
+        local = subprocess.run(common + ["--jobs", "1", "--out", "local_out"], cwd=client_dir, env=env,
+                               capture_output=True, text=True, timeout=300)
+        assert local.returncode == 0, local.stderr
+        assert not list(worker_dir.rglob("rows.sqlite")), "rows are written by the client, not the workers"
+        a = non_timing(client_dir / "dask_out" / "cluster" / "results.csv")
+        b = non_timing(client_dir / "local_out" / "cluster" / "results.csv")
+        assert len(a) == 2 * 3 * 3
+        pd.testing.assert_frame_equal(a, b)
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()

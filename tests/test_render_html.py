@@ -1,0 +1,108 @@
+"""The HTML pieces of the report in headless Chromium: numbered captions, table of contents with working
+anchors, every image loads; coloured ratio tables; the Dolan–Moré profile arithmetic."""
+from __future__ import annotations
+
+import base64
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from experiments.render.html_tables import coloured_table, ratio_colour
+from experiments.render.profiles import performance_ratios, problem_table, profile, plot_profiles
+from tests.report_checks import check_html_report, chromium, screenshot
+
+needs_chromium = pytest.mark.skipif(chromium() is None, reason="no chromium/chromium-browser on PATH")
+
+
+def _table():
+    t = pd.DataFrame({"circle.kasa": [1.0, 4.0, np.inf], "circle.gauss_newton": [2.0, 2.0, 3.0],
+                      "circle.minimum_zone": [1.0, 8.0, 1.5]}, index=pd.Index(["p1", "p2", "p3"], name="problem"))
+    return t
+
+
+def test_profile_by_hand():
+    r = performance_ratios(_table())
+    assert r.loc["p2", "circle.minimum_zone"] == 4.0 and r.loc["p3", "circle.kasa"] == np.inf
+    rho = profile(_table(), [1.0, 2.0, 4.0, 100.0])
+    # kasa: best on p1 (tie), 2x on p2, failed on p3
+    assert rho["circle.kasa"].tolist() == pytest.approx([1 / 3, 2 / 3, 2 / 3, 2 / 3])
+    assert rho["circle.gauss_newton"].tolist() == pytest.approx([1 / 3, 1.0, 1.0, 1.0])
+    assert rho["circle.minimum_zone"].tolist() == pytest.approx([2 / 3, 2 / 3, 1.0, 1.0])
+
+
+def test_ties_are_not_decided_by_rounding():
+    t = pd.DataFrame({"a": [1.0, 1.0], "b": [1.0 + 1e-12, 3.0]})
+    assert profile(t, [1.0])["b"].iloc[0] == 0.5
+    assert profile(t, [1.0], rtol=0.0)["b"].iloc[0] == 0.0
+
+
+def test_problem_table_from_rows():
+    rows = pd.DataFrame({"study": "s", "dataset": ["a", "a", "b", "b", "c"], "data_stream": "0",
+                         "method": ["m.x", "m.y", "m.x", "m.y", "m.x"], "params": "{}",
+                         "status": ["ok", "ok", "ok", "not converged", "ok"], "err": [1e-20, 2.0, 3.0, 1.0, 1.0]})
+    t = problem_table(rows, metric="err", floor=1e-9)
+    assert t.shape == (2, 2) and t.attrs["dropped_problems"] == 1       # c: m.y never ran there
+    assert t.loc["s | b | 0", "m.y"] == np.inf                           # not converged = failure
+    assert t.loc["s | a | 0", "m.x"] == 1e-9                             # floored
+    with pytest.raises(ValueError, match="repeat"):
+        problem_table(pd.concat([rows, rows]), metric="err")
+    with pytest.raises(ValueError, match="no column"):
+        problem_table(rows, metric="nope")
+
+
+def test_coloured_table():
+    html = coloured_table(_table(), unit="µm", caption="Table 1: errors")
+    assert html.count("<tr>") == 4 and "failed" in html and "Cell colour" in html
+    assert ratio_colour(1.0) != ratio_colour(3.0) != ratio_colour(np.inf)
+    assert 'data-ratio="4.0"' in html and 'data-ratio="inf"' in html
+    from experiments.render.html_tables import format_number
+    assert [format_number(v) for v in (2080.0, 0.0123, 4.07e8, -1.5e-5)] == ["2080", "0.0123", "4.07×10⁸", "-1.50×10⁻⁵"]
+    with pytest.raises(ValueError):
+        coloured_table(pd.DataFrame({"a": [-1.0]}))
+
+
+def build_sample_report(folder: Path, *, broken_image=False, unnumbered=False) -> Path:
+    """A small report like the real one: TOC, two sections, a numbered figure (a profile PNG, once as a file
+    and once embedded) and a numbered coloured table."""
+    folder.mkdir(parents=True, exist_ok=True)
+    png = folder / "figures" / "profile.png"
+    plot_profiles({"error": _table()}, png)
+    data = base64.b64encode(png.read_bytes()).decode()
+    src = "figures/missing.png" if broken_image else "figures/profile.png"
+    cap = "A profile" if unnumbered else "Figure 1: performance profile of three methods on three problems."
+    html = f"""<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>sample</title></head><body>
+<h1>Sample report</h1>
+<nav id="toc"><ol><li><a href="#sec-1">1 Accuracy</a></li><li><a href="#sec-2">2 Runtime</a></li></ol></nav>
+<h2 id="sec-1">1 Accuracy</h2>
+<figure><img src="{src}" alt="profile"><figcaption>{cap}</figcaption></figure>
+{coloured_table(_table(), unit="µm", caption="Table 1: error by problem (colour: ratio to the best).")}
+<h2 id="sec-2">2 Runtime</h2>
+<figure><img src="data:image/png;base64,{data}" alt="profile"><figcaption>Figure 2: the same, embedded.</figcaption></figure>
+</body></html>"""
+    path = folder / "report.html"
+    path.write_text(html, encoding="utf-8")
+    return path
+
+
+@needs_chromium
+def test_sample_report_passes(tmp_path):
+    report = build_sample_report(tmp_path / "ok")
+    assert check_html_report(report) == []
+    shot = screenshot(report, tmp_path / "top.png", width=1000, height=900)
+    assert shot.stat().st_size > 10_000
+
+
+@needs_chromium
+def test_checks_can_fail(tmp_path):
+    problems = check_html_report(build_sample_report(tmp_path / "bad", broken_image=True, unnumbered=True))
+    assert any("do not load" in p for p in problems)
+    assert any("unnumbered figure" in p for p in problems)
+    no_toc = tmp_path / "bad" / "notoc.html"
+    no_toc.write_text((tmp_path / "bad" / "report.html").read_text().replace('id="toc"', 'id="x"')
+                      .replace('id="sec-2"', 'id="elsewhere"'))
+    assert any("no table of contents" in p for p in check_html_report(no_toc))
+    dead = tmp_path / "bad" / "dead.html"
+    dead.write_text((tmp_path / "bad" / "report.html").read_text().replace('id="sec-2"', 'id="elsewhere"'))
+    assert any("without a target" in p for p in check_html_report(dead))

@@ -1,0 +1,233 @@
+"""LaTeX fragments of the report compile on A4 (2.5 cm margins) without an overfull box wider than 1 pt.
+
+The tables are the report's hardest: the multilateration accuracy table (60 rows x 12 columns, long repeated
+scenario names), the roundness paper's published-against-reproduced table, the magnification table with maths
+in its headers. They are built from the committed results/ (skipped with the reason when a study is absent).
+"""
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from experiments.render.latex import Column as C, TableTooWide, compile_pdf, latex_table, standalone_document
+from experiments.render.text import ordinal, percentile_phrase
+
+REPO = Path(__file__).resolve().parents[1]
+RESULTS = REPO / "results"
+PDFLATEX = shutil.which("pdflatex")
+needs_pdflatex = pytest.mark.skipif(PDFLATEX is None, reason="pdflatex is not installed (apt-get install "
+                                    "texlive-latex-extra texlive-science for booktabs/siunitx/multirow)")
+MAX_OVERFULL_PT = 1.0
+
+
+def _csv(study, name):
+    path = RESULTS / study / name
+    if not path.exists():
+        pytest.skip(f"{path} is missing: run python -m experiments.run {study}")
+    return pd.read_csv(path)
+
+
+def multilateration_tables() -> list[str]:
+    """The 60 x 12 accuracy table as two tables (errors; condition numbers), scenarios as group rows."""
+    acc = _csv("multilateration", "accuracy.csv")
+    keys = [C("dataset", group=True), C("stations", group=True)]
+    errors = latex_table(acc, keys + [
+        C("method"), C("runs", kind="integer"), C("station_error_um", "largest station error", "µm"),
+        C("dead_path_error_um", "dead path error", "µm"),
+        C("volumetric_error_rms_um", "volumetric error RMS", "µm"),
+        C("aligned_error_rms_um", "aligned RMS", "µm"), C("model_error_rms_um", "21-error map RMS", "µm")],
+        caption="Multilateration: medians over the Monte Carlo runs of the errors against the simulator's truth",
+        label="ml-errors", notes=["--: not applicable (stations given, so not located; or no machine errors, so "
+                                  "no 21-error map)."])
+    kappa = latex_table(acc, keys + [
+        C("method"), C("kappa_stations", r"$\kappa_2$ stations"), C("kappa_stations_theorem1", "Theorem 1 stations"),
+        C("kappa_points", r"$\kappa_2$ points"), C("kappa_points_theorem1", "Theorem 1 points")],
+        caption=r"Multilateration: median condition numbers $\kappa_2$ (SVD) and the lower estimate of Theorem 1",
+        label="ml-kappa", notes=["--: stations given, step 1 not run."])
+    return [errors, kappa]
+
+
+def published_table() -> str:
+    meta = RESULTS / "published" / "meta.json"
+    if not meta.exists():
+        pytest.skip(f"{meta} is missing: run python -m experiments.run published")
+    pub = pd.DataFrame(json.loads(meta.read_text())["findings"]["published_vs_reproduced"])
+    pub["difference_um"] = 1e3 * pub["difference"]
+    pub["set"] = pub["dataset"] + np.where(pub["variant"] == "as published", "", " (closing point dropped)")
+    pub["explanation"] = [
+        "reproduced" if r.reproduced else
+        (f"printed digits allow {r.rounding_p0_5:.6f}..{r.rounding_p99_5:.6f} mm (99 %); published at "
+         f"{percentile_phrase(r.published_percentile, 0)}" if r.explained_by_rounding else "not explained")
+        for r in pub.itertuples()]
+    return latex_table(pub, [C("set", group=True), C("column", width="3.3cm"), C("published", unit="mm", exact=True),
+                        C("reproduced_value", "reproduced", "mm", decimals=7), C("difference_um", "difference", unit="µm", digits=2),
+                        C("explanation", width="5.2cm")],
+                       caption="Roundness paper, table 1: published against reproduced circularity",
+                       label="published")
+
+
+def magnification_table() -> str:
+    df = _csv("magnification", "results.csv")
+    df["cell"] = [("skipped" if s != "ok" else f"{c:.2f} / {int(lo)}")
+                  for s, c, lo in zip(df["status"], df["continuity"], df["loops"])]
+    piv = df.pivot_table(index="dataset", columns="method", values="cell", aggfunc="first", sort=False).reset_index()
+    headers = {"nearest (conventional)": "nearest (conventional)",
+               "offset as printed, delta = 10 e_max": r"offset as printed, $\delta = 10\,e_\mathrm{max}$",
+               "offset same side, delta = 2 e_max": r"same side, $\delta = 2\,e_\mathrm{max}$",
+               "offset same side, delta = 10 e_max": r"same side, $\delta = 10\,e_\mathrm{max}$",
+               "offset same side, delta = 1.2 eta e_max": r"same side, $\delta = 1.2\,\eta\,e_\mathrm{max}$"}
+    cols = [C("dataset", "example")] + [C(m, headers.get(m, m), width="2.1cm") for m in piv.columns[1:]]
+    return latex_table(piv, cols, caption=r"Magnified contouring errors: continuity / loops of the magnified "
+                                          r"trajectory ($\le 1$: continuous)", label="magnification")
+
+
+def _assert_compiles_within_page(fragments, tmp_path, name):
+    result = compile_pdf(standalone_document(fragments), tmp_path, name=name)
+    assert result["ok"], f"pdflatex failed: {result['errors'][:3]}"
+    wide = [(pt, line) for kind, pt, line in result["overfull"] if kind == "h" and pt > MAX_OVERFULL_PT]
+    assert not wide, f"{len(wide)} overfull boxes wider than {MAX_OVERFULL_PT} pt, e.g. {wide[:3]}"
+    return result
+
+
+@needs_pdflatex
+def test_overfull_detection_can_fail(tmp_path):
+    """The check itself: a table wider than the page must be reported as overfull."""
+    wide = "\\begin{tabular}{" + "l" * 12 + "}\n" + " & ".join(["a-very-wide-cell-text"] * 12) + r" \\" + "\n\\end{tabular}"
+    result = compile_pdf(standalone_document([wide]), tmp_path, name="wide")
+    assert result["ok"]
+    assert max(pt for _, pt, _ in result["overfull"]) > 100
+
+
+@needs_pdflatex
+def test_multilateration_tables_fit_a4(tmp_path):
+    _assert_compiles_within_page(multilateration_tables(), tmp_path, "ml")
+
+
+@needs_pdflatex
+def test_published_table_fits_a4(tmp_path):
+    _assert_compiles_within_page([published_table()], tmp_path, "pub")
+
+
+@needs_pdflatex
+def test_magnification_table_fits_a4(tmp_path):
+    _assert_compiles_within_page([magnification_table()], tmp_path, "mag")
+
+
+@needs_pdflatex
+def test_every_results_csv_renders_or_is_flagged(tmp_path):
+    """Every committed table CSV under results/ either renders to a fragment that fits, or is refused as too
+    wide with a message (never silently overflows)."""
+    frags, flagged = [], []
+    for path in sorted(RESULTS.glob("*/*.csv")):
+        if path.name in ("results.csv",):
+            continue
+        df = pd.read_csv(path)
+        try:
+            frags.append(latex_table(df.head(80), caption=f"{path.parent.name}: {path.stem}", label=path.stem))
+        except TableTooWide as exc:
+            assert "split" in str(exc)
+            flagged.append(path.name)
+    if not frags:
+        pytest.skip("no table CSV under results/")
+    _assert_compiles_within_page(frags, tmp_path, "all")
+
+
+def test_too_wide_table_is_flagged():
+    df = pd.DataFrame({f"a long column header {k}": np.linspace(1, 2e3, 4) for k in range(16)})
+    with pytest.raises(TableTooWide, match="split"):
+        latex_table(df, caption="x", label="wide")
+
+
+def test_numbers_units_and_text():
+    df = pd.DataFrame({"method": ["circle.kasa", "circle.gauss_newton"], "kappa": [4.07e8, 70.9],
+                       "err": [-0.0123, 12.5], "n": [10, 2000]})
+    frag = latex_table(df, [C("method"), C("kappa", r"$\kappa_2$"), C("err", "error", "um"), C("n", kind="integer")],
+                       caption=r"Errors at $\sigma = 0.01\,R$ in µm; 91st percentile", label="t")
+    assert "4.07e8" in frag and "4.07e+08" not in frag
+    exact = latex_table(pd.DataFrame({"p": [0.029807, 1.7487]}), [C("p", exact=True)], caption="x", label="x")
+    assert "0.029807 \\" in exact and "1.7487 \\" in exact and "S[table-format=1.6]" in exact                 # siunitx parses and prints 4.07 x 10^8
+    assert r"\si{\micro\metre}" in frag and " um" not in frag
+    assert r"$\kappa_2$" in frag and r"$\sigma = 0.01\,R$" in frag    # maths kept
+    assert r"circle.gauss\_newton" in frag and r"\textmu{}m" in frag
+    assert "S[table-format=-2.4]" in frag or "S[table-format=-2.3]" in frag
+    assert "S[table-format=4.0]" in frag
+    assert r"\toprule" in frag and r"\bottomrule" in frag
+
+
+def test_long_table_is_split_over_pages():
+    df = pd.DataFrame({"k": np.arange(100), "v": np.linspace(0, 1, 100)})
+    frag = latex_table(df, caption="long", label="long")
+    assert r"\begin{longtable}" in frag and r"\endhead" in frag
+
+
+def test_bad_column_is_a_clear_error():
+    with pytest.raises(ValueError, match="no column"):
+        latex_table(pd.DataFrame({"a": [1]}), [C("b")], caption="x", label="x")
+    with pytest.raises(ValueError, match="kind must be"):
+        C("a", kind="float")
+
+
+def test_ordinal():
+    assert [ordinal(k) for k in (1, 2, 3, 4, 11, 12, 13, 21, 22, 23, 72, 91, 101, 111, 112, 113)] == [
+        "1st", "2nd", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "23rd", "72nd", "91st", "101st",
+        "111th", "112th", "113th"]
+    assert percentile_phrase(90.3) == "percentile 90.3" and percentile_phrase(91) == "the 91st percentile"
+    with pytest.raises(ValueError):
+        ordinal(-1)
+
+
+@needs_pdflatex
+def test_report_tex_includes_fragments_and_figures_and_compiles(tmp_path):
+    """paper/report.tex from the jinja2 template: sections, findings text with maths, \\input tables,
+    figures with captions; compiles (twice, for the table of contents) without an overfull box > 1 pt."""
+    from experiments.render import figures as F
+    from experiments.render.document import write_report_tex
+    (tmp_path / "tables").mkdir()
+    frags = {"ml-errors": multilateration_tables()[0], "published": published_table(),
+             "magnification": magnification_table()}
+    for name, frag in frags.items():
+        (tmp_path / "tables" / f"{name}.tex").write_text(frag, encoding="utf-8")
+    F.noise_kcr(_csv("noise", "kcr.csv"), tmp_path / "figures" / "noise.png")
+    sections = [{"title": "Roundness paper (Pınar & Güllü)", "label": "roundness", "studies": [
+        {"title": "Published data", "findings": "Sample findings text (not a result): Kåsa, 45°, "
+                                                "maths $\\sigma = 0.05\\,R$ and 2 %.",
+         "items": [{"kind": "table", "file": "tables/published.tex"},
+                   {"kind": "figure", "file": "figures/noise.png", "label": "noise",
+                    "caption": "Radius RMSE / KCR bound and radius bias / σ against σ / R (100 points)."}]}]},
+        {"title": "Magnification and multilateration", "studies": [
+            {"title": "Tables", "items": [{"kind": "table", "file": "tables/magnification.tex"},
+                                          {"kind": "table", "file": "tables/ml-errors.tex"}]}]}]
+    path = write_report_tex(tmp_path, sections, provenance="commit abc, 2 cores")
+    src = path.read_text()
+    assert r"\tableofcontents" in src and r"\input{tables/published.tex}" in src and r"\label{fig:noise}" in src
+    assert "$\\sigma = 0.05\\,R$" in src and "Kåsa" in src
+    result = compile_pdf(src, tmp_path, name="report", runs=2)
+    assert result["ok"], result["errors"][:3]
+    wide = [(pt, line) for kind, pt, line in result["overfull"] if kind == "h" and pt > MAX_OVERFULL_PT]
+    assert not wide, wide[:3]
+    assert (tmp_path / "report.toc").read_text().count("contentsline") >= 4
+
+
+def test_report_tex_refuses_missing_files_and_captionless_figures(tmp_path):
+    from experiments.render.document import render_report_tex, write_report_tex
+    with pytest.raises(FileNotFoundError, match="missing"):
+        write_report_tex(tmp_path, [{"title": "A", "studies": [{"title": "s", "items": [
+            {"kind": "table", "file": "tables/none.tex"}]}]}])
+    with pytest.raises(ValueError, match="no caption"):
+        render_report_tex([{"title": "A", "studies": [{"title": "s", "items": [
+            {"kind": "figure", "file": "f.png"}]}]}])
+
+
+@needs_pdflatex
+def test_multirow_grouping_compiles(tmp_path):
+    df = pd.DataFrame({"scenario": ["six stations, noise"] * 3 + ["four stations"] * 2,
+                       "method": ["a", "b", "c", "a", "b"], "error": [1.5, 2.25, 30.0, 0.001, 4e-6]})
+    frag = latex_table(df, [C("scenario", group=True, width="3cm"), C("method"), C("error", unit="µm")],
+                       caption="grouped with multirow", label="mr", group_style="multirow")
+    assert frag.count(r"\multirow") == 2
+    _assert_compiles_within_page([frag], tmp_path, "mr")

@@ -1,0 +1,255 @@
+"""Issue 16 items 4-6, 8, 9 and the fault-injection test: kills, interrupts, a corrupt row store, history-
+independent row order, --jobs and --out checks, a bad Dask scheduler. The runs are subprocesses started in
+another folder than the repository (PYTHONPATH points at this checkout)."""
+from __future__ import annotations
+
+import os
+import random
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+STUDY = '''name = "{name}"
+title = "fault test study"
+kind = "grid"
+seed = 11
+repetitions = {reps}
+
+[[datasets]]
+generator = "circle"
+params = {{ center = [1.0, 2.0], radius = 5.0, noise = 0.01 }}
+grid = {{ n = {ns} }}
+
+[[methods]]
+id = "circle.kasa"
+[[methods]]
+id = "circle.gauss_newton"
+[[methods]]
+id = "circle.nelder_mead"
+'''
+
+
+def study(folder: Path, name="faults", reps=3, ns="[10, 20]") -> Path:
+    path = folder / f"{name}.toml"
+    path.write_text(STUDY.format(name=name, reps=reps, ns=ns), encoding="utf-8")
+    return path
+
+
+def env():
+    e = dict(os.environ)
+    e["PYTHONPATH"] = str(REPO) + os.pathsep + e.get("PYTHONPATH", "")
+    return e
+
+
+def run(args, cwd, timeout=300):
+    return subprocess.run([sys.executable, "-m", "experiments.run", *map(str, args)], cwd=cwd, env=env(),
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def start(args, cwd):
+    return subprocess.Popen([sys.executable, "-m", "experiments.run", *map(str, args)], cwd=cwd, env=env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+
+def children(pid: int) -> set[int]:
+    """Every live descendant of ``pid`` (from /proc)."""
+    parent = {}
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                stat = (d / "stat").read_text()
+                parent[int(d.name)] = int(stat.rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                pass
+    out, todo = set(), [pid]
+    while todo:
+        p = todo.pop()
+        for c, pp in parent.items():
+            if pp == p and c not in out:
+                out.add(c)
+                todo.append(c)
+    return out
+
+
+def alive(pids) -> set[int]:
+    left = set()
+    for p in pids:
+        try:
+            state = Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[0]
+            if state != "Z":
+                left.add(p)
+        except OSError:
+            pass
+    return left
+
+
+def stored_rows(db: Path) -> int:
+    try:
+        con = sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=0.2)
+        try:
+            return con.execute("SELECT count(*) FROM rows").fetchone()[0]
+        finally:
+            con.close()
+    except sqlite3.Error:
+        return 0
+
+
+def wait_rows(proc, db: Path, at_least: int, timeout=120):
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        if proc.poll() is not None:
+            return False
+        if stored_rows(db) >= at_least:
+            return True
+        time.sleep(0.05)
+    raise AssertionError("no rows were stored in time")
+
+
+
+def non_timing(path: Path) -> pd.DataFrame:
+    df = pd.read_csv(path)
+    return df[[c for c in df.columns if not c.startswith("time_")]]
+
+
+def no_survivors(pids, within=10.0):
+    t0 = time.time()
+    while alive(pids) and time.time() - t0 < within:
+        time.sleep(0.1)
+    return alive(pids)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_sigterm_and_ctrl_c_print_one_line_and_leave_no_process(tmp_path, sig):
+    cfg = study(tmp_path, reps=40, ns="[50, 200]")
+    proc = start([cfg, "--jobs", "2", "--out", tmp_path / "out"], tmp_path)
+    wait_rows(proc, tmp_path / "out" / "faults" / "rows.sqlite", 2)
+    kids = children(proc.pid)
+    assert kids, "the run started no worker"
+    os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(sig)  # Ctrl-C reaches the whole group
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == (143 if sig == signal.SIGTERM else 130), err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert "rows.sqlite" in lines[0] and "resume" in lines[0]
+    assert not no_survivors(kids), "worker or resource tracker outlived the run"
+
+
+def test_sigkill_of_the_parent_ends_workers_and_resource_tracker(tmp_path):
+    cfg = study(tmp_path, reps=40, ns="[50, 200]")
+    proc = start([cfg, "--jobs", "2", "--out", tmp_path / "out"], tmp_path)
+    wait_rows(proc, tmp_path / "out" / "faults" / "rows.sqlite", 2)
+    kids = children(proc.pid)
+    assert len(kids) >= 2
+    proc.kill()
+    proc.wait(timeout=10)
+    assert not no_survivors(kids, within=10), "processes outlived their SIGKILLed parent"
+
+
+def test_fault_injection_sigkill_at_random_moments_then_rerun_reproduces(tmp_path):
+    """SIGKILL at random moments during rows and during finalize (several seeds); each rerun gives the non-timing
+    columns of an uninterrupted run exactly, and no process outlives its parent."""
+    cfg = study(tmp_path, reps=2, ns="[10, 30]")
+    ref = run([cfg, "--jobs", "1", "--out", tmp_path / "ref"], tmp_path)
+    assert ref.returncode == 0, ref.stderr
+    expected = non_timing(tmp_path / "ref" / "faults" / "results.csv")
+    for seed in range(3):
+        out = tmp_path / f"killed{seed}"
+        rng = random.Random(seed)
+        jobs = 2 if seed == 0 else 1
+        proc = start([cfg, "--jobs", jobs, "--out", out], tmp_path)
+        db = out / "faults" / "rows.sqlite"
+        if seed < 2:  # during rows: after a random number of stored rows
+            wait_rows(proc, db, rng.randint(1, 8))
+        else:  # during finalize (seed 2): once every row is stored, after a random delay
+            wait_rows(proc, db, len(expected))
+            time.sleep(rng.uniform(0.0, 0.5))
+        kids = children(proc.pid)
+        proc.kill()
+        proc.wait(timeout=10)
+        assert not no_survivors(kids), f"seed {seed}: processes outlived their parent"
+        again = run([cfg, "--jobs", jobs, "--out", out], tmp_path)
+        assert again.returncode == 0, again.stderr
+        assert not list(out.rglob("*.tmp")), "left-over temporary files"
+        pd.testing.assert_frame_equal(non_timing(out / "faults" / "results.csv"), expected)
+
+
+@pytest.mark.parametrize("damage", ["garbage", "truncated"])
+def test_corrupt_row_store_is_moved_aside_and_recomputed(tmp_path, damage):
+    cfg = study(tmp_path, reps=1)
+    out = tmp_path / "out"
+    first = run([cfg, "--jobs", "1", "--out", out], tmp_path)
+    assert first.returncode == 0, first.stderr
+    expected = non_timing(out / "faults" / "results.csv")
+    db = out / "faults" / "rows.sqlite"
+    data = db.read_bytes()
+    db.write_bytes(b"this is not SQLite " * 200 if damage == "garbage" else data[: len(data) // 2])
+    for extra in ([], ["--force"]):
+        again = run([cfg, "--jobs", "1", "--out", out, *extra], tmp_path)
+        assert again.returncode == 0, again.stderr
+        assert "Traceback" not in again.stderr
+        if not extra:
+            said = [ln for ln in again.stdout.splitlines() if "moved aside" in ln]
+            assert len(said) == 1 and "rows.sqlite" in said[0], again.stdout
+            assert list((out / "faults").glob("rows.sqlite.corrupt-*"))
+        pd.testing.assert_frame_equal(non_timing(out / "faults" / "results.csv"), expected)
+        db.write_bytes(b"\x00garbage" * 500)  # and --force on a corrupt store
+
+
+def test_row_order_does_not_depend_on_history(tmp_path):
+    old = study(tmp_path, reps=1, ns="[10, 20]")
+    resumed = tmp_path / "resumed"
+    assert run([old, "--jobs", "1", "--out", resumed], tmp_path).returncode == 0
+    new_dir = tmp_path / "new"
+    new_dir.mkdir()
+    new = study(new_dir, reps=1, ns="[30, 20, 10]")  # reordered and extended grid: cached rows are reused
+    second = run([new, "--jobs", "1", "--out", resumed], tmp_path)
+    assert second.returncode == 0 and "already stored" in second.stdout
+    fresh = run([new, "--jobs", "1", "--out", tmp_path / "fresh"], tmp_path)
+    assert fresh.returncode == 0
+    a = non_timing(resumed / "faults" / "results.csv")
+    b = non_timing(tmp_path / "fresh" / "faults" / "results.csv")
+    assert list(a["data_n"][:3]) == [30, 30, 30]
+    pd.testing.assert_frame_equal(a, b)
+
+
+def test_jobs_capped_out_checked_and_default_out_in_cwd(tmp_path):
+    cfg = study(tmp_path, reps=1, ns="[10]")
+    res = run([cfg, "--jobs", "64"], tmp_path)  # no --out: results/ in the working directory
+    assert res.returncode == 0, res.stderr
+    capped = [ln for ln in res.stdout.splitlines() if "capped" in ln]
+    assert len(capped) == 1 and "--jobs 64" in capped[0]
+    assert (tmp_path / "results" / "faults" / "results.csv").is_file()
+    afile = tmp_path / "a_file"
+    afile.write_text("x")
+    for out in (afile, afile / "below"):
+        res = run([cfg, "--out", out], tmp_path)
+        assert res.returncode == 2 and "Traceback" not in res.stderr
+        assert len(res.stderr.strip().splitlines()) == 1 and "--out" in res.stderr
+
+
+def test_bad_dask_scheduler_is_one_line_in_bounded_time(tmp_path):
+    cfg = study(tmp_path, reps=1, ns="[10]")
+    for address in ("tcp://127.0.0.1:1", "not-an-address", ""):
+        t0 = time.time()
+        res = run([cfg, "--executor", "dask", "--scheduler", address, "--out", tmp_path / "out"], tmp_path, timeout=120)
+        took = time.time() - t0
+        assert res.returncode == 2, (address, res.stderr)
+        assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.stderr, res.stderr
+        assert "scheduler" in res.stderr
+        assert took < 30, f"{address!r}: {took:.0f} s"  # 5 s connection timeout + interpreter start on a busy machine
+
+
+@pytest.mark.parametrize("module", ["experiments.run", "experiments.report", "experiments.verify"])
+def test_version(module, tmp_path):
+    res = subprocess.run([sys.executable, "-m", module, "--version"], cwd=tmp_path, env=env(),
+                         capture_output=True, text=True, timeout=120)
+    from importlib import metadata
+    assert res.returncode == 0 and metadata.version("fitbench") in res.stdout

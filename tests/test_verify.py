@@ -1,0 +1,132 @@
+"""Issue 17: experiments.verify compares a run with committed results column by column, with the tolerances
+declared with the metrics (experiments.metrics.TOLERANCES)."""
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from experiments import run as runner
+from experiments import verify
+from experiments.metrics import TOLERANCES, tolerance
+
+REPO = Path(__file__).resolve().parents[1]
+
+STUDY = '''name = "vstudy"
+title = "verify test study"
+kind = "grid"
+seed = 5
+repetitions = 2
+
+[[datasets]]
+generator = "circle"
+params = { center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }
+
+[[methods]]
+id = "circle.kasa"
+[[methods]]
+id = "circle.gauss_newton"
+'''
+
+
+@pytest.fixture(scope="module")
+def committed(tmp_path_factory):
+    root = tmp_path_factory.mktemp("verify")
+    cfg = root / "vstudy.toml"
+    cfg.write_text(STUDY, encoding="utf-8")
+    assert runner.main([str(cfg), "--jobs", "1", "--out", str(root / "committed")]) == 0
+    return root / "committed"
+
+
+def copy_run(committed: Path, tmp_path: Path) -> Path:
+    fresh = tmp_path / "fresh"
+    shutil.copytree(committed, fresh)
+    (fresh / verify.VERDICT_FILE).unlink(missing_ok=True)
+    return fresh
+
+
+def edit(folder: Path, row: int, column: str, change) -> str:
+    path = folder / "vstudy" / "results.csv"
+    df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    df.loc[row, column] = change(df.loc[row, column])
+    df.to_csv(path, index=False)
+    return df.loc[row, "method"]
+
+
+def test_identical_run_agrees_and_writes_verdict(committed, tmp_path, capsys):
+    fresh = copy_run(committed, tmp_path)
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 0
+    assert capsys.readouterr().out.startswith("vstudy: agree")
+    assert verify.last_verdict(committed)["agree"] is True
+    assert "agree" in verify.verdict_markdown(committed)[0]
+
+
+def test_values_within_tolerance_pass(committed, tmp_path, capsys):
+    fresh = copy_run(committed, tmp_path)
+    tol = TOLERANCES["radius"]
+    edit(fresh, 1, "radius", lambda v: repr(float(v) * (1 + tol.rtol / 10)))
+    edit(fresh, 2, "center_error", lambda v: repr(float(v) + TOLERANCES["center_error"].atol / 10))
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 0, capsys.readouterr().out
+
+
+@pytest.mark.parametrize("column,change", [
+    ("radius", lambda v: repr(float(v) * (1 + 1e3 * TOLERANCES["radius"].rtol))),
+    ("status", lambda v: "not converged"),
+    ("iterations", lambda v: str(int(v) + 1)),
+])
+def test_perturbation_beyond_tolerance_fails_naming_study_column_row(committed, tmp_path, capsys, column, change):
+    fresh = copy_run(committed, tmp_path)
+    method = edit(fresh, 3, column, change)  # row 3: repetition 1, circle.gauss_newton
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 1
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].startswith("vstudy: DIFFER")
+    bad = [ln for ln in out.splitlines() if ln.startswith("vstudy ")]
+    assert len(bad) == 1 and f" {column} " in bad[0] and f"method={method}" in bad[0] and "repetition=1" in bad[0]
+    verdict = json.loads((committed / verify.VERDICT_FILE).read_text())
+    assert verdict["agree"] is False and verdict["studies"][0]["problems"][0]["column"] == column
+
+
+def test_missing_row_is_a_difference(committed, tmp_path, capsys):
+    fresh = copy_run(committed, tmp_path)
+    path = fresh / "vstudy" / "results.csv"
+    df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    df.drop(index=0).to_csv(path, index=False)
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 1
+    assert "row missing in this run" in capsys.readouterr().out
+
+
+def test_bad_input_exits_2_in_one_line(committed, tmp_path, capsys):
+    fresh = copy_run(committed, tmp_path)
+    cases = [["--results", str(tmp_path / "nope"), "--against", str(fresh)],
+             ["--results", str(committed), "--against", str(tmp_path / "nope")],
+             ["unknown_study", "--results", str(committed), "--against", str(fresh)],
+             ["--results", str(committed), "--against", str(fresh), "--quick"]]  # a full run is not a quick one
+    (tmp_path / "broken" / "vstudy").mkdir(parents=True)
+    (tmp_path / "broken" / "vstudy" / "results.csv").write_bytes(b"\xff\xfe\x00garbage")
+    cases.append(["--results", str(committed), "--against", str(tmp_path / "broken")])
+    for args in cases:
+        assert verify.main(args) == 2, args
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("experiments.verify: error:") and "\n" not in err, err
+
+
+def test_timing_and_message_are_not_compared_every_metric_declares_a_justified_tolerance():
+    assert tolerance("time_median_s") is None and tolerance("message") is None
+    assert tolerance("status").rtol == 0 == tolerance("status").atol
+    for column, tol in TOLERANCES.items():
+        assert tol is None or (tol.rtol >= 0 and tol.atol >= 0 and len(tol.why) > 20), column
+
+
+def test_committed_quick_results_exist_for_the_ci_verify_step():
+    """CI runs `python -m experiments.verify --quick --against <fresh quick run> --results results/quick`: the
+    committed quick results must be there (generated with `python -m experiments.run --quick --out results/quick`)."""
+    quick = REPO / "results" / "quick"
+    assert quick.is_dir(), ("results/quick/ is missing: generate it with python -m experiments.run --quick "
+                            "--out results/quick and commit it (the CI verify step compares with it)")
+    defaults = [n for n in runner.configs.available() if runner.configs.load(n).get("default")]
+    for name in defaults:
+        meta = json.loads((quick / name / "meta.json").read_text())
+        assert meta["quick"] is True and (quick / name / "results.csv").is_file(), name

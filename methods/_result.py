@@ -71,10 +71,17 @@ class CircleFit(FitResult):
 
 
 def radial_distances(points: np.ndarray, center) -> np.ndarray:
-    """Distances r_i of the points from ``center`` (vectorised)."""
+    """Distances r_i of the points from ``center`` (vectorised); exact to rounding at any float64 scale
+    (np.hypot, free of under/overflow, is used when a squared distance would leave the normal range)."""
     dx = points[:, 0] - center[0]
     dy = points[:, 1] - center[1]
-    return np.sqrt(dx * dx + dy * dy)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        r = dx * dx
+        r += dy * dy
+        np.sqrt(r, out=r)
+    if r.size and not (1e-145 < r.min() and r.max() < 1e150):
+        r = np.hypot(dx, dy)
+    return r
 
 
 def circle_result(points: np.ndarray, center, radius: float, *, converged: bool, message: str,
@@ -82,9 +89,11 @@ def circle_result(points: np.ndarray, center, radius: float, *, converged: bool,
     """Build a :class:`CircleFit`, computing residuals and form error from the data in data units."""
     center = (float(center[0]), float(center[1]))
     radius = float(radius)
-    r = radial_distances(points, center)
+    with np.errstate(over="ignore", invalid="ignore"):  # a degenerate circle far away: NaN/inf, no warning
+        r = radial_distances(points, center)
     ok_geometry = all(map(math.isfinite, center)) and math.isfinite(radius)
-    form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
+    with np.errstate(over="ignore", invalid="ignore"):
+        form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
     return CircleFit(center=center, radius=radius, form_error=form_error, residuals=r - radius,
                      converged=bool(converged and ok_geometry), iterations=iterations, nfev=nfev,
                      history=list(history or []), message=message, extra=dict(extra or {}))

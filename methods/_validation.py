@@ -4,43 +4,94 @@ from __future__ import annotations
 import numpy as np
 
 from methods._errors import InvalidInputError
+from methods._frame import dot, offer_frame, unit_frame
 
-#: Singular-value ratio below which a point set counts as collinear (rounding level of float64).
+#: Singular-value ratio (smaller / larger principal spread) below which a point set counts as
+#: collinear; raised to the rounding of the coordinates themselves (8 eps max|X| / spread) when that
+#: is larger, so the test is scale-free: it depends on the shape of the data, not on their unit.
 COLLINEAR_RTOL = 1e-12
+EPS = float(np.finfo(float).eps)
+
+
+def _as_array(points, who: str) -> np.ndarray:
+    """The points as a float64 array, honouring masks and column names; complex input refused.
+
+    * a NumPy masked array: rows with a masked coordinate are dropped (the fit sees only unmasked
+      points; residuals follow the kept points in their order);
+    * a pandas DataFrame (or anything with ``columns``) with columns named x and y (any case): used
+      by name, whatever their order; otherwise its columns by position;
+    * complex numbers are refused (their imaginary part would be silently lost)."""
+    if hasattr(points, "columns") and hasattr(points, "to_numpy"):
+        names = [str(c).strip().lower() for c in points.columns]
+        if "x" in names and "y" in names:
+            points = points.iloc[:, [names.index("x"), names.index("y")]]
+        points = points.to_numpy()
+    if isinstance(points, np.ma.MaskedArray):
+        mask = np.ma.getmaskarray(points)
+        data = np.asarray(points.data)
+        if mask.any():
+            if data.ndim != 2 or data.shape[1] != 2:
+                raise InvalidInputError(f"{who}points must be an (N, 2) array of x, y; got shape {data.shape}")
+            data = data[~mask.any(axis=1)]
+        points = data
+    raw = np.asarray(points) if not isinstance(points, np.ndarray) else points
+    if np.iscomplexobj(raw) or (raw.dtype == object and any(isinstance(v, complex) for v in raw.ravel()[:1000])):
+        raise InvalidInputError(f"{who}points are complex numbers; pass real x, y columns "
+                                "(e.g. numpy.column_stack([z.real, z.imag]))")
+    try:
+        return np.asarray(raw, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{who}points are not numeric ({exc}); pass an (N, 2) array of x, y") from None
 
 
 def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndarray:
     """Return ``points`` as a C-contiguous float64 (N, 2) array or raise :class:`InvalidInputError`.
 
-    Refuses: wrong shape, NaN/inf, fewer than ``min_points`` points, all points identical,
-    all points on one straight line. O(N): the eigenvalues of the 2x2 scatter matrix decide identity and collinearity.
-    """
+    Refuses: wrong shape, complex numbers, NaN/inf, fewer than ``min_points`` points, all points
+    identical, all points on one straight line. Masked arrays lose their masked rows, DataFrame
+    columns named x, y are taken by name (see :func:`_as_array`).
+
+    Scale-free at any float64 magnitude: identity and collinearity are decided on the unit frame
+    (:func:`methods._frame.unit_frame`, computed without overflow or underflow), which is then handed
+    to the method's own :meth:`UnitFrame.of` so that the data are normalised once."""
     who = f"{method}: " if method else ""
-    try:
-        arr = np.asarray(points, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"{who}points are not numeric ({exc}); pass an (N, 2) array of x, y") from None
+    arr = _as_array(points, who)
     if arr.ndim != 2 or arr.shape[1] != 2:
         hint = " (it looks transposed: pass points.T)" if arr.ndim == 2 and arr.shape[0] == 2 else ""
         raise InvalidInputError(f"{who}points must be an (N, 2) array of x, y; got shape {arr.shape}{hint}")
     n = arr.shape[0]
+    masked = " after dropping masked points" if isinstance(points, np.ma.MaskedArray) else ""
     if n < min_points:
-        raise InvalidInputError(f"{who}needs at least {min_points} points, got {n}")
-    if not np.isfinite(arr).all():
+        raise InvalidInputError(f"{who}needs at least {min_points} points, got {n}{masked}")
+    arr = np.ascontiguousarray(arr)
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = arr.sum()
+    if not np.isfinite(total):  # one cheap sweep; the elementwise test only when it fails
         bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
-        raise InvalidInputError(
-            f"{who}{bad.size} point(s) contain NaN or inf (first at index {bad[0]}); remove or repair them")
-    x, y = arr[:, 0], arr[:, 1]
-    dx, dy = x - x.mean(), y - y.mean()
-    sxx, syy, sxy = float(dx @ dx), float(dy @ dy), float(dx @ dy)
-    # eigenvalues of the 2x2 scatter matrix in closed form (largest first)
-    half_trace, root = 0.5 * (sxx + syy), float(np.hypot(0.5 * (sxx - syy), sxy))
-    big, small = half_trace + root, max(sxx * syy - sxy * sxy, 0.0) / max(half_trace + root, np.finfo(float).tiny)
-    if big <= 0.0:
-        raise InvalidInputError(f"{who}all {n} points are identical; a curve needs points spread along it")
-    if small <= (COLLINEAR_RTOL ** 2) * big:
-        raise InvalidInputError(f"{who}all {n} points lie on one straight line; no circle or ellipse passes through them")
-    return np.ascontiguousarray(arr)
+        if bad.size:
+            raise InvalidInputError(
+                f"{who}{bad.size} point(s) contain NaN or inf (first at index {bad[0]}); remove or repair them")
+    shift, scale, x, y = unit_frame(arr)
+    if not np.isfinite(scale):
+        raise InvalidInputError(f"{who}the points' spread exceeds the float64 range (~1.8e308); rescale the data")
+    coord = float(np.max(np.abs(shift)))
+    if scale <= 64 * EPS * coord or scale == 0.0:
+        if scale == 0.0 or bool((arr == arr[0]).all()):
+            raise InvalidInputError(f"{who}all {n} points are identical; a curve needs points spread along it")
+    # principal spreads of the unit-frame data (trace = N): all O(1) numbers, no under/overflow
+    sxx, syy, sxy = dot(x, x) / n, dot(y, y) / n, dot(x, y) / n
+    big = 0.5 * (sxx + syy) + float(np.hypot(0.5 * (sxx - syy), sxy))
+    small = max(sxx * syy - sxy * sxy, 0.0) / big
+    rtol = max(COLLINEAR_RTOL, 8 * EPS * coord / scale)
+    if small <= 1e-8 * big:  # det suffers cancellation: measure the spread across the principal axis
+        theta = 0.5 * np.arctan2(2 * sxy, sxx - syy)
+        across = np.cos(theta) * y - np.sin(theta) * x
+        small = dot(across, across) / n
+    if small <= rtol * rtol * big:
+        raise InvalidInputError(f"{who}all {n} points lie on one straight line (to {rtol:.0e} of their spread); "
+                                "no circle or ellipse passes through them")
+    offer_frame(arr, (shift, scale, x, y), total)
+    return arr
 
 
 def check_choice(name: str, value, choices, method: str = ""):

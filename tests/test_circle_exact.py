@@ -49,9 +49,14 @@ def test_powell_hybrid_paper_settings():
     """Table 1 of the circle/ellipse paper: p_s = (0, 0, 299), epsilon = 1e-8."""
     pts = circle_points((-0.01184, 0.00981), 299.0132, 3358)
     res = methods.fit("circle.powell_hybrid", pts, start=(0.0, 0.0, 299.0), xtol=1e-8)
-    assert res.converged, res.message
     assert np.abs(np.array(res.center) - (-0.01184, 0.00981)).max() < 1e-7
     assert abs(res.radius - 299.0132) < 1e-7
+    # The paper's epsilon stops MINPACK ~1e-10 mm (4e-13 of the radius) from the exact root: near the
+    # 1024-ulp resolution of the stationarity check, so either verdict may be right; it must be stated.
+    assert "stationary" in res.message
+    res = methods.fit("circle.powell_hybrid", pts, start=(0.0, 0.0, 299.0))
+    assert res.converged, res.message
+    assert np.abs(np.array(res.center) - (-0.01184, 0.00981)).max() < 1e-9
 
 
 @pytest.mark.parametrize("stop", ["objective", "step", "gradient"])

@@ -3,8 +3,14 @@
 The circle is written as A(x^2 + y^2) + Bx + Cy + D = 0 and the algebraic residuals are
 minimised under a normalisation constraint a^T N a = 1 (Chernov, *Circular and Linear
 Regression*, 2010, ch. 5-7). Pratt, Taubin and Hyper are generalised eigenproblems
-M a = eta N a with M = Z^T Z, Z = [z, x, y, 1]; they are solved stably from the SVD of Z
-(via its QR factor), never from the squared matrix M.
+M a = eta N a with M = Z^T Z, Z = [z, x, y, 1].
+
+Speed and accuracy (issue 20): every fit reads the data once more after validation, for the 4x4 moment
+matrix M / N of the centred, scaled (unit-frame) data (:func:`methods.circle._frame.moments`, one
+matrix product), then solves a 3x3 or 4x4 problem; the residuals and form error are one more sweep.
+In the unit frame M is as well conditioned as the circle's shape allows (no offset, no unit), so the
+squared condition number of the moments costs nothing measurable: tests/test_algebraic_moments.py
+compares every fit with an SVD of Z on the NIST sets and on ill-conditioned exact circles.
 """
 from __future__ import annotations
 
@@ -12,7 +18,7 @@ import numpy as np
 
 from methods._registry import register
 from methods._result import circle_result
-from methods.circle._frame import Frame, kasa_xy
+from methods.circle._frame import Frame, kasa_moments, moments
 
 
 @register("circle.kasa", kind="closed form",
@@ -22,33 +28,28 @@ def kasa(points):
     """Minimise S_CA = sum((x_i - xc)^2 + (y_i - yc)^2 - R^2)^2 (circle/ellipse paper eq. 5) by
     solving the linear least-squares system of roundness-paper eq. 7 for (xc, yc, w)."""
     frame = Frame.of(points)
-    p = kasa_xy(frame.x, frame.y)
+    p = kasa_moments(moments(frame.x, frame.y))
     if not np.isfinite(p).all():
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="Kåsa system gives R^2 <= 0: no real circle fits these points")
     center, radius = frame.circle_to_data(p)
+    del frame  # the result's residual sweep does not need the unit-frame copy
     return circle_result(points, center, radius, converged=True, message="closed-form solution")
 
 
-def _eigen_fit(x: np.ndarray, y: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
-    """Solve min a^T Z^T Z a s.t. a^T N a = 1 (smallest positive eigenvalue of M a = eta N a).
+def _eigen_fit(m: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
+    """Solve min a^T M a s.t. a^T N a = 1 (smallest positive eigenvalue of M a = eta N a), M = Z^T Z / N.
 
-    With Z = Q R and R = U S V^T, put a = V S^-1 b: then K b = (1/eta) b with
+    With M = V S^2 V^T (its eigendecomposition, S^2 >= 0), put a = V S^-1 b: then K b = (1/eta) b with
     K = S^-1 V^T N V S^-1 symmetric; the wanted a comes from the largest positive eigenvalue of K.
-    Exact data (S_min ~ 0) give a = V[:, -1] directly.
+    When the smallest eigenvalue of M is at its rounding level (points on a circle to ~1e-7 of
+    its size), a is the null vector of M: every constraint then gives the same circle.
     """
-    Z = np.empty((len(x), 4))
-    Z[:, 0] = x * x + y * y
-    Z[:, 1] = x
-    Z[:, 2] = y
-    Z[:, 3] = 1.0
-    R = np.linalg.qr(Z, mode="r")
-    if R.shape[0] < 4:  # N = 3: pad with zero rows (R^T R = Z^T Z still holds)
-        R = np.vstack([R, np.zeros((4 - R.shape[0], 4))])
-    _, s, vt = np.linalg.svd(R)
-    v = vt.T
-    if s[-1] <= 8 * np.finfo(float).eps * s[0]:
-        return v[:, -1], "points lie exactly on a circle (zero algebraic residual)"
+    lam, v = np.linalg.eigh(m)
+    lam, v = lam[::-1], v[:, ::-1]  # largest first
+    if lam[-1] <= 64 * np.finfo(float).eps * lam[0]:
+        return v[:, -1], "points lie on a circle to rounding (algebraic residuals at the moments' resolution)"
+    s = np.sqrt(lam)
     K = (v.T @ constraint @ v) / np.outer(s, s)
     mu, b = np.linalg.eigh(K)
     j = int(np.argmax(mu))
@@ -81,8 +82,9 @@ def _constraint(kind: str, zbar: float) -> np.ndarray:
 
 def _constrained_fit(points, kind: str):
     frame = Frame.of(points)
-    zbar = float(frame.x @ frame.x + frame.y @ frame.y) / len(frame.x)
-    a, message = _eigen_fit(frame.x, frame.y, _constraint(kind, zbar))
+    m = moments(frame.x, frame.y)
+    a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])))
+    frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))  # release the copy
     return _circle_from_conic(points, frame, a, message)
 
 

@@ -6,6 +6,7 @@ import numpy as np
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive, check_vector
+from methods.circle import _stationarity as stationarity
 from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations
 
 STOPPING_CRITERIA = ("objective", "step", "gradient")
@@ -41,20 +42,21 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     p = algebraic_start(x, y) if p_start is None else frame.circle_to_unit(p_start)
     history, steps = [], []
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
+    work = np.empty((4, n))  # one workspace for every sweep (peak memory: frame + 4 N numbers)
+    state = geometric_normal_equations(x, y, p, work)  # J of eq. 10, as J^T J and J^T d: one sweep
     f_prev = None
     it = 0
     for it in range(1, max_iter + 1):
-        state = geometric_normal_equations(x, y, p)  # J of eq. 10, as J^T J and J^T d
         if state is None:
             message = "an iterate's centre coincides with a data point (Jacobian eq. 9 undefined)"
             break
-        f, jtj, jtd, (_, _, r, _) = state
+        f, jtj, jtd, _ = state
         history.append(f)
         if stop == "gradient" and np.linalg.norm(jtd) / n <= gtol:
             converged, message = True, f"|J^T d|/N <= gtol={gtol:g}"
             break
         # F is a sum of squared differences of O(1) numbers: its rounding noise is ~2 eps sqrt(N F) r_max
-        noise = 4.0 * EPS * np.sqrt(n * f) * r.max()
+        noise = 8.0 * EPS * np.sqrt(n * f * (f / n + 4.0 * p[2] * p[2]))
         if stop == "objective" and f_prev is not None and abs(f_prev - f) <= ftol * f_prev + noise:
             converged, message = True, f"|F_(k-1) - F_k| <= ftol={ftol:g} * F_(k-1) (+ rounding noise of F)"
             break
@@ -63,6 +65,11 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         except np.linalg.LinAlgError:
             message = "singular Gauss–Newton system (J^T J not invertible)"
             break
+        # the decrease of F this step promises, against F's rounding noise (8 eps sqrt(F sum (r_i + R)^2)):
+        # below it, and not shrinking any more, steps are rounding noise and can never reach xtol
+        promised = float(-delta @ jtd)
+        s2 = max(f - 4.0 * abs(p[2]) * float(jtd[2]) + 4.0 * n * p[2] * p[2], 0.0)
+        f_noise = 8.0 * EPS * np.sqrt(f * s2) + 16.0 * EPS * EPS * s2
         p = p + delta  # eq. 13
         if not np.isfinite(p).all():
             message = "Gauss–Newton diverged (non-finite iterate)"
@@ -70,11 +77,27 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         step = float(np.linalg.norm(delta))
         steps.append(step)
         f_prev = f
+        state = geometric_normal_equations(x, y, p, work)
         if stop == "step" and step <= xtol:
             converged, message = True, f"(Delta^T Delta)^(1/2) <= xtol={xtol:g}"
             break
+        if stop == "step" and promised <= f_noise and len(steps) > 1 and step >= 0.5 * steps[-2]:
+            converged = True
+            message = (f"(Delta^T Delta)^(1/2) = {step:.1e} stopped shrinking with a promised decrease of F "
+                       f"below its rounding noise (xtol={xtol:g} is below the resolution)")
+            break
+    if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
+        check = stationarity.geometric_from_state(p, state if np.isfinite(p).all() else None, frame.ulp)
+        converged = check.ok
+        message = f"{message}; {check.text}"
+    else:
+        check = None
     center, radius = frame.circle_to_data(p)
-    scale2 = frame.scale ** 2
+    scale2 = frame.power(2)
+    scale = frame.scale
+    del work, state, x, y, frame  # the result's residual sweep needs none of them
+    extra = {"step_norms": [s * scale for s in steps], "stop": stop}
+    if check is not None:
+        extra.update(check.extra(scale2))
     return circle_result(points, center, radius, converged=converged, message=message, iterations=it,
-                         nfev=it, history=[h * scale2 for h in history],
-                         extra={"step_norms": [s * frame.scale for s in steps], "stop": stop})
+                         nfev=it, history=[h * scale2 for h in history], extra=extra)

@@ -3,20 +3,24 @@ from __future__ import annotations
 
 import numpy as np
 
+from methods._frame import dot
+
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_positive, check_vector
+from methods.circle import _stationarity as stationarity
 from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations as _state
 
 
 def _reduction(arrays, h):
-    """F(p) - F(p + h) without cancellation: d' - d = (r'^2 - r^2) / (r' + r) - h_R, with
+    """F(p) - F(p + h) (``arrays`` = (c, s, r, d) at p, dx = c r, dy = s r) without cancellation: d' - d = (r'^2 - r^2) / (r' + r) - h_R, with
     r'^2 - r^2 = -h_x (2 dx - h_x) - h_y (2 dy - h_y); F - F' = -sum (d' - d)(d' + d)."""
-    dx, dy, r, d = arrays
+    c, s, r, d = arrays
+    dx, dy = c * r, s * r
     ndx, ndy = dx - h[0], dy - h[1]
     rn = np.sqrt(ndx * ndx + ndy * ndy)
     delta = (-h[0] * (2 * dx - h[0]) - h[1] * (2 * dy - h[1])) / (rn + r) - h[2]
-    return -float(delta @ (2 * d + delta))
+    return -dot(delta, 2 * d + delta)
 
 
 @register("circle.levenberg_marquardt", kind="iterative",
@@ -83,6 +87,12 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
             nu = 2.0
         else:
             mu, nu = mu * nu, 2 * nu
+    extra = {"final_damping": mu}
+    if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
+        check = stationarity.geometric_from_state(p, (f, jtj, jtd, arrays), frame.ulp)
+        converged = check.ok
+        message = f"{message}; {check.text}"
+        extra.update(check.extra(frame.power(2)))
     center, radius = frame.circle_to_data(p)
     return circle_result(points, center, radius, converged=converged, message=message, iterations=it,
-                         nfev=nfev, history=[v * frame.scale ** 2 for v in history], extra={"final_damping": mu})
+                         nfev=nfev, history=[v * frame.power(2) for v in history], extra=extra)

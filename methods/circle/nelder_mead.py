@@ -3,18 +3,21 @@ from __future__ import annotations
 
 import numpy as np
 
+from methods._frame import dot
+
 from methods import _simplex as simplex
 from methods._errors import InvalidInputError
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive, check_vector
+from methods.circle import _stationarity as stationarity
 from methods.circle._frame import Frame, algebraic_start
 
 
 @register("circle.nelder_mead", kind="iterative",
           summary="FCG: geometric sum of squares (eq. 9) by Nelder–Mead, simplex from s1S and lambda",
           reference="Glavonjić, circle/ellipse paper, eq. 8-9 (program FCG, table 2); Nelder & Mead, Comput. J. 7 (1965) 308-313")
-def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-13, fatol=1e-16, max_fev=20000):
+def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-15, fatol=0.0, max_fev=20000):
     """Minimise S_CG = sum (sqrt((x_i - xc)^2 + (y_i - yc)^2) - R)^2 (eq. 8-9) with Nelder–Mead.
 
     The initial simplex is the first vertex s1S = ``start`` = (xc, yc, R) and s1S + lambda_j e_j
@@ -46,9 +49,65 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-13, 
     def objective(p):
         dx, dy = x - p[0], y - p[1]
         d = np.sqrt(dx * dx + dy * dy) - p[2]
-        return float(d @ d)
+        return dot(d, d)
 
-    run = simplex.nelder_mead(objective, x0, lam_unit, backend=backend, xatol=xatol, fatol=fatol, max_fev=max_fev)
-    center, radius = frame.circle_to_data(run.x)
-    return circle_result(points, center, radius, converged=run.converged, message=run.message,
-                         iterations=run.iterations, nfev=run.nfev, history=[h * frame.scale ** 2 for h in run.history])
+    # Stopping tolerances at the objective's resolution (README, NIST): values of S_CG scatter by their
+    # rounding noise once the simplex is small, so asking for a smaller simplex makes the stop a matter of
+    # the last bit (issue 17). Each run has at most RUN_BUDGET evaluations (a simplex that wanders in the
+    # noise stagnates there); the flag is then decided by the point, never by which rule ended the run:
+    # converged = stationary (first-order optimum of S_CG, checked below). A run that ends at a point that
+    # is not stationary (a far start, a collapsed simplex) is restarted there with a fresh simplex of the
+    # same steps (Kelley's restart), within the total budget max_fev.
+    p, history, iterations, nfev, restarts = x0, [], 0, 0, 0
+    while True:
+        xat, fat = _resolution_tolerances(x, y, p, xatol, fatol)
+        run = simplex.nelder_mead(objective, p, lam_unit, backend=backend, xatol=xat, fatol=fat,
+                                  max_fev=min(RUN_BUDGET, max_fev - nfev))
+        history += run.history
+        iterations = None if run.iterations is None else iterations + run.iterations
+        nfev += run.nfev
+        p = run.x
+        check = stationarity.geometric(x, y, p, frame.ulp)
+        if check.ok or check.degenerate or restarts >= MAX_RESTARTS or nfev >= max_fev:
+            break
+        restarts += 1
+    converged = check.ok
+    how = "simplex within tolerance" if run.converged else f"run stopped after {run.nfev} evaluations"
+    message = (f"{run.message} ({how}; xatol={xat:.1e}, fatol={fat:.1e}: the resolution of S_CG, unit frame"
+               f"{f'; {restarts} restart(s)' if restarts else ''}); {check.text}")
+    if not converged and not check.degenerate:
+        message += f"; gave up after {nfev} of max_fev={max_fev} evaluations"
+    center, radius = frame.circle_to_data(p)
+    return circle_result(points, center, radius, converged=converged, message=message,
+                         iterations=iterations, nfev=nfev, history=[h * frame.power(2) for h in history],
+                         extra={"restarts": restarts, "xatol_used": xat * frame.scale, "fatol_used": fat * frame.power(2),
+                                "simplex_stop": bool(run.converged), **check.extra(frame.power(2))})
+
+
+#: evaluations per Nelder–Mead run (a converging run from Kåsa's start needs 100-600) and restarts at most
+RUN_BUDGET = 2000
+MAX_RESTARTS = 5
+
+
+def _resolution_tolerances(x, y, p, xatol: float, fatol: float) -> tuple[float, float]:
+    """(xatol, fatol) raised to the resolution of S_CG at p. Each residual d_i = r_i - R carries a
+    rounding error of about eps (r_i + R), so values of S_CG = sum d_i^2 scatter by
+    noise = 4 eps sqrt(sum d_i^2 (r_i + R)^2) (+ eps^2 sum (r_i + R)^2 for residuals at rounding level),
+    which is far above eps F when the residuals are small. A simplex smaller than
+    sqrt(noise / lambda_min(J^T J)) can no longer be ordered by its values: asking for less makes the
+    stop a matter of the last bit. fatol = 2 noise (the values' own scatter passes it), xatol = a quarter of
+    that size (values there differ by ~noise/16: shrink steps still reduce the simplex), at least the
+    caller's values. Unit frame."""
+    dx, dy = x - p[0], y - p[1]
+    r = np.sqrt(dx * dx + dy * dy)
+    d = r - p[2]
+    w = r + abs(float(p[2]))
+    eps = np.finfo(float).eps
+    noise = 4 * eps * np.sqrt(dot(d * d, w * w)) + eps * eps * dot(w, w)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c, s = dx / r, dy / r
+    jtj = np.array([[dot(c, c), dot(c, s), c.sum()], [dot(c, s), dot(s, s), s.sum()], [c.sum(), s.sum(), float(len(x))]])
+    if not np.isfinite(jtj).all():
+        return xatol, fatol
+    lam_min = max(float(np.linalg.eigvalsh(jtj)[0]), eps * len(x))
+    return max(xatol, 0.25 * float(np.sqrt(noise / lam_min))), max(fatol, 2 * noise)

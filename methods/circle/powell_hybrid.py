@@ -2,11 +2,14 @@
 from __future__ import annotations
 
 import numpy as np
+
+from methods._frame import dot
 from scipy.optimize import root
 
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_positive, check_vector
+from methods.circle import _stationarity as stationarity
 from methods.circle._frame import Frame
 
 EPS = np.finfo(float).eps
@@ -55,31 +58,29 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
         a, b, rr = p
         du, dv = x - a, y - b
         e = du * du + dv * dv - rr * rr
-        history.append(float(e @ e))
+        history.append(dot(e, e))
         se, su, sv = e.sum(), du.sum(), dv.sum()
-        f = -4.0 * np.array([e @ du, e @ dv, rr * se])
+        f = -4.0 * np.array([dot(e, du), dot(e, dv), rr * se])
         jac = np.array([
-            [4.0 * (2.0 * (du @ du) + se), 8.0 * (du @ dv), 8.0 * rr * su],
-            [8.0 * (du @ dv), 4.0 * (2.0 * (dv @ dv) + se), 8.0 * rr * sv],
+            [4.0 * (2.0 * dot(du, du) + se), 8.0 * dot(du, dv), 8.0 * rr * su],
+            [8.0 * dot(du, dv), 4.0 * (2.0 * dot(dv, dv) + se), 8.0 * rr * sv],
             [8.0 * rr * su, 8.0 * rr * sv, -4.0 * se + 8.0 * rr * rr * n],
         ])
         return f, jac
 
-    sol = root(equations, p0, jac=True, method="hybr", options={"xtol": xtol, "maxfev": maxfev})
-    center, radius = frame.circle_to_data(sol.x)
-    ok = bool(sol.success) and np.isfinite(sol.x).all() and abs(sol.x[2]) > 0
-    message = sol.message if abs(sol.x[2]) > 0 else "converged to R = 0, a stationary point that is no circle"
-    if not ok and np.isfinite(sol.x).all() and abs(sol.x[2]) > 0:
-        # On (near) exact data MINPACK may stop with 'not making good progress' at the root itself,
-        # its last steps being rounding noise: the equations (6) are then satisfied to rounding.
-        a, b, rr = sol.x
-        du, dv = x - a, y - b
-        rounding = 16 * 4 * EPS * float(np.sum((du * du + dv * dv + rr * rr) * (np.abs(du) + np.abs(dv) + abs(rr))))
-        if np.max(np.abs(sol.fun)) <= rounding:
-            ok = True
-            message = f"equations (6) satisfied to rounding (MINPACK: {sol.message.strip()})"
+    with np.errstate(over="ignore", invalid="ignore"):
+        sol = root(equations, p0, jac=True, method="hybr", options={"xtol": xtol, "maxfev": maxfev})
+    minpack = "MINPACK: " + " ".join(str(sol.message).split())
+    # MINPACK's own stop (status 1: xtol met; 3: xtol too small; 4, 5: no progress, which on exact data
+    # happens at the root itself) is necessary; the flag then needs the point to be a non-degenerate
+    # stationary point of S_CA (its R = 0 stationary point and a centre at infinity are refused).
+    check = stationarity.algebraic(x, y, sol.x, frame.ulp)
+    stopped = int(sol.status) in (1, 3, 4, 5)
+    ok = stopped and check.ok
+    message = f"{minpack}; {check.text}" if stopped or check.degenerate else minpack
+    extra = {"njev": int(getattr(sol, "njev", 0) or 0), "residual_equations": [float(v) for v in sol.fun],
+             "minpack_status": int(sol.status), **check.extra(frame.power(4))}
+    center, radius = frame.circle_to_data(sol.x) if np.isfinite(sol.x).all() else ((np.nan, np.nan), np.nan)
     return circle_result(points, center, radius, converged=ok, message=message,
                          iterations=max(len(history) - 1, 0), nfev=len(history),
-                         history=[h * frame.scale ** 4 for h in history],
-                         extra={"njev": int(getattr(sol, "njev", 0) or 0),
-                                "residual_equations": [float(v) for v in sol.fun]})
+                         history=[h * frame.power(4) for h in history], extra=extra)

@@ -1,0 +1,134 @@
+"""The check behind every ``converged=True`` of an iterative circle method: is the returned point a
+first-order optimum of the method's own objective, and is it a circle at all?
+
+Both objectives are sums of squares F = sum e_i^2 (geometric: e_i = r_i - R, roundness paper eq. 3-4,
+circle/ellipse paper eq. 8-9; algebraic: e_i = r_i^2 - R^2, circle/ellipse paper eq. 4-5). At the
+returned point p the Gauss–Newton model of F promises the decrease
+
+    D = g^T (J^T J)^-1 g,   g = J^T e   (the decrease a local least-squares solver started at p finds
+                                        to first order; D = 0 exactly at a stationary point).
+
+p is accepted when D <= ``REL_DECREASE`` * F + the rounding noise of F (every e_i carries an absolute
+error ~4 eps (|terms|)) + trace(J^T J) (1024 ulp)^2 (moving the circle by 1024 ulps = 2.3e-13 of the data: exact data
+have F ~ 0, where a relative test means nothing; ``ulp`` = eps max(1, |shift| / scale) in the unit frame), in the unit frame (data centred, RMS radius 1), so the test does not depend
+on the unit or the position of the data. A point whose radius collapses (R < ``MIN_RADIUS`` of the
+data's size) or whose centre runs off to infinity (R > ``MAX_RADIUS``: the points are then a
+straight line to the precision of the fit) is reported as degenerate, never as converged.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from methods._frame import dot
+
+EPS = float(np.finfo(float).eps)
+#: a local solver started at an accepted point cannot lower F by more than this fraction (+ rounding)
+REL_DECREASE = 1e-9
+#: unit-frame radii outside (MIN_RADIUS, MAX_RADIUS) are degenerate circles
+MIN_RADIUS, MAX_RADIUS = 1e-8, 1e8
+#: a point this many ulps of the data (unit frame; 1024 eps = 2.3e-13 of its size) from the optimum counts as the optimum
+DATA_ULPS = 1024
+
+
+@dataclass(frozen=True)
+class Stationarity:
+    ok: bool
+    degenerate: bool
+    decrease: float      # D, unit frame
+    tolerance: float     # REL_DECREASE * F + rounding noise of F, unit frame
+    objective: float     # F, unit frame
+    text: str            # what was checked, for the result's message
+
+    def extra(self, scale_power: float) -> dict:
+        """The check's numbers in data units (F scales as scale**scale_power)."""
+        return {"stationarity_decrease": self.decrease * scale_power, "stationarity_tolerance": self.tolerance * scale_power,
+                "stationarity_ok": self.ok, "degenerate": self.degenerate}
+
+
+def _degenerate(p) -> str | None:
+    a, b, rr = (float(v) for v in p)
+    if not np.isfinite([a, b, rr]).all():
+        return "degenerate: non-finite circle parameters"
+    if abs(rr) < MIN_RADIUS:
+        return f"degenerate: radius collapsed to {abs(rr):.1e} of the data's size (R = 0 is no circle)"
+    if abs(rr) > MAX_RADIUS or np.hypot(a, b) > MAX_RADIUS:
+        return (f"degenerate: centre {max(abs(rr), float(np.hypot(a, b))):.1e} data sizes away "
+                "(a circle of infinite radius is a straight line, no circle)")
+    return None
+
+
+def _decide(g, jtj, f, noise, label, ulp) -> Stationarity:
+    # + the decrease of moving the circle by DATA_ULPS ulps of the data: below it the data, rounded to
+    # float64, do not define the circle any better (exact data have F ~ 0, where 1e-9 F means nothing)
+    tol = REL_DECREASE * f + noise + float(np.trace(jtj)) * (DATA_ULPS * ulp) ** 2
+    try:
+        h = np.linalg.lstsq(jtj, g, rcond=None)[0]
+        dec = float(g @ h)
+    except np.linalg.LinAlgError:
+        dec = float("inf")
+    ok = bool(np.isfinite(dec) and dec <= tol)
+    word = "stationary" if ok else "NOT stationary"
+    text = (f"{word}: Gauss–Newton decrease of {label} at the returned point {dec:.1e} "
+            f"{'<=' if ok else '>'} 1e-9 F + rounding + 1024 data ulps = {tol:.1e} (unit frame)")
+    return Stationarity(ok, False, dec, tol, f, text)
+
+
+def _refuse(reason: str) -> Stationarity:
+    return Stationarity(False, True, float("nan"), float("nan"), float("nan"), reason)
+
+
+def geometric(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity:
+    """Stationarity of S_CG = sum (r_i - R)^2 at unit-frame p = (xc, yc, R)."""
+    reason = _degenerate(p)
+    if reason:
+        return _refuse(reason)
+    dx, dy = x - p[0], y - p[1]
+    r = np.sqrt(dx * dx + dy * dy)
+    if not r.all():
+        return _refuse("the centre coincides with a data point (S_CG not differentiable there)")
+    d = r - p[2]
+    c, s = dx / r, dy / r
+    jtj = np.array([[dot(c, c), dot(c, s), c.sum()], [dot(c, s), dot(s, s), s.sum()], [c.sum(), s.sum(), float(len(x))]])
+    g = np.array([dot(c, d), dot(s, d), d.sum()])
+    f = dot(d, d)
+    delta = 4 * EPS * (r + abs(p[2]))
+    noise = 2 * dot(np.abs(d), delta) + dot(delta, delta)
+    return _decide(g, jtj, f, noise, "S_CG", ulp)
+
+
+def algebraic(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity:
+    """Stationarity of S_CA = sum ((x_i - xc)^2 + (y_i - yc)^2 - R^2)^2 at unit-frame p; its
+    stationary point R = 0 (dS/dR = -4 R sum e_i vanishes there) is reported as degenerate."""
+    reason = _degenerate(p)
+    if reason:
+        return _refuse(reason)
+    du, dv = x - p[0], y - p[1]
+    q = du * du + dv * dv
+    e = q - p[2] * p[2]
+    # residual Jacobian rows -2 [du, dv, R]
+    jtj = 4 * np.array([[dot(du, du), dot(du, dv), p[2] * du.sum()], [dot(du, dv), dot(dv, dv), p[2] * dv.sum()],
+                        [p[2] * du.sum(), p[2] * dv.sum(), p[2] * p[2] * len(x)]])
+    g = -2 * np.array([dot(e, du), dot(e, dv), p[2] * e.sum()])
+    f = dot(e, e)
+    delta = 4 * EPS * (q + p[2] * p[2])
+    noise = 2 * dot(np.abs(e), delta) + dot(delta, delta)
+    return _decide(g, jtj, f, noise, "S_CA", ulp)
+
+
+def geometric_from_state(p, state, ulp: float = EPS) -> Stationarity:
+    """:func:`geometric` from the normal equations at p that an iteration already computed
+    (``methods.circle._frame.geometric_normal_equations``), so the check costs no extra sweep.
+    The rounding noise of F is bounded by Cauchy–Schwarz: 8 eps sqrt(F sum (r_i + R)^2) + 16 eps^2
+    sum (r_i + R)^2, with sum (r_i + R)^2 = F + 4 R sum d_i + 4 N R^2."""
+    reason = _degenerate(p)
+    if reason:
+        return _refuse(reason)
+    if state is None:
+        return _refuse("the centre coincides with a data point (S_CG not differentiable there)")
+    f, jtj, jtd, _ = state
+    rr = abs(float(p[2]))
+    s2 = max(f - 4 * rr * float(jtd[2]) + 4 * jtj[2, 2] * rr * rr, 0.0)
+    noise = 8 * EPS * np.sqrt(f * s2) + 16 * EPS * EPS * s2
+    return _decide(-jtd, jtj, f, noise, "S_CG", ulp)

@@ -2,13 +2,14 @@
 first-order optimum of the method's own objective, and that the ellipse is not degenerate.
 
 Every objective of the family is a sum of squares S(q) = sum r_i(q)^2 in the unit frame (data centred on
-the centroid and scaled to unit RMS radius). :func:`stationarity_probe` starts a few Gauss–Newton steps
-with step halving at the returned point (a short local solver, as scipy's least_squares would take first)
+the centroid and scaled to unit RMS radius). :func:`stationarity_probe` starts a few Levenberg–Marquardt steps
+at the returned point (a short local solver, as scipy's least_squares would take first)
 and measures the decrease it achieves. The point counts as stationary when that decrease is at most
 ``rtol`` S plus the rounding noise of S (the probe cannot see below it); otherwise the method stopped
-at a non-stationary point, whatever its own stopping rule said. A point that a Gauss–Newton step cannot
-lower is a first-order optimum to the probe's resolution: J^T r = 0 makes the step vanish, and a
-non-zero J^T r gives a descent direction that step halving finds.
+at a non-stationary point, whatever its own stopping rule said. A point that no step of the
+Levenberg–Marquardt path can lower is a first-order optimum to the probe's resolution: J^T r = 0 makes
+every step vanish, and a non-zero J^T r makes the strongly damped step (a short steepest-descent step)
+lower S.
 """
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ class Stationarity:
     objective: float        # S at the returned point (unit frame)
     decrease: float         # the largest decrease the probe achieved (unit frame)
     noise: float            # rounding noise of S at the returned point (unit frame)
-    steps: int              # Gauss–Newton steps tried
+    steps: int              # Levenberg–Marquardt steps tried
 
     @property
     def relative(self) -> float:
@@ -41,18 +42,20 @@ class Stationarity:
     def as_dict(self) -> dict:
         return {"stationary": self.stationary, "objective_unit": self.objective, "decrease_found_unit": self.decrease,
                 "relative_decrease": self.relative, "rounding_noise_unit": self.noise, "probe_steps": self.steps,
-                "probe": "Gauss-Newton steps with halving from the returned point (unit frame)"}
+                "probe": "Levenberg-Marquardt steps from the returned point (unit frame)"}
 
     def reason(self) -> str:
-        return (f"not a stationary point of the objective: a Gauss-Newton probe started there lowers it by "
+        return (f"not a stationary point of the objective: a Levenberg-Marquardt probe started there lowers it by "
                 f"{self.relative:.2e} relative (tolerance {STATIONARY_RTOL:.0e} plus rounding)")
 
 
-def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONARY_RTOL, steps: int = 4,
-                       halvings: int = 30) -> Stationarity:
-    """Try up to ``steps`` Gauss–Newton steps (each with up to ``halvings`` halvings) on S = |r(q)|^2 from
-    ``q``; ``noise(r, q)`` is the rounding noise of S at q. Stationary when the total decrease achieved is
-    at most ``rtol`` S(q) + noise."""
+def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONARY_RTOL, steps: int = 4) -> Stationarity:
+    """Up to ``steps`` Levenberg–Marquardt steps on S = |r(q)|^2 from ``q`` (each trying the Gauss–Newton
+    step first, then more and more damping down to a short steepest-descent step, in column-scaled
+    variables); ``noise(r, q)`` is the rounding noise of S at q. Stationary when the total decrease
+    achieved is at most ``rtol`` S(q) + noise. Damping stops once the model's own decrease
+    sum_i (2 m_i - m_i^2) g_i^2, m_i = s_i^2 / (s_i^2 + lambda), falls below that tolerance: no step of the
+    trust-region path can then show a significant decrease."""
     q0 = np.asarray(q, dtype=np.float64)
     r = np.asarray(residuals(q0), dtype=np.float64)
     f0 = float(r @ r)
@@ -63,25 +66,25 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
     qk, fk, rk, taken = q0, f0, r, 0
     for _ in range(steps):
         J = np.asarray(jacobian(qk), dtype=np.float64)
+        if not np.isfinite(J).all():
+            break
         col = np.sqrt(np.einsum("ij,ij->j", J, J))
         col[col == 0] = 1.0
-        step = -np.linalg.lstsq(J / col, rk, rcond=None)[0] / col  # column-scaled Gauss–Newton step
-        if not np.isfinite(step).all():
-            break
-        Js = J @ step
-        model = float(Js @ Js)  # the Gauss–Newton model's decrease t (2 - t) |J s|^2 at t = 1
-        if f0 - fk + model <= threshold:  # even the model cannot lower S beyond the tolerance
-            break
-        t, improved = 1.0, False
-        for _ in range(halvings):
-            trial = qk + t * step
+        U, sv, Vt = np.linalg.svd(J / col, full_matrices=False)
+        g = U.T @ rk
+        keep = sv > sv[0] * len(rk) * EPS
+        improved = False
+        for lam in (0.0, *(sv[0] ** 2 * 10.0 ** np.arange(-12, 5))):
+            m = np.where(keep, sv * sv / (sv * sv + lam), 0.0) if lam > 0 else keep.astype(float)
+            model = float(np.sum((2 * m - m * m) * g * g))
+            if f0 - fk + model <= threshold:  # no step of the path (more damping only shortens it) can show more
+                break
+            inv = np.divide(m, sv, out=np.zeros_like(sv), where=sv > 0)
+            trial = qk - (Vt.T @ (inv * g)) / col
             rt = np.asarray(residuals(trial), dtype=np.float64)
             ft = float(rt @ rt)
             if np.isfinite(ft) and ft < fk:
                 qk, fk, rk, improved = trial, ft, rt, True
-                break
-            t *= 0.5
-            if f0 - fk + t * (2 - t) * model <= threshold:
                 break
         taken += 1
         if not improved or f0 - fk > threshold:

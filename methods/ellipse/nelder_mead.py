@@ -6,7 +6,7 @@ Stopping and the converged flag (the same for both programs):
   rounding noise of the objective at the best vertex (below it the simplex only sees rounding, its moves
   depend on the last bit and a run wanders until its budget: the status would flip between CPUs), and,
   if ``xatol`` is given, when the simplex is also smaller than ``xatol`` (unit frame).
-- Then a short Gauss–Newton probe from the best vertex (:mod:`methods.ellipse._checks`) tests
+- Then a short Levenberg–Marquardt probe from the best vertex (:mod:`methods.ellipse._checks`) tests
   stationarity of the objective. Where it finds a decrease, Nelder–Mead is restarted from that vertex with
   the initial steps (the remedy for stagnation of Kelley, SIAM J. Optim. 10 (1999) 43-55), until the probe
   finds the point stationary or the budget ``max_fev`` is spent.
@@ -91,7 +91,7 @@ def _minimise(objective, residuals, jacobian, noise, x0, lam, *, backend, xatol,
             x, f_best = np.asarray(run.x, dtype=np.float64), min(f_run, f_best)
         probe = stationarity_probe(residuals, jacobian, x, noise=lambda r, q: sum_of_squares_noise(r, noise(q)))
         if probe.stationary:
-            message = f"Nelder-Mead stopped ({run.message}); stationary point (Gauss-Newton probe" \
+            message = f"Nelder-Mead stopped ({run.message}); stationary point (Levenberg-Marquardt probe" \
                       f"{'' if round_ == 1 else f', after {round_ - 1} restart(s)'})"
             return x, True, message, iterations, nfev, history, probe
         message = probe.reason()

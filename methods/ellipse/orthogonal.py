@@ -45,7 +45,7 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
     with the analytic Jacobian of :func:`distance_jacobian`; every evaluation solves the closest
     points of all points at once, once (the Jacobian reuses them). Start: ``start`` = (xc, yc, a, b,
     theta) in data units, default Halir & Flusser's direct fit. In the unit frame; tolerances are
-    MINPACK's. ``converged`` needs MINPACK's success, a stationary point for the Gauss–Newton probe of
+    MINPACK's. ``converged`` needs MINPACK's success, a stationary point for the Levenberg–Marquardt probe of
     :mod:`methods.ellipse._checks` and a non-degenerate ellipse."""
     name = "ellipse.orthogonal"
     for key, val in (("xtol", xtol), ("ftol", ftol), ("gtol", gtol)):

@@ -95,8 +95,8 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
 
 def sum_of_squares_noise(r, term_size) -> float:
     """Rounding noise of S = sum r_i^2 when each r_i is a sum of terms of size ``term_size`` (array or
-    scalar) computed with a few roundings: |dS| <= 2 sum |r_i| dr_i + sum dr_i^2, dr_i = 16 eps term_size."""
-    dr = 16.0 * EPS * np.broadcast_to(np.asarray(term_size, dtype=np.float64), r.shape)
+    scalar) computed with a few roundings: |dS| <= 2 sum |r_i| dr_i + sum dr_i^2, dr_i = 4 eps term_size."""
+    dr = 4.0 * EPS * np.broadcast_to(np.asarray(term_size, dtype=np.float64), r.shape)
     return float(2.0 * np.abs(r) @ dr + dr @ dr)
 
 

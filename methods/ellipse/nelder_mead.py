@@ -80,7 +80,7 @@ def _minimise(objective, residuals, jacobian, noise, x0, lam, *, backend, xatol,
             break
         r_now = residuals(x)
         fatol_eff = max(float(fatol or 0.0), sum_of_squares_noise(r_now, noise(x)) if np.isfinite(r_now).all() else 0.0)
-        xtol = xatol if xatol is not None else (np.inf if backend == "scipy" else 1e-10)
+        xtol = xatol if xatol is not None else (np.inf if backend == "scipy" else 1e-13)
         run = simplex.nelder_mead(objective, x, lam, backend=backend, xatol=xtol, fatol=fatol_eff, max_fev=left)
         iterations += run.iterations or 0
         nfev += run.nfev

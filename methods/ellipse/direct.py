@@ -25,10 +25,6 @@ C6[1, 1] = -1.0
 ILL_POSED_RTOL = 1e-10
 
 
-def design(x, y):
-    return np.column_stack([x * x, x * y, y * y, x, y, np.ones_like(x)])
-
-
 def scatter(x, y) -> np.ndarray:
     """S = D^T D for D = [x^2, xy, y^2, x, y, 1] from the moments sum x^p y^q, p + q <= 4 (one sweep of
     three products and twelve dot products; S[i, j] depends only on the sum of the monomials' exponents)."""

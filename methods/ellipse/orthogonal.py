@@ -10,6 +10,7 @@ from methods.ellipse._checks import degenerate_reason, stationarity_probe, sum_o
 from methods.ellipse._geometry import Frame, canonical, orthogonal_residuals
 from methods.ellipse._result import ellipse_result, failed, history_to_data
 from methods.ellipse._validation import check_distinct_points
+from methods.ellipse.direct import halir_flusser_unit
 
 
 def distance_jacobian(x, y, p, phi):
@@ -56,7 +57,6 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
     frame = Frame.of(points)
     x, y = frame.x, frame.y
     if p_start is None:
-        from methods.ellipse.direct import halir_flusser_unit
         p0, why = halir_flusser_unit(frame)
         if p0 is None:
             return failed(points, f"no start: the direct fit failed ({why}); pass start=")

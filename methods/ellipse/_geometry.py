@@ -15,7 +15,28 @@ EPS = np.finfo(float).eps
 
 
 class Frame(UnitFrame):
-    """Shift to the centroid, scale to unit RMS distance (as for circles)."""
+    """Shift to the centroid, scale to unit RMS distance (as for circles), computed without overflow or
+    underflow for every finite input (coordinates up to the largest float64, spreads down to subnormals):
+    the sums are formed on values divided by the largest deviation first."""
+
+    @classmethod
+    def of(cls, points: np.ndarray):
+        x0, y0 = points[:, 0], points[:, 1]
+        n = len(x0)
+        with np.errstate(over="ignore"):
+            mx, my = x0.mean(), y0.mean()
+        if not (np.isfinite(mx) and np.isfinite(my)):  # the sum overflowed: average the scaled values
+            mx, my = (x0 / n).sum(), (y0 / n).sum()
+        x, y = x0 - mx, y0 - my
+        big = float(max(np.abs(x).max(), np.abs(y).max()))
+        if not (np.isfinite(big) and big > 0):
+            return super().of(points)  # refused by validation before (identical or non-finite points)
+        x /= big
+        y /= big
+        rms = float(np.sqrt((x @ x + y @ y) / n))
+        x /= rms
+        y /= rms
+        return cls(shift=np.array([mx, my]), scale=big * rms, x=x, y=y)
 
     def params_to_unit(self, p) -> np.ndarray:
         p = np.asarray(p, dtype=np.float64)
@@ -113,6 +134,16 @@ def to_local(x, y, p):
     return dx * c + dy * s, -dx * s + dy * c
 
 
+def _norm(x, y):
+    """sqrt(x^2 + y^2) elementwise: the fast formula, np.hypot (slow, but free of over- and underflow)
+    only where the squares leave the float64 range."""
+    d = np.sqrt(x * x + y * y)
+    bad = ~(d >= 1e-150) | (d > 1e150)
+    if bad.any():
+        d[bad] = np.hypot(x[bad], y[bad])
+    return d
+
+
 def closest_points(u, v, a, b, iterations=60):
     """Closest points (X, Y) on the axis-aligned ellipse (X/a)^2 + (Y/b)^2 = 1 (a >= b > 0) to the
     points (u, v), and the signed distances (positive outside). Vectorised and robust for every
@@ -136,7 +167,7 @@ def closest_points(u, v, a, b, iterations=60):
         n0g, z1g = (n0, z1) if every else (n0[gen], z1[gen])
         lo = z1g
         rm1 = r0 - 1.0
-        h = np.hypot(n0g, z1g)
+        h = _norm(n0g, z1g)
         if rm1 < 0.1:  # near-circle: first-order root h - n0^2 (r0 - 1) / h^2 (Newton then needs ~2 steps)
             w = np.maximum(h - n0g * n0g * rm1 / (h * h), lo)
         else:
@@ -188,14 +219,34 @@ def closest_points(u, v, a, b, iterations=60):
         Y[on_axis] = np.where(inside_evolute, b * np.sqrt(np.maximum(1 - (xa / a) ** 2, 0.0)), 0.0)
     X = np.copysign(X, u)
     Y = np.copysign(Y, v)
-    dx, dy = u - X, v - Y
-    d = np.sqrt(dx * dx + dy * dy)
+    d = _norm(u - X, v - Y)
     return X, Y, np.where(g > 0, d, -d)
+
+
+#: Points per block of :func:`orthogonal_residuals` (at least 4096, ~N/8 above): the closest-point solve
+#: needs about twenty temporaries per point, so blocks keep its memory to ~1.3x the coordinates.
+BLOCK_MIN = 4096
 
 
 def orthogonal_residuals(x, y, p, iterations=60, with_phi=True):
     """Signed orthogonal distances of the points to the ellipse p = (xc, yc, a, b, theta) and (if
-    ``with_phi``) the parameter phi of each closest point (x' = a cos phi, y' = b sin phi, eq. 17)."""
+    ``with_phi``) the parameter phi of each closest point (x' = a cos phi, y' = b sin phi, eq. 17).
+    Solved in about eight blocks of points (vectorised within each block) to bound the temporaries."""
+    n = len(x)
+    block = max(BLOCK_MIN, -(-n // 8))
+    if n <= block:
+        return _orthogonal_residuals(x, y, p, iterations, with_phi)
+    d = np.empty(n)
+    phi = np.empty(n) if with_phi else None
+    for lo in range(0, n, block):
+        hi = min(lo + block, n)
+        d[lo:hi], ph = _orthogonal_residuals(x[lo:hi], y[lo:hi], p, iterations, with_phi)
+        if with_phi:
+            phi[lo:hi] = ph
+    return d, phi
+
+
+def _orthogonal_residuals(x, y, p, iterations, with_phi):
     xc, yc, a, b, t = p
     u, v = to_local(x, y, p)
     if a >= b:

@@ -86,3 +86,26 @@ def test_baseline_skimage_ellipsemodel_with_residuals(benchmark):
 
     r = benchmark.pedantic(fit_and_residuals, rounds=5, iterations=1)
     assert r.shape == (3358,) and np.abs(r).max() < 0.05
+
+
+@pytest.mark.parametrize("method_id", FAST)
+def test_peak_memory(benchmark, trace, method_id):
+    """Peak memory of one fit (tracemalloc: every NumPy allocation) as a multiple of the input array, in
+    the benchmark output (extra_info). The direct fits stay within 4x at N = 10^5 (closest points solved
+    in blocks); ellipse.orthogonal holds an N x 5 Jacobian and MINPACK's copies (about 20x; not met)."""
+    import tracemalloc
+
+    n, pts = trace
+    benchmark.group = f"ellipse peak memory n={n}"
+    methods.fit(method_id, pts)
+    tracemalloc.start()
+    try:
+        methods.fit(method_id, pts)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    ratio = peak / pts.nbytes
+    benchmark.extra_info["peak_memory_over_input"] = round(ratio, 2)
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+    if method_id != "ellipse.orthogonal" and n >= 100_000:
+        assert ratio <= 4.0, f"{method_id}: peak memory {ratio:.2f}x the input"

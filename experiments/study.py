@@ -177,6 +177,9 @@ def validate(cfg: dict, where: str) -> None:
         for k in ("caption", "rows", "values"):
             if k not in t:
                 raise ConfigError(f"{here}: missing key {k!r}")
+        if t.get("colour", "lower_is_better") != "lower_is_better":
+            raise ConfigError(f"{here}: colour must be 'lower_is_better' (cells coloured by their ratio to the row's "
+                              f"lowest value), got {t['colour']!r}")
         if t.get("aggregate", "mean") not in AGGREGATES and t.get("aggregate") != "ok_share":
             raise ConfigError(f"{here}: aggregate must be one of {', '.join(AGGREGATES)}, ok_share")
     for i, f in enumerate(cfg.get("figures", [])):

@@ -378,7 +378,8 @@ def _rankings_section(rankings, problem, out, add_table, add_figure):
             words.append(f"{name}: {r.table.columns[k]} is best on {100 * best1[k]:.0f} % of {len(r.table)} problems")
     findings = ("; ".join(words) + ".") if words else "No problem is shared by the methods of a ranking."
     md += [f"**Findings.** {findings}", ""]
-    tables = {n: r.table for n, r in rankings.items() if r.table is not None and len(r.table)}
+    import textwrap
+    tables = {textwrap.fill(n, 34): r.table for n, r in rankings.items() if r.table is not None and len(r.table)}
     if tables:
         import matplotlib
         matplotlib.use("Agg")
@@ -401,8 +402,9 @@ def _rankings_section(rankings, problem, out, add_table, add_figure):
         if r.by_dataset is None or r.by_dataset.empty:
             continue
         lines, tex_items = add_table(r.by_dataset.reset_index(),
-                                     f"Median {name} per data set and method over the data set's problems (blank: "
-                                     "failed on more than half of them); colour: ratio to the best method of the row",
+                                     f"Median {name} per data set and method over the data set's problems (failed, "
+                                     "or -- in the LaTeX table: failed on at least half of them); colour in the HTML "
+                                     "report: ratio to the best method of the row",
                                      r.unit, 3, "lower_is_better")
         md += lines
         items += tex_items

@@ -1,8 +1,10 @@
 """``python -m experiments.report [--results DIR] [--out DIR]``: the comparison report, built only from
 the studies' output in ``results/`` (default ``results/`` -> ``paper/``).
 
-Writes ``report.md``, a self-contained ``report.html`` (images embedded), LaTeX table fragments
-``tables/*.tex`` (booktabs) and every figure as PNG and PDF under ``figures/``. A study that is missing
+Writes ``report.md``, a self-contained ``report.html`` (images embedded, numbered captions, nav#toc, coloured
+method tables), ``report.tex`` (compiles on A4) with the LaTeX table fragments ``tables/*.tex`` (siunitx,
+split when too wide; ``experiments.render``) and every figure as PNG and PDF under ``figures/``, and the section
+"Rankings across data sets" (performance profiles of every ranking the studies declare, ``[[rankings]]``). A study that is missing
 or whose rows failed is shown as such, never dropped. Also run at the end of ``python -m experiments.run``.
 """
 from __future__ import annotations
@@ -25,25 +27,6 @@ from experiments.provenance import REPO, write_atomic
 from methods import InvalidInputError
 
 # ---------------------------------------------------------------- tables
-
-def latex_table(df: pd.DataFrame, caption: str, label: str, floatfmt: str = ".7g") -> str:
-    """A booktabs table fragment (\\begin{table}...\\end{table}); needs \\usepackage{booktabs}."""
-    def esc(v):
-        if isinstance(v, float):
-            v = "" if v != v else format(v, floatfmt)
-        s = str(v)
-        for a, b in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("$", r"\$"), ("#", r"\#"),
-                     ("_", r"\_"), ("{", r"\{"), ("}", r"\}"), ("~", r"\textasciitilde{}"), ("^", r"\^{}")):
-            s = s.replace(a, b)
-        return s.replace("±", r"$\pm$").replace("µ", r"$\mu$").replace("°", r"$^\circ$").replace("≥", r"$\geq$")
-    cols = "l" * len(df.columns)
-    lines = [r"\begin{table}[htbp]", r"\centering", r"\small", f"\\begin{{tabular}}{{{cols}}}", r"\toprule",
-             " & ".join(esc(c) for c in df.columns) + r" \\", r"\midrule"]
-    lines += [" & ".join(esc(v) for v in row) + r" \\" for row in df.itertuples(index=False)]
-    lines += [r"\bottomrule", r"\end{tabular}", f"\\caption{{{esc(caption)}}}", f"\\label{{tab:{label}}}",
-              r"\end{table}", ""]
-    return "\n".join(lines)
-
 
 def md_table(df: pd.DataFrame, floatfmt: str = ".7g") -> str:
     def fmt(v):

@@ -76,7 +76,18 @@ TOP_LEVEL: dict[str, dict] = {
                        "columns": {"type": "string"},
                        "aggregate": {"enum": ["mean", "median", "max", "min", "std", "count", "rmse", "ok_share"]},
                        "unit": {"type": "string"}, "digits": {"type": "integer", "minimum": 0},
-                       "where": {"type": "object"}}}},
+                       "where": {"type": "object"},
+                       "colour": {"enum": ["lower_is_better"],
+                                  "description": "a method comparison: HTML cells coloured by their ratio to "
+                                                 "the row's best (lowest) value"}}}},
+    # cross-study rankings (experiments/report.py): Dolan-More performance profiles pooled over every study
+    # that declares the same profile name
+    "rankings": {"type": "array", "items": {
+        "type": "object", "required": ["profile", "metric"], "additionalProperties": False,
+        "properties": {"profile": {"type": "string", "minLength": 1}, "metric": {"type": "string", "minLength": 1},
+                       "unit": {"type": "string"}, "methods": {"type": "string", "minLength": 1},
+                       "problem": {"type": "array", "items": {"type": "string"}, "minItems": 1},
+                       "floor": {"type": "number", "minimum": 0}, "where": {"type": "object"}}}},
     "figures": {"type": "array", "items": {
         "type": "object", "required": ["caption"], "additionalProperties": False,
         "properties": {"caption": {"type": "string", "minLength": 1}, "plot": {"type": "string"},

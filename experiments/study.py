@@ -86,6 +86,7 @@ class Table:
     data: pd.DataFrame = field(repr=False)
     unit: str = ""
     digits: int = 7
+    colour: str = ""   #: "lower_is_better": a method comparison, coloured per row in the HTML report
 
 
 @dataclass
@@ -153,7 +154,7 @@ def bars(df, ax, *, x, y, aggregate="mean", logy=False, xlabel=None, ylabel=None
 
 # ---------------------------------------------------------------- declarations
 
-TABLE_KEYS = {"caption", "rows", "columns", "values", "aggregate", "unit", "digits", "where"}
+TABLE_KEYS = {"caption", "rows", "columns", "values", "aggregate", "unit", "digits", "where", "colour"}
 FIGURE_KEYS = {"caption", "plot", "file", "args", "x", "y", "by", "aggregate", "logx", "logy", "xlabel", "ylabel",
                "width", "height", "where"}
 REPORT_KEYS = {"section", "order", "findings"}
@@ -176,6 +177,9 @@ def validate(cfg: dict, where: str) -> None:
         for k in ("caption", "rows", "values"):
             if k not in t:
                 raise ConfigError(f"{here}: missing key {k!r}")
+        if t.get("colour", "lower_is_better") != "lower_is_better":
+            raise ConfigError(f"{here}: colour must be 'lower_is_better' (cells coloured by their ratio to the row's "
+                              f"lowest value), got {t['colour']!r}")
         if t.get("aggregate", "mean") not in AGGREGATES and t.get("aggregate") != "ok_share":
             raise ConfigError(f"{here}: aggregate must be one of {', '.join(AGGREGATES)}, ok_share")
     for i, f in enumerate(cfg.get("figures", [])):
@@ -222,7 +226,8 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
     else:
         out = data.groupby(rows, sort=False, dropna=False)[value].agg(AGGREGATES[how]).reset_index()
         out = out.rename(columns={value: f"{how} of {t['values']}"})
-    return Table(caption=t["caption"], data=out, unit=t.get("unit", ""), digits=t.get("digits", 4))  # significant digits
+    return Table(caption=t["caption"], data=out, unit=t.get("unit", ""), digits=t.get("digits", 4),  # significant digits
+                 colour=t.get("colour", ""))  # significant digits
 
 
 def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Figure:
@@ -309,7 +314,8 @@ def write_manifest(target: Path, cfg: dict, analysis: Analysis, summary: pd.Data
         t.data.to_csv(buf, index=False, float_format="%.10g")
         name = f"tables/table_{k + 1}.csv"
         write_atomic(target / name, buf.getvalue())
-        entries.append({"caption": t.caption, "file": name, "unit": t.unit, "digits": t.digits})
+        entries.append({"caption": t.caption, "file": name, "unit": t.unit, "digits": t.digits,
+                        **({"colour": t.colour} if t.colour else {})})
     rep = cfg.get("report", {})
     findings = analysis.findings
     if not findings and rep.get("findings"):

@@ -1,0 +1,96 @@
+"""Rankings across data sets: Dolan–Moré performance profiles pooled over every study that declares them.
+
+A study opts in with ``[[rankings]]`` entries in its TOML (kept in its ``meta.json`` config)::
+
+    [[rankings]]
+    profile = "centre error against the true centre"   # studies declaring the same name are pooled
+    metric = "center_error"                             # a column of the rows; lower is better
+    methods = "circle.*"                                # fnmatch pattern on the method id (default: all)
+    unit = "mm"                                         # optional; problem = ["dataset", "data_stream", "repetition"]
+    floor = 1e-12                                       # costs below it are equal (default 1e-12; 0 for runtimes)
+
+The report names no study: it reads the declarations of whichever study folders exist. A problem is one
+(study, data set, data stream, repetition); a method is a method id with its parameters. Only methods that
+ran in every contributing study are profiled (the others are named in the caption), so that no problem is
+dropped for a method that was never run on it.
+"""
+from __future__ import annotations
+
+import fnmatch
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from experiments.render.profiles import method_label, problem_table
+
+DEFAULT_PROBLEM = ("dataset", "data_stream", "repetition")
+
+
+@dataclass
+class Ranking:
+    profile: str
+    metric: str
+    unit: str = ""
+    studies: list[str] = field(default_factory=list)
+    rows: list[pd.DataFrame] = field(default_factory=list, repr=False)
+    left_out: list[str] = field(default_factory=list)
+    table: pd.DataFrame | None = field(default=None, repr=False)
+    by_dataset: pd.DataFrame | None = field(default=None, repr=False)
+
+
+def collect(studies: list[tuple[str, Path, dict]]) -> dict[str, Ranking]:
+    """``studies``: (name, folder, meta) of every readable study. Returns the rankings by profile name;
+    a study's unreadable rows raise ValueError naming the study."""
+    out: dict[str, Ranking] = {}
+    for name, folder, meta in studies:
+        decls = (meta.get("config") or {}).get("rankings") or []
+        if not decls:
+            continue
+        try:
+            rows = pd.read_csv(folder / "results.csv", keep_default_na=False, na_values=[""], low_memory=False)
+        except (OSError, ValueError, pd.errors.ParserError) as exc:
+            raise ValueError(f"rankings: the rows of study {name!r} are unreadable ({exc})") from None
+        for d in decls:
+            metric = d["metric"]
+            if metric not in rows.columns:
+                raise ValueError(f"rankings: study {name!r} declares metric {metric!r}, which its rows do not have")
+            sel = rows[[fnmatch.fnmatchcase(str(m), d.get("methods", "*")) for m in rows["method"]]]
+            for k, v in (d.get("where") or {}).items():
+                sel = sel[sel[k].isin(v if isinstance(v, list) else [v])]
+            problem = [c for c in d.get("problem", DEFAULT_PROBLEM) if c in sel.columns]
+            part = pd.DataFrame({"study": name, "problem": sel[problem].astype(str).agg(" | ".join, axis=1),
+                                 "dataset": sel["dataset"].astype(str) if "dataset" in sel else "",
+                                 "method": sel["method"], "params": sel.get("params", pd.Series("", index=sel.index)),
+                                 "status": sel["status"], "cost": pd.to_numeric(sel[metric], errors="coerce"),
+                                 "floor": float(d.get("floor", 0.0 if d.get("unit") == "s" else 1e-12))})
+            r = out.setdefault(d["profile"], Ranking(d["profile"], metric, d.get("unit", "")))
+            r.studies.append(name)
+            r.rows.append(part)
+    for r in out.values():
+        _tabulate(r)
+    return out
+
+
+def _tabulate(r: Ranking) -> None:
+    labelled = []
+    for part in r.rows:
+        part = part.assign(label=[method_label(m, p) for m, p in zip(part["method"], part["params"])])
+        labelled.append(part)
+    common = set.intersection(*(set(p["label"]) for p in labelled))
+    every = set().union(*(set(p["label"]) for p in labelled))
+    r.left_out = sorted(every - common)
+    rows = pd.concat(labelled, ignore_index=True)
+    rows = rows[rows["label"].isin(common)]
+    floor = float(rows["floor"].max()) if len(rows) else 0.0
+    rows = rows.assign(problem=rows["study"] + " | " + rows["problem"])
+    r.table = problem_table(rows.assign(**{r.metric: rows["cost"]}).drop(columns=["method", "params"])
+                            .rename(columns={"label": "method"}),
+                            metric=r.metric, problem=("problem",), floor=floor)
+    # per data set: the median cost of each method over the data set's problems (failures count as inf)
+    costs = r.table.copy()
+    costs["data set"] = [p.split(" | ")[0] + ": " + p.split(" | ")[1] for p in costs.index]
+    med = costs.groupby("data set", sort=False).median()
+    med.columns.name = None
+    r.by_dataset = med.replace(np.inf, np.nan)

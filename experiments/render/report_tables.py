@@ -1,0 +1,100 @@
+"""A declared table of the report in LaTeX and HTML: the bridge between a study's table CSV (caption, unit,
+significant digits, optional ``colour``) and the renderers ``latex.latex_table`` / ``html_tables.coloured_table``.
+
+``latex_fragments`` never returns an overflowing table: a table too wide for the page (``TableTooWide``) is
+split into parts that keep the key (text) columns and share out the number columns; a table that cannot fit
+even with one number column becomes a note pointing to its CSV.
+"""
+from __future__ import annotations
+
+import html
+
+import numpy as np
+import pandas as pd
+
+from experiments.render.html_tables import coloured_table, format_number
+from experiments.render.latex import Column, TableTooWide, latex_table
+from experiments.render.text import human_unit, tex
+
+MAX_DIGITS = 4   #: significant digits shown in the paper (the CSV keeps all)
+
+
+def _numeric(s: pd.Series) -> bool:
+    return pd.api.types.is_numeric_dtype(s) and not pd.api.types.is_bool_dtype(s)
+
+
+def split_columns(df: pd.DataFrame) -> tuple[list[str], list[str]]:
+    """(key columns = text, value columns = numbers) in table order."""
+    keys = [c for c in df.columns if not _numeric(df[c])]
+    return keys, [c for c in df.columns if c not in keys]
+
+
+def _columns(df: pd.DataFrame, keys, values, unit: str, digits: int) -> list[Column]:
+    cols = []
+    for i, c in enumerate(keys):
+        repeated = len(df) > 1 and df[c].duplicated().any() and len(keys) > 1 and i == 0
+        cols.append(Column(str(c), kind="text", group=bool(repeated)))
+    for c in values:
+        integer = pd.api.types.is_integer_dtype(df[c])
+        cols.append(Column(str(c), unit=unit or None, kind="integer" if integer else "number",
+                           digits=max(1, min(int(digits or 3), MAX_DIGITS))))
+    return cols
+
+
+def latex_fragments(df: pd.DataFrame, *, caption: str, label: str, unit: str = "", digits: int = 4) -> list[str]:
+    """One or more LaTeX fragments for the table (more than one when it had to be split)."""
+    keys, values = split_columns(df)
+    notes = ["-- : no value (the method did not run there or failed)"] if df.isna().any().any() else None
+
+    def attempt(vals, cap, lab):
+        return latex_table(df[keys + vals], _columns(df, keys, vals, unit, digits), caption=cap, label=lab, notes=notes)
+
+    try:
+        return [attempt(values, caption, label)]
+    except TableTooWide:
+        pass
+    parts = [values]
+    while True:
+        widest = max(parts, key=len)
+        if len(widest) <= 1:
+            break
+        i = parts.index(widest)
+        half = (len(widest) + 1) // 2
+        parts[i:i + 1] = [widest[:half], widest[half:]]
+        try:
+            return [attempt(p, f"{caption} (part {k + 1} of {len(parts)})", f"{label}-{k + 1}")
+                    for k, p in enumerate(parts)]
+        except TableTooWide:
+            continue
+    return [f"\\begin{{table}}[htbp]\\centering\\small\\caption{{{tex(caption)}}}\\label{{tab:{label}}}\n"
+            f"\\parbox{{0.9\\linewidth}}{{Too wide for the page even with one number column per part; the data are in "
+            f"the report's \\texttt{{tables/{label}.csv}}.}}\n\\end{{table}}\n"]
+
+
+def html_table(df: pd.DataFrame, *, caption: str, unit: str = "", digits: int = 4, colour: str = "",
+               table_id: str | None = None) -> str:
+    """The table as self-contained HTML with ``<caption>``; ``colour='lower_is_better'``: the number columns
+    are methods (or other competitors), each cell coloured by its ratio to the row's lowest value."""
+    keys, values = split_columns(df)
+    shown_digits = max(1, min(int(digits or 3), MAX_DIGITS))
+    if colour == "lower_is_better" and values and keys:
+        t = df.set_index(keys)[values]
+        t.index = [" | ".join(map(str, k)) if isinstance(k, tuple) else str(k) for k in t.index]
+        t.index.name = " | ".join(keys)
+        numbers = t.to_numpy(float)
+        if np.all(np.isnan(numbers) | (numbers >= 0)):
+            return coloured_table(t, unit=human_unit(unit), caption=html.escape(caption), digits=shown_digits,
+                                  table_id=table_id)
+
+    def cell(v, numeric):
+        if v is None or (isinstance(v, float) and np.isnan(v)):
+            return "–"
+        return format_number(float(v), shown_digits) if numeric and not isinstance(v, (bool, np.bool_)) else html.escape(str(v))
+
+    unit_h = f" [{html.escape(human_unit(unit))}]" if unit else ""
+    head = "".join(f"<th>{html.escape(str(c))}{unit_h if c in values else ''}</th>" for c in df.columns)
+    rows = "".join("<tr>" + "".join(f"<td{' class=num' if c in values else ''}>{cell(v, c in values)}</td>"
+                                    for c, v in zip(df.columns, r)) + "</tr>" for r in df.itertuples(index=False))
+    ident = f' id="{html.escape(table_id)}"' if table_id else ""
+    return (f'<div style="overflow-x:auto"><table{ident}><caption>{html.escape(caption)}</caption>'
+            f"<thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table></div>")

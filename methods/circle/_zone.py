@@ -11,9 +11,12 @@ from __future__ import annotations
 
 from itertools import combinations
 
-import clarabel
 import numpy as np
-import scipy.sparse as sp
+
+from methods._lazy import lazy_module
+
+clarabel = lazy_module("clarabel")
+sp = lazy_module("scipy.sparse")
 
 #: relative slack of the final check of every point (rounding of radii in the unit frame)
 CHECK_RTOL = 1e-12

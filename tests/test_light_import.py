@@ -56,3 +56,49 @@ def test_a_solver_loads_when_first_used(method, needs):
             f"    r = methods.fit({method!r}, np.column_stack([np.cos(t), np.sin(t)]))\n"
             "    assert abs(r.radius - 1) < 1e-9, r")
     assert needs in loaded_after(body)
+
+
+SMALL_FILES = {
+    "comma_header.csv": "x,y\n1.5,2.25\n-3e-3,4\n5,6.125\n",
+    "semicolon_decimal_comma.csv": "# a comment\nx;y\n1,5;2,25\n-0,003;4\n5;6,125\n",
+    "whitespace_no_header.txt": "1.5  2.25\n\n-3e-3\t4\n5 6.125\n",
+    "three_columns.csv": "t,x,y\n0,1.5,2.25\n1,-3e-3,4\n2,5,6.125\n",
+    "percent_comments.txt": "% instrument export\nx y\n% run 1\n1.5 2.25\n-3e-3 4\n5 6.125\n",
+}
+
+
+@pytest.mark.parametrize("name", sorted(SMALL_FILES))
+def test_small_file_reader_agrees_with_the_pandas_reader(tmp_path, monkeypatch, name):
+    """The pandas-free reader of small files gives the same points as the pandas reader it bypasses."""
+    from datasets import io as dio
+    path = tmp_path / name
+    path.write_text(SMALL_FILES[name], encoding="utf-8")
+
+    class NoPandas:
+        def __getattr__(self, attr):
+            raise AssertionError("the small-file reader used pandas")
+    with monkeypatch.context() as m:
+        m.setattr(dio, "pd", NoPandas())
+        fast = dio.read_points(path)
+    monkeypatch.setattr(dio, "SMALL_FILE_BYTES", -1)  # force the pandas path
+    slow = dio.read_points(path)
+    np.testing.assert_array_equal(fast, slow)
+    np.testing.assert_array_equal(fast, [[1.5, 2.25], [-3e-3, 4.0], [5.0, 6.125]])
+
+
+@pytest.mark.parametrize("text", ["x,y\n1,2\n3,nan\n4,5\n", "x,y\n1,2\n3\n4,5\n", "x,y\n1,2\n3,abc\n4,5\n",
+                                  "x,y\n1,2 # note\n3,4\n5,7\n"])
+def test_small_file_reader_leaves_unusual_files_to_the_pandas_reader(tmp_path, monkeypatch, text):
+    """Bad or unusual small files get the same outcome (points or the same one-line error) either way."""
+    from datasets import io as dio
+    path = tmp_path / "odd.csv"
+    path.write_text(text, encoding="utf-8")
+
+    def outcome():
+        try:
+            return dio.read_points(path).tolist()
+        except dio.DataFileError as exc:
+            return str(exc)
+    fast = outcome()
+    monkeypatch.setattr(dio, "SMALL_FILE_BYTES", -1)
+    assert fast == outcome()

@@ -5,9 +5,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import nlopt
 import numpy as np
-from scipy.optimize import minimize
+
+from methods._lazy import lazy_module
+
+nlopt = lazy_module("nlopt")
+
 
 BACKENDS = ("scipy", "nlopt")
 
@@ -41,6 +44,8 @@ def nelder_mead(objective, x0, steps, *, backend: str, xatol: float, fatol: floa
 
         def callback(intermediate_result):
             history.append(float(intermediate_result.fun))
+
+        from scipy.optimize import minimize  # imported on first use (issue 20: light import)
 
         res = minimize(objective, x0, method="Nelder-Mead", callback=callback,
                        options={"initial_simplex": initial_simplex(x0, steps), "xatol": xatol, "fatol": fatol,

@@ -11,9 +11,12 @@ from __future__ import annotations
 
 from itertools import combinations
 
-import clarabel
 import numpy as np
-import scipy.sparse as sp
+
+from methods._lazy import lazy_module
+
+clarabel = lazy_module("clarabel")
+sp = lazy_module("scipy.sparse")
 
 #: relative slack of the final check of every point (rounding of radii in the unit frame)
 CHECK_RTOL = 1e-12
@@ -336,8 +339,13 @@ def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max
         c, (oc, ic), ok, certified, message = start, ((), ()), False, False, f"{exc}; no result is claimed"
         stats = {"solves": None, "solver_iterations": None, "history": [], "rounds": None, "active_points": None}
     center, _ = frame.circle_to_data(np.array([c[0], c[1], 1.0]))
-    r_data = radii(points[:, 0], points[:, 1], center)
-    radius = radius_rule(r_data, center)
+    # the radius rule runs in the unit frame and is mapped back (radius = scale x rule(r / scale)): radii
+    # squared in data units overflow beyond ~1e154 and underflow below ~1e-154
+    radius = frame.scale * float(radius_rule(radii(x, y, c), c))
+    if not (np.isfinite(radius) and np.all(np.isfinite(center))):
+        ok, certified = False, False
+        message = (f"the circle is not representable in float64 at this scale (centre {center}, radius {radius}); "
+                   f"no result is claimed (solver said: {message})")
     return zone_result(points, center, radius, {"outer": sorted(oc), "inner": sorted(ic)}, converged=bool(ok),
                        message=message, iterations=stats["solves"], nfev=stats["solver_iterations"],
                        history=[h * frame.scale for h in stats["history"]],

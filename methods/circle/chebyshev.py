@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import linprog
 
 from methods._registry import register
 from methods._validation import check_choice, check_positive
@@ -46,6 +45,8 @@ def chebyshev_lp(points, *, solver="highs", active_size=16, max_rounds=50):
         G, h = _lp_rows(x, y, idx)
         cost = np.array([0.0, 0.0, 0.0, 1.0])
         if solver == "highs":
+            from scipy.optimize import linprog  # imported on first use (light import)
+
             res = linprog(cost, A_ub=G, b_ub=h, bounds=[(None, None)] * 3 + [(0, None)], method="highs")
             if res.status != 0:
                 raise z.SolverFailure(f"HiGHS: {res.message}")

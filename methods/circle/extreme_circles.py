@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods._registry import register
-from methods._result import zone_result
+from methods._result import radial_distances, zone_result
 from methods._validation import check_choice, check_positive
 from methods.circle import _zone as z
 from methods.circle._frame import Frame
@@ -97,7 +97,7 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
     gap = largest_angular_gap(x, y, start)
     if gap >= np.pi:
         center, _ = frame.circle_to_data(np.array([start[0], start[1], 1.0]))
-        r = z.radii(points[:, 0], points[:, 1], center)
+        r = radial_distances(points, center)
         return zone_result(points, center, r.min(), {"outer": [], "inner": []}, converged=False,
                            message=(f"the points do not surround a centre (largest angular gap {np.degrees(gap):.1f} deg "
                                     ">= 180 deg, a partial arc): a maximum inscribed circle does not exist"),

@@ -1,7 +1,6 @@
 """Minimum-zone circles (MZC): the thinnest annulus of two concentric circles holding all points."""
 from __future__ import annotations
 
-import clarabel
 import numpy as np
 
 from methods._registry import register
@@ -29,7 +28,7 @@ def outer_cone_rows(x, y, out, R_column: int, nvar: int):
         e_r[R_column], e_x[0], e_y[1] = -1.0, 1.0, 1.0
         rows += [e_r, e_x, e_y]
         rhs += [0.0, x[i], y[i]]
-    return rows, rhs, [clarabel.SecondOrderConeT(3) for _ in out]
+    return rows, rhs, [z.clarabel.SecondOrderConeT(3) for _ in out]
 
 
 def check_ccp_params(name, active_size, max_rounds, max_ccp, ccp_tol, trust_radius):

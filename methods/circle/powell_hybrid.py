@@ -4,7 +4,6 @@ from __future__ import annotations
 import numpy as np
 
 from methods._frame import dot
-from scipy.optimize import root
 
 from methods._registry import register
 from methods._result import circle_result
@@ -69,6 +68,8 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
         return f, jac
 
     with np.errstate(over="ignore", invalid="ignore"):
+        from scipy.optimize import root  # imported on first use (light import)
+
         sol = root(equations, p0, jac=True, method="hybr", options={"xtol": xtol, "maxfev": maxfev})
     minpack = "MINPACK: " + " ".join(str(sol.message).split())
     # MINPACK's own stop (status 1: xtol met; 3: xtol too small; 4, 5: no progress, which on exact data

@@ -31,7 +31,6 @@ the reason, and left out of the fit.
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from methods._errors import InvalidInputError
 
@@ -141,6 +140,8 @@ def diagnose(cw, ccw, nominal_radius: float, nominal_center, *, feed_mm_min: flo
     rss_grid = [solve(p)[0] for p in grid]
     k = int(np.argmin(rss_grid))
     lo, hi = np.log(grid[max(k - 1, 0)]), np.log(grid[min(k + 1, len(grid) - 1)])
+    from scipy.optimize import minimize_scalar  # imported on first use (light import)
+
     opt = minimize_scalar(lambda lp: solve(np.exp(lp))[0], bounds=(lo, hi), method="bounded",
                           options={"xatol": 1e-4})
     phi_tau = float(np.exp(opt.x)) if opt.fun <= rss_grid[k] else float(grid[k])

@@ -9,12 +9,15 @@ and size of the data.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as sla
 
 from methods._registry import register
 from methods.ellipse._geometry import Frame, conic_to_params, normalise_conic
 from methods.ellipse._result import ellipse_result, failed, residuals_from_unit
 from methods.ellipse._validation import check_distinct_points
+from methods._lazy import lazy_module
+
+sla = lazy_module("scipy.linalg")
+
 
 #: Fitzgibbon's constraint matrix: a^T C a = 4AC - B^2
 C6 = np.zeros((6, 6))

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from methods._registry import register
 from methods._validation import check_positive, check_vector
@@ -84,6 +83,8 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
         return distance_jacobian(x, y, p, phi)
 
     eps = np.finfo(float).eps
+    from scipy.optimize import least_squares  # imported on first use (light import)
+
     res = least_squares(fun, p0, jac=jac, method="lm", xtol=max(xtol, eps), ftol=max(ftol, eps),
                         gtol=max(gtol, eps), max_nfev=max_nfev, x_scale="jac")
     q = res.x

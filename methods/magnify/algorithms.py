@@ -15,13 +15,15 @@ Both map each measured point p(k) to p~(k) = r~(k) + eta (p(k) - r~(k)) for a re
 from __future__ import annotations
 
 import numpy as np
-import shapely
 
 from methods._errors import InvalidInputError
 from methods._registry import register
 from methods._result import MagnifyFit
 from methods._validation import check_choice, check_positive
 from methods.magnify.data import MagnifyInput, continuity, self_intersections, validate
+from methods._lazy import lazy_module
+
+shapely = lazy_module("shapely")
 
 
 def _signed_error(line, pts_geom, pts):

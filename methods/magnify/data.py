@@ -4,9 +4,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 
 from methods._errors import InvalidInputError
+from methods._lazy import lazy_module
+
+shapely = lazy_module("shapely")
 
 
 @dataclass(frozen=True)

@@ -11,10 +11,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
 from methods._errors import InvalidInputError
 from methods._validation import read_table
+from methods._lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import io
 
-import pandas as pd
+from methods._lazy import lazy_module
+
+pd = lazy_module("pandas")
+
 
 DIRECTION = {"X": "positioning/straightness along x", "Y": "straightness/positioning along y",
              "Z": "straightness/positioning along z", "A": "roll/pitch/yaw about x", "B": "roll/pitch/yaw about y",

@@ -40,10 +40,12 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import pandas as pd
 
 from methods._errors import InvalidInputError
 from methods.positioning.model import evaluate_band
+from methods._lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 
 def compensation_table(res, data, *, interval: float | None = None, source: str = "model") -> pd.DataFrame:

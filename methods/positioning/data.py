@@ -22,14 +22,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-import pandas as pd
-
 import re
+
+import numpy as np
 
 from methods._errors import InvalidInputError
 from methods._validation import read_table
 from methods.units import canonical, to_mm, warn_implausible
+from methods._lazy import lazy_module
+
+pd = lazy_module("pandas")
+
 
 MAX_ABS_DEVIATION_MM = 1e6     # larger deviations are not measurements (and overflow the statistics)
 TARGET_NAMES = ("target", "position", "target position", "target [mm]", "target (mm)", "target position (mm)",

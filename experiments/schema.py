@@ -89,6 +89,7 @@ TOP_LEVEL: dict[str, dict] = {
     "rounding": {"type": "object", "properties": {"samples": _POSITIVE_INT}},
     "paths": {"type": "array", "items": {"enum": ["both", "cw", "ccw"]}, "minItems": 1},
     "start_distances": {"type": "array", "minItems": 1, "items": {"type": "number", "minimum": 0}},
+    "reference_optimum": {"type": "object", "required": ["default"], "additionalProperties": {"type": "string"}},
     "start_directions": _POSITIVE_INT,
     "examples": {"type": "object", "minProperties": 1},
     "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},

@@ -249,6 +249,9 @@ def test_quick_default_studies_run(tmp_path, name):
     assert manifest["tables"] and manifest["figures"] and manifest["quick"] is True
     for t in manifest["tables"]:
         assert len(pd.read_csv(target / t["file"])) > 0 and t["caption"]
+    # a findings paragraph generated from the run's numbers (a digit in it), never a template left unfilled
+    findings = manifest["findings"]
+    assert findings and "not filled" not in findings and any(ch.isdigit() for ch in findings), findings
     for f in manifest["figures"]:
         assert (target / f["file"]).stat().st_size > 10_000 and f["caption"]
 

@@ -4,7 +4,6 @@ circle and whether its solver certified it. Cut-offs above N/7 UPR are skipped (
 The analysis (``rank_table``, ``cutoff_table``) is pure functions of the rows."""
 from __future__ import annotations
 
-import json
 import textwrap
 
 import numpy as np
@@ -12,6 +11,7 @@ import pandas as pd
 
 import datasets
 import methods
+from experiments import engine
 from experiments.engine import ConfigError
 from experiments.study import Analysis, Figure, Table, save_csv
 from methods.roundness.filter import POINTS_PER_CUTOFF, parse_cutoff
@@ -71,14 +71,11 @@ def execute(task):
     spec = task["dataset"]
     pts = load(spec, task["seed"], task["stream"])
     cut = task["params"]["cutoff_upr"]
-    row = {"study": task["study"], "dataset": spec["label"], "repetition": task["repetition"], "seed": task["seed"],
-           "data_stream": ".".join(map(str, task["stream"])), "method": task["method"],
-           "params": json.dumps(task["params"], sort_keys=True), "cutoff_upr": "none" if cut is None else cut,
-           "n_points": int(pts.shape[0])}
+    row = {**engine.base_row(task), "cutoff_upr": "none" if cut is None else cut, "n_points": int(pts.shape[0])}
     if cut is not None and pts.shape[0] < POINTS_PER_CUTOFF * cut:
         return {**row, "status": "skipped", "message": f"{pts.shape[0]} points cannot carry a {cut:g} UPR cut-off "
                                                        f"(ISO 12181-2: >= {POINTS_PER_CUTOFF} x cut-off points)"}
-    res = methods.fit("roundness.iso12181", pts, cutoff_upr=cut, reference="all")
+    res = methods.fit(task["method"], pts, **task["params"])
     row.update(status="ok" if res.converged else "not converged", message=res.message, converged=res.converged)
     for k, ref in res.references.items():
         row[f"RONt_{k}_um"] = ref["RONt"] * 1e3

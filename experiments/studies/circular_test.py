@@ -75,7 +75,7 @@ def execute(task):
     cond, err, cw, ccw = scenario(task["seed"])
     pts = {"both": np.vstack([cw, ccw]), "cw": cw, "ccw": ccw}[task["dataset"]["path"]]
     truth = exact_truth(cond, err)
-    if task["method"].startswith("circle."):
+    if methods.get(task["method"]).family == "circle":
         truth = {"family": "circle", "center": truth["circle_center"], "radius": truth["circle_radius"]}
     row = engine.fit_row(task, pts, truth)
     row["path"] = task["dataset"]["path"]
@@ -98,7 +98,7 @@ def analyse(df, cfg, target, log):
     for m in dict.fromkeys(df["method"]):
         g = df[df["method"] == m]
         lines.append(f"\n  {m} {g['params'].iloc[0] if g['params'].iloc[0] != '{}' else ''}")
-        if m.startswith("circle."):
+        if methods.get(m).family == "circle":
             lines.append(f"    {'path':<6} {'x_c [um]':>9} {'y_c [um]':>9} {'R [mm]':>10} | truth {'x_c':>7} {'y_c':>7} "
                          f"{'R':>10} | paper {'x_c':>7} {'y_c':>7} {'R':>10}")
             for r in g.itertuples():
@@ -143,12 +143,12 @@ def analyse(df, cfg, target, log):
                              for k, v in iso.items()])
     diag_rows = pd.DataFrame([{"source": k, "estimate": v["value"], "u": v["u"], "unit": v["unit"],
                                "injected": injected.get(k, np.nan)} for k, v in diagnostics.items()])
-    circ = df[df["method"].str.startswith("circle.") & (df["status"] == "ok")]
+    circ = df[df["method"].map(lambda m: methods.get(m).family == "circle") & (df["status"] == "ok")]
     t = (_um(truth["circle_center"][0], xc0), _um(truth["circle_center"][1], yc0))
     centre_err = np.hypot(_um(circ["center_x"], xc0) - t[0], _um(circ["center_y"], yc0) - t[1])
     fits = df[["method", "path", "status", "center_x", "center_y", "radius", "semi_axis_a", "semi_axis_b"]].copy()
     fits["center_x"], fits["center_y"] = _um(fits["center_x"], xc0).round(2), _um(fits["center_y"], yc0).round(2)
-    fits = fits.rename(columns={"center_x": "x_c − nominal [µm]", "center_y": "y_c − nominal [µm]", "radius": "R [mm]",
+    fits = fits.rename(columns={"center_x": "x_c - nominal [µm]", "center_y": "y_c - nominal [µm]", "radius": "R [mm]",
                                 "semi_axis_a": "a [mm]", "semi_axis_b": "b [mm]"})
     values = {"iso230_4_um": {k: v * 1e3 for k, v in iso.items()}, "iso230_4_published_um": PAPER_ISO,
               "diagnostics": diagnostics, "injected": injected,

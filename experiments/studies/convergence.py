@@ -129,7 +129,7 @@ def analyse(df, cfg, target, log):
         shown = shown.rename_axis("method").reset_index()
         tables.append(Table(caption=f"Share of runs reaching the optimum of the method's own objective (within 1e-6 R) "
                                     f"from starts d radii from the true centre, {n_dirs} directions each; synthetic "
-                                    f"circle, {arc:.0f}° arc, N = {data.get('n')}, σ = {data.get('noise')} R",
+                                    f"circle, {arc:.0f}° arc, N = {data.get('n')}, sigma = {data.get('noise')} R",
                             data=shown, unit="%"))
     lab = table.assign(label=[_label(m, p) for m, p in zip(table["method"], table["params"])])
     worst = lab.groupby("label", sort=False)["success_rate"].min()

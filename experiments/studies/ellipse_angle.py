@@ -56,11 +56,11 @@ def analyse(df, cfg, target, log):
     findings += "; ".join(f"{m}: RMS error / prediction between {r.min():.2f} and {r.max():.2f}"
                           for m, r in ratio.items())
     findings += f" ({reps} noisy copies per a − b, so a ratio is known to about ±{100 / np.sqrt(2 * reps):.0f} %)."
-    shown = table.rename(columns={"a_minus_b_mm": "a − b [mm]", "predicted_sd_deg": "predicted s.d. [°]",
+    shown = table.rename(columns={"a_minus_b_mm": "a - b [mm]", "predicted_sd_deg": "predicted s.d. [°]",
                                   **{c: f"{c.split(' ', 1)[1]} RMS [°]" for c in table.columns if c.startswith("rms")}})
-    caption = (f"RMS error of the fitted axis angle [°] against the axis difference a − b, and the first-order "
-               f"prediction σ·sqrt([(JᵀJ)⁻¹]θθ); synthetic near-circular ellipses, a = 299.0243 mm, N = {params['n']}, "
-               f"σ = {params['noise'] * 1e3:g} µm per coordinate, {reps} repetitions")
+    caption = (f"RMS error of the fitted axis angle [°] against the axis difference a - b, and the first-order "
+               f"prediction sigma sqrt([(J^T J)^-1]_theta,theta); synthetic near-circular ellipses, a = 299.0243 mm, N = {params['n']}, "
+               f"sigma = {params['noise'] * 1e3:g} µm per coordinate, {reps} repetitions")
     fig = Figure(caption="RMS error of the fitted axis angle [°] against a − b [µm] on synthetic near-circular "
                          "ellipses, with the first-order prediction: the angle of a near-circle is ill-conditioned",
                  file="angle_conditioning.png")

@@ -100,9 +100,9 @@ def analyse(df, cfg, target, log):
     findings = ("Examples where the magnified trajectory is continuous (continuity ≤ 1) and has no loops, out of "
                 "those the algorithm applies to: " + "; ".join(f"{lab}: {clean[lab]} of {applied[lab]}"
                                                               for lab in VARIANTS if lab in clean) + ".")
-    caption = (f"Continuity (largest magnified step / (η × largest measured step); about 1 or less: continuous) and "
+    caption = (f"Continuity (largest magnified step / (eta x largest measured step); about 1 or less: continuous) and "
                f"loops (self-intersections) of the magnified trajectory, as 'continuity / loops', for "
-               f"{len(cfg['examples'])} contouring examples (η 50 to 1000, dimensionless); 'skipped': the algorithm "
+               f"{len(cfg['examples'])} contouring examples (eta 50 to 1000, dimensionless); 'skipped': the algorithm "
                "does not apply")
     figs = [Figure(caption="Continuity (left, log scale) and loops (right) of the magnified trajectory per contouring "
                            "example and algorithm variant", file="magnification_continuity.png"),

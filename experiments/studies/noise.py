@@ -73,7 +73,7 @@ def analyse(df, cfg, target, log):
     shown = piv.reset_index()
     shown.columns = ["method"] + [f"{c:.0f}° arc" for c in piv.columns]
     caption = (f"Radius RMSE divided by the KCR lower bound (dimensionless, 1 = the statistical limit), every circle "
-               f"method on synthetic unit circles and arcs, σ = {sigma:g} R isotropic noise, N = {n}, "
+               f"method on synthetic unit circles and arcs, sigma = {sigma:g} R isotropic noise, N = {n}, "
                f"{int(worst['runs'].max())} repetitions")
     fig_caption = ("Radius RMSE / KCR bound (top) and radius bias / σ (bottom) of the least-squares estimators "
                    "against the noise σ / R on synthetic unit circles and arcs; dashed: closed-form (algebraic) fits")

@@ -239,7 +239,7 @@ def test_quick_published_study(tmp_path):
     mc = rows["dataset"].str.endswith("(rounding Monte Carlo)")
     assert "time_median_s" in rows and rows.loc[~mc, "time_median_s"].notna().all()
     # the rounding Monte Carlo is one engine row per published figure (cached like every fit), quick: 100 fits each
-    assert mc.sum() == len(found) and set(rows.loc[mc, "rounding_samples"]) == {100}
+    assert mc.sum() == len(meta["findings"]["published_vs_reproduced"]) and set(rows.loc[mc, "rounding_samples"]) == {100}
     assert (rows.loc[mc, "rounding_min"] <= rows.loc[mc, "rounding_max"]).all()
 
 

@@ -49,7 +49,30 @@ def tasks(cfg):
         for m, extra in engine.expand_methods(cfg, cfg["_where"]):
             out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
                         "stream": [0, 0, 0], "seed": cfg["seed"], "method": m, "params": extra["params"], "timing": None})
+    # the ISO 230-4 evaluation and the error-source diagnosis of both runs: one cached task (its row holds the numbers)
+    spec = {"entry": 0, "point": len(cfg["paths"]), "scenario": "lola_hbg130", "path": "cw+ccw", "label": "lola_hbg130:cw+ccw"}
+    out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0, "stream": [0, 0, 0],
+                "seed": cfg["seed"], "method": EVALUATION, "params": {}, "timing": None, "x_evaluation": True})
     return out
+
+
+#: the ``method`` label of the evaluation row (ISO 230-4 figures and diagnostics of both runs)
+EVALUATION = "ISO 230-4 evaluation and diagnosis"
+ISO_FIGURES = ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation")
+
+
+def evaluation_row(task):
+    """ISO 230-4 figures [mm] and the diagnosed error sources (value, standard uncertainty, unit) of both runs."""
+    from methods.circular_test import diagnose, evaluate
+    cond, err, cw, ccw = scenario(task["seed"])
+    ev = evaluate(cw, ccw, cond.nominal_radius, cond.nominal_center, conditions=cond)
+    dg = diagnose(cw, ccw, cond.nominal_radius, cond.nominal_center, feed_mm_min=cond.feed_mm_min)
+    row = {**engine.base_row(task), "path": "cw+ccw", "status": "ok", "message": ""}
+    row.update({f"iso_{k}": float(ev[k]) for k in ISO_FIGURES})
+    for k, v in dg.items():
+        if not k.startswith("_"):
+            row.update({f"diag_{k}": v["value"], f"diag_{k}_u": v["u"], f"diag_{k}_unit": v["unit"]})
+    return row
 
 
 def scenario(seed):
@@ -72,6 +95,8 @@ def exact_truth(cond, err):
 
 
 def execute(task):
+    if task.get("x_evaluation"):
+        return evaluation_row(task)
     cond, err, cw, ccw = scenario(task["seed"])
     pts = {"both": np.vstack([cw, ccw]), "cw": cw, "ccw": ccw}[task["dataset"]["path"]]
     truth = exact_truth(cond, err)
@@ -86,11 +111,17 @@ def _um(v, ref):
     return (v - ref) * 1e3
 
 
+def _num(v):
+    return None if v is None or v != v else float(v)
+
+
 def analyse(df, cfg, target, log):
     """Fits against the scenario's exact truth and the published values; ISO 230-4 figures; diagnostics."""
-    from methods.circular_test import diagnose, evaluate
-    from methods.circular_test.report import polar_plot, text
+    from methods.circular_test import evaluate
+    from methods.circular_test.report import polar_plot
 
+    evaluation = df[df["method"] == EVALUATION].iloc[0]
+    df = df[df["method"] != EVALUATION]
     cond, err, cw, ccw = scenario(cfg["seed"])
     truth = exact_truth(cond, err)
     xc0, yc0 = cond.nominal_center
@@ -123,13 +154,16 @@ def analyse(df, cfg, target, log):
                              f"      {truth['semi_axes'][0]:9.4f} {truth['semi_axes'][1]:9.4f} {np.degrees(truth['angle']):7.2f} | " +
                              (f"      {p[0]:9.4f} {p[1]:9.4f} {p[2]:7.2f} {p[3]:7.2f}" if p else "      (not published)") +
                              ("" if r.status == "ok" else f"  [{r.status}]"))
-    ev = evaluate(cw, ccw, cond.nominal_radius, cond.nominal_center, conditions=cond)
-    dg = diagnose(cw, ccw, cond.nominal_radius, cond.nominal_center, feed_mm_min=cond.feed_mm_min)
+    ev = evaluate(cw, ccw, cond.nominal_radius, cond.nominal_center, conditions=cond)  # for the polar plot only
     injected = {"squareness": err.squareness * 1e6, "scale_mismatch": (err.scale_x - err.scale_y) * 1e6,
                 "servo_mismatch": err.servo_mismatch * 1e3, "backlash_x": err.backlash_x * 1e3,
                 "backlash_y": err.backlash_y * 1e3, "reversal_spike_x": err.spike_x * 1e3,
                 "reversal_spike_y": err.spike_y * 1e3}
-    lines.append("\n  " + text(ev, dg).replace("\n", "\n  "))
+    iso = {k: float(evaluation[f"iso_{k}"]) for k in ISO_FIGURES}
+    names = [c[len("diag_"):-len("_unit")] for c in evaluation.index if c.startswith("diag_") and c.endswith("_unit")]
+    diagnostics = {k: {"value": _num(evaluation[f"diag_{k}"]), "u": _num(evaluation[f"diag_{k}_u"]),
+                       "unit": evaluation[f"diag_{k}_unit"]} for k in names}
+    lines.append("\n  ISO 230-4 [um]: " + ", ".join(f"{k} {v * 1e3:.2f}" for k, v in iso.items()))
     lines.append("  published (sec. 3.3): G = 27.0 / 26.3 um, G(b) = 27.4 um, H = 9 um; injected: " +
                  ", ".join(f"{k} {v:g}" for k, v in injected.items()))
     for line in lines:
@@ -137,8 +171,6 @@ def analyse(df, cfg, target, log):
     with atomic_path(target / "polar.png") as tmp:
         polar_plot(cw, ccw, ev, tmp, title="LOLA HBG 130 (synthetic scenario)")
     write_atomic(target / "tables.txt", "\n".join(lines) + "\n")
-    iso = {k: float(ev[k]) for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation")}
-    diagnostics = {k: v for k, v in dg.items() if not k.startswith("_")}
     iso_rows = pd.DataFrame([{"figure": k, "synthetic scenario": round(v * 1e3, 2), "published": PAPER_ISO.get(k, np.nan)}
                              for k, v in iso.items()])
     diag_rows = pd.DataFrame([{"source": k, "estimate": v["value"], "u": v["u"], "unit": v["unit"],

@@ -280,26 +280,20 @@ RESULT_COLUMNS = ("status", "message", "converged", "iterations", "nfev", "form_
 
 def fit_row(task: dict, points, truth) -> dict:
     """Fit, measure, time: the generic row of a task (exceptions become status 'error')."""
-    return fit_result_row(task, points, truth)[0]
-
-
-def fit_result_row(task: dict, points, truth) -> tuple[dict, object]:
-    """``fit_row`` and the method's result (None when the fit raised), for a study's ``execute`` that
-    measures more of the result than the generic metrics."""
     row = base_row(task)
     try:
         res = methods.fit(task["method"], points, **task["params"])
     except InvalidInputError as exc:
-        return {**row, "status": "skipped", "message": str(exc)}, None
+        return {**row, "status": "skipped", "message": str(exc)}
     except Exception as exc:  # a method's bug: recorded, retried on the next run
-        return {**row, "status": "error", "message": f"{type(exc).__name__}: {exc}"}, None
+        return {**row, "status": "error", "message": f"{type(exc).__name__}: {exc}"}
     row.update(status="ok" if res.converged else "not converged", message=res.message, converged=res.converged,
                iterations=res.iterations, nfev=res.nfev, **metrics(res, truth))
     if task.get("timing"):
         t = task["timing"]
         row.update(time_call(lambda: methods.fit(task["method"], points, **task["params"]),
                              min_time_s=t.get("min_time_s", 0.02), rounds=t.get("rounds", 5)))
-    return row, res
+    return row
 
 
 def run_task(task: dict) -> dict:

@@ -49,8 +49,9 @@ A study is one TOML file (``experiments/configs/NAME.toml``, or any path)::
 
 Python is needed only for analysis a config cannot express: the study module defines
 ``analyse(df, cfg, target, log) -> Analysis`` (tables, figures it saved under ``target``, named values
-and a findings text built from those values). Older study modules may instead define ``finalize``
-(its dict lands in ``meta.json['findings']``) and ``report_tables(target, findings) -> [Table]``.
+and a findings text built from those values); the values also land in ``meta.json['findings']``. A study
+whose numbers need more computation than its rows declares it as tasks (``tasks(cfg)`` + ``execute(task)``),
+so that the engine caches, resumes and parallelises it; ``analyse`` only aggregates rows.
 
 ``run.py`` writes ``report.json`` (the manifest: sections, numbered later by the report) and one CSV
 per table under ``target/tables/``; everything atomically.
@@ -337,18 +338,11 @@ def _plain(v):
 
 
 def analyse(study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tuple[dict, Analysis]:
-    """Run a study's analysis (``analyse``, or the older ``finalize`` + ``report_tables``) and the
-    TOML's declared tables and figures; return (findings for meta.json, Analysis)."""
-    if hasattr(study, "analyse"):
-        analysis = study.analyse(df, cfg, target, log)
-        findings = dict(analysis.values)
-    else:
-        findings = study.finalize(df, cfg, target, log) if hasattr(study, "finalize") else {}
-        findings = json.loads(json.dumps(findings, default=str))  # what meta.json holds
-        tables = study.report_tables(target, findings) if hasattr(study, "report_tables") else []
-        scalars = {k: v for k, v in findings.items() if isinstance(v, (int, float, str, bool))}
-        analysis = Analysis(tables=list(tables), values=scalars)
+    """Run a study's analysis (its module's ``analyse``, if any) and the TOML's declared tables and figures;
+    return (the named values for meta.json, Analysis)."""
+    analysis = study.analyse(df, cfg, target, log) if hasattr(study, "analyse") else Analysis()
     analysis.values = {"n_rows": len(df), "n_ok": int((df["status"] == "ok").sum()), **analysis.values}
+    findings = json.loads(json.dumps(analysis.values, default=_plain))  # what meta.json holds
     analysis.tables += [declared_table(df, t) for t in cfg.get("tables", [])]
     for f in cfg.get("figures", []):
         analysis.figures.append(declared_figure(df, f, target, len(analysis.figures) + 1))

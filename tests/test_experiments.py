@@ -236,7 +236,11 @@ def test_quick_published_study(tmp_path):
         assert found[("roundness_set2", col)]["reproduced"]
     assert not found[("roundness_set1", "LSQ (paper's Gauss-Newton)")]["reproduced"]
     assert found[("roundness_set1", "LSQ (paper's Gauss-Newton)")]["explained_by_rounding"]
-    assert "time_median_s" in rows and rows["time_median_s"].notna().all()
+    mc = rows["dataset"].str.endswith("(rounding Monte Carlo)")
+    assert "time_median_s" in rows and rows.loc[~mc, "time_median_s"].notna().all()
+    # the rounding Monte Carlo is one engine row per published figure (cached like every fit), quick: 100 fits each
+    assert mc.sum() == len(meta["findings"]["published_vs_reproduced"]) and set(rows.loc[mc, "rounding_samples"]) == {100}
+    assert (rows.loc[mc, "rounding_min"] <= rows.loc[mc, "rounding_max"]).all()
 
 
 @pytest.mark.parametrize("name", ["noise", "convergence", "ellipse_angle", "scaling", "circular_test", "positioning",
@@ -249,6 +253,9 @@ def test_quick_default_studies_run(tmp_path, name):
     assert manifest["tables"] and manifest["figures"] and manifest["quick"] is True
     for t in manifest["tables"]:
         assert len(pd.read_csv(target / t["file"])) > 0 and t["caption"]
+    # a findings paragraph generated from the run's numbers (a digit in it), never a template left unfilled
+    findings = manifest["findings"]
+    assert findings and "not filled" not in findings and any(ch.isdigit() for ch in findings), findings
     for f in manifest["figures"]:
         assert (target / f["file"]).stat().st_size > 10_000 and f["caption"]
 

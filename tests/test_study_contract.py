@@ -184,3 +184,37 @@ def test_plugin_method_and_data_source_reach_a_study_and_the_report(tmp_path):
     report = (out / "paper" / "report.md").read_text()
     assert "Plugin method on plugin data" in report and "circle.median_radius" in report
     assert "plugins: fitbench-outlier-plugin 0.3.1" in report
+
+
+def test_every_default_study_declares_tables_with_captions_and_findings():
+    """Static part of the contract (the quick runs in test_experiments check the rendered manifest): every default
+    study either has an ``analyse`` (tables, figures, values, findings) or declares tables with captions and a
+    findings template in its TOML; no study module keeps the removed ``finalize``/``report_tables`` hooks."""
+    import importlib
+
+    from experiments import config as configs
+    from experiments.run import default_studies
+    names = default_studies()
+    assert len(names) >= 9
+    for name in names:
+        cfg = configs.load(name)
+        module = importlib.import_module(f"experiments.studies.{cfg['kind']}")
+        assert not hasattr(module, "finalize") and not hasattr(module, "report_tables"), name
+        if hasattr(module, "analyse"):
+            continue
+        assert cfg.get("tables") and all(t.get("caption") for t in cfg["tables"]), name
+        assert cfg.get("report", {}).get("findings"), name
+
+
+def test_analyse_tables_have_captions_units_and_generated_findings(tmp_path):
+    """An ``analyse`` study run end to end on quick rows (noise: the smallest): each returned table has a caption
+    naming its data, the findings quote numbers of the named values."""
+    import json
+
+    from experiments.run import run_study
+    target = run_study("noise", tmp_path, quick=True, jobs=1, log=lambda *a: None)
+    manifest = json.loads((target / "report.json").read_text())
+    assert manifest["tables"] and all("synthetic" in t["caption"] for t in manifest["tables"])
+    v = manifest["values"]
+    assert f"σ = {v['sigma']:g} R" in manifest["findings"]
+    assert f"{len(v['within_10_percent'])} of" in manifest["findings"]

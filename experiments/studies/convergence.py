@@ -13,13 +13,22 @@ import pandas as pd
 import methods
 from experiments import engine
 from experiments.engine import ConfigError
-from experiments.study import save_csv, save_figure
+from experiments.study import Analysis, Figure, Table, save_csv
 
 
 def validate(cfg, where):
     d = cfg.get("start_distances")
     if not isinstance(d, list) or not d or not all(isinstance(v, (int, float)) and v >= 0 for v in d):
         raise ConfigError(f"{where}: start_distances must be a list of non-negative numbers, got {d!r}")
+    refs = cfg.get("reference_optimum")
+    if not isinstance(refs, dict) or "default" not in refs:
+        raise ConfigError(f"{where}: reference_optimum must be a table method id -> the method giving the known "
+                          f"optimum of its objective, with a 'default' entry")
+    for r in refs.values():
+        try:
+            methods.get(r)
+        except methods.UnknownMethodError as exc:
+            raise ConfigError(f"{where}: reference_optimum: {exc}") from None
     k = cfg.get("start_directions")
     if not isinstance(k, int) or k < 1:
         raise ConfigError(f"{where}: start_directions must be a positive integer, got {k!r}")
@@ -35,20 +44,21 @@ def tasks(cfg):
         for d in cfg["start_distances"]:
             for k in range(cfg["start_directions"]):
                 out.append({**t, "x_start_distance": float(d), "x_start_direction": k,
-                            "x_directions": cfg["start_directions"]})
+                            "x_directions": cfg["start_directions"],
+                            "x_reference_optimum": cfg["reference_optimum"]})
     return out
 
 
-def _objective(method_id, points, c, r):
-    d = np.hypot(points[:, 0] - c[0], points[:, 1] - c[1])
-    if method_id == "circle.powell_hybrid":
-        e = d * d - r * r
-        return float(e @ e)
-    e = d - r
-    return float(e @ e)
+def reference_method(cfg_or_task: dict, method_id: str) -> str:
+    """The method that gives the known optimum of ``method_id``'s objective (TOML ``reference_optimum``:
+    a table method id -> reference id, with a ``default``)."""
+    refs = cfg_or_task["x_reference_optimum"] if "x_reference_optimum" in cfg_or_task else cfg_or_task["reference_optimum"]
+    return refs.get(method_id, refs["default"])
 
 
 def execute(task):
+    """Fit from the distant start; compare with the known optimum (the reference method of the TOML). The
+    objective values are the method's own: the first ``history`` entry of a restart at each circle."""
     points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
     R = truth["radius"]
     phi = 2 * np.pi * task["x_start_direction"] / task["x_directions"]
@@ -61,22 +71,29 @@ def execute(task):
     row["start_x"], row["start_y"], row["start_radius"] = start
     row["start_distance"] = task["x_start_distance"]
     row["start_direction_deg"] = float(np.degrees(phi))
-    ref_id = "circle.kasa" if task["method"] == "circle.powell_hybrid" else "circle.levenberg_marquardt"
-    ref = methods.fit(ref_id, points)
+    ref = methods.fit(reference_method(task, task["method"]), points)
     if row.get("status") in ("ok", "not converged") and "center_x" in row:
         dist = max(np.hypot(row["center_x"] - ref.center[0], row["center_y"] - ref.center[1]),
                    abs(row["radius"] - ref.radius))
         row["distance_to_optimum"] = float(dist)
         row["success"] = bool(row["status"] == "ok" and dist <= 1e-6 * R)
-        f = _objective(task["method"], points, (row["center_x"], row["center_y"]), row["radius"])
-        f_opt = _objective(task["method"], points, ref.center, ref.radius)
-        row["objective_excess"] = f - f_opt
+        f = _objective_at(task, points, (row["center_x"], row["center_y"], row["radius"]))
+        f_opt = _objective_at(task, points, (*ref.center, ref.radius))
+        if f is not None and f_opt is not None:
+            row["objective_excess"] = f - f_opt
     else:
         row["success"] = False
     return row
 
 
-def finalize(df, cfg, target, log):
+def _objective_at(task, points, circle) -> float | None:
+    """The method's own objective at ``circle``: the first entry of its history when started there."""
+    res = methods.fit(task["method"], points, **{**task["params"], "start": [float(v) for v in circle]})
+    return float(res.history[0]) if res.history else None
+
+
+def success_table(df):
+    """Success rate and median iterations/evaluations of the successful runs per arc, method and start distance."""
     rows = []
     for (arc, m, p, dist), g in df.groupby(["data_arc_deg", "method", "params", "start_distance"], sort=False):
         ok = g[g["success"] == True]  # noqa: E712
@@ -84,54 +101,48 @@ def finalize(df, cfg, target, log):
                      "success_rate": len(ok) / len(g),
                      "iterations_median": float(ok["iterations"].median()) if len(ok) and ok["iterations"].notna().any() else np.nan,
                      "nfev_median": float(ok["nfev"].median()) if len(ok) else np.nan})
-    table = pd.DataFrame(rows)
+    return pd.DataFrame(rows)
+
+
+def _label(m, p):
+    return m + ("" if p == "{}" else " " + p.replace('"', "").replace("{", "").replace("}", ""))
+
+
+def analyse(df, cfg, target, log):
+    """Success tables per arc (success.csv), the redrawn success figure, and which methods always converge."""
+    from experiments.render import figures
+
+    table = success_table(df)
     save_csv(table, target / "success.csv", index=False, float_format="%.4g")
-    log("  success rate by start distance (radii):")
+    figures.convergence_success(table, target / "convergence.png")
+    tables = []
+    n_dirs = cfg["start_directions"]
+    data = cfg["datasets"][0].get("params", {})
     for arc, ta in table.groupby("arc_deg", sort=False):
         piv = ta.pivot_table(index=["method", "params"], columns="start_distance", values="success_rate", sort=False)
         log(f"  {arc:.0f}° arc " + " " * 28 + "".join(f"{c:>7g}" for c in piv.columns))
         for (m, p), vals in piv.iterrows():
-            label = m + ("" if p == "{}" else " " + p.replace('"', "").replace("{", "").replace("}", ""))
-            log(f"    {label:<40}" + "".join(f"{v:7.2f}" for v in vals))
-    figure(table, target)
-    return {"success_table": "success.csv", "figure": "convergence.png"}
-
-
-def figure(table, target):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    arcs = list(table["arc_deg"].unique())
-    fig, axes = plt.subplots(1, len(arcs), figsize=(5 * len(arcs), 3.6), squeeze=False, sharey=True)
-    for j, arc in enumerate(arcs):
-        groups = list(table[table["arc_deg"] == arc].groupby(["method", "params"], sort=False))
-        for k, ((m, p), g) in enumerate(groups):
-            label = m.split(".", 1)[1] + ("" if p == "{}" else " " + p.replace('"', "").replace("{", "").replace("}", ""))
-            # small vertical offsets keep coinciding curves visible
-            axes[0, j].semilogx(g["start_distance"], g["success_rate"] + 0.012 * (k - len(groups) / 2),
-                                marker="osd^v"[k % 5], ms=5, label=label)
-        axes[0, j].set_title(f"{arc:.0f}° arc")
-        axes[0, j].set_xlabel("start distance from the centre [radii]")
-    axes[0, 0].set_ylabel("success rate (curves offset by ±0.03 for visibility)")
-    axes[0, -1].legend(fontsize=7)
-    fig.tight_layout()
-    save_figure(fig, target / "convergence.png", dpi=110)
-    plt.close(fig)
-
-
-def report_tables(folder, f):
-    """The tables a reader wants from this study (moved here from the report, which names no study)."""
-    import pandas as pd
-
-    from experiments.study import Table
-    out = []
-    t = pd.read_csv(folder / "success.csv")
-    for arc, g in t.groupby("arc_deg", sort=False):
-        piv = g.pivot_table(index=["method", "params"], columns="start_distance", values="success_rate", sort=False)
-        piv.columns = [f"{c:g} R" for c in piv.columns]
-        piv = piv.reset_index()
-        piv["method"] = piv["method"] + piv["params"].map(lambda p: "" if p == "{}" else " " + p.replace('"', ""))
-        out.append((f"Convergence from distant starts ({arc:.0f}° arc): success rate by start distance",
-                    piv.drop(columns=["params"]).round(2)))
-    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]
+            log(f"    {_label(m, p):<40}" + "".join(f"{v:7.2f}" for v in vals))
+        shown = (piv * 100).round(1)
+        shown.columns = [f"{c:g} R" for c in piv.columns]
+        shown.index = [_label(m, p) for m, p in piv.index]
+        shown = shown.rename_axis("method").reset_index()
+        tables.append(Table(caption=f"Share of runs reaching the optimum of the method's own objective (within 1e-6 R) "
+                                    f"from starts d radii from the true centre, {n_dirs} directions each; synthetic "
+                                    f"circle, {arc:.0f}° arc, N = {data.get('n')}, sigma = {data.get('noise')} R",
+                            data=shown, unit="%"))
+    lab = table.assign(label=[_label(m, p) for m, p in zip(table["method"], table["params"])])
+    worst = lab.groupby("label", sort=False)["success_rate"].min()
+    always = [m for m, v in worst.items() if v == 1.0]
+    far = table["start_distance"].max()
+    values = {"always_converged": always, "largest_start_distance": float(far),
+              "lowest_success_rate": {m: float(v) for m, v in worst.items()}}
+    findings = (f"{len(always)} of {len(worst)} method variants reach their optimum from every start up to {far:g} "
+                f"radii on every arc ({', '.join(always) or 'none'}).")
+    others = [m for m in worst.index if m not in always]
+    if others:
+        findings += " Lowest success rate of the others: " + "; ".join(f"{m} {100 * worst[m]:.0f} %" for m in others) + "."
+    fig = Figure(caption="Share of runs from distant starts that reach the optimum of the method's own objective, "
+                         "against the start distance [radii], synthetic circles (full circle and arc); iterative "
+                         "methods only", file="convergence.png")
+    return Analysis(tables=tables, figures=[fig], values=values, findings=findings)

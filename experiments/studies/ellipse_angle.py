@@ -2,32 +2,30 @@
 
 For each a - b, noisy copies of the ellipse are fitted; the RMS angle error is compared with the
 first-order (Gauss–Markov) prediction sigma * sqrt([(J^T J)^-1]_theta,theta) from the orthogonal-
-distance Jacobian at the truth, which grows like sigma / ((a - b) sqrt(N / 2)): the angle of a
-near-circle is ill-conditioned.
+distance Jacobian at the truth (``methods.ellipse.parameter_covariance``), which grows like
+sigma / ((a - b) sqrt(N / 2)): the angle of a near-circle is ill-conditioned.
 """
 from __future__ import annotations
 
 import json
 
 import numpy as np
+import pandas as pd
 
 from datasets.synthetic import ellipse_points
-from methods.ellipse._geometry import orthogonal_residuals
-from methods.ellipse.orthogonal import distance_jacobian
-from experiments.study import save_figure
+from methods.ellipse import parameter_covariance
+from experiments.study import Analysis, Figure, Table
 
 
 def predicted_angle_sd(points, p, sigma):
-    _, phi = orthogonal_residuals(points[:, 0], points[:, 1], p)
-    J = distance_jacobian(points[:, 0], points[:, 1], p, phi)
-    return float(sigma * np.sqrt(np.linalg.inv(J.T @ J)[4, 4]))
+    """First-order s.d. of the fitted angle [rad]."""
+    return float(np.sqrt(parameter_covariance(points, p, sigma)[4, 4]))
 
 
-def finalize(df, cfg, target, log):
-    params = cfg["datasets"][0]["params"]
+def angle_table(df, params) -> pd.DataFrame:
+    """Per a - b: the predicted s.d. and each method's RMS angle error [deg] (converged fits)."""
     sigma, theta = float(params["noise"]), np.radians(params["angle_deg"])
-    summary = []
-    log(f"  {'a - b [mm]':>10} {'predicted [deg]':>15} " + " ".join(f"{m:>24}" for m in df["method"].unique()))
+    rows = []
     for axes_json, g in df.groupby("data_semi_axes", sort=False):
         a, b = json.loads(axes_json)
         exact = ellipse_points(params["center"], (a, b), theta, params["n"])
@@ -36,41 +34,59 @@ def finalize(df, cfg, target, log):
         for m, gm in g.groupby("method", sort=False):
             ok = gm[gm["status"] == "ok"]["angle_error"].astype(float)
             row[f"rms_error_deg {m}"] = float(np.degrees(np.sqrt(np.mean(ok ** 2)))) if len(ok) else float("nan")
-        summary.append(row)
-        log(f"  {a - b:10.4f} {row['predicted_sd_deg']:15.4f} "
-            + " ".join(f"{v:24.4f}" for k, v in row.items() if k.startswith("rms")))
-    figure(summary, target, sigma, params["n"], params["semi_axes"] if "semi_axes" in params else None)
-    return {"summary": summary, "figure": "angle_conditioning.png"}
+        rows.append(row)
+    return pd.DataFrame(rows)
 
 
-def figure(summary, target, sigma, n, _):
+def analyse(df, cfg, target, log):
+    """RMS angle error against a - b with the first-order prediction; findings: how close each method is to it."""
+    params = cfg["datasets"][0]["params"]
+    table = angle_table(df, params)
+    log(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    figure(table, target, params["noise"], params["n"])
+    ratio = {c.split(" ", 1)[1]: table[c] / table["predicted_sd_deg"] for c in table.columns if c.startswith("rms")}
+    values = {"ratio_to_prediction": {m: [float(v) for v in r] for m, r in ratio.items()},
+              "a_minus_b_mm": [float(v) for v in table["a_minus_b_mm"]],
+              "largest_predicted_sd_deg": float(table["predicted_sd_deg"].max()),
+              "smallest_predicted_sd_deg": float(table["predicted_sd_deg"].min())}
+    reps = int(df.groupby(["data_semi_axes", "method"]).size().max())
+    findings = (f"The first-order prediction of the angle's scatter grows from {values['smallest_predicted_sd_deg']:.3g}° "
+                f"at a − b = {table['a_minus_b_mm'].max():.4g} mm to {values['largest_predicted_sd_deg']:.3g}° at "
+                f"a − b = {table['a_minus_b_mm'].min():.4g} mm. ")
+    findings += "; ".join(f"{m}: RMS error / prediction between {r.min():.2f} and {r.max():.2f}"
+                          for m, r in ratio.items())
+    findings += f" ({reps} noisy copies per a − b, so a ratio is known to about ±{100 / np.sqrt(2 * reps):.0f} %)."
+    shown = table.rename(columns={"a_minus_b_mm": "a - b [mm]", "predicted_sd_deg": "predicted s.d. [°]",
+                                  **{c: f"{c.split(' ', 1)[1]} RMS [°]" for c in table.columns if c.startswith("rms")}})
+    caption = (f"RMS error of the fitted axis angle [°] against the axis difference a - b, and the first-order "
+               f"prediction sigma sqrt([(J^T J)^-1]_theta,theta); synthetic near-circular ellipses, a = 299.0243 mm, N = {params['n']}, "
+               f"sigma = {params['noise'] * 1e3:g} µm per coordinate, {reps} repetitions")
+    fig = Figure(caption="RMS error of the fitted axis angle [°] against a − b [µm] on synthetic near-circular "
+                         "ellipses, with the first-order prediction: the angle of a near-circle is ill-conditioned",
+                 file="angle_conditioning.png")
+    return Analysis(tables=[Table(caption=caption, data=shown, unit="°", digits=4)], figures=[fig], values=values,
+                    findings=findings)
+
+
+def figure(table, target, sigma, n):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    diffs = np.array([s["a_minus_b_mm"] for s in summary]) * 1e3
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    ax.loglog(diffs, [s["predicted_sd_deg"] for s in summary], "k-", label="first order: σ·sqrt([(JᵀJ)⁻¹]θθ)")
-    for key, marker in zip([k for k in summary[0] if k.startswith("rms_error_deg")], "os"):
-        ax.loglog(diffs, [s[key] for s in summary], marker, mfc="none", label=key.split(" ", 1)[1] + " (RMS)")
-    ax.axvline(22.1, color="0.6", ls=":", label="paper's ellipse (22.1 µm)")
-    ax.set_xlabel(f"a − b [µm]  (a = 299.0243 mm, N = {n}, σ = {sigma * 1e3:g} µm per coordinate)")
-    ax.set_ylabel("angle error [deg]")
-    ax.set_title("Angle of a near-circle: error ∝ σ / ((a − b)·sqrt(N/2))")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    target.mkdir(parents=True, exist_ok=True)
-    save_figure(fig, target / "angle_conditioning.png", dpi=120)
-    plt.close(fig)
-
-
-def report_tables(folder, f):
-    """The tables a reader wants from this study (moved here from the report, which names no study)."""
-    import pandas as pd
-
-    from experiments.study import Table
-    out = []
-    out.append(("Angle of a near-circle: RMS angle error [deg] against a - b, and the first-order prediction",
-                pd.DataFrame(f.get("summary", [])).round(4)))
-    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]
+    from experiments.render import style
+    diffs = table["a_minus_b_mm"].to_numpy() * 1e3
+    with style.figure_style():
+        fig, ax = plt.subplots(figsize=style.size(0.8, 0.6))
+        ax.loglog(diffs, table["predicted_sd_deg"], "k-", label="first order: σ·sqrt([(JᵀJ)⁻¹]θθ)")
+        for key in [k for k in table.columns if k.startswith("rms_error_deg")]:
+            m = key.split(" ", 1)[1]
+            kw = style.method_style(m)
+            ax.loglog(diffs, table[key], marker=kw["marker"], color=kw["color"], linestyle="none", mfc="none",
+                      label=f"{kw['label']} (RMS)")
+        ax.axvline(22.1, color="0.6", ls=":", label="paper's ellipse (22.1 µm)")
+        ax.set_xlabel(f"a − b [µm]  (N = {n}, σ = {sigma * 1e3:g} µm)")
+        ax.set_ylabel("angle error [°]")
+        style.plain_log_ticks(ax, "both")
+        style.legend_outside(fig, ncol=2)
+        style.save(fig, target / "angle_conditioning.png")
+        plt.close(fig)

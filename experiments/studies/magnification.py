@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 
 import methods
 from datasets.contouring import EXAMPLES
 from experiments.engine import ConfigError
 from methods.magnify import MagnifyInput
-from experiments.study import save_csv, save_figure
+from experiments.study import Analysis, Figure, Table, save_csv
 
 VARIANTS = {  # label -> (method, selection, delta rule)
     "nearest (conventional)": ("magnify.nearest", None, None),
@@ -62,58 +61,51 @@ def execute(task):
             "nearest_point_used": res.extra.get("nearest_point_used", 0)}
 
 
-def finalize(df, cfg, target, log):
+#: the trajectories drawn side by side: (example, variants, zoom box in mm or None)
+SHOWN = [("corner_inside_convex", ["nearest (conventional)", "offset as printed, delta = 10 e_max",
+                                   "offset same side, delta = 10 e_max"], None),
+         ("free_form_0.1mm", ["nearest (conventional)", "offset same side, delta = 2 e_max",
+                              "offset same side, delta = 1.2 eta e_max"], (15.0, 16.6, 1.65, 2.45))]
+
+
+def _panel(name, label, eta, box):
+    method, selection, rule = VARIANTS[label]
+    params = {} if method == "magnify.nearest" else {"selection": selection, "delta_emax": rule[1],
+                                                     "delta_times_eta": rule[0] == "eta_e"}
+    return {"example": name, "eta": eta, "method": method, "params": params, "title": f"{name}: {label}", "box": box}
+
+
+def analyse(df, cfg, target, log):
+    """Continuity / loops table from the rows, the redrawn continuity chart and trajectories; findings:
+    which algorithm variants stay continuous and loop-free on every example they apply to."""
+    from experiments.render import figures
+
     table = df.pivot_table(index="dataset", columns="method", values=["continuity", "loops"], sort=False)
     save_csv(table, target / "metrics.csv", float_format="%.4g")
-    labels = list(VARIANTS)
-    log("  continuity (<= ~1: continuous) / loops, per example and algorithm:")
-    log("  " + f"{'example':<26}" + "".join(f"{lab[:22]:>24}" for lab in labels))
-    for name in dict.fromkeys(df["dataset"]):
-        g = df[df["dataset"] == name].set_index("method")
-        cells = []
-        for lab in labels:
-            c, lo = g.loc[lab].get("continuity"), g.loc[lab].get("loops")
-            cells.append(f"{'skipped':>24}" if c is None or c != c else f"{c:>16.2f} / {int(lo):<5d}")
-        log("  " + f"{name:<26}" + "".join(cells))
-    figures(cfg, target)
-    return {"metrics": "metrics.csv", "figure": "magnification.png"}
-
-
-def figures(cfg, target):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    shown = [("corner_inside_convex", ["nearest (conventional)", "offset as printed, delta = 10 e_max",
-                                       "offset same side, delta = 10 e_max"], None),
-             ("free_form_0.1mm", ["nearest (conventional)", "offset same side, delta = 2 e_max",
-                                  "offset same side, delta = 1.2 eta e_max"], (15.0, 16.6, 1.65, 2.45))]
-    fig, axes = plt.subplots(len(shown), 3, figsize=(13, 8.4))
-    for row, (name, labels, box) in enumerate(shown):
-        for col, label in enumerate(labels):
-            data, res, params, emax = run_variant(name, label, cfg["examples"][name])
-            ax = axes[row, col]
-            ax.plot(*data.reference.T, color="0.6", lw=1.0)
-            ax.plot(*res.points.T, lw=0.8, color="tab:blue")
-            if box:  # a zoom (the loops are small); else the whole magnified corner
-                ax.set_xlim(box[0], box[1])
-                ax.set_ylim(box[2], box[3])
-            ax.set_aspect("equal")
-            ax.set_title(f"{name}: {label}\ncontinuity {res.extra['continuity']:.2f}, loops {res.extra['self_intersections']}",
-                         fontsize=8)
-    fig.tight_layout()
-    save_figure(fig, target / "magnification.png", dpi=110)
-    plt.close(fig)
-
-
-def report_tables(folder, f):
-    """The tables a reader wants from this study (moved here from the report, which names no study)."""
-    import pandas as pd
-
-    from experiments.study import Table
-    out = []
-    df = pd.read_csv(folder / "results.csv")
-    df["cell"] = df.apply(lambda r: "skipped" if r["status"] != "ok" else f"{r['continuity']:.2f} / {int(r['loops'])}", axis=1)
-    piv = df.pivot_table(index="dataset", columns="method", values="cell", aggfunc="first", sort=False).reset_index()
-    out.append(("Continuity (about 1 or less: continuous) / loops of the magnified trajectories", piv))
-    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]
+    cells = df.assign(cell=[("skipped" if st != "ok" else f"{c:.2f} / {int(lo)}")
+                            for st, c, lo in zip(df["status"], df["continuity"], df["loops"])])
+    piv = cells.pivot_table(index="dataset", columns="method", values="cell", aggfunc="first", sort=False)
+    piv = piv[[v for v in VARIANTS if v in piv.columns]].rename_axis("example").reset_index()
+    log(piv.to_string(index=False))
+    figures.magnification_continuity(df, target / "magnification_continuity.png")
+    figures.magnification_trajectories([_panel(n, lab, cfg["examples"][n], box) for n, labs, box in SHOWN
+                                        if n in cfg["examples"] for lab in labs], target / "magnification.png")
+    ok = df[df["status"] == "ok"]
+    clean = {}
+    for label, g in ok.groupby("method", sort=False):
+        clean[label] = int(((g["continuity"] <= 1.0 + 1e-9) & (g["loops"] == 0)).sum())
+    applied = ok.groupby("method", sort=False).size()
+    values = {"continuous_loop_free": clean, "applicable": applied.to_dict(),
+              "skipped": df[df["status"] != "ok"].groupby("method").size().to_dict()}
+    findings = ("Examples where the magnified trajectory is continuous (continuity ≤ 1) and has no loops, out of "
+                "those the algorithm applies to: " + "; ".join(f"{lab}: {clean[lab]} of {applied[lab]}"
+                                                              for lab in VARIANTS if lab in clean) + ".")
+    caption = (f"Continuity (largest magnified step / (eta x largest measured step); about 1 or less: continuous) and "
+               f"loops (self-intersections) of the magnified trajectory, as 'continuity / loops', for "
+               f"{len(cfg['examples'])} contouring examples (eta 50 to 1000, dimensionless); 'skipped': the algorithm "
+               "does not apply")
+    figs = [Figure(caption="Continuity (left, log scale) and loops (right) of the magnified trajectory per contouring "
+                           "example and algorithm variant", file="magnification_continuity.png"),
+            Figure(caption="Magnified trajectories (positions in mm, errors magnified by η) by the conventional "
+                           "nearest-point rule and by offset-algorithm variants", file="magnification.png")]
+    return Analysis(tables=[Table(caption=caption, data=piv)], figures=figs, values=values, findings=findings)

@@ -9,6 +9,7 @@ of the 21 geometric errors identified from the volumetric errors, runtime.
 """
 from __future__ import annotations
 
+import json
 import time
 
 import numpy as np
@@ -16,10 +17,11 @@ import pandas as pd
 
 import methods
 from datasets import multilateration as sim
+from experiments import engine
 from experiments.engine import ConfigError
 from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_matrix, identify
 from methods.multilateration.solvers import kabsch
-from experiments.study import save_csv, save_figure
+from experiments.study import Analysis, Figure, Table, save_csv
 
 SCENARIO_KEYS = {"stations", "noise", "errors", "grid"}
 MODES = ("located", "known")
@@ -36,6 +38,15 @@ def validate(cfg, where):
                               f"(allowed: {sorted(SCENARIO_KEYS)})")
     for m in cfg.get("methods", []):
         methods.get(f"multilateration.{m}")
+    named = [*cfg.get("axis_figure", [])]
+    if cfg.get("conditioning_check"):
+        c = cfg["conditioning_check"]
+        named += [c["published"], c["same_estimator"], c["reference"]]
+    for m in named:
+        try:
+            methods.get(m)
+        except methods.UnknownMethodError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
 
 
 def _scenario(params):
@@ -61,7 +72,7 @@ def tasks(cfg):
                                 "repetition": r, "stream": [i, 0, r], "seed": cfg["seed"],
                                 "method": f"multilateration.{m}", "params": {}, "timing": None,
                                 "x_mode": mode})
-    return out
+    return out + conditioning_tasks(cfg)
 
 
 def simulate(task):
@@ -70,13 +81,13 @@ def simulate(task):
 
 
 def execute(task):
+    if "x_conditioning" in task:
+        return conditioning_row(task)
     data, truth = simulate(task)
     mode = task["x_mode"]
     if mode == "known":
         data = data.with_stations(truth["stations"])
-    row = {"study": task["study"], "dataset": task["dataset"]["label"], "repetition": task["repetition"],
-           "seed": task["seed"], "data_stream": ".".join(map(str, task["stream"])), "method": task["method"],
-           "params": "{}", "stations": mode, "n_points": len(data.points), "n_stations": len(data.stations)}
+    row = {**engine.base_row(task), "stations": mode, "n_points": len(data.points), "n_stations": len(data.stations)}
     t0 = time.perf_counter()
     res = methods.fit(task["method"], data)
     row["runtime_s"] = time.perf_counter() - t0
@@ -86,16 +97,25 @@ def execute(task):
     return row
 
 
-def metrics(res, data, truth, mode) -> dict:
+def _in_result_frame(res, data, truth, mode):
+    """The true points and stations in the frame the result is reported in: a scheme whose located result is
+    aligned to the nominal points (its message says so) is compared with the truth aligned the same way."""
     actual, stations = truth["actual"], truth["stations"]
-    if res.method.endswith(".joint") and mode == "located":        # the joint result is aligned to the nominal grid
+    if mode == "located" and "aligned to the nominal points" in (res.message or ""):
         R, t = kabsch(actual, data.points)
         actual = actual @ R.T + t
         stations = np.column_stack([stations[:, :3] @ R.T + t, stations[:, 3]])
+    return actual, stations
+
+
+def metrics(res, data, truth, mode) -> dict:
+    actual, stations = _in_result_frame(res, data, truth, mode)
     out = {}
     if mode == "located":
         out["station_error_um"] = 1e3 * float(np.max(np.linalg.norm(res.stations[:, :3] - stations[:, :3], axis=1)))
         out["dead_path_error_um"] = 1e3 * float(np.max(np.abs(res.stations[:, 3] - stations[:, 3])))
+        out["station_deltas_um"] = json.dumps({str(sid): [round(1e3 * float(v), 6) for v in res.stations[k] - stations[k]]
+                                               for k, sid in enumerate(res.station_ids)})
     e = np.linalg.norm(res.points - actual, axis=1)
     out["volumetric_error_rms_um"] = 1e3 * float(np.sqrt(np.mean(e ** 2)))
     out["volumetric_error_max_um"] = 1e3 * float(e.max())
@@ -124,9 +144,95 @@ def metrics(res, data, truth, mode) -> dict:
     return out
 
 
-# ---------------------------------------------------------------- tables and figures
+# ---------------------------------------------------------------- exact-length conditioning check (tasks)
 
-def finalize(df, cfg, target, log):
+def conditioning_tasks(cfg):
+    """One task per (station set, mode) of the TOML's ``conditioning_check``: the published scheme against
+    the same estimator in a well-conditioned form, and a reference scheme, on exact lengths."""
+    chk = cfg.get("conditioning_check")
+    if not chk:
+        return []
+    out = []
+    for j, stations in enumerate(chk["stations"]):
+        label = "-".join(map(str, stations)) if isinstance(stations, list) else str(stations)
+        spec = {"entry": len(cfg["scenarios"]), "point": j, "label": f"exact lengths, stations {label}",
+                "params": {"stations": stations, "noise": 0.0}}
+        for mode in MODES:
+            out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
+                        "stream": [len(cfg["scenarios"]), j, 0], "seed": cfg["seed"], "method": chk["published"],
+                        "params": {}, "timing": None, "x_mode": mode,
+                        "x_conditioning": {"same_estimator": chk["same_estimator"], "reference": chk["reference"]}})
+    return out
+
+
+def conditioning_row(task):
+    """What the published scheme's conditioning costs in double precision on exact lengths."""
+    chk = task["x_conditioning"]
+    data, truth = sim.simulate(**_scenario(task["dataset"]["params"]))
+    if task["x_mode"] == "known":
+        data = data.with_stations(truth["stations"])
+    b = methods.fit(task["method"], data)
+    c = methods.fit(chk["same_estimator"], data)
+    a = methods.fit(chk["reference"], data)
+    return {**engine.base_row(task), "stations": task["x_mode"], "status": "ok", "message": "",
+            "published_vs_centred_um": 1e3 * float(np.max(np.abs(b.points - c.points))),
+            "kappa_points_published": float(np.median(b.condition_numbers["points"]["svd"])),
+            "kappa_points_centred": float(np.median(c.condition_numbers["points"]["svd"])),
+            "case_b_vs_truth_um": 1e3 * float(np.max(np.abs(b.points - truth["actual"]))),
+            "case_a_vs_truth_um": 1e3 * float(np.max(np.abs(a.points - truth["actual"])))}
+
+
+# ---------------------------------------------------------------- analysis
+
+def _first_noisy(cfg):
+    """The scenario of the stations table and the x-axis figure: the first with noise, 6 stations, machine errors."""
+    for i, s in enumerate(cfg["scenarios"]):
+        p = s["params"]
+        if p.get("noise", 1.0) > 0 and p.get("stations", 6) == 6 and p.get("errors", "default") != "none":
+            return i, s
+    return 0, cfg["scenarios"][0]
+
+
+def _campaign_rows(df, cfg):
+    i, s = _first_noisy(cfg)
+    g = df[(df["dataset"] == s["label"]) & (df["repetition"] == 0) & (df["stations"] == "located")]
+    return s, g
+
+
+def stations_table(df, cfg):
+    """Tables 5-9 of the paper: each scheme's stations of one simulated campaign against the truth [µm] (from
+    the rows: ``station_deltas_um`` of repetition 0, stations located)."""
+    s, g = _campaign_rows(df, cfg)
+    rows = []
+    for r in g.itertuples():
+        if not isinstance(r.station_deltas_um, str):
+            continue
+        for sid, d in json.loads(r.station_deltas_um).items():
+            rows.append({"method": r.method.split(".", 1)[1], "station": sid, "dx_um": d[0], "dy_um": d[1],
+                         "dz_um": d[2], "dL_um": d[3]})
+    return s["label"], pd.DataFrame(rows)
+
+
+def winner(acc):
+    """The most accurate scheme per scenario and mode (median aligned volumetric-error RMS)."""
+    out = []
+    for (scen, mode), g in acc.groupby(["dataset", "stations"], sort=False):
+        g = g.sort_values("aligned_error_rms_um")
+        best, second = g.iloc[0], g.iloc[1]
+        out.append({"scenario": scen, "stations": mode, "best": best["method"],
+                    "best_rms_um": float(best["aligned_error_rms_um"]), "runner_up": second["method"],
+                    "runner_up_rms_um": float(second["aligned_error_rms_um"])})
+    return pd.DataFrame(out)
+
+
+def analyse(df, cfg, target, log):
+    """Accuracy and conditioning per scenario, stations table, winners, the exact-length conditioning check,
+    the redrawn conditioning figure and the x-axis figure; findings from the winners."""
+    from experiments.render import figures
+
+    is_check = df["dataset"].str.startswith("exact lengths, stations ") if "published_vs_centred_um" in df else \
+        pd.Series(False, index=df.index)
+    check, df = df[is_check], df[~is_check]
     ok = df[df["status"] == "ok"].copy()
     ok["method"] = ok["method"].str.replace("multilateration.", "", regex=False)
     cols = ["station_error_um", "dead_path_error_um", "volumetric_error_rms_um", "volumetric_error_max_um",
@@ -136,189 +242,90 @@ def finalize(df, cfg, target, log):
     acc = ok.groupby(["dataset", "stations", "method"], sort=False)[cols].median().reset_index()
     acc.insert(3, "runs", ok.groupby(["dataset", "stations", "method"], sort=False).size().to_numpy())
     save_csv(acc, target / "accuracy.csv", index=False, float_format="%.6g")
-    log(f"  {'scenario':<62} {'stations':<8} {'method':<16} {'station um':>10} {'vol RMS um':>10} {'aligned':>8} "
-        f"{'kappa st':>9} {'kappa pt':>9}")
     for r in acc.itertuples():
-        log(f"  {r.dataset[:62]:<62} {r.stations:<8} {r.method:<16} {getattr(r, 'station_error_um', np.nan):10.3f} "
-            f"{r.volumetric_error_rms_um:10.3f} {r.aligned_error_rms_um:8.3f} {getattr(r, 'kappa_stations', np.nan):9.3g} "
-            f"{r.kappa_points:9.3g}")
-    findings = {"accuracy": acc.to_dict(orient="records")}
-    findings["stations_table"] = stations_table(cfg, target)
-    findings["rounding"] = rounding(cfg)
-    findings["winner"] = winner(acc)
+        log(f"  {r.dataset[:62]:<62} {r.stations:<8} {r.method:<16} vol RMS {r.volumetric_error_rms_um:10.3f} µm "
+            f"aligned {r.aligned_error_rms_um:8.3f} µm")
+    scen_label, st = stations_table(df, cfg)
+    save_csv(st, target / "stations_table.csv", index=False, float_format="%.6f")
+    win = winner(acc)
+    figures.multilateration_conditioning(acc, target / "multilateration.png")
     figure_axis_line(cfg, target)
-    figure_kappa(acc, target)
-    findings["figure"] = "multilateration.png"
-    findings["example"] = "x_axis.png"
-    return findings
-
-
-def _first_noisy(cfg):
-    for i, s in enumerate(cfg["scenarios"]):
-        p = s["params"]
-        if p.get("noise", 1.0) > 0 and p.get("stations", 6) == 6 and p.get("errors", "default") != "none":
-            return i, s
-    return 0, cfg["scenarios"][0]
-
-
-def stations_table(cfg, target):
-    """Tables 5-9 of the paper: each scheme's stations of one simulated campaign against the truth."""
-    i, s = _first_noisy(cfg)
-    task = {"seed": cfg["seed"], "stream": [i, 0, 0], "dataset": {"params": s["params"]}}
-    data, truth = simulate(task)
-    rows = []
-    for m in cfg["methods"]:
-        res = methods.fit(f"multilateration.{m}", data)
-        st = truth["stations"]
-        if m == "joint":
-            R, t = kabsch(truth["actual"], data.points)
-            st = np.column_stack([st[:, :3] @ R.T + t, st[:, 3]])
-        for k, sid in enumerate(res.station_ids):
-            d = (res.stations[k] - st[k]) * 1e3
-            rows.append({"method": m, "station": sid, "x": res.stations[k, 0], "y": res.stations[k, 1],
-                         "z": res.stations[k, 2], "L": res.stations[k, 3], "dx_um": d[0], "dy_um": d[1], "dz_um": d[2],
-                         "dL_um": d[3]})
-    for k, sid in enumerate(data.stations):
-        st = truth["stations"][k]
-        rows.append({"method": "truth", "station": sid, "x": st[0], "y": st[1], "z": st[2], "L": st[3],
-                     "dx_um": 0.0, "dy_um": 0.0, "dz_um": 0.0, "dL_um": 0.0})
-    table = pd.DataFrame(rows)
-    save_csv(table, target / "stations_table.csv", index=False, float_format="%.6f")
-    return {"scenario": s["label"], "rows": table.to_dict(orient="records")}
-
-
-def rounding(cfg):
-    """What the published Case B's conditioning costs in double precision: its solution against the centred
-    one (the same estimator) on exact lengths, stations located and given."""
-    out = []
-    for stations in (6, 4, (1, 2, 3, 4)):
-        data, truth = sim.simulate(stations=stations, noise=0.0)
-        for mode in MODES:
-            d = data if mode == "located" else data.with_stations(truth["stations"])
-            b = methods.fit("multilateration.case_b_linear", d)
-            c = methods.fit("multilateration.case_b_centred", d)
-            a = methods.fit("multilateration.case_a_distance", d)
-            out.append({"stations": "-".join(map(str, stations)) if isinstance(stations, tuple) else str(stations),
-                        "mode": mode,
-                        "published_vs_centred_um": 1e3 * float(np.max(np.abs(b.points - c.points))),
-                        "kappa_points_published": float(np.median(b.condition_numbers["points"]["svd"])),
-                        "kappa_points_centred": float(np.median(c.condition_numbers["points"]["svd"])),
-                        "case_b_vs_truth_um": 1e3 * float(np.max(np.abs(b.points - truth["actual"]))),
-                        "case_a_vs_truth_um": 1e3 * float(np.max(np.abs(a.points - truth["actual"])))})
-    return out
-
-
-def winner(acc):
-    """The most accurate scheme per scenario and mode (median aligned volumetric-error RMS)."""
-    out = []
-    for (scen, mode), g in acc.groupby(["dataset", "stations"], sort=False):
-        g = g.sort_values("aligned_error_rms_um")
-        best, second = g.iloc[0], g.iloc[1]
-        a = g[g["method"] == "case_a_distance"]["aligned_error_rms_um"]
-        b = g[g["method"] == "case_b_linear"]["aligned_error_rms_um"]
-        out.append({"scenario": scen, "stations": mode, "best": best["method"],
-                    "best_rms_um": float(best["aligned_error_rms_um"]), "runner_up": second["method"],
-                    "runner_up_rms_um": float(second["aligned_error_rms_um"]),
-                    "case_a_rms_um": float(a.iloc[0]) if len(a) else None,
-                    "case_b_rms_um": float(b.iloc[0]) if len(b) else None})
-    return out
+    runs = int(acc["runs"].max())
+    tables = []
+    if len(st):
+        tables.append(Table(caption=f"Stations located by each scheme in one simulated campaign ({scen_label}): "
+                                    "difference from the true station and dead path (the paper's tables 5-9; the "
+                                    "joint adjustment in its gauge)", data=st.round(3), unit="µm"))
+    keep = ["dataset", "stations", "method", "runs", "station_error_um", "volumetric_error_rms_um",
+            "aligned_error_rms_um", "model_error_rms_um"]
+    tables.append(Table(caption=f"Median over {runs} simulated LaserTRACER campaigns of the MCV 754 per scenario: largest "
+                                "station error, RMS error of the volumetric errors (raw, and after the best rigid "
+                                "alignment), RMS error of the map from the 21 identified errors",
+                        data=acc[[c for c in keep if c in acc.columns]].rename(columns={
+                            "dataset": "scenario", "stations": "stations are", "station_error_um": "station [µm]",
+                            "volumetric_error_rms_um": "vol. RMS [µm]", "aligned_error_rms_um": "aligned RMS [µm]",
+                            "model_error_rms_um": "21-error map RMS [µm]"}), unit="µm", digits=3))
+    kap = [c for c in ("kappa_stations", "kappa_stations_theorem1", "kappa_points", "kappa_points_theorem1") if c in acc]
+    tables.append(Table(caption=f"Median condition numbers (2-norm by SVD, and Theorem 1's lower estimate) of step 1 "
+                                f"(stations) and step 2 (points) over {runs} simulated campaigns per scenario "
+                                "(dimensionless)", data=acc[["dataset", "stations", "method"] + kap], digits=3))
+    tables.append(Table(caption=f"Most accurate scheme per scenario and mode: median RMS volumetric-error error after "
+                                f"alignment over {runs} simulated campaigns", data=win.round(3), unit="µm"))
+    if len(check):
+        chk = check[["dataset", "stations", "published_vs_centred_um", "kappa_points_published", "kappa_points_centred",
+                     "case_b_vs_truth_um", "case_a_vs_truth_um"]]
+        tables.append(Table(caption="Exact lengths (simulated, no noise): what the published Case B's conditioning costs "
+                                    "in double precision (its points against the centred solution of the same "
+                                    "equations) and its error against the truth [µm]; condition numbers dimensionless",
+                            data=chk, unit="µm", digits=3))
+    counts = win.groupby("best").size().sort_values(ascending=False)
+    values = {"winners": win.to_dict(orient="records"), "best_counts": counts.to_dict(),
+              "accuracy": acc.to_dict(orient="records")}
+    findings = (f"Over {len(win)} scenario/mode combinations ({runs} simulated campaigns each), the most accurate scheme "
+                "(median volumetric-error RMS after alignment) is " + "; ".join(f"{m} in {n}" for m, n in counts.items())
+                + ".")
+    if len(check):
+        findings += (f" On exact lengths the published Case B departs from the centred solution of the same equations "
+                     f"by up to {check['published_vs_centred_um'].max():.3g} µm (condition number up to "
+                     f"{check['kappa_points_published'].max():.3g} against {check['kappa_points_centred'].max():.3g}).")
+    figs = [Figure(caption="Condition numbers of both steps (median κ₂ and Theorem 1's estimate) and the median "
+                           f"volumetric-error RMS after alignment [µm] per scheme; first scenario, {runs} simulated "
+                           "campaigns, stations located", file="multilateration.png"),
+            Figure(caption="One simulated campaign: volumetric errors along the x axis [µm] against x [mm], truth and "
+                           "three schemes with self-located stations (the paper's figures 5-6)", file="x_axis.png")]
+    return Analysis(tables=tables, figures=figs, values=values, findings=findings)
 
 
 def figure_axis_line(cfg, target):
     """Figures 5-6 of the paper: volumetric errors along the x axis (y = 0, z = 0, no tool offset), truth
-    against Case A, Case B and the joint adjustment, stations located."""
+    against the schemes of the TOML's ``axis_figure`` list, stations located."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from experiments.render import style
     i, s = _first_noisy(cfg)
     params = _scenario(s["params"])
     params["grid"] = (16, 4, 4)
     data, truth = sim.simulate(rng=np.random.default_rng(cfg["seed"]), **params)
     on = np.flatnonzero((truth["axes"][:, 1] == 0) & (truth["axes"][:, 2] == 0) & np.all(truth["offsets"] == 0, axis=1))
     x = truth["axes"][on, 0]
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6), sharex=True)
-    shown = [("truth", truth["volumetric_errors"], dict(color="k", lw=2)),]
-    for m, style in (("case_a_distance", dict(color="tab:red", marker="o", ms=3)),
-                     ("case_b_linear", dict(color="tab:blue", marker="s", ms=3, ls="--")),
-                     ("joint", dict(color="tab:green", marker="^", ms=3, ls=":"))):
-        res = methods.fit(f"multilateration.{m}", data)
-        vol = res.volumetric_errors
-        if m == "joint":   # its gauge: compare after the truth's own best alignment
-            R, t = kabsch(truth["actual"], data.points)
-            vol = vol - ((truth["actual"] @ R.T + t) - truth["actual"])
-        shown.append((m, vol, style))
-    for c, ax in enumerate(axes):
-        for label, vol, style in shown:
-            ax.plot(x, vol[on, c] * 1e3, label=label, **style)
-        ax.set_title(f"Δ{'xyz'[c]} on the x axis", fontsize=9)
-        ax.set_xlabel("x [mm]")
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel("volumetric error [µm]")
-    axes[0].legend(fontsize=7)
-    fig.suptitle(f"{s['label']}: stations located by each scheme", fontsize=9)
-    fig.tight_layout()
-    save_figure(fig, target / "x_axis.png", dpi=110)
-    plt.close(fig)
-
-
-def figure_kappa(acc, target):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    sub = acc[acc["stations"] == "located"]
-    scen = sub["dataset"].iloc[0]
-    g = sub[sub["dataset"] == scen]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
-    xs = np.arange(len(g))
-    for ax, step in zip(axes, ("stations", "points")):
-        ax.bar(xs, g[f"kappa_{step}"], color="tab:blue", label="κ₂ by SVD (median)")
-        ax.scatter(xs, g[f"kappa_{step}_theorem1"], color="tab:red", zorder=3, label="Theorem 1 lower estimate")
-        ax.set_yscale("log")
-        ax.set_xticks(xs, g["method"], rotation=25, fontsize=7)
-        ax.axhline(100, color="k", ls="--", lw=0.8, label="100 (the paper's 'satisfactory')")
-        ax.set_title(f"step {'1: stations' if step == 'stations' else '2: points'}", fontsize=9)
-    axes[0].legend(fontsize=7)
-    ax2 = axes[1].twinx()
-    ax2.plot(xs, g["aligned_error_rms_um"], "ko-", label="volumetric error RMS [µm]")
-    ax2.set_ylabel("volumetric error RMS after alignment [µm]", fontsize=8)
-    ax2.legend(fontsize=7, loc="upper right")
-    fig.suptitle(scen, fontsize=9)
-    fig.tight_layout()
-    save_figure(fig, target / "multilateration.png", dpi=110)
-    plt.close(fig)
-
-
-def report_tables(folder, f):
-    """The tables a reader wants from this study (moved here from the report, which names no study)."""
-    import pandas as pd
-
-    from experiments.study import Table
-    out = []
-    st = f.get("stations_table", {})
-    t = pd.DataFrame(st.get("rows", []))
-    if len(t):
-        t = t[t["method"] != "truth"][["method", "station", "dx_um", "dy_um", "dz_um", "dL_um"]].round(3)
-        out.append((f"Stations located by each scheme, one campaign ({st.get('scenario', '')}): difference from the "
-                    "truth [um] (the paper's tables 5-9; the joint adjustment in its gauge)", t))
-    acc = pd.DataFrame(f.get("accuracy", []))
-    if len(acc):
-        keep = ["dataset", "stations", "method", "runs", "station_error_um", "volumetric_error_rms_um",
-                "aligned_error_rms_um", "model_error_rms_um", "kappa_stations", "kappa_stations_theorem1",
-                "kappa_points", "kappa_points_theorem1"]
-        acc = acc[[c for c in keep if c in acc.columns]].rename(columns={
-            "dataset": "scenario", "stations": "stations are", "station_error_um": "station [um]",
-            "volumetric_error_rms_um": "vol. RMS [um]", "aligned_error_rms_um": "aligned RMS [um]",
-            "model_error_rms_um": "21-error map RMS [um]", "kappa_stations": "kappa st.",
-            "kappa_stations_theorem1": "Thm 1 st.", "kappa_points": "kappa pt.", "kappa_points_theorem1": "Thm 1 pt."})
-        for c in acc.columns[4:]:
-            acc[c] = acc[c].map(lambda v: "" if pd.isna(v) else f"{v:.3g}")
-        out.append(("Median over the Monte Carlo runs: largest station error, volumetric-error error (RMS, and after "
-                    "the best rigid alignment), error of the map from the 21 identified errors, condition numbers", acc))
-    out.append(("Most accurate scheme per scenario (median aligned RMS [um])", pd.DataFrame(f.get("winner", [])).round(3)))
-    r = pd.DataFrame(f.get("rounding", []))
-    if len(r):
-        for c in r.columns[2:]:
-            r[c] = r[c].map(lambda v: f"{v:.3g}")
-        out.append(("Exact lengths: what the published Case B's conditioning costs in double precision (its points "
-                    "against the centred solution of the same equations) and its error against the truth [um]", r))
-    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]
+    shown = [("truth", truth["volumetric_errors"], dict(color="k", lw=2))]
+    for m in cfg.get("axis_figure", []):
+        res = methods.fit(m, data)
+        actual, _ = _in_result_frame(res, data, truth, "located")
+        # compare in the result's frame: subtract the frame change of the truth
+        vol = res.volumetric_errors - (actual - truth["actual"])
+        kw = style.method_style(m)
+        shown.append((kw["label"], vol, dict(color=kw["color"], marker=kw["marker"], ms=3)))
+    with style.figure_style():
+        fig, axes = plt.subplots(1, 3, figsize=style.size(1.0, 0.38), sharex=True)
+        for c, ax in enumerate(axes):
+            for label, vol, kw in shown:
+                ax.plot(x, vol[on, c] * 1e3, label=label, **kw)
+            ax.set_title(f"Δ{'xyz'[c]} on the x axis")
+            ax.set_xlabel("x [mm]")
+        axes[0].set_ylabel("volumetric error [µm]")
+        style.legend_outside(fig, ncol=4)
+        style.save(fig, target / "x_axis.png")
+        plt.close(fig)

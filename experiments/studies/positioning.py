@@ -5,13 +5,13 @@ U(P) = 2 sqrt(x^T Cov x) (its figure 3). Positions are drawn uniformly along the
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 
 import methods
 from datasets.positioning import axis_test
+from experiments import engine
 from experiments.engine import ConfigError
 from methods.positioning.model import evaluate_band
-from experiments.study import save_csv, save_figure, atomic_path
+from experiments.study import Analysis, Figure, Table, atomic_path, save_csv
 
 BANDS = ("iso230-2 point-wise (mean +- 2s)", "OLS cubic", "GLS cubic (paper)")
 
@@ -56,63 +56,53 @@ def execute(task):
         res = methods.fit("positioning.gls_polynomial", data, instrument_u=s.get("instrument_u"), mpe=s.get("mpe"))
         v, U = evaluate_band(res.polynomial["up"], P)
     err = v - truth["up"](P)
-    return {"study": task["study"], "dataset": task["dataset"]["label"], "repetition": task["repetition"],
-            "seed": task["seed"], "data_stream": ".".join(map(str, task["stream"])), "method": band, "params": "{}",
-            "status": "ok", "message": "", "coverage": float(np.mean(np.abs(err) <= U)),
+    return {**engine.base_row(task), "status": "ok", "message": "", "coverage": float(np.mean(np.abs(err) <= U)),
             "band_halfwidth_mean": float(np.mean(U)), "error_rms": float(np.sqrt(np.mean(err ** 2)))}
 
 
-def finalize(df, cfg, target, log):
+def analyse(df, cfg, target, log):
+    """Coverage table (coverage.csv), the redrawn coverage figure, the example axis; findings: which band
+    reaches the nominal 95 % in every scenario."""
+    from experiments.render import figures
+
     table = df.groupby(["dataset", "method"], sort=False).agg(coverage=("coverage", "mean"),
                                                               halfwidth_um=("band_halfwidth_mean", "mean"),
                                                               error_rms_um=("error_rms", "mean")).reset_index()
     table["halfwidth_um"] *= 1e3
     table["error_rms_um"] *= 1e3
     save_csv(table, target / "coverage.csv", index=False, float_format="%.4g")
-    log(f"  {'scenario':<55} {'band':<34} {'coverage':>8} {'half-width':>10} {'RMS error':>9}")
     for r in table.itertuples():
         log(f"  {r.dataset:<55} {r.method:<34} {r.coverage:8.3f} {r.halfwidth_um:8.2f} um {r.error_rms_um:7.2f} um")
+    figures.positioning_coverage(table, target / "positioning.png")
     example(cfg, target)
-    return {"coverage": table.to_dict(orient="records"), "figure": "positioning.png", "example": "example.png"}
+    worst = table.groupby("method", sort=False)["coverage"].min()
+    reaching = [b for b, v in worst.items() if v >= 0.95]
+    values = {"lowest_coverage": {b: float(v) for b, v in worst.items()}, "bands_at_nominal": reaching,
+              "mean_halfwidth_um": table.groupby("method", sort=False)["halfwidth_um"].mean().to_dict()}
+    findings = (f"Over {df['dataset'].nunique()} scenarios, {len(reaching)} of {len(worst)} bands cover the true deviation "
+                f"curve at the nominal 95 % or more in every scenario ({', '.join(reaching) or 'none'}); lowest coverage: "
+                + "; ".join(f"{b} {100 * v:.1f} %" for b, v in worst.items()) + ".")
+    reps = int(df.groupby(["dataset", "method"]).size().max())
+    shown = table.rename(columns={"dataset": "scenario", "method": "band", "halfwidth_um": "mean half-width [µm]",
+                                  "error_rms_um": "RMS error [µm]"}).round(3)
+    shown["coverage"] = (shown["coverage"] * 100).round(1)
+    shown = shown.rename(columns={"coverage": "coverage [%]"})
+    caption = (f"Coverage of the true deviation curve (approach +) by each band at {cfg.get('positions_per_test', 50)} "
+               f"random positions per test, mean band half-width and RMS error of the band's centre line; "
+               f"{reps} simulated ISO 230-2 axis tests per scenario")
+    figs = [Figure(caption=f"Coverage of the true deviation curve by each band per scenario ({reps} simulated ISO 230-2 "
+                           "axis tests each), with the nominal 95 %", file="positioning.png"),
+            Figure(caption="One simulated axis with the periodic error: measured deviations [µm] against the target "
+                           "position [mm], with the ISO 230-2 and polynomial-model bands", file="example.png")]
+    return Analysis(tables=[Table(caption=caption, data=shown, unit="%, µm")], figures=figs, values=values,
+                    findings=findings)
 
 
 def example(cfg, target):
-    """The paper's figures 2 and 3 for one synthetic axis with the periodic error, and the coverage bars."""
+    """The paper's figures 2 and 3 for one synthetic axis with the periodic error."""
     from methods.positioning.report import plot
     s = cfg["scenarios"][-1]
     data, _ = axis_test(rng=np.random.default_rng(cfg["seed"]), **s["params"])
     res = methods.fit("positioning.gls_polynomial", data, instrument_u=s.get("instrument_u"), mpe=s.get("mpe"))
     with atomic_path(target / "example.png") as tmp:
         plot(res, tmp, title=f"synthetic axis: {s['label']}")
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    cov = pd.read_csv(target / "coverage.csv")
-    scen = list(dict.fromkeys(cov["dataset"]))
-    fig, ax = plt.subplots(figsize=(10, 4))
-    w = 0.8 / len(BANDS)
-    for b, band in enumerate(BANDS):
-        vals = [cov[(cov.dataset == sname) & (cov.method == band)]["coverage"].mean() for sname in scen]
-        ax.bar(np.arange(len(scen)) + (b - 1) * w, vals, w, label=band)
-    ax.axhline(0.95, color="k", lw=0.8, ls="--", label="95 %")
-    ax.set_xticks(np.arange(len(scen)), [sname.replace(", ", ",\n", 1) for sname in scen], fontsize=7)
-    ax.set_ylabel("coverage of the true curve")
-    ax.set_ylim(0, 1.05)
-    ax.legend(fontsize=7, loc="lower left")
-    fig.tight_layout()
-    save_figure(fig, target / "positioning.png", dpi=110)
-    plt.close(fig)
-
-
-def report_tables(folder, f):
-    """The tables a reader wants from this study (moved here from the report, which names no study)."""
-    import pandas as pd
-
-    from experiments.study import Table
-    out = []
-    t = pd.DataFrame(f.get("coverage", []))
-    if len(t):
-        t = t.rename(columns={"dataset": "scenario", "method": "band", "halfwidth_um": "half-width [um]",
-                              "error_rms_um": "RMS error [um]"}).round(3)
-    out.append(("Coverage of the true deviation curve by the bands (1000 synthetic axes per scenario)", t))
-    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]

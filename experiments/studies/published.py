@@ -1,19 +1,45 @@
 """Study ``published``: every circle method on the roundness paper's published profiles, and its
 table 1 (LSQ, Voronoi minimum zone, MIC, MCC) published against reproduced. Where a figure is not
 reproduced, coordinates consistent with the printed digits (uniform within half a unit of the last
-printed decimal) are refitted to measure the spread that the rounding alone allows."""
+printed decimal) are refitted to measure the spread that the rounding alone allows: one engine task
+per (data set, table column), so the Monte Carlo is cached, resumable and parallel like every row."""
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 import datasets
 import methods
-from experiments.study import save_figure
+from experiments import engine
+from experiments.render.text import percentile_phrase
+from experiments.study import Analysis, Figure, Table
 
 #: table 1 columns of the roundness paper and the method that reproduces each
 PUBLISHED_COLUMNS = {"LSQ (paper's Gauss-Newton)": "circle.gauss_newton",
                      "Voronoi (minimum zone)": "circle.minimum_zone",
                      "MIC": "circle.max_inscribed", "MCC": "circle.min_circumscribed"}
+#: the data set label of the rounding Monte Carlo rows (one row per data set and table column)
+ROUNDING = " (rounding Monte Carlo)"
+
+
+def tasks(cfg):
+    """The fits of every method on every published set, and one rounding Monte Carlo task per published
+    figure of table 1 (its own seed stream: (seed, 99, data set entry, column))."""
+    out = engine.grid_tasks(cfg, cfg["_where"])
+    samples = int(cfg.get("rounding", {}).get("samples", 1000))
+    for spec in engine.expand_datasets(cfg, cfg["_where"]):
+        variant = spec.get("variant")
+        ds = datasets.load(spec["published"], drop_repeated_closing_point=variant == "drop_repeated_closing_point")
+        for c, (column, method_id) in enumerate(PUBLISHED_COLUMNS.items()):
+            pub = ds.published.get(column)
+            if pub is None:
+                continue
+            out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": {**spec, "label": spec["label"] + ROUNDING},
+                        "repetition": 0, "stream": [99, spec["entry"], c], "seed": cfg["seed"], "method": method_id,
+                        "params": {}, "timing": None,
+                        "x_rounding": {"column": column, "published": pub, "samples": samples,
+                                       "decimals": int(ds.meta.get("decimals_printed", 6))}})
+    return out
 
 
 def rounding_spread(points: np.ndarray, decimals: int, *, samples: int, rng, method: str) -> np.ndarray:
@@ -27,98 +53,83 @@ def rounding_spread(points: np.ndarray, decimals: int, *, samples: int, rng, met
     return widths[np.isfinite(widths)]
 
 
-def compare(ds, variant: str, column: str, method_id: str, pub: float, samples: int, rng) -> dict:
-    res = methods.fit(method_id, ds.points)
-    digits = len(repr(pub).split(".")[1]) if "." in repr(pub) else 0
-    reproduced = round(res.form_error, digits) == pub
-    decimals = int(ds.meta.get("decimals_printed", 6))
-    widths = rounding_spread(ds.points, decimals, samples=samples, rng=rng, method=method_id)
+def execute(task):
+    """A generic fit row, or a rounding Monte Carlo row (percentiles of the circularity)."""
+    points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
+    if "x_rounding" not in task:
+        return engine.fit_row(task, points, truth)
+    r = task["x_rounding"]
+    rng = np.random.default_rng(np.random.SeedSequence(task["seed"], spawn_key=tuple(task["stream"])))
+    widths = rounding_spread(points, r["decimals"], samples=r["samples"], rng=rng, method=task["method"])
+    row = {**engine.base_row(task), "table_column": r["column"], "published": r["published"],
+           "decimals_printed": r["decimals"], "rounding_samples": len(widths)}
+    if not len(widths):
+        return {**row, "status": "not converged", "message": "no fit of the rounded data converged"}
     lo, med, hi = np.percentile(widths, [0.5, 50, 99.5])
-    pct = float(np.mean(widths <= pub) * 100)
-    inside = bool(widths.min() <= pub <= widths.max())
-    if reproduced:
-        verdict = f"reproduced: {res.form_error:.7f} rounds to the published {pub}"
-    elif inside:
-        verdict = (f"not reproduced from the printed data (difference {res.form_error - pub:+.7f}); coordinates "
-                   f"consistent with the {decimals} printed decimals give {lo:.6f} .. {hi:.6f} (99 % range) and the "
-                   f"published value lies at their {pct:.1f}th percentile: consistent with the paper having "
-                   "evaluated the unrounded source data")
-    else:
-        verdict = (f"NOT reproduced and not explained by the rounding of the printed data (difference "
-                   f"{res.form_error - pub:+.7f}; rounding range {widths.min():.6f} .. {widths.max():.6f})")
-    return {"dataset": ds.name, "variant": variant, "column": column, "method": method_id, "published": pub,
-            "reproduced_value": res.form_error, "difference": res.form_error - pub, "reproduced": reproduced,
-            "decimals_printed": decimals, "rounding_p0_5": lo, "rounding_median": med, "rounding_p99_5": hi,
-            "rounding_min": float(widths.min()), "rounding_max": float(widths.max()),
-            "published_percentile": pct, "explained_by_rounding": inside, "samples": len(widths), "verdict": verdict}
+    return {**row, "status": "ok", "message": f"{len(widths)} of {r['samples']} fits converged",
+            "rounding_p0_5": lo, "rounding_median": med, "rounding_p99_5": hi, "rounding_min": float(widths.min()),
+            "rounding_max": float(widths.max()), "published_percentile": float(np.mean(widths <= r["published"]) * 100)}
 
 
-def finalize(df, cfg, target, log):
-    samples = int(cfg.get("rounding", {}).get("samples", 1000))
-    rng = np.random.default_rng(np.random.SeedSequence(cfg["seed"], spawn_key=(99,)))
-    out = []
-    for spec in cfg["datasets"]:
-        name, variant = spec["published"], spec.get("variant")
-        ds = datasets.load(name, drop_repeated_closing_point=variant == "drop_repeated_closing_point")
-        label = name + (f":{variant}" if variant else "")
-        mine = df[df["dataset"] == label]
-        log(f"\n  {label} ({ds.meta['table']}, {len(ds.points)} points); published: "
-            + ", ".join(f"{k} {v}" for k, v in ds.published.items() if v is not None))
-        log(f"  {'method':<28} {'params':<20} {'circularity':>12} {'centre x':>13} {'centre y':>13} {'status':<8} {'time':>10}")
-        for r in mine.itertuples():
-            t = f"{r.time_median_s * 1e6:8.1f} µs" if hasattr(r, "time_median_s") and r.time_median_s == r.time_median_s else ""
-            params = "" if r.params == "{}" else r.params
-            log(f"  {r.method:<28} {params:<20} {r.form_error:12.7f} {r.center_x:13.7f} {r.center_y:13.7f} "
-                f"{r.status:<8} {t:>10}")
-        for column, method_id in PUBLISHED_COLUMNS.items():
-            pub = ds.published.get(column)
-            if pub is None:
-                continue
-            c = compare(ds, variant or "as published", column, method_id, pub, samples, rng)
-            log(f"  {column:<27} [{method_id}] published {pub}: {c['verdict']}")
-            out.append(c)
-    figure(out, target)
-    return {"published_vs_reproduced": out, "figure": "published.png"}
+def comparison(df: pd.DataFrame) -> pd.DataFrame:
+    """Published against reproduced, one row per published figure: the reproduced value is the method's fit
+    row on the printed data, the rounding range the Monte Carlo row."""
+    mc = df[df["dataset"].str.endswith(ROUNDING)]
+    fits = df[~df["dataset"].str.endswith(ROUNDING) & (df["params"] == "{}")].set_index(["dataset", "method"])
+    rows = []
+    for r in mc.itertuples():
+        label = r.dataset[: -len(ROUNDING)]
+        value = float(fits.loc[(label, r.method), "form_error"])
+        pub = float(r.published)
+        digits = len(repr(pub).split(".")[1]) if "." in repr(pub) else 0
+        name, _, variant = label.partition(":")
+        rows.append({"dataset": name, "variant": variant or "as published", "column": r.table_column, "method": r.method,
+                     "published": pub, "reproduced_value": value, "difference": value - pub,
+                     "reproduced": round(value, digits) == pub, "decimals_printed": int(r.decimals_printed),
+                     "rounding_p0_5": r.rounding_p0_5, "rounding_median": r.rounding_median,
+                     "rounding_p99_5": r.rounding_p99_5, "rounding_min": r.rounding_min, "rounding_max": r.rounding_max,
+                     "published_percentile": r.published_percentile,
+                     "explained_by_rounding": bool(r.rounding_min <= pub <= r.rounding_max),
+                     "samples": int(r.rounding_samples)})
+    return pd.DataFrame(rows)
 
 
-def figure(rows, target):
-    """Published against reproduced circularity, with the 99 % range the printed digits allow."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, len(rows), figsize=(1.5 * len(rows) + 1, 3.6))
-    for ax, r in zip(np.atleast_1d(axes), rows):
-        ax.errorbar([0], [r["rounding_median"]], yerr=[[r["rounding_median"] - r["rounding_p0_5"]],
-                                                       [r["rounding_p99_5"] - r["rounding_median"]]],
-                    fmt="none", ecolor="0.6", capsize=6, lw=2, label="99 % rounding range")
-        ax.plot([0], [r["reproduced_value"]], "o", color="tab:blue", label="reproduced")
-        ax.plot([0], [r["published"]], "x", color="tab:red", ms=9, label="published")
-        ax.set_xticks([])
-        set_name = r["dataset"].replace("roundness_", "") + ("*" if r["variant"] != "as published" else "")
-        ax.set_title(f"{set_name}\n{r['column'].split(' ')[0]}", fontsize=8)
-        ax.tick_params(labelsize=7)
-        ax.ticklabel_format(axis="y", useOffset=False)
-    np.atleast_1d(axes)[0].legend(fontsize=6, loc="lower left")
-    fig.suptitle("Roundness paper, table 1: published vs reproduced circularity [mm] (*: repeated point dropped)",
-                 fontsize=9)
-    fig.tight_layout()
-    save_figure(fig, target / "published.png", dpi=110)
-    plt.close(fig)
+def _explanation(r) -> str:
+    if r["reproduced"]:
+        return "reproduced"
+    if r["explained_by_rounding"]:
+        return (f"rounding of the printed coordinates: 99 % range {r['rounding_p0_5']:.6f}..{r['rounding_p99_5']:.6f}, "
+                f"published at {percentile_phrase(r['published_percentile'], 0)}")
+    return "NOT explained by the rounding of the printed data"
 
 
-def report_tables(folder, f):
-    """The tables a reader wants from this study (moved here from the report, which names no study)."""
-    import pandas as pd
+def analyse(df, cfg, target, log):
+    """Table 1 published against reproduced, the redrawn comparison figure; findings: how many figures are
+    reproduced, how many the rounding of the printed data explains."""
+    from experiments.render import figures
 
-    from experiments.study import Table
-    out = []
-    rows = [{"set": r["dataset"] + ("" if r["variant"] == "as published" else f" ({r['variant']})"),
-             "column": r["column"], "published": r["published"], "reproduced": round(r["reproduced_value"], 7),
-             "difference": round(r["difference"], 7),
-             "explanation": "reproduced" if r["reproduced"] else
-             (f"rounding of the printed coordinates: 99 % range {r['rounding_p0_5']:.6f}..{r['rounding_p99_5']:.6f}, "
-              f"published at the {r['published_percentile']:.0f}th percentile" if r["explained_by_rounding"]
-              else "NOT explained")}
-            for r in f.get("published_vs_reproduced", [])]
-    out.append(("Roundness paper, table 1: published against reproduced circularity [mm]", pd.DataFrame(rows)))
-    return [Table(caption=c, data=t) for c, t in out if t is not None and len(t)]
+    comp = comparison(df)
+    for r in comp.to_dict(orient="records"):
+        log(f"  {r['dataset']} {r['variant']:<28} {r['column']:<27} published {r['published']}: "
+            f"{r['reproduced_value']:.7f} ({_explanation(r)})")
+    figures.published_circularity(comp, target / "published.png")
+    n, rep = len(comp), int(comp["reproduced"].sum())
+    explained = int((~comp["reproduced"] & comp["explained_by_rounding"]).sum())
+    values = {"published_figures": n, "reproduced": rep, "explained_by_rounding": explained,
+              "not_explained": n - rep - explained, "rounding_samples": int(comp["samples"].min()) if n else 0,
+              "published_vs_reproduced": comp.to_dict(orient="records")}
+    findings = (f"Of the {n} circularity figures of the paper's table 1, {rep} are reproduced from the printed "
+                f"coordinates to the printed digits; {explained} more lie inside the range that coordinates "
+                f"consistent with the printed digits give ({values['rounding_samples']} Monte Carlo fits each), and "
+                f"{n - rep - explained} are not explained.")
+    shown = pd.DataFrame({"set": comp["dataset"] + comp["variant"].map(lambda v: "" if v == "as published" else f" ({v})"),
+                          "column": comp["column"], "published": comp["published"],
+                          "reproduced": comp["reproduced_value"].round(7), "difference": comp["difference"].round(7),
+                          "explanation": [_explanation(r) for r in comp.to_dict(orient="records")]})
+    caption = ("Circularity of the roundness paper's published profiles (table 1, roundness sets 1-3): published "
+               "against reproduced from the printed coordinates, and where not reproduced the 99 % range that "
+               f"coordinates consistent with the printed digits give ({values['rounding_samples']} fits each) [mm]")
+    fig = Figure(caption="Published profiles of the roundness paper: reproduced circularity and the 99 % range the "
+                         "printed digits allow, relative to the published value [µm]", file="published.png")
+    return Analysis(tables=[Table(caption=caption, data=shown, unit="mm")], figures=[fig], values=values,
+                    findings=findings)

@@ -4,14 +4,16 @@ circle and whether its solver certified it. Cut-offs above N/7 UPR are skipped (
 The analysis (``rank_table``, ``cutoff_table``) is pure functions of the rows."""
 from __future__ import annotations
 
-import json
+import textwrap
 
 import numpy as np
 import pandas as pd
 
 import datasets
 import methods
+from experiments import engine
 from experiments.engine import ConfigError
+from experiments.study import Analysis, Figure, Table, save_csv
 from methods.roundness.filter import POINTS_PER_CUTOFF, parse_cutoff
 
 REFS = ("lsci", "mzci", "mici", "mcci")
@@ -69,14 +71,11 @@ def execute(task):
     spec = task["dataset"]
     pts = load(spec, task["seed"], task["stream"])
     cut = task["params"]["cutoff_upr"]
-    row = {"study": task["study"], "dataset": spec["label"], "repetition": task["repetition"], "seed": task["seed"],
-           "data_stream": ".".join(map(str, task["stream"])), "method": task["method"],
-           "params": json.dumps(task["params"], sort_keys=True), "cutoff_upr": "none" if cut is None else cut,
-           "n_points": int(pts.shape[0])}
+    row = {**engine.base_row(task), "cutoff_upr": "none" if cut is None else cut, "n_points": int(pts.shape[0])}
     if cut is not None and pts.shape[0] < POINTS_PER_CUTOFF * cut:
         return {**row, "status": "skipped", "message": f"{pts.shape[0]} points cannot carry a {cut:g} UPR cut-off "
                                                        f"(ISO 12181-2: >= {POINTS_PER_CUTOFF} x cut-off points)"}
-    res = methods.fit("roundness.iso12181", pts, cutoff_upr=cut, reference="all")
+    res = methods.fit(task["method"], pts, **task["params"])
     row.update(status="ok" if res.converged else "not converged", message=res.message, converged=res.converged)
     for k, ref in res.references.items():
         row[f"RONt_{k}_um"] = ref["RONt"] * 1e3
@@ -112,43 +111,72 @@ def rank_table(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
-def finalize(df, cfg, target, log):
+def analyse(df, cfg, target, log):
+    """RONt by cut-off (certified fits) and the ranking of the four reference circles; figure; findings."""
     table = cutoff_table(df)
     ranks = rank_table(df)
-    table.to_csv(target / "ront_by_cutoff.csv", index=False, float_format="%.5g")
-    ranks.to_csv(target / "ranking.csv", index=False, float_format="%.5g")
-    log(f"  {'profile':<42} {'cut-off':>7} " + " ".join(f"{k.upper() + ' RONt':>11}" for k in REFS) + "  certified")
+    save_csv(table, target / "ront_by_cutoff.csv", index=False, float_format="%.5g")
+    save_csv(ranks, target / "ranking.csv", index=False, float_format="%.5g")
     for r in table.itertuples(index=False):
         d = r._asdict()
         log(f"  {d['dataset']:<42} {d['cutoff_upr']:>7} " + " ".join(f"{d[f'RONt_{k}_um']:8.3f} µm" for k in REFS)
             + "  " + "/".join(f"{d[f'certified_{k}']:.0%}" for k in REFS))
     skipped = df[df["status"] == "skipped"]
-    if len(skipped):
-        log(f"  skipped (under-sampled for the cut-off): {len(skipped)} rows")
-    for r in ranks.itertuples():
-        log(f"  {r.reference.upper()}: smallest RONt in {r.smallest}/{r.rows} certified rows, largest in {r.largest}, "
-            f"RONt above MZCI's by {r.mean_excess_over_mzci_pct:.1f} % on average")
     figure(table, target / "roundness.png")
-    return {"ront_by_cutoff": table.to_dict(orient="records"), "ranking": ranks.to_dict(orient="records"),
-            "figure": "roundness.png", "skipped_undersampled": int(len(skipped))}
+    reps = int(df.groupby(["dataset", "cutoff_upr"]).size().max()) if len(df) else 0
+    r = ranks.set_index("reference")
+    values = {"ranking": ranks.to_dict(orient="records"), "skipped_undersampled": int(len(skipped)),
+              "rows_all_certified": int(r["rows"].iloc[0]) if len(r) else 0,
+              "mzci_smallest": int(r.loc["mzci", "smallest"]) if "mzci" in r.index else 0}
+    findings = (f"Where all four reference circles are certified ({values['rows_all_certified']} rows), MZCI gives the "
+                f"smallest RONt in {values['mzci_smallest']}; on average RONt exceeds MZCI's by "
+                + ", ".join(f"{k.upper()} {r.loc[k, 'mean_excess_over_mzci_pct']:.1f} %" for k in REFS if k != "mzci")
+                + f". {len(skipped)} (profile, cut-off) rows are skipped: fewer than 7 points per cut-off wavelength "
+                "(ISO 12181-2).")
+    shown = table.copy()
+    for k in REFS:
+        shown[f"certified_{k}"] = (100 * shown[f"certified_{k}"]).round(0)
+    shown = shown.rename(columns={"dataset": "profile", "cutoff_upr": "cut-off [UPR]",
+                                  **{f"RONt_{k}_um": f"RONt {k.upper()} [µm]" for k in REFS},
+                                  **{f"certified_{k}": f"{k.upper()} certified [%]" for k in REFS}})
+    tables = [Table(caption=f"RONt (mean of certified fits) of each ISO 12181 reference circle against the ISO 16610-21 "
+                            f"Gaussian cut-off, on the published roundness profiles and synthetic lobed profiles "
+                            f"({reps} repetition(s) of the noisy ones), with the share of certified fits", data=shown,
+                    unit="µm, %", digits=4),
+              Table(caption="How often each reference circle gives the smallest and the largest RONt, and its mean "
+                            "excess over the minimum-zone RONt, over the rows where all four circles are certified",
+                    data=ranks.rename(columns={"mean_excess_over_mzci_pct": "mean excess over MZCI [%]"}), unit="%",
+                    digits=3)]
+    fig = Figure(caption="RONt [µm] of the four reference circles against the Gaussian cut-off [UPR] per profile "
+                         "(certified fits; none = unfiltered)", file="roundness.png")
+    return Analysis(tables=tables, figures=[fig], values=values, findings=findings)
 
 
 def figure(table: pd.DataFrame, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from experiments.render import style
     profiles = list(dict.fromkeys(table["dataset"]))
-    fig, axes = plt.subplots(1, len(profiles), figsize=(3.2 * len(profiles), 3.4), squeeze=False)
-    for ax, p in zip(axes[0], profiles):
-        g = table[table["dataset"] == p]
-        x = np.arange(len(g))
-        for k in REFS:
-            ax.plot(x, g[f"RONt_{k}_um"], marker="o", ms=3, label=k.upper())
-        ax.set_xticks(x, [c.replace(".0", "") for c in g["cutoff_upr"]], fontsize=7)
-        ax.set_xlabel("cut-off [UPR] (none = unfiltered)", fontsize=8)
-        ax.set_title(p, fontsize=8)
-    axes[0][0].set_ylabel("RONt [µm]")
-    axes[0][0].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    ncol = min(3, len(profiles))
+    nrow = int(np.ceil(len(profiles) / ncol))
+    colours = style.category_styles([k.upper() for k in REFS])
+    with style.figure_style():
+        fig, axes = plt.subplots(nrow, ncol, figsize=style.size(1.0, 0.32 * nrow), squeeze=False)
+        for ax, p in zip(axes.ravel(), profiles):
+            g = table[table["dataset"] == p]
+            x = np.arange(len(g))
+            for k in REFS:
+                kw = colours[k.upper()]
+                ax.plot(x, g[f"RONt_{k}_um"], marker=kw.get("marker", "o"), color=kw["color"], ms=3, label=k.upper())
+            ax.set_xticks(x, [c.replace(".0", "") for c in g["cutoff_upr"]])
+            ax.set_xlabel("cut-off [UPR]")
+            ax.set_title("\n".join(textwrap.wrap(p, 36)))
+        for ax in axes.ravel()[len(profiles):]:
+            ax.set_visible(False)
+        for row in axes:
+            row[0].set_ylabel("RONt [µm]")
+        style.legend_outside(fig, axes=[axes[0, 0]], ncol=4)
+        style.save(fig, path)
+        plt.close(fig)

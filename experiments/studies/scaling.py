@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from experiments.study import Analysis, Table, save_csv, save_figure
+from experiments.study import Analysis, Figure, Table, save_csv
 
 
 def analyse(df, cfg, target, log):
@@ -43,31 +43,37 @@ def analyse(df, cfg, target, log):
                     f"({slopes[hi]:.2f}).")
     caption = (f"Median runtime per fit [ms] of every method on synthetic circles (R = 299 mm) and ellipses "
                f"against N, and the log-log slope for N >= 1000")
-    return Analysis(tables=[Table(caption=caption, data=shown.round(3), unit="ms")], values=values, findings=findings)
+    fig = Figure(caption="Median runtime per fit [ms] against the number of points N, per method family (log-log), "
+                         "synthetic circles and ellipses; the log-log slope for N >= 1000 in the legend", file="scaling.png")
+    return Analysis(tables=[Table(caption=caption, data=shown.round(3), unit="ms")], figures=[fig], values=values,
+                    findings=findings)
 
 
 def figure(ok, slopes, target):
+    """Median runtime against N, one panel per method family (registry metadata), log-log slope in the legend."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), sharey=True)
-    colours = plt.get_cmap("tab20").colors
-    count = {0: 0, 1: 0}
-    for label, g in ok.groupby("label", sort=True):
-        side = 0 if label.startswith("circle.") else 1
-        k = count[side]
-        count[side] += 1
-        g = g.sort_values("data_n")
-        s = slopes.get(label)
-        axes[side].loglog(g["data_n"], g["time_median_s"], marker="osd^v<>ph*"[k % 10], ms=4, color=colours[k % 20],
-                          ls="-" if k < 10 else "--", label=label.split(".", 1)[1] + (f" ({s:.2f})" if s is not None else ""))
-    for ax, title in zip(axes, ("circle methods", "ellipse methods")):
-        ax.set_title(f"{title}: median runtime (slope for N ≥ 1000)")
-        ax.set_xlabel("N (points)")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    axes[0].set_ylabel("seconds per fit")
-    fig.tight_layout()
-    save_figure(fig, target / "scaling.png", dpi=110)
-    plt.close(fig)
+    import methods
+    from experiments.render import style
+    ok = ok.assign(family=ok["method"].map(lambda m: methods.get(m).family))
+    families = list(dict.fromkeys(ok["family"]))
+    with style.figure_style():
+        fig, axes = plt.subplots(1, len(families), figsize=style.size(1.0, 0.85), sharey=True, squeeze=False)
+        for ax, fam in zip(axes[0], families):
+            for label, g in ok[ok["family"] == fam].groupby("label", sort=True):
+                g = g.sort_values("data_n")
+                kw = style.method_style(label)
+                s = slopes.get(label)
+                ax.plot(g["data_n"], g["time_median_s"] * 1e3, marker=kw["marker"], color=kw["color"], ms=3,
+                        label=style.short_label(label) + (f" ({s:.2f})" if s is not None else ""))
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            style.plain_log_ticks(ax, "both")
+            ax.set_title(f"{fam} methods")
+            ax.set_xlabel("N (points)")
+            ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.22), ncol=2, frameon=False)
+        axes[0, 0].set_ylabel("median runtime per fit [ms]")
+        style.save(fig, target / "scaling.png")
+        plt.close(fig)

@@ -1,2 +1,17 @@
 """Ellipse family: importing this package registers its methods."""
 from methods.ellipse import direct, nelder_mead, orthogonal  # noqa: F401
+
+
+def parameter_covariance(points, params, sigma: float):
+    """First-order (Gauss–Markov) covariance of the ellipse parameters (xc, yc, a, b, theta) for
+    isotropic noise of s.d. ``sigma`` per coordinate: sigma^2 (J^T J)^-1, J the orthogonal-distance
+    Jacobian at the closest points of ``points`` on the ellipse ``params`` (Ahn et al. 2001)."""
+    import numpy as np
+
+    from methods.ellipse._geometry import orthogonal_residuals
+    from methods.ellipse.orthogonal import distance_jacobian
+    pts = np.asarray(points, dtype=float)
+    p = np.asarray(params, dtype=float)
+    _, phi = orthogonal_residuals(pts[:, 0], pts[:, 1], p)
+    J = distance_jacobian(pts[:, 0], pts[:, 1], p, phi)
+    return sigma ** 2 * np.linalg.inv(J.T @ J)

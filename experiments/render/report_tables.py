@@ -29,14 +29,31 @@ def split_columns(df: pd.DataFrame) -> tuple[list[str], list[str]]:
     return keys, [c for c in df.columns if c not in keys]
 
 
+def _integral(s: pd.Series) -> bool:
+    """A count column: integer dtype, or floats that are all whole numbers (a CSV column with a gap)."""
+    if pd.api.types.is_integer_dtype(s):
+        return True
+    v = s.dropna().to_numpy(float)
+    return pd.api.types.is_float_dtype(s) and len(v) > 0 and bool(np.all(np.isfinite(v) & (v == np.round(v)))) \
+        and bool(np.all(np.abs(v) < 2 ** 53))
+
+
+def column_unit(name, s: pd.Series, unit: str) -> str:
+    """The table's unit for this column's header: none for a column whose name already carries one
+    ("error [mm]") or for a count column (whole numbers)."""
+    if not unit or "[" in str(name) or _integral(s):
+        return ""
+    return unit
+
+
 def _columns(df: pd.DataFrame, keys, values, unit: str, digits: int) -> list[Column]:
     cols = []
     for i, c in enumerate(keys):
         repeated = len(df) > 1 and df[c].duplicated().any() and len(keys) > 1 and i == 0
         cols.append(Column(str(c), kind="text", group=bool(repeated)))
     for c in values:
-        integer = pd.api.types.is_integer_dtype(df[c])
-        cols.append(Column(str(c), unit=unit or None, kind="integer" if integer else "number",
+        integer = _integral(df[c])
+        cols.append(Column(str(c), unit=column_unit(c, df[c], unit) or None, kind="integer" if integer else "number",
                            digits=max(1, min(int(digits or 3), MAX_DIGITS))))
     return cols
 
@@ -86,14 +103,21 @@ def html_table(df: pd.DataFrame, *, caption: str, unit: str = "", digits: int = 
             return coloured_table(t, unit=human_unit(unit), caption=html.escape(caption), digits=shown_digits,
                                   table_id=table_id)
 
-    def cell(v, numeric):
+    counts = {c for c in values if _integral(df[c])}
+
+    def cell(v, numeric, count=False):
         if v is None or (isinstance(v, float) and np.isnan(v)):
             return "–"
+        if count:
+            return str(int(v))
         return format_number(float(v), shown_digits) if numeric and not isinstance(v, (bool, np.bool_)) else html.escape(str(v))
 
-    unit_h = f" [{html.escape(human_unit(unit))}]" if unit else ""
-    head = "".join(f"<th>{html.escape(str(c))}{unit_h if c in values else ''}</th>" for c in df.columns)
-    rows = "".join("<tr>" + "".join(f"<td{' class=num' if c in values else ''}>{cell(v, c in values)}</td>"
+    def unit_h(c):
+        u = column_unit(c, df[c], unit)
+        return f" [{html.escape(human_unit(u))}]" if u else ""
+
+    head = "".join(f"<th>{html.escape(str(c))}{unit_h(c) if c in values else ''}</th>" for c in df.columns)
+    rows = "".join("<tr>" + "".join(f"<td{' class=num' if c in values else ''}>{cell(v, c in values, c in counts)}</td>"
                                     for c, v in zip(df.columns, r)) + "</tr>" for r in df.itertuples(index=False))
     ident = f' id="{html.escape(table_id)}"' if table_id else ""
     return (f'<div style="overflow-x:auto"><table{ident}><caption>{html.escape(caption)}</caption>'

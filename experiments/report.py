@@ -207,8 +207,8 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
 
     md = ["# fitbench: comparison report", "",
           f"Built from `{_shown(results)}` by `python -m experiments.report`; reproduce everything with "
-          "`python -m experiments.run` (the default studies) and "
-          "`FITBENCH_NIST_DIR=... python -m experiments.run nist_circle`.", ""]
+          "`python -m experiments.run` (the default studies; a study that is not default: "
+          "`python -m experiments.run NAME`).", ""]
     # --- hook of experiments.verify (engine): the last reproducibility verdict, when there is one
     from experiments.verify import verdict_markdown
     md += verdict_markdown(results) + [""]

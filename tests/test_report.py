@@ -108,3 +108,17 @@ def test_html_renders_in_headless_chromium(built, tmp_path):
     import matplotlib.image as mpimg
     img = mpimg.imread(shot)
     assert img.std() > 0.05  # not blank
+
+
+def test_report_module_names_no_study():
+    """The report renders what studies declare: its code contains no study's name (issue 14)."""
+    from conftest import REPO
+    source = (REPO / "experiments" / "report.py").read_text(encoding="utf-8")
+    names = [p.stem for p in (REPO / "experiments" / "configs").glob("*.toml")]
+    assert names
+    import re
+    # a name with an underscore (nist_circle) is never prose: any occurrence counts; a plain English word
+    # ("published", "noise") counts when it is used as a string, a key or an identifier
+    found = [n for n in names if ("_" in n and re.search(rf"\b{re.escape(n)}\b", source))
+             or re.search(rf"['\"`]{re.escape(n)}['\"`]|\b{re.escape(n)}\s*[=(.\[]", source)]
+    assert not found, f"experiments/report.py names the studies {found}"

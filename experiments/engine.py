@@ -347,7 +347,7 @@ def run(tasks: list[dict], store: RowStore, *, force: bool, jobs: int, executor:
     log(f"   {counts['tasks']} rows: {counts['stored']} already stored, {counts['to_run']} to run"
         + (f" ({counts['retried_errors']} failed before, retried)" if counts["retried_errors"] else ""))
     t0 = time.perf_counter()
-    execute(todo, store, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc)
+    execute(todo, store, work=run_task, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc)
     counts["wall_s"] = time.perf_counter() - t0
     stored = store.get_by_key(keys)
     # the order of the rows is the order of the tasks of this config, whatever order they were stored in

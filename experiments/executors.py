@@ -11,9 +11,6 @@ import time
 from experiments.store import RowStore
 
 
-def _run_task(task):
-    from experiments.engine import run_task
-    return run_task(task)
 
 
 def _progress(total: int, desc: str):
@@ -21,7 +18,7 @@ def _progress(total: int, desc: str):
     return tqdm(total=total, desc=desc, unit="row", disable=not sys.stderr.isatty(), leave=False, dynamic_ncols=True)
 
 
-def execute(tasks: list[dict], store: RowStore, *, jobs: int, executor: str, scheduler: str | None, desc: str):
+def execute(tasks: list[dict], store: RowStore, *, work, jobs: int, executor: str, scheduler: str | None, desc: str):
     """Run tasks and store each row as it finishes. KeyboardInterrupt cancels what is pending; what
     finished stays stored."""
     if not tasks:
@@ -29,13 +26,13 @@ def execute(tasks: list[dict], store: RowStore, *, jobs: int, executor: str, sch
     bar = _progress(len(tasks), desc)
     try:
         if executor == "dask":
-            _run_dask(tasks, store, jobs, scheduler, bar)
+            _run_dask(work, tasks, store, jobs, scheduler, bar)
         elif jobs <= 1:
             for t in tasks:
-                store.put(t["key"], _run_task(t))
+                store.put(t["key"], work(t))
                 bar.update()
         else:
-            _run_processes(tasks, store, jobs, bar)
+            _run_processes(work, tasks, store, jobs, bar)
     finally:
         bar.close()
 
@@ -114,7 +111,7 @@ def _stop_pool(pool) -> None:
             proc.join(timeout=5)
 
 
-def _run_processes(tasks, store, jobs, bar):
+def _run_processes(work, tasks, store, jobs, bar):
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor, as_completed
     with _one_blas_thread_per_worker():
@@ -122,7 +119,7 @@ def _run_processes(tasks, store, jobs, bar):
                                    initializer=_die_with_parent, initargs=(os.getpid(),))
         try:
             with _workers_ignore_ctrl_c():
-                futures = {pool.submit(_run_task, t): t for t in tasks}  # the workers start here
+                futures = {pool.submit(work, t): t for t in tasks}  # the workers start here
             for fut in as_completed(futures):
                 store.put(futures[fut]["key"], fut.result())
                 bar.update()
@@ -165,7 +162,7 @@ def connect_dask(scheduler: str):
             lg.setLevel(level)
 
 
-def _run_dask(tasks, store, jobs, scheduler, bar):
+def _run_dask(work, tasks, store, jobs, scheduler, bar):
     from distributed import Client, LocalCluster, as_completed
     cluster = None
     if scheduler is not None:
@@ -176,7 +173,7 @@ def _run_dask(tasks, store, jobs, scheduler, bar):
                                    dashboard_address=None, silence_logs=40)
         client = Client(cluster)
     try:
-        futures = client.map(_run_task, tasks, pure=False)
+        futures = client.map(work, tasks, pure=False)
         index = {f.key: t for f, t in zip(futures, tasks)}
         for fut in as_completed(futures):
             store.put(index[fut.key]["key"], fut.result())  # rows are written by the client, not the workers

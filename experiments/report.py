@@ -210,7 +210,7 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
           "`python -m experiments.run` (the default studies; a study that is not default: "
           "`python -m experiments.run NAME`).", ""]
     # --- hook of experiments.verify (engine): the last reproducibility verdict, when there is one
-    from experiments.verify import verdict_markdown
+    from experiments.verdict import verdict_markdown
     md += verdict_markdown(results) + [""]
     # --- end of hook
     if any(e[4] and e[4].get("quick") for e in entries):
@@ -471,8 +471,8 @@ def to_html(markdown: str, out: Path, blocks: dict[str, str] | None = None) -> s
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.report", description="Build paper/ from results/.")
-    from experiments.verify import _version  # --version (engine)
-    parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {_version()})")
+    from fitbench import __version__
+    parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
     parser.add_argument("--results", type=Path, default=REPO / "results")
     parser.add_argument("--out", type=Path, help="default: paper/ beside the results folder")
     args = parser.parse_args(argv)

@@ -29,6 +29,7 @@ from experiments import study as contract
 from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
 from experiments.summary import summarise, to_markdown
+from fitbench import __version__
 import methods
 from methods import InvalidInputError
 
@@ -143,14 +144,6 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     return target
 
 
-def _version() -> str:
-    from importlib import metadata
-    try:
-        return metadata.version("fitbench")
-    except metadata.PackageNotFoundError:
-        return "unknown (fitbench is not installed)"
-
-
 def usable_jobs(jobs: int, log=print) -> int:
     """``jobs``, capped at the cores this process may use (more workers only compete for them)."""
     try:
@@ -186,7 +179,7 @@ def _on_sigterm(signum, frame):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.run", description="Run fitbench studies.")
-    parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {_version()})")
+    parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
     parser.add_argument("names", nargs="*", metavar="NAME", help="studies (names or .toml paths); default: the default studies")
     parser.add_argument("--list", action="store_true", help="list the studies, one line each")
     parser.add_argument("--quick", action="store_true", help="the reduced grid of each study (CI size)")

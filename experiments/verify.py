@@ -25,9 +25,10 @@ import pandas as pd
 
 from experiments.metrics import CHAOTIC, tolerance
 from experiments.provenance import write_atomic
+from experiments.verdict import VERDICT_FILE, last_verdict, verdict_markdown  # noqa: F401  (the report's reading side)
+from fitbench import __version__
 from methods import InvalidInputError
 
-VERDICT_FILE = "verify.json"
 #: columns that identify a row (those present are used; data_* and param_* columns are added)
 IDENTITY = ("study", "dataset", "data_stream", "repetition", "seed", "method", "params")
 WORST_ROWS = 3
@@ -161,42 +162,10 @@ def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
     return verdict
 
 
-def last_verdict(results: Path) -> dict | None:
-    """The verdict of the last ``experiments.verify`` against ``results`` (None when there is none or it is unreadable)."""
-    try:
-        verdict = json.loads((Path(results) / VERDICT_FILE).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return verdict if isinstance(verdict, dict) and "agree" in verdict else None
-
-
-def verdict_markdown(results: Path) -> list[str]:
-    """Lines for the report: the last verdict in one sentence, with the studies that differ."""
-    v = last_verdict(results)
-    if v is None:
-        return ["No reproducibility verdict yet: run `python -m experiments.verify`."]
-    studies = v.get("studies", [])
-    differ = [s.get("study", "?") for s in studies if not s.get("agree")]
-    when = v.get("date", "?")
-    if not differ:
-        return [f"Reproducibility: `python -m experiments.verify` on {when}: all {len(studies)} studies agree with "
-                f"these results within the declared tolerances."]
-    return [f"Reproducibility: `python -m experiments.verify` on {when}: {len(differ)} of {len(studies)} studies "
-            f"differ beyond the declared tolerances ({', '.join(differ)}); see `verify.json`."]
-
-
-def _version() -> str:
-    from importlib import metadata
-    try:
-        return metadata.version("fitbench")
-    except metadata.PackageNotFoundError:
-        return "unknown (fitbench is not installed)"
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.verify",
                                      description="Check that a run reproduces the committed results within declared tolerances.")
-    parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {_version()})")
+    parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
     parser.add_argument("studies", nargs="*", metavar="STUDY", help="studies to check (default: every study in --results)")
     parser.add_argument("--results", type=Path, help="committed results (default: results/, or results/quick with --quick)")
     parser.add_argument("--against", type=Path, help="a finished run to check (default: run the studies now, in a temporary folder)")

@@ -67,10 +67,15 @@ def _positive(v):
     return None if _is_real(v) and v > 0 and math.isfinite(v) else "must be a positive finite number"
 
 
+def _non_negative(v):
+    return None if _is_real(v) and v >= 0 and math.isfinite(v) else "must be a finite number >= 0"
+
+
 #: Checks by parameter-name convention, applied to every method (a method's own ``param_checks`` win):
-#: tolerances are positive finite numbers, iteration/evaluation budgets positive integers.
+#: tolerances are finite numbers >= 0 (0: the method's own rounding-noise floor decides, as Nelder-Mead's
+#: fatol), iteration/evaluation budgets positive integers.
 PARAM_CONVENTIONS: list[tuple[Callable[[str], bool], Callable]] = [
-    (lambda n: n.endswith("tol"), _positive),
+    (lambda n: n.endswith("tol"), _non_negative),
     (lambda n: n.startswith("max_") or n == "maxfev", _positive),
 ]
 

@@ -223,17 +223,17 @@ def closest_points(u, v, a, b, iterations=60):
     return X, Y, np.where(g > 0, d, -d)
 
 
-#: Points per block of :func:`orthogonal_residuals` (at least 4096, ~N/8 above): the closest-point solve
-#: needs about twenty temporaries per point, so blocks keep its memory to ~1.3x the coordinates.
+#: Points per block of :func:`orthogonal_residuals` (at least 4096, ~N/16 above): the closest-point solve
+#: needs about twenty temporaries per point, so sixteen blocks keep its memory to ~0.7x the coordinates.
 BLOCK_MIN = 4096
 
 
 def orthogonal_residuals(x, y, p, iterations=60, with_phi=True):
     """Signed orthogonal distances of the points to the ellipse p = (xc, yc, a, b, theta) and (if
     ``with_phi``) the parameter phi of each closest point (x' = a cos phi, y' = b sin phi, eq. 17).
-    Solved in about eight blocks of points (vectorised within each block) to bound the temporaries."""
+    Solved in about sixteen blocks of points (vectorised within each block) to bound the temporaries."""
     n = len(x)
-    block = max(BLOCK_MIN, -(-n // 8))
+    block = max(BLOCK_MIN, -(-n // 16))
     if n <= block:
         return _orthogonal_residuals(x, y, p, iterations, with_phi)
     d = np.empty(n)

@@ -1,0 +1,17 @@
+"""Build of fitbench's compiled kernels (issue 20); everything else is declared in pyproject.toml.
+
+Each kernel is a small C99 extension over the CPython buffer protocol (no NumPy headers needed to build).
+They are compiled without -ffast-math and with floating-point contraction off, so every operation is the
+IEEE one its C source names, in source order: the same bits on every x86-64 CPU (AMD or Intel) and no FMA
+contraction on aarch64. ``methods/_compiled.py`` loads them; ``FITBENCH_KERNELS=numpy`` selects the NumPy
+reference path that tests compare them against.
+"""
+from setuptools import Extension, setup
+
+#: (importable module name, C source) of every compiled kernel.
+KERNELS: list[tuple[str, str]] = [
+]
+
+COMPILE_ARGS = ["-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-fno-associative-math"]
+
+setup(ext_modules=[Extension(name, [source], extra_compile_args=COMPILE_ARGS) for name, source in KERNELS])

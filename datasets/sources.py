@@ -26,14 +26,14 @@ from __future__ import annotations
 import inspect
 import json
 import os
-import warnings
 from dataclasses import dataclass, field
 from decimal import Decimal
-from importlib import metadata
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from methods._plugins import load_entry_points
 
 ENTRY_POINT_GROUP = "fitbench.datasets"
 
@@ -56,7 +56,6 @@ class DataSource:
 
 
 _REGISTRY: dict[str, DataSource] = {}
-_plugins_loaded = False
 
 
 def register_source(name: str, *, random: bool, summary: str, files: Callable | None = None):
@@ -71,16 +70,9 @@ def register_source(name: str, *, random: bool, summary: str, files: Callable | 
 
 
 def load_plugins() -> None:
-    """Import every entry point of ``fitbench.datasets`` once (a broken plugin warns)."""
-    global _plugins_loaded
-    if _plugins_loaded:
-        return
-    _plugins_loaded = True
-    for ep in metadata.entry_points(group=ENTRY_POINT_GROUP):
-        try:
-            ep.load()
-        except Exception as exc:  # a third-party bug must not take the built-in sources down
-            warnings.warn(f"fitbench data source plugin {ep.name!r} ({ep.value}) failed to load: {exc}", stacklevel=2)
+    """Import every entry point of ``fitbench.datasets`` once (a broken plugin warns, see
+    :func:`methods._plugins.load_entry_points`)."""
+    load_entry_points(ENTRY_POINT_GROUP, "data source")
 
 
 def get_source(name: str) -> DataSource:

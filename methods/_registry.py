@@ -10,12 +10,11 @@ import difflib
 import inspect
 import math
 import time
-import warnings
 from dataclasses import dataclass, field
-from importlib import metadata
 from typing import Callable
 
 from methods._errors import InvalidInputError, UnknownMethodError
+from methods._plugins import load_entry_points
 from methods._validation import validate_points
 
 ENTRY_POINT_GROUP = "fitbench.methods"
@@ -24,7 +23,6 @@ KINDS = ("closed form", "iterative", "convex program")
 FAMILY_MIN_POINTS = {"circle": 3, "ellipse": 5}
 
 _REGISTRY: dict[str, "MethodSpec"] = {}
-_plugins_loaded = False
 
 
 @dataclass(frozen=True)
@@ -161,16 +159,9 @@ def _run(spec: MethodSpec, points, params: dict):
 
 
 def load_plugins() -> None:
-    """Import every entry point of the ``fitbench.methods`` group once (a broken plugin warns)."""
-    global _plugins_loaded
-    if _plugins_loaded:
-        return
-    _plugins_loaded = True
-    for ep in metadata.entry_points(group=ENTRY_POINT_GROUP):
-        try:
-            ep.load()
-        except Exception as exc:  # a third-party bug must not take the built-in methods down
-            warnings.warn(f"fitbench plugin {ep.name!r} ({ep.value}) failed to load: {exc}", stacklevel=2)
+    """Import every entry point of the ``fitbench.methods`` group once (a broken plugin warns, see
+    :func:`methods._plugins.load_entry_points`)."""
+    load_entry_points(ENTRY_POINT_GROUP, "method")
 
 
 def get(method_id: str) -> MethodSpec:

@@ -1,5 +1,10 @@
-"""Shared fixtures. Tests import fitbench's own ``datasets``/``methods`` from the repository."""
+"""Shared fixtures and helpers. Tests import fitbench's own ``datasets``/``methods`` from the repository;
+a test that starts another Python (a CLI, a study run, a Dask worker) gives it :func:`subprocess_env`, and
+a test that needs a third-party plugin builds one offline with :func:`install_plugin`."""
 import os
+import subprocess
+import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -20,3 +25,39 @@ def nist_dir() -> Path | None:
         return None
     path = Path(value)
     return path if path.is_dir() else None
+
+
+def subprocess_env(*path_first, repo: Path = REPO, **variables) -> dict:
+    """The environment of a child Python that imports fitbench from ``repo`` (this checkout, or a copy of it)
+    from any working directory: PYTHONPATH = ``path_first`` (e.g. a plugin's install folder), then ``repo``;
+    ``variables`` are set on top of this process's environment."""
+    return {**os.environ, **variables, "PYTHONPATH": os.pathsep.join([*map(str, path_first), str(repo)])}
+
+
+def run_python(*args, cwd=REPO, path_first=(), repo: Path = REPO, timeout=600, **variables):
+    """``python ARGS`` in ``cwd`` with :func:`subprocess_env`, output captured as text."""
+    return subprocess.run([sys.executable, *map(str, args)], cwd=cwd, capture_output=True, text=True,
+                          timeout=timeout, env=subprocess_env(*path_first, repo=repo, **variables))
+
+
+def install_plugin(workdir: Path, name: str, modules: dict, entry_points: dict, version: str = "0.0.1") -> Path:
+    """Build and install a plugin distribution offline (pip, no index, no build isolation) into a new folder
+    ``workdir/site`` and return that folder (put it first on PYTHONPATH).
+
+    ``modules`` maps a top-level module name to its source; ``entry_points`` maps an entry-point group
+    (``fitbench.methods``, ``fitbench.datasets``) to ``{entry point name: module}``."""
+    src, site = Path(workdir) / "plugin_src", Path(workdir) / "site"
+    src.mkdir(parents=True)
+    for module, code in modules.items():
+        (src / f"{module}.py").write_text(textwrap.dedent(code))
+    groups = "".join(f'[project.entry-points."{group}"]\n' + "".join(f'{ep} = "{value}"\n' for ep, value in eps.items())
+                     for group, eps in entry_points.items())
+    py_modules = ", ".join(f'"{m}"' for m in modules)
+    (src / "pyproject.toml").write_text(
+        '[build-system]\nrequires = ["setuptools>=61"]\nbuild-backend = "setuptools.build_meta"\n'
+        f'[project]\nname = "{name}"\nversion = "{version}"\n{groups}'
+        f'[tool.setuptools]\npy-modules = [{py_modules}]\n')
+    out = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
+                          "--quiet", "--target", str(site), str(src)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    return site

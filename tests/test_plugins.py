@@ -4,14 +4,10 @@ The test builds and installs a tiny plugin distribution with pip (offline, into 
 target directory) and checks that a fresh interpreter lists it and fits with it.
 """
 import json
-import os
-import subprocess
-import sys
-import textwrap
 
 import pytest
 
-from conftest import REPO
+from conftest import install_plugin, run_python
 
 PLUGIN = '''
 """A tiny external fitter: the circle through the centroid with the mean distance as radius."""
@@ -32,32 +28,12 @@ def centroid_mean(points, *, shrink=1.0):
 
 @pytest.fixture(scope="module")
 def plugin_path(tmp_path_factory):
-    src = tmp_path_factory.mktemp("plugin_src")
-    (src / "fitbench_demo_plugin.py").write_text(PLUGIN)
-    (src / "pyproject.toml").write_text(textwrap.dedent('''
-        [build-system]
-        requires = ["setuptools>=61"]
-        build-backend = "setuptools.build_meta"
-        [project]
-        name = "fitbench-demo-plugin"
-        version = "0.0.1"
-        [project.entry-points."fitbench.methods"]
-        centroid_mean = "fitbench_demo_plugin"
-        [tool.setuptools]
-        py-modules = ["fitbench_demo_plugin"]
-    '''))
-    target = tmp_path_factory.mktemp("plugin_site")
-    out = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation",
-                          "--no-index", "--quiet", "--target", str(target), str(src)],
-                         capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    return target
+    return install_plugin(tmp_path_factory.mktemp("plugin"), "fitbench-demo-plugin",
+                          {"fitbench_demo_plugin": PLUGIN}, {"fitbench.methods": {"centroid_mean": "fitbench_demo_plugin"}})
 
 
 def run_with(plugin_path, *args):
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(plugin_path), str(REPO)])}
-    return subprocess.run([sys.executable, "-m", "methods", *args], capture_output=True, text=True,
-                          cwd=REPO, env=env)
+    return run_python("-m", "methods", *args, path_first=[plugin_path])
 
 
 def test_plugin_is_listed(plugin_path):
@@ -75,5 +51,7 @@ def test_plugin_fits_with_its_parameters(plugin_path):
 
 
 def test_without_plugin_it_is_absent():
-    out = subprocess.run([sys.executable, "-m", "methods", "list"], capture_output=True, text=True, cwd=REPO)
+    out = run_python("-m", "methods", "list")
+    assert out.returncode == 0, out.stderr
+    assert any(line.startswith("circle.kasa") for line in out.stdout.splitlines())
     assert "circle.centroid_mean" not in out.stdout

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from methods._figures import report_figure
+
 LABELS = {"squareness": "squareness", "scale_mismatch": "scale mismatch X-Y", "servo_mismatch": "servo mismatch X-Y",
           "backlash_x": "backlash X", "backlash_y": "backlash Y", "reversal_spike_x": "reversal spike X",
           "reversal_spike_y": "reversal spike Y", "cyclic_error": "cyclic error"}
@@ -108,91 +110,81 @@ def polar_plot(cw, ccw, ev: dict, path, title: str = "", *, diagnostics=None, co
     the ring 0; the G band (min and max radius of both runs) shaded; start (o) and direction (arrow)
     markers; a panel of test conditions and the ranked diagnostics. Returns the figure's scale dict
     {'um_per_division', 'divisions'}."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    c = ev["center"]
-    R = ev["nominal_radius"]
-    cond = dict(ev.get("conditions") or {})
-    cond.update(conditions or {})
-    runs = []
-    for pts, label, colour in ((cw, "CW (G02)", "tab:blue"), (ccw, "CCW (G03)", "tab:red")):
-        pts = np.asarray(pts, float)
-        ang = np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0])
-        dev_um = (np.hypot(pts[:, 0] - c[0], pts[:, 1] - c[1]) - R) * 1e3
-        runs.append((ang, dev_um, label, colour))
-    lo = min(d.min() for _, d, _, _ in runs)
-    hi = max(d.max() for _, d, _, _ in runs)
-    div = _nice_division(max(hi - lo, 1e-3))
-    # rings: from below the smallest to above the largest deviation, in whole divisions
-    r0 = np.floor(lo / div) - 1
-    n_div = int(np.ceil(hi / div) - r0 + 1)
-    base = r0 * div                                        # the radius drawn at the plot centre (µm)
-    fig = plt.figure(figsize=(11.5, 7.2))
-    ax = fig.add_axes([0.04, 0.08, 0.56, 0.84], projection="polar")
-    ring = np.linspace(0, 2 * np.pi, 721)
-    ax.fill_between(ring, lo - base, hi - base, color="0.88", alpha=0.5, lw=0)
-    ax.plot(ring, np.full_like(ring, lo - base), color="0.55", lw=0.8)
-    ax.plot(ring, np.full_like(ring, hi - base), color="0.55", lw=0.8,
-            label=f"G band, min/max circles: {hi - lo:.2f} µm")
-    ax.plot(ring, np.full_like(ring, -base), color="0.2", lw=1.2, ls="--", label=f"nominal circle R = {R:g} mm (0 µm)")
-    outer = n_div * div
-    for i, (ang, dev, label, colour) in enumerate(runs):
-        ax.plot(ang, dev - base, lw=0.8, color=colour, label=label)
-        # start marker on the trace, and an arrow just outside the trace along the direction of travel
-        ax.plot(ang[0], dev[0] - base, "o", color=colour, ms=9, mfc="white", mec=colour, mew=2, zorder=5,
-                label=f"{label.split()[0]} start")
-        a = np.unwrap(ang)
-        k = int(np.searchsorted(np.abs(a - a[0]), np.radians(25.0)))
-        k = min(max(k, 1), len(ang) - 1)
-        r_arrow = outer * (0.93 - 0.05 * i)
-        ax.annotate("", xy=(ang[k], r_arrow), xytext=(ang[0], r_arrow),
-                    arrowprops=dict(arrowstyle="-|>", color=colour, lw=2.0, mutation_scale=16,
-                                    connectionstyle=f"arc3,rad={0.12 if a[k] > a[0] else -0.12}"))
-    ticks = np.arange(1, n_div + 1) * div
-    ax.set_rticks(ticks)
-    ax.set_yticklabels([f"{base + t:+.3g} µm" for t in ticks], fontsize=7)
-    ax.set_rlim(0, outer)
-    ax.set_rlabel_position(112.5)
-    ax.set_thetagrids(np.arange(0, 360, 45), labels=[f"{a}°" for a in range(0, 360, 45)])
-    ax.set_title((title + "\n" if title else "") + f"radial deviation about the {ev['center_kind']} centre: "
-                 f"scale {div:g} µm/div", fontsize=10)
-    handles, labels = ax.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower left", fontsize=8, bbox_to_anchor=(0.64, 0.02), frameon=False)
-    # the panel: test conditions, results, diagnostics ranked
-    um = 1e3
-    arc = ev.get("arc_deg", {})
-    centre = cond.get("nominal_center_mm") or cond.get("nominal_center")
-    lines = ["Test conditions",
-             f"  machine      {cond.get('machine') or '-'}",
-             f"  date         {cond.get('date') or '-'}",
-             f"  plane        {str(cond.get('plane') or 'xy').upper()}",
-             f"  radius       {R:g} mm",
-             f"  centre       {'(' + ', '.join(f'{v:g}' for v in centre) + ') mm' if centre else '-'}",
-             f"  feed         {str(cond.get('feed_mm_min')) + ' mm/min' if cond.get('feed_mm_min') else '-'}",
-             f"  arc          CW {arc.get('cw', 360):.0f}°, CCW {arc.get('ccw', 360):.0f}°",
-             f"  scale        {div:g} µm/div",
-             "",
-             "Results (ISO 230-4)",
-             f"  G CW / CCW   {ev['G_cw'] * um:.2f} / {ev['G_ccw'] * um:.2f} µm",
-             f"  G(b)         {ev['G_b'] * um:.2f} µm",
-             f"  H            {ev['H'] * um:.2f} µm",
-             f"  F max / min  {ev['F_max'] * um:+.2f} / {ev['F_min'] * um:+.2f} µm"]
-    if diagnostics:
-        lines += ["", "Diagnostics (ranked, contribution µm)"]
-        for label, item, contrib in ranked(diagnostics, R, cond.get("feed_mm_min"), cond.get("plane")):
-            if item["value"] is None:
-                lines.append(f"  {label:<20} n/a")
-            else:
-                unit = HUMAN_UNIT.get(item["unit"], item["unit"])
-                lines.append(f"  {label:<20} {item['value']:+8.2f} {unit:<5} {contrib:6.2f}")
-    fig.text(0.64, 0.92, "\n".join(lines), va="top", ha="left", family="monospace", fontsize=8.5)
-    try:
-        if save is not None:
-            save(fig, path)
-        else:
-            fig.savefig(path, dpi=120)
-    finally:
-        plt.close(fig)
-    return {"um_per_division": div, "divisions": n_div, "figure_text": lines}
+    with report_figure(path, dpi=120, save=save, figsize=(11.5, 7.2)) as fig:
+        c = ev["center"]
+        R = ev["nominal_radius"]
+        cond = dict(ev.get("conditions") or {})
+        cond.update(conditions or {})
+        runs = []
+        for pts, label, colour in ((cw, "CW (G02)", "tab:blue"), (ccw, "CCW (G03)", "tab:red")):
+            pts = np.asarray(pts, float)
+            ang = np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0])
+            dev_um = (np.hypot(pts[:, 0] - c[0], pts[:, 1] - c[1]) - R) * 1e3
+            runs.append((ang, dev_um, label, colour))
+        lo = min(d.min() for _, d, _, _ in runs)
+        hi = max(d.max() for _, d, _, _ in runs)
+        div = _nice_division(max(hi - lo, 1e-3))
+        # rings: from below the smallest to above the largest deviation, in whole divisions
+        r0 = np.floor(lo / div) - 1
+        n_div = int(np.ceil(hi / div) - r0 + 1)
+        base = r0 * div                                        # the radius drawn at the plot centre (µm)
+        ax = fig.add_axes([0.04, 0.08, 0.56, 0.84], projection="polar")
+        ring = np.linspace(0, 2 * np.pi, 721)
+        ax.fill_between(ring, lo - base, hi - base, color="0.88", alpha=0.5, lw=0)
+        ax.plot(ring, np.full_like(ring, lo - base), color="0.55", lw=0.8)
+        ax.plot(ring, np.full_like(ring, hi - base), color="0.55", lw=0.8,
+                label=f"G band, min/max circles: {hi - lo:.2f} µm")
+        ax.plot(ring, np.full_like(ring, -base), color="0.2", lw=1.2, ls="--",
+                label=f"nominal circle R = {R:g} mm (0 µm)")
+        outer = n_div * div
+        for i, (ang, dev, label, colour) in enumerate(runs):
+            ax.plot(ang, dev - base, lw=0.8, color=colour, label=label)
+            # start marker on the trace, and an arrow just outside the trace along the direction of travel
+            ax.plot(ang[0], dev[0] - base, "o", color=colour, ms=9, mfc="white", mec=colour, mew=2, zorder=5,
+                    label=f"{label.split()[0]} start")
+            a = np.unwrap(ang)
+            k = int(np.searchsorted(np.abs(a - a[0]), np.radians(25.0)))
+            k = min(max(k, 1), len(ang) - 1)
+            r_arrow = outer * (0.93 - 0.05 * i)
+            ax.annotate("", xy=(ang[k], r_arrow), xytext=(ang[0], r_arrow),
+                        arrowprops=dict(arrowstyle="-|>", color=colour, lw=2.0, mutation_scale=16,
+                                        connectionstyle=f"arc3,rad={0.12 if a[k] > a[0] else -0.12}"))
+        ticks = np.arange(1, n_div + 1) * div
+        ax.set_rticks(ticks)
+        ax.set_yticklabels([f"{base + t:+.3g} µm" for t in ticks], fontsize=7)
+        ax.set_rlim(0, outer)
+        ax.set_rlabel_position(112.5)
+        ax.set_thetagrids(np.arange(0, 360, 45), labels=[f"{a}°" for a in range(0, 360, 45)])
+        ax.set_title((title + "\n" if title else "") + f"radial deviation about the {ev['center_kind']} centre: "
+                     f"scale {div:g} µm/div", fontsize=10)
+        handles, labels = ax.get_legend_handles_labels()
+        fig.legend(handles, labels, loc="lower left", fontsize=8, bbox_to_anchor=(0.64, 0.02), frameon=False)
+        # the panel: test conditions, results, diagnostics ranked
+        um = 1e3
+        arc = ev.get("arc_deg", {})
+        centre = cond.get("nominal_center_mm") or cond.get("nominal_center")
+        lines = ["Test conditions",
+                 f"  machine      {cond.get('machine') or '-'}",
+                 f"  date         {cond.get('date') or '-'}",
+                 f"  plane        {str(cond.get('plane') or 'xy').upper()}",
+                 f"  radius       {R:g} mm",
+                 f"  centre       {'(' + ', '.join(f'{v:g}' for v in centre) + ') mm' if centre else '-'}",
+                 f"  feed         {str(cond.get('feed_mm_min')) + ' mm/min' if cond.get('feed_mm_min') else '-'}",
+                 f"  arc          CW {arc.get('cw', 360):.0f}°, CCW {arc.get('ccw', 360):.0f}°",
+                 f"  scale        {div:g} µm/div",
+                 "",
+                 "Results (ISO 230-4)",
+                 f"  G CW / CCW   {ev['G_cw'] * um:.2f} / {ev['G_ccw'] * um:.2f} µm",
+                 f"  G(b)         {ev['G_b'] * um:.2f} µm",
+                 f"  H            {ev['H'] * um:.2f} µm",
+                 f"  F max / min  {ev['F_max'] * um:+.2f} / {ev['F_min'] * um:+.2f} µm"]
+        if diagnostics:
+            lines += ["", "Diagnostics (ranked, contribution µm)"]
+            for label, item, contrib in ranked(diagnostics, R, cond.get("feed_mm_min"), cond.get("plane")):
+                if item["value"] is None:
+                    lines.append(f"  {label:<20} n/a")
+                else:
+                    unit = HUMAN_UNIT.get(item["unit"], item["unit"])
+                    lines.append(f"  {label:<20} {item['value']:+8.2f} {unit:<5} {contrib:6.2f}")
+        fig.text(0.64, 0.92, "\n".join(lines), va="top", ha="left", family="monospace", fontsize=8.5)
+        return {"um_per_division": div, "divisions": n_div, "figure_text": lines}

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from methods._figures import report_figure
 from methods.positioning.model import evaluate_band
 
 ARROW = {"up": "↑", "down": "↓"}
@@ -69,63 +70,54 @@ def plot(result, path, title: str = "", *, data=None, save=None) -> dict:
     """Left: every run (thin), the mean deviations of each direction, the mean bidirectional curve, the
     ±k s bands and the figures A, E, B, M, R annotated; right: the model with U(P). Returns the axes'
     labels (for tests)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    per, figs = result.per_target, result.figures
-    k = figs.get("k", 2.0)
-    P = per["targets"]
-    um = 1e3
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5), sharey=True)
-    ax = axes[0]
-    colours = {"up": "tab:blue", "down": "tab:red"}
-    dirs = [d for d in ("up", "down") if f"mean_{d}" in per]
-    if data is not None:
+    with report_figure(path, dpi=110, save=save, figsize=(13, 5)) as fig:
+        per, figs = result.per_target, result.figures
+        k = figs.get("k", 2.0)
+        P = per["targets"]
+        um = 1e3
+        axes = fig.subplots(1, 2, sharey=True)
+        ax = axes[0]
+        colours = {"up": "tab:blue", "down": "tab:red"}
+        dirs = [d for d in ("up", "down") if f"mean_{d}" in per]
+        if data is not None:
+            for d in dirs:
+                arr = getattr(data, d)
+                for j in range(arr.shape[1]):
+                    ax.plot(P, arr[:, j] * um, lw=0.5, alpha=0.5, color=colours[d],
+                            label=f"runs {ARROW[d]}" if j == 0 else None)
         for d in dirs:
-            arr = getattr(data, d)
-            for j in range(arr.shape[1]):
-                ax.plot(P, arr[:, j] * um, lw=0.5, alpha=0.5, color=colours[d],
-                        label=f"runs {ARROW[d]}" if j == 0 else None)
-    for d in dirs:
-        x, s = per[f"mean_{d}"], per[f"s_{d}"]
-        ax.plot(P, x * um, "o-", color=colours[d], ms=4, lw=1.4, label=f"mean {ARROW[d]}")
-        ax.fill_between(P, (x - k * s) * um, (x + k * s) * um, color=colours[d], alpha=0.15, label=f"±{k:g}s {ARROW[d]}")
-    if "mean_bidirectional" in per:
-        ax.plot(P, per["mean_bidirectional"] * um, "k-", lw=1.2, label="mean bidirectional")
-    if figs.get("standard") == "vdi3441":
-        notes = [f"P = {figs['P'] * um:.2f} µm", f"Pa = {figs['Pa'] * um:.2f} µm", f"Ps = {figs['Ps'] * um:.2f} µm",
-                 f"U = {figs['U'] * um:.2f} µm"]
-    else:
-        notes = [f"{key} = {figs[key] * um:.2f} µm" for key in ("A", "E", "B", "M", "R") if key in figs]
-    ax.text(0.02, 0.98, "\n".join(notes), transform=ax.transAxes, va="top", ha="left", fontsize=9,
-            family="monospace", bbox=dict(boxstyle="round", fc="white", ec="0.6", alpha=0.9))
-    ax.set_title(f"{TITLES.get(figs.get('standard'), figs.get('standard'))}: {figs['targets']} targets x "
-                 f"{figs['runs']} runs", fontsize=10)
-    grid = np.linspace(P.min(), P.max(), 400)
-    for d in dirs:
-        axes[1].plot(P, per[f"mean_{d}"] * um, "o", color=colours[d], ms=4)
-        if d in (result.polynomial or {}):
-            v, U = evaluate_band(result.polynomial[d], grid, result.polynomial[d]["k"])
-            axes[1].plot(grid, v * um, color=colours[d],
-                         label=f"degree-{result.polynomial[d]['degree']} fit {ARROW[d]}")
-            axes[1].fill_between(grid, (v - U) * um, (v + U) * um, color=colours[d], alpha=0.2,
-                                 label=f"U(P), k = {result.polynomial[d]['k']:g}")
-    axes[1].set_title("model: fitted curve and expanded uncertainty anywhere on the travel", fontsize=10)
-    for a in axes:
-        a.set_xlabel("target position P [mm]")
-        a.grid(alpha=0.3)
-        a.legend(fontsize=7, loc="lower right")
-    axes[0].set_ylabel("positional deviation [µm]")
-    if title:
-        fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    labels = {"x": axes[0].get_xlabel(), "y": axes[0].get_ylabel(), "notes": notes}
-    try:
-        if save is not None:
-            save(fig, path)
+            x, s = per[f"mean_{d}"], per[f"s_{d}"]
+            ax.plot(P, x * um, "o-", color=colours[d], ms=4, lw=1.4, label=f"mean {ARROW[d]}")
+            ax.fill_between(P, (x - k * s) * um, (x + k * s) * um, color=colours[d], alpha=0.15,
+                            label=f"±{k:g}s {ARROW[d]}")
+        if "mean_bidirectional" in per:
+            ax.plot(P, per["mean_bidirectional"] * um, "k-", lw=1.2, label="mean bidirectional")
+        if figs.get("standard") == "vdi3441":
+            notes = [f"P = {figs['P'] * um:.2f} µm", f"Pa = {figs['Pa'] * um:.2f} µm", f"Ps = {figs['Ps'] * um:.2f} µm",
+                     f"U = {figs['U'] * um:.2f} µm"]
         else:
-            fig.savefig(path, dpi=110)
-    finally:
-        plt.close(fig)
-    return labels
+            notes = [f"{key} = {figs[key] * um:.2f} µm" for key in ("A", "E", "B", "M", "R") if key in figs]
+        ax.text(0.02, 0.98, "\n".join(notes), transform=ax.transAxes, va="top", ha="left", fontsize=9,
+                family="monospace", bbox=dict(boxstyle="round", fc="white", ec="0.6", alpha=0.9))
+        ax.set_title(f"{TITLES.get(figs.get('standard'), figs.get('standard'))}: {figs['targets']} targets x "
+                     f"{figs['runs']} runs", fontsize=10)
+        grid = np.linspace(P.min(), P.max(), 400)
+        for d in dirs:
+            axes[1].plot(P, per[f"mean_{d}"] * um, "o", color=colours[d], ms=4)
+            if d in (result.polynomial or {}):
+                v, U = evaluate_band(result.polynomial[d], grid, result.polynomial[d]["k"])
+                axes[1].plot(grid, v * um, color=colours[d],
+                             label=f"degree-{result.polynomial[d]['degree']} fit {ARROW[d]}")
+                axes[1].fill_between(grid, (v - U) * um, (v + U) * um, color=colours[d], alpha=0.2,
+                                     label=f"U(P), k = {result.polynomial[d]['k']:g}")
+        axes[1].set_title("model: fitted curve and expanded uncertainty anywhere on the travel", fontsize=10)
+        for a in axes:
+            a.set_xlabel("target position P [mm]")
+            a.grid(alpha=0.3)
+            a.legend(fontsize=7, loc="lower right")
+        axes[0].set_ylabel("positional deviation [µm]")
+        if title:
+            fig.suptitle(title, fontsize=10)
+        fig.tight_layout()
+        labels = {"x": axes[0].get_xlabel(), "y": axes[0].get_ylabel(), "notes": notes}
+        return labels

@@ -1,15 +1,11 @@
 """The cache key covers all code a row depends on: edit a copy of the repository (or of a plugin) and
 the resumed run recomputes the rows, instead of serving stale ones; an edit elsewhere recomputes nothing."""
-import os
 import re
 import shutil
-import subprocess
-import sys
-import textwrap
 
 import pytest
 
-from conftest import REPO
+from conftest import REPO, install_plugin, run_python
 
 STUDY = """
 name = "keyed"
@@ -37,9 +33,8 @@ def repo_copy(tmp_path):
 
 
 def run(repo, study, out, extra_path=()):
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([*map(str, extra_path), str(repo)])}
-    proc = subprocess.run([sys.executable, "-m", "experiments.run", str(study), "--out", str(out), "--jobs", "1"],
-                          cwd=repo, env=env, capture_output=True, text=True, timeout=300)
+    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", cwd=repo, path_first=extra_path,
+                      repo=repo, timeout=300)
     assert proc.returncode == 0, proc.stderr
     m = re.search(r"(\d+) rows: (\d+) already stored, (\d+) to run", proc.stdout)
     assert m, proc.stdout
@@ -101,26 +96,9 @@ def radius_of(points, c):
 
 
 def test_editing_a_plugin_helper_module_recomputes(repo_copy, tmp_path):
-    src = tmp_path / "plugin_src"
-    src.mkdir()
-    (src / "fitbench_keyed_plugin.py").write_text(PLUGIN)
-    (src / "fitbench_keyed_helper.py").write_text(HELPER)
-    (src / "pyproject.toml").write_text(textwrap.dedent('''
-        [build-system]
-        requires = ["setuptools>=61"]
-        build-backend = "setuptools.build_meta"
-        [project]
-        name = "fitbench-keyed-plugin"
-        version = "0.0.1"
-        [project.entry-points."fitbench.methods"]
-        keyed = "fitbench_keyed_plugin"
-        [tool.setuptools]
-        py-modules = ["fitbench_keyed_plugin", "fitbench_keyed_helper"]
-    '''))
-    site = tmp_path / "site"
-    proc = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
-                           "--quiet", "--target", str(site), str(src)], capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
+    site = install_plugin(tmp_path, "fitbench-keyed-plugin",
+                          {"fitbench_keyed_plugin": PLUGIN, "fitbench_keyed_helper": HELPER},
+                          {"fitbench.methods": {"keyed": "fitbench_keyed_plugin"}})
     study = tmp_path / "keyed.toml"
     study.write_text(STUDY.format(kind="grid", method="circle.keyed_plugin"))
     out = tmp_path / "out"

@@ -13,7 +13,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+from conftest import subprocess_env
+
 DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
 
 STUDY = '''name = "cluster"
@@ -54,7 +55,7 @@ def test_study_on_a_separate_scheduler_and_workers_matches_local_run(tmp_path):
     worker_dir.mkdir()
     cfg = client_dir / "cluster.toml"
     cfg.write_text(STUDY, encoding="utf-8")
-    env = dict(os.environ, PYTHONPATH=str(REPO), OPENBLAS_NUM_THREADS="1")  # workers: fitbench importable, nothing else
+    env = subprocess_env(OPENBLAS_NUM_THREADS="1")  # workers: fitbench importable, nothing else
     port = free_port()
     address = f"tcp://127.0.0.1:{port}"
     procs = [subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],

@@ -15,7 +15,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+from conftest import subprocess_env
 
 STUDY = '''name = "{name}"
 title = "fault test study"
@@ -43,19 +43,13 @@ def study(folder: Path, name="faults", reps=3, ns="[10, 20]") -> Path:
     return path
 
 
-def env():
-    e = dict(os.environ)
-    e["PYTHONPATH"] = str(REPO) + os.pathsep + e.get("PYTHONPATH", "")
-    return e
-
-
 def run(args, cwd, timeout=300):
-    return subprocess.run([sys.executable, "-m", "experiments.run", *map(str, args)], cwd=cwd, env=env(),
+    return subprocess.run([sys.executable, "-m", "experiments.run", *map(str, args)], cwd=cwd, env=subprocess_env(),
                           capture_output=True, text=True, timeout=timeout)
 
 
 def start(args, cwd):
-    return subprocess.Popen([sys.executable, "-m", "experiments.run", *map(str, args)], cwd=cwd, env=env(),
+    return subprocess.Popen([sys.executable, "-m", "experiments.run", *map(str, args)], cwd=cwd, env=subprocess_env(),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 
@@ -249,7 +243,7 @@ def test_bad_dask_scheduler_is_one_line_in_bounded_time(tmp_path):
 
 @pytest.mark.parametrize("module", ["experiments.run", "experiments.report", "experiments.verify"])
 def test_version(module, tmp_path):
-    res = subprocess.run([sys.executable, "-m", module, "--version"], cwd=tmp_path, env=env(),
+    res = subprocess.run([sys.executable, "-m", module, "--version"], cwd=tmp_path, env=subprocess_env(),
                          capture_output=True, text=True, timeout=120)
     from importlib import metadata
     assert res.returncode == 0 and metadata.version("fitbench") in res.stdout

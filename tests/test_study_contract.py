@@ -3,16 +3,13 @@ table and figure) runs from the command line into rows, a summary averaged over 
 section; a plugin registers a method and a data source through entry points and both reach a study and
 the report; the report shows a broken study with its reason and builds the rest."""
 import json
-import os
-import subprocess
-import sys
 import textwrap
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import REPO
+from conftest import REPO, install_plugin, run_python
 
 STUDY = """
 name = "toml_only"
@@ -66,10 +63,8 @@ def write_study(folder, second="circle.gauss_newton"):
     return path
 
 
-def run(args, cwd, env_extra=None):
-    env = {**os.environ, **(env_extra or {})}
-    return subprocess.run([sys.executable, "-m", "experiments.run", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=600)
+def run(args, cwd, path_first=()):
+    return run_python("-m", "experiments.run", *args, cwd=cwd, path_first=path_first)
 
 
 def test_toml_only_study_from_the_command_line(tmp_path):
@@ -136,27 +131,9 @@ def circle_outliers(rng, *, n=40, share=0.1):
 
 
 def test_plugin_method_and_data_source_reach_a_study_and_the_report(tmp_path):
-    src = tmp_path / "plugin_src"
-    src.mkdir()
-    (src / "fitbench_outlier_plugin.py").write_text(PLUGIN)
-    (src / "pyproject.toml").write_text(textwrap.dedent('''
-        [build-system]
-        requires = ["setuptools>=61"]
-        build-backend = "setuptools.build_meta"
-        [project]
-        name = "fitbench-outlier-plugin"
-        version = "0.3.1"
-        [project.entry-points."fitbench.methods"]
-        median_radius = "fitbench_outlier_plugin"
-        [project.entry-points."fitbench.datasets"]
-        circle_outliers = "fitbench_outlier_plugin"
-        [tool.setuptools]
-        py-modules = ["fitbench_outlier_plugin"]
-    '''))
-    site = tmp_path / "site"
-    proc = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
-                           "--quiet", "--target", str(site), str(src)], capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
+    site = install_plugin(tmp_path, "fitbench-outlier-plugin", {"fitbench_outlier_plugin": PLUGIN},
+                          {"fitbench.methods": {"median_radius": "fitbench_outlier_plugin"},
+                           "fitbench.datasets": {"circle_outliers": "fitbench_outlier_plugin"}}, version="0.3.1")
     study = tmp_path / "plug.toml"
     study.write_text(textwrap.dedent('''
         name = "plug"
@@ -174,7 +151,7 @@ def test_plugin_method_and_data_source_reach_a_study_and_the_report(tmp_path):
     '''))
     out = tmp_path / "out"
     proc = run([str(study), "--out", str(out), "--jobs", "1"], cwd=REPO,
-               env_extra={"PYTHONPATH": os.pathsep.join([str(site), str(REPO)])})
+               path_first=[site])
     assert proc.returncode == 0, proc.stderr
     df = pd.read_csv(out / "plug" / "results.csv")
     assert set(df["method"]) == {"circle.median_radius", "circle.kasa"} and set(df["status"]) == {"ok"}

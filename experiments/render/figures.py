@@ -202,7 +202,9 @@ def magnification_trajectories(panels: list[dict], path):
                 x0, x1, y0, y1 = pnl["box"]
                 ax.set_xlim(x0, x1)
                 ax.set_ylim(y0, y1)
-            ax.set_aspect("equal", adjustable="datalim")
+            # equal scales in x and y: a zoom box is shown exactly (the axes box takes the box's shape);
+            # without one, matplotlib widens the free data limits to fill the panel
+            ax.set_aspect("equal", adjustable="box" if pnl.get("box") else "datalim")
             ax.set_title(f"{pnl.get('title', pnl['method'])}\nη = {eta:g}: continuity {res.extra['continuity']:.2f}, "
                          f"loops {res.extra['self_intersections']}", fontsize=8)
             ax.set_xlabel("x [mm]")

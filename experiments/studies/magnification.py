@@ -65,14 +65,14 @@ def execute(task):
 SHOWN = [("corner_inside_convex", ["nearest (conventional)", "offset as printed, delta = 10 e_max",
                                    "offset same side, delta = 10 e_max"], None),
          ("free_form_0.1mm", ["nearest (conventional)", "offset same side, delta = 2 e_max",
-                              "offset same side, delta = 1.2 eta e_max"], (15.0, 16.6, 1.65, 2.45))]
+                              "offset same side, delta = 1.2 eta e_max"], (15.0, 16.6, 1.9, 3.0))]
 
 
 def _panel(name, label, eta, box):
     method, selection, rule = VARIANTS[label]
     params = {} if method == "magnify.nearest" else {"selection": selection, "delta_emax": rule[1],
                                                      "delta_times_eta": rule[0] == "eta_e"}
-    return {"example": name, "eta": eta, "method": method, "params": params, "title": f"{name}: {label}", "box": box}
+    return {"example": name, "eta": eta, "method": method, "params": params, "title": f"{name}:\n{label}", "box": box}
 
 
 def analyse(df, cfg, target, log):

@@ -1,0 +1,43 @@
+"""The magnified-trajectory figure (experiments.render.figures.magnification_trajectories): a panel with a
+zoom box shows exactly that box at equal x/y scales, without matplotlib's "Ignoring fixed x/y limits to
+fulfill fixed data aspect" warnings (the cause: equal aspect with adjustable data limits over fixed limits)."""
+import logging
+
+import pytest
+
+from experiments.render import figures, style
+from experiments.studies import magnification
+
+
+@pytest.fixture
+def drawn(monkeypatch, tmp_path, caplog):
+    """Draw the study's own panels; keep the figure that style.save writes (and closes)."""
+    kept = []
+    save = style.save
+    monkeypatch.setattr(style, "save", lambda fig, path, **kw: (kept.append(fig), save(fig, path, **kw))[1])
+    examples = {name: 200.0 for name, _, _ in magnification.SHOWN}
+    panels = [magnification._panel(name, label, examples[name], box)
+              for name, labels, box in magnification.SHOWN for label in labels]
+    with caplog.at_level(logging.WARNING, logger="matplotlib"):
+        figures.magnification_trajectories(panels, tmp_path / "magnification.png")
+    assert (tmp_path / "magnification.png").stat().st_size > 10_000
+    return panels, kept[0], caplog.records
+
+
+def test_no_aspect_warning(drawn):
+    _, _, records = drawn
+    assert not [r.getMessage() for r in records if "Ignoring fixed" in r.getMessage()]
+
+
+def test_zoom_box_shown_exactly_at_equal_scales(drawn):
+    panels, fig, _ = drawn
+    boxed = [(ax, p["box"]) for ax, p in zip(fig.axes, panels) if p.get("box")]
+    assert boxed, "the study declares at least one zoom box"
+    for ax, (x0, x1, y0, y1) in boxed:
+        assert ax.get_xlim() == pytest.approx((x0, x1), abs=1e-12)
+        assert ax.get_ylim() == pytest.approx((y0, y1), abs=1e-12)
+    for ax in fig.axes[:len(panels)]:
+        # equal scales: one mm on x is as long on the page as one mm on y
+        bbox = ax.get_window_extent()
+        (xa, xb), (ya, yb) = ax.get_xlim(), ax.get_ylim()
+        assert (bbox.width / (xb - xa)) == pytest.approx(bbox.height / (yb - ya), rel=1e-3)

@@ -11,7 +11,19 @@ from methods._result import (CircleFit, EllipseFit, FitResult, MagnifyFit, Multi
                              ZoneFit)
 from methods._validation import validate_points
 
-from methods import circle, ellipse, magnify, multilateration, positioning, roundness  # noqa: E402,F401  (registers the built-in methods)
+
+def __getattr__(name: str):
+    """The family subpackages (``methods.circle``, ...) import on first use (PEP 562): ``import methods``
+    stays light; :func:`methods._registry.load_builtins` imports them all (binding them here)."""
+    if name.startswith("__"):  # a probe for a dunder (pickle, inspect, doctest) imports nothing
+        raise AttributeError(f"module 'methods' has no attribute {name!r}")
+    from methods._registry import load_builtins
+    load_builtins()
+    try:
+        return globals()[name]
+    except KeyError:
+        raise AttributeError(f"module 'methods' has no attribute {name!r}") from None
+
 
 __all__ = ["InvalidInputError", "UnknownMethodError", "MethodSpec", "register", "get", "list_methods",
            "fit", "load_plugins", "FitResult", "CircleFit", "ZoneFit", "EllipseFit", "validate_points", "ENTRY_POINT_GROUP", "KINDS"]

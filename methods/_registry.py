@@ -23,6 +23,7 @@ KINDS = ("closed form", "iterative", "convex program")
 FAMILY_MIN_POINTS = {"circle": 3, "ellipse": 5}
 
 _REGISTRY: dict[str, "MethodSpec"] = {}
+_builtins_loaded = False
 
 
 @dataclass(frozen=True)
@@ -123,6 +124,8 @@ def register(method_id: str, *, summary: str, reference: str, kind: str, min_poi
         raise ValueError(f"{method_id}: a summary and a literature reference are required")
 
     def decorate(func):
+        if not func.__module__.startswith("methods."):
+            load_builtins()  # a plugin's id is checked against every built-in one
         sig = inspect.signature(func)
         defaults = {p.name: p.default for p in sig.parameters.values()
                     if p.kind == p.KEYWORD_ONLY and p.default is not p.empty}
@@ -158,6 +161,26 @@ def _run(spec: MethodSpec, points, params: dict):
     return result
 
 
+def load_builtins() -> None:
+    """Import the built-in method families once: each registers its methods on import. Done by the first
+    :func:`get`, :func:`list_methods` or :func:`fit` (and by a plugin's :func:`register`), not by ``import
+    methods``, so that ``python -m methods list`` can read the manifest instead (:mod:`methods._manifest`).
+    The import statement is static: experiments/codehash.py sees every family in the registry's closure."""
+    global _builtins_loaded
+    if _builtins_loaded:
+        return
+    _builtins_loaded = True
+    try:
+        from methods import circle, ellipse, magnify, multilateration, positioning, roundness  # noqa: F401
+    except BaseException:
+        _builtins_loaded = False
+        raise
+
+
+def builtins_loaded() -> bool:
+    return _builtins_loaded
+
+
 def load_plugins() -> None:
     """Import every entry point of the ``fitbench.methods`` group once (a broken plugin warns, see
     :func:`methods._plugins.load_entry_points`)."""
@@ -166,6 +189,7 @@ def load_plugins() -> None:
 
 def get(method_id: str) -> MethodSpec:
     """The :class:`MethodSpec` of ``method_id``; unknown ids raise with close suggestions."""
+    load_builtins()
     load_plugins()
     try:
         return _REGISTRY[method_id]
@@ -180,6 +204,7 @@ def get(method_id: str) -> MethodSpec:
 
 def list_methods(family: str | None = None) -> list[MethodSpec]:
     """Registered methods, sorted by id, optionally of one family."""
+    load_builtins()
     load_plugins()
     return [s for k, s in sorted(_REGISTRY.items()) if family is None or s.family == family]
 

@@ -52,6 +52,10 @@ def test_wheel_install_runs_from_another_directory(tmp_path):
     where = subprocess.run([sys.executable, "-c", "import methods, fitbench; print(methods.__file__, fitbench.__file__)"],
                            capture_output=True, text=True, cwd=elsewhere, env=env).stdout
     assert str(target) in where and str(REPO) not in where
+    # the manifest of the built-in methods is installed and current ('list' need not import the families)
+    current = subprocess.run([sys.executable, "-c", "from methods import _manifest; print(_manifest.read() is not None)"],
+                             capture_output=True, text=True, cwd=elsewhere, env=env)
+    assert current.stdout.strip() == "True", current
     run = subprocess.run([str(script), "run", "published", "--out", "X", "--jobs", "1"], capture_output=True, text=True,
                          cwd=elsewhere, env=env)
     assert run.returncode == 0, run.stderr[-2000:]

@@ -1,0 +1,114 @@
+"""The manifest of the built-in methods: what ``python -m methods list`` shows, without importing the
+method families (issue 20: start-up). Generated from the registry, never edited by hand::
+
+    python -m methods._manifest          # rewrite methods/_manifest.json after changing a built-in method
+
+The registry stays the one source of truth: the manifest records a digest of the source files it was built
+from (the modules of the ``methods`` package), and :func:`describe_methods` uses it only while that digest
+matches the files on disk (else it imports the families and reads the registry); tests/test_manifest.py
+fails when the committed manifest and the registry disagree.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sys
+import tempfile
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from methods import _registry
+
+PATH = Path(__file__).with_name("_manifest.json")
+_PACKAGE_DIR = Path(__file__).parent
+
+
+@dataclass(frozen=True)
+class MethodInfo:
+    """What a listing shows of a registered method (the fields of :class:`methods._registry.MethodSpec`
+    without its function)."""
+
+    id: str
+    family: str
+    name: str
+    summary: str
+    reference: str
+    kind: str
+    defaults: dict
+    min_points: int
+    module: str
+
+    @classmethod
+    def of(cls, spec: _registry.MethodSpec) -> "MethodInfo":
+        return cls(id=spec.id, family=spec.family, name=spec.name, summary=spec.summary, reference=spec.reference,
+                   kind=spec.kind, defaults=dict(spec.defaults), min_points=spec.min_points, module=spec.module)
+
+
+#: modules of the package that no built-in method imports (the command line, this module): not hashed
+_NOT_SOURCES = {"cli.py", "__main__.py", "_manifest.py"}
+
+
+def source_files() -> list[Path]:
+    """The files whose code can decide the manifest: every module of the ``methods`` package (the built-in
+    families, the registry and the helpers they import), except :data:`_NOT_SOURCES`."""
+    return sorted(p for p in _PACKAGE_DIR.rglob("*.py") if p.relative_to(_PACKAGE_DIR).as_posix() not in _NOT_SOURCES)
+
+
+def source_digest() -> str:
+    h = hashlib.sha256()
+    for path in source_files():
+        h.update(path.relative_to(_PACKAGE_DIR).as_posix().encode() + b"\0")
+        h.update(path.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def build() -> dict:
+    """The manifest of the registry's built-in methods (imports the families)."""
+    _registry.load_builtins()
+    infos = [asdict(MethodInfo.of(s)) for k, s in sorted(_registry._REGISTRY.items())
+             if s.module.startswith("methods.")]
+    return {"generated_by": "python -m methods._manifest", "source_digest": source_digest(), "methods": infos}
+
+
+def write(path: Path = PATH) -> Path:
+    """Write :func:`build` to ``path`` atomically."""
+    text = json.dumps(build(), indent=1, ensure_ascii=False) + "\n"
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def read(path: Path = PATH) -> list[MethodInfo] | None:
+    """The stored built-in methods, or None when there is no manifest or it was built from other sources."""
+    try:
+        stored = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if stored.get("source_digest") != source_digest():
+        return None
+    return [MethodInfo(**m) for m in stored["methods"]]
+
+
+def describe_methods(family: str | None = None) -> list[MethodInfo]:
+    """Every method (built-in and plugin) as :class:`MethodInfo`, sorted by id, optionally of one family.
+    The built-in ones come from the manifest while the families are not imported and the manifest is
+    current, else from the registry (the same values: tests/test_manifest.py)."""
+    _registry.load_plugins()
+    stored = None if _registry.builtins_loaded() else read()
+    if stored is None:
+        _registry.load_builtins()
+        stored = []
+    infos = {m.id: m for m in stored}
+    infos.update((k, MethodInfo.of(s)) for k, s in _registry._REGISTRY.items())
+    return [m for k, m in sorted(infos.items()) if family is None or m.family == family]
+
+
+if __name__ == "__main__":
+    print(f"wrote {write()}", file=sys.stderr)

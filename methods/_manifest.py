@@ -15,34 +15,14 @@ import json
 import os
 import sys
 import tempfile
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, fields
 from pathlib import Path
 
 from methods import _registry
+from methods._registry import MethodInfo
 
 PATH = Path(__file__).with_name("_manifest.json")
 _PACKAGE_DIR = Path(__file__).parent
-
-
-@dataclass(frozen=True)
-class MethodInfo:
-    """What a listing shows of a registered method (the fields of :class:`methods._registry.MethodSpec`
-    without its function)."""
-
-    id: str
-    family: str
-    name: str
-    summary: str
-    reference: str
-    kind: str
-    defaults: dict
-    min_points: int
-    module: str
-
-    @classmethod
-    def of(cls, spec: _registry.MethodSpec) -> "MethodInfo":
-        return cls(id=spec.id, family=spec.family, name=spec.name, summary=spec.summary, reference=spec.reference,
-                   kind=spec.kind, defaults=dict(spec.defaults), min_points=spec.min_points, module=spec.module)
 
 
 #: modules of the package that no built-in method imports (the command line, this module): not hashed
@@ -63,10 +43,15 @@ def source_digest() -> str:
     return h.hexdigest()
 
 
+def info_of(spec: MethodInfo) -> MethodInfo:
+    """The :class:`MethodInfo` part of a registered :class:`methods._registry.MethodSpec`."""
+    return MethodInfo(**{f.name: getattr(spec, f.name) for f in fields(MethodInfo)})
+
+
 def build() -> dict:
     """The manifest of the registry's built-in methods (imports the families)."""
     _registry.load_builtins()
-    infos = [asdict(MethodInfo.of(s)) for k, s in sorted(_registry._REGISTRY.items())
+    infos = [asdict(info_of(s)) for k, s in sorted(_registry._REGISTRY.items())
              if s.module.startswith("methods.")]
     return {"generated_by": "python -m methods._manifest", "source_digest": source_digest(), "methods": infos}
 
@@ -106,7 +91,7 @@ def describe_methods(family: str | None = None) -> list[MethodInfo]:
         _registry.load_builtins()
         stored = []
     infos = {m.id: m for m in stored}
-    infos.update((k, MethodInfo.of(s)) for k, s in _registry._REGISTRY.items())
+    infos.update((k, info_of(s)) for k, s in _registry._REGISTRY.items())
     return [m for k, m in sorted(infos.items()) if family is None or m.family == family]
 
 

@@ -27,8 +27,9 @@ _builtins_loaded = False
 
 
 @dataclass(frozen=True)
-class MethodSpec:
-    """A registered method and what a user needs to know about it."""
+class MethodInfo:
+    """What a user needs to know about a registered method (what ``list`` shows; the built-in ones are
+    also stored in the manifest, :mod:`methods._manifest`)."""
 
     id: str
     family: str
@@ -38,8 +39,14 @@ class MethodSpec:
     kind: str
     defaults: dict
     min_points: int
+    module: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class MethodSpec(MethodInfo):
+    """A registered method: its :class:`MethodInfo` and how to run it."""
+
     func: Callable = field(repr=False, compare=False)
-    module: str = ""
     validator: Callable | None = field(default=None, repr=False, compare=False)
     param_checks: dict = field(default_factory=dict, repr=False, compare=False)
 

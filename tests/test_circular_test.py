@@ -1,14 +1,12 @@
 """Circular tests (ISO 230-4): figures by their definitions, diagnostics recover injected sources,
 the paper's elliptic path, the CLI."""
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from conftest import REPO
+from conftest import run_python
 from datasets.circular_test import MachineErrors, TestConditions, circular_test, lola_hbg130
 from methods import InvalidInputError
 from methods.circular_test import diagnose, evaluate
@@ -148,8 +146,7 @@ def files(tmp_path_factory):
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "methods", "circular-test", *map(str, args)], capture_output=True,
-                          text=True, cwd=REPO)
+    return run_python("-m", "methods", "circular-test", *args)
 
 
 def test_cli_json_and_plot(files, tmp_path):

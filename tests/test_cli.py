@@ -1,15 +1,13 @@
 """The command line: human and JSON output, one-line errors with exit status 2."""
 import json
-import subprocess
-import sys
 
 import pytest
 
-from conftest import REPO
+from conftest import REPO, run_python
 
 
 def run(*args, cwd=REPO):
-    return subprocess.run([sys.executable, "-m", "methods", *args], capture_output=True, text=True, cwd=cwd)
+    return run_python("-m", "methods", *args, cwd=cwd)
 
 
 def test_list_one_line_per_method():

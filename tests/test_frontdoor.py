@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
 import sys
 import warnings
 
@@ -14,7 +13,7 @@ import pandas as pd
 import pytest
 
 import methods
-from conftest import REPO
+from conftest import run_python
 from datasets.circular_test import MachineErrors, TestConditions, circular_test, lola_hbg130, trace
 from datasets.io import read_points, read_runs
 from datasets.positioning import axis_test, to_frame
@@ -553,7 +552,7 @@ pts = read_points({str(p)!r})
 after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 print((after - before) * 1024 / pts.nbytes, pts.shape[0])
 """
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
+    out = run_python("-c", code)
     assert out.returncode == 0, out.stderr
     ratio, rows = out.stdout.split()
     assert int(rows) == n and float(ratio) < 3.0, ratio
@@ -564,7 +563,7 @@ def test_version_on_every_entry_point():
     from fitbench import __version__
     for args in (["-m", "methods", "--version"], ["-m", "fitbench", "--version"], ["-m", "fitbench", "run", "--version"],
                  ["-m", "methods", "circular-test", "--version"]):
-        out = subprocess.run([sys.executable, *args], capture_output=True, text=True, cwd=REPO)
+        out = run_python(*args)
         assert out.returncode == 0 and out.stdout.strip() == f"fitbench {__version__}", (args, out)
 
 

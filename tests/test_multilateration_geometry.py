@@ -1,13 +1,11 @@
 """Issue 16 item 14: degenerate station geometry is refused (InvalidInputError, CLI exit 2), and a solution
 left undetermined by rounding is reported converged=False with the condition number, never 'converged'."""
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import methods
-from conftest import REPO
+from conftest import run_python
 from datasets.multilateration import simulate
 
 ALL = ["case_a_distance", "case_a_squared", "joint", "case_b_linear", "case_b_taylor", "case_b_centred"]
@@ -77,7 +75,6 @@ def test_cli_exit_2_for_collinear_stations(tmp_path):
     meas, st = tmp_path / "m.csv", tmp_path / "s.csv"
     data.to_frame().to_csv(meas, index=False, float_format="%.9f")
     data.with_stations(S).stations_frame().to_csv(st, index=False, float_format="%.9f")
-    out = subprocess.run([sys.executable, "-m", "methods", "multilaterate", str(meas), "--stations", str(st)],
-                         capture_output=True, text=True, cwd=REPO)
+    out = run_python("-m", "methods", "multilaterate", meas, "--stations", st)
     assert out.returncode == 2, (out.stdout, out.stderr)
     assert "straight line" in out.stderr and "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1

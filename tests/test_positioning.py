@@ -1,7 +1,5 @@
 """Positioning (ISO 230-2) and the GLS polynomial model."""
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
@@ -10,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import methods
-from conftest import REPO
+from conftest import run_python
 from datasets.positioning import axis_test, to_frame
 from methods import InvalidInputError
 from methods.positioning import read_csv
@@ -165,8 +163,7 @@ def test_cli_json_keys_and_plot(tmp_path):
     data, _ = axis_test(rng=np.random.default_rng(2), mpe=0.002)
     p = tmp_path / "axis.csv"
     to_frame(data).to_csv(p, index=False)
-    out = subprocess.run([sys.executable, "-m", "methods", "positioning", str(p), "--mpe", "0.002", "--json",
-                          "--plot", str(tmp_path / "axis.png")], capture_output=True, text=True, cwd=REPO)
+    out = run_python("-m", "methods", "positioning", p, "--mpe", "0.002", "--json", "--plot", tmp_path / "axis.png")
     assert out.returncode == 0, out.stderr
     d = json.loads(out.stdout)
     for key in ("A", "A_up", "A_down", "E", "E_up", "E_down", "M", "R", "R_up", "R_down", "B", "B_mean", "per_target",
@@ -176,6 +173,5 @@ def test_cli_json_keys_and_plot(tmp_path):
         assert len(d["polynomial"][direction]["coefficients"]) == 4
         assert np.array(d["polynomial"][direction]["covariance"]).shape == (4, 4)
     assert (tmp_path / "axis.png").stat().st_size > 10_000
-    bad = subprocess.run([sys.executable, "-m", "methods", "positioning", str(p), "--mpe", "1", "--instrument-u", "1"],
-                         capture_output=True, text=True, cwd=REPO)
+    bad = run_python("-m", "methods", "positioning", p, "--mpe", "1", "--instrument-u", "1")
     assert bad.returncode == 2 and "Traceback" not in bad.stderr

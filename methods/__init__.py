@@ -14,15 +14,12 @@ from methods._validation import validate_points
 
 def __getattr__(name: str):
     """The family subpackages (``methods.circle``, ...) import on first use (PEP 562): ``import methods``
-    stays light; :func:`methods._registry.load_builtins` imports them all (binding them here)."""
-    if name.startswith("__"):  # a probe for a dunder (pickle, inspect, doctest) imports nothing
+    stays light; the registry imports them all on its first lookup (:func:`methods._registry.load_builtins`)."""
+    from methods._registry import BUILTIN_FAMILIES, load_builtins
+    if name not in BUILTIN_FAMILIES:
         raise AttributeError(f"module 'methods' has no attribute {name!r}")
-    from methods._registry import load_builtins
     load_builtins()
-    try:
-        return globals()[name]
-    except KeyError:
-        raise AttributeError(f"module 'methods' has no attribute {name!r}") from None
+    return globals()[name]
 
 
 __all__ = ["InvalidInputError", "UnknownMethodError", "MethodSpec", "register", "get", "list_methods",

@@ -7,6 +7,7 @@ module (or object) whose import runs ``@register``.
 from __future__ import annotations
 
 import difflib
+import importlib
 import inspect
 import math
 import time
@@ -21,6 +22,9 @@ ENTRY_POINT_GROUP = "fitbench.methods"
 KINDS = ("closed form", "iterative", "convex program")
 #: Minimum number of points a family's methods need (before a method's own stricter rule).
 FAMILY_MIN_POINTS = {"circle": 3, "ellipse": 5}
+
+#: the subpackages of ``methods`` holding the built-in methods (see :func:`load_builtins`)
+BUILTIN_FAMILIES = ("circle", "ellipse", "magnify", "multilateration", "positioning", "roundness")
 
 _REGISTRY: dict[str, "MethodSpec"] = {}
 _builtins_loaded = False
@@ -172,13 +176,15 @@ def load_builtins() -> None:
     """Import the built-in method families once: each registers its methods on import. Done by the first
     :func:`get`, :func:`list_methods` or :func:`fit` (and by a plugin's :func:`register`), not by ``import
     methods``, so that ``python -m methods list`` can read the manifest instead (:mod:`methods._manifest`).
-    The import statement is static: experiments/codehash.py sees every family in the registry's closure."""
+    The families import this module (``register``): importing them by name here keeps the import graph
+    free of circles."""
     global _builtins_loaded
     if _builtins_loaded:
         return
     _builtins_loaded = True
     try:
-        from methods import circle, ellipse, magnify, multilateration, positioning, roundness  # noqa: F401
+        for family in BUILTIN_FAMILIES:
+            importlib.import_module(f"methods.{family}")
     except BaseException:
         _builtins_loaded = False
         raise

@@ -17,9 +17,9 @@ installer's bookkeeping files ``RECORD``, ``INSTALLER``, ``REQUESTED``, ``direct
 byte code), so that editing any helper module of a plugin recomputes its rows. A plugin module found
 without distribution metadata (a plain file on ``PYTHONPATH``) is hashed with its static closure.
 
-Because ``methods/__init__.py`` imports every built-in family (that is how they register), a built-in
-method's closure is all of ``methods/``: editing any method recomputes every method's rows. That is
-the honest import graph; a cache that is sometimes too eager is the price of one that is never stale.
+A built-in method's closure is its own import graph: ``methods/__init__.py`` does not import the
+families (the registry loads them by name on first use), so editing one family recomputes only the rows
+of the methods whose modules import it (``circle.kasa``: the circle family and the shared helpers).
 """
 from __future__ import annotations
 

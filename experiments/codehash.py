@@ -125,7 +125,18 @@ def files_of(module: str) -> list[Path]:
     for name, path in module_closure(module):
         if not _in_repo(path):
             files.update(_distribution_files(name) or [path])
+    files.update(_compiled_sources(files))
     return sorted(files)
+
+
+def _compiled_sources(files) -> set[Path]:
+    """The C sources of the compiled kernels beside the repository's modules in ``files`` (a family loads
+    its ``_ckernels`` by name through ``methods/_compiled.py``, which no import statement shows), and
+    ``setup.py``, which holds their compile flags."""
+    sources = {c for f in files if _in_repo(f) for c in Path(f).parent.glob("*.c")}
+    if sources and (REPO / "setup.py").is_file():
+        sources.add(REPO / "setup.py")
+    return sources
 
 
 def _digest(files) -> str:

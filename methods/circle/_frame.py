@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from methods._frame import UnitFrame, dot
+from methods._frame import KernelFrame, UnitFrame, dot, is_point_array, kernel_frame, offer_frame, point_kernels, take_frame
 
 
 class Frame(UnitFrame):
@@ -141,8 +141,102 @@ def geometric_normal_equations(x, y, p, work: np.ndarray | None = None):
     return dd, jtj, jtd, (c, s, r, d)
 
 
+def compiled_frame(points):
+    """(ck, frame) for the compiled path: the circle kernels and the :class:`methods._frame.KernelFrame` that
+    validation offered for ``points`` (pass 1), computed here when none was offered; None on the NumPy path
+    (``FITBENCH_KERNELS=numpy``, or data the kernels leave to NumPy: not finite, sums out of range)."""
+    ck = point_kernels()
+    if ck is None:
+        return None
+    frame = take_frame(points)
+    if isinstance(frame, KernelFrame):
+        return ck, frame
+    if frame is not None:  # a NumPy frame was offered (data the kernel left to NumPy): leave it for Frame.of
+        offer_frame(points, frame)
+        return None
+    frame = kernel_frame(points, ck) if is_point_array(points) else None
+    return (ck, frame) if frame is not None else None
+
+
+def compiled_moments(points, ck, frame: KernelFrame) -> tuple[KernelFrame, np.ndarray]:
+    """(frame, M = Z^T Z / N) by the compiled pass 2: Z = [z, x, y, 1] of the centred, scaled data (as
+    :func:`moments`). The pass returns the data's token: if the points changed since ``frame`` was
+    computed, the frame is computed again (pass 1) and the moments with it."""
+    t, zz, zx, zy, xx, yy, xy, sx, sy, sz = ck.moments(points, frame.cx, frame.cy, frame.scale)
+    if t != frame.token:
+        frame = kernel_frame(points, ck)
+        t, zz, zx, zy, xx, yy, xy, sx, sy, sz = ck.moments(points, frame.cx, frame.cy, frame.scale)
+    n = float(points.shape[0])
+    return frame, np.array([[zz, zx, zy, sz],
+                            [zx, xx, xy, sx],
+                            [zy, xy, yy, sy],
+                            [sz, sx, sy, n]]) / n
+
+
+def frame_and_moments(points) -> tuple["Frame", np.ndarray]:
+    """The circle frame (shift and scale; x, y only on the NumPy path) and the moment matrix M of
+    :func:`moments`: compiled passes 1-2 (no unit-frame copy), or the NumPy reference path."""
+    compiled = compiled_frame(points)
+    if compiled is None:
+        frame = Frame.of(points)
+        return frame, moments(frame.x, frame.y)
+    kf, m = compiled_moments(points, *compiled)
+    return Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES), m
+
+
+_NO_COORDINATES = np.empty(0)
+
+
+def compiled_geometric(points, ck, frame: KernelFrame, p, previous=None):
+    """:func:`geometric_normal_equations` by one compiled sweep over the data points (unit-frame circle
+    ``p``): (F, J^T J, J^T d, None), None when a point is the centre; with ``previous`` (the unit-frame
+    circle before the step) also the actual reduction F(previous) - F(p) free of cancellation
+    (:func:`methods.circle.levenberg_marquardt._reduction`): then ((F, J^T J, J^T d, None), reduction)."""
+    q = (float(p[0]), float(p[1]), float(p[2]))
+    if previous is None:
+        out = ck.geometric(points, frame.cx, frame.cy, frame.scale, q)
+    else:
+        out = ck.geometric(points, frame.cx, frame.cy, frame.scale, q,
+                           (float(previous[0]), float(previous[1]), float(previous[2])))
+    _, cc, cs, ss_, sc, ss, cd, sd_, sd, dd, reduction, zero_r = out
+    if zero_r or not np.isfinite([cc, cs, ss_, sc, ss]).all():
+        state = None
+    else:
+        jtj = np.array([[cc, cs, sc], [cs, ss_, ss], [sc, ss, float(points.shape[0])]])
+        state = (dd, jtj, -np.array([cd, sd_, sd]), None)
+    return state if previous is None else (state, reduction)
+
+
 def algebraic_start(x, y) -> np.ndarray:
     """Kåsa's circle as the start of an iterative geometric fit (the roundness paper's choice);
     the unit circle about the centroid when Kåsa's system has no real circle."""
-    p = kasa_moments(moments(x, y))
+    return start_from_moments(moments(x, y))
+
+
+def start_from_moments(m: np.ndarray) -> np.ndarray:
+    """:func:`algebraic_start` from the moment matrix M."""
+    p = kasa_moments(m)
     return p if np.isfinite(p).all() else np.array([0.0, 0.0, 1.0])
+
+
+def geometric_setup(points, start):
+    """What Gauss–Newton and LM need, on the compiled or the NumPy path: (frame, p0, sweep, coordinates).
+
+    ``p0`` is ``start`` (data units) in the unit frame, or Kåsa's start (one moments sweep);
+    ``sweep(q)`` = :func:`geometric_normal_equations` at unit-frame q (one sweep; compiled: state[3] is None);
+    ``coordinates`` = (x, y) on the NumPy path, None on the compiled path (no unit-frame copy)."""
+    compiled = compiled_frame(points)
+    if compiled is None:
+        frame = Frame.of(points)
+        x, y = frame.x, frame.y
+        p0 = algebraic_start(x, y) if start is None else frame.circle_to_unit(start)
+        work = np.empty((4, len(x)))  # one workspace for every sweep (peak memory: frame + 4 N numbers)
+        return frame, p0, lambda q: geometric_normal_equations(x, y, q, work), (x, y)
+    ck, kf = compiled
+    if start is None:
+        kf, m = compiled_moments(points, ck, kf)  # proves the points unchanged since validation (token)
+    else:
+        kf = kernel_frame(points, ck) or kf  # a fresh pass 1: the frame of the points as they are now
+    frame = Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES)
+    p0 = start_from_moments(m) if start is None else frame.circle_to_unit(start)
+    return frame, p0, lambda q, previous=None: compiled_geometric(points, ck, kf, q, previous), None

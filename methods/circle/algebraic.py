@@ -6,8 +6,13 @@ Regression*, 2010, ch. 5-7). Pratt, Taubin and Hyper are generalised eigenproble
 M a = eta N a with M = Z^T Z, Z = [z, x, y, 1].
 
 Speed and accuracy (issue 20): every fit reads the data once more after validation, for the 4x4 moment
-matrix M / N of the centred, scaled (unit-frame) data (:func:`methods.circle._frame.moments`, one
-matrix product), then solves a 3x3 or 4x4 problem; the residuals and form error are one more sweep.
+matrix M / N of the centred, scaled (unit-frame) data, then solves a 3x3 or 4x4 problem; the residuals
+and form error are one more sweep. Through ``methods.fit`` that is three sweeps over the points in all
+(compiled path, ``methods/circle/_ckernels.c``; the NumPy reference path computes the same quantities):
+
+1. validation + frame: ``frame_stats`` (finite, centroid, scale, collinearity; ``methods._validation``);
+2. the moments of the centred, scaled data: ``moments`` (:func:`methods.circle._frame.frame_and_moments`);
+3. residuals r_i - R, form error max r - min r: ``radial`` (:func:`methods._result.circle_result`).
 In the unit frame M is as well conditioned as the circle's shape allows (no offset, no unit), so the
 squared condition number of the moments costs nothing measurable: tests/test_algebraic_moments.py
 compares every fit with an SVD of Z on the NIST sets and on ill-conditioned exact circles.
@@ -18,7 +23,7 @@ import numpy as np
 
 from methods._registry import register
 from methods._result import circle_result
-from methods.circle._frame import Frame, kasa_moments, moments
+from methods.circle._frame import Frame, frame_and_moments, kasa_moments
 
 
 @register("circle.kasa", kind="closed form",
@@ -27,8 +32,8 @@ from methods.circle._frame import Frame, kasa_moments, moments
 def kasa(points):
     """Minimise S_CA = sum((x_i - xc)^2 + (y_i - yc)^2 - R^2)^2 (circle/ellipse paper eq. 5) by
     solving the linear least-squares system of roundness-paper eq. 7 for (xc, yc, w)."""
-    frame = Frame.of(points)
-    p = kasa_moments(moments(frame.x, frame.y))
+    frame, m = frame_and_moments(points)
+    p = kasa_moments(m)
     if not np.isfinite(p).all():
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="Kåsa system gives R^2 <= 0: no real circle fits these points")
@@ -81,8 +86,7 @@ def _constraint(kind: str, zbar: float) -> np.ndarray:
 
 
 def _constrained_fit(points, kind: str):
-    frame = Frame.of(points)
-    m = moments(frame.x, frame.y)
+    frame, m = frame_and_moments(points)
     a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])))
     frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))  # release the copy
     return _circle_from_conic(points, frame, a, message)

@@ -7,7 +7,7 @@ from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive, check_vector
 from methods.circle import _stationarity as stationarity
-from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations
+from methods.circle._frame import geometric_setup
 
 STOPPING_CRITERIA = ("objective", "step", "gradient")
 EPS = np.finfo(float).eps
@@ -36,14 +36,11 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     p_start = check_vector("start", start, 3, name)
-    frame = Frame.of(points)
-    x, y = frame.x, frame.y
-    n = len(x)
-    p = algebraic_start(x, y) if p_start is None else frame.circle_to_unit(p_start)
+    frame, p, sweep, _ = geometric_setup(points, p_start)  # compiled: no unit-frame copy, one sweep per state
+    n = len(points)
     history, steps = [], []
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
-    work = np.empty((4, n))  # one workspace for every sweep (peak memory: frame + 4 N numbers)
-    state = geometric_normal_equations(x, y, p, work)  # J of eq. 10, as J^T J and J^T d: one sweep
+    state = sweep(p)  # J of eq. 10, as J^T J and J^T d, and F: one sweep
     f_prev = None
     it = 0
     for it in range(1, max_iter + 1):
@@ -77,7 +74,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         step = float(np.linalg.norm(delta))
         steps.append(step)
         f_prev = f
-        state = geometric_normal_equations(x, y, p, work)
+        state = sweep(p)
         if stop == "step" and step <= xtol:
             converged, message = True, f"(Delta^T Delta)^(1/2) <= xtol={xtol:g}"
             break
@@ -95,7 +92,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     center, radius = frame.circle_to_data(p)
     scale2 = frame.power(2)
     scale = frame.scale
-    del work, state, x, y, frame  # the result's residual sweep needs none of them
+    del state, sweep, frame  # the result's residual sweep needs none of them
     extra = {"step_norms": [s * scale for s in steps], "stop": stop}
     if check is not None:
         extra.update(check.extra(scale2))

@@ -9,7 +9,7 @@ from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_positive, check_vector
 from methods.circle import _stationarity as stationarity
-from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations as _state
+from methods.circle._frame import geometric_normal_equations, geometric_setup
 
 
 def _reduction(arrays, h):
@@ -47,14 +47,22 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     p_start = check_vector("start", start, 3, name)
-    frame = Frame.of(points)
-    x, y = frame.x, frame.y
-    n = len(x)
-    p = algebraic_start(x, y) if p_start is None else frame.circle_to_unit(p_start)
-    state = _state(x, y, p)
+    frame, p, sweep, coordinates = geometric_setup(points, p_start)
+    n = len(points)
+    if coordinates is None:  # compiled: the one sweep at p + h also gives the actual reduction from p
+        def trial_state(p, h, arrays):
+            return sweep(p + h, p)
+    else:  # NumPy reference: a fresh workspace per state (the accepted state's arrays give the reduction)
+        x, y = coordinates
+        sweep = lambda q: geometric_normal_equations(x, y, q)  # noqa: E731
+
+        def trial_state(p, h, arrays):
+            trial = sweep(p + h)
+            return trial, (_reduction(arrays, h) if trial is not None else None)
+    state = sweep(p)
     if state is None:
         p = p + np.array([1e-6, 1e-6, 0.0])  # start on a data point: nudge it off
-        state = _state(x, y, p)
+        state = sweep(p)
     f, jtj, jtd, arrays = state
     mu, nu = tau * float(np.max(np.diag(jtj))), 2.0
     history, nfev = [f], 1
@@ -72,13 +80,13 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         if np.linalg.norm(h) <= xtol * (np.linalg.norm(p) + xtol):
             converged, message = True, f"|h| <= xtol={xtol:g} (|p| + xtol)"
             break
-        trial = _state(x, y, p + h)
+        trial, reduction = trial_state(p, h, arrays)
         nfev += 1
         if trial is None:
             mu, nu = mu * nu, 2 * nu
             continue
         predicted = float(h @ (mu * np.diag(jtj) * h - jtd))  # L(0) - L(h), times 2
-        rho = _reduction(arrays, h) / predicted if predicted > 0 else -1.0
+        rho = reduction / predicted if predicted > 0 else -1.0
         if rho > 0:
             p = p + h
             f, jtj, jtd, arrays = trial

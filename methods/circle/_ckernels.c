@@ -1,0 +1,392 @@
+/* Compiled kernels of the circle fits (issue 20): each function is ONE sweep over the (N, 2) points.
+ *
+ * Which pass does what (a closed-form fit through methods.fit makes exactly three sweeps, the numbers
+ * below; Gauss-Newton / Levenberg-Marquardt make the first, then one `geometric` sweep per iteration and
+ * one `radial` sweep for the result):
+ *
+ *   1. frame_stats(points)            validation + frame: finiteness (sums stay finite), the centroid and
+ *                                     the centred scatter Sxx, Syy, Sxy (-> unit-frame scale sqrt((Sxx+Syy)/N)
+ *                                     and the collinearity test), per block of BLOCK points: block sums,
+ *                                     then the block's deviations from its own mean while the block is in
+ *                                     L1 cache (corrected two-pass), blocks merged pairwise by Chan's formula;
+ *   2. moments(points, cx, cy, s)     the moments of the CENTRED, SCALED data u = (X - cx)/s, v = (Y - cy)/s,
+ *                                     z = u^2 + v^2: sums of zz, zu, zv, uu, vv, uv, u, v, z;
+ *   3. radial(points, cx, cy, R, out) r_i = |P_i - c| in data units, out_i = r_i - R, min r, max r and
+ *                                     sum (r_i - R)^2 (form error and RMS of the result);
+ *   geometric(points, cx, cy, s, p, q)  one Gauss-Newton/LM sweep at unit-frame circle q = (a, b, R):
+ *                                     J^T J, J^T d and F = sum d_i^2 together (d_i = r_i - R), and when p
+ *                                     is given the LM actual reduction F(p) - F(q) free of cancellation.
+ *
+ * Summation: every sum is accumulated per block of BLOCK points and the block sums are added pairwise
+ * (a binary counter of partial sums), so the rounding error grows like (BLOCK + log2(N / BLOCK)) eps,
+ * not N eps. Every pass also returns `token`, the sum of the raw coordinates added in the same order
+ * as pass 1, so a later pass proves (bit for bit) that the data did not change since validation.
+ *
+ * Operation order is explicit (compiled without fast-math or FP contraction: same bits on any x86-64).
+ * Non-finite input or sums outside the normal range are NOT handled here: the callers see a non-finite
+ * result and take the NumPy reference path, which decides and explains.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <string.h>
+
+#define BLOCK 256
+#define MAXLEV 64
+#define NSUM 12
+
+typedef struct {
+    int k;
+    unsigned char used[MAXLEV];
+    double acc[MAXLEV][NSUM];
+} pairwise_t;
+
+static void pw_init(pairwise_t *p, int k) { p->k = k; memset(p->used, 0, sizeof p->used); }
+
+static void pw_add(pairwise_t *p, const double *v) {
+    double carry[NSUM];
+    int j, lev;
+    memcpy(carry, v, sizeof(double) * p->k);
+    for (lev = 0; lev < MAXLEV; lev++) {
+        if (!p->used[lev]) {
+            memcpy(p->acc[lev], carry, sizeof(double) * p->k);
+            p->used[lev] = 1;
+            return;
+        }
+        for (j = 0; j < p->k; j++) carry[j] = p->acc[lev][j] + carry[j];
+        p->used[lev] = 0;
+    }
+}
+
+static void pw_total(const pairwise_t *p, double *out) {
+    int j, lev, first = 1;
+    for (j = 0; j < p->k; j++) out[j] = 0.0;
+    for (lev = 0; lev < MAXLEV; lev++) {
+        if (!p->used[lev]) continue;
+        for (j = 0; j < p->k; j++) out[j] = first ? p->acc[lev][j] : out[j] + p->acc[lev][j];
+        first = 0;
+    }
+}
+
+/* the raw-coordinate token of one block: sequential sum of x then y per point, the same in every pass */
+#define TOKEN_ADD(tok, x, y) do { (tok) = (tok) + (x); (tok) = (tok) + (y); } while (0)
+
+static int get_points(PyObject *obj, Py_buffer *view, Py_ssize_t *n) {
+    if (PyObject_GetBuffer(obj, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) return -1;
+    if (view->itemsize != 8 || (view->format && strcmp(view->format, "d") != 0 && strcmp(view->format, "<d") != 0
+                                && strcmp(view->format, "=d") != 0)) {
+        PyBuffer_Release(view);
+        PyErr_SetString(PyExc_TypeError, "points must be a C-contiguous float64 buffer");
+        return -1;
+    }
+    if (view->len % 16 != 0) {
+        PyBuffer_Release(view);
+        PyErr_SetString(PyExc_ValueError, "points must hold x, y pairs (an (N, 2) float64 array)");
+        return -1;
+    }
+    *n = view->len / 16;
+    return 0;
+}
+
+/* ---- pass 1: centroid and centred scatter ------------------------------------------------------- */
+typedef struct { double n, mx, my, cxx, cyy, cxy; } moments2_t;
+
+static moments2_t chan_merge(moments2_t a, moments2_t b) {
+    moments2_t m;
+    double n = a.n + b.n, dx = b.mx - a.mx, dy = b.my - a.my, w = a.n * b.n / n;
+    m.n = n;
+    m.mx = a.mx + dx * (b.n / n);
+    m.my = a.my + dy * (b.n / n);
+    m.cxx = (a.cxx + b.cxx) + dx * dx * w;
+    m.cyy = (a.cyy + b.cyy) + dy * dy * w;
+    m.cxy = (a.cxy + b.cxy) + dx * dy * w;
+    return m;
+}
+
+static PyObject *frame_stats(PyObject *self, PyObject *args) {
+    PyObject *obj;
+    Py_buffer view;
+    Py_ssize_t n, i0, i;
+    moments2_t stack[MAXLEV], tot;
+    unsigned char used[MAXLEV];
+    double token = 0.0;
+    int lev;
+    if (!PyArg_ParseTuple(args, "O", &obj)) return NULL;
+    if (get_points(obj, &view, &n) != 0) return NULL;
+    if (n == 0) {
+        PyBuffer_Release(&view);
+        PyErr_SetString(PyExc_ValueError, "frame_stats needs at least one point");
+        return NULL;
+    }
+    memset(used, 0, sizeof used);
+    Py_BEGIN_ALLOW_THREADS
+    const double *p = (const double *)view.buf;
+    for (i0 = 0; i0 < n; i0 += BLOCK) {
+        Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
+        double sx = 0.0, sy = 0.0, btok = 0.0, mx, my, ex = 0.0, ey = 0.0, cxx = 0.0, cyy = 0.0, cxy = 0.0;
+        double nb = (double)(i1 - i0);
+        moments2_t carry;
+        for (i = i0; i < i1; i++) {
+            sx = sx + p[2 * i];
+            sy = sy + p[2 * i + 1];
+            TOKEN_ADD(btok, p[2 * i], p[2 * i + 1]);
+        }
+        mx = sx / nb;
+        my = sy / nb;
+        for (i = i0; i < i1; i++) {  /* the block is in L1 cache: no second sweep over memory */
+            double dx = p[2 * i] - mx, dy = p[2 * i + 1] - my;
+            ex = ex + dx;
+            ey = ey + dy;
+            cxx = cxx + dx * dx;
+            cyy = cyy + dy * dy;
+            cxy = cxy + dx * dy;
+        }
+        /* corrected two-pass: remove the rounding of the block mean */
+        carry.n = nb;
+        carry.mx = mx + ex / nb;
+        carry.my = my + ey / nb;
+        carry.cxx = cxx - ex * ex / nb;
+        carry.cyy = cyy - ey * ey / nb;
+        carry.cxy = cxy - ex * ey / nb;
+        token = token + btok;
+        for (lev = 0; lev < MAXLEV; lev++) {
+            if (!used[lev]) { stack[lev] = carry; used[lev] = 1; break; }
+            carry = chan_merge(stack[lev], carry);
+            used[lev] = 0;
+        }
+    }
+    {
+        int first = 1;
+        for (lev = 0; lev < MAXLEV; lev++) {
+            if (!used[lev]) continue;
+            tot = first ? stack[lev] : chan_merge(stack[lev], tot);
+            first = 0;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&view);
+    return Py_BuildValue("(dddddd)", token, tot.mx, tot.my, tot.cxx, tot.cyy, tot.cxy);
+}
+
+/* ---- pass 2: moments of the centred, scaled data ------------------------------------------------- */
+static PyObject *moments(PyObject *self, PyObject *args) {
+    PyObject *obj;
+    Py_buffer view;
+    Py_ssize_t n, i0, i;
+    double cx, cy, s, token = 0.0, out[9];
+    pairwise_t pw;
+    if (!PyArg_ParseTuple(args, "Oddd", &obj, &cx, &cy, &s)) return NULL;
+    if (get_points(obj, &view, &n) != 0) return NULL;
+    pw_init(&pw, 9);
+    Py_BEGIN_ALLOW_THREADS
+    const double *p = (const double *)view.buf;
+    for (i0 = 0; i0 < n; i0 += BLOCK) {
+        Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
+        double b[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, btok = 0.0;
+        for (i = i0; i < i1; i++) {
+            double u = (p[2 * i] - cx) / s, v = (p[2 * i + 1] - cy) / s;
+            double z = u * u + v * v;
+            TOKEN_ADD(btok, p[2 * i], p[2 * i + 1]);
+            b[0] = b[0] + z * z;
+            b[1] = b[1] + z * u;
+            b[2] = b[2] + z * v;
+            b[3] = b[3] + u * u;
+            b[4] = b[4] + v * v;
+            b[5] = b[5] + u * v;
+            b[6] = b[6] + u;
+            b[7] = b[7] + v;
+            b[8] = b[8] + z;
+        }
+        token = token + btok;
+        pw_add(&pw, b);
+    }
+    pw_total(&pw, out);
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&view);
+    return Py_BuildValue("(dddddddddd)", token, out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7],
+                         out[8]);
+}
+
+/* ---- pass 3: radial residuals of the result ----------------------------------------------------- */
+static PyObject *radial(PyObject *self, PyObject *args) {
+    PyObject *obj;
+    Py_buffer view, res;
+    Py_ssize_t n, i0, i;
+    double cx, cy, R, rmin = INFINITY, rmax = -INFINITY, ss;
+    long long nonnormal = 0;
+    pairwise_t pw;
+    if (!PyArg_ParseTuple(args, "Odddw*", &obj, &cx, &cy, &R, &res)) return NULL;
+    if (get_points(obj, &view, &n) != 0) { PyBuffer_Release(&res); return NULL; }
+    if (res.len != n * 8 || res.itemsize != 8 || !PyBuffer_IsContiguous(&res, 'C')) {
+        PyBuffer_Release(&view);
+        PyBuffer_Release(&res);
+        PyErr_SetString(PyExc_ValueError, "radial: out must be a contiguous float64 buffer of N numbers");
+        return NULL;
+    }
+    pw_init(&pw, 1);
+    Py_BEGIN_ALLOW_THREADS
+    const double *p = (const double *)view.buf;
+    double *o = (double *)res.buf;
+    for (i0 = 0; i0 < n; i0 += BLOCK) {
+        Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
+        double b = 0.0;
+        for (i = i0; i < i1; i++) {
+            double dx = p[2 * i] - cx, dy = p[2 * i + 1] - cy;
+            double r = sqrt(dx * dx + dy * dy), d = r - R;
+            o[i] = d;
+            /* outside (1e-145, 1e150) a squared distance may have left the normal range (or r is NaN) */
+            if (!(r > 1e-145 && r < 1e150)) nonnormal++;
+            if (r < rmin) rmin = r;
+            if (r > rmax) rmax = r;
+            b = b + d * d;
+        }
+        pw_add(&pw, &b);
+    }
+    pw_total(&pw, &ss);
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&view);
+    PyBuffer_Release(&res);
+    return Py_BuildValue("(dddL)", rmin, rmax, ss, nonnormal);
+}
+
+/* ---- Gauss-Newton / LM sweep ----------------------------------------------------------------------- */
+static PyObject *geometric(PyObject *self, PyObject *args) {
+    PyObject *obj, *prev = Py_None;
+    Py_buffer view;
+    Py_ssize_t n, i0, i;
+    double cx, cy, s, a, b, R, a0 = 0.0, b0 = 0.0, R0 = 0.0, token = 0.0, out[11];
+    long long zero_r = 0;
+    int with_prev = 0;
+    pairwise_t pw;
+    if (!PyArg_ParseTuple(args, "Oddd(ddd)|O", &obj, &cx, &cy, &s, &a, &b, &R, &prev)) return NULL;
+    if (prev != Py_None) {
+        if (!PyArg_ParseTuple(prev, "ddd", &a0, &b0, &R0)) return NULL;
+        with_prev = 1;
+    }
+    if (get_points(obj, &view, &n) != 0) return NULL;
+    pw_init(&pw, with_prev ? 11 : 10);
+    Py_BEGIN_ALLOW_THREADS
+    const double *p = (const double *)view.buf;
+    double ha = a - a0, hb = b - b0, hR = R - R0;
+    for (i0 = 0; i0 < n; i0 += BLOCK) {
+        Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
+        double t[11] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}, btok = 0.0;
+        for (i = i0; i < i1; i++) {
+            double u = (p[2 * i] - cx) / s, v = (p[2 * i + 1] - cy) / s;
+            double dx = u - a, dy = v - b;
+            double r = sqrt(dx * dx + dy * dy);
+            double c = dx / r, sn = dy / r, d = r - R;
+            TOKEN_ADD(btok, p[2 * i], p[2 * i + 1]);
+            if (r == 0.0) zero_r++;
+            t[0] = t[0] + c * c;
+            t[1] = t[1] + c * sn;
+            t[2] = t[2] + sn * sn;
+            t[3] = t[3] + c;
+            t[4] = t[4] + sn;
+            t[5] = t[5] + c * d;
+            t[6] = t[6] + sn * d;
+            t[7] = t[7] + d;
+            t[8] = t[8] + d * d;
+            if (with_prev) {
+                /* F(p) - F(q) = -sum (d' - d)(d' + d), d' - d = (r'^2 - r^2)/(r' + r) - h_R with
+                   r'^2 - r^2 = -h_a (2 dx0 - h_a) - h_b (2 dy0 - h_b): no cancellation near the optimum */
+                double dx0 = u - a0, dy0 = v - b0;
+                double r0 = sqrt(dx0 * dx0 + dy0 * dy0), d0 = r0 - R0;
+                double delta = (-ha * (2.0 * dx0 - ha) - hb * (2.0 * dy0 - hb)) / (r + r0) - hR;
+                t[10] = t[10] + delta * (2.0 * d0 + delta);
+            }
+        }
+        t[9] = btok;
+        token = token + btok;
+        pw_add(&pw, t);
+    }
+    pw_total(&pw, out);
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&view);
+    return Py_BuildValue("(dddddddddddL)", token, out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7],
+                         out[8], with_prev ? -out[10] : 0.0, zero_r);
+}
+
+/* ---- the unit-frame coordinates, for the methods that work on arrays ------------------------------- */
+static PyObject *unit_coords(PyObject *self, PyObject *args) {
+    PyObject *obj;
+    Py_buffer view, res;
+    Py_ssize_t n, i0, i;
+    double cx, cy, s, token = 0.0;
+    if (!PyArg_ParseTuple(args, "Odddw*", &obj, &cx, &cy, &s, &res)) return NULL;
+    if (get_points(obj, &view, &n) != 0) { PyBuffer_Release(&res); return NULL; }
+    if (res.len < 2 * n * 8 || res.itemsize != 8 || !PyBuffer_IsContiguous(&res, 'C')) {
+        PyBuffer_Release(&view);
+        PyBuffer_Release(&res);
+        PyErr_SetString(PyExc_ValueError, "unit_coords: out must be a contiguous float64 buffer of at least 2N numbers");
+        return NULL;
+    }
+    Py_BEGIN_ALLOW_THREADS
+    const double *p = (const double *)view.buf;
+    double *x = (double *)res.buf, *y = x + n;
+    for (i0 = 0; i0 < n; i0 += BLOCK) {
+        Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
+        double btok = 0.0;
+        for (i = i0; i < i1; i++) {
+            TOKEN_ADD(btok, p[2 * i], p[2 * i + 1]);
+            x[i] = (p[2 * i] - cx) / s;
+            y[i] = (p[2 * i + 1] - cy) / s;
+        }
+        token = token + btok;
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&view);
+    PyBuffer_Release(&res);
+    return PyFloat_FromDouble(token);
+}
+
+/* ---- small dense solve: 3x3 by Gaussian elimination with partial pivoting (as LAPACK dgesv) ------- */
+static PyObject *solve3(PyObject *self, PyObject *args) {
+    double A[3][3], x[3], bb[3];
+    int i, j, k;
+    if (!PyArg_ParseTuple(args, "(ddddddddd)(ddd)", &A[0][0], &A[0][1], &A[0][2], &A[1][0], &A[1][1], &A[1][2],
+                          &A[2][0], &A[2][1], &A[2][2], &bb[0], &bb[1], &bb[2]))
+        return NULL;
+    for (k = 0; k < 3; k++) {
+        int piv = k;
+        for (i = k + 1; i < 3; i++)
+            if (fabs(A[i][k]) > fabs(A[piv][k])) piv = i;
+        if (A[piv][k] == 0.0) Py_RETURN_NONE;  /* singular: an exact zero pivot, as LAPACK's dgesv */
+        if (piv != k) {
+            for (j = 0; j < 3; j++) { double t = A[k][j]; A[k][j] = A[piv][j]; A[piv][j] = t; }
+            { double t = bb[k]; bb[k] = bb[piv]; bb[piv] = t; }
+        }
+        for (i = k + 1; i < 3; i++) {
+            double l = A[i][k] / A[k][k];
+            for (j = k + 1; j < 3; j++) A[i][j] = A[i][j] - l * A[k][j];
+            bb[i] = bb[i] - l * bb[k];
+        }
+    }
+    for (i = 2; i >= 0; i--) {
+        double t = bb[i];
+        for (j = i + 1; j < 3; j++) t = t - A[i][j] * x[j];
+        x[i] = t / A[i][i];
+    }
+    return Py_BuildValue("(ddd)", x[0], x[1], x[2]);
+}
+
+static PyMethodDef Methods[] = {
+    {"frame_stats", frame_stats, METH_VARARGS,
+     "frame_stats(points) -> (token, mean_x, mean_y, Sxx, Syy, Sxy): pass 1 (centroid, centred scatter)"},
+    {"moments", moments, METH_VARARGS,
+     "moments(points, cx, cy, s) -> (token, zz, zu, zv, uu, vv, uv, u, v, z): pass 2, sums over the unit frame"},
+    {"radial", radial, METH_VARARGS,
+     "radial(points, cx, cy, R, out) -> (r_min, r_max, sum (r_i - R)^2, count of r outside (1e-145, 1e150))"},
+    {"geometric", geometric, METH_VARARGS,
+     "geometric(points, cx, cy, s, (a, b, R)[, (a0, b0, R0)]) -> (token, cc, cs, ss, c, s, cd, sd, d, dd, "
+     "F(p0) - F(p), count of r == 0)"},
+    {"unit_coords", unit_coords, METH_VARARGS,
+     "unit_coords(points, cx, cy, s, out) -> token: out[:N] = (X - cx)/s, out[N:2N] = (Y - cy)/s"},
+    {"solve3", solve3, METH_VARARGS, "solve3(A (9 numbers, row major), b (3)) -> x, or None when singular"},
+    {NULL, NULL, 0, NULL}};
+
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_ckernels",
+                                    "Compiled kernels of the circle fits (issue 20); see the C source header.",
+                                    -1, Methods};
+
+PyMODINIT_FUNC PyInit__ckernels(void) { return PyModule_Create(&module); }

@@ -20,6 +20,7 @@ writes the coordinates (one sweep) only for the methods that work on arrays. Dat
 from __future__ import annotations
 
 import math
+import os
 import threading
 import weakref
 from dataclasses import dataclass
@@ -107,9 +108,18 @@ def unit_frame(points: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.nd
 KERNEL_MODULE = "methods.circle._ckernels"
 
 
+_loaded: dict = {}
+
+
 def point_kernels():
-    """The compiled point-set kernels, or None on the NumPy reference path (``FITBENCH_KERNELS=numpy``)."""
-    return kernels(KERNEL_MODULE)
+    """The compiled point-set kernels, or None on the NumPy reference path (``FITBENCH_KERNELS=numpy``);
+    the choice is read from the environment at every call (cached per value: a fit calls this thrice)."""
+    choice = os.environ.get("FITBENCH_KERNELS")
+    try:
+        return _loaded[choice]
+    except KeyError:
+        _loaded[choice] = ck = kernels(KERNEL_MODULE)
+        return ck
 
 
 def is_point_array(points) -> bool:

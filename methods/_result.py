@@ -6,6 +6,8 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from methods._frame import is_point_array, point_kernels
+
 
 def _jsonable(value):
     """Convert numpy scalars/arrays and non-finite floats to plain JSON values (NaN/inf -> None)."""
@@ -88,8 +90,6 @@ def _compiled_residuals(points, center, radius: float):
     """(r_i - R, max r - min r) by one compiled sweep (``methods/circle/_ckernels.c`` ``radial``): the same
     operations as :func:`radial_distances` then ``r - radius``, hence the same bits; None on the NumPy
     path, for input the kernel does not take, or when a distance leaves (1e-145, 1e150) (np.hypot then)."""
-    from methods._frame import is_point_array, point_kernels
-
     ck = point_kernels()
     if ck is None or not is_point_array(points):
         return None

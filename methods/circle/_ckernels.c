@@ -68,8 +68,9 @@ static void pw_total(const pairwise_t *p, double *out) {
     }
 }
 
-/* the raw-coordinate token of one block: sequential sum of x then y per point, the same in every pass */
-#define TOKEN_ADD(tok, x, y) do { (tok) = (tok) + (x); (tok) = (tok) + (y); } while (0)
+/* the raw-coordinate token of one block: (sequential sum of its x) + (sequential sum of its y), the same
+   operations in every pass; the data's token is the sequential sum of the block tokens */
+#define TOKEN_ADD(tx, ty, x, y) do { (tx) = (tx) + (x); (ty) = (ty) + (y); } while (0)
 
 static int get_points(PyObject *obj, Py_buffer *view, Py_ssize_t *n) {
     if (PyObject_GetBuffer(obj, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) return -1;
@@ -123,13 +124,11 @@ static PyObject *frame_stats(PyObject *self, PyObject *args) {
     const double *p = (const double *)view.buf;
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double sx = 0.0, sy = 0.0, btok = 0.0, mx, my, ex = 0.0, ey = 0.0, cxx = 0.0, cyy = 0.0, cxy = 0.0;
+        double sx = 0.0, sy = 0.0, mx, my, ex = 0.0, ey = 0.0, cxx = 0.0, cyy = 0.0, cxy = 0.0;
         double nb = (double)(i1 - i0);
         moments2_t carry;
         for (i = i0; i < i1; i++) {
-            sx = sx + p[2 * i];
-            sy = sy + p[2 * i + 1];
-            TOKEN_ADD(btok, p[2 * i], p[2 * i + 1]);
+            TOKEN_ADD(sx, sy, p[2 * i], p[2 * i + 1]);
         }
         mx = sx / nb;
         my = sy / nb;
@@ -148,7 +147,7 @@ static PyObject *frame_stats(PyObject *self, PyObject *args) {
         carry.cxx = cxx - ex * ex / nb;
         carry.cyy = cyy - ey * ey / nb;
         carry.cxy = cxy - ex * ey / nb;
-        token = token + btok;
+        token = token + (sx + sy);
         for (lev = 0; lev < MAXLEV; lev++) {
             if (!used[lev]) { stack[lev] = carry; used[lev] = 1; break; }
             carry = chan_merge(stack[lev], carry);
@@ -182,23 +181,28 @@ static PyObject *moments(PyObject *self, PyObject *args) {
     const double *p = (const double *)view.buf;
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double b[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, btok = 0.0;
-        for (i = i0; i < i1; i++) {
+        double tx = 0.0, ty = 0.0, zz = 0.0, zu = 0.0, zv = 0.0, uu = 0.0, vv = 0.0, uv = 0.0, su = 0.0, sv = 0.0,
+               sz = 0.0;
+        for (i = i0; i < i1; i++) {  /* scalar accumulators: kept in registers */
             double u = (p[2 * i] - cx) / s, v = (p[2 * i + 1] - cy) / s;
             double z = u * u + v * v;
-            TOKEN_ADD(btok, p[2 * i], p[2 * i + 1]);
-            b[0] = b[0] + z * z;
-            b[1] = b[1] + z * u;
-            b[2] = b[2] + z * v;
-            b[3] = b[3] + u * u;
-            b[4] = b[4] + v * v;
-            b[5] = b[5] + u * v;
-            b[6] = b[6] + u;
-            b[7] = b[7] + v;
-            b[8] = b[8] + z;
+            TOKEN_ADD(tx, ty, p[2 * i], p[2 * i + 1]);
+            zz = zz + z * z;
+            zu = zu + z * u;
+            zv = zv + z * v;
+            uu = uu + u * u;
+            vv = vv + v * v;
+            uv = uv + u * v;
+            su = su + u;
+            sv = sv + v;
+            sz = sz + z;
         }
-        token = token + btok;
-        pw_add(&pw, b);
+        {
+            double b[9];
+            b[0] = zz; b[1] = zu; b[2] = zv; b[3] = uu; b[4] = vv; b[5] = uv; b[6] = su; b[7] = sv; b[8] = sz;
+            token = token + (tx + ty);
+            pw_add(&pw, b);
+        }
     }
     pw_total(&pw, out);
     Py_END_ALLOW_THREADS
@@ -264,41 +268,47 @@ static PyObject *geometric(PyObject *self, PyObject *args) {
         with_prev = 1;
     }
     if (get_points(obj, &view, &n) != 0) return NULL;
-    pw_init(&pw, with_prev ? 11 : 10);
+    pw_init(&pw, with_prev ? 11 : 9);
     Py_BEGIN_ALLOW_THREADS
     const double *p = (const double *)view.buf;
-    double ha = a - a0, hb = b - b0, hR = R - R0;
+    double ha = a - a0, hb = b - b0, hR = R - R0, inv_s = 1.0 / s;
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double t[11] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}, btok = 0.0;
-        for (i = i0; i < i1; i++) {
-            double u = (p[2 * i] - cx) / s, v = (p[2 * i + 1] - cy) / s;
+        double tx = 0.0, ty = 0.0, cc = 0.0, cs = 0.0, ss = 0.0, sc = 0.0, ssn = 0.0, cd = 0.0, sd = 0.0, sdd = 0.0,
+               dd = 0.0, red = 0.0;
+        for (i = i0; i < i1; i++) {  /* scalar accumulators: kept in registers */
+            /* u = (X - cx) / s to within one rounding (times 1/s: divisions are the slow part) */
+            double u = (p[2 * i] - cx) * inv_s, v = (p[2 * i + 1] - cy) * inv_s;
             double dx = u - a, dy = v - b;
-            double r = sqrt(dx * dx + dy * dy);
-            double c = dx / r, sn = dy / r, d = r - R;
-            TOKEN_ADD(btok, p[2 * i], p[2 * i + 1]);
-            if (r == 0.0) zero_r++;
-            t[0] = t[0] + c * c;
-            t[1] = t[1] + c * sn;
-            t[2] = t[2] + sn * sn;
-            t[3] = t[3] + c;
-            t[4] = t[4] + sn;
-            t[5] = t[5] + c * d;
-            t[6] = t[6] + sn * d;
-            t[7] = t[7] + d;
-            t[8] = t[8] + d * d;
+            double r = sqrt(dx * dx + dy * dy), inv_r = 1.0 / r;
+            double c = dx * inv_r, sn = dy * inv_r, d = r - R;
+            TOKEN_ADD(tx, ty, p[2 * i], p[2 * i + 1]);
+            zero_r += (r == 0.0);
+            cc = cc + c * c;
+            cs = cs + c * sn;
+            ss = ss + sn * sn;
+            sc = sc + c;
+            ssn = ssn + sn;
+            cd = cd + c * d;
+            sd = sd + sn * d;
+            sdd = sdd + d;
+            dd = dd + d * d;
             if (with_prev) {
                 /* F(p) - F(q) = -sum (d' - d)(d' + d), d' - d = (r'^2 - r^2)/(r' + r) - h_R with
                    r'^2 - r^2 = -h_a (2 dx0 - h_a) - h_b (2 dy0 - h_b): no cancellation near the optimum */
                 double dx0 = u - a0, dy0 = v - b0;
                 double r0 = sqrt(dx0 * dx0 + dy0 * dy0), d0 = r0 - R0;
                 double delta = (-ha * (2.0 * dx0 - ha) - hb * (2.0 * dy0 - hb)) / (r + r0) - hR;
-                t[10] = t[10] + delta * (2.0 * d0 + delta);
+                red = red + delta * (2.0 * d0 + delta);
             }
         }
-        t[9] = btok;
-        token = token + btok;
-        pw_add(&pw, t);
+        {
+            double t[11];
+            t[0] = cc; t[1] = cs; t[2] = ss; t[3] = sc; t[4] = ssn; t[5] = cd; t[6] = sd; t[7] = sdd; t[8] = dd;
+            t[9] = 0.0; t[10] = red;
+            token = token + (tx + ty);
+            pw_add(&pw, t);
+        }
     }
     pw_total(&pw, out);
     Py_END_ALLOW_THREADS
@@ -326,13 +336,13 @@ static PyObject *unit_coords(PyObject *self, PyObject *args) {
     double *x = (double *)res.buf, *y = x + n;
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double btok = 0.0;
+        double tx = 0.0, ty = 0.0;
         for (i = i0; i < i1; i++) {
-            TOKEN_ADD(btok, p[2 * i], p[2 * i + 1]);
+            TOKEN_ADD(tx, ty, p[2 * i], p[2 * i + 1]);
             x[i] = (p[2 * i] - cx) / s;
             y[i] = (p[2 * i + 1] - cy) / s;
         }
-        token = token + btok;
+        token = token + (tx + ty);
     }
     Py_END_ALLOW_THREADS
     PyBuffer_Release(&view);
@@ -370,6 +380,110 @@ static PyObject *solve3(PyObject *self, PyObject *args) {
     return Py_BuildValue("(ddd)", x[0], x[1], x[2]);
 }
 
+/* ---- 4x4 symmetric eigenproblems of the Pratt / Taubin / Hyper fits ------------------------------- */
+/* Cyclic Jacobi (Rutishauser's rotation formulas, Golub & Van Loan alg. 8.5.3): A = V diag(w) V^T; the
+   eigenvalues come out with small absolute error relative to ||A|| (as LAPACK's dsyevd's), sorted
+   descending with V's columns. */
+static void jacobi4(double a[4][4], double w[4], double v[4][4]) {
+    int i, j, k, sweep;
+    for (i = 0; i < 4; i++)
+        for (j = 0; j < 4; j++) v[i][j] = (i == j) ? 1.0 : 0.0;
+    for (sweep = 0; sweep < 64; sweep++) {
+        int rotated = 0;
+        for (i = 0; i < 3; i++)
+            for (j = i + 1; j < 4; j++) {
+                double apq = a[i][j], theta, t, c, sn, tau;
+                /* Demmel & Veselic's threshold: a rotation smaller than eps sqrt(|a_ii a_jj|) changes nothing
+                   (for a positive semi-definite M this keeps small eigenvalues to high relative accuracy) */
+                if (fabs(apq) <= 1e-17 * sqrt(fabs(a[i][i] * a[j][j])) || fabs(apq) < 1e-300) continue;
+                rotated = 1;
+                theta = (a[j][j] - a[i][i]) / (2.0 * apq);
+                t = (theta >= 0.0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+                if (!isfinite(theta * theta)) t = 0.5 / theta;  /* |theta| huge: t = 1/(2 theta) */
+                c = 1.0 / sqrt(t * t + 1.0);
+                sn = t * c;
+                tau = sn / (1.0 + c);
+                a[i][i] = a[i][i] - t * apq;
+                a[j][j] = a[j][j] + t * apq;
+                a[i][j] = a[j][i] = 0.0;
+                for (k = 0; k < 4; k++) {
+                    if (k != i && k != j) {
+                        double aki = a[k][i], akj = a[k][j];
+                        a[k][i] = a[i][k] = aki - sn * (akj + tau * aki);
+                        a[k][j] = a[j][k] = akj + sn * (aki - tau * akj);
+                    }
+                    {
+                        double vki = v[k][i], vkj = v[k][j];
+                        v[k][i] = vki - sn * (vkj + tau * vki);
+                        v[k][j] = vkj + sn * (vki - tau * vkj);
+                    }
+                }
+            }
+        if (!rotated) break;
+    }
+    for (i = 0; i < 4; i++) w[i] = a[i][i];
+    for (i = 0; i < 3; i++) {  /* selection sort, descending */
+        int m = i;
+        for (j = i + 1; j < 4; j++)
+            if (w[j] > w[m]) m = j;
+        if (m != i) {
+            double t = w[i];
+            w[i] = w[m];
+            w[m] = t;
+            for (k = 0; k < 4; k++) { t = v[k][i]; v[k][i] = v[k][m]; v[k][m] = t; }
+        }
+    }
+}
+
+/* eigen_fit(M (16, row major), N (16, row major)) -> (status, a0, a1, a2, a3): min a^T M a subject to
+   a^T N a = 1 as methods/circle/algebraic.py::_eigen_fit (M = V S^2 V^T, K = S^-1 V^T N V S^-1, a = V S^-1 b
+   for the largest eigenvalue of K). status 0: solved; 1: M singular to rounding (a = null vector of M);
+   2: no positive generalised eigenvalue. */
+static PyObject *eigen_fit(PyObject *self, PyObject *args) {
+    double m[4][4], nn[4][4], lam[4], v[4][4], s[4], kk[4][4], mu[4], b[4][4], t[4][4], a[4];
+    int i, j, k, jmax, status = 0;
+    if (!PyArg_ParseTuple(args, "(dddddddddddddddd)(dddddddddddddddd)", &m[0][0], &m[0][1], &m[0][2], &m[0][3],
+                          &m[1][0], &m[1][1], &m[1][2], &m[1][3], &m[2][0], &m[2][1], &m[2][2], &m[2][3], &m[3][0],
+                          &m[3][1], &m[3][2], &m[3][3], &nn[0][0], &nn[0][1], &nn[0][2], &nn[0][3], &nn[1][0],
+                          &nn[1][1], &nn[1][2], &nn[1][3], &nn[2][0], &nn[2][1], &nn[2][2], &nn[2][3], &nn[3][0],
+                          &nn[3][1], &nn[3][2], &nn[3][3]))
+        return NULL;
+    jacobi4(m, lam, v);
+    if (lam[3] <= 64.0 * 2.220446049250313e-16 * lam[0]) {
+        for (i = 0; i < 4; i++) a[i] = v[i][3];
+        status = 1;
+    } else {
+        for (i = 0; i < 4; i++) s[i] = sqrt(lam[i]);
+        for (i = 0; i < 4; i++)  /* t = N V */
+            for (j = 0; j < 4; j++) {
+                double acc = 0.0;
+                for (k = 0; k < 4; k++) acc = acc + nn[i][k] * v[k][j];
+                t[i][j] = acc;
+            }
+        for (i = 0; i < 4; i++)  /* K = V^T N V / (s_i s_j) */
+            for (j = 0; j < 4; j++) {
+                double acc = 0.0;
+                for (k = 0; k < 4; k++) acc = acc + v[k][i] * t[k][j];
+                kk[i][j] = acc / (s[i] * s[j]);
+            }
+        for (i = 0; i < 4; i++)  /* exactly symmetric */
+            for (j = i + 1; j < 4; j++) kk[j][i] = kk[i][j] = 0.5 * (kk[i][j] + kk[j][i]);
+        jacobi4(kk, mu, b);
+        jmax = 0;
+        if (!(mu[jmax] > 0.0)) {
+            status = 2;
+            for (i = 0; i < 4; i++) a[i] = NAN;
+        } else {
+            for (i = 0; i < 4; i++) {
+                double acc = 0.0;
+                for (k = 0; k < 4; k++) acc = acc + v[i][k] * (b[k][jmax] / s[k]);
+                a[i] = acc;
+            }
+        }
+    }
+    return Py_BuildValue("(idddd)", status, a[0], a[1], a[2], a[3]);
+}
+
 static PyMethodDef Methods[] = {
     {"frame_stats", frame_stats, METH_VARARGS,
      "frame_stats(points) -> (token, mean_x, mean_y, Sxx, Syy, Sxy): pass 1 (centroid, centred scatter)"},
@@ -382,6 +496,8 @@ static PyMethodDef Methods[] = {
      "F(p0) - F(p), count of r == 0)"},
     {"unit_coords", unit_coords, METH_VARARGS,
      "unit_coords(points, cx, cy, s, out) -> token: out[:N] = (X - cx)/s, out[N:2N] = (Y - cy)/s"},
+    {"eigen_fit", eigen_fit, METH_VARARGS,
+     "eigen_fit(M 16 numbers, N 16 numbers) -> (status, a0..a3): Pratt/Taubin/Hyper generalised eigenproblem"},
     {"solve3", solve3, METH_VARARGS, "solve3(A (9 numbers, row major), b (3)) -> x, or None when singular"},
     {NULL, NULL, 0, NULL}};
 

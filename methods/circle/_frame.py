@@ -7,6 +7,8 @@ are kept as two contiguous 1-D arrays ``x``, ``y`` (strided (N, 2) columns are s
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._frame import KernelFrame, UnitFrame, dot, is_point_array, kernel_frame, offer_frame, point_kernels, take_frame
@@ -97,9 +99,20 @@ def moments(x: np.ndarray, y: np.ndarray) -> np.ndarray:
                      [sz, sx, sy, float(n)]]) / n
 
 
-def kasa_moments(m: np.ndarray) -> np.ndarray:
+def kasa_moments(m: np.ndarray, ck=None) -> np.ndarray:
     """Kåsa's circle (roundness paper eq. 7: least squares of [2x 2y -1][xc yc w]^T = x^2 + y^2,
-    w = xc^2 + yc^2 - R^2) from the moment matrix of :func:`moments`: its 3x3 normal equations."""
+    w = xc^2 + yc^2 - R^2) from the moment matrix of :func:`moments`: its 3x3 normal equations
+    (``ck``: solved by the compiled ``solve3``, Gaussian elimination with partial pivoting as LAPACK's
+    dgesv, without NumPy's per-call overhead; else by np.linalg.solve)."""
+    if ck is not None:
+        (_, m01, m02, m03), (_, m11, m12, m13), (_, _, m22, m23), (_, _, _, m33) = m.tolist()
+        sol = ck.solve3((4 * m11, 4 * m12, -2 * m13, 4 * m12, 4 * m22, -2 * m23, -2 * m13, -2 * m23, m33),
+                        (2 * m01, 2 * m02, -m03))
+        if sol is None:
+            return np.full(3, np.nan)
+        xc, yc, w = sol
+        r2 = xc * xc + yc * yc - w
+        return np.array([xc, yc, math.sqrt(r2) if r2 > 0 else math.nan])
     ata = np.array([[4 * m[1, 1], 4 * m[1, 2], -2 * m[1, 3]],
                     [4 * m[1, 2], 4 * m[2, 2], -2 * m[2, 3]],
                     [-2 * m[1, 3], -2 * m[2, 3], m[3, 3]]])
@@ -173,15 +186,16 @@ def compiled_moments(points, ck, frame: KernelFrame) -> tuple[KernelFrame, np.nd
                             [sz, sx, sy, n]]) / n
 
 
-def frame_and_moments(points) -> tuple["Frame", np.ndarray]:
-    """The circle frame (shift and scale; x, y only on the NumPy path) and the moment matrix M of
-    :func:`moments`: compiled passes 1-2 (no unit-frame copy), or the NumPy reference path."""
+def frame_and_moments(points) -> tuple["Frame", np.ndarray, object]:
+    """The circle frame (shift and scale; x, y only on the NumPy path), the moment matrix M of
+    :func:`moments` and the kernels: compiled passes 1-2 (no unit-frame copy), or the NumPy reference
+    path (kernels None)."""
     compiled = compiled_frame(points)
     if compiled is None:
         frame = Frame.of(points)
-        return frame, moments(frame.x, frame.y)
+        return frame, moments(frame.x, frame.y), None
     kf, m = compiled_moments(points, *compiled)
-    return Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES), m
+    return Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES), m, compiled[0]
 
 
 _NO_COORDINATES = np.empty(0)
@@ -213,9 +227,9 @@ def algebraic_start(x, y) -> np.ndarray:
     return start_from_moments(moments(x, y))
 
 
-def start_from_moments(m: np.ndarray) -> np.ndarray:
-    """:func:`algebraic_start` from the moment matrix M."""
-    p = kasa_moments(m)
+def start_from_moments(m: np.ndarray, ck=None) -> np.ndarray:
+    """:func:`algebraic_start` from the moment matrix M (``ck``: see :func:`kasa_moments`)."""
+    p = kasa_moments(m, ck)
     return p if np.isfinite(p).all() else np.array([0.0, 0.0, 1.0])
 
 
@@ -238,5 +252,5 @@ def geometric_setup(points, start):
     else:
         kf = kernel_frame(points, ck) or kf  # a fresh pass 1: the frame of the points as they are now
     frame = Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES)
-    p0 = start_from_moments(m) if start is None else frame.circle_to_unit(start)
+    p0 = start_from_moments(m, ck) if start is None else frame.circle_to_unit(start)
     return frame, p0, lambda q, previous=None: compiled_geometric(points, ck, kf, q, previous), None

@@ -32,8 +32,8 @@ from methods.circle._frame import Frame, frame_and_moments, kasa_moments
 def kasa(points):
     """Minimise S_CA = sum((x_i - xc)^2 + (y_i - yc)^2 - R^2)^2 (circle/ellipse paper eq. 5) by
     solving the linear least-squares system of roundness-paper eq. 7 for (xc, yc, w)."""
-    frame, m = frame_and_moments(points)
-    p = kasa_moments(m)
+    frame, m, ck = frame_and_moments(points)
+    p = kasa_moments(m, ck)
     if not np.isfinite(p).all():
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="Kåsa system gives R^2 <= 0: no real circle fits these points")
@@ -42,7 +42,12 @@ def kasa(points):
     return circle_result(points, center, radius, converged=True, message="closed-form solution")
 
 
-def _eigen_fit(m: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
+_EIGEN_MESSAGES = ("closed-form solution (generalised eigenvector)",
+                   "points lie on a circle to rounding (algebraic residuals at the moments' resolution)",
+                   "no positive generalised eigenvalue: the constraint admits no circle")
+
+
+def _eigen_fit(m: np.ndarray, constraint: np.ndarray, ck=None) -> tuple[np.ndarray, str]:
     """Solve min a^T M a s.t. a^T N a = 1 (smallest positive eigenvalue of M a = eta N a), M = Z^T Z / N.
 
     With M = V S^2 V^T (its eigendecomposition, S^2 >= 0), put a = V S^-1 b: then K b = (1/eta) b with
@@ -50,17 +55,20 @@ def _eigen_fit(m: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
     When the smallest eigenvalue of M is at its rounding level (points on a circle to ~1e-7 of
     its size), a is the null vector of M: every constraint then gives the same circle.
     """
+    if ck is not None:  # the same computation in C (methods/circle/_ckernels.c eigen_fit, cyclic Jacobi)
+        status, *a = ck.eigen_fit(tuple(m.ravel().tolist()), tuple(constraint.ravel().tolist()))
+        return np.array(a), _EIGEN_MESSAGES[status]
     lam, v = np.linalg.eigh(m)
     lam, v = lam[::-1], v[:, ::-1]  # largest first
     if lam[-1] <= 64 * np.finfo(float).eps * lam[0]:
-        return v[:, -1], "points lie on a circle to rounding (algebraic residuals at the moments' resolution)"
+        return v[:, -1], _EIGEN_MESSAGES[1]
     s = np.sqrt(lam)
     K = (v.T @ constraint @ v) / np.outer(s, s)
     mu, b = np.linalg.eigh(K)
     j = int(np.argmax(mu))
     if not mu[j] > 0:
-        return np.full(4, np.nan), "no positive generalised eigenvalue: the constraint admits no circle"
-    return v @ (b[:, j] / s), "closed-form solution (generalised eigenvector)"
+        return np.full(4, np.nan), _EIGEN_MESSAGES[2]
+    return v @ (b[:, j] / s), _EIGEN_MESSAGES[0]
 
 
 def _circle_from_conic(points, frame: Frame, a: np.ndarray, message: str):
@@ -79,15 +87,19 @@ def _circle_from_conic(points, frame: Frame, a: np.ndarray, message: str):
                          extra={"algebraic_parameters_unit_frame": [float(x) for x in a]})
 
 
+_PRATT = np.array([[0, 0, 0, -2], [0, 1, 0, 0], [0, 0, 1, 0], [-2, 0, 0, 0]], dtype=float)
+
+
 def _constraint(kind: str, zbar: float) -> np.ndarray:
-    pratt = np.array([[0, 0, 0, -2], [0, 1, 0, 0], [0, 0, 1, 0], [-2, 0, 0, 0]], dtype=float)
+    if kind == "pratt":
+        return _PRATT
     taubin = np.diag([4 * zbar, 1.0, 1.0, 0.0])  # data centred: the A*B and A*C terms vanish
-    return {"pratt": pratt, "taubin": taubin, "hyper": 2 * taubin - pratt}[kind]
+    return taubin if kind == "taubin" else 2 * taubin - _PRATT
 
 
 def _constrained_fit(points, kind: str):
-    frame, m = frame_and_moments(points)
-    a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])))
+    frame, m, ck = frame_and_moments(points)
+    a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])), ck)
     frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))  # release the copy
     return _circle_from_conic(points, frame, a, message)
 

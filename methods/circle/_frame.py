@@ -213,7 +213,7 @@ def compiled_geometric(points, ck, frame: KernelFrame, p, previous=None):
         out = ck.geometric(points, frame.cx, frame.cy, frame.scale, q,
                            (float(previous[0]), float(previous[1]), float(previous[2])))
     _, cc, cs, ss_, sc, ss, cd, sd_, sd, dd, reduction, zero_r = out
-    if zero_r or not np.isfinite([cc, cs, ss_, sc, ss]).all():
+    if zero_r or not all(map(math.isfinite, (cc, cs, ss_, sc, ss))):
         state = None
     else:
         jtj = np.array([[cc, cs, sc], [cs, ss_, ss], [sc, ss, float(points.shape[0])]])
@@ -233,8 +233,24 @@ def start_from_moments(m: np.ndarray, ck=None) -> np.ndarray:
     return p if np.isfinite(p).all() else np.array([0.0, 0.0, 1.0])
 
 
+def solve_linear(ck):
+    """solve(A, b) for a 3x3 system: np.linalg.solve (NumPy path), or the compiled ``solve3`` (Gaussian
+    elimination with partial pivoting, as LAPACK's dgesv, without NumPy's per-call overhead); both raise
+    np.linalg.LinAlgError on an exactly singular matrix."""
+    if ck is None:
+        return np.linalg.solve
+
+    def solve(a, b):
+        x = ck.solve3(tuple(a.ravel().tolist()), tuple(b.tolist()))
+        if x is None:
+            raise np.linalg.LinAlgError("Singular matrix")
+        return np.array(x)
+    return solve
+
+
 def geometric_setup(points, start):
-    """What Gauss–Newton and LM need, on the compiled or the NumPy path: (frame, p0, sweep, coordinates).
+    """What Gauss–Newton and LM need, on the compiled or the NumPy path: (frame, p0, sweep, coordinates,
+    solve) (``solve``: :func:`solve_linear`).
 
     ``p0`` is ``start`` (data units) in the unit frame, or Kåsa's start (one moments sweep);
     ``sweep(q)`` = :func:`geometric_normal_equations` at unit-frame q (one sweep; compiled: state[3] is None);
@@ -245,7 +261,7 @@ def geometric_setup(points, start):
         x, y = frame.x, frame.y
         p0 = algebraic_start(x, y) if start is None else frame.circle_to_unit(start)
         work = np.empty((4, len(x)))  # one workspace for every sweep (peak memory: frame + 4 N numbers)
-        return frame, p0, lambda q: geometric_normal_equations(x, y, q, work), (x, y)
+        return frame, p0, lambda q: geometric_normal_equations(x, y, q, work), (x, y), np.linalg.solve
     ck, kf = compiled
     if start is None:
         kf, m = compiled_moments(points, ck, kf)  # proves the points unchanged since validation (token)
@@ -253,4 +269,4 @@ def geometric_setup(points, start):
         kf = kernel_frame(points, ck) or kf  # a fresh pass 1: the frame of the points as they are now
     frame = Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES)
     p0 = start_from_moments(m, ck) if start is None else frame.circle_to_unit(start)
-    return frame, p0, lambda q, previous=None: compiled_geometric(points, ck, kf, q, previous), None
+    return frame, p0, lambda q, previous=None: compiled_geometric(points, ck, kf, q, previous), None, solve_linear(ck)

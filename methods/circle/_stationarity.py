@@ -17,6 +17,7 @@ straight line to the precision of the fit) is reported as degenerate, never as c
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,12 +50,12 @@ class Stationarity:
 
 def _degenerate(p) -> str | None:
     a, b, rr = (float(v) for v in p)
-    if not np.isfinite([a, b, rr]).all():
+    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(rr)):
         return "degenerate: non-finite circle parameters"
     if abs(rr) < MIN_RADIUS:
         return f"degenerate: radius collapsed to {abs(rr):.1e} of the data's size (R = 0 is no circle)"
-    if abs(rr) > MAX_RADIUS or np.hypot(a, b) > MAX_RADIUS:
-        return (f"degenerate: centre {max(abs(rr), float(np.hypot(a, b))):.1e} data sizes away "
+    if abs(rr) > MAX_RADIUS or math.hypot(a, b) > MAX_RADIUS:
+        return (f"degenerate: centre {max(abs(rr), math.hypot(a, b)):.1e} data sizes away "
                 "(a circle of infinite radius is a straight line, no circle)")
     return None
 
@@ -130,5 +131,5 @@ def geometric_from_state(p, state, ulp: float = EPS) -> Stationarity:
     f, jtj, jtd, _ = state
     rr = abs(float(p[2]))
     s2 = max(f - 4 * rr * float(jtd[2]) + 4 * jtj[2, 2] * rr * rr, 0.0)
-    noise = 8 * EPS * np.sqrt(f * s2) + 16 * EPS * EPS * s2
+    noise = 8 * EPS * math.sqrt(f * s2) + 16 * EPS * EPS * s2
     return _decide(-jtd, jtj, f, noise, "S_CG", ulp)

@@ -1,6 +1,8 @@
 """Gauss–Newton geometric circle fit as in the roundness paper (Pınar & Güllü, sec. 3)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._registry import register
@@ -36,7 +38,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     p_start = check_vector("start", start, 3, name)
-    frame, p, sweep, _ = geometric_setup(points, p_start)  # compiled: no unit-frame copy, one sweep per state
+    frame, p, sweep, _, solve = geometric_setup(points, p_start)  # compiled: no unit-frame copy, one sweep per state
     n = len(points)
     history, steps = [], []
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
@@ -49,16 +51,16 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
             break
         f, jtj, jtd, _ = state
         history.append(f)
-        if stop == "gradient" and np.linalg.norm(jtd) / n <= gtol:
+        if stop == "gradient" and math.sqrt(float(jtd @ jtd)) / n <= gtol:
             converged, message = True, f"|J^T d|/N <= gtol={gtol:g}"
             break
         # F is a sum of squared differences of O(1) numbers: its rounding noise is ~2 eps sqrt(N F) r_max
-        noise = 8.0 * EPS * np.sqrt(n * f * (f / n + 4.0 * p[2] * p[2]))
+        noise = 8.0 * EPS * math.sqrt(n * f * (f / n + 4.0 * p[2] * p[2]))
         if stop == "objective" and f_prev is not None and abs(f_prev - f) <= ftol * f_prev + noise:
             converged, message = True, f"|F_(k-1) - F_k| <= ftol={ftol:g} * F_(k-1) (+ rounding noise of F)"
             break
         try:
-            delta = np.linalg.solve(jtj, -jtd)  # normal equations of J Delta = -d (eq. 12)
+            delta = solve(jtj, -jtd)  # normal equations of J Delta = -d (eq. 12)
         except np.linalg.LinAlgError:
             message = "singular Gauss–Newton system (J^T J not invertible)"
             break
@@ -66,12 +68,12 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         # below it, and not shrinking any more, steps are rounding noise and can never reach xtol
         promised = float(-delta @ jtd)
         s2 = max(f - 4.0 * abs(p[2]) * float(jtd[2]) + 4.0 * n * p[2] * p[2], 0.0)
-        f_noise = 8.0 * EPS * np.sqrt(f * s2) + 16.0 * EPS * EPS * s2
+        f_noise = 8.0 * EPS * math.sqrt(f * s2) + 16.0 * EPS * EPS * s2
         p = p + delta  # eq. 13
-        if not np.isfinite(p).all():
+        if not all(map(math.isfinite, p)):
             message = "Gauss–Newton diverged (non-finite iterate)"
             break
-        step = float(np.linalg.norm(delta))
+        step = math.sqrt(float(delta @ delta))
         steps.append(step)
         f_prev = f
         state = sweep(p)
@@ -84,7 +86,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
                        f"below its rounding noise (xtol={xtol:g} is below the resolution)")
             break
     if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
-        check = stationarity.geometric_from_state(p, state if np.isfinite(p).all() else None, frame.ulp)
+        check = stationarity.geometric_from_state(p, state if all(map(math.isfinite, p)) else None, frame.ulp)
         converged = check.ok
         message = f"{message}; {check.text}"
     else:

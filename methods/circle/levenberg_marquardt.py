@@ -47,7 +47,7 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     p_start = check_vector("start", start, 3, name)
-    frame, p, sweep, coordinates = geometric_setup(points, p_start)
+    frame, p, sweep, coordinates, solve = geometric_setup(points, p_start)
     n = len(points)
     if coordinates is None:  # compiled: the one sweep at p + h also gives the actual reduction from p
         def trial_state(p, h, arrays):
@@ -73,7 +73,7 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
             converged, message = True, f"|J^T d|_inf / N <= gtol={gtol:g}"
             break
         try:
-            h = np.linalg.solve(jtj + mu * np.diag(np.diag(jtj)), -jtd)
+            h = solve(jtj + mu * np.diag(np.diag(jtj)), -jtd)
         except np.linalg.LinAlgError:
             message = "singular damped system"
             break

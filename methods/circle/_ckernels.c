@@ -68,9 +68,28 @@ static void pw_total(const pairwise_t *p, double *out) {
     }
 }
 
-/* the raw-coordinate token of one block: (sequential sum of its x) + (sequential sum of its y), the same
-   operations in every pass; the data's token is the sequential sum of the block tokens */
-#define TOKEN_ADD(tx, ty, x, y) do { (tx) = (tx) + (x); (ty) = (ty) + (y); } while (0)
+/* Two-lane arithmetic (GCC/Clang vector extension; SSE2 on x86-64, NEON on aarch64, else lane by lane):
+   the points of a block are taken in pairs, lane 0 the even and lane 1 the odd points; every lane
+   operation is the IEEE operation its C source names, so the bits do not depend on the CPU. At the end of
+   a block, sum = lane 0 + lane 1, then + the block's last point when the block has an odd count. */
+typedef double v2d __attribute__((vector_size(16)));
+#if defined(__SSE2__)
+#include <emmintrin.h>
+static inline v2d vsqrt(v2d a) { return (v2d)_mm_sqrt_pd((__m128d)a); }
+static inline v2d vmin(v2d a, v2d b) { return (v2d)_mm_min_pd((__m128d)a, (__m128d)b); }
+static inline v2d vmax(v2d a, v2d b) { return (v2d)_mm_max_pd((__m128d)a, (__m128d)b); }
+#else
+static inline v2d vsqrt(v2d a) { v2d r = {sqrt(a[0]), sqrt(a[1])}; return r; }
+static inline v2d vmin(v2d a, v2d b) { v2d r = {a[0] < b[0] ? a[0] : b[0], a[1] < b[1] ? a[1] : b[1]}; return r; }
+static inline v2d vmax(v2d a, v2d b) { v2d r = {a[0] > b[0] ? a[0] : b[0], a[1] > b[1] ? a[1] : b[1]}; return r; }
+#endif
+static inline v2d vset(double a) { v2d r = {a, a}; return r; }
+static inline double hsum(v2d a) { return a[0] + a[1]; }
+/* the x and y of points i, i + 1 (interleaved input) */
+#define LOAD_PAIR(X, Y, p, i) do { (X) = (v2d){(p)[2 * (i)], (p)[2 * (i) + 2]}; \
+                                   (Y) = (v2d){(p)[2 * (i) + 1], (p)[2 * (i) + 3]}; } while (0)
+/* the data's token: per block (sum of its x) + (sum of its y), the sums taken lane-wise as above, and the
+   block tokens added in order; every pass computes it with these same operations */
 
 static int get_points(PyObject *obj, Py_buffer *view, Py_ssize_t *n) {
     if (PyObject_GetBuffer(obj, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) return -1;
@@ -124,21 +143,37 @@ static PyObject *frame_stats(PyObject *self, PyObject *args) {
     const double *p = (const double *)view.buf;
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double sx = 0.0, sy = 0.0, mx, my, ex = 0.0, ey = 0.0, cxx = 0.0, cyy = 0.0, cxy = 0.0;
-        double nb = (double)(i1 - i0);
+        double nb = (double)(i1 - i0), sx, sy, mx, my, ex, ey, cxx, cyy, cxy;
+        v2d tx = vset(0.0), ty = vset(0.0), X, Y, vmx, vmy, vex = vset(0.0), vey = vset(0.0), vxx = vset(0.0),
+            vyy = vset(0.0), vxy = vset(0.0);
         moments2_t carry;
-        for (i = i0; i < i1; i++) {
-            TOKEN_ADD(sx, sy, p[2 * i], p[2 * i + 1]);
+        for (i = i0; i + 1 < i1; i += 2) {
+            LOAD_PAIR(X, Y, p, i);
+            tx = tx + X;
+            ty = ty + Y;
         }
+        sx = hsum(tx);
+        sy = hsum(ty);
+        if (i < i1) { sx = sx + p[2 * i]; sy = sy + p[2 * i + 1]; }
         mx = sx / nb;
         my = sy / nb;
-        for (i = i0; i < i1; i++) {  /* the block is in L1 cache: no second sweep over memory */
+        vmx = vset(mx);
+        vmy = vset(my);
+        for (i = i0; i + 1 < i1; i += 2) {  /* the block is in L1 cache: no second sweep over memory */
+            v2d dx, dy;
+            LOAD_PAIR(X, Y, p, i);
+            dx = X - vmx;
+            dy = Y - vmy;
+            vex = vex + dx;
+            vey = vey + dy;
+            vxx = vxx + dx * dx;
+            vyy = vyy + dy * dy;
+            vxy = vxy + dx * dy;
+        }
+        ex = hsum(vex); ey = hsum(vey); cxx = hsum(vxx); cyy = hsum(vyy); cxy = hsum(vxy);
+        if (i < i1) {
             double dx = p[2 * i] - mx, dy = p[2 * i + 1] - my;
-            ex = ex + dx;
-            ey = ey + dy;
-            cxx = cxx + dx * dx;
-            cyy = cyy + dy * dy;
-            cxy = cxy + dx * dy;
+            ex = ex + dx; ey = ey + dy; cxx = cxx + dx * dx; cyy = cyy + dy * dy; cxy = cxy + dx * dy;
         }
         /* corrected two-pass: remove the rounding of the block mean */
         carry.n = nb;
@@ -179,14 +214,20 @@ static PyObject *moments(PyObject *self, PyObject *args) {
     pw_init(&pw, 9);
     Py_BEGIN_ALLOW_THREADS
     const double *p = (const double *)view.buf;
+    v2d vcx = vset(cx), vcy = vset(cy), vs = vset(s);
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double tx = 0.0, ty = 0.0, zz = 0.0, zu = 0.0, zv = 0.0, uu = 0.0, vv = 0.0, uv = 0.0, su = 0.0, sv = 0.0,
-               sz = 0.0;
-        for (i = i0; i < i1; i++) {  /* scalar accumulators: kept in registers */
-            double u = (p[2 * i] - cx) / s, v = (p[2 * i + 1] - cy) / s;
-            double z = u * u + v * v;
-            TOKEN_ADD(tx, ty, p[2 * i], p[2 * i + 1]);
+        v2d X, Y, tx = vset(0.0), ty = vset(0.0), zz = vset(0.0), zu = vset(0.0), zv = vset(0.0), uu = vset(0.0),
+                  vv = vset(0.0), uv = vset(0.0), su = vset(0.0), sv = vset(0.0), sz = vset(0.0);
+        double b[9], sx, sy;
+        for (i = i0; i + 1 < i1; i += 2) {
+            v2d u, v, z;
+            LOAD_PAIR(X, Y, p, i);
+            u = (X - vcx) / vs;  /* the unit frame: u = (X - cx) / s, as methods/_frame.py */
+            v = (Y - vcy) / vs;
+            z = u * u + v * v;
+            tx = tx + X;
+            ty = ty + Y;
             zz = zz + z * z;
             zu = zu + z * u;
             zv = zv + z * v;
@@ -197,12 +238,17 @@ static PyObject *moments(PyObject *self, PyObject *args) {
             sv = sv + v;
             sz = sz + z;
         }
-        {
-            double b[9];
-            b[0] = zz; b[1] = zu; b[2] = zv; b[3] = uu; b[4] = vv; b[5] = uv; b[6] = su; b[7] = sv; b[8] = sz;
-            token = token + (tx + ty);
-            pw_add(&pw, b);
+        sx = hsum(tx); sy = hsum(ty);
+        b[0] = hsum(zz); b[1] = hsum(zu); b[2] = hsum(zv); b[3] = hsum(uu); b[4] = hsum(vv); b[5] = hsum(uv);
+        b[6] = hsum(su); b[7] = hsum(sv); b[8] = hsum(sz);
+        if (i < i1) {
+            double u = (p[2 * i] - cx) / s, v = (p[2 * i + 1] - cy) / s, z = u * u + v * v;
+            sx = sx + p[2 * i]; sy = sy + p[2 * i + 1];
+            b[0] = b[0] + z * z; b[1] = b[1] + z * u; b[2] = b[2] + z * v; b[3] = b[3] + u * u;
+            b[4] = b[4] + v * v; b[5] = b[5] + u * v; b[6] = b[6] + u; b[7] = b[7] + v; b[8] = b[8] + z;
         }
+        token = token + (sx + sy);
+        pw_add(&pw, b);
     }
     pw_total(&pw, out);
     Py_END_ALLOW_THREADS
@@ -217,7 +263,7 @@ static PyObject *radial(PyObject *self, PyObject *args) {
     Py_buffer view, res;
     Py_ssize_t n, i0, i;
     double cx, cy, R, rmin = INFINITY, rmax = -INFINITY, ss;
-    long long nonnormal = 0;
+    long long outside;
     pairwise_t pw;
     if (!PyArg_ParseTuple(args, "Odddw*", &obj, &cx, &cy, &R, &res)) return NULL;
     if (get_points(obj, &view, &n) != 0) { PyBuffer_Release(&res); return NULL; }
@@ -231,15 +277,28 @@ static PyObject *radial(PyObject *self, PyObject *args) {
     Py_BEGIN_ALLOW_THREADS
     const double *p = (const double *)view.buf;
     double *o = (double *)res.buf;
+    v2d vcx = vset(cx), vcy = vset(cy), vR = vset(R), vlo = vset(INFINITY), vhi = vset(-INFINITY);
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double b = 0.0;
-        for (i = i0; i < i1; i++) {
-            double dx = p[2 * i] - cx, dy = p[2 * i + 1] - cy;
-            double r = sqrt(dx * dx + dy * dy), d = r - R;
+        v2d X, Y, acc = vset(0.0);
+        double b;
+        for (i = i0; i + 1 < i1; i += 2) {
+            v2d dx, dy, r, d;
+            LOAD_PAIR(X, Y, p, i);
+            dx = X - vcx;
+            dy = Y - vcy;
+            r = vsqrt(dx * dx + dy * dy);  /* as methods/_result.py::radial_distances: same bits */
+            d = r - vR;
+            o[i] = d[0];
+            o[i + 1] = d[1];
+            vlo = vmin(vlo, r);
+            vhi = vmax(vhi, r);
+            acc = acc + d * d;
+        }
+        b = hsum(acc);
+        if (i < i1) {
+            double dx = p[2 * i] - cx, dy = p[2 * i + 1] - cy, r = sqrt(dx * dx + dy * dy), d = r - R;
             o[i] = d;
-            /* outside (1e-145, 1e150) a squared distance may have left the normal range (or r is NaN) */
-            if (!(r > 1e-145 && r < 1e150)) nonnormal++;
             if (r < rmin) rmin = r;
             if (r > rmax) rmax = r;
             b = b + d * d;
@@ -247,10 +306,17 @@ static PyObject *radial(PyObject *self, PyObject *args) {
         pw_add(&pw, &b);
     }
     pw_total(&pw, &ss);
+    if (vlo[0] < rmin) rmin = vlo[0];
+    if (vlo[1] < rmin) rmin = vlo[1];
+    if (vhi[0] > rmax) rmax = vhi[0];
+    if (vhi[1] > rmax) rmax = vhi[1];
     Py_END_ALLOW_THREADS
+    /* a distance outside (1e-145, 1e150) may come from a squared distance outside the normal range, and a
+       NaN distance makes the sum of squares NaN: either way the caller takes np.hypot */
+    outside = !(rmin > 1e-145 && rmax < 1e150 && isfinite(ss));
     PyBuffer_Release(&view);
     PyBuffer_Release(&res);
-    return Py_BuildValue("(dddL)", rmin, rmax, ss, nonnormal);
+    return Py_BuildValue("(dddL)", rmin, rmax, ss, outside);
 }
 
 /* ---- Gauss-Newton / LM sweep ----------------------------------------------------------------------- */
@@ -259,7 +325,6 @@ static PyObject *geometric(PyObject *self, PyObject *args) {
     Py_buffer view;
     Py_ssize_t n, i0, i;
     double cx, cy, s, a, b, R, a0 = 0.0, b0 = 0.0, R0 = 0.0, token = 0.0, out[11];
-    long long zero_r = 0;
     int with_prev = 0;
     pairwise_t pw;
     if (!PyArg_ParseTuple(args, "Oddd(ddd)|O", &obj, &cx, &cy, &s, &a, &b, &R, &prev)) return NULL;
@@ -268,22 +333,33 @@ static PyObject *geometric(PyObject *self, PyObject *args) {
         with_prev = 1;
     }
     if (get_points(obj, &view, &n) != 0) return NULL;
-    pw_init(&pw, with_prev ? 11 : 9);
+    pw_init(&pw, 11);
     Py_BEGIN_ALLOW_THREADS
     const double *p = (const double *)view.buf;
     double ha = a - a0, hb = b - b0, hR = R - R0, inv_s = 1.0 / s;
+    v2d vcx = vset(cx), vcy = vset(cy), vinv = vset(inv_s), va = vset(a), vb = vset(b), vR = vset(R);
+    v2d va0 = vset(a0), vb0 = vset(b0), vR0 = vset(R0), vha = vset(ha), vhb = vset(hb), vhR = vset(hR);
+    v2d one = vset(1.0), two = vset(2.0);
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double tx = 0.0, ty = 0.0, cc = 0.0, cs = 0.0, ss = 0.0, sc = 0.0, ssn = 0.0, cd = 0.0, sd = 0.0, sdd = 0.0,
-               dd = 0.0, red = 0.0;
-        for (i = i0; i < i1; i++) {  /* scalar accumulators: kept in registers */
+        v2d X, Y, tx = vset(0.0), ty = vset(0.0), cc = vset(0.0), cs = vset(0.0), ss = vset(0.0), sc = vset(0.0),
+                  ssn = vset(0.0), cd = vset(0.0), sd = vset(0.0), sdd = vset(0.0), dd = vset(0.0), red = vset(0.0);
+        double t[11], sx, sy;
+        for (i = i0; i + 1 < i1; i += 2) {
+            v2d u, v, dx, dy, r, inv_r, c, sn, d;
+            LOAD_PAIR(X, Y, p, i);
             /* u = (X - cx) / s to within one rounding (times 1/s: divisions are the slow part) */
-            double u = (p[2 * i] - cx) * inv_s, v = (p[2 * i + 1] - cy) * inv_s;
-            double dx = u - a, dy = v - b;
-            double r = sqrt(dx * dx + dy * dy), inv_r = 1.0 / r;
-            double c = dx * inv_r, sn = dy * inv_r, d = r - R;
-            TOKEN_ADD(tx, ty, p[2 * i], p[2 * i + 1]);
-            zero_r += (r == 0.0);
+            u = (X - vcx) * vinv;
+            v = (Y - vcy) * vinv;
+            dx = u - va;
+            dy = v - vb;
+            r = vsqrt(dx * dx + dy * dy);
+            inv_r = one / r;  /* r = 0 (a point at the centre) makes the sums NaN: the caller sees it */
+            c = dx * inv_r;
+            sn = dy * inv_r;
+            d = r - vR;
+            tx = tx + X;
+            ty = ty + Y;
             cc = cc + c * c;
             cs = cs + c * sn;
             ss = ss + sn * sn;
@@ -296,25 +372,36 @@ static PyObject *geometric(PyObject *self, PyObject *args) {
             if (with_prev) {
                 /* F(p) - F(q) = -sum (d' - d)(d' + d), d' - d = (r'^2 - r^2)/(r' + r) - h_R with
                    r'^2 - r^2 = -h_a (2 dx0 - h_a) - h_b (2 dy0 - h_b): no cancellation near the optimum */
-                double dx0 = u - a0, dy0 = v - b0;
-                double r0 = sqrt(dx0 * dx0 + dy0 * dy0), d0 = r0 - R0;
-                double delta = (-ha * (2.0 * dx0 - ha) - hb * (2.0 * dy0 - hb)) / (r + r0) - hR;
-                red = red + delta * (2.0 * d0 + delta);
+                v2d dx0 = u - va0, dy0 = v - vb0, r0, d0, delta;
+                r0 = vsqrt(dx0 * dx0 + dy0 * dy0);
+                d0 = r0 - vR0;
+                delta = (-vha * (two * dx0 - vha) - vhb * (two * dy0 - vhb)) / (r + r0) - vhR;
+                red = red + delta * (two * d0 + delta);
             }
         }
-        {
-            double t[11];
-            t[0] = cc; t[1] = cs; t[2] = ss; t[3] = sc; t[4] = ssn; t[5] = cd; t[6] = sd; t[7] = sdd; t[8] = dd;
-            t[9] = 0.0; t[10] = red;
-            token = token + (tx + ty);
-            pw_add(&pw, t);
+        sx = hsum(tx); sy = hsum(ty);
+        t[0] = hsum(cc); t[1] = hsum(cs); t[2] = hsum(ss); t[3] = hsum(sc); t[4] = hsum(ssn); t[5] = hsum(cd);
+        t[6] = hsum(sd); t[7] = hsum(sdd); t[8] = hsum(dd); t[9] = 0.0; t[10] = hsum(red);
+        if (i < i1) {
+            double u = (p[2 * i] - cx) * inv_s, v = (p[2 * i + 1] - cy) * inv_s, dx = u - a, dy = v - b;
+            double r = sqrt(dx * dx + dy * dy), inv_r = 1.0 / r, c = dx * inv_r, sn = dy * inv_r, d = r - R;
+            sx = sx + p[2 * i]; sy = sy + p[2 * i + 1];
+            t[0] = t[0] + c * c; t[1] = t[1] + c * sn; t[2] = t[2] + sn * sn; t[3] = t[3] + c; t[4] = t[4] + sn;
+            t[5] = t[5] + c * d; t[6] = t[6] + sn * d; t[7] = t[7] + d; t[8] = t[8] + d * d;
+            if (with_prev) {
+                double dx0 = u - a0, dy0 = v - b0, r0 = sqrt(dx0 * dx0 + dy0 * dy0), d0 = r0 - R0;
+                double delta = (-ha * (2.0 * dx0 - ha) - hb * (2.0 * dy0 - hb)) / (r + r0) - hR;
+                t[10] = t[10] + delta * (2.0 * d0 + delta);
+            }
         }
+        token = token + (sx + sy);
+        pw_add(&pw, t);
     }
     pw_total(&pw, out);
     Py_END_ALLOW_THREADS
     PyBuffer_Release(&view);
     return Py_BuildValue("(dddddddddddL)", token, out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7],
-                         out[8], with_prev ? -out[10] : 0.0, zero_r);
+                         out[8], with_prev ? -out[10] : 0.0, 0LL);
 }
 
 /* ---- the unit-frame coordinates, for the methods that work on arrays ------------------------------- */
@@ -336,19 +423,27 @@ static PyObject *unit_coords(PyObject *self, PyObject *args) {
     double *x = (double *)res.buf, *y = x + n;
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double tx = 0.0, ty = 0.0;
-        for (i = i0; i < i1; i++) {
-            TOKEN_ADD(tx, ty, p[2 * i], p[2 * i + 1]);
+        v2d X, Y, tx = vset(0.0), ty = vset(0.0);
+        double sx, sy;
+        for (i = i0; i + 1 < i1; i += 2) {
+            LOAD_PAIR(X, Y, p, i);
+            tx = tx + X;
+            ty = ty + Y;
+        }
+        sx = hsum(tx); sy = hsum(ty);
+        if (i < i1) { sx = sx + p[2 * i]; sy = sy + p[2 * i + 1]; }
+        for (i = i0; i < i1; i++) {  /* as numpy: x = (X - cx) / s */
             x[i] = (p[2 * i] - cx) / s;
             y[i] = (p[2 * i + 1] - cy) / s;
         }
-        token = token + (tx + ty);
+        token = token + (sx + sy);
     }
     Py_END_ALLOW_THREADS
     PyBuffer_Release(&view);
     PyBuffer_Release(&res);
     return PyFloat_FromDouble(token);
 }
+
 
 /* ---- small dense solve: 3x3 by Gaussian elimination with partial pivoting (as LAPACK dgesv) ------- */
 static PyObject *solve3(PyObject *self, PyObject *args) {

@@ -6,9 +6,10 @@
  *
  *   1. frame_stats(points)            validation + frame: finiteness (sums stay finite), the centroid and
  *                                     the centred scatter Sxx, Syy, Sxy (-> unit-frame scale sqrt((Sxx+Syy)/N)
- *                                     and the collinearity test), per block of BLOCK points: block sums,
- *                                     then the block's deviations from its own mean while the block is in
- *                                     L1 cache (corrected two-pass), blocks merged pairwise by Chan's formula;
+ *                                     and the collinearity test), per block of BLOCK points: block sums of the
+ *                                     coordinates relative to the first point, then the block's deviations
+ *                                     from its own mean while the block is in L1 cache (corrected two-pass),
+ *                                     blocks merged pairwise by Chan's formula;
  *   2. moments(points, cx, cy, s)     the moments of the CENTRED, SCALED data u = (X - cx)/s, v = (Y - cy)/s,
  *                                     z = u^2 + v^2: sums of zz, zu, zv, uu, vv, uv, u, v, z;
  *   3. radial(points, cx, cy, R, out) r_i = |P_i - c| in data units, out_i = r_i - R, min r, max r and
@@ -129,7 +130,7 @@ static PyObject *frame_stats(PyObject *self, PyObject *args) {
     Py_ssize_t n, i0, i;
     moments2_t stack[MAXLEV], tot;
     unsigned char used[MAXLEV];
-    double token = 0.0;
+    double token = 0.0, x0, y0;
     int lev;
     if (!PyArg_ParseTuple(args, "O", &obj)) return NULL;
     if (get_points(obj, &view, &n) != 0) return NULL;
@@ -141,29 +142,41 @@ static PyObject *frame_stats(PyObject *self, PyObject *args) {
     memset(used, 0, sizeof used);
     Py_BEGIN_ALLOW_THREADS
     const double *p = (const double *)view.buf;
+    /* sums of X - x0, Y - y0 about the first point: exact differences (Sterbenz) for data far from the
+       origin, so block means and Chan's merge terms are rounded relative to the spread, not to |X| */
+    x0 = p[0];
+    y0 = p[1];
+    v2d vx0 = vset(x0), vy0 = vset(y0);
     for (i0 = 0; i0 < n; i0 += BLOCK) {
         Py_ssize_t i1 = i0 + BLOCK < n ? i0 + BLOCK : n;
-        double nb = (double)(i1 - i0), sx, sy, mx, my, ex, ey, cxx, cyy, cxy;
-        v2d tx = vset(0.0), ty = vset(0.0), X, Y, vmx, vmy, vex = vset(0.0), vey = vset(0.0), vxx = vset(0.0),
-            vyy = vset(0.0), vxy = vset(0.0);
+        double nb = (double)(i1 - i0), sx, sy, rx, ry, mx, my, ex, ey, cxx, cyy, cxy;
+        v2d tx = vset(0.0), ty = vset(0.0), vrx = vset(0.0), vry = vset(0.0), X, Y, vmx, vmy, vex = vset(0.0),
+            vey = vset(0.0), vxx = vset(0.0), vyy = vset(0.0), vxy = vset(0.0);
         moments2_t carry;
         for (i = i0; i + 1 < i1; i += 2) {
             LOAD_PAIR(X, Y, p, i);
             tx = tx + X;
             ty = ty + Y;
+            vrx = vrx + (X - vx0);
+            vry = vry + (Y - vy0);
         }
         sx = hsum(tx);
         sy = hsum(ty);
-        if (i < i1) { sx = sx + p[2 * i]; sy = sy + p[2 * i + 1]; }
-        mx = sx / nb;
-        my = sy / nb;
+        rx = hsum(vrx);
+        ry = hsum(vry);
+        if (i < i1) {
+            sx = sx + p[2 * i]; sy = sy + p[2 * i + 1];
+            rx = rx + (p[2 * i] - x0); ry = ry + (p[2 * i + 1] - y0);
+        }
+        mx = rx / nb;  /* block mean relative to the first point: O(spread), rounded relative to it */
+        my = ry / nb;
         vmx = vset(mx);
         vmy = vset(my);
         for (i = i0; i + 1 < i1; i += 2) {  /* the block is in L1 cache: no second sweep over memory */
             v2d dx, dy;
             LOAD_PAIR(X, Y, p, i);
-            dx = X - vmx;
-            dy = Y - vmy;
+            dx = (X - vx0) - vmx;
+            dy = (Y - vy0) - vmy;
             vex = vex + dx;
             vey = vey + dy;
             vxx = vxx + dx * dx;
@@ -172,7 +185,7 @@ static PyObject *frame_stats(PyObject *self, PyObject *args) {
         }
         ex = hsum(vex); ey = hsum(vey); cxx = hsum(vxx); cyy = hsum(vyy); cxy = hsum(vxy);
         if (i < i1) {
-            double dx = p[2 * i] - mx, dy = p[2 * i + 1] - my;
+            double dx = (p[2 * i] - x0) - mx, dy = (p[2 * i + 1] - y0) - my;
             ex = ex + dx; ey = ey + dy; cxx = cxx + dx * dx; cyy = cyy + dy * dy; cxy = cxy + dx * dy;
         }
         /* corrected two-pass: remove the rounding of the block mean */
@@ -199,7 +212,7 @@ static PyObject *frame_stats(PyObject *self, PyObject *args) {
     }
     Py_END_ALLOW_THREADS
     PyBuffer_Release(&view);
-    return Py_BuildValue("(dddddd)", token, tot.mx, tot.my, tot.cxx, tot.cyy, tot.cxy);
+    return Py_BuildValue("(dddddd)", token, x0 + tot.mx, y0 + tot.my, tot.cxx, tot.cyy, tot.cxy);
 }
 
 /* ---- pass 2: moments of the centred, scaled data ------------------------------------------------- */

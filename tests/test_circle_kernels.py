@@ -188,3 +188,20 @@ def test_kernels_refuse_wrong_buffers_with_a_message():
     with pytest.raises((TypeError, ValueError, BufferError)):
         ck.frame_stats(np.zeros((4, 2))[::2])  # not contiguous
     assert kernels("methods.circle._ckernels") is ck
+
+
+def test_stationarity_pseudo_inverse_matches_lstsq():
+    """The compiled g^T pinv(J^T J) g (Jacobi eigenvalues, cut-off 3 eps max) against np.linalg.lstsq's: both are
+    backward stable, so they agree to ~cond(J^T J) eps (1e-7 relative up to cond 1e8, tested)."""
+    rng = np.random.default_rng(20)
+    for _ in range(500):
+        jac = rng.normal(size=(40, 3)) * 10.0 ** rng.uniform(-2, 2, size=3)
+        a = jac.T @ jac
+        if np.linalg.cond(a) > 1e8:
+            continue
+        g = rng.normal(size=3)
+        ref = float(g @ np.linalg.lstsq(a, g, rcond=None)[0])
+        assert abs(ck.psd_decrease(tuple(a.ravel()), tuple(g)) - ref) <= 1e-7 * abs(ref)
+    # exactly rank-deficient: the null direction is dropped, as lstsq drops it
+    a = np.diag([2.0, 1.0, 0.0])
+    assert ck.psd_decrease(tuple(a.ravel()), (2.0, 1.0, 5.0)) == pytest.approx(2.0 * 2.0 / 2.0 + 1.0)

@@ -592,6 +592,26 @@ static PyObject *eigen_fit(PyObject *self, PyObject *args) {
     return Py_BuildValue("(idddd)", status, a[0], a[1], a[2], a[3]);
 }
 
+/* psd_decrease(A (9 numbers, symmetric positive semi-definite 3x3), g (3)) -> g^T A^+ g with A^+ the
+   pseudo-inverse that drops eigenvalues <= 3 eps max eigenvalue: what np.linalg.lstsq(A, g, rcond=None)
+   gives for g^T h (its singular values are these eigenvalues, its cut-off rcond = eps max(M, N)). */
+static PyObject *psd_decrease(PyObject *self, PyObject *args) {
+    double a[4][4], v[4][4], w[4], g[3], dec = 0.0;
+    int i, k;
+    memset(a, 0, sizeof a);
+    if (!PyArg_ParseTuple(args, "(ddddddddd)(ddd)", &a[0][0], &a[0][1], &a[0][2], &a[1][0], &a[1][1], &a[1][2],
+                          &a[2][0], &a[2][1], &a[2][2], &g[0], &g[1], &g[2]))
+        return NULL;
+    jacobi4(a, w, v);  /* the 4th row and column are zero: an eigenvalue 0 with eigenvector e4, dropped */
+    for (i = 0; i < 4; i++) {
+        double proj = 0.0;
+        if (!(fabs(w[i]) > 3.0 * 2.220446049250313e-16 * fabs(w[0]))) continue;
+        for (k = 0; k < 3; k++) proj = proj + v[k][i] * g[k];
+        dec = dec + proj * proj / w[i];
+    }
+    return PyFloat_FromDouble(dec);
+}
+
 static PyMethodDef Methods[] = {
     {"frame_stats", frame_stats, METH_VARARGS,
      "frame_stats(points) -> (token, mean_x, mean_y, Sxx, Syy, Sxy): pass 1 (centroid, centred scatter)"},
@@ -606,6 +626,8 @@ static PyMethodDef Methods[] = {
      "unit_coords(points, cx, cy, s, out) -> token: out[:N] = (X - cx)/s, out[N:2N] = (Y - cy)/s"},
     {"eigen_fit", eigen_fit, METH_VARARGS,
      "eigen_fit(M 16 numbers, N 16 numbers) -> (status, a0..a3): Pratt/Taubin/Hyper generalised eigenproblem"},
+    {"psd_decrease", psd_decrease, METH_VARARGS,
+     "psd_decrease(A 9 numbers, g 3 numbers) -> g^T pinv(A) g (eigenvalues <= 3 eps max dropped, as lstsq)"},
     {"solve3", solve3, METH_VARARGS, "solve3(A (9 numbers, row major), b (3)) -> x, or None when singular"},
     {NULL, NULL, 0, NULL}};
 

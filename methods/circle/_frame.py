@@ -14,6 +14,9 @@ import numpy as np
 from methods._frame import KernelFrame, UnitFrame, dot, is_point_array, kernel_frame, offer_frame, point_kernels, take_frame
 
 
+_EPS = float(np.finfo(float).eps)
+
+
 class Frame(UnitFrame):
     """The unit frame with the circle parameters' conversions (xc, yc, R)."""
 
@@ -25,12 +28,14 @@ class Frame(UnitFrame):
     @property
     def ulp(self) -> float:
         """The rounding of the data's coordinates in the unit frame: eps max(1, |shift| / scale)."""
-        return float(np.finfo(float).eps) * max(1.0, float(np.abs(self.shift).max()) / self.scale)
+        return _EPS * max(1.0, max(abs(float(self.shift[0])), abs(float(self.shift[1]))) / self.scale)
 
     def power(self, k: int) -> float:
         """scale**k for converting objective values to data units; inf/0 (no exception) when out of range."""
-        with np.errstate(over="ignore", under="ignore"):
-            return float(np.float64(self.scale) ** k)
+        try:
+            return float(self.scale) ** k
+        except OverflowError:
+            return math.inf
 
     def circle_to_data(self, p) -> tuple[np.ndarray, float]:
         """(xc, yc, R) in the unit frame -> (center, radius) in data units."""
@@ -250,7 +255,7 @@ def solve_linear(ck):
 
 def geometric_setup(points, start):
     """What Gauss–Newton and LM need, on the compiled or the NumPy path: (frame, p0, sweep, coordinates,
-    solve) (``solve``: :func:`solve_linear`).
+    ck) (``ck``: the compiled kernels, None on the NumPy path; see :func:`solve_linear`).
 
     ``p0`` is ``start`` (data units) in the unit frame, or Kåsa's start (one moments sweep);
     ``sweep(q)`` = :func:`geometric_normal_equations` at unit-frame q (one sweep; compiled: state[3] is None);
@@ -261,7 +266,7 @@ def geometric_setup(points, start):
         x, y = frame.x, frame.y
         p0 = algebraic_start(x, y) if start is None else frame.circle_to_unit(start)
         work = np.empty((4, len(x)))  # one workspace for every sweep (peak memory: frame + 4 N numbers)
-        return frame, p0, lambda q: geometric_normal_equations(x, y, q, work), (x, y), np.linalg.solve
+        return frame, p0, lambda q: geometric_normal_equations(x, y, q, work), (x, y), None
     ck, kf = compiled
     if start is None:
         kf, m = compiled_moments(points, ck, kf)  # proves the points unchanged since validation (token)
@@ -269,4 +274,4 @@ def geometric_setup(points, start):
         kf = kernel_frame(points, ck) or kf  # a fresh pass 1: the frame of the points as they are now
     frame = Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES)
     p0 = start_from_moments(m, ck) if start is None else frame.circle_to_unit(start)
-    return frame, p0, lambda q, previous=None: compiled_geometric(points, ck, kf, q, previous), None, solve_linear(ck)
+    return frame, p0, lambda q, previous=None: compiled_geometric(points, ck, kf, q, previous), None, ck

@@ -60,13 +60,13 @@ def _degenerate(p) -> str | None:
     return None
 
 
-def _decide(g, jtj, f, noise, label, ulp) -> Stationarity:
+def _decide(g, jtj, f, noise, label, ulp, ck=None) -> Stationarity:
     # + the decrease of moving the circle by DATA_ULPS ulps of the data: below it the data, rounded to
     # float64, do not define the circle any better (exact data have F ~ 0, where 1e-9 F means nothing)
     tol = REL_DECREASE * f + noise + float(np.trace(jtj)) * (DATA_ULPS * ulp) ** 2
-    try:
-        h = np.linalg.lstsq(jtj, g, rcond=None)[0]
-        dec = float(g @ h)
+    try:  # ck: the same pseudo-inverse by the compiled kernels' Jacobi eigensolver (no NumPy call overhead)
+        dec = (ck.psd_decrease(tuple(jtj.ravel().tolist()), tuple(g.tolist())) if ck is not None
+               else float(g @ np.linalg.lstsq(jtj, g, rcond=None)[0]))
     except np.linalg.LinAlgError:
         dec = float("inf")
     ok = bool(np.isfinite(dec) and dec <= tol)
@@ -118,7 +118,7 @@ def algebraic(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity
     return _decide(g, jtj, f, noise, "S_CA", ulp)
 
 
-def geometric_from_state(p, state, ulp: float = EPS) -> Stationarity:
+def geometric_from_state(p, state, ulp: float = EPS, ck=None) -> Stationarity:
     """:func:`geometric` from the normal equations at p that an iteration already computed
     (``methods.circle._frame.geometric_normal_equations``), so the check costs no extra sweep.
     The rounding noise of F is bounded by Cauchy–Schwarz: 8 eps sqrt(F sum (r_i + R)^2) + 16 eps^2
@@ -132,4 +132,4 @@ def geometric_from_state(p, state, ulp: float = EPS) -> Stationarity:
     rr = abs(float(p[2]))
     s2 = max(f - 4 * rr * float(jtd[2]) + 4 * jtj[2, 2] * rr * rr, 0.0)
     noise = 8 * EPS * math.sqrt(f * s2) + 16 * EPS * EPS * s2
-    return _decide(-jtd, jtj, f, noise, "S_CG", ulp)
+    return _decide(-jtd, jtj, f, noise, "S_CG", ulp, ck)

@@ -9,7 +9,7 @@ from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive, check_vector
 from methods.circle import _stationarity as stationarity
-from methods.circle._frame import geometric_setup
+from methods.circle._frame import geometric_setup, solve_linear
 
 STOPPING_CRITERIA = ("objective", "step", "gradient")
 EPS = np.finfo(float).eps
@@ -38,7 +38,8 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     p_start = check_vector("start", start, 3, name)
-    frame, p, sweep, _, solve = geometric_setup(points, p_start)  # compiled: no unit-frame copy, one sweep per state
+    frame, p, sweep, _, ck = geometric_setup(points, p_start)  # compiled: no unit-frame copy, one sweep per state
+    solve = solve_linear(ck)
     n = len(points)
     history, steps = [], []
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
@@ -86,7 +87,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
                        f"below its rounding noise (xtol={xtol:g} is below the resolution)")
             break
     if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
-        check = stationarity.geometric_from_state(p, state if all(map(math.isfinite, p)) else None, frame.ulp)
+        check = stationarity.geometric_from_state(p, state if all(map(math.isfinite, p)) else None, frame.ulp, ck)
         converged = check.ok
         message = f"{message}; {check.text}"
     else:

@@ -9,7 +9,7 @@ from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_positive, check_vector
 from methods.circle import _stationarity as stationarity
-from methods.circle._frame import geometric_normal_equations, geometric_setup
+from methods.circle._frame import geometric_normal_equations, geometric_setup, solve_linear
 
 
 def _reduction(arrays, h):
@@ -47,7 +47,8 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     p_start = check_vector("start", start, 3, name)
-    frame, p, sweep, coordinates, solve = geometric_setup(points, p_start)
+    frame, p, sweep, coordinates, ck = geometric_setup(points, p_start)
+    solve = solve_linear(ck)
     n = len(points)
     if coordinates is None:  # compiled: the one sweep at p + h also gives the actual reduction from p
         def trial_state(p, h, arrays):
@@ -97,7 +98,7 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
             mu, nu = mu * nu, 2 * nu
     extra = {"final_damping": mu}
     if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
-        check = stationarity.geometric_from_state(p, (f, jtj, jtd, arrays), frame.ulp)
+        check = stationarity.geometric_from_state(p, (f, jtj, jtd, arrays), frame.ulp, ck)
         converged = check.ok
         message = f"{message}; {check.text}"
         extra.update(check.extra(frame.power(2)))

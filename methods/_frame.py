@@ -13,8 +13,10 @@ Compiled path (issue 20; ``methods/_compiled.py``): :func:`kernel_frame` compute
 the unit-frame second moments in ONE sweep (``methods/circle/_ckernels.c`` pass 1) without writing the
 unit-frame coordinates; validation offers that :class:`KernelFrame`, the circle fits read the points
 through the frame's shift and scale in their own kernel sweeps (each of which returns the data's
-``token`` and so proves that the points did not change since validation), and :meth:`UnitFrame.of`
-writes the coordinates (one sweep) only for the methods that work on arrays. Data whose sums leave
+``token`` and so proves that the points did not change since validation); :meth:`UnitFrame.of` (the
+methods that work on coordinate arrays) computes the NumPy frame, bit for bit the frame those methods had
+before the kernels (:meth:`KernelFrame.coordinates` writes them in one sweep, for a family that wants it,
+at the cost of last-bit differences in its iterations). Data whose sums leave
 (SAFE_LOW, SAFE_HIGH) or are not finite take the NumPy path below, which decides and explains.
 """
 from __future__ import annotations
@@ -199,8 +201,9 @@ class UnitFrame:
     def of(cls, points: np.ndarray):
         frame = take_frame(points)
         if isinstance(frame, KernelFrame):
-            ck = point_kernels()
-            frame = frame.coordinates(points, ck) if ck is not None else None
+            # the methods that work on coordinate arrays get the NumPy frame, the same bits as before the
+            # kernels (their iterations, and so their statuses, do not move by the last bit of the shift)
+            frame = None
         shift, scale, x, y = frame if frame is not None else unit_frame(points)
         return cls(shift=shift, scale=scale, x=x, y=y)
 

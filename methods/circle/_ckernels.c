@@ -474,16 +474,19 @@ static PyObject *solve3(PyObject *self, PyObject *args) {
             for (j = 0; j < 3; j++) { double t = A[k][j]; A[k][j] = A[piv][j]; A[piv][j] = t; }
             { double t = bb[k]; bb[k] = bb[piv]; bb[piv] = t; }
         }
-        for (i = k + 1; i < 3; i++) {
-            double l = A[i][k] / A[k][k];
-            for (j = k + 1; j < 3; j++) A[i][j] = A[i][j] - l * A[k][j];
-            bb[i] = bb[i] - l * bb[k];
+        {
+            double rp = 1.0 / A[k][k];  /* as LAPACK's dgetf2: the column scaled by the pivot's reciprocal */
+            for (i = k + 1; i < 3; i++) {
+                double l = A[i][k] * rp;
+                for (j = k + 1; j < 3; j++) A[i][j] = A[i][j] - l * A[k][j];
+                bb[i] = bb[i] - l * bb[k];
+            }
         }
     }
-    for (i = 2; i >= 0; i--) {
-        double t = bb[i];
-        for (j = i + 1; j < 3; j++) t = t - A[i][j] * x[j];
-        x[i] = t / A[i][i];
+    for (i = 0; i < 3; i++) x[i] = bb[i];
+    for (k = 2; k >= 0; k--) {  /* as LAPACK's dtrsm (upper, column by column) */
+        x[k] = x[k] / A[k][k];
+        for (i = 0; i < k; i++) x[i] = x[i] - x[k] * A[i][k];
     }
     return Py_BuildValue("(ddd)", x[0], x[1], x[2]);
 }

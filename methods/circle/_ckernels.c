@@ -460,16 +460,20 @@ static PyObject *unit_coords(PyObject *self, PyObject *args) {
 
 /* ---- small dense solve: 3x3 by Gaussian elimination with partial pivoting (as LAPACK dgesv) ------- */
 static PyObject *solve3(PyObject *self, PyObject *args) {
-    double A[3][3], x[3], bb[3];
+    double A[3][3], x[3], bb[3], amax = 0.0, rtol = 0.0;
     int i, j, k;
-    if (!PyArg_ParseTuple(args, "(ddddddddd)(ddd)", &A[0][0], &A[0][1], &A[0][2], &A[1][0], &A[1][1], &A[1][2],
-                          &A[2][0], &A[2][1], &A[2][2], &bb[0], &bb[1], &bb[2]))
+    if (!PyArg_ParseTuple(args, "(ddddddddd)(ddd)|d", &A[0][0], &A[0][1], &A[0][2], &A[1][0], &A[1][1], &A[1][2],
+                          &A[2][0], &A[2][1], &A[2][2], &bb[0], &bb[1], &bb[2], &rtol))
         return NULL;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++)
+            if (fabs(A[i][j]) > amax) amax = fabs(A[i][j]);
     for (k = 0; k < 3; k++) {
         int piv = k;
         for (i = k + 1; i < 3; i++)
             if (fabs(A[i][k]) > fabs(A[piv][k])) piv = i;
-        if (A[piv][k] == 0.0) Py_RETURN_NONE;  /* singular: an exact zero pivot, as LAPACK's dgesv */
+        /* singular: an exact zero pivot (as LAPACK's dgesv), or with rtol > 0 a pivot |u_kk| <= rtol max|a_ij| */
+        if (A[piv][k] == 0.0 || (rtol > 0.0 && !(fabs(A[piv][k]) > rtol * amax))) Py_RETURN_NONE;
         if (piv != k) {
             for (j = 0; j < 3; j++) { double t = A[k][j]; A[k][j] = A[piv][j]; A[piv][j] = t; }
             { double t = bb[k]; bb[k] = bb[piv]; bb[piv] = t; }
@@ -631,7 +635,7 @@ static PyMethodDef Methods[] = {
      "eigen_fit(M 16 numbers, N 16 numbers) -> (status, a0..a3): Pratt/Taubin/Hyper generalised eigenproblem"},
     {"psd_decrease", psd_decrease, METH_VARARGS,
      "psd_decrease(A 9 numbers, g 3 numbers) -> g^T pinv(A) g (eigenvalues <= 3 eps max dropped, as lstsq)"},
-    {"solve3", solve3, METH_VARARGS, "solve3(A (9 numbers, row major), b (3)) -> x, or None when singular"},
+    {"solve3", solve3, METH_VARARGS, "solve3(A (9 numbers, row major), b (3)[, rtol]) -> x, or None when singular (a zero pivot, or one <= rtol max|A|)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_ckernels",

@@ -238,15 +238,25 @@ def start_from_moments(m: np.ndarray, ck=None) -> np.ndarray:
     return p if np.isfinite(p).all() else np.array([0.0, 0.0, 1.0])
 
 
+#: a Gauss–Newton/LM system whose pivot is below this fraction of max|J^T J| is singular to working precision
+#: (compiled path; see :func:`solve_linear`)
+GN_PIVOT_RTOL = 24 * _EPS
+
+
 def solve_linear(ck):
-    """solve(A, b) for a 3x3 system: np.linalg.solve (NumPy path), or the compiled ``solve3`` (Gaussian
-    elimination with partial pivoting, as LAPACK's dgesv, without NumPy's per-call overhead); both raise
-    np.linalg.LinAlgError on an exactly singular matrix."""
+    """solve(A, b) for the 3x3 Gauss–Newton/LM systems: np.linalg.solve (NumPy path), or the compiled
+    ``solve3`` (Gaussian elimination with partial pivoting as LAPACK's dgetf2/dtrsm, without NumPy's per-call
+    overhead). Both raise np.linalg.LinAlgError when J^T J is singular: LAPACK at an exactly zero pivot;
+    the compiled path also at a pivot below GN_PIVOT_RTOL max|J^T J|, the rounding of the sums. (When an
+    iterate runs off to a huge circle, every c_i, s_i rounds to the same value and J^T J is singular in
+    exact arithmetic; whether its pivot then comes out exactly 0 depends on the summation order: LAPACK on
+    NumPy's sums said "singular", the compiled sums left 1e-17 and GN walked on. The tolerance makes that
+    verdict independent of the order.)"""
     if ck is None:
         return np.linalg.solve
 
     def solve(a, b):
-        x = ck.solve3(tuple(a.ravel().tolist()), tuple(b.tolist()))
+        x = ck.solve3(tuple(a.ravel().tolist()), tuple(b.tolist()), GN_PIVOT_RTOL)
         if x is None:
             raise np.linalg.LinAlgError("Singular matrix")
         return np.array(x)

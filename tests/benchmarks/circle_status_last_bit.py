@@ -5,10 +5,16 @@ on EITHER path: each case is refitted with the start (convergence) or the data (
 Run from the repository root:  FITBENCH_KERNELS=numpy python tests/benchmarks/circle_status_last_bit.py
 (and without FITBENCH_KERNELS for the compiled path). Prints the status (ok/no, iterations) of each refit.
 """
-import os, numpy as np, methods
-from experiments import config as C, engine
-from experiments.studies import convergence as conv
-from experiments.studies import roundness as rs
+import os
+import sys
+
+sys.path.insert(0, os.getcwd())  # this checkout's methods, not an installed copy
+import numpy as np  # noqa: E402
+
+import methods  # noqa: E402
+from experiments import config as C, engine  # noqa: E402
+from experiments.studies import convergence as conv  # noqa: E402
+from experiments.studies import roundness as rs  # noqa: E402
 
 cfg = C.load("convergence", quick=True)
 eps = np.finfo(float).eps

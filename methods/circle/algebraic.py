@@ -19,6 +19,8 @@ compares every fit with an SVD of Z on the NIST sets and on ill-conditioned exac
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._registry import register
@@ -72,19 +74,21 @@ def _eigen_fit(m: np.ndarray, constraint: np.ndarray, ck=None) -> tuple[np.ndarr
 
 
 def _circle_from_conic(points, frame: Frame, a: np.ndarray, message: str):
+    a = [float(v) for v in a]  # plain floats: the same IEEE operations as NumPy scalars, less overhead
     A, B, C, D = a
-    disc = B * B + C * C - 4 * A * D
-    if not np.isfinite(a).all() or abs(A) <= 1e-14 * np.sqrt(disc if disc > 0 else 1.0):
+    finite = all(map(math.isfinite, a))
+    disc = B * B + C * C - 4 * A * D if finite else math.nan
+    if not finite or abs(A) <= 1e-14 * math.sqrt(disc if disc > 0 else 1.0):
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
-                             message=message if not np.isfinite(a).all()
+                             message=message if not finite
                              else "best algebraic fit is a straight line (A = 0): the radius is unbounded")
     if disc <= 0:
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="algebraic solution has B^2 + C^2 - 4AD <= 0: no real circle")
-    p = np.array([-B / (2 * A), -C / (2 * A), np.sqrt(disc) / (2 * abs(A))])
+    p = np.array([-B / (2 * A), -C / (2 * A), math.sqrt(disc) / (2 * abs(A))])
     center, radius = frame.circle_to_data(p)
     return circle_result(points, center, radius, converged=True, message=message,
-                         extra={"algebraic_parameters_unit_frame": [float(x) for x in a]})
+                         extra={"algebraic_parameters_unit_frame": a})
 
 
 _PRATT = np.array([[0, 0, 0, -2], [0, 1, 0, 0], [0, 0, 1, 0], [-2, 0, 0, 0]], dtype=float)
@@ -93,14 +97,17 @@ _PRATT = np.array([[0, 0, 0, -2], [0, 1, 0, 0], [0, 0, 1, 0], [-2, 0, 0, 0]], dt
 def _constraint(kind: str, zbar: float) -> np.ndarray:
     if kind == "pratt":
         return _PRATT
-    taubin = np.diag([4 * zbar, 1.0, 1.0, 0.0])  # data centred: the A*B and A*C terms vanish
-    return taubin if kind == "taubin" else 2 * taubin - _PRATT
+    z4 = 4 * zbar  # Taubin: diag(4 mean(z), 1, 1, 0) (data centred: the A*B and A*C terms vanish); Hyper: 2 N_T - N_P
+    if kind == "taubin":
+        return np.array([[z4, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 0.0]])
+    return np.array([[2 * z4, 0.0, 0.0, 2.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [2.0, 0.0, 0.0, 0.0]])
 
 
 def _constrained_fit(points, kind: str):
     frame, m, ck = frame_and_moments(points)
     a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])), ck)
-    frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))  # release the copy
+    if frame.x.size:  # NumPy path: release the unit-frame copy before the residual sweep
+        frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))
     return _circle_from_conic(points, frame, a, message)
 
 

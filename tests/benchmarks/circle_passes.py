@@ -35,11 +35,8 @@ def _misses(method: str, fit: bool) -> tuple[int, int]:
         proc = subprocess.run(["valgrind", "--tool=cachegrind", "--cache-sim=yes", "--LL=1048576,16,64",
                                f"--cachegrind-out-file={out}", sys.executable, script],
                               capture_output=True, text=True, env=env, check=True)
-        dlmr = int(re.search(r"LL(?:d)? misses:\s+([\d,]+) \(\s*([\d,]+) rd \+\s+([\d,]+) wr\)",
-                             proc.stderr.split("D1  misses")[1]).group(2).replace(",", ""))
-        dlmw = int(re.search(r"LL(?:d)? misses:\s+([\d,]+) \(\s*([\d,]+) rd \+\s+([\d,]+) wr\)",
-                             proc.stderr.split("D1  misses")[1]).group(3).replace(",", ""))
-        return dlmr, dlmw
+        found = re.search(r"LLd misses:\s+([\d,]+)\s+\(\s*([\d,]+) rd\s+\+\s+([\d,]+) wr\)", proc.stderr)
+        return int(found.group(2).replace(",", "")), int(found.group(3).replace(",", ""))
 
 
 if __name__ == "__main__":

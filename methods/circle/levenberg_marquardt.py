@@ -1,6 +1,8 @@
 """Levenberg–Marquardt geometric circle fit (damped Gauss–Newton)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._frame import dot
@@ -65,20 +67,23 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         p = p + np.array([1e-6, 1e-6, 0.0])  # start on a data point: nudge it off
         state = sweep(p)
     f, jtj, jtd, arrays = state
-    mu, nu = tau * float(np.max(np.diag(jtj))), 2.0
+    dj = jtj.diagonal().copy()  # (the same IEEE operations as np.diag/np.linalg.norm below, less overhead)
+    mu, nu = tau * float(dj.max()), 2.0
     history, nfev = [f], 1
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
     it = 0
     for it in range(1, max_iter + 1):
-        if np.max(np.abs(jtd)) / n <= gtol:
+        if max(map(abs, jtd.tolist())) / n <= gtol:
             converged, message = True, f"|J^T d|_inf / N <= gtol={gtol:g}"
             break
         try:
-            h = solve(jtj + mu * np.diag(np.diag(jtj)), -jtd)
+            damped = jtj.copy()
+            damped.flat[::4] += mu * dj  # J^T J + mu diag(J^T J)
+            h = solve(damped, -jtd)
         except np.linalg.LinAlgError:
             message = "singular damped system"
             break
-        if np.linalg.norm(h) <= xtol * (np.linalg.norm(p) + xtol):
+        if math.sqrt(float(h @ h)) <= xtol * (math.sqrt(float(p @ p)) + xtol):
             converged, message = True, f"|h| <= xtol={xtol:g} (|p| + xtol)"
             break
         trial, reduction = trial_state(p, h, arrays)
@@ -86,11 +91,12 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         if trial is None:
             mu, nu = mu * nu, 2 * nu
             continue
-        predicted = float(h @ (mu * np.diag(jtj) * h - jtd))  # L(0) - L(h), times 2
+        predicted = float(h @ (mu * dj * h - jtd))  # L(0) - L(h), times 2
         rho = reduction / predicted if predicted > 0 else -1.0
         if rho > 0:
             p = p + h
             f, jtj, jtd, arrays = trial
+            dj = jtj.diagonal().copy()
             history.append(f)
             mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
             nu = 2.0

@@ -13,7 +13,9 @@ from the origin, by max|X| / R. So the paths must agree to C eps (max|X| + R) ma
 ratio measured on these sets is 1.5, Hyper on NIST set 30; GN/LM <= 0.6): a real difference between the
 paths (a wrong sum, a lost term, a wrong lane) is a relative error of 1e-3 or more and fails by 1e9.
 """
+import importlib
 import math
+import os
 
 import numpy as np
 import pytest
@@ -27,7 +29,7 @@ from methods._errors import InvalidInputError
 EPS = float(np.finfo(float).eps)
 CIRCLE_LSQ = ["circle.kasa", "circle.pratt", "circle.taubin", "circle.hyper", "circle.gauss_newton",
               "circle.levenberg_marquardt"]
-ck = pytest.importorskip("methods.circle._ckernels", reason="the compiled kernels are not built")
+ck = importlib.import_module("methods.circle._ckernels")  # not built: an ImportError, never a skip
 
 
 def _noisy(center, radius, n, arc=(0.0, 2 * np.pi), noise=0.0, seed=3358):
@@ -187,7 +189,8 @@ def test_kernels_refuse_wrong_buffers_with_a_message():
         ck.radial(np.zeros((4, 2)), 0.0, 0.0, 1.0, np.empty(3))
     with pytest.raises((TypeError, ValueError, BufferError)):
         ck.frame_stats(np.zeros((4, 2))[::2])  # not contiguous
-    assert kernels("methods.circle._ckernels") is ck
+    if os.environ.get("FITBENCH_KERNELS", "compiled") != "numpy":
+        assert kernels("methods.circle._ckernels") is ck
 
 
 def test_stationarity_pseudo_inverse_matches_lstsq():

@@ -625,10 +625,10 @@ static PyMethodDef Methods[] = {
     {"moments", moments, METH_VARARGS,
      "moments(points, cx, cy, s) -> (token, zz, zu, zv, uu, vv, uv, u, v, z): pass 2, sums over the unit frame"},
     {"radial", radial, METH_VARARGS,
-     "radial(points, cx, cy, R, out) -> (r_min, r_max, sum (r_i - R)^2, count of r outside (1e-145, 1e150))"},
+     "radial(points, cx, cy, R, out) -> (r_min, r_max, sum (r_i - R)^2, 1 if a distance is NaN or outside (1e-145, 1e150) else 0)"},
     {"geometric", geometric, METH_VARARGS,
      "geometric(points, cx, cy, s, (a, b, R)[, (a0, b0, R0)]) -> (token, cc, cs, ss, c, s, cd, sd, d, dd, "
-     "F(p0) - F(p), count of r == 0)"},
+     "F(p0) - F(p), 0); a point at the centre (r = 0) makes the sums NaN"},
     {"unit_coords", unit_coords, METH_VARARGS,
      "unit_coords(points, cx, cy, s, out) -> token: out[:N] = (X - cx)/s, out[N:2N] = (Y - cy)/s"},
     {"eigen_fit", eigen_fit, METH_VARARGS,

@@ -1,11 +1,11 @@
 """Shared input validation: every method's points pass through :func:`validate_points`."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._errors import InvalidInputError
-import math
-
 from methods._frame import dot, kernel_frame, offer_frame, point_kernels, unit_frame
 
 #: Singular-value ratio (smaller / larger principal spread) below which a point set counts as

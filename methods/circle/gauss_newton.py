@@ -56,7 +56,8 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
             converged, message = True, f"|J^T d|/N <= gtol={gtol:g}"
             break
         # F is a sum of squared differences of O(1) numbers: its rounding noise is ~2 eps sqrt(N F) r_max
-        noise = 8.0 * EPS * math.sqrt(n * f * (f / n + 4.0 * p[2] * p[2]))
+        pr = float(p[2])  # plain floats: the same IEEE operations as NumPy scalars, less overhead
+        noise = 8.0 * EPS * math.sqrt(n * f * (f / n + 4.0 * pr * pr))
         if stop == "objective" and f_prev is not None and abs(f_prev - f) <= ftol * f_prev + noise:
             converged, message = True, f"|F_(k-1) - F_k| <= ftol={ftol:g} * F_(k-1) (+ rounding noise of F)"
             break
@@ -68,7 +69,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         # the decrease of F this step promises, against F's rounding noise (8 eps sqrt(F sum (r_i + R)^2)):
         # below it, and not shrinking any more, steps are rounding noise and can never reach xtol
         promised = float(-delta @ jtd)
-        s2 = max(f - 4.0 * abs(p[2]) * float(jtd[2]) + 4.0 * n * p[2] * p[2], 0.0)
+        s2 = max(f - 4.0 * abs(pr) * float(jtd[2]) + 4.0 * n * pr * pr, 0.0)
         f_noise = 8.0 * EPS * math.sqrt(f * s2) + 16.0 * EPS * EPS * s2
         p = p + delta  # eq. 13
         if not all(map(math.isfinite, p)):

@@ -130,7 +130,7 @@ def is_point_array(points) -> bool:
             and points.shape[1] == 2 and points.flags.c_contiguous)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class KernelFrame:
     """The unit frame from the compiled pass 1, without the coordinates: shift (cx, cy), scale, the data's
     token (sum of the raw coordinates in the kernels' order) and the unit-frame means sxx = mean(x^2),

@@ -185,10 +185,11 @@ def compiled_moments(points, ck, frame: KernelFrame) -> tuple[KernelFrame, np.nd
         frame = kernel_frame(points, ck)
         t, zz, zx, zy, xx, yy, xy, sx, sy, sz = ck.moments(points, frame.cx, frame.cy, frame.scale)
     n = float(points.shape[0])
+    zz, zx, zy, xx, yy, xy, sx, sy, sz = zz / n, zx / n, zy / n, xx / n, yy / n, xy / n, sx / n, sy / n, sz / n
     return frame, np.array([[zz, zx, zy, sz],
                             [zx, xx, xy, sx],
                             [zy, xy, yy, sy],
-                            [sz, sx, sy, n]]) / n
+                            [sz, sx, sy, 1.0]])
 
 
 def frame_and_moments(points) -> tuple["Frame", np.ndarray, object]:

@@ -36,7 +36,7 @@ def kasa(points):
     solving the linear least-squares system of roundness-paper eq. 7 for (xc, yc, w)."""
     frame, m, ck = frame_and_moments(points)
     p = kasa_moments(m, ck)
-    if not np.isfinite(p).all():
+    if not all(map(math.isfinite, p.tolist())):
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="Kåsa system gives R^2 <= 0: no real circle fits these points")
     center, radius = frame.circle_to_data(p)

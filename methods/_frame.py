@@ -8,14 +8,28 @@ data are first scaled by a power of two (exact), so the frame of a circle of rad
 :func:`methods._validation.validate_points` computes the frame of the points it accepts and hands it
 to the first :meth:`UnitFrame.of` call on the same array (checked by identity and by the array's
 sum), so validation and normalisation are one sweep over the data.
+
+Compiled path (issue 20; ``methods/_compiled.py``): :func:`kernel_frame` computes the shift, the scale and
+the unit-frame second moments in ONE sweep (``methods/circle/_ckernels.c`` pass 1) without writing the
+unit-frame coordinates; validation offers that :class:`KernelFrame`, the circle fits read the points
+through the frame's shift and scale in their own kernel sweeps (each of which returns the data's
+``token`` and so proves that the points did not change since validation); :meth:`UnitFrame.of` (the
+methods that work on coordinate arrays) computes the NumPy frame, bit for bit the frame those methods had
+before the kernels (:meth:`KernelFrame.coordinates` writes them in one sweep, for a family that wants it,
+at the cost of last-bit differences in its iterations). Data whose sums leave
+(SAFE_LOW, SAFE_HIGH) or are not finite take the NumPy path below, which decides and explains.
 """
 from __future__ import annotations
 
+import math
+import os
 import threading
 import weakref
 from dataclasses import dataclass
 
 import numpy as np
+
+from methods._compiled import kernels
 
 #: squared sums inside (SAFE_LOW, SAFE_HIGH) are computed directly; outside, the data are rescaled first
 SAFE_LOW, SAFE_HIGH = 1e-250, 1e250
@@ -92,6 +106,68 @@ def unit_frame(points: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.nd
         return qshift * big, s * p2 * big, x, y
 
 
+#: the compiled module of the point-set sweeps (frame, moments, residuals; used by every family's frame)
+KERNEL_MODULE = "methods.circle._ckernels"
+
+
+_loaded: dict = {}
+
+
+def point_kernels():
+    """The compiled point-set kernels, or None on the NumPy reference path (``FITBENCH_KERNELS=numpy``);
+    the choice is read from the environment at every call (cached per value: a fit calls this thrice)."""
+    choice = os.environ.get("FITBENCH_KERNELS")
+    try:
+        return _loaded[choice]
+    except KeyError:
+        _loaded[choice] = ck = kernels(KERNEL_MODULE)
+        return ck
+
+
+def is_point_array(points) -> bool:
+    """True for a C-contiguous float64 (N, 2) array, the only input the kernels take."""
+    return (isinstance(points, np.ndarray) and points.dtype == np.float64 and points.ndim == 2
+            and points.shape[1] == 2 and points.flags.c_contiguous)
+
+
+@dataclass(frozen=True, slots=True)
+class KernelFrame:
+    """The unit frame from the compiled pass 1, without the coordinates: shift (cx, cy), scale, the data's
+    token (sum of the raw coordinates in the kernels' order) and the unit-frame means sxx = mean(x^2),
+    syy = mean(y^2), sxy = mean(x y) (x, y centred and scaled)."""
+
+    cx: float
+    cy: float
+    scale: float
+    token: float
+    sxx: float
+    syy: float
+    sxy: float
+
+    @property
+    def shift(self) -> np.ndarray:
+        return np.array([self.cx, self.cy])
+
+    def coordinates(self, points: np.ndarray, ck):
+        """(shift, scale, x, y) as :func:`unit_frame` returns them (x, y rows 0, 1 of a (3, N) buffer), written
+        in one sweep; None when the points changed since this frame was computed (token differs)."""
+        buf = np.empty((3, points.shape[0]))
+        if ck.unit_coords(points, self.cx, self.cy, self.scale, buf) != self.token:
+            return None
+        return self.shift, self.scale, buf[0], buf[1]
+
+
+def kernel_frame(points: np.ndarray, ck) -> KernelFrame | None:
+    """Pass 1 (compiled): the frame of ``points`` (a C-contiguous float64 (N, 2) array), or None when the
+    data are not finite or their centred sum of squares leaves (SAFE_LOW, SAFE_HIGH) (the NumPy path then
+    decides: power-of-two prescaling, or the error message)."""
+    token, cx, cy, cxx, cyy, cxy = ck.frame_stats(points)
+    ss = cxx + cyy
+    if not (math.isfinite(token) and math.isfinite(cx) and math.isfinite(cy) and SAFE_LOW < ss < SAFE_HIGH):
+        return None
+    return KernelFrame(cx, cy, math.sqrt(ss / points.shape[0]), token, cxx / ss, cyy / ss, cxy / ss)
+
+
 def offer_frame(points: np.ndarray, frame: tuple, total: float | None = None) -> None:
     """Hand the frame computed during validation to the next :meth:`UnitFrame.of` of ``points``
     (``total`` = points.sum() if the caller has it)."""
@@ -104,6 +180,8 @@ def take_frame(points: np.ndarray):
     _handoff.value = None
     if offered is None or offered[0]() is not points:
         return None
+    if isinstance(offered[2], KernelFrame):  # its token is checked by the first sweep that reads the points
+        return offered[2]
     total = float(points.sum())
     if not (total == offered[1] or (np.isnan(total) and np.isnan(offered[1]))):
         return None
@@ -122,6 +200,10 @@ class UnitFrame:
     @classmethod
     def of(cls, points: np.ndarray):
         frame = take_frame(points)
+        if isinstance(frame, KernelFrame):
+            # the methods that work on coordinate arrays get the NumPy frame, the same bits as before the
+            # kernels (their iterations, and so their statuses, do not move by the last bit of the shift)
+            frame = None
         shift, scale, x, y = frame if frame is not None else unit_frame(points)
         return cls(shift=shift, scale=scale, x=x, y=y)
 

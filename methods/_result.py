@@ -6,6 +6,8 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from methods._frame import is_point_array, point_kernels
+
 
 def _jsonable(value):
     """Convert numpy scalars/arrays and non-finite floats to plain JSON values (NaN/inf -> None)."""
@@ -84,17 +86,36 @@ def radial_distances(points: np.ndarray, center) -> np.ndarray:
     return r
 
 
+def _compiled_residuals(points, center, radius: float):
+    """(r_i - R, max r - min r) by one compiled sweep (``methods/circle/_ckernels.c`` ``radial``): the same
+    operations as :func:`radial_distances` then ``r - radius``, hence the same bits; None on the NumPy
+    path, for input the kernel does not take, or when a distance leaves (1e-145, 1e150) (np.hypot then)."""
+    ck = point_kernels()
+    if ck is None or not is_point_array(points):
+        return None
+    out = np.empty(points.shape[0])
+    r_min, r_max, _, outside = ck.radial(points, center[0], center[1], radius, out)
+    if outside or not out.size:
+        return None
+    return out, r_max - r_min
+
+
 def circle_result(points: np.ndarray, center, radius: float, *, converged: bool, message: str,
                   iterations=None, nfev=None, history=None, extra=None) -> CircleFit:
     """Build a :class:`CircleFit`, computing residuals and form error from the data in data units."""
     center = (float(center[0]), float(center[1]))
     radius = float(radius)
-    with np.errstate(over="ignore", invalid="ignore"):  # a degenerate circle far away: NaN/inf, no warning
-        r = radial_distances(points, center)
     ok_geometry = all(map(math.isfinite, center)) and math.isfinite(radius)
-    with np.errstate(over="ignore", invalid="ignore"):
-        form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
-    return CircleFit(center=center, radius=radius, form_error=form_error, residuals=r - radius,
+    residuals = _compiled_residuals(points, center, radius) if ok_geometry else None
+    if residuals is not None:
+        residuals, form_error = residuals
+    else:
+        with np.errstate(over="ignore", invalid="ignore"):  # a degenerate circle far away: NaN/inf, no warning
+            r = radial_distances(points, center)
+        with np.errstate(over="ignore", invalid="ignore"):
+            form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
+        residuals = r - radius
+    return CircleFit(center=center, radius=radius, form_error=form_error, residuals=residuals,
                      converged=bool(converged and ok_geometry), iterations=iterations, nfev=nfev,
                      history=list(history or []), message=message, extra=dict(extra or {}))
 

@@ -1,10 +1,12 @@
 """Shared input validation: every method's points pass through :func:`validate_points`."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._errors import InvalidInputError
-from methods._frame import dot, offer_frame, unit_frame
+from methods._frame import dot, kernel_frame, offer_frame, point_kernels, unit_frame
 
 #: Singular-value ratio (smaller / larger principal spread) below which a point set counts as
 #: collinear; raised to the rounding of the coordinates themselves (8 eps max|X| / spread) when that
@@ -64,6 +66,9 @@ def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndar
     if n < min_points:
         raise InvalidInputError(f"{who}needs at least {min_points} points, got {n}{masked}")
     arr = np.ascontiguousarray(arr)
+    ck = point_kernels()
+    if ck is not None and _clearly_valid(arr, ck):
+        return arr
     with np.errstate(over="ignore", invalid="ignore"):
         total = arr.sum()
     if not np.isfinite(total):  # one cheap sweep; the elementwise test only when it fails
@@ -92,6 +97,27 @@ def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndar
                                 "no circle or ellipse passes through them")
     offer_frame(arr, (shift, scale, x, y), total)
     return arr
+
+
+def _clearly_valid(arr: np.ndarray, ck) -> bool:
+    """The compiled path of :func:`validate_points` (one sweep, ``methods/circle/_ckernels.c`` pass 1): True,
+    and the frame offered to the method, when the points are finite, in the kernels' range, clearly not
+    identical and clearly not collinear by the same rules as below; anything else (a refusal, a borderline
+    case, sums out of range) returns False and the NumPy path decides and explains."""
+    frame = kernel_frame(arr, ck)
+    if frame is None:
+        return False
+    coord = max(abs(frame.cx), abs(frame.cy))
+    if frame.scale <= 64 * EPS * coord:
+        return False
+    sxx, syy, sxy = frame.sxx, frame.syy, frame.sxy
+    big = 0.5 * (sxx + syy) + math.hypot(0.5 * (sxx - syy), sxy)
+    small = max(sxx * syy - sxy * sxy, 0.0) / big
+    rtol = max(COLLINEAR_RTOL, 8 * EPS * coord / frame.scale)
+    if small <= 1e-8 * big or small <= rtol * rtol * big:
+        return False
+    offer_frame(arr, frame, frame.token)
+    return True
 
 
 def check_choice(name: str, value, choices, method: str = ""):

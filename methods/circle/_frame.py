@@ -7,9 +7,14 @@ are kept as two contiguous 1-D arrays ``x``, ``y`` (strided (N, 2) columns are s
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from methods._frame import UnitFrame, dot
+from methods._frame import KernelFrame, UnitFrame, dot, is_point_array, kernel_frame, offer_frame, point_kernels, take_frame
+
+
+_EPS = float(np.finfo(float).eps)
 
 
 class Frame(UnitFrame):
@@ -23,12 +28,14 @@ class Frame(UnitFrame):
     @property
     def ulp(self) -> float:
         """The rounding of the data's coordinates in the unit frame: eps max(1, |shift| / scale)."""
-        return float(np.finfo(float).eps) * max(1.0, float(np.abs(self.shift).max()) / self.scale)
+        return _EPS * max(1.0, max(abs(float(self.shift[0])), abs(float(self.shift[1]))) / self.scale)
 
     def power(self, k: int) -> float:
         """scale**k for converting objective values to data units; inf/0 (no exception) when out of range."""
-        with np.errstate(over="ignore", under="ignore"):
-            return float(np.float64(self.scale) ** k)
+        try:
+            return float(self.scale) ** k
+        except OverflowError:
+            return math.inf
 
     def circle_to_data(self, p) -> tuple[np.ndarray, float]:
         """(xc, yc, R) in the unit frame -> (center, radius) in data units."""
@@ -97,9 +104,20 @@ def moments(x: np.ndarray, y: np.ndarray) -> np.ndarray:
                      [sz, sx, sy, float(n)]]) / n
 
 
-def kasa_moments(m: np.ndarray) -> np.ndarray:
+def kasa_moments(m: np.ndarray, ck=None) -> np.ndarray:
     """Kåsa's circle (roundness paper eq. 7: least squares of [2x 2y -1][xc yc w]^T = x^2 + y^2,
-    w = xc^2 + yc^2 - R^2) from the moment matrix of :func:`moments`: its 3x3 normal equations."""
+    w = xc^2 + yc^2 - R^2) from the moment matrix of :func:`moments`: its 3x3 normal equations
+    (``ck``: solved by the compiled ``solve3``, Gaussian elimination with partial pivoting as LAPACK's
+    dgesv, without NumPy's per-call overhead; else by np.linalg.solve)."""
+    if ck is not None:
+        (_, m01, m02, m03), (_, m11, m12, m13), (_, _, m22, m23), (_, _, _, m33) = m.tolist()
+        sol = ck.solve3((4 * m11, 4 * m12, -2 * m13, 4 * m12, 4 * m22, -2 * m23, -2 * m13, -2 * m23, m33),
+                        (2 * m01, 2 * m02, -m03))
+        if sol is None:
+            return np.full(3, np.nan)
+        xc, yc, w = sol
+        r2 = xc * xc + yc * yc - w
+        return np.array([xc, yc, math.sqrt(r2) if r2 > 0 else math.nan])
     ata = np.array([[4 * m[1, 1], 4 * m[1, 2], -2 * m[1, 3]],
                     [4 * m[1, 2], 4 * m[2, 2], -2 * m[2, 3]],
                     [-2 * m[1, 3], -2 * m[2, 3], m[3, 3]]])
@@ -141,8 +159,130 @@ def geometric_normal_equations(x, y, p, work: np.ndarray | None = None):
     return dd, jtj, jtd, (c, s, r, d)
 
 
+def compiled_frame(points):
+    """(ck, frame) for the compiled path: the circle kernels and the :class:`methods._frame.KernelFrame` that
+    validation offered for ``points`` (pass 1), computed here when none was offered; None on the NumPy path
+    (``FITBENCH_KERNELS=numpy``, or data the kernels leave to NumPy: not finite, sums out of range)."""
+    ck = point_kernels()
+    if ck is None:
+        return None
+    frame = take_frame(points)
+    if isinstance(frame, KernelFrame):
+        return ck, frame
+    if frame is not None:  # a NumPy frame was offered (data the kernel left to NumPy): leave it for Frame.of
+        offer_frame(points, frame)
+        return None
+    frame = kernel_frame(points, ck) if is_point_array(points) else None
+    return (ck, frame) if frame is not None else None
+
+
+def compiled_moments(points, ck, frame: KernelFrame) -> tuple[KernelFrame, np.ndarray]:
+    """(frame, M = Z^T Z / N) by the compiled pass 2: Z = [z, x, y, 1] of the centred, scaled data (as
+    :func:`moments`). The pass returns the data's token: if the points changed since ``frame`` was
+    computed, the frame is computed again (pass 1) and the moments with it."""
+    t, zz, zx, zy, xx, yy, xy, sx, sy, sz = ck.moments(points, frame.cx, frame.cy, frame.scale)
+    if t != frame.token:
+        frame = kernel_frame(points, ck)
+        t, zz, zx, zy, xx, yy, xy, sx, sy, sz = ck.moments(points, frame.cx, frame.cy, frame.scale)
+    n = float(points.shape[0])
+    zz, zx, zy, xx, yy, xy, sx, sy, sz = zz / n, zx / n, zy / n, xx / n, yy / n, xy / n, sx / n, sy / n, sz / n
+    return frame, np.array([[zz, zx, zy, sz],
+                            [zx, xx, xy, sx],
+                            [zy, xy, yy, sy],
+                            [sz, sx, sy, 1.0]])
+
+
+def frame_and_moments(points) -> tuple["Frame", np.ndarray, object]:
+    """The circle frame (shift and scale; x, y only on the NumPy path), the moment matrix M of
+    :func:`moments` and the kernels: compiled passes 1-2 (no unit-frame copy), or the NumPy reference
+    path (kernels None)."""
+    compiled = compiled_frame(points)
+    if compiled is None:
+        frame = Frame.of(points)
+        return frame, moments(frame.x, frame.y), None
+    kf, m = compiled_moments(points, *compiled)
+    return Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES), m, compiled[0]
+
+
+_NO_COORDINATES = np.empty(0)
+
+
+def compiled_geometric(points, ck, frame: KernelFrame, p, previous=None):
+    """:func:`geometric_normal_equations` by one compiled sweep over the data points (unit-frame circle
+    ``p``): (F, J^T J, J^T d, None), None when a point is the centre; with ``previous`` (the unit-frame
+    circle before the step) also the actual reduction F(previous) - F(p) free of cancellation
+    (:func:`methods.circle.levenberg_marquardt._reduction`): then ((F, J^T J, J^T d, None), reduction)."""
+    q = (float(p[0]), float(p[1]), float(p[2]))
+    if previous is None:
+        out = ck.geometric(points, frame.cx, frame.cy, frame.scale, q)
+    else:
+        out = ck.geometric(points, frame.cx, frame.cy, frame.scale, q,
+                           (float(previous[0]), float(previous[1]), float(previous[2])))
+    _, cc, cs, ss_, sc, ss, cd, sd_, sd, dd, reduction, zero_r = out
+    if zero_r or not all(map(math.isfinite, (cc, cs, ss_, sc, ss))):
+        state = None
+    else:
+        jtj = np.array([[cc, cs, sc], [cs, ss_, ss], [sc, ss, float(points.shape[0])]])
+        state = (dd, jtj, -np.array([cd, sd_, sd]), None)
+    return state if previous is None else (state, reduction)
+
+
 def algebraic_start(x, y) -> np.ndarray:
     """Kåsa's circle as the start of an iterative geometric fit (the roundness paper's choice);
     the unit circle about the centroid when Kåsa's system has no real circle."""
-    p = kasa_moments(moments(x, y))
+    return start_from_moments(moments(x, y))
+
+
+def start_from_moments(m: np.ndarray, ck=None) -> np.ndarray:
+    """:func:`algebraic_start` from the moment matrix M (``ck``: see :func:`kasa_moments`)."""
+    p = kasa_moments(m, ck)
     return p if np.isfinite(p).all() else np.array([0.0, 0.0, 1.0])
+
+
+#: a Gauss–Newton/LM system whose pivot is below this fraction of max|J^T J| is singular to working precision
+#: (compiled path; see :func:`solve_linear`)
+GN_PIVOT_RTOL = 24 * _EPS
+
+
+def solve_linear(ck):
+    """solve(A, b) for the 3x3 Gauss–Newton/LM systems: np.linalg.solve (NumPy path), or the compiled
+    ``solve3`` (Gaussian elimination with partial pivoting as LAPACK's dgetf2/dtrsm, without NumPy's per-call
+    overhead). Both raise np.linalg.LinAlgError when J^T J is singular: LAPACK at an exactly zero pivot;
+    the compiled path also at a pivot below GN_PIVOT_RTOL max|J^T J|, the rounding of the sums. (When an
+    iterate runs off to a huge circle, every c_i, s_i rounds to the same value and J^T J is singular in
+    exact arithmetic; whether its pivot then comes out exactly 0 depends on the summation order: LAPACK on
+    NumPy's sums said "singular", the compiled sums left 1e-17 and GN walked on. The tolerance makes that
+    verdict independent of the order.)"""
+    if ck is None:
+        return np.linalg.solve
+
+    def solve(a, b):
+        x = ck.solve3(tuple(a.ravel().tolist()), tuple(b.tolist()), GN_PIVOT_RTOL)
+        if x is None:
+            raise np.linalg.LinAlgError("Singular matrix")
+        return np.array(x)
+    return solve
+
+
+def geometric_setup(points, start):
+    """What Gauss–Newton and LM need, on the compiled or the NumPy path: (frame, p0, sweep, coordinates,
+    ck) (``ck``: the compiled kernels, None on the NumPy path; see :func:`solve_linear`).
+
+    ``p0`` is ``start`` (data units) in the unit frame, or Kåsa's start (one moments sweep);
+    ``sweep(q)`` = :func:`geometric_normal_equations` at unit-frame q (one sweep; compiled: state[3] is None);
+    ``coordinates`` = (x, y) on the NumPy path, None on the compiled path (no unit-frame copy)."""
+    compiled = compiled_frame(points)
+    if compiled is None:
+        frame = Frame.of(points)
+        x, y = frame.x, frame.y
+        p0 = algebraic_start(x, y) if start is None else frame.circle_to_unit(start)
+        work = np.empty((4, len(x)))  # one workspace for every sweep (peak memory: frame + 4 N numbers)
+        return frame, p0, lambda q: geometric_normal_equations(x, y, q, work), (x, y), None
+    ck, kf = compiled
+    if start is None:
+        kf, m = compiled_moments(points, ck, kf)  # proves the points unchanged since validation (token)
+    else:
+        kf = kernel_frame(points, ck) or kf  # a fresh pass 1: the frame of the points as they are now
+    frame = Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES)
+    p0 = start_from_moments(m, ck) if start is None else frame.circle_to_unit(start)
+    return frame, p0, lambda q, previous=None: compiled_geometric(points, ck, kf, q, previous), None, ck

@@ -17,6 +17,7 @@ straight line to the precision of the fit) is reported as degenerate, never as c
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,23 +50,23 @@ class Stationarity:
 
 def _degenerate(p) -> str | None:
     a, b, rr = (float(v) for v in p)
-    if not np.isfinite([a, b, rr]).all():
+    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(rr)):
         return "degenerate: non-finite circle parameters"
     if abs(rr) < MIN_RADIUS:
         return f"degenerate: radius collapsed to {abs(rr):.1e} of the data's size (R = 0 is no circle)"
-    if abs(rr) > MAX_RADIUS or np.hypot(a, b) > MAX_RADIUS:
-        return (f"degenerate: centre {max(abs(rr), float(np.hypot(a, b))):.1e} data sizes away "
+    if abs(rr) > MAX_RADIUS or math.hypot(a, b) > MAX_RADIUS:
+        return (f"degenerate: centre {max(abs(rr), math.hypot(a, b)):.1e} data sizes away "
                 "(a circle of infinite radius is a straight line, no circle)")
     return None
 
 
-def _decide(g, jtj, f, noise, label, ulp) -> Stationarity:
+def _decide(g, jtj, f, noise, label, ulp, ck=None) -> Stationarity:
     # + the decrease of moving the circle by DATA_ULPS ulps of the data: below it the data, rounded to
     # float64, do not define the circle any better (exact data have F ~ 0, where 1e-9 F means nothing)
     tol = REL_DECREASE * f + noise + float(np.trace(jtj)) * (DATA_ULPS * ulp) ** 2
-    try:
-        h = np.linalg.lstsq(jtj, g, rcond=None)[0]
-        dec = float(g @ h)
+    try:  # ck: the same pseudo-inverse by the compiled kernels' Jacobi eigensolver (no NumPy call overhead)
+        dec = (ck.psd_decrease(tuple(jtj.ravel().tolist()), tuple(g.tolist())) if ck is not None
+               else float(g @ np.linalg.lstsq(jtj, g, rcond=None)[0]))
     except np.linalg.LinAlgError:
         dec = float("inf")
     ok = bool(np.isfinite(dec) and dec <= tol)
@@ -117,7 +118,7 @@ def algebraic(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity
     return _decide(g, jtj, f, noise, "S_CA", ulp)
 
 
-def geometric_from_state(p, state, ulp: float = EPS) -> Stationarity:
+def geometric_from_state(p, state, ulp: float = EPS, ck=None) -> Stationarity:
     """:func:`geometric` from the normal equations at p that an iteration already computed
     (``methods.circle._frame.geometric_normal_equations``), so the check costs no extra sweep.
     The rounding noise of F is bounded by Cauchy–Schwarz: 8 eps sqrt(F sum (r_i + R)^2) + 16 eps^2
@@ -130,5 +131,5 @@ def geometric_from_state(p, state, ulp: float = EPS) -> Stationarity:
     f, jtj, jtd, _ = state
     rr = abs(float(p[2]))
     s2 = max(f - 4 * rr * float(jtd[2]) + 4 * jtj[2, 2] * rr * rr, 0.0)
-    noise = 8 * EPS * np.sqrt(f * s2) + 16 * EPS * EPS * s2
-    return _decide(-jtd, jtj, f, noise, "S_CG", ulp)
+    noise = 8 * EPS * math.sqrt(f * s2) + 16 * EPS * EPS * s2
+    return _decide(-jtd, jtj, f, noise, "S_CG", ulp, ck)

@@ -6,19 +6,26 @@ Regression*, 2010, ch. 5-7). Pratt, Taubin and Hyper are generalised eigenproble
 M a = eta N a with M = Z^T Z, Z = [z, x, y, 1].
 
 Speed and accuracy (issue 20): every fit reads the data once more after validation, for the 4x4 moment
-matrix M / N of the centred, scaled (unit-frame) data (:func:`methods.circle._frame.moments`, one
-matrix product), then solves a 3x3 or 4x4 problem; the residuals and form error are one more sweep.
+matrix M / N of the centred, scaled (unit-frame) data, then solves a 3x3 or 4x4 problem; the residuals
+and form error are one more sweep. Through ``methods.fit`` that is three sweeps over the points in all
+(compiled path, ``methods/circle/_ckernels.c``; the NumPy reference path computes the same quantities):
+
+1. validation + frame: ``frame_stats`` (finite, centroid, scale, collinearity; ``methods._validation``);
+2. the moments of the centred, scaled data: ``moments`` (:func:`methods.circle._frame.frame_and_moments`);
+3. residuals r_i - R, form error max r - min r: ``radial`` (:func:`methods._result.circle_result`).
 In the unit frame M is as well conditioned as the circle's shape allows (no offset, no unit), so the
 squared condition number of the moments costs nothing measurable: tests/test_algebraic_moments.py
 compares every fit with an SVD of Z on the NIST sets and on ill-conditioned exact circles.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._registry import register
 from methods._result import circle_result
-from methods.circle._frame import Frame, kasa_moments, moments
+from methods.circle._frame import Frame, frame_and_moments, kasa_moments
 
 
 @register("circle.kasa", kind="closed form",
@@ -27,9 +34,9 @@ from methods.circle._frame import Frame, kasa_moments, moments
 def kasa(points):
     """Minimise S_CA = sum((x_i - xc)^2 + (y_i - yc)^2 - R^2)^2 (circle/ellipse paper eq. 5) by
     solving the linear least-squares system of roundness-paper eq. 7 for (xc, yc, w)."""
-    frame = Frame.of(points)
-    p = kasa_moments(moments(frame.x, frame.y))
-    if not np.isfinite(p).all():
+    frame, m, ck = frame_and_moments(points)
+    p = kasa_moments(m, ck)
+    if not all(map(math.isfinite, p.tolist())):
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="Kåsa system gives R^2 <= 0: no real circle fits these points")
     center, radius = frame.circle_to_data(p)
@@ -37,7 +44,12 @@ def kasa(points):
     return circle_result(points, center, radius, converged=True, message="closed-form solution")
 
 
-def _eigen_fit(m: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
+_EIGEN_MESSAGES = ("closed-form solution (generalised eigenvector)",
+                   "points lie on a circle to rounding (algebraic residuals at the moments' resolution)",
+                   "no positive generalised eigenvalue: the constraint admits no circle")
+
+
+def _eigen_fit(m: np.ndarray, constraint: np.ndarray, ck=None) -> tuple[np.ndarray, str]:
     """Solve min a^T M a s.t. a^T N a = 1 (smallest positive eigenvalue of M a = eta N a), M = Z^T Z / N.
 
     With M = V S^2 V^T (its eigendecomposition, S^2 >= 0), put a = V S^-1 b: then K b = (1/eta) b with
@@ -45,46 +57,57 @@ def _eigen_fit(m: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
     When the smallest eigenvalue of M is at its rounding level (points on a circle to ~1e-7 of
     its size), a is the null vector of M: every constraint then gives the same circle.
     """
+    if ck is not None:  # the same computation in C (methods/circle/_ckernels.c eigen_fit, cyclic Jacobi)
+        status, *a = ck.eigen_fit(tuple(m.ravel().tolist()), tuple(constraint.ravel().tolist()))
+        return np.array(a), _EIGEN_MESSAGES[status]
     lam, v = np.linalg.eigh(m)
     lam, v = lam[::-1], v[:, ::-1]  # largest first
     if lam[-1] <= 64 * np.finfo(float).eps * lam[0]:
-        return v[:, -1], "points lie on a circle to rounding (algebraic residuals at the moments' resolution)"
+        return v[:, -1], _EIGEN_MESSAGES[1]
     s = np.sqrt(lam)
     K = (v.T @ constraint @ v) / np.outer(s, s)
     mu, b = np.linalg.eigh(K)
     j = int(np.argmax(mu))
     if not mu[j] > 0:
-        return np.full(4, np.nan), "no positive generalised eigenvalue: the constraint admits no circle"
-    return v @ (b[:, j] / s), "closed-form solution (generalised eigenvector)"
+        return np.full(4, np.nan), _EIGEN_MESSAGES[2]
+    return v @ (b[:, j] / s), _EIGEN_MESSAGES[0]
 
 
 def _circle_from_conic(points, frame: Frame, a: np.ndarray, message: str):
+    a = [float(v) for v in a]  # plain floats: the same IEEE operations as NumPy scalars, less overhead
     A, B, C, D = a
-    disc = B * B + C * C - 4 * A * D
-    if not np.isfinite(a).all() or abs(A) <= 1e-14 * np.sqrt(disc if disc > 0 else 1.0):
+    finite = all(map(math.isfinite, a))
+    disc = B * B + C * C - 4 * A * D if finite else math.nan
+    if not finite or abs(A) <= 1e-14 * math.sqrt(disc if disc > 0 else 1.0):
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
-                             message=message if not np.isfinite(a).all()
+                             message=message if not finite
                              else "best algebraic fit is a straight line (A = 0): the radius is unbounded")
     if disc <= 0:
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="algebraic solution has B^2 + C^2 - 4AD <= 0: no real circle")
-    p = np.array([-B / (2 * A), -C / (2 * A), np.sqrt(disc) / (2 * abs(A))])
+    p = np.array([-B / (2 * A), -C / (2 * A), math.sqrt(disc) / (2 * abs(A))])
     center, radius = frame.circle_to_data(p)
     return circle_result(points, center, radius, converged=True, message=message,
-                         extra={"algebraic_parameters_unit_frame": [float(x) for x in a]})
+                         extra={"algebraic_parameters_unit_frame": a})
+
+
+_PRATT = np.array([[0, 0, 0, -2], [0, 1, 0, 0], [0, 0, 1, 0], [-2, 0, 0, 0]], dtype=float)
 
 
 def _constraint(kind: str, zbar: float) -> np.ndarray:
-    pratt = np.array([[0, 0, 0, -2], [0, 1, 0, 0], [0, 0, 1, 0], [-2, 0, 0, 0]], dtype=float)
-    taubin = np.diag([4 * zbar, 1.0, 1.0, 0.0])  # data centred: the A*B and A*C terms vanish
-    return {"pratt": pratt, "taubin": taubin, "hyper": 2 * taubin - pratt}[kind]
+    if kind == "pratt":
+        return _PRATT
+    z4 = 4 * zbar  # Taubin: diag(4 mean(z), 1, 1, 0) (data centred: the A*B and A*C terms vanish); Hyper: 2 N_T - N_P
+    if kind == "taubin":
+        return np.array([[z4, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 0.0]])
+    return np.array([[2 * z4, 0.0, 0.0, 2.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [2.0, 0.0, 0.0, 0.0]])
 
 
 def _constrained_fit(points, kind: str):
-    frame = Frame.of(points)
-    m = moments(frame.x, frame.y)
-    a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])))
-    frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))  # release the copy
+    frame, m, ck = frame_and_moments(points)
+    a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])), ck)
+    if frame.x.size:  # NumPy path: release the unit-frame copy before the residual sweep
+        frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))
     return _circle_from_conic(points, frame, a, message)
 
 

@@ -1,13 +1,15 @@
 """Gauss–Newton geometric circle fit as in the roundness paper (Pınar & Güllü, sec. 3)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive, check_vector
 from methods.circle import _stationarity as stationarity
-from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations
+from methods.circle._frame import geometric_setup, solve_linear
 
 STOPPING_CRITERIA = ("objective", "step", "gradient")
 EPS = np.finfo(float).eps
@@ -36,14 +38,12 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     p_start = check_vector("start", start, 3, name)
-    frame = Frame.of(points)
-    x, y = frame.x, frame.y
-    n = len(x)
-    p = algebraic_start(x, y) if p_start is None else frame.circle_to_unit(p_start)
+    frame, p, sweep, _, ck = geometric_setup(points, p_start)  # compiled: no unit-frame copy, one sweep per state
+    solve = solve_linear(ck)
+    n = len(points)
     history, steps = [], []
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
-    work = np.empty((4, n))  # one workspace for every sweep (peak memory: frame + 4 N numbers)
-    state = geometric_normal_equations(x, y, p, work)  # J of eq. 10, as J^T J and J^T d: one sweep
+    state = sweep(p)  # J of eq. 10, as J^T J and J^T d, and F: one sweep
     f_prev = None
     it = 0
     for it in range(1, max_iter + 1):
@@ -52,32 +52,33 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
             break
         f, jtj, jtd, _ = state
         history.append(f)
-        if stop == "gradient" and np.linalg.norm(jtd) / n <= gtol:
+        if stop == "gradient" and math.sqrt(float(jtd @ jtd)) / n <= gtol:
             converged, message = True, f"|J^T d|/N <= gtol={gtol:g}"
             break
         # F is a sum of squared differences of O(1) numbers: its rounding noise is ~2 eps sqrt(N F) r_max
-        noise = 8.0 * EPS * np.sqrt(n * f * (f / n + 4.0 * p[2] * p[2]))
+        pr = float(p[2])  # plain floats: the same IEEE operations as NumPy scalars, less overhead
+        noise = 8.0 * EPS * math.sqrt(n * f * (f / n + 4.0 * pr * pr))
         if stop == "objective" and f_prev is not None and abs(f_prev - f) <= ftol * f_prev + noise:
             converged, message = True, f"|F_(k-1) - F_k| <= ftol={ftol:g} * F_(k-1) (+ rounding noise of F)"
             break
         try:
-            delta = np.linalg.solve(jtj, -jtd)  # normal equations of J Delta = -d (eq. 12)
+            delta = solve(jtj, -jtd)  # normal equations of J Delta = -d (eq. 12)
         except np.linalg.LinAlgError:
             message = "singular Gauss–Newton system (J^T J not invertible)"
             break
         # the decrease of F this step promises, against F's rounding noise (8 eps sqrt(F sum (r_i + R)^2)):
         # below it, and not shrinking any more, steps are rounding noise and can never reach xtol
         promised = float(-delta @ jtd)
-        s2 = max(f - 4.0 * abs(p[2]) * float(jtd[2]) + 4.0 * n * p[2] * p[2], 0.0)
-        f_noise = 8.0 * EPS * np.sqrt(f * s2) + 16.0 * EPS * EPS * s2
+        s2 = max(f - 4.0 * abs(pr) * float(jtd[2]) + 4.0 * n * pr * pr, 0.0)
+        f_noise = 8.0 * EPS * math.sqrt(f * s2) + 16.0 * EPS * EPS * s2
         p = p + delta  # eq. 13
-        if not np.isfinite(p).all():
+        if not all(map(math.isfinite, p)):
             message = "Gauss–Newton diverged (non-finite iterate)"
             break
-        step = float(np.linalg.norm(delta))
+        step = math.sqrt(float(delta @ delta))
         steps.append(step)
         f_prev = f
-        state = geometric_normal_equations(x, y, p, work)
+        state = sweep(p)
         if stop == "step" and step <= xtol:
             converged, message = True, f"(Delta^T Delta)^(1/2) <= xtol={xtol:g}"
             break
@@ -87,7 +88,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
                        f"below its rounding noise (xtol={xtol:g} is below the resolution)")
             break
     if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
-        check = stationarity.geometric_from_state(p, state if np.isfinite(p).all() else None, frame.ulp)
+        check = stationarity.geometric_from_state(p, state if all(map(math.isfinite, p)) else None, frame.ulp, ck)
         converged = check.ok
         message = f"{message}; {check.text}"
     else:
@@ -95,7 +96,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     center, radius = frame.circle_to_data(p)
     scale2 = frame.power(2)
     scale = frame.scale
-    del work, state, x, y, frame  # the result's residual sweep needs none of them
+    del state, sweep, frame  # the result's residual sweep needs none of them
     extra = {"step_norms": [s * scale for s in steps], "stop": stop}
     if check is not None:
         extra.update(check.extra(scale2))

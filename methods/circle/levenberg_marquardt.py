@@ -1,6 +1,8 @@
 """Levenberg–Marquardt geometric circle fit (damped Gauss–Newton)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._frame import dot
@@ -9,7 +11,7 @@ from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_positive, check_vector
 from methods.circle import _stationarity as stationarity
-from methods.circle._frame import Frame, algebraic_start, geometric_normal_equations as _state
+from methods.circle._frame import geometric_normal_equations, geometric_setup, solve_linear
 
 
 def _reduction(arrays, h):
@@ -47,41 +49,54 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     p_start = check_vector("start", start, 3, name)
-    frame = Frame.of(points)
-    x, y = frame.x, frame.y
-    n = len(x)
-    p = algebraic_start(x, y) if p_start is None else frame.circle_to_unit(p_start)
-    state = _state(x, y, p)
+    frame, p, sweep, coordinates, ck = geometric_setup(points, p_start)
+    solve = solve_linear(ck)
+    n = len(points)
+    if coordinates is None:  # compiled: the one sweep at p + h also gives the actual reduction from p
+        def trial_state(p, h, arrays):
+            return sweep(p + h, p)
+    else:  # NumPy reference: a fresh workspace per state (the accepted state's arrays give the reduction)
+        x, y = coordinates
+        sweep = lambda q: geometric_normal_equations(x, y, q)  # noqa: E731
+
+        def trial_state(p, h, arrays):
+            trial = sweep(p + h)
+            return trial, (_reduction(arrays, h) if trial is not None else None)
+    state = sweep(p)
     if state is None:
         p = p + np.array([1e-6, 1e-6, 0.0])  # start on a data point: nudge it off
-        state = _state(x, y, p)
+        state = sweep(p)
     f, jtj, jtd, arrays = state
-    mu, nu = tau * float(np.max(np.diag(jtj))), 2.0
+    dj = jtj.diagonal().copy()  # (the same IEEE operations as np.diag/np.linalg.norm below, less overhead)
+    mu, nu = tau * float(dj.max()), 2.0
     history, nfev = [f], 1
     converged, message = False, f"no convergence within max_iter={max_iter} iterations"
     it = 0
     for it in range(1, max_iter + 1):
-        if np.max(np.abs(jtd)) / n <= gtol:
+        if max(map(abs, jtd.tolist())) / n <= gtol:
             converged, message = True, f"|J^T d|_inf / N <= gtol={gtol:g}"
             break
         try:
-            h = np.linalg.solve(jtj + mu * np.diag(np.diag(jtj)), -jtd)
+            damped = jtj.copy()
+            damped.flat[::4] += mu * dj  # J^T J + mu diag(J^T J)
+            h = solve(damped, -jtd)
         except np.linalg.LinAlgError:
             message = "singular damped system"
             break
-        if np.linalg.norm(h) <= xtol * (np.linalg.norm(p) + xtol):
+        if math.sqrt(float(h @ h)) <= xtol * (math.sqrt(float(p @ p)) + xtol):
             converged, message = True, f"|h| <= xtol={xtol:g} (|p| + xtol)"
             break
-        trial = _state(x, y, p + h)
+        trial, reduction = trial_state(p, h, arrays)
         nfev += 1
         if trial is None:
             mu, nu = mu * nu, 2 * nu
             continue
-        predicted = float(h @ (mu * np.diag(jtj) * h - jtd))  # L(0) - L(h), times 2
-        rho = _reduction(arrays, h) / predicted if predicted > 0 else -1.0
+        predicted = float(h @ (mu * dj * h - jtd))  # L(0) - L(h), times 2
+        rho = reduction / predicted if predicted > 0 else -1.0
         if rho > 0:
             p = p + h
             f, jtj, jtd, arrays = trial
+            dj = jtj.diagonal().copy()
             history.append(f)
             mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
             nu = 2.0
@@ -89,7 +104,7 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
             mu, nu = mu * nu, 2 * nu
     extra = {"final_damping": mu}
     if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
-        check = stationarity.geometric_from_state(p, (f, jtj, jtd, arrays), frame.ulp)
+        check = stationarity.geometric_from_state(p, (f, jtj, jtd, arrays), frame.ulp, ck)
         converged = check.ok
         message = f"{message}; {check.text}"
         extra.update(check.extra(frame.power(2)))

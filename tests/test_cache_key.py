@@ -29,6 +29,7 @@ def repo_copy(tmp_path):
     for part in ("methods", "datasets", "experiments"):
         shutil.copytree(REPO / part, dst / part, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
     shutil.copy(REPO / "pyproject.toml", dst)
+    shutil.copy(REPO / "setup.py", dst)
     return dst
 
 
@@ -46,7 +47,8 @@ def append(path, text="\n# edited by the cache-key test\n"):
 
 
 @pytest.mark.parametrize("edited", ["experiments/metrics.py", "datasets/synthetic.py", "experiments/studies/grid.py",
-                                    "methods/circle/algebraic.py", "methods/_result.py"])
+                                    "methods/circle/algebraic.py", "methods/_result.py",
+                                    "methods/circle/_ckernels.c", "setup.py"])
 def test_editing_code_a_row_depends_on_recomputes_it(repo_copy, tmp_path, edited):
     study = tmp_path / "keyed.toml"
     study.write_text(STUDY.format(kind="grid", method="circle.kasa"))

@@ -11,6 +11,7 @@ from setuptools import Extension, setup
 #: (importable module name, C source) of every compiled kernel.
 KERNELS: list[tuple[str, str]] = [
     ("methods.circle._ckernels", "methods/circle/_ckernels.c"),
+    ("methods.ellipse._ckernels", "methods/ellipse/_ckernels.c"),
 ]
 
 COMPILE_ARGS = ["-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-fno-associative-math"]

@@ -7,8 +7,11 @@ gamma = theta). Results are canonicalised to a >= b and theta in [0, pi).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from methods._compiled import kernels
 from methods._frame import UnitFrame
 
 EPS = np.finfo(float).eps
@@ -231,7 +234,17 @@ BLOCK_MIN = 4096
 def orthogonal_residuals(x, y, p, iterations=60, with_phi=True):
     """Signed orthogonal distances of the points to the ellipse p = (xc, yc, a, b, theta) and (if
     ``with_phi``) the parameter phi of each closest point (x' = a cos phi, y' = b sin phi, eq. 17).
-    Solved in about sixteen blocks of points (vectorised within each block) to bound the temporaries."""
+    Compiled: one sweep, point by point (methods/ellipse/_ckernels.c). NumPy reference path
+    (FITBENCH_KERNELS=numpy): about sixteen blocks of points, vectorised within each, to bound the temporaries."""
+    ck = kernels("methods.ellipse._ckernels")
+    xc, yc, a, b, t = (float(v) for v in p)
+    if ck is not None and a > 0 and b > 0 and math.isfinite(a * b * xc * yc * t):
+        # one compiled sweep, no temporaries (methods/ellipse/_ckernels.c); a degenerate ellipse takes the
+        # reference code below, whose NaN/inf distances the callers report
+        d = np.empty(len(x))
+        phi = np.empty(len(x)) if with_phi else None
+        ck.orthogonal(x, y, xc, yc, float(np.cos(t)), float(np.sin(t)), a, b, int(iterations), d, phi)
+        return d, phi
     n = len(x)
     block = max(BLOCK_MIN, -(-n // 16))
     if n <= block:

@@ -1,0 +1,84 @@
+"""The compiled orthogonal residuals (methods/ellipse/_ckernels.c) against the NumPy reference path
+(methods/ellipse/_geometry.py, FITBENCH_KERNELS=numpy) and against an independent dense search.
+
+Both paths solve the same first-quadrant root (Eberly); the reference stops Newton when a whole block of
+points has converged, the kernel point by point, so they agree to the solver's rounding: the distance is a
+difference of coordinates of size L = max(|u|, |v|, a), each correct to a few eps, so 64 eps L bounds the
+difference (measured: below 2 eps L). phi agrees to 64 eps rad where the closest point is well defined."""
+import numpy as np
+import pytest
+
+from methods._compiled import kernels
+from methods.ellipse import _geometry as geometry
+
+EPS = np.finfo(float).eps
+
+
+def both_paths(monkeypatch, x, y, p, with_phi=True):
+    monkeypatch.delenv("FITBENCH_KERNELS", raising=False)
+    compiled = geometry.orthogonal_residuals(x, y, p, with_phi=with_phi)
+    monkeypatch.setenv("FITBENCH_KERNELS", "numpy")
+    reference = geometry.orthogonal_residuals(x, y, p, with_phi=with_phi)
+    monkeypatch.delenv("FITBENCH_KERNELS")
+    return compiled, reference
+
+
+def cases():
+    rng = np.random.default_rng(20)
+    t = rng.uniform(0, 2 * np.pi, 4000)
+    ring = np.c_[np.cos(t), np.sin(t)]
+    yield "noisy 299 mm", ring * (299.0243, 299.0022) + rng.normal(0, 0.005, (4000, 2)) + (1200, 650), \
+        (1200.0, 650.0, 299.0243, 299.0022, 0.0)
+    yield "elongated 10:1", ring * (10.0, 1.0) * rng.uniform(0.2, 3.0, (4000, 1)), (0.0, 0.0, 10.0, 1.0, 0.3)
+    yield "b > a", ring * (1.0, 4.0) * rng.uniform(0.0, 2.0, (4000, 1)), (0.0, 0.0, 1.0, 4.0, -1.1)
+    yield "near circle", ring * (5.0, 5.0 * (1 - 1e-9)) * rng.uniform(0.5, 1.5, (4000, 1)), (0.0, 0.0, 5.0, 5.0 * (1 - 1e-9), 2.0)
+    yield "partial arc", ring[t < 1.0] * (3.0, 2.0) + rng.normal(0, 0.01, ((t < 1.0).sum(), 2)), (0.0, 0.0, 3.0, 2.0, 0.0)
+    grid = np.array([(u, v) for u in (-3.0, -1.0, 0.0, 0.5, 1.0, 2.9, 3.0, 4.0) for v in (-2.0, 0.0, 1e-300, 0.5, 2.0)])
+    yield "axes, centre, evolute", grid, (0.0, 0.0, 3.0, 2.0, 0.0)
+    yield "scale 1e-150", ring * (3e-150, 2e-150) * rng.uniform(0.5, 1.5, (4000, 1)), (0.0, 0.0, 3e-150, 2e-150, 0.7)
+    yield "scale 1e150", ring * (3e150, 2e150) * rng.uniform(0.5, 1.5, (4000, 1)), (0.0, 0.0, 3e150, 2e150, 0.7)
+
+
+@pytest.mark.parametrize("name,points,p", list(cases()), ids=[c[0] for c in cases()])
+def test_compiled_residuals_match_the_numpy_reference(monkeypatch, name, points, p):
+    assert kernels("methods.ellipse._ckernels") is not None, "the ellipse kernel must be built for this test"
+    x, y = points[:, 0], points[:, 1]  # strided columns, as the result builder passes them
+    (d, phi), (d_ref, phi_ref) = both_paths(monkeypatch, x, y, p)
+    size = np.maximum(np.hypot(x - p[0], y - p[1]), max(p[2], p[3]))
+    assert np.all(np.isfinite(d)) and np.all(np.isfinite(phi))
+    assert np.all(np.abs(d - d_ref) <= 64 * EPS * size), np.max(np.abs(d - d_ref) / size) / EPS
+    well_defined = np.abs(d_ref) < 0.5 * min(p[2], p[3])  # away from the centre's ambiguous closest points
+    dphi = np.abs((phi - phi_ref + np.pi) % (2 * np.pi) - np.pi)
+    assert np.all(dphi[well_defined] <= 64 * EPS * 2 * np.pi)
+
+
+def test_compiled_distances_are_the_minimum_over_a_dense_search():
+    """Independent check: |d| equals the smallest distance to 2^20 points of the ellipse to the search's
+    resolution: with samples h apart along the curve, the nearest sample lies within h/2 of the closest
+    point, so the sampled distance exceeds the true one by at most min(h/2, (h/2)^2 / (2 d)); a factor 2
+    margin covers the curvature term. The sign says inside/outside."""
+    rng = np.random.default_rng(7)
+    a, b, theta, xc, yc = 3.0, 1.2, 0.4, 0.5, -0.2
+    pts = rng.uniform(-5, 5, (300, 2))
+    d, _ = geometry.orthogonal_residuals(pts[:, 0], pts[:, 1], (xc, yc, a, b, theta), with_phi=False)
+    s = np.linspace(0, 2 * np.pi, 2 ** 20, endpoint=False)
+    c, sn = np.cos(theta), np.sin(theta)
+    ex = xc + a * np.cos(s) * c - b * np.sin(s) * sn
+    ey = yc + a * np.cos(s) * sn + b * np.sin(s) * c
+    step = 2 * np.pi * a / 2 ** 20
+    for (px, py), di in zip(pts, d):
+        best = np.sqrt(np.min((ex - px) ** 2 + (ey - py) ** 2))
+        assert best - min(step / 2, step ** 2 / (4 * best)) - 1e-12 <= abs(di) <= best + 1e-12
+        inside = ((px - xc) * c + (py - yc) * sn) ** 2 / a ** 2 + (-(px - xc) * sn + (py - yc) * c) ** 2 / b ** 2 < 1
+        assert (di < 0) == inside
+
+
+def test_bad_buffers_are_refused_with_a_message():
+    ck = kernels("methods.ellipse._ckernels")
+    x = np.zeros(4)
+    with pytest.raises(ValueError, match="same length"):
+        ck.orthogonal(x, np.zeros(3), 0.0, 0.0, 1.0, 0.0, 2.0, 1.0, 60, np.empty(4))
+    with pytest.raises(TypeError, match="1-D float64"):
+        ck.orthogonal(x.astype(np.float32), x, 0.0, 0.0, 1.0, 0.0, 2.0, 1.0, 60, np.empty(4))
+    with pytest.raises(ValueError, match="semi-axes"):
+        ck.orthogonal(x, x, 0.0, 0.0, 1.0, 0.0, -2.0, 1.0, 60, np.empty(4))

@@ -27,11 +27,37 @@ def _jsonable(value):
     return value
 
 
+def _num(v) -> str:
+    """A number as a person reads it: 10 significant digits, "nan" for a non-finite value."""
+    if v is None:
+        return "-"
+    v = float(v)
+    return f"{v:.10g}" if math.isfinite(v) else "nan"
+
+
 @dataclass(kw_only=True)
 class FitResult:
-    """Fields shared by every method's result (cf. scipy's ``OptimizeResult``).
+    """Fields shared by every method's result (cf. scipy's ``OptimizeResult``), and the one interface the
+    engine, the metrics and the CLI read a result through (no family is recognised by its attributes):
 
-    ``form_error`` and ``residuals`` are defined per family; ``history`` holds the objective per
+    * :meth:`geometry` -- the fitted geometry as named row columns (lengths in data units, angles in rad);
+    * :meth:`truth_errors` -- the errors of that geometry against a known truth;
+    * :meth:`report_lines` -- (label, text with unit) lines the CLI prints for that geometry.
+
+    ``form_error`` has one meaning per family (lengths in data units):
+
+    ========================  ===============================================================================
+    circle (least squares)    max r_i - min r_i about the fitted centre (circularity about that centre)
+    circle zone (MZ, MIC,     outer - inner radius of the zone about the centre the criterion chose
+    MCC, Chebyshev)
+    ellipse                   max - min of the signed orthogonal distances to the fitted ellipse
+    positioning (ISO 230-2)   not defined (NaN): the standard's figures A, E, M, R, B are in ``figures``
+    magnify                   the largest contouring error |p - r~| of the trajectory
+    multilateration           the largest volumetric error magnitude |X_actual - X_nominal|
+    roundness (ISO 12181)     RONt about the MZCI (else about the one reference circle evaluated)
+    ========================  ===============================================================================
+
+    ``residuals`` are defined per family (each class says how); ``history`` holds the objective per
     iteration of iterative methods in data units; ``extra`` holds method-specific diagnostics.
     """
 
@@ -46,6 +72,19 @@ class FitResult:
     runtime_s: float = float("nan")
     params: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
+
+    def geometry(self) -> dict:
+        """The fitted geometry as row columns (none for a family without a fitted curve)."""
+        return {}
+
+    def truth_errors(self, truth: dict) -> dict:
+        """Errors of :meth:`geometry` against ``truth`` (keys the family knows; others are ignored)."""
+        return {}
+
+    def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
+        """(label, text) lines of the fitted geometry for a person to read, every length in ``unit`` (the
+        data's unit: the CLI converts every input to mm), angles in rad."""
+        return []
 
     def to_dict(self, residuals: bool = True) -> dict:
         """The JSON-ready dict the CLI prints (``residuals=False`` leaves the per-point array out)."""
@@ -64,6 +103,22 @@ class CircleFit(FitResult):
 
     center: tuple
     radius: float
+
+    def geometry(self) -> dict:
+        return {"center_x": self.center[0], "center_y": self.center[1], "radius": self.radius}
+
+    def truth_errors(self, truth: dict) -> dict:
+        out = {}
+        if "center" in truth:
+            dx, dy = self.center[0] - truth["center"][0], self.center[1] - truth["center"][1]
+            out.update(center_error_x=dx, center_error_y=dy, center_error=float(np.hypot(dx, dy)))
+        if "radius" in truth:
+            out["radius_error"] = self.radius - truth["radius"]
+        return out
+
+    def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
+        return [("center x", f"{_num(self.center[0])} {unit}"), ("center y", f"{_num(self.center[1])} {unit}"),
+                ("radius", f"{_num(self.radius)} {unit}")]
 
     def to_dict(self, residuals: bool = True) -> dict:
         d = super().to_dict(residuals)
@@ -132,6 +187,14 @@ class ZoneFit(CircleFit):
     outer_radius: float
     contacts: dict
 
+    def geometry(self) -> dict:
+        return {**super().geometry(), "inner_radius": self.inner_radius, "outer_radius": self.outer_radius}
+
+    def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
+        return [*super().report_lines(unit), ("inner radius", f"{_num(self.inner_radius)} {unit}"),
+                ("outer radius", f"{_num(self.outer_radius)} {unit}"),
+                ("contacts", f"outer {self.contacts['outer']}, inner {self.contacts['inner']} (point indices)")]
+
     def to_dict(self, residuals: bool = True) -> dict:
         d = super().to_dict(residuals)
         head = {k: d.pop(k) for k in ("method", "center", "radius", "inner_radius", "outer_radius",
@@ -163,6 +226,26 @@ class EllipseFit(FitResult):
     semi_axes: tuple
     angle: float
     conic: tuple
+
+    def geometry(self) -> dict:
+        return {"center_x": self.center[0], "center_y": self.center[1], "semi_axis_a": self.semi_axes[0],
+                "semi_axis_b": self.semi_axes[1], "angle": self.angle}
+
+    def truth_errors(self, truth: dict) -> dict:
+        out = {}
+        if "center" in truth:
+            dx, dy = self.center[0] - truth["center"][0], self.center[1] - truth["center"][1]
+            out.update(center_error_x=dx, center_error_y=dy, center_error=float(np.hypot(dx, dy)))
+        if "semi_axes" in truth:
+            out["semi_axis_a_error"] = self.semi_axes[0] - truth["semi_axes"][0]
+            out["semi_axis_b_error"] = self.semi_axes[1] - truth["semi_axes"][1]
+            out["angle_error"] = float((self.angle - truth["angle"] + np.pi / 2) % np.pi - np.pi / 2)
+        return out
+
+    def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
+        return [("center x", f"{_num(self.center[0])} {unit}"), ("center y", f"{_num(self.center[1])} {unit}"),
+                ("semi-axes", f"a = {_num(self.semi_axes[0])} {unit}, b = {_num(self.semi_axes[1])} {unit}"),
+                ("angle", f"{_num(self.angle)} rad ({_num(math.degrees(self.angle))}°, direction of a)")]
 
     def to_dict(self, residuals: bool = True) -> dict:
         d = super().to_dict(residuals)

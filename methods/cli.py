@@ -224,17 +224,8 @@ def cmd_fit(args) -> int:
     print(f"input unit {canonical(args.unit)}{' (converted to mm)' if canonical(args.unit) != 'mm' else ''}; "
           "lengths below in mm")
     rows = [("method", result.method), ("data", f"{source} ({len(points)} points)")]
-    if hasattr(result, "center"):
-        rows += [("center x", _fmt(result.center[0])), ("center y", _fmt(result.center[1]))]
-    if hasattr(result, "radius"):
-        rows += [("radius", _fmt(result.radius))]
-    if hasattr(result, "inner_radius"):
-        rows += [("inner radius", _fmt(result.inner_radius)), ("outer radius", _fmt(result.outer_radius)),
-                 ("contacts", f"outer {result.contacts['outer']}, inner {result.contacts['inner']}")]
-    if hasattr(result, "semi_axes"):
-        rows += [("semi-axes", f"a = {_fmt(result.semi_axes[0])}, b = {_fmt(result.semi_axes[1])}"),
-                 ("angle", f"{_fmt(result.angle)} rad ({_fmt(math.degrees(result.angle))}°, direction of a)")]
-    rows += [("form error", _fmt(result.form_error)),
+    rows += result.report_lines()
+    rows += [("form error", f"{_fmt(result.form_error)} mm"),
              ("converged", f"{'yes' if result.converged else 'NO'} ({result.message})"),
              ("iterations", _fmt(result.iterations)), ("evaluations", _fmt(result.nfev)),
              ("runtime", f"{result.runtime_s * 1e3:.3f} ms"),

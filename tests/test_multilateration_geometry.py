@@ -78,3 +78,17 @@ def test_cli_exit_2_for_collinear_stations(tmp_path):
     out = run_python("-m", "methods", "multilaterate", meas, "--stations", st)
     assert out.returncode == 2, (out.stdout, out.stderr)
     assert "straight line" in out.stderr and "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("max_iter", [100, 1])
+def test_the_result_states_its_frame_converged_or_not(max_iter):
+    """The joint scheme's located solution is defined up to a rigid motion and reported aligned to the nominal
+    points, converged or not: ``frame == "nominal"`` says so (the study reads the field, never the message),
+    and the alignment holds: the least-squares rigid motion from its points to the nominal ones is the identity."""
+    from methods.multilateration.solvers import kabsch
+    data, _ = simulate(stations=6)
+    res = methods.fit("multilateration.joint", data, max_iter=max_iter)
+    assert res.frame == "nominal" and res.converged == (max_iter == 100)
+    R, t = kabsch(res.points, data.points)
+    assert np.abs(R - np.eye(3)).max() < 1e-9 and np.abs(t).max() < 1e-6
+    assert methods.fit("multilateration.case_a_distance", data).frame == "measurement"

@@ -99,9 +99,9 @@ def execute(task):
 
 def _in_result_frame(res, data, truth, mode):
     """The true points and stations in the frame the result is reported in: a scheme whose located result is
-    aligned to the nominal points (its message says so) is compared with the truth aligned the same way."""
+    aligned to the nominal points (``res.frame == "nominal"``) is compared with the truth aligned the same way."""
     actual, stations = truth["actual"], truth["stations"]
-    if mode == "located" and "aligned to the nominal points" in (res.message or ""):
+    if res.frame == "nominal":
         R, t = kabsch(actual, data.points)
         actual = actual @ R.T + t
         stations = np.column_stack([stations[:, :3] @ R.T + t, stations[:, 3]])

@@ -50,7 +50,8 @@ def _undetermined(cond: dict) -> str:
             + " (degenerate station or point geometry)") if bad else ""
 
 
-def _result(data: MultilaterationData, stations, points, cond, *, converged=True, iterations=None, message=""):
+def _result(data: MultilaterationData, stations, points, cond, *, converged=True, iterations=None, message="",
+            frame="measurement"):
     why = _undetermined(cond)
     if why:
         converged, message = False, f"{why}; {message}"
@@ -58,7 +59,7 @@ def _result(data: MultilaterationData, stations, points, cond, *, converged=True
     res = np.sqrt(np.einsum("nki,nki->nk", d, d)) - (stations[None, :, 3] + data.lengths)
     vol = points - data.points
     return MultilaterationFit(station_ids=list(data.stations), stations=stations, points=points, volumetric_errors=vol,
-                              condition_numbers=cond, residuals=res,
+                              condition_numbers=cond, residuals=res, frame=frame,
                               form_error=float(np.max(np.linalg.norm(vol, axis=1))), converged=bool(converged),
                               iterations=iterations, message=message)
 
@@ -167,5 +168,5 @@ def joint(data, *, max_iter: int = 100):
     cond = {"stations": solvers.conditioning(S[None], f"{S.shape[0]} x {S.shape[0]} Schur complement (stations, gauge fixed)"),
             "points": solvers.conditioning(Hpp, "3 x 3 point blocks of J^T J")}
     msg = "joint Levenberg-Marquardt converged; aligned to the nominal points" if ok else \
-        f"joint adjustment not converged within max_iter={max_iter}"
-    return _result(data, stations, points, cond, converged=ok, iterations=it, message=msg)
+        f"joint adjustment not converged within max_iter={max_iter}; aligned to the nominal points"
+    return _result(data, stations, points, cond, converged=ok, iterations=it, message=msg, frame="nominal")

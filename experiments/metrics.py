@@ -50,8 +50,6 @@ TOLERANCES: dict[str, Tolerance | None] = {
     "center_error_x": _ERRORS, "center_error_y": _ERRORS, "center_error": _ERRORS, "radius_error": _ERRORS,
     "semi_axis_a_error": _ERRORS, "semi_axis_b_error": _ERRORS, "angle_error": _ERRORS,
     "message": None,
-    # wall time of a study's own task (multilateration): a timing column, measured, never reproducible
-    "runtime_s": None,
 }
 DEFAULT_TOLERANCE = Tolerance(1e-9, 1e-12, "a numeric study column not declared here: the geometric fits' 1e-9")
 #: Wider tolerances of methods or studies that are chaotic by nature: (study glob, method glob, column) -> Tolerance.

@@ -34,6 +34,22 @@ def _read(path: Path, where: str) -> dict:
         raise ConfigError(f"{where}: not valid TOML ({exc})") from None
 
 
+def _study_module(cfg: dict, where: str):
+    """The module of the config's study kind (None while ``kind`` is missing or not a string: the structure
+    check then says so); it declares the study's own config keys (``CONFIG_SCHEMA``)."""
+    kind = cfg.get("kind")
+    if not isinstance(kind, str):
+        return None
+    if not kind.isidentifier():
+        raise ConfigError(f"{where}: kind: unknown kind {kind!r} (a module in experiments/studies/)")
+    try:
+        return importlib.import_module(f"experiments.studies.{kind}")
+    except ModuleNotFoundError as exc:
+        if exc.name != f"experiments.studies.{kind}":
+            raise
+        raise ConfigError(f"{where}: kind: unknown kind {kind!r} (a module in experiments/studies/)") from None
+
+
 def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
     """The config of study ``name`` (or of a .toml path), with its ``[quick]`` table applied when
     ``quick`` and ``seed`` overriding its seed. Everything is checked before a row runs: the structure
@@ -50,7 +66,8 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
         path, stem = configs[name], name
     where = path.name
     cfg = _read(path, where)
-    schema.check_structure(cfg, where)
+    study = _study_module(cfg, where)
+    schema.check_structure(cfg, where, getattr(study, "CONFIG_SCHEMA", None) if study else None)
     if cfg["name"] != stem:
         raise ConfigError(f"{where}: name = {cfg['name']!r} must match the file name {stem!r}")
     quick_table = cfg.pop("quick", {})
@@ -61,10 +78,6 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
             raise ConfigError(f"--seed must be a non-negative integer, got {seed!r}")
         cfg["seed"] = seed
     cfg.setdefault("seed", 0)
-    try:
-        study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
-    except ModuleNotFoundError:
-        raise ConfigError(f"{where}: kind: unknown kind {cfg['kind']!r} (a module in experiments/studies/)") from None
     schema.check_values(cfg, where)
     if not hasattr(study, "tasks"):  # the generic grid: data sets x methods
         for key in ("datasets", "methods"):

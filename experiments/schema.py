@@ -2,8 +2,10 @@
 
 ONE PLACE TO EXTEND:
 * a new top-level key of every study (e.g. ``report``, ``tables``, ``figures``): add it to
-  :data:`TOP_LEVEL`; a key only some studies use (``rounding``, ``scenarios``) goes there too, typed as
-  loosely as its study needs (its study's ``validate`` checks the values);
+  :data:`TOP_LEVEL`;
+* a key only one kind of study uses (``rounding``, ``scenarios``, ...) is declared by that study's module as
+  ``CONFIG_SCHEMA`` = {key: JSON Schema}, merged here when a config of that kind is checked: adding a study
+  needs no edit of this file (its ``validate`` checks the values the schema cannot express);
 * a new kind of data source in ``[[datasets]]`` (e.g. ``file = "trace.csv"``, a plugin source): add its
   key to :data:`DATASET_SOURCES` with the schema of the entry's own keys, and register the check of its
   parameter values with :func:`register_source_check` (the source validates its parameters, not this
@@ -96,24 +98,6 @@ TOP_LEVEL: dict[str, dict] = {
                        "logy": {"type": "boolean"}, "xlabel": {"type": "string"}, "ylabel": {"type": "string"},
                        "args": {"type": "object"}, "width": {"type": "number", "exclusiveMinimum": 0},
                        "height": {"type": "number", "exclusiveMinimum": 0}, "where": {"type": "object"}}}},
-    # study-specific keys (their study module's validate() checks the values)
-    "rounding": {"type": "object", "properties": {"samples": _POSITIVE_INT}},
-    "paths": {"type": "array", "items": {"enum": ["both", "cw", "ccw"]}, "minItems": 1},
-    "start_distances": {"type": "array", "minItems": 1, "items": {"type": "number", "minimum": 0}},
-    "reference_optimum": {"type": "object", "required": ["default"], "additionalProperties": {"type": "string"}},
-    "conditioning_check": {"type": "object", "required": ["published", "same_estimator", "reference", "stations"],
-                           "additionalProperties": False,
-                           "properties": {"published": {"type": "string"}, "same_estimator": {"type": "string"},
-                                          "reference": {"type": "string"}, "stations": {"type": "array", "minItems": 1}}},
-    "axis_figure": {"type": "array", "items": {"type": "string"}},
-    "start_directions": _POSITIVE_INT,
-    "examples": {"type": "object", "minProperties": 1},
-    "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
-    "positions_per_test": _POSITIVE_INT,
-    "cutoffs": {"type": "array", "minItems": 1, "items": {"anyOf": [{"type": "number", "exclusiveMinimum": 0},
-                                                                   {"const": "none"}]}},
-    "published": {"type": "array", "minItems": 1, "items": {"type": "string"}},
-    "synthetic": {"type": "array", "minItems": 1, "items": {"type": "object"}},
 }
 REQUIRED = ("name", "title", "kind")
 NOT_IN_QUICK = ("name", "kind", "default", "quick")
@@ -126,9 +110,13 @@ def _dataset_schema() -> dict:
     return {"oneOf": alternatives}
 
 
-def config_schema() -> dict:
-    """The JSON Schema of a whole config file (its ``[quick]`` table: the same keys, none required)."""
-    props = {k: dict(v) for k, v in TOP_LEVEL.items()}
+def config_schema(study_keys: dict | None = None) -> dict:
+    """The JSON Schema of a whole config file (its ``[quick]`` table: the same keys, none required), with the
+    keys its study kind declares (``study_keys``: the study module's ``CONFIG_SCHEMA``)."""
+    clash = set(study_keys or {}) & set(TOP_LEVEL)
+    if clash:
+        raise ValueError(f"CONFIG_SCHEMA redefines the common key(s) {', '.join(sorted(clash))}")
+    props = {k: dict(v) for k, v in {**TOP_LEVEL, **(study_keys or {})}.items()}
     props["datasets"] = {**props["datasets"], "items": _dataset_schema()}
     quick = {k: v for k, v in props.items() if k not in NOT_IN_QUICK}
     props["quick"] = {"type": "object", "properties": quick, "additionalProperties": False}
@@ -189,10 +177,11 @@ _Validator = jsonschema.validators.extend(
         "integer", lambda checker, v: isinstance(v, int) and not isinstance(v, bool)))
 
 
-def check_structure(cfg: dict, where: str) -> None:
-    """Raise ConfigError for the first structural problem (unknown key, wrong type, missing table)."""
+def check_structure(cfg: dict, where: str, study_keys: dict | None = None) -> None:
+    """Raise ConfigError for the first structural problem (unknown key, wrong type, missing table);
+    ``study_keys``: the keys the config's study kind declares (its module's ``CONFIG_SCHEMA``)."""
     from experiments.engine import ConfigError
-    validator = _Validator(config_schema())
+    validator = _Validator(config_schema(study_keys))
     errors = sorted(validator.iter_errors(cfg), key=lambda e: (list(map(str, e.absolute_path)), e.validator))
     if errors:
         err = errors[0]

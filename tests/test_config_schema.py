@@ -134,3 +134,25 @@ def test_method_registry_parameter_hook():
             spec.check_params(bad)
     for m in methods.list_methods():  # every method's defaults pass its own checks
         m.check_params(dict(m.defaults))
+
+
+def test_a_study_declares_its_own_config_keys(tmp_path, monkeypatch):
+    """A new study kind adds its own top-level key in its module (CONFIG_SCHEMA), with no edit under
+    experiments/ elsewhere; the key is typed by that schema, and another kind still refuses it."""
+    import sys
+    import types
+
+    from experiments import schema
+    module = types.ModuleType("experiments.studies.study_with_own_key")
+    module.CONFIG_SCHEMA = {"lobes": {"type": "array", "minItems": 1, "items": {"type": "integer", "minimum": 2}}}
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    own = GOOD.format(name="study").replace('kind = "grid"', 'kind = "study_with_own_key"\nlobes = [3, 5]')
+    assert configs.load(str(write(tmp_path, own)))["lobes"] == [3, 5]
+    with pytest.raises(ConfigError, match=r"study\.toml: lobes\[1\]: .*1.*minimum|study\.toml: lobes"):
+        configs.load(str(write(tmp_path, own.replace("lobes = [3, 5]", "lobes = [3, 1]"))))
+    with pytest.raises(ConfigError, match="lobes"):  # the generic grid does not know the key
+        configs.load(str(write(tmp_path, GOOD.format(name="study").replace("seed = 3", "seed = 3\nlobes = [3]"))))
+    for key in ("rounding", "scenarios", "cutoffs", "positions_per_test"):  # no study key is common any more
+        assert key not in schema.TOP_LEVEL
+    with pytest.raises(ValueError, match="redefines the common key"):
+        schema.config_schema({"seed": {"type": "string"}})

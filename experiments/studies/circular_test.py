@@ -20,6 +20,11 @@ import pandas as pd
 from experiments.study import Analysis, Figure, Table, atomic_path
 from experiments.provenance import write_atomic
 
+#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
+CONFIG_SCHEMA = {
+    "paths": {"type": "array", "items": {"enum": ["both", "cw", "ccw"]}, "minItems": 1},
+}
+
 PAPER = {  # tables 1-5 (centres in um about the nominal centre, radii and axes in mm, angles in deg)
     "circle.powell_hybrid": {"both": (-11.84, 9.81, 299.0132), "cw": (-11.67, 9.50, 299.0131), "ccw": (-12.00, 10.11, 299.0134)},
     "circle.nelder_mead": {"both": (-11.83, 9.79, 299.0132), "cw": (-11.72, 9.53, 299.0131), "ccw": (-12.02, 10.06, 299.0134)},

@@ -15,6 +15,13 @@ from experiments import engine
 from experiments.engine import ConfigError
 from experiments.study import Analysis, Figure, Table, save_csv
 
+#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
+CONFIG_SCHEMA = {
+    "start_distances": {"type": "array", "minItems": 1, "items": {"type": "number", "minimum": 0}},
+    "reference_optimum": {"type": "object", "required": ["default"], "additionalProperties": {"type": "string"}},
+    "start_directions": {"type": "integer", "minimum": 1},
+}
+
 
 def validate(cfg, where):
     d = cfg.get("start_distances")

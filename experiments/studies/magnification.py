@@ -6,9 +6,15 @@ import numpy as np
 
 import methods
 from datasets.contouring import EXAMPLES
+from experiments import engine
 from experiments.engine import ConfigError
 from methods.magnify import MagnifyInput
 from experiments.study import Analysis, Figure, Table, save_csv
+
+#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
+CONFIG_SCHEMA = {
+    "examples": {"type": "object", "minProperties": 1},
+}
 
 VARIANTS = {  # label -> (method, selection, delta rule)
     "nearest (conventional)": ("magnify.nearest", None, None),
@@ -48,17 +54,16 @@ def run_variant(name, label, eta):
 
 
 def execute(task):
+    """One row per (example, variant), built on the engine's identity columns (engine.base_row)."""
     name, label, eta = task["dataset"]["label"], task["method"], task["x_eta"]
+    row = {**engine.base_row(task), "param_eta": eta}
     try:
         _, res, params, emax = run_variant(name, label, eta)
     except methods.InvalidInputError as exc:
-        return {"study": task["study"], "dataset": name, "repetition": 0, "seed": task["seed"], "data_stream": "0",
-                "method": label, "params": "{}", "param_eta": eta, "status": "skipped", "message": str(exc)}
-    return {"study": task["study"], "dataset": name, "repetition": 0, "seed": task["seed"], "data_stream": "0",
-            "method": label, "params": "{}", "param_eta": eta, "param_delta": params.get("delta"),
-            "status": "ok" if res.converged else "not converged", "message": res.message,
-            "max_error_um": emax * 1e3, "continuity": res.extra["continuity"], "loops": res.extra["self_intersections"],
-            "nearest_point_used": res.extra.get("nearest_point_used", 0)}
+        return {**row, "status": "skipped", "message": str(exc)}
+    return {**row, "param_delta": params.get("delta"), "status": "ok" if res.converged else "not converged",
+            "message": res.message, "max_error_um": emax * 1e3, "continuity": res.extra["continuity"],
+            "loops": res.extra["self_intersections"], "nearest_point_used": res.extra.get("nearest_point_used", 0)}
 
 
 #: the trajectories drawn side by side: (example, variants, zoom box in mm or None)

@@ -23,6 +23,16 @@ from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_ma
 from methods.multilateration.solvers import kabsch
 from experiments.study import Analysis, Figure, Table, save_csv
 
+#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
+CONFIG_SCHEMA = {
+    "conditioning_check": {"type": "object", "required": ["published", "same_estimator", "reference", "stations"],
+                           "additionalProperties": False,
+                           "properties": {"published": {"type": "string"}, "same_estimator": {"type": "string"},
+                                          "reference": {"type": "string"}, "stations": {"type": "array", "minItems": 1}}},
+    "axis_figure": {"type": "array", "items": {"type": "string"}},
+    "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
+}
+
 SCENARIO_KEYS = {"stations", "noise", "errors", "grid"}
 MODES = ("located", "known")
 

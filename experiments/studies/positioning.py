@@ -13,10 +13,31 @@ from experiments.engine import ConfigError
 from methods.positioning.model import evaluate_band
 from experiments.study import Analysis, Figure, Table, atomic_path, save_csv
 
-BANDS = ("iso230-2 point-wise (mean +- 2s)", "OLS cubic", "GLS cubic (paper)")
+#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
+CONFIG_SCHEMA = {
+    "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
+    "positions_per_test": {"type": "integer", "minimum": 1},
+    # the bands compared: a label (the rows' method column), the positioning method that gives the band, and
+    # the scenario keys passed to it as parameters (e.g. the instrument's uncertainty for the GLS model)
+    "bands": {"type": "array", "minItems": 1, "items": {
+        "type": "object", "required": ["label", "method"], "additionalProperties": False,
+        "properties": {"label": {"type": "string", "minLength": 1}, "method": {"type": "string", "minLength": 1},
+                       "scenario_params": {"type": "array", "items": {"type": "string"}}}}},
+}
+
 
 
 def validate(cfg, where):
+    if not cfg.get("bands"):
+        raise ConfigError(f"{where}: needs [[bands]] tables (label, method)")
+    for j, b in enumerate(cfg["bands"]):
+        try:
+            spec = methods.get(b["method"])
+        except methods.UnknownMethodError as exc:
+            raise ConfigError(f"{where} bands[{j}]: {exc}") from None
+        unknown = set(b.get("scenario_params", [])) - set(spec.defaults)
+        if unknown:
+            raise ConfigError(f"{where} bands[{j}]: {spec.id} has no parameter(s) {', '.join(sorted(unknown))}")
     sc = cfg.get("scenarios")
     if not isinstance(sc, list) or not sc:
         raise ConfigError(f"{where}: needs [[scenarios]] tables")
@@ -33,10 +54,10 @@ def tasks(cfg):
     for i, s in enumerate(cfg["scenarios"]):
         spec = {"entry": i, "point": 0, "scenario": s, "label": s["label"]}
         for r in range(cfg["repetitions"]):
-            for b, band in enumerate(BANDS):
+            for band in cfg["bands"]:
                 out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": r,
-                            "stream": [i, 0, r], "seed": cfg["seed"], "method": band, "params": {}, "timing": None,
-                            "x_positions": cfg.get("positions_per_test", 50)})
+                            "stream": [i, 0, r], "seed": cfg["seed"], "method": band["label"], "params": {},
+                            "timing": None, "band": band, "x_positions": cfg.get("positions_per_test", 50)})
     return out
 
 
@@ -45,16 +66,14 @@ def execute(task):
     rng = np.random.default_rng(np.random.SeedSequence(task["seed"], spawn_key=tuple(task["stream"])))
     data, truth = axis_test(rng=rng, **s["params"])
     P = rng.uniform(data.targets.min(), data.targets.max(), task["x_positions"])
-    band = task["method"]
-    if band.startswith("iso230"):
-        per = methods.fit("positioning.iso230_2", data).per_target
+    band = task["band"]
+    res = methods.fit(band["method"], data, **{k: s.get(k) for k in band.get("scenario_params", [])})
+    if res.polynomial:  # a model: its value and expanded uncertainty U(P) = 2 sqrt(x^T Cov x)
+        v, U = evaluate_band(res.polynomial["up"], P)
+    else:  # the standard's point-wise evaluation: mean +- 2 s at the targets, linear in between
+        per = res.per_target
         v = np.interp(P, data.targets, per["mean_up"])
         U = np.interp(P, data.targets, 2 * per["s_up"])
-    elif band.startswith("OLS"):
-        v, U = evaluate_band(methods.fit("positioning.ols_polynomial", data).polynomial["up"], P)
-    else:
-        res = methods.fit("positioning.gls_polynomial", data, instrument_u=s.get("instrument_u"), mpe=s.get("mpe"))
-        v, U = evaluate_band(res.polynomial["up"], P)
     err = v - truth["up"](P)
     return {**engine.base_row(task), "status": "ok", "message": "", "coverage": float(np.mean(np.abs(err) <= U)),
             "band_halfwidth_mean": float(np.mean(U)), "error_rms": float(np.sqrt(np.mean(err ** 2)))}

@@ -14,6 +14,11 @@ from experiments import engine
 from experiments.render.text import percentile_phrase
 from experiments.study import Analysis, Figure, Table
 
+#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
+CONFIG_SCHEMA = {
+    "rounding": {"type": "object", "properties": {"samples": {"type": "integer", "minimum": 1}}},
+}
+
 #: table 1 columns of the roundness paper and the method that reproduces each
 PUBLISHED_COLUMNS = {"LSQ (paper's Gauss-Newton)": "circle.gauss_newton",
                      "Voronoi (minimum zone)": "circle.minimum_zone",

@@ -16,6 +16,14 @@ from experiments.engine import ConfigError
 from experiments.study import Analysis, Figure, Table, save_csv
 from methods.roundness.filter import POINTS_PER_CUTOFF, parse_cutoff
 
+#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
+CONFIG_SCHEMA = {
+    "cutoffs": {"type": "array", "minItems": 1, "items": {"anyOf": [{"type": "number", "exclusiveMinimum": 0},
+                                                                   {"const": "none"}]}},
+    "published": {"type": "array", "minItems": 1, "items": {"type": "string"}},
+    "synthetic": {"type": "array", "minItems": 1, "items": {"type": "object"}},
+}
+
 REFS = ("lsci", "mzci", "mici", "mcci")
 
 

@@ -35,6 +35,14 @@ def _num(v) -> str:
     return f"{v:.10g}" if math.isfinite(v) else "nan"
 
 
+def _center_errors(center, truth: dict) -> dict:
+    """Signed components and distance of a fitted centre from the true one (none without a true centre)."""
+    if "center" not in truth:
+        return {}
+    dx, dy = center[0] - truth["center"][0], center[1] - truth["center"][1]
+    return {"center_error_x": dx, "center_error_y": dy, "center_error": float(np.hypot(dx, dy))}
+
+
 @dataclass(kw_only=True)
 class FitResult:
     """Fields shared by every method's result (cf. scipy's ``OptimizeResult``), and the one interface the
@@ -108,10 +116,7 @@ class CircleFit(FitResult):
         return {"center_x": self.center[0], "center_y": self.center[1], "radius": self.radius}
 
     def truth_errors(self, truth: dict) -> dict:
-        out = {}
-        if "center" in truth:
-            dx, dy = self.center[0] - truth["center"][0], self.center[1] - truth["center"][1]
-            out.update(center_error_x=dx, center_error_y=dy, center_error=float(np.hypot(dx, dy)))
+        out = _center_errors(self.center, truth)
         if "radius" in truth:
             out["radius_error"] = self.radius - truth["radius"]
         return out
@@ -232,10 +237,7 @@ class EllipseFit(FitResult):
                 "semi_axis_b": self.semi_axes[1], "angle": self.angle}
 
     def truth_errors(self, truth: dict) -> dict:
-        out = {}
-        if "center" in truth:
-            dx, dy = self.center[0] - truth["center"][0], self.center[1] - truth["center"][1]
-            out.update(center_error_x=dx, center_error_y=dy, center_error=float(np.hypot(dx, dy)))
+        out = _center_errors(self.center, truth)
         if "semi_axes" in truth:
             out["semi_axis_a_error"] = self.semi_axes[0] - truth["semi_axes"][0]
             out["semi_axis_b_error"] = self.semi_axes[1] - truth["semi_axes"][1]

@@ -54,6 +54,21 @@ def largest_angular_gap(x, y, c) -> float:
     return float(max(np.diff(t).max(initial=0.0), 2 * np.pi - (t[-1] - t[0])))
 
 
+def _mcc_certify(x, y):
+    """The hull certificate of :func:`methods.circle._zone.certify_hulls`, its message stating what was checked
+    and to which tolerance (KKT of the convex program min R s.t. |p_i - c| <= R)."""
+    from methods.circle._global import TIE_REL
+    hull = z.certify_hulls(x, y)
+
+    def certify(c, oc, ic):
+        ok, message = hull(c, oc, ic)
+        if ok:
+            message += (f"; checked: every point within (1 + {z.CHECK_RTOL:g}) x the contacts' radius, contacts tied "
+                        f"within {TIE_REL:g} x the radius, the centre in the hull of their unit directions to 1e-12")
+        return ok, message
+    return certify
+
+
 @register("circle.min_circumscribed", kind="convex program",
           summary="Minimum circumscribed circle (MCC): SOCP (clarabel) on an active set, exact contacts",
           reference="roundness paper sec. 1 (MDTD, table 1 column MCC); Elzinga & Hearn, Transp. Sci. 6 (1972) 379-394")
@@ -77,7 +92,7 @@ def min_circumscribed(points, *, active_size=16, max_rounds=50):
 
     return z.fit_zone(points, frame, start=z.kasa_normal(x, y), local_solve=local_solve,
                       exact=lambda act, c: _best_single_sided(x, y, act, c, "outer"),
-                      certify=z.certify_hulls(x, y), sides=("outer",), k=k, max_rounds=max_rounds,
+                      certify=_mcc_certify(x, y), sides=("outer",), k=k, max_rounds=max_rounds,
                       radius_rule=lambda r, c: r.max())
 
 

@@ -9,14 +9,14 @@ Before the fix, turned shaft 50 UPR and centreless ground 3/50 UPR gave an UNcer
 for some one-ulp perturbations (tests/benchmarks/circle_status_last_bit.py)."""
 import numpy as np
 import pytest
+import shapely
+from scipy import spatial
 
 import methods
 from methods.circle._global import EPS_ABS, EPS_REL
 from methods.circle._zone import CHECK_RTOL
 from methods.roundness.evaluation import filtered_profile
 
-shapely = pytest.importorskip("shapely")
-spatial = pytest.importorskip("scipy.spatial")
 
 EPS = np.finfo(float).eps
 CASES = [("turned shaft, D 25 mm, 3600 points", 50.0), ("turned shaft, D 25 mm, 3600 points", 3.0),

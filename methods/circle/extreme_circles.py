@@ -11,16 +11,40 @@ from methods.circle._frame import Frame
 from methods.circle.minimum_zone import check_ccp_params, convex_concave, linearised_inner_rows, outer_cone_rows
 
 
+#: sizes of the candidate pool (most extreme active points) tried in turn by the exact step
+POOL_SIZES = (8, 16, 32, 64)
+
+
 def _best_single_sided(x, y, act, c, side):
+    """Exact centre from the 2- and 3-point circles of the ``m`` most extreme active points about the
+    solver's centre c, best over the active set. On a smooth (filtered) profile many neighbours of one
+    contact have nearly equal radii, so the 8 most extreme may all lie near one or two contacts and miss
+    the third: the pick then depends on the last bit of the data. The pool grows (POOL_SIZES) until the
+    picked circle's tied contacts surround its centre (the optimality condition), so the exact step no
+    longer stops on a wrong configuration that a one-ulp change of the data would have avoided."""
     r = z.radii(x[act], y[act], c)
     order = np.argsort(r)
-    m = min(act.size, 8)
-    idx = act[order[::-1][:m]] if side == "outer" else act[order[:m]]
-    C, configs = z.circle_candidates(x, y, idx, c, side)
-    rr = z.candidate_radii(x, y, act, C)
-    if side == "outer":
-        return z.pick(C, configs, rr.max(axis=1), minimise=True)
-    return z.pick(C, configs, rr.min(axis=1), minimise=False)
+    ranked = order[::-1] if side == "outer" else order
+    best = None
+    for m in POOL_SIZES:
+        m = min(act.size, m)
+        idx = act[ranked[:m]]
+        C, configs = z.circle_candidates(x, y, idx, c, side)
+        rr = z.candidate_radii(x, y, act, C)
+        best = (z.pick(C, configs, rr.max(axis=1), minimise=True) if side == "outer"
+                else z.pick(C, configs, rr.min(axis=1), minimise=False))
+        if m >= act.size or _surrounds(x, y, act, best[0], side):
+            return best
+    return best
+
+
+def _surrounds(x, y, act, c, side) -> bool:
+    """Do the active points tied (within TIE_REL of the extreme radius) at centre c surround it?"""
+    from methods.circle._global import TIE_REL, alternating_contacts
+    r = z.radii(x[act], y[act], c)
+    tol = TIE_REL * r.max()
+    tied = act[r >= r.max() - tol] if side == "outer" else act[r <= r.min() + tol]
+    return alternating_contacts(x, y, c, np.empty(0, dtype=np.intp), tied, z.hulls_meet) is not None
 
 
 def largest_angular_gap(x, y, c) -> float:
@@ -28,6 +52,21 @@ def largest_angular_gap(x, y, c) -> float:
     a half-plane through c and do not surround it."""
     t = np.sort(np.arctan2(y - c[1], x - c[0]))
     return float(max(np.diff(t).max(initial=0.0), 2 * np.pi - (t[-1] - t[0])))
+
+
+def _mcc_certify(x, y):
+    """The hull certificate of :func:`methods.circle._zone.certify_hulls`, its message stating what was checked
+    and to which tolerance (KKT of the convex program min R s.t. |p_i - c| <= R)."""
+    from methods.circle._global import TIE_REL
+    hull = z.certify_hulls(x, y)
+
+    def certify(c, oc, ic):
+        ok, message = hull(c, oc, ic)
+        if ok:
+            message += (f"; checked: every point within (1 + {z.CHECK_RTOL:g}) x the contacts' radius, contacts tied "
+                        f"within {TIE_REL:g} x the radius, the centre in the hull of their unit directions to 1e-12")
+        return ok, message
+    return certify
 
 
 @register("circle.min_circumscribed", kind="convex program",
@@ -53,7 +92,7 @@ def min_circumscribed(points, *, active_size=16, max_rounds=50):
 
     return z.fit_zone(points, frame, start=z.kasa_normal(x, y), local_solve=local_solve,
                       exact=lambda act, c: _best_single_sided(x, y, act, c, "outer"),
-                      certify=z.certify_hulls(x, y), sides=("outer",), k=k, max_rounds=max_rounds,
+                      certify=_mcc_certify(x, y), sides=("outer",), k=k, max_rounds=max_rounds,
                       radius_rule=lambda r, c: r.max())
 
 

@@ -87,7 +87,8 @@ static void closest(double u, double v, double a, double b, int iterations, doub
     } else {  /* on the major axis: closed form */
         double num = a * au, den = a * a - b * b;
         int inside = num < den;
-        double xa = inside ? a * a * au / (den > 0 ? den : 1.0) : a;
+        /* (a / den) a au: the reference's a^2 au / den without overflow of a^2 au at large scales */
+        double xa = inside ? (a / (den > 0 ? den : 1.0)) * a * au : a;
         if (xa > a) xa = a;
         x = xa;
         if (inside) {

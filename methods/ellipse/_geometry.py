@@ -238,7 +238,7 @@ def orthogonal_residuals(x, y, p, iterations=60, with_phi=True):
     (FITBENCH_KERNELS=numpy): about sixteen blocks of points, vectorised within each, to bound the temporaries."""
     ck = kernels("methods.ellipse._ckernels")
     xc, yc, a, b, t = (float(v) for v in p)
-    if ck is not None and a > 0 and b > 0 and math.isfinite(a * b * xc * yc * t):
+    if ck is not None and a > 0 and b > 0 and all(map(math.isfinite, (xc, yc, a, b, t))):
         # one compiled sweep, no temporaries (methods/ellipse/_ckernels.c); a degenerate ellipse takes the
         # reference code below, whose NaN/inf distances the callers report
         d = np.empty(len(x))

@@ -60,6 +60,7 @@ class FitResult:
     MCC, Chebyshev)
     ellipse                   max - min of the signed orthogonal distances to the fitted ellipse
     positioning (ISO 230-2)   not defined (NaN): the standard's figures A, E, M, R, B are in ``figures``
+    ISO 230-4 circular test   G(b), the bidirectional circular deviation (G, H, F are in ``figures``)
     magnify                   the largest contouring error |p - r~| of the trajectory
     multilateration           the largest volumetric error magnitude |X_actual - X_nominal|
     roundness (ISO 12181)     RONt about the MZCI (else about the one reference circle evaluated)
@@ -269,6 +270,54 @@ class PositioningFit(FitResult):
         d = super().to_dict(residuals)
         figures = d.pop("figures")
         return {"method": d.pop("method"), **figures, **d}
+
+
+@dataclass(kw_only=True)
+class CircularTestFit(FitResult):
+    """ISO 230-4 evaluation of a bidirectional circular test (:func:`methods.circular_test.evaluate`), lengths in
+    data units: ``figures`` = {G_cw, G_ccw, G_b, H, F_max, F_min, mean_radial_deviation}; ``center`` is the
+    centre G(b) is evaluated about (``center_kind`` 'lsq': least squares, 'mz': minimum zone), ``center_cw`` /
+    ``center_ccw`` those of each run; ``residuals`` = the radial deviations of both runs (CW then CCW) from the
+    nominal radius about ``F_center``; ``form_error`` = G(b), the bidirectional circular deviation."""
+
+    #: the standard's figures, in the order they are reported
+    FIGURES = ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation")
+
+    figures: dict
+    center: tuple
+    center_cw: tuple
+    center_ccw: tuple
+    center_kind: str
+    F_center: tuple
+    F_about: str
+    H_about: str
+    nominal_radius: float
+    n_points: dict
+    partial_arc: bool
+    arc_deg: dict
+    conditions: dict = field(default_factory=dict)
+
+    def geometry(self) -> dict:
+        return {"center_x": self.center[0], "center_y": self.center[1]}
+
+    def truth_errors(self, truth: dict) -> dict:
+        return _center_errors(self.center, truth)
+
+    def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
+        f = self.figures
+        common = " (over the common arc)" if self.partial_arc else ""
+        return [("nominal radius", f"{_num(self.nominal_radius)} {unit}"),
+                (f"centre ({self.center_kind})", f"({_num(self.center[0])}, {_num(self.center[1])}) {unit}"),
+                ("G CW / CCW", f"{_num(f['G_cw'])} / {_num(f['G_ccw'])} {unit}"),
+                ("G(b)", f"{_num(f['G_b'])} {unit}"),
+                ("H (1996)", f"{_num(f['H'])} {unit}{common}"),
+                ("F max / F min", f"{_num(f['F_max'])} / {_num(f['F_min'])} {unit} ({self.F_about})"),
+                ("mean radial deviation", f"{_num(f['mean_radial_deviation'])} {unit}")]
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        figures = d.pop("figures")
+        return {"method": d.pop("method"), **figures, "center": d.pop("center"), **d}
 
 
 @dataclass(kw_only=True)

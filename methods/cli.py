@@ -309,14 +309,18 @@ def cmd_circular_test(args) -> int:
         warn(w)
     dg = None
     if center is not None:
-        dg = diagnose(runs["cw"], runs["ccw"], R, center, feed_mm_min=feed, cyclic_pitch=pitch, partial=ev["partial_arc"])
+        dg = diagnose(runs["cw"], runs["ccw"], R, center, feed_mm_min=feed, cyclic_pitch=pitch, partial=ev.partial_arc)
     if plot_path:
         polar_plot(runs["cw"], runs["ccw"], ev, plot_path, diagnostics=dg, conditions=conditions, save=save_figure)
     if args.json:
-        out = {k: ev[k] for k in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation", "center")}
+        d = ev.to_dict(residuals=False)
+        out = {k: d.pop(k) for k in (*ev.FIGURES, "center")}
         out["units"] = dict(JSON_UNITS, input_unit=canonical(args.unit))
         out["diagnostics"] = (diagnostics_json(dg) if dg else "not estimated: give --nominal-center X Y")
-        out["details"] = {k: v for k, v in ev.items() if k not in out}
+        from dataclasses import fields
+        from methods._result import FitResult
+        shared = {f.name for f in fields(FitResult)}  # the evaluation's own fields only
+        out["details"] = {k: v for k, v in d.items() if k not in shared}
         out["notes"] = notes
         if dg:
             out["details"]["diagnostics_model"] = dg["_model"]

@@ -33,13 +33,13 @@ def ptp_about(pts, c):
 def test_iso_figures_by_their_definitions():
     cw, ccw, _ = circular_test(COND, MachineErrors(noise=0.0005, **ALL), seed=3)
     ev = evaluate(cw, ccw, 150.0, (300.0, 200.0))
-    assert ev["G_cw"] == pytest.approx(ptp_about(cw, independent_lsq_centre(cw)), abs=1e-9)
-    assert ev["G_ccw"] == pytest.approx(ptp_about(ccw, independent_lsq_centre(ccw)), abs=1e-9)
+    assert ev.figures["G_cw"] == pytest.approx(ptp_about(cw, independent_lsq_centre(cw)), abs=1e-9)
+    assert ev.figures["G_ccw"] == pytest.approx(ptp_about(ccw, independent_lsq_centre(ccw)), abs=1e-9)
     both = np.vstack([cw, ccw])
-    assert ev["G_b"] == pytest.approx(ptp_about(both, independent_lsq_centre(both)), abs=1e-9)
+    assert ev.figures["G_b"] == pytest.approx(ptp_about(both, independent_lsq_centre(both)), abs=1e-9)
     r = np.hypot(both[:, 0] - 300.0, both[:, 1] - 200.0) - 150.0
-    assert ev["F_max"] == pytest.approx(r.max(), abs=1e-12) and ev["F_min"] == pytest.approx(r.min(), abs=1e-12)
-    assert ev["mean_radial_deviation"] == pytest.approx(r.mean(), abs=1e-12)
+    assert ev.figures["F_max"] == pytest.approx(r.max(), abs=1e-12) and ev.figures["F_min"] == pytest.approx(r.min(), abs=1e-12)
+    assert ev.figures["mean_radial_deviation"] == pytest.approx(r.mean(), abs=1e-12)
     # H: nearest-angle pairing of the two runs (an independent discretisation) agrees to the sampling step
     c = independent_lsq_centre(both)
     a1 = np.arctan2(cw[:, 1] - c[1], cw[:, 0] - c[0])
@@ -47,11 +47,11 @@ def test_iso_figures_by_their_definitions():
     r1, r2 = np.hypot(*(cw - c).T), np.hypot(*(ccw - c).T)
     diff = np.abs(np.angle(np.exp(1j * (a1[:, None] - a2[None, :]))))
     h = np.max(np.abs(r1 - r2[np.argmin(diff, axis=1)]))
-    assert ev["H"] == pytest.approx(h, rel=0.15)
+    assert ev.figures["H"] == pytest.approx(h, rel=0.15)
     # without a nominal centre, F is about the least-squares centre of both runs
     ev2 = evaluate(cw, ccw, 150.0)
     r = np.hypot(*(both - c).T) - 150.0
-    assert ev2["F_max"] == pytest.approx(r.max(), abs=1e-9) and "least-squares" in ev2["F_about"]
+    assert ev2.figures["F_max"] == pytest.approx(r.max(), abs=1e-9) and "least-squares" in ev2.F_about
 
 
 def test_minimum_zone_option():
@@ -59,15 +59,15 @@ def test_minimum_zone_option():
     lsq = evaluate(cw, ccw, 150.0, center="lsq")
     mz = evaluate(cw, ccw, 150.0, center="mz")
     for key in ("G_cw", "G_ccw", "G_b"):
-        assert mz[key] <= lsq[key] + 1e-12
-    assert mz["center_kind"] == "mz"
+        assert mz.figures[key] <= lsq.figures[key] + 1e-12
+    assert mz.center_kind == "mz"
 
 
 def test_exact_circle_gives_zero_figures():
     cw, ccw, _ = circular_test(COND, MachineErrors(), seed=0)
     ev = evaluate(cw, ccw, 150.0, (300.0, 200.0))
     for key in ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min"):
-        assert abs(ev[key]) < 1e-9
+        assert abs(ev.figures[key]) < 1e-9
 
 
 SINGLE = {
@@ -186,4 +186,4 @@ def test_arc_under_90_degrees_is_refused():
     with pytest.raises(InvalidInputError, match="covers an arc of 8[0-9] deg"):
         evaluate(cw[: int(len(cw) * 85 / 360)], ccw, 150.0)
     half = evaluate(cw[: len(cw) // 2], ccw, 150.0)   # a 180 deg arc is a partial arc now, not an error
-    assert half["partial_arc"] and 175 < half["arc_deg"]["cw"] <= 180
+    assert half.partial_arc and 175 < half.arc_deg["cw"] <= 180

@@ -162,7 +162,7 @@ def test_angle_and_radial_deviation_file_with_both_runs(tmp_path, lola, angle_un
     out = cli("circular-test", p, "--skip-rows", 4, "--unit", "um", "--nominal-radius", R, "--nominal-center", *c,
               "--json")
     assert out.returncode == 0, out.stderr
-    assert json.loads(out.stdout)["G_b"] == pytest.approx(ref["G_b"], abs=1e-5)
+    assert json.loads(out.stdout)["G_b"] == pytest.approx(ref.figures["G_b"], abs=1e-5)
 
 
 def test_polar_file_needs_the_angle_unit(tmp_path, lola):
@@ -186,7 +186,7 @@ def test_one_xy_file_with_a_run_column_directions_from_point_order(tmp_path, lol
     assert out.returncode == 0, out.stderr
     ref = evaluate(cw, ccw, cond.nominal_radius)
     got = json.loads(out.stdout)
-    assert got["G_cw"] == pytest.approx(ref["G_cw"], abs=1e-9) and got["G_ccw"] == pytest.approx(ref["G_ccw"], abs=1e-9)
+    assert got["G_cw"] == pytest.approx(ref.figures["G_cw"], abs=1e-9) and got["G_ccw"] == pytest.approx(ref.figures["G_ccw"], abs=1e-9)
 
 
 def wide_laser_export(path, data, *, sep=";", decimal=",", dev_factor=1e3, preamble=True, direction_column=False):
@@ -315,17 +315,17 @@ def test_overrun_is_trimmed_and_G_unchanged(tmp_path):
                                         np.arctan2(cw_full[0, 1] - 200, cw_full[0, 0] - 300))) < 360 - 1e-9))
     clean = evaluate(cw_full[:n360], ccw_full[:n360], 150.0, (300.0, 200.0))
     untrimmed = evaluate(cw_full, ccw_full, 150.0, (300.0, 200.0))
-    assert untrimmed["G_cw"] - clean["G_cw"] > 1e-3                        # the overrun mattered (> 1 µm)
+    assert untrimmed.figures["G_cw"] - clean.figures["G_cw"] > 1e-3                        # the overrun mattered (> 1 µm)
     cw_t, rep = trim(cw_full, (300.0, 200.0))
     ccw_t, _ = trim(ccw_full, (300.0, 200.0))
     assert rep["overrun_trimmed_points"] > 0 and abs(rep["evaluated_arc_deg"] - 360) < 1.0
     trimmed = evaluate(cw_t, ccw_t, 150.0, (300.0, 200.0))
-    assert abs(trimmed["G_cw"] - clean["G_cw"]) < 1e-4 and abs(trimmed["G_ccw"] - clean["G_ccw"]) < 1e-4
+    assert abs(trimmed.figures["G_cw"] - clean.figures["G_cw"]) < 1e-4 and abs(trimmed.figures["G_ccw"] - clean.figures["G_ccw"]) < 1e-4
     save_xy(tmp_path / "cw.csv", cw_full)
     save_xy(tmp_path / "ccw.csv", ccw_full)
     out = cli("circular-test", tmp_path / "cw.csv", tmp_path / "ccw.csv", "--nominal-radius", 150, "--json")
     j = json.loads(out.stdout)
-    assert abs(j["G_cw"] - clean["G_cw"]) < 1e-4 and any("overrun" in n for n in j["notes"])
+    assert abs(j["G_cw"] - clean.figures["G_cw"]) < 1e-4 and any("overrun" in n for n in j["notes"])
 
 
 def test_lead_in_and_lead_out_removed_by_option(tmp_path):
@@ -343,7 +343,7 @@ def test_lead_in_and_lead_out_removed_by_option(tmp_path):
     out = cli("circular-test", tmp_path / "cw.csv", tmp_path / "ccw.csv", "--nominal-radius", 150,
               "--lead-in", 30, "--lead-out", 30, "--json")
     assert out.returncode == 0, out.stderr
-    assert json.loads(out.stdout)["G_cw"] == pytest.approx(ref["G_cw"], abs=0.2e-3)
+    assert json.loads(out.stdout)["G_cw"] == pytest.approx(ref.figures["G_cw"], abs=0.2e-3)
 
 
 # ------------------------------------------------------------------------------------------ partial arcs
@@ -362,7 +362,7 @@ def test_220_degree_vertical_plane_arc_recovers_squareness_and_scale():
                         noise=0.0003)
     cw, ccw = arc_runs(220.0, -20.0, err)
     ev = evaluate(cw, ccw, 150.0, (0.0, 0.0))
-    assert ev["partial_arc"] and 219 < ev["arc_deg"]["cw"] < 221
+    assert ev.partial_arc and 219 < ev.arc_deg["cw"] < 221
     dg = diagnose(cw, ccw, 150.0, (0.0, 0.0), feed_mm_min=1000.0)
     assert dg["squareness"]["value"] == pytest.approx(30.0, rel=0.05)
     assert dg["scale_mismatch"]["value"] == pytest.approx(35.0, rel=0.05)

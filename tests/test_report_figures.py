@@ -1,6 +1,8 @@
 """The method reports' figures (circular-test polar plot, positioning plot) go through one helper,
 methods._figures.report_figure: the figure is closed on every path (drawing error, write error, success)
 and the file is written atomically (a failed write leaves the previous file whole and no temporary file)."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -78,7 +80,7 @@ def test_a_failed_write_keeps_the_old_file_and_closes_the_figure(draw, inputs, r
 
 def test_an_error_while_drawing_closes_the_figure_and_writes_nothing(polar_inputs, tmp_path):
     cw, ccw, ev = polar_inputs
-    incomplete = {k: v for k, v in ev.items() if k != "G_cw"}  # the panel needs it after the axes are drawn
+    incomplete = dataclasses.replace(ev, figures={k: v for k, v in ev.figures.items() if k != "G_cw"})  # needed late
     before = open_figures()
     with pytest.raises(KeyError, match="G_cw"):
         polar_plot(cw, ccw, incomplete, tmp_path / "fig.png")

@@ -60,3 +60,38 @@ def test_a_family_without_geometry_gives_only_the_shared_columns():
 def test_report_lines_carry_units(method_id, data):
     lines = methods.fit(method_id, data).report_lines()
     assert lines and all(("mm" in text or "rad" in text or "point indices" in text) for _, text in lines), lines
+
+
+def test_circular_test_evaluation_is_a_fit_result():
+    """ISO 230-4: the evaluation is a FitResult (form_error = G(b), residuals = radial deviations F about the
+    stated centre), its figures checked against an independent least-squares centre and a direct F."""
+    from datasets.circular_test import MachineErrors, TestConditions, circular_test
+    from methods._result import CircularTestFit
+    from methods.circular_test import evaluate
+
+    cond = TestConditions(nominal_radius=150.0, nominal_center=(300.0, 200.0), feed_mm_min=1000.0)
+    cw, ccw, _ = circular_test(cond, MachineErrors(noise=0.0005, squareness=20e-6), seed=3)
+    ev = evaluate(cw, ccw, 150.0, (300.0, 200.0))
+    assert isinstance(ev, FitResult) and isinstance(ev, CircularTestFit) and ev.converged
+    both = np.vstack([cw, ccw])
+    assert ev.form_error == ev.figures["G_b"]
+    assert list(ev.figures) == list(CircularTestFit.FIGURES)
+    # F about the nominal centre, computed directly
+    dev = np.hypot(both[:, 0] - 300.0, both[:, 1] - 200.0) - 150.0
+    np.testing.assert_allclose(ev.residuals, dev, rtol=0, atol=1e-12)
+    assert ev.figures["F_max"] == pytest.approx(dev.max(), abs=1e-12)
+    # G(b) about an independent least-squares centre of both runs (linear Kasa start, then scipy least_squares)
+    from scipy.optimize import least_squares
+    A = np.c_[2 * both, np.ones(len(both))]
+    c0 = np.linalg.lstsq(A, (both ** 2).sum(1), rcond=None)[0][:2]
+    c = least_squares(lambda c: np.hypot(*(both - c).T) - np.hypot(*(both - c).T).mean(), c0, xtol=1e-15,
+                      ftol=1e-15, gtol=1e-15).x
+    r = np.hypot(*(both - c).T)
+    assert ev.figures["G_b"] == pytest.approx(r.max() - r.min(), abs=1e-9)
+    row = metrics(ev, {"center": (300.0, 200.0)})
+    assert list(row) == ["form_error", "residual_rms", "center_x", "center_y", "center_error_x", "center_error_y",
+                         "center_error"]
+    lines = dict(ev.report_lines("mm"))
+    assert lines["G(b)"].endswith(" mm") and "nominal centre" in lines["F max / F min"]
+    d = ev.to_dict(residuals=False)
+    assert list(d)[:9] == ["method", *CircularTestFit.FIGURES, "center"] and "residuals" not in d

@@ -18,6 +18,7 @@ from experiments.engine import ConfigError
 import pandas as pd
 
 from experiments.study import Analysis, Figure, Table, atomic_path
+from methods._result import CircularTestFit
 from experiments.provenance import write_atomic
 
 #: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
@@ -63,7 +64,7 @@ def tasks(cfg):
 
 #: the ``method`` label of the evaluation row (ISO 230-4 figures and diagnostics of both runs)
 EVALUATION = "ISO 230-4 evaluation and diagnosis"
-ISO_FIGURES = ("G_cw", "G_ccw", "G_b", "H", "F_max", "F_min", "mean_radial_deviation")
+ISO_FIGURES = CircularTestFit.FIGURES
 
 
 def evaluation_row(task):
@@ -73,7 +74,7 @@ def evaluation_row(task):
     ev = evaluate(cw, ccw, cond.nominal_radius, cond.nominal_center, conditions=cond)
     dg = diagnose(cw, ccw, cond.nominal_radius, cond.nominal_center, feed_mm_min=cond.feed_mm_min)
     row = {**engine.base_row(task), "path": "cw+ccw", "status": "ok", "message": ""}
-    row.update({f"iso_{k}": float(ev[k]) for k in ISO_FIGURES})
+    row.update({f"iso_{k}": ev.figures[k] for k in ISO_FIGURES})
     for k, v in dg.items():
         if not k.startswith("_"):
             row.update({f"diag_{k}": v["value"], f"diag_{k}_u": v["u"], f"diag_{k}_unit": v["unit"]})

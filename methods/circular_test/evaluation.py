@@ -23,6 +23,7 @@ import numpy as np
 
 import methods
 from methods._errors import InvalidInputError
+from methods._result import CircularTestFit
 from methods._validation import validate_points
 
 RADIUS_TOLERANCE = 0.05     # the data's mean radius may differ from the nominal radius by 5 % at most
@@ -97,8 +98,10 @@ def hysteresis(cw, ccw, center, samples=3600, partial=False):
     return float(np.max(np.abs(out[0] - out[1])))
 
 
-def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = "lsq", conditions=None) -> dict:
-    """ISO 230-4 figures of a bidirectional test (see the module docstring); lengths in data units."""
+def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = "lsq",
+             conditions=None) -> CircularTestFit:
+    """ISO 230-4 figures of a bidirectional test (see the module docstring) as a
+    :class:`~methods._result.CircularTestFit`; lengths in data units."""
     if center not in ("lsq", "mz"):
         raise InvalidInputError(f"center must be 'lsq' or 'mz', got {center!r}")
     if not (np.isfinite(nominal_radius) and nominal_radius > 0):
@@ -126,12 +129,15 @@ def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = 
     dev = radii(both, f_center) - nominal_radius
     if is_dataclass(conditions):
         conditions = asdict(conditions)
-    return {"G_cw": G_cw, "G_ccw": G_ccw, "G_b": G_b, "H": H, "F_max": float(dev.max()), "F_min": float(dev.min()),
-            "mean_radial_deviation": float(dev.mean()), "center": [float(v) for v in c_b],
-            "center_cw": [float(v) for v in c_cw], "center_ccw": [float(v) for v in c_ccw],
-            "center_kind": center, "F_center": [float(v) for v in f_center],
-            "F_about": "nominal centre" if nominal_center is not None else "least-squares centre of both runs",
-            "H_about": "least-squares centre of both runs (ISO 230-4:1996)",
-            "nominal_radius": float(nominal_radius), "n_points": {"cw": len(cw), "ccw": len(ccw)},
-            "conditions": conditions or {}, "partial_arc": bool(partial),
-            "arc_deg": {k: round(v, 3) for k, v in arcs.items()}}
+    about = {"lsq": "the least-squares centre", "mz": "the minimum-zone centre"}[center]
+    return CircularTestFit(
+        method="ISO 230-4", form_error=float(G_b), residuals=dev, converged=True,
+        message=f"ISO 230-4 figures: G about {about} of each run and of both runs, H and F as stated",
+        figures={"G_cw": float(G_cw), "G_ccw": float(G_ccw), "G_b": float(G_b), "H": H, "F_max": float(dev.max()),
+                 "F_min": float(dev.min()), "mean_radial_deviation": float(dev.mean())},
+        center=tuple(float(v) for v in c_b), center_cw=tuple(float(v) for v in c_cw),
+        center_ccw=tuple(float(v) for v in c_ccw), center_kind=center, F_center=tuple(float(v) for v in f_center),
+        F_about="nominal centre" if nominal_center is not None else "least-squares centre of both runs",
+        H_about="least-squares centre of both runs (ISO 230-4:1996)", nominal_radius=float(nominal_radius),
+        n_points={"cw": len(cw), "ccw": len(ccw)}, conditions=conditions or {}, partial_arc=bool(partial),
+        arc_deg={k: round(v, 3) for k, v in arcs.items()})

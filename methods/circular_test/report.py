@@ -64,25 +64,26 @@ def diagnostics_json(dg: dict) -> dict:
     return out
 
 
-def text(ev: dict, dg: dict | None) -> str:
+def text(ev, dg: dict | None) -> str:
+    """The evaluation ``ev`` (a CircularTestFit) and the diagnostics ``dg`` as a person reads them (µm)."""
     um = 1e3
-    arc = ev.get("arc_deg", {})
-    partial = ev.get("partial_arc", False)
+    arc = ev.arc_deg
+    partial = ev.partial_arc
     lines = ["ISO 230-4 circular test" + (f" (partial arc: CW {arc.get('cw', 0):.1f}°, CCW {arc.get('ccw', 0):.1f}°)"
                                           if partial else ""),
-             f"  nominal radius          {ev['nominal_radius']:.6g} mm",
-             f"  centre ({ev['center_kind']})          ({ev['center'][0]:.6f}, {ev['center'][1]:.6f}) mm",
-             f"  G  CW / CCW             {ev['G_cw'] * um:.2f} / {ev['G_ccw'] * um:.2f} µm",
-             f"  G(b)                    {ev['G_b'] * um:.2f} µm",
-             f"  H (1996)                {ev['H'] * um:.2f} µm{' (over the common arc)' if partial else ''}",
-             f"  F max / F min           {ev['F_max'] * um:+.2f} / {ev['F_min'] * um:+.2f} µm ({ev['F_about']})",
-             f"  mean radial deviation   {ev['mean_radial_deviation'] * um:+.2f} µm"]
+             f"  nominal radius          {ev.nominal_radius:.6g} mm",
+             f"  centre ({ev.center_kind})          ({ev.center[0]:.6f}, {ev.center[1]:.6f}) mm",
+             f"  G  CW / CCW             {ev.figures['G_cw'] * um:.2f} / {ev.figures['G_ccw'] * um:.2f} µm",
+             f"  G(b)                    {ev.figures['G_b'] * um:.2f} µm",
+             f"  H (1996)                {ev.figures['H'] * um:.2f} µm{' (over the common arc)' if partial else ''}",
+             f"  F max / F min           {ev.figures['F_max'] * um:+.2f} / {ev.figures['F_min'] * um:+.2f} µm ({ev.F_about})",
+             f"  mean radial deviation   {ev.figures['mean_radial_deviation'] * um:+.2f} µm"]
     if dg:
-        feed = (ev.get("conditions") or {}).get("feed_mm_min")
+        feed = ev.conditions.get("feed_mm_min")
         lines += ["diagnostics (least squares on the error signatures; value +- standard uncertainty), ranked by "
                   "their contribution to the circular deviation (peak-to-valley, µm)"]
-        plane = (ev.get("conditions") or {}).get("plane")
-        for label, item, contrib in ranked(dg, ev["nominal_radius"], feed, plane):
+        plane = ev.conditions.get("plane")
+        for label, item, contrib in ranked(dg, ev.nominal_radius, feed, plane):
             if item["value"] is None:
                 lines.append(f"  {label:<22}  {item.get('note', 'not estimated')}")
             else:
@@ -104,16 +105,16 @@ def _nice_division(span_um: float) -> float:
     return float(10 ** (exp + 1))
 
 
-def polar_plot(cw, ccw, ev: dict, path, title: str = "", *, diagnostics=None, conditions=None, save=None):
+def polar_plot(cw, ccw, ev, path, title: str = "", *, diagnostics=None, conditions=None, save=None):
     """Both runs as radial deviation (µm) about the evaluation centre, drawn on a polar grid whose
     rings are a fixed number of µm apart (the scale is printed: µm per division); the nominal circle is
     the ring 0; the G band (min and max radius of both runs) shaded; start (o) and direction (arrow)
     markers; a panel of test conditions and the ranked diagnostics. Returns the figure's scale dict
     {'um_per_division', 'divisions'}."""
     with report_figure(path, dpi=120, save=save, figsize=(11.5, 7.2)) as fig:
-        c = ev["center"]
-        R = ev["nominal_radius"]
-        cond = dict(ev.get("conditions") or {})
+        c = ev.center
+        R = ev.nominal_radius
+        cond = dict(ev.conditions)
         cond.update(conditions or {})
         runs = []
         for pts, label, colour in ((cw, "CW (G02)", "tab:blue"), (ccw, "CCW (G03)", "tab:red")):
@@ -155,13 +156,13 @@ def polar_plot(cw, ccw, ev: dict, path, title: str = "", *, diagnostics=None, co
         ax.set_rlim(0, outer)
         ax.set_rlabel_position(112.5)
         ax.set_thetagrids(np.arange(0, 360, 45), labels=[f"{a}°" for a in range(0, 360, 45)])
-        ax.set_title((title + "\n" if title else "") + f"radial deviation about the {ev['center_kind']} centre: "
+        ax.set_title((title + "\n" if title else "") + f"radial deviation about the {ev.center_kind} centre: "
                      f"scale {div:g} µm/div", fontsize=10)
         handles, labels = ax.get_legend_handles_labels()
         fig.legend(handles, labels, loc="lower left", fontsize=8, bbox_to_anchor=(0.64, 0.02), frameon=False)
         # the panel: test conditions, results, diagnostics ranked
         um = 1e3
-        arc = ev.get("arc_deg", {})
+        arc = ev.arc_deg
         centre = cond.get("nominal_center_mm") or cond.get("nominal_center")
         lines = ["Test conditions",
                  f"  machine      {cond.get('machine') or '-'}",
@@ -174,10 +175,10 @@ def polar_plot(cw, ccw, ev: dict, path, title: str = "", *, diagnostics=None, co
                  f"  scale        {div:g} µm/div",
                  "",
                  "Results (ISO 230-4)",
-                 f"  G CW / CCW   {ev['G_cw'] * um:.2f} / {ev['G_ccw'] * um:.2f} µm",
-                 f"  G(b)         {ev['G_b'] * um:.2f} µm",
-                 f"  H            {ev['H'] * um:.2f} µm",
-                 f"  F max / min  {ev['F_max'] * um:+.2f} / {ev['F_min'] * um:+.2f} µm"]
+                 f"  G CW / CCW   {ev.figures['G_cw'] * um:.2f} / {ev.figures['G_ccw'] * um:.2f} µm",
+                 f"  G(b)         {ev.figures['G_b'] * um:.2f} µm",
+                 f"  H            {ev.figures['H'] * um:.2f} µm",
+                 f"  F max / min  {ev.figures['F_max'] * um:+.2f} / {ev.figures['F_min'] * um:+.2f} µm"]
         if diagnostics:
             lines += ["", "Diagnostics (ranked, contribution µm)"]
             for label, item, contrib in ranked(diagnostics, R, cond.get("feed_mm_min"), cond.get("plane")):

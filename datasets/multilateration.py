@@ -103,7 +103,7 @@ def simulate(*, stations=6, grid=(5, 4, 4), offsets=TOOL_OFFSETS, errors: ErrorM
     lengths = dist - S[None, :, 3] + noise * sigma * rng.standard_normal(dist.shape)
     data = MultilaterationData(tuple(f"LT{k}" for k in chosen), nominal, lengths, offsets=offs)
     truth = {"stations": S, "axes": axes, "offsets": offs, "nominal": nominal, "actual": actual,
-             "volumetric_errors": vol, "model": model, "sigma": sigma}
+             "volumetric_errors": vol, "model": model, "sigma": sigma, "noise": float(noise)}
     return data, truth
 
 

@@ -50,12 +50,42 @@ TOLERANCES: dict[str, Tolerance | None] = {
     "center_error_x": _ERRORS, "center_error_y": _ERRORS, "center_error": _ERRORS, "radius_error": _ERRORS,
     "semi_axis_a_error": _ERRORS, "semi_axis_b_error": _ERRORS, "angle_error": _ERRORS,
     "message": None,
+    # multilateration (lengths in µm of a 1000-mm machine): least-squares adjustments with condition numbers 1e4-1e8 (4-6
+    # stations) and up to 9e11 (4 stations within 1.3 mm of a plane, the paper's bad case). Between OpenBLAS's
+    # Haswell and Sandybridge kernels (tests/test_cpu_independence.py) the near-planar case's values moved by up to
+    # 1e-5 relative (1.1e-3 µm of 116 µm), the identified coefficients' relative error by 1e-4 of itself, the others
+    # by 3e-8 relative or 1.2e-4 µm; the exact-length check measures the published scheme's own rounding (~1e-4 µm).
+    # Declared: 1e-4 relative and 1e-2 µm (10 nm), a margin of 10.
+    **dict.fromkeys(("station_error_um", "dead_path_error_um", "volumetric_error_rms_um", "volumetric_error_max_um",
+                     "aligned_error_rms_um", "model_error_rms_um", "published_vs_centred_um", "case_a_vs_truth_um",
+                     "case_b_vs_truth_um"),
+                    Tolerance(1e-4, 1e-2, "a µm length of an adjustment with condition numbers up to 9e11: CPU rounding")),
+    "identified_max_relative_error": Tolerance(1e-3, 1e-7, "relative error of 21 identified coefficients: moved 1e-4 "
+                                                           "of itself between BLAS kernels (near-planar stations)"),
+    # condition numbers by SVD: sigma_min carries an absolute error of eps sigma_max (seen: 2e-7 relative)
+    **dict.fromkeys(("kappa_stations", "kappa_stations_max", "kappa_points", "kappa_points_max",
+                     "kappa_stations_theorem1", "kappa_points_theorem1"),
+                    Tolerance(1e-5, 0.0, "a condition number sigma_max / sigma_min: sigma_min is known to eps sigma_max")),
+    # the per-station deltas as a JSON list for the report, rounded to 1e-6 µm: their size is station_error_um
+    "station_deltas_um": None,
 }
 DEFAULT_TOLERANCE = Tolerance(1e-9, 1e-12, "a numeric study column not declared here: the geometric fits' 1e-9")
 #: Wider tolerances of methods or studies that are chaotic by nature: (study glob, method glob, column) -> Tolerance.
-#: Each entry says why; verify prints them with the verdict. None declared: every method here is expected to meet
-#: the column's tolerance above on any CPU (issue 17), and verify shows where it does not.
-CHAOTIC: dict[tuple[str, str, str], Tolerance] = {}
+#: Each entry says why; verify prints them with the verdict. Every other method meets the column's tolerance above
+#: between OpenBLAS's Haswell and SkylakeX kernels (tests/test_cpu_independence.py).
+_ORTHOGONAL_WHY = ("ellipse.orthogonal on the study's near-circular ellipses (b/a to 0.99): the data fix the angle to "
+                   "~1e-7 rad only, and MINPACK's ftol stop lands one iteration earlier or later for a Halir-Flusser "
+                   "start that differs in its last bit (its 3x3 eigenproblem is LAPACK's, on a BLAS kernel chosen "
+                   "per CPU); seen: 1 iteration, 3 evaluations, 7e-8 rad, 2e-9 in the semi-axes")
+CHAOTIC: dict[tuple[str, str, str], Tolerance] = {
+    ("ellipse_angle", "ellipse.orthogonal", "iterations"): Tolerance(0.0, 2.0, _ORTHOGONAL_WHY),
+    ("ellipse_angle", "ellipse.orthogonal", "nfev"): Tolerance(0.0, 6.0, _ORTHOGONAL_WHY),
+    ("ellipse_angle", "ellipse.orthogonal", "form_error"): Tolerance(1e-6, 1e-9, _ORTHOGONAL_WHY),
+    **{("ellipse_angle", "ellipse.orthogonal", c): Tolerance(1e-6, 1e-6, _ORTHOGONAL_WHY) for c in ("angle", "angle_error")},
+    **{("ellipse_angle", "ellipse.orthogonal", c): Tolerance(1e-6, 1e-8, _ORTHOGONAL_WHY)
+       for c in ("center_x", "center_y", "semi_axis_a", "semi_axis_b", "center_error_x", "center_error_y",
+                 "center_error", "semi_axis_a_error", "semi_axis_b_error", "residual_rms")},
+}
 
 
 def tolerance(column: str, study: str = "", method: str = "") -> Tolerance | None:

@@ -38,16 +38,18 @@ _handoff = threading.local()
 
 
 def dot(a: np.ndarray, b: np.ndarray) -> float:
-    """sum(a * b) of two 1-D arrays by NumPy's own single-threaded SIMD loop (np.einsum), not BLAS:
-    on a loaded machine a threaded BLAS ddot of 10^5 numbers can take 100x longer, and the sum of
-    products needs no temporary array. Short vectors go to BLAS, whose call overhead is lower and
-    which does not thread them."""
-    if a.size < EINSUM_FROM:  # below BLAS's threading threshold its call is cheaper (3 us vs 7 us)
-        return float(a @ b)
+    """sum(a * b) of two 1-D arrays by NumPy's own loops, never BLAS: a BLAS ddot kernel is chosen per CPU
+    (OpenBLAS's Haswell and SkylakeX kernels round differently), and a last-bit difference in an objective
+    changes the path of a Nelder–Mead simplex, hence its iteration count and status, from one CPU to the next
+    (``tests/test_cpu_independence.py``). NumPy's pairwise sum and np.einsum are compiled once for the
+    baseline instruction set and give the same bits on every x86-64 CPU; np.einsum needs no temporary array,
+    the product-then-sum is cheaper to call for short vectors."""
+    if a.size < EINSUM_FROM:
+        return float(np.add.reduce(a * b))
     return float(np.einsum("i,i->", a, b))
 
 
-#: vector length from which :func:`dot` uses np.einsum rather than BLAS
+#: vector length from which :func:`dot` uses np.einsum (no temporary) rather than a product and a pairwise sum
 EINSUM_FROM = 8192
 
 

@@ -1,6 +1,8 @@
 """Issue 16 items 1-3: every config problem refused before a row runs, in one line naming file, key and problem."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from experiments import config as configs
@@ -156,3 +158,26 @@ def test_a_study_declares_its_own_config_keys(tmp_path, monkeypatch):
         assert key not in schema.TOP_LEVEL
     with pytest.raises(ValueError, match="redefines the common key"):
         schema.config_schema({"seed": {"type": "string"}})
+
+
+MAGNIFICATION = (Path(__file__).resolve().parents[1] / "experiments" / "configs" / "magnification.toml").read_text()
+
+
+@pytest.mark.parametrize("old,new,key", [
+    ('method = "magnify.nearest"', 'method = "magnify.nearst"', "variants[0]"),
+    ('params = { selection = "same_side", delta_emax = 2.0 }', 'params = { selection = "same_side", delt = 2.0 }',
+     "variants[2]"),
+    ('times_eta = ["delta_emax"]', 'times_eta = ["delta"]', "variants[4]"),
+    ('label = "offset same side, delta = 2 e_max"', 'label = "nearest (conventional)"', "unique"),
+    ('example = "corner_inside_convex"', 'example = "corner_nowhere"', "trajectories[0]"),
+    ('box = [15.0, 16.6, 1.9, 3.0]', 'box = [15.0, 16.6]', "box"),
+])
+def test_magnification_variants_are_checked(tmp_path, old, new, key):
+    """The magnification study's algorithm variants and drawn trajectories are data (its TOML), checked on load."""
+    assert old in MAGNIFICATION
+    path = tmp_path / "magnification.toml"
+    path.write_text(MAGNIFICATION.replace(old, new, 1))
+    with pytest.raises(ConfigError) as info:
+        configs.load(str(path), quick=True)
+    msg = str(info.value)
+    assert "\n" not in msg and key in msg, msg

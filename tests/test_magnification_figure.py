@@ -5,6 +5,7 @@ import logging
 
 import pytest
 
+from experiments import config as configs
 from experiments.render import figures, style
 from experiments.studies import magnification
 
@@ -15,9 +16,9 @@ def drawn(monkeypatch, tmp_path, caplog):
     kept = []
     save = style.save
     monkeypatch.setattr(style, "save", lambda fig, path, **kw: (kept.append(fig), save(fig, path, **kw))[1])
-    examples = {name: 200.0 for name, _, _ in magnification.SHOWN}
-    panels = [magnification._panel(name, label, examples[name], box)
-              for name, labels, box in magnification.SHOWN for label in labels]
+    cfg = configs.load("magnification", quick=True)
+    cfg["examples"] = {name: 200.0 for name in cfg["examples"]}
+    panels = magnification._panels(cfg)
     with caplog.at_level(logging.WARNING, logger="matplotlib"):
         figures.magnification_trajectories(panels, tmp_path / "magnification.png")
     assert (tmp_path / "magnification.png").stat().st_size > 10_000

@@ -106,3 +106,22 @@ def test_cli(tmp_path):
     bad = run_python("-m", "methods", "magnify", tmp_path / "ref.csv", tmp_path / "meas.csv", "--eta", "200",
                      "--delta", "0.001")
     assert bad.returncode == 2 and "larger than the largest contouring error" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_delta_as_a_multiple_of_the_largest_contouring_error():
+    """delta_emax = k gives delta = k e_max, e_max being the nearest-point method's largest error (also reported
+    by both methods as extra['max_contouring_error']); delta and delta_emax together are refused."""
+    data = MagnifyInput(*free_form())
+    nearest = methods.fit("magnify.nearest", data, eta=200)
+    emax = nearest.form_error
+    assert nearest.extra["max_contouring_error"] == emax
+    by_multiple = methods.fit("magnify.offset", data, eta=200, delta_emax=1.2 * 200)
+    by_length = methods.fit("magnify.offset", data, eta=200, delta=1.2 * 200 * emax)
+    assert by_multiple.extra["delta"] == pytest.approx(1.2 * 200 * emax, rel=1e-15)
+    assert by_multiple.extra["max_contouring_error"] == emax
+    np.testing.assert_allclose(by_multiple.points, by_length.points, rtol=0, atol=1e-9)
+    assert methods.fit("magnify.offset", data, eta=200).extra["delta"] == 2.0 * emax   # the default
+    with pytest.raises(InvalidInputError, match="not both"):
+        methods.fit("magnify.offset", data, eta=200, delta=1.0, delta_emax=2.0)
+    with pytest.raises(InvalidInputError, match="must be larger than the largest contouring error"):
+        methods.fit("magnify.offset", data, eta=200, delta_emax=0.5)

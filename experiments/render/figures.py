@@ -175,10 +175,8 @@ def magnification_continuity(results: pd.DataFrame, path, *, threshold: float = 
 
 def magnification_trajectories(panels: list[dict], path):
     """Magnified trajectories side by side. Each panel: {'example': name in datasets.contouring.EXAMPLES,
-    'eta': magnification, 'method': 'magnify.nearest' | 'magnify.offset', 'params': {...} (delta as
-    'delta_emax': multiple of the largest error, optionally times eta with 'delta_times_eta': true),
-    'title': str, 'box': (x0, x1, y0, y1) in mm or None}. Axes in mm, reference and magnified path in the
-    legend."""
+    'eta': magnification, 'method': a magnify method id, 'params': its other parameters, 'title': str,
+    'box': (x0, x1, y0, y1) in mm or None}. Axes in mm, reference and magnified path in the legend."""
     import matplotlib.pyplot as plt
     import methods
     from datasets.contouring import EXAMPLES
@@ -191,11 +189,7 @@ def magnification_trajectories(panels: list[dict], path):
             ref, meas = EXAMPLES[pnl["example"]]()
             data = MagnifyInput(ref, meas)
             eta = float(pnl["eta"])
-            params = dict(pnl.get("params", {}))
-            emax = methods.fit("magnify.nearest", data, eta=eta).form_error
-            if "delta_emax" in params:
-                params["delta"] = params.pop("delta_emax") * emax * (eta if params.pop("delta_times_eta", False) else 1)
-            res = methods.fit(pnl["method"], data, eta=eta, **params)
+            res = methods.fit(pnl["method"], data, eta=eta, **pnl.get("params", {}))
             ax.plot(*data.reference.T, color="0.55", lw=1.0, label="reference path")
             ax.plot(*res.points.T, color=style.PALETTE[0], lw=0.9, label="magnified path (error × η)")
             if pnl.get("box"):

@@ -14,14 +14,18 @@ from experiments.study import Analysis, Figure, Table, save_csv
 #: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
 CONFIG_SCHEMA = {
     "examples": {"type": "object", "minProperties": 1},
-}
-
-VARIANTS = {  # label -> (method, selection, delta rule)
-    "nearest (conventional)": ("magnify.nearest", None, None),
-    "offset as printed, delta = 10 e_max": ("magnify.offset", "nearest_of_both", ("e", 10.0)),
-    "offset same side, delta = 2 e_max": ("magnify.offset", "same_side", ("e", 2.0)),
-    "offset same side, delta = 10 e_max": ("magnify.offset", "same_side", ("e", 10.0)),
-    "offset same side, delta = 1.2 eta e_max": ("magnify.offset", "same_side", ("eta_e", 1.2)),
+    # the algorithm variants compared: a label (the rows' method column), a magnify method and its parameters;
+    # ``times_eta`` names parameters multiplied by the example's eta (e.g. delta_emax = 1.2 -> 1.2 eta e_max)
+    "variants": {"type": "array", "minItems": 1, "items": {
+        "type": "object", "required": ["label", "method"], "additionalProperties": False,
+        "properties": {"label": {"type": "string", "minLength": 1}, "method": {"type": "string", "minLength": 1},
+                       "params": {"type": "object"}, "times_eta": {"type": "array", "items": {"type": "string"}}}}},
+    # the trajectories drawn side by side: an example, the variants (labels) and a zoom box [x0, x1, y0, y1] in mm
+    "trajectories": {"type": "array", "items": {
+        "type": "object", "required": ["example", "variants"], "additionalProperties": False,
+        "properties": {"example": {"type": "string"}, "variants": {"type": "array", "minItems": 1,
+                                                                   "items": {"type": "string"}},
+                       "box": {"type": "array", "items": {"type": "number"}, "minItems": 4, "maxItems": 4}}}},
 }
 
 
@@ -29,55 +33,69 @@ def validate(cfg, where):
     bad = set(cfg.get("examples", {})) - set(EXAMPLES)
     if bad or not cfg.get("examples"):
         raise ConfigError(f"{where}: examples must name some of {', '.join(EXAMPLES)} (got {sorted(bad) or 'none'})")
+    if not cfg.get("variants"):
+        raise ConfigError(f"{where}: needs [[variants]] tables (label, method, params)")
+    labels = [v["label"] for v in cfg["variants"]]
+    if len(set(labels)) != len(labels):
+        raise ConfigError(f"{where}: variant labels must be unique, got {labels}")
+    for j, v in enumerate(cfg["variants"]):
+        try:
+            spec = methods.get(v["method"])
+        except methods.UnknownMethodError as exc:
+            raise ConfigError(f"{where} variants[{j}]: {exc}") from None
+        unknown = (set(v.get("params", {})) | set(v.get("times_eta", []))) - set(spec.defaults) | (
+            set(v.get("times_eta", [])) - set(v.get("params", {})))
+        if unknown or "eta" in v.get("params", {}):
+            raise ConfigError(f"{where} variants[{j}]: {spec.id} parameter(s) {', '.join(sorted(unknown)) or 'eta'} "
+                              f"cannot be set here (eta comes from [examples]; times_eta names given params); its "
+                              f"parameters are: {', '.join(k for k in spec.defaults if k != 'eta')}")
+    for j, t in enumerate(cfg.get("trajectories", [])):
+        if t["example"] not in cfg["examples"] or set(t["variants"]) - set(labels):
+            raise ConfigError(f"{where} trajectories[{j}]: example must be one of [examples] and variants among the "
+                              f"[[variants]] labels; got {t['example']!r}, {t['variants']}")
 
 
 def tasks(cfg):
     out = []
     for i, (name, eta) in enumerate(cfg["examples"].items()):
-        for label in VARIANTS:
+        for v in cfg["variants"]:
             out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": {"entry": i, "point": 0, "label": name},
-                        "repetition": 0, "stream": [i, 0, 0], "seed": cfg["seed"], "method": label, "params": {},
-                        "timing": None, "x_eta": float(eta)})
+                        "repetition": 0, "stream": [i, 0, 0], "seed": cfg["seed"], "method": v["label"],
+                        "params": {}, "timing": None, "x_eta": float(eta), "x_variant": v})
     return out
 
 
-def run_variant(name, label, eta):
-    ref, meas = EXAMPLES[name]()
-    data = MagnifyInput(ref, meas)
-    method, selection, rule = VARIANTS[label]
-    params = {"eta": eta}
-    emax = methods.fit("magnify.nearest", data, eta=eta).form_error
-    if method == "magnify.offset":
-        params["selection"] = selection
-        params["delta"] = rule[1] * emax * (eta if rule[0] == "eta_e" else 1.0)
-    return data, methods.fit(method, data, **params), params, emax
+def variant_params(variant: dict, eta: float) -> dict:
+    """The method parameters of a [[variants]] entry for an example magnified by ``eta``."""
+    params = dict(variant.get("params", {}))
+    for k in variant.get("times_eta", []):
+        params[k] = params[k] * eta
+    return {"eta": eta, **params}
 
 
 def execute(task):
     """One row per (example, variant), built on the engine's identity columns (engine.base_row)."""
-    name, label, eta = task["dataset"]["label"], task["method"], task["x_eta"]
+    name, eta, variant = task["dataset"]["label"], task["x_eta"], task["x_variant"]
     row = {**engine.base_row(task), "param_eta": eta}
     try:
-        _, res, params, emax = run_variant(name, label, eta)
+        ref, meas = EXAMPLES[name]()
+        res = methods.fit(variant["method"], MagnifyInput(ref, meas), **variant_params(variant, eta))
     except methods.InvalidInputError as exc:
         return {**row, "status": "skipped", "message": str(exc)}
-    return {**row, "param_delta": params.get("delta"), "status": "ok" if res.converged else "not converged",
-            "message": res.message, "max_error_um": emax * 1e3, "continuity": res.extra["continuity"],
-            "loops": res.extra["self_intersections"], "nearest_point_used": res.extra.get("nearest_point_used", 0)}
+    return {**row, "delta_mm": res.extra.get("delta"), "status": "ok" if res.converged else "not converged",
+            "message": res.message, "max_error_um": res.extra["max_contouring_error"] * 1e3,
+            "continuity": res.extra["continuity"], "loops": res.extra["self_intersections"],
+            "nearest_point_used": res.extra.get("nearest_point_used", 0)}
 
 
-#: the trajectories drawn side by side: (example, variants, zoom box in mm or None)
-SHOWN = [("corner_inside_convex", ["nearest (conventional)", "offset as printed, delta = 10 e_max",
-                                   "offset same side, delta = 10 e_max"], None),
-         ("free_form_0.1mm", ["nearest (conventional)", "offset same side, delta = 2 e_max",
-                              "offset same side, delta = 1.2 eta e_max"], (15.0, 16.6, 1.9, 3.0))]
-
-
-def _panel(name, label, eta, box):
-    method, selection, rule = VARIANTS[label]
-    params = {} if method == "magnify.nearest" else {"selection": selection, "delta_emax": rule[1],
-                                                     "delta_times_eta": rule[0] == "eta_e"}
-    return {"example": name, "eta": eta, "method": method, "params": params, "title": f"{name}:\n{label}", "box": box}
+def _panels(cfg):
+    """The declared [[trajectories]] as panels of figures.magnification_trajectories."""
+    variants = {v["label"]: v for v in cfg["variants"]}
+    return [{"example": t["example"], "eta": cfg["examples"][t["example"]], "method": variants[lab]["method"],
+             "params": {k: v for k, v in variant_params(variants[lab], cfg["examples"][t["example"]]).items()
+                        if k != "eta"},
+             "title": f"{t['example']}:\n{lab}", "box": tuple(t["box"]) if t.get("box") else None}
+            for t in cfg.get("trajectories", []) for lab in t["variants"]]
 
 
 def analyse(df, cfg, target, log):
@@ -90,11 +108,13 @@ def analyse(df, cfg, target, log):
     cells = df.assign(cell=[("skipped" if st != "ok" else f"{c:.2f} / {int(lo)}")
                             for st, c, lo in zip(df["status"], df["continuity"], df["loops"])])
     piv = cells.pivot_table(index="dataset", columns="method", values="cell", aggfunc="first", sort=False)
-    piv = piv[[v for v in VARIANTS if v in piv.columns]].rename_axis("example").reset_index()
+    labels = [v["label"] for v in cfg["variants"]]
+    piv = piv[[v for v in labels if v in piv.columns]].rename_axis("example").reset_index()
     log(piv.to_string(index=False))
     figures.magnification_continuity(df, target / "magnification_continuity.png")
-    figures.magnification_trajectories([_panel(n, lab, cfg["examples"][n], box) for n, labs, box in SHOWN
-                                        if n in cfg["examples"] for lab in labs], target / "magnification.png")
+    panels = _panels(cfg)
+    if panels:
+        figures.magnification_trajectories(panels, target / "magnification.png")
     ok = df[df["status"] == "ok"]
     clean = {}
     for label, g in ok.groupby("method", sort=False):
@@ -104,13 +124,14 @@ def analyse(df, cfg, target, log):
               "skipped": df[df["status"] != "ok"].groupby("method").size().to_dict()}
     findings = ("Examples where the magnified trajectory is continuous (continuity ≤ 1) and has no loops, out of "
                 "those the algorithm applies to: " + "; ".join(f"{lab}: {clean[lab]} of {applied[lab]}"
-                                                              for lab in VARIANTS if lab in clean) + ".")
+                                                              for lab in labels if lab in clean) + ".")
     caption = (f"Continuity (largest magnified step / (eta x largest measured step); about 1 or less: continuous) and "
                f"loops (self-intersections) of the magnified trajectory, as 'continuity / loops', for "
                f"{len(cfg['examples'])} contouring examples (eta 50 to 1000, dimensionless); 'skipped': the algorithm "
                "does not apply")
     figs = [Figure(caption="Continuity (left, log scale) and loops (right) of the magnified trajectory per contouring "
-                           "example and algorithm variant", file="magnification_continuity.png"),
-            Figure(caption="Magnified trajectories (positions in mm, errors magnified by η) by the conventional "
-                           "nearest-point rule and by offset-algorithm variants", file="magnification.png")]
+                           "example and algorithm variant", file="magnification_continuity.png")]
+    if panels:
+        figs.append(Figure(caption="Magnified trajectories (positions in mm, errors magnified by η) by the conventional "
+                                   "nearest-point rule and by offset-algorithm variants", file="magnification.png"))
     return Analysis(tables=[Table(caption=caption, data=piv)], figures=figs, values=values, findings=findings)

@@ -51,21 +51,11 @@ def kasa_xy(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Kåsa's algebraic fit in the unit frame: least squares of the linear system of eq. 7
     (roundness paper) [2x 2y -1][xc yc w]^T = x^2 + y^2, with w = xc^2 + yc^2 - R^2 (eq. 6).
 
-    Solved through the R factor of the QR decomposition of [K | L] (as accurate as lstsq on K)."""
-    aug = np.empty((len(x), 4))
-    aug[:, 0] = 2.0 * x
-    aug[:, 1] = 2.0 * y
-    aug[:, 2] = -1.0
-    aug[:, 3] = x * x + y * y
-    r = np.linalg.qr(aug, mode="r")
-    if r.shape[0] < 4:  # N = 3: pad with zero rows (R^T R = A^T A still holds)
-        r = np.vstack([r, np.zeros((4 - r.shape[0], 4))])
-    try:
-        xc, yc, w = np.linalg.solve(r[:3, :3], r[:3, 3])
-    except np.linalg.LinAlgError:
-        return np.full(3, np.nan)
-    r2 = xc * xc + yc * yc - w
-    return np.array([xc, yc, np.sqrt(r2) if r2 > 0 else np.nan])
+    From its normal equations (:func:`moments`, :func:`kasa_moments`): on centred, scaled data they are as well
+    conditioned as the circle's shape allows, and their sums and 3x3 solve use no BLAS, so a start built on
+    them is the same on every CPU (a QR factorisation's Householder updates go through BLAS kernels chosen per
+    CPU, and a Nelder–Mead simplex started one ulp away ends after another number of iterations)."""
+    return kasa_moments(moments(x, y))
 
 
 def kasa_unit(u: np.ndarray) -> np.ndarray:
@@ -108,7 +98,7 @@ def kasa_moments(m: np.ndarray, ck=None) -> np.ndarray:
     """Kåsa's circle (roundness paper eq. 7: least squares of [2x 2y -1][xc yc w]^T = x^2 + y^2,
     w = xc^2 + yc^2 - R^2) from the moment matrix of :func:`moments`: its 3x3 normal equations
     (``ck``: solved by the compiled ``solve3``, Gaussian elimination with partial pivoting as LAPACK's
-    dgesv, without NumPy's per-call overhead; else by np.linalg.solve)."""
+    dgesv, without NumPy's per-call overhead; else by the same elimination in Python, :func:`solve3`)."""
     if ck is not None:
         (_, m01, m02, m03), (_, m11, m12, m13), (_, _, m22, m23), (_, _, _, m33) = m.tolist()
         sol = ck.solve3((4 * m11, 4 * m12, -2 * m13, 4 * m12, 4 * m22, -2 * m23, -2 * m13, -2 * m23, m33),
@@ -118,16 +108,47 @@ def kasa_moments(m: np.ndarray, ck=None) -> np.ndarray:
         xc, yc, w = sol
         r2 = xc * xc + yc * yc - w
         return np.array([xc, yc, math.sqrt(r2) if r2 > 0 else math.nan])
-    ata = np.array([[4 * m[1, 1], 4 * m[1, 2], -2 * m[1, 3]],
-                    [4 * m[1, 2], 4 * m[2, 2], -2 * m[2, 3]],
-                    [-2 * m[1, 3], -2 * m[2, 3], m[3, 3]]])
-    atl = np.array([2 * m[0, 1], 2 * m[0, 2], -m[0, 3]])
-    try:
-        xc, yc, w = np.linalg.solve(ata, atl)
-    except np.linalg.LinAlgError:
+    (_, m01, m02, m03), (_, m11, m12, m13), (_, _, m22, m23), (_, _, _, m33) = m.tolist()
+    sol = solve3((4 * m11, 4 * m12, -2 * m13, 4 * m12, 4 * m22, -2 * m23, -2 * m13, -2 * m23, m33),
+                 (2 * m01, 2 * m02, -m03))
+    if sol is None:
         return np.full(3, np.nan)
+    xc, yc, w = sol
     r2 = xc * xc + yc * yc - w
-    return np.array([xc, yc, np.sqrt(r2) if r2 > 0 else np.nan])
+    return np.array([xc, yc, math.sqrt(r2) if r2 > 0 else math.nan])
+
+
+def solve3(a, b, rtol: float = 0.0):
+    """x of the 3x3 system A x = b (``a``: 9 numbers, row major) by Gaussian elimination with partial pivoting,
+    the same operations in the same order as the compiled ``solve3`` (hence the same bits) and as LAPACK's
+    dgetf2/dtrsm; None when singular (an exact zero pivot, or with ``rtol`` > 0 one <= rtol max|a_ij|).
+    Plain float arithmetic, never BLAS: LAPACK's solve goes through a BLAS kernel chosen per CPU, and a
+    last-bit change in a start moves a Nelder–Mead simplex to another iteration count on another CPU."""
+    A = [list(a[0:3]), list(a[3:6]), list(a[6:9])]
+    bb = list(b)
+    amax = max(abs(v) for v in a)
+    for k in range(3):
+        piv = k
+        for i in range(k + 1, 3):
+            if abs(A[i][k]) > abs(A[piv][k]):
+                piv = i
+        if A[piv][k] == 0.0 or (rtol > 0.0 and not abs(A[piv][k]) > rtol * amax):
+            return None
+        if piv != k:
+            A[k], A[piv] = A[piv], A[k]
+            bb[k], bb[piv] = bb[piv], bb[k]
+        rp = 1.0 / A[k][k]
+        for i in range(k + 1, 3):
+            lik = A[i][k] * rp
+            for j in range(k + 1, 3):
+                A[i][j] = A[i][j] - lik * A[k][j]
+            bb[i] = bb[i] - lik * bb[k]
+    x = bb[:]
+    for k in (2, 1, 0):
+        x[k] = x[k] / A[k][k]
+        for i in range(k):
+            x[i] = x[i] - x[k] * A[i][k]
+    return x
 
 
 def geometric_normal_equations(x, y, p, work: np.ndarray | None = None):
@@ -245,7 +266,7 @@ GN_PIVOT_RTOL = 24 * _EPS
 
 
 def solve_linear(ck):
-    """solve(A, b) for the 3x3 Gauss–Newton/LM systems: np.linalg.solve (NumPy path), or the compiled
+    """solve(A, b) for the 3x3 Gauss–Newton/LM systems: :func:`solve3` (NumPy path), or the compiled
     ``solve3`` (Gaussian elimination with partial pivoting as LAPACK's dgetf2/dtrsm, without NumPy's per-call
     overhead). Both raise np.linalg.LinAlgError when J^T J is singular: LAPACK at an exactly zero pivot;
     the compiled path also at a pivot below GN_PIVOT_RTOL max|J^T J|, the rounding of the sums. (When an
@@ -253,11 +274,11 @@ def solve_linear(ck):
     exact arithmetic; whether its pivot then comes out exactly 0 depends on the summation order: LAPACK on
     NumPy's sums said "singular", the compiled sums left 1e-17 and GN walked on. The tolerance makes that
     verdict independent of the order.)"""
-    if ck is None:
-        return np.linalg.solve
-
     def solve(a, b):
-        x = ck.solve3(tuple(a.ravel().tolist()), tuple(b.tolist()), GN_PIVOT_RTOL)
+        if ck is None:  # the NumPy path: the same elimination in Python, singular at an exact zero pivot
+            x = solve3(a.ravel().tolist(), b.tolist())
+        else:
+            x = ck.solve3(tuple(a.ravel().tolist()), tuple(b.tolist()), GN_PIVOT_RTOL)
         if x is None:
             raise np.linalg.LinAlgError("Singular matrix")
         return np.array(x)

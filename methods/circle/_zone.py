@@ -13,6 +13,7 @@ from itertools import combinations
 
 import numpy as np
 
+from methods._frame import dot
 from methods._lazy import lazy_module
 
 clarabel = lazy_module("clarabel")
@@ -35,8 +36,8 @@ def kasa_normal(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """A fast start centre: Kåsa's fit from its 2x2 normal equations on centred unit-frame data
     (a few streaming passes; accuracy only matters for the speed of what follows)."""
     z = x * x + y * y
-    sxx, sxy, syy = x @ x, x @ y, y @ y
-    bx, by = 0.5 * (x @ z), 0.5 * (y @ z)
+    sxx, sxy, syy = dot(x, x), dot(x, y), dot(y, y)   # not BLAS: the same bits on every CPU (methods._frame.dot)
+    bx, by = 0.5 * dot(x, z), 0.5 * dot(y, z)
     det = sxx * syy - sxy * sxy
     if not det > 1e-300:
         return np.zeros(2)

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from methods._compiled import kernels
-from methods._frame import UnitFrame
+from methods._frame import UnitFrame, dot
 
 EPS = np.finfo(float).eps
 
@@ -36,7 +36,7 @@ class Frame(UnitFrame):
             return super().of(points)  # refused by validation before (identical or non-finite points)
         x /= big
         y /= big
-        rms = float(np.sqrt((x @ x + y @ y) / n))
+        rms = float(np.sqrt((dot(x, x) + dot(y, y)) / n))
         x /= rms
         y /= rms
         return cls(shift=np.array([mx, my]), scale=big * rms, x=x, y=y)

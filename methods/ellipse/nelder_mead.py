@@ -19,6 +19,7 @@ import numpy as np
 
 from methods import _simplex as simplex
 from methods._errors import InvalidInputError
+from methods._frame import dot
 from methods._registry import register
 from methods._validation import check_choice, check_positive, check_vector
 from methods.circle._frame import kasa_xy
@@ -73,6 +74,7 @@ def _minimise(objective, residuals, jacobian, noise, x0, lam, *, backend, xatol,
     x = np.asarray(x0, dtype=np.float64)
     history, iterations, nfev, probe, message = [], 0, 0, None, ""
     f_best = float(objective(x))
+    stalled = 0
     for round_ in range(1, MAX_ROUNDS + 1):
         left = max_fev - nfev
         if left <= len(x) + 1:
@@ -81,7 +83,10 @@ def _minimise(objective, residuals, jacobian, noise, x0, lam, *, backend, xatol,
         r_now = residuals(x)
         fatol_eff = max(float(fatol or 0.0), sum_of_squares_noise(r_now, noise(x)) if np.isfinite(r_now).all() else 0.0)
         xtol = xatol if xatol is not None else (np.inf if backend == "scipy" else 1e-13)
-        run = simplex.nelder_mead(objective, x, lam, backend=backend, xatol=xtol, fatol=fatol_eff, max_fev=left)
+        # after a restart without progress, one more from a simplex reflected and ten times larger (a collapsed
+        # simplex can stall Nelder-Mead away from a minimum: McKinnon 1998; Kelley 1999 restarts it afresh)
+        steps = lam if stalled == 0 else -10.0 * lam
+        run = simplex.nelder_mead(objective, x, steps, backend=backend, xatol=xtol, fatol=fatol_eff, max_fev=left)
         iterations += run.iterations or 0
         nfev += run.nfev
         history += run.history
@@ -96,8 +101,12 @@ def _minimise(objective, residuals, jacobian, noise, x0, lam, *, backend, xatol,
             return x, True, message, iterations, nfev, history, probe
         message = probe.reason()
         if not progressed and round_ > 1:
-            message += f"; Nelder-Mead restarted there makes no progress ({run.message})"
-            break
+            stalled += 1
+            if stalled == 2:
+                message += f"; Nelder-Mead restarted there makes no progress ({run.message})"
+                break
+        else:
+            stalled = 0
     else:
         message = (message + "; " if message else "") + f"{MAX_ROUNDS} Nelder-Mead restarts"
     return x, False, message, iterations or None, nfev, history, probe
@@ -180,7 +189,7 @@ def _fit(points, model, name, scale_power, backend, start, step, xatol, fatol, m
 
     def objective(q):
         r = residuals(q)
-        return float(r @ r) if np.isfinite(r).all() else np.inf
+        return dot(r, r) if np.isfinite(r).all() else np.inf   # not BLAS: the same bits on every CPU
 
     out = _minimise(objective, residuals, jacobian, term_size, x0, lam, backend=backend, xatol=xatol, fatol=fatol,
                     max_fev=max_fev)

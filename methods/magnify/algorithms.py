@@ -48,13 +48,15 @@ def _eta(eta, method_id) -> float:
     return float(check_positive("eta", eta, method_id))
 
 
-def _finish(data: MagnifyInput, r, eta, extra, message):
+def _finish(data: MagnifyInput, r, eta, extra, message, e_max):
+    """The result; ``e_max`` is the largest contouring error (distance of a measured point from R)."""
     p = data.measured
     mag = r + eta * (p - r)
     err = np.hypot(*(p - r).T)
     return MagnifyFit(points=mag, reference_points=r, form_error=float(np.nanmax(err)), residuals=err,
                       converged=bool(np.isfinite(mag).all()), message=message,
-                      extra={**extra, "continuity": continuity(mag, p, eta), "self_intersections": self_intersections(mag)})
+                      extra={**extra, "max_contouring_error": e_max, "continuity": continuity(mag, p, eta),
+                             "self_intersections": self_intersections(mag)})
 
 
 @register("magnify.nearest", kind="closed form", validator=validate,
@@ -66,24 +68,30 @@ def nearest(data, *, eta=1000.0):
     eta = _eta(eta, "magnify.nearest")
     line = data.line
     pts_geom = shapely.points(data.measured)
-    r, _, _ = _signed_error(line, pts_geom, data.measured)
-    return _finish(data, r, float(eta), {}, "nearest-point magnification")
+    r, err, _ = _signed_error(line, pts_geom, data.measured)
+    return _finish(data, r, float(eta), {}, "nearest-point magnification", float(err.max()))
 
 
 @register("magnify.offset", kind="closed form", validator=validate,
           summary="Contour-parallel-offset magnification (offsets at +-delta, line from the offset point to p meets R)",
           reference="Ibaraki & Matsubara, Precis. Eng. 33 (2009) 322-326, sec. 2 steps (1)-(4), eq. 1")
-def offset(data, *, eta=1000.0, delta=None, selection="same_side"):
-    """Steps (1)-(4) of the paper with offsets from shapely (exact, round joins). ``delta`` must exceed
-    the largest contouring error (default: twice it). ``selection``: ``"same_side"`` (default, continuous
-    at corners) or ``"nearest_of_both"`` (step (2) as printed)."""
+def offset(data, *, eta=1000.0, delta=None, delta_emax=None, selection="same_side"):
+    """Steps (1)-(4) of the paper with offsets from shapely (exact, round joins). The offset distance must
+    exceed the largest contouring error e_max: give it as ``delta`` (data units) or as ``delta_emax``, a
+    multiple of e_max (default: ``delta_emax=2``, the paper's condition). ``selection``: ``"same_side"``
+    (default, continuous at corners) or ``"nearest_of_both"`` (step (2) as printed)."""
     eta = _eta(eta, "magnify.offset")
     check_choice("selection", selection, ("same_side", "nearest_of_both"), "magnify.offset")
+    if delta is not None and delta_emax is not None:
+        raise InvalidInputError("magnify.offset: give delta (data units) or delta_emax (a multiple of the largest "
+                                "contouring error), not both")
+    if delta_emax is not None:
+        delta_emax = float(check_positive("delta_emax", delta_emax, "magnify.offset"))
     line = data.line
     pts_geom = shapely.points(data.measured)
     r0, err, side = _signed_error(line, pts_geom, data.measured)
     emax = float(err.max())
-    delta = 2.0 * emax if delta is None else float(delta)
+    delta = (2.0 if delta_emax is None else delta_emax) * emax if delta is None else float(delta)
     if not delta > emax:
         raise InvalidInputError(f"magnify.offset: delta = {delta:g} must be larger than the largest contouring "
                                 f"error ({emax:g}); choose a larger --delta")
@@ -118,7 +126,7 @@ def offset(data, *, eta=1000.0, delta=None, selection="same_side"):
     miss = empty & ~on_line
     r[miss] = r0[miss]
     return _finish(data, r, float(eta), {"delta": delta, "selection": selection, "nearest_point_used": int(miss.sum())},
-                   f"offset magnification ({selection})")
+                   f"offset magnification ({selection})", emax)
 
 
 def _nearest_on_each(geoms, pts_geom):

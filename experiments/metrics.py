@@ -62,6 +62,11 @@ TOLERANCES: dict[str, Tolerance | None] = {
                     Tolerance(1e-4, 1e-2, "a µm length of an adjustment with condition numbers up to 9e11: CPU rounding")),
     "identified_max_relative_error": Tolerance(1e-3, 1e-7, "relative error of 21 identified coefficients: moved 1e-4 "
                                                            "of itself between BLAS kernels (near-planar stations)"),
+    # roundness (ISO 12181): RONt/RONq in µm of profiles up to D 25 mm (2.5e4 µm) after the ISO 16610-21 filter; at a
+    # cut-off of 1 UPR the filtered profile of a near-perfect part is ~1e-4 µm, rounding itself, and its MCC/MZ moved
+    # by up to 1.5e-7 µm between BLAS kernels: 1e-9 relative and 1e-5 µm (10 pm) absolute
+    **{f"RON{q}_{k}_um": Tolerance(1e-9, 1e-5, "a µm roundness of a filtered profile: absolute resolution 1e-5 µm")
+       for q in ("t", "q") for k in ("lsci", "mzci", "mici", "mcci")},
     # condition numbers by SVD: sigma_min carries an absolute error of eps sigma_max (seen: 2e-7 relative)
     **dict.fromkeys(("kappa_stations", "kappa_stations_max", "kappa_points", "kappa_points_max",
                      "kappa_stations_theorem1", "kappa_points_theorem1"),
@@ -73,16 +78,17 @@ DEFAULT_TOLERANCE = Tolerance(1e-9, 1e-12, "a numeric study column not declared 
 #: Wider tolerances of methods or studies that are chaotic by nature: (study glob, method glob, column) -> Tolerance.
 #: Each entry says why; verify prints them with the verdict. Every other method meets the column's tolerance above
 #: between OpenBLAS's Haswell and SkylakeX kernels (tests/test_cpu_independence.py).
-_ORTHOGONAL_WHY = ("ellipse.orthogonal on the study's near-circular ellipses (b/a to 0.99): the data fix the angle to "
-                   "~1e-7 rad only, and MINPACK's ftol stop lands one iteration earlier or later for a Halir-Flusser "
-                   "start that differs in its last bit (its 3x3 eigenproblem is LAPACK's, on a BLAS kernel chosen "
-                   "per CPU); seen: 1 iteration, 3 evaluations, 7e-8 rad, 2e-9 in the semi-axes")
+_ORTHOGONAL_WHY = ("ellipse.orthogonal: MINPACK's stop (xtol 1e-15, at rounding level) comes 1-2 iterations earlier or later "
+                   "for a Halir-Flusser start that differs in its last bits (its 3x3 eigenproblem is LAPACK's, on a BLAS "
+                   "kernel chosen per CPU); on the near-circular ellipses of ellipse_angle (b/a to 0.99999) the data fix "
+                   "the angle to ~1e-7 rad only. Seen between two BLAS kernels: 2 iterations, 8 evaluations, 1.3e-7 rad, "
+                   "2e-9 in the semi-axes")
 CHAOTIC: dict[tuple[str, str, str], Tolerance] = {
-    ("ellipse_angle", "ellipse.orthogonal", "iterations"): Tolerance(0.0, 2.0, _ORTHOGONAL_WHY),
-    ("ellipse_angle", "ellipse.orthogonal", "nfev"): Tolerance(0.0, 6.0, _ORTHOGONAL_WHY),
-    ("ellipse_angle", "ellipse.orthogonal", "form_error"): Tolerance(1e-6, 1e-9, _ORTHOGONAL_WHY),
-    **{("ellipse_angle", "ellipse.orthogonal", c): Tolerance(1e-6, 1e-6, _ORTHOGONAL_WHY) for c in ("angle", "angle_error")},
-    **{("ellipse_angle", "ellipse.orthogonal", c): Tolerance(1e-6, 1e-8, _ORTHOGONAL_WHY)
+    ("*", "ellipse.orthogonal", "iterations"): Tolerance(0.0, 3.0, _ORTHOGONAL_WHY),
+    ("*", "ellipse.orthogonal", "nfev"): Tolerance(0.0, 12.0, _ORTHOGONAL_WHY),
+    ("*", "ellipse.orthogonal", "form_error"): Tolerance(1e-6, 1e-9, _ORTHOGONAL_WHY),
+    **{("*", "ellipse.orthogonal", c): Tolerance(0.0, 1e-6, _ORTHOGONAL_WHY) for c in ("angle", "angle_error")},
+    **{("*", "ellipse.orthogonal", c): Tolerance(1e-6, 1e-8, _ORTHOGONAL_WHY)
        for c in ("center_x", "center_y", "semi_axis_a", "semi_axis_b", "center_error_x", "center_error_y",
                  "center_error", "semi_axis_a_error", "semi_axis_b_error", "residual_rms")},
 }

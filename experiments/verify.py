@@ -88,8 +88,11 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
     compared = 0
     # A row that did not converge (the same status other than "ok" in both runs) carries no geometric result: its values
     # are where the iteration stopped, which rounding moves; its status and counts are compared, its values are not.
-    stopped = ((a["status"].to_numpy() == b["status"].to_numpy()) & (a["status"].to_numpy() != "ok")
-               if "status" in a and "status" in b else np.zeros(len(a), dtype=bool))
+    if "status" in a and "status" in b:
+        st_a, st_b = a["status"].astype(str).to_numpy(), b["status"].astype(str).to_numpy()
+        stopped = np.asarray((st_a == st_b) & (st_a != "ok"), dtype=bool)
+    else:
+        stopped = np.zeros(len(a), dtype=bool)
     not_compared = 0
     for col in committed.columns:
         if col.startswith("_") or col in ident:
@@ -100,8 +103,8 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
                 problems.append({"column": col, "n_rows": int(len(a)), "problem": "column missing in this run", "worst": []})
             continue
         tols = [tolerance(col, study, m) for m in methods]
-        keep = np.array([t is not None for t in tols])
-        inexact = np.array([t is not None and (t.rtol, t.atol) != (0.0, 0.0) for t in tols])
+        keep = np.array([t is not None for t in tols], dtype=bool)
+        inexact = np.array([t is not None and (t.rtol, t.atol) != (0.0, 0.0) for t in tols], dtype=bool)
         not_compared += int((keep & inexact & stopped).sum())
         keep &= ~(inexact & stopped)
         if not keep.any():

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 
+from methods._frame import dot
 from methods._registry import register
 from methods._result import circle_result
 from methods._validation import check_choice, check_positive, check_vector
@@ -52,7 +53,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
             break
         f, jtj, jtd, _ = state
         history.append(f)
-        if stop == "gradient" and math.sqrt(float(jtd @ jtd)) / n <= gtol:
+        if stop == "gradient" and math.sqrt(dot(jtd, jtd)) / n <= gtol:
             converged, message = True, f"|J^T d|/N <= gtol={gtol:g}"
             break
         # F is a sum of squared differences of O(1) numbers: its rounding noise is ~2 eps sqrt(N F) r_max
@@ -68,14 +69,14 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
             break
         # the decrease of F this step promises, against F's rounding noise (8 eps sqrt(F sum (r_i + R)^2)):
         # below it, and not shrinking any more, steps are rounding noise and can never reach xtol
-        promised = float(-delta @ jtd)
+        promised = -dot(delta, jtd)
         s2 = max(f - 4.0 * abs(pr) * float(jtd[2]) + 4.0 * n * pr * pr, 0.0)
         f_noise = 8.0 * EPS * math.sqrt(f * s2) + 16.0 * EPS * EPS * s2
         p = p + delta  # eq. 13
         if not all(map(math.isfinite, p)):
             message = "Gauss–Newton diverged (non-finite iterate)"
             break
-        step = math.sqrt(float(delta @ delta))
+        step = math.sqrt(dot(delta, delta))
         steps.append(step)
         f_prev = f
         state = sweep(p)

@@ -83,7 +83,7 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         except np.linalg.LinAlgError:
             message = "singular damped system"
             break
-        if math.sqrt(float(h @ h)) <= xtol * (math.sqrt(float(p @ p)) + xtol):
+        if math.sqrt(dot(h, h)) <= xtol * (math.sqrt(dot(p, p)) + xtol):
             converged, message = True, f"|h| <= xtol={xtol:g} (|p| + xtol)"
             break
         trial, reduction = trial_state(p, h, arrays)
@@ -91,7 +91,7 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
         if trial is None:
             mu, nu = mu * nu, 2 * nu
             continue
-        predicted = float(h @ (mu * dj * h - jtd))  # L(0) - L(h), times 2
+        predicted = dot(h, mu * dj * h - jtd)  # L(0) - L(h), times 2
         rho = reduction / predicted if predicted > 0 else -1.0
         if rho > 0:
             p = p + h

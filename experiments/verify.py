@@ -169,8 +169,11 @@ def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
         log("")
         log(_table(bad))
     if CHAOTIC:
+        by_reason: dict[str, list[str]] = {}
+        for (s, m, c), t in CHAOTIC.items():
+            by_reason.setdefault(t.why, []).append(f"{s}/{m}/{c} rtol={t.rtol:g} atol={t.atol:g}")
         log("wider tolerances declared for methods chaotic by nature: " +
-            "; ".join(f"{s}/{m}/{c}: rtol={t.rtol:g} atol={t.atol:g} ({t.why})" for (s, m, c), t in CHAOTIC.items()))
+            "; ".join(f"{', '.join(cols)} (why: {why})" for why, cols in by_reason.items()))
     verdict = {"agree": not bad, "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                "results": str(results), "against": str(against), "studies": reports}
     write_atomic(results / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")

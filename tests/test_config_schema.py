@@ -181,3 +181,24 @@ def test_magnification_variants_are_checked(tmp_path, old, new, key):
         configs.load(str(path), quick=True)
     msg = str(info.value)
     assert "\n" not in msg and key in msg, msg
+
+
+CONFIGS = Path(__file__).resolve().parents[1] / "experiments" / "configs"
+
+
+@pytest.mark.parametrize("config,old,new,key", [
+    ("published", 'MIC = "circle.max_inscribed"', 'MIC = "circle.max_inscrbed"', "published_columns.'MIC'"),
+    ("published", 'MCC = "circle.min_circumscribed"', 'MCC = 5', "published_columns"),
+    ("positioning", 'example_band = "GLS cubic (paper)"', 'example_band = "GLS quintic"', "example_band"),
+])
+def test_study_data_in_its_toml_is_checked(tmp_path, config, old, new, key):
+    """What a study once named in its code (the published table's columns and their methods, the band of the
+    positioning example) is declared in its TOML and checked on load, in one line naming the key."""
+    text = (CONFIGS / f"{config}.toml").read_text()
+    assert old in text
+    path = tmp_path / f"{config}.toml"
+    path.write_text(text.replace(old, new, 1))
+    with pytest.raises(ConfigError) as info:
+        configs.load(str(path), quick=True)
+    msg = str(info.value)
+    assert "\n" not in msg and key in msg, msg

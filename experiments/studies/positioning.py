@@ -23,6 +23,8 @@ CONFIG_SCHEMA = {
         "type": "object", "required": ["label", "method"], "additionalProperties": False,
         "properties": {"label": {"type": "string", "minLength": 1}, "method": {"type": "string", "minLength": 1},
                        "scenario_params": {"type": "array", "items": {"type": "string"}}}}},
+    # the band whose model the example figure draws (the paper's figures 2 and 3), on the last scenario
+    "example_band": {"type": "string", "minLength": 1},
 }
 
 
@@ -38,6 +40,9 @@ def validate(cfg, where):
         unknown = set(b.get("scenario_params", [])) - set(spec.defaults)
         if unknown:
             raise ConfigError(f"{where} bands[{j}]: {spec.id} has no parameter(s) {', '.join(sorted(unknown))}")
+    labels = [b["label"] for b in cfg["bands"]]
+    if cfg.get("example_band") is not None and cfg["example_band"] not in labels:
+        raise ConfigError(f"{where}: example_band must be one of the [[bands]] labels {labels}, got {cfg['example_band']!r}")
     sc = cfg.get("scenarios")
     if not isinstance(sc, list) or not sc:
         raise ConfigError(f"{where}: needs [[scenarios]] tables")
@@ -93,7 +98,8 @@ def analyse(df, cfg, target, log):
     for r in table.itertuples():
         log(f"  {r.dataset:<55} {r.method:<34} {r.coverage:8.3f} {r.halfwidth_um:8.2f} um {r.error_rms_um:7.2f} um")
     figures.positioning_coverage(table, target / "positioning.png")
-    example(cfg, target)
+    if cfg.get("example_band"):
+        example(cfg, target)
     worst = table.groupby("method", sort=False)["coverage"].min()
     reaching = [b for b, v in worst.items() if v >= 0.95]
     values = {"lowest_coverage": {b: float(v) for b, v in worst.items()}, "bands_at_nominal": reaching,
@@ -110,9 +116,11 @@ def analyse(df, cfg, target, log):
                f"random positions per test, mean band half-width and RMS error of the band's centre line; "
                f"{reps} simulated ISO 230-2 axis tests per scenario")
     figs = [Figure(caption=f"Coverage of the true deviation curve by each band per scenario ({reps} simulated ISO 230-2 "
-                           "axis tests each), with the nominal 95 %", file="positioning.png"),
-            Figure(caption="One simulated axis with the periodic error: measured deviations [µm] against the target "
-                           "position [mm], with the ISO 230-2 and polynomial-model bands", file="example.png")]
+                           "axis tests each), with the nominal 95 %", file="positioning.png")]
+    if cfg.get("example_band"):
+        figs.append(Figure(caption=f"One simulated axis ({cfg['scenarios'][-1]['label']}): measured deviations [µm] "
+                                   f"against the target position [mm], with the ISO 230-2 band and that of "
+                                   f"{cfg['example_band']}", file="example.png"))
     return Analysis(tables=[Table(caption=caption, data=shown, unit="%, µm")], figures=figs, values=values,
                     findings=findings)
 
@@ -122,6 +130,7 @@ def example(cfg, target):
     from methods.positioning.report import plot
     s = cfg["scenarios"][-1]
     data, _ = axis_test(rng=np.random.default_rng(cfg["seed"]), **s["params"])
-    res = methods.fit("positioning.gls_polynomial", data, instrument_u=s.get("instrument_u"), mpe=s.get("mpe"))
+    band = next(b for b in cfg["bands"] if b["label"] == cfg["example_band"])
+    res = methods.fit(band["method"], data, **{k: s.get(k) for k in band.get("scenario_params", [])})
     with atomic_path(target / "example.png") as tmp:
         plot(res, tmp, title=f"synthetic axis: {s['label']}")

@@ -17,12 +17,21 @@ from experiments.study import Analysis, Figure, Table
 #: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
 CONFIG_SCHEMA = {
     "rounding": {"type": "object", "properties": {"samples": {"type": "integer", "minimum": 1}}},
+    # the published table's columns (as the data sets' ``published`` keys) and the method that reproduces each
+    "published_columns": {"type": "object", "minProperties": 1, "additionalProperties": {"type": "string"}},
 }
 
-#: table 1 columns of the roundness paper and the method that reproduces each
-PUBLISHED_COLUMNS = {"LSQ (paper's Gauss-Newton)": "circle.gauss_newton",
-                     "Voronoi (minimum zone)": "circle.minimum_zone",
-                     "MIC": "circle.max_inscribed", "MCC": "circle.min_circumscribed"}
+
+def validate(cfg, where):
+    columns = cfg.get("published_columns")
+    if not columns:
+        raise engine.ConfigError(f"{where}: needs [published_columns] (table column label = method id)")
+    for column, method_id in columns.items():
+        try:
+            methods.get(method_id)
+        except methods.UnknownMethodError as exc:
+            raise engine.ConfigError(f"{where} published_columns.{column!r}: {exc}") from None
+    engine.expand_methods(cfg, where)
 #: the data set label of the rounding Monte Carlo rows (one row per data set and table column)
 ROUNDING = " (rounding Monte Carlo)"
 
@@ -35,7 +44,7 @@ def tasks(cfg):
     for spec in engine.expand_datasets(cfg, cfg["_where"]):
         variant = spec.get("variant")
         ds = datasets.load(spec["published"], drop_repeated_closing_point=variant == "drop_repeated_closing_point")
-        for c, (column, method_id) in enumerate(PUBLISHED_COLUMNS.items()):
+        for c, (column, method_id) in enumerate(cfg["published_columns"].items()):
             pub = ds.published.get(column)
             if pub is None:
                 continue

@@ -76,22 +76,9 @@ TOLERANCES: dict[str, Tolerance | None] = {
 }
 DEFAULT_TOLERANCE = Tolerance(1e-9, 1e-12, "a numeric study column not declared here: the geometric fits' 1e-9")
 #: Wider tolerances of methods or studies that are chaotic by nature: (study glob, method glob, column) -> Tolerance.
-#: Each entry says why; verify prints them with the verdict. Every other method meets the column's tolerance above
-#: between OpenBLAS's Haswell and SkylakeX kernels (tests/test_cpu_independence.py).
-_ORTHOGONAL_WHY = ("ellipse.orthogonal: MINPACK's stop (xtol 1e-15, at rounding level) comes 1-2 iterations earlier or later "
-                   "for a Halir-Flusser start that differs in its last bits (its 3x3 eigenproblem is LAPACK's, on a BLAS "
-                   "kernel chosen per CPU); on the near-circular ellipses of ellipse_angle (b/a to 0.99999) the data fix "
-                   "the angle to ~1e-7 rad only. Seen between two BLAS kernels: 2 iterations, 8 evaluations, 1.3e-7 rad, "
-                   "2e-9 in the semi-axes")
-CHAOTIC: dict[tuple[str, str, str], Tolerance] = {
-    ("*", "ellipse.orthogonal", "iterations"): Tolerance(0.0, 3.0, _ORTHOGONAL_WHY),
-    ("*", "ellipse.orthogonal", "nfev"): Tolerance(0.0, 12.0, _ORTHOGONAL_WHY),
-    ("*", "ellipse.orthogonal", "form_error"): Tolerance(1e-6, 1e-9, _ORTHOGONAL_WHY),
-    **{("*", "ellipse.orthogonal", c): Tolerance(0.0, 1e-6, _ORTHOGONAL_WHY) for c in ("angle", "angle_error")},
-    **{("*", "ellipse.orthogonal", c): Tolerance(1e-6, 1e-8, _ORTHOGONAL_WHY)
-       for c in ("center_x", "center_y", "semi_axis_a", "semi_axis_b", "center_error_x", "center_error_y",
-                 "center_error", "semi_axis_a_error", "semi_axis_b_error", "residual_rms")},
-}
+#: Each entry says why; verify prints them with the verdict. None is needed: every method meets the column's
+#: tolerance above between OpenBLAS's kernels and NumPy's SIMD levels (tests/test_cpu_independence.py).
+CHAOTIC: dict[tuple[str, str, str], Tolerance] = {}
 
 
 def tolerance(column: str, study: str = "", method: str = "") -> Tolerance | None:

@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 
-from methods._frame import KernelFrame, UnitFrame, dot, is_point_array, kernel_frame, offer_frame, point_kernels, take_frame
+from methods._frame import (KernelFrame, UnitFrame, dot, is_point_array, kernel_frame, offer_frame, point_kernels,
+                            solve3, take_frame)
 
 
 _EPS = float(np.finfo(float).eps)
@@ -118,37 +119,6 @@ def kasa_moments(m: np.ndarray, ck=None) -> np.ndarray:
     return np.array([xc, yc, math.sqrt(r2) if r2 > 0 else math.nan])
 
 
-def solve3(a, b, rtol: float = 0.0):
-    """x of the 3x3 system A x = b (``a``: 9 numbers, row major) by Gaussian elimination with partial pivoting,
-    the same operations in the same order as the compiled ``solve3`` (hence the same bits) and as LAPACK's
-    dgetf2/dtrsm; None when singular (an exact zero pivot, or with ``rtol`` > 0 one <= rtol max|a_ij|).
-    Plain float arithmetic, never BLAS: LAPACK's solve goes through a BLAS kernel chosen per CPU, and a
-    last-bit change in a start moves a Nelder–Mead simplex to another iteration count on another CPU."""
-    A = [list(a[0:3]), list(a[3:6]), list(a[6:9])]
-    bb = list(b)
-    amax = max(abs(v) for v in a)
-    for k in range(3):
-        piv = k
-        for i in range(k + 1, 3):
-            if abs(A[i][k]) > abs(A[piv][k]):
-                piv = i
-        if A[piv][k] == 0.0 or (rtol > 0.0 and not abs(A[piv][k]) > rtol * amax):
-            return None
-        if piv != k:
-            A[k], A[piv] = A[piv], A[k]
-            bb[k], bb[piv] = bb[piv], bb[k]
-        rp = 1.0 / A[k][k]
-        for i in range(k + 1, 3):
-            lik = A[i][k] * rp
-            for j in range(k + 1, 3):
-                A[i][j] = A[i][j] - lik * A[k][j]
-            bb[i] = bb[i] - lik * bb[k]
-    x = bb[:]
-    for k in (2, 1, 0):
-        x[k] = x[k] / A[k][k]
-        for i in range(k):
-            x[i] = x[i] - x[k] * A[i][k]
-    return x
 
 
 def geometric_normal_equations(x, y, p, work: np.ndarray | None = None):

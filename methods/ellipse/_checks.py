@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from methods._frame import dot
+
 EPS = np.finfo(float).eps
 #: Relative decrease of the objective below which a point counts as stationary (the promise is tested
 #: at 1e-9 against scipy.optimize.least_squares started at the returned point).
@@ -58,7 +60,7 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
     trust-region path can then show a significant decrease."""
     q0 = np.asarray(q, dtype=np.float64)
     r = np.asarray(residuals(q0), dtype=np.float64)
-    f0 = float(r @ r)
+    f0 = dot(r, r)
     floor = float(noise(r, q0))
     if not np.isfinite(f0):
         return Stationarity(False, f0, np.inf, floor, 0)
@@ -82,7 +84,7 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
             inv = np.divide(m, sv, out=np.zeros_like(sv), where=sv > 0)
             trial = qk - (Vt.T @ (inv * g)) / col
             rt = np.asarray(residuals(trial), dtype=np.float64)
-            ft = float(rt @ rt)
+            ft = dot(rt, rt)
             if np.isfinite(ft) and ft < fk:
                 qk, fk, rk, improved = trial, ft, rt, True
                 break

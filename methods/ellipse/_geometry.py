@@ -89,19 +89,30 @@ def normalise_conic(k) -> np.ndarray:
 
 def conic_to_params(k) -> np.ndarray | None:
     """General conic of an ellipse -> canonical (xc, yc, a, b, theta); None if it is no real ellipse.
-    Centre from the gradient = 0, axes from the eigen-decomposition of [[A, B/2], [B/2, C]]."""
+    Centre from the gradient = 0 (elimination with partial pivoting on the block [[A, B/2], [B/2, C]]), axes from
+    that block's eigenvalues and the direction of its smaller one, in closed form: plain floating point, the
+    same bits on every CPU (LAPACK's 2 x 2 solve and eigh go through BLAS kernels chosen per CPU)."""
     A, B, C, D, E, F = (float(v) for v in k)
-    M = np.array([[A, B / 2], [B / 2, C]])
-    det = np.linalg.det(M)
+    h = B / 2
+    det = A * C - h * h
     if not det > 0:
         return None
-    xc, yc = np.linalg.solve(M, [-D / 2, -E / 2])
+    (p0, q0, r0), (p1, q1, r1) = ((A, h, -D / 2), (h, C, -E / 2)) if abs(A) >= abs(h) else ((h, C, -E / 2), (A, h, -D / 2))
+    lf = p1 / p0                      # Gaussian elimination with partial pivoting (backward stable, as LAPACK's)
+    yc = (r1 - lf * r0) / (q1 - lf * q0)
+    xc = (r0 - q0 * yc) / p0
     Fc = F + 0.5 * (D * xc + E * yc)  # value at the centre
-    w, V = np.linalg.eigh(M)
+    if h == 0.0:  # eigenvalues by one Jacobi rotation, t = tan of its angle (Golub & Van Loan alg. 8.5.1):
+        w = (min(A, C), max(A, C))  # A - t h and C + t h, free of the cancellation in det / w_big
+    else:
+        tau = (C - A) / (2 * h)
+        t = math.copysign(1.0, tau) / (abs(tau) + math.hypot(1.0, tau))
+        w1, w2 = A - t * h, C + t * h
+        w = (min(w1, w2), max(w1, w2))
     if Fc * w[0] >= 0:  # the conic has no real points (or is degenerate)
         return None
-    axes = np.sqrt(-Fc / w)  # eigenvalue w[0] <= w[1] -> axes[0] >= axes[1]
-    theta = np.arctan2(V[1, 0], V[0, 0])
+    axes = (math.sqrt(-Fc / w[0]), math.sqrt(-Fc / w[1]))  # w[0] <= w[1] -> axes[0] >= axes[1]
+    theta = 0.5 * math.atan2(-B, C - A)  # the eigenvector of the smaller eigenvalue: the direction of axes[0]
     return canonical([xc, yc, axes[0], axes[1], theta])
 
 

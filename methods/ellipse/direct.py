@@ -8,9 +8,12 @@ and size of the data.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._registry import register
+from methods._frame import dot, solve3
 from methods.ellipse._geometry import Frame, conic_to_params, normalise_conic
 from methods.ellipse._result import ellipse_result, failed, residuals_from_unit
 from methods.ellipse._validation import check_distinct_points
@@ -31,10 +34,10 @@ ILL_POSED_RTOL = 1e-10
 def scatter(x, y) -> np.ndarray:
     """S = D^T D for D = [x^2, xy, y^2, x, y, 1] from the moments sum x^p y^q, p + q <= 4 (one sweep of
     three products and twelve dot products; S[i, j] depends only on the sum of the monomials' exponents)."""
-    xx, xy, yy = x * x, x * y, y * y
-    m40, m31, m22, m13, m04 = xx @ xx, xx @ xy, xx @ yy, xy @ yy, yy @ yy
-    m30, m21, m12, m03 = xx @ x, xx @ y, yy @ x, yy @ y
-    m20, m11, m02 = x @ x, x @ y, y @ y
+    xx, xy, yy = x * x, x * y, y * y   # sums of products by methods._frame.dot: never BLAS, the same bits on every CPU
+    m40, m31, m22, m13, m04 = dot(xx, xx), dot(xx, xy), dot(xx, yy), dot(xy, yy), dot(yy, yy)
+    m30, m21, m12, m03 = dot(xx, x), dot(xx, y), dot(yy, x), dot(yy, y)
+    m20, m11, m02 = dot(x, x), dot(x, y), dot(y, y)
     m10, m01, m00 = x.sum(), y.sum(), float(len(x))
     return np.array([[m40, m31, m22, m30, m21, m20],
                      [m31, m22, m13, m21, m12, m11],
@@ -98,28 +101,110 @@ def halir_flusser_unit(frame):
 
 
 def _halir_flusser_conic(frame):
-    S = scatter(frame.x, frame.y)
-    S1, S2, S3 = S[:3, :3], S[:3, 3:], S[3:, 3:]
-    try:
-        T = -np.linalg.solve(S3, S2.T)          # a2 = T a1 eliminates the linear part
-    except np.linalg.LinAlgError:
+    S = scatter(frame.x, frame.y).tolist()
+    return halir_flusser_conic(S)
+
+
+def halir_flusser_conic(S):
+    """Halir & Flusser's conic from the 6 x 6 scatter ``S`` (nested lists): (k, eigenvalue, "") or
+    (None, None, reason). Every step is 3 x 3 and done in plain floating point, never LAPACK/BLAS (whose
+    kernels are chosen per CPU and round differently): T = -S3^-1 S2^T by :func:`solve3` column by column;
+    M = S1 + S2 T; the pencil M a = lambda C1 a from the roots of det(M - lambda C1), a cubic, each polished by
+    Newton's method, and its eigenvector as the null vector of the symmetric M - lambda C1 (the largest cross
+    product of two of its rows)."""
+    S1 = [row[:3] for row in S[:3]]
+    S2 = [row[3:] for row in S[:3]]
+    S3 = [row[3:] for row in S[3:]]
+    s3 = [v for row in S3 for v in row]
+    cols = [solve3(s3, S2[c]) for c in range(3)]  # column c of S3^-1 S2^T: S3^-1 times row c of S2
+    if any(col is None for col in cols):
         return None, None, "the linear part of the scatter is singular (degenerate data)"
-    M = S1 + S2 @ T                              # reduced scatter, symmetric positive semi-definite
-    M = 0.5 * (M + M.T)
-    sv = np.linalg.svd(M, compute_uv=False)
+    T = [[-cols[c][r] for c in range(3)] for r in range(3)]              # T[r][c] = -(S3^-1 S2^T)[r][c]
+    M = [[S1[i][j] + (S2[i][0] * T[0][j] + S2[i][1] * T[1][j] + S2[i][2] * T[2][j]) for j in range(3)]
+         for i in range(3)]
+    M = [[0.5 * (M[i][j] + M[j][i]) for j in range(3)] for i in range(3)]
+    ev = symmetric_eigenvalues3(M)
+    sv = sorted((abs(v) for v in ev), reverse=True)
     if not sv[1] > ILL_POSED_RTOL * sv[0]:
-        return None, None, (f"ill-posed: the reduced scatter has two (near-)zero singular values {sv.tolist()}; "
+        return None, None, (f"ill-posed: the reduced scatter has two (near-)zero singular values {sv}; "
                             "a family of conics fits these points (too few distinct points in general position)")
-    C1inv = np.array([[0.0, 0.0, 0.5], [0.0, -1.0, 0.0], [0.5, 0.0, 0.0]])
-    w, V = np.linalg.eig(C1inv @ M)
-    V = V.real
-    cond = 4 * V[0] * V[2] - V[1] ** 2
-    ok = np.flatnonzero(cond > 0)
-    if ok.size == 0:
+    best = None
+    for lam in pencil_eigenvalues(M):
+        a = null_vector3([[M[0][0], M[0][1], M[0][2] - 2.0 * lam],
+                          [M[1][0], M[1][1] + lam, M[1][2]],
+                          [M[2][0] - 2.0 * lam, M[2][1], M[2][2]]])
+        if a is None or not 4.0 * a[0] * a[2] - a[1] * a[1] > 0:
+            continue
+        if best is None or abs(lam) < abs(best[0]):
+            best = (lam, a)
+    if best is None:
         return None, None, "no eigenvector satisfies 4AC - B^2 > 0 (the data determine no ellipse)"
-    j = ok[np.argmin(np.abs(w.real[ok]))] if ok.size > 1 else ok[0]
-    a1 = V[:, j]
-    return np.concatenate([a1, T @ a1]), float(w.real[j]), ""
+    lam, a1 = best
+    a2 = [T[r][0] * a1[0] + T[r][1] * a1[1] + T[r][2] * a1[2] for r in range(3)]
+    return np.array([*a1, *a2]), float(lam), ""
+
+
+def _cubic_roots(c3, c2, c1, c0):
+    """Real roots of c3 x^3 + c2 x^2 + c1 x + c0 (c3 != 0): the trigonometric / Cardano formulas, then two
+    Newton steps each (plain floats: the same bits on every CPU with IEEE double and the same libm)."""
+    b, c, d = c2 / c3, c1 / c3, c0 / c3
+    p = c - b * b / 3.0
+    q = 2.0 * b * b * b / 27.0 - b * c / 3.0 + d
+    disc = (q / 2.0) ** 2 + (p / 3.0) ** 3
+    if disc > 0:  # one real root
+        sq = math.sqrt(disc)
+        u, v = -q / 2.0 + sq, -q / 2.0 - sq
+        roots = [math.copysign(abs(u) ** (1 / 3), u) + math.copysign(abs(v) ** (1 / 3), v) - b / 3.0]
+    elif p == 0.0:
+        roots = [-b / 3.0]
+    else:  # three real roots
+        m = 2.0 * math.sqrt(-p / 3.0)
+        arg = max(-1.0, min(1.0, 3.0 * q / (p * m)))
+        t = math.acos(arg) / 3.0
+        roots = [m * math.cos(t - 2.0 * math.pi * k / 3.0) - b / 3.0 for k in range(3)]
+    out = []
+    for x in roots:
+        for _ in range(2):
+            f = ((c3 * x + c2) * x + c1) * x + c0
+            g = (3.0 * c3 * x + 2.0 * c2) * x + c1
+            if g == 0.0 or not math.isfinite(f / g):
+                break
+            x = x - f / g
+        out.append(x)
+    return out
+
+
+def pencil_eigenvalues(M):
+    """Real eigenvalues lambda of M a = lambda C1 a (C1 of Fitzgibbon's constraint 4AC - B^2, 3 x 3 block): the
+    roots of det(M - lambda C1) = -4 l^3 + 4 (m02 - m11) l^2 + (m00 m22 - 4 m01 m12 + 4 m11 m02 - m02^2) l + det M."""
+    (m00, m01, m02), (_, m11, m12), (_, _, m22) = M
+    det = (m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02))
+    return _cubic_roots(-4.0, 4.0 * (m02 - m11), m00 * m22 - 4.0 * m01 * m12 + 4.0 * m11 * m02 - m02 * m02, det)
+
+
+def symmetric_eigenvalues3(M):
+    """Eigenvalues of a symmetric 3 x 3 matrix (the roots of its characteristic polynomial; absolute error
+    about eps ||M||, enough for :data:`ILL_POSED_RTOL`)."""
+    (m00, m01, m02), (_, m11, m12), (_, _, m22) = M
+    tr = m00 + m11 + m22
+    minors = m00 * m11 - m01 * m01 + m00 * m22 - m02 * m02 + m11 * m22 - m12 * m12
+    det = (m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02))
+    return _cubic_roots(1.0, -tr, minors, -det)
+
+
+def null_vector3(A):
+    """A unit vector spanning the null space of a (numerically) rank-2 symmetric 3 x 3 matrix: the largest of
+    the cross products of two of its rows; None if every cross product vanishes."""
+    r0, r1, r2 = A
+    best, norm = None, 0.0
+    for u, v in ((r0, r1), (r0, r2), (r1, r2)):
+        c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+        n = math.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+        if n > norm:
+            best, norm = c, n
+    if best is None or not math.isfinite(norm):
+        return None
+    return [best[0] / norm, best[1] / norm, best[2] / norm]
 
 
 @register("ellipse.halir_flusser", kind="closed form",

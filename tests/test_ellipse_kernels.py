@@ -94,3 +94,23 @@ def test_compiled_distances_scale_with_the_data(scale):
                                               (0.0, 0.0, 3.0 * scale, 2.0 * scale, 0.0), with_phi=False)
     assert unit[0] == pytest.approx(-np.hypot(1.0 - 1.8, 1.6), rel=1e-14)  # X = 9/5, Y = 2 sqrt(1 - 0.36)
     assert np.all(np.abs(scaled / scale - unit) <= 64 * EPS * 4.0)
+
+
+@pytest.mark.parametrize("iterations", [1, 3, 50])
+def test_four_points_at_a_time_gives_the_bits_of_one_at_a_time(iterations):
+    """The kernel solves 4 points per block (packed Newton steps) and the remainder one by one: every point's
+    distance and parameter are bitwise those of the one-point solver (a length-1 call), points on the axes,
+    near the centre (bisection) and far away included."""
+    ck = kernels("methods.ellipse._ckernels")
+    assert ck is not None, "the ellipse kernel must be built for this test"
+    rng = np.random.default_rng(iterations)
+    for a, b in ((3.0, 1.0), (1.0, 3.0), (2.0, 2.0 * (1 - 1e-9)), (10.0, 0.1)):
+        pts = np.vstack([rng.standard_normal((61, 2)) * 3, [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1e-9, 1e-9]]])
+        x, y = np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1])
+        c, s = np.cos(0.4), np.sin(0.4)
+        d, phi = np.empty(len(x)), np.empty(len(x))
+        ck.orthogonal(x, y, 0.3, -0.1, c, s, a, b, iterations, d, phi)
+        for i in range(len(x)):
+            d1, p1 = np.empty(1), np.empty(1)
+            ck.orthogonal(x[i:i + 1], y[i:i + 1], 0.3, -0.1, c, s, a, b, iterations, d1, p1)
+            assert d1[0] == d[i] and p1[0] == phi[i], (a, b, i)

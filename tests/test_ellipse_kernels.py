@@ -114,3 +114,74 @@ def test_four_points_at_a_time_gives_the_bits_of_one_at_a_time(iterations):
             d1, p1 = np.empty(1), np.empty(1)
             ck.orthogonal(x[i:i + 1], y[i:i + 1], 0.3, -0.1, c, s, a, b, iterations, d1, p1)
             assert d1[0] == d[i] and p1[0] == phi[i], (a, b, i)
+
+
+# ---- ellipse.orthogonal's per-iteration kernel: distances and Jacobian in one sweep ----------------------------
+
+@pytest.mark.parametrize("name,points,p", list(cases()), ids=[c[0] for c in cases()])
+def test_distances_jacobian_match_the_residual_kernel_and_the_numpy_jacobian(monkeypatch, name, points, p):
+    """distances_jacobian's d is orthogonal()'s, bit for bit (the same closest points); its Jacobian (transposed,
+    (5, N)) is methods.ellipse.orthogonal.distance_jacobian at the reference phi to rounding: every entry is a
+    product of unit-size factors (normal components, cos/sin phi) and, for theta, the semi-axes, so 64 eps
+    max(1, a, b) bounds the difference where the closest point is well defined (away from the centre's ambiguous
+    closest points, where phi itself is ill-conditioned)."""
+    from methods.ellipse.orthogonal import distance_jacobian
+
+    ck = kernels("methods.ellipse._ckernels")
+    assert ck is not None, "the ellipse kernel must be built for this test"
+    x, y = points[:, 0], points[:, 1]
+    xc, yc, a, b, t = p
+    d, Jt = np.empty(len(x)), np.empty((5, len(x)))
+    ck.distances_jacobian(x, y, xc, yc, float(np.cos(t)), float(np.sin(t)), a, b, 60, d, Jt)
+    d_kernel = np.empty(len(x))
+    ck.orthogonal(x, y, xc, yc, float(np.cos(t)), float(np.sin(t)), a, b, 60, d_kernel)
+    assert np.array_equal(d, d_kernel)
+    monkeypatch.setenv("FITBENCH_KERNELS", "numpy")
+    d_ref, phi_ref = geometry.orthogonal_residuals(x, y, p)
+    J_ref = distance_jacobian(x, y, p, phi_ref)
+    well_defined = np.abs(d_ref) < 0.5 * min(a, b)
+    assert np.all(np.isfinite(Jt))
+    err = np.abs(Jt.T - J_ref)[well_defined] / np.array([1, 1, 1, 1, max(1.0, a, b)])
+    assert np.all(err <= 64 * EPS), err.max() / EPS
+
+
+def test_distances_jacobian_refuses_bad_buffers():
+    ck = kernels("methods.ellipse._ckernels")
+    x = np.zeros(4)
+    with pytest.raises(ValueError, match=r"\(5, N\)"):
+        ck.distances_jacobian(x, x, 0.0, 0.0, 1.0, 0.0, 2.0, 1.0, 60, np.empty(4), np.empty((4, 5)))
+    with pytest.raises(ValueError, match="semi-axes"):
+        ck.distances_jacobian(x, x, 0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 60, np.empty(4), np.empty((5, 4)))
+
+
+def _orthogonal_cases():
+    rng = np.random.default_rng(2020)
+    t = rng.uniform(0, 2 * np.pi, 3358)
+    yield "paper near-circle", np.c_[299.0243 * np.cos(t), 299.0022 * np.sin(t)] @ np.array(
+        [[np.cos(0.56), np.sin(0.56)], [-np.sin(0.56), np.cos(0.56)]]) + (1200.0, 650.0) + rng.normal(0, 0.005, (3358, 2))
+    s = rng.uniform(0.2, 1.4, 500)
+    yield "short arc 3:1 far away", np.c_[3.0 * np.cos(s), np.sin(s)] + (1e6, -2e6) + rng.normal(0, 1e-3, (500, 2))
+    u = rng.uniform(0, 2 * np.pi, 800)
+    yield "10:1 at 1e-150", (np.c_[10.0 * np.cos(u), np.sin(u)] + rng.normal(0, 0.05, (800, 2))) * 1e-150
+    yield "5:4 at 1e150", (np.c_[5.0 * np.cos(u), 4.0 * np.sin(u)] + rng.normal(0, 0.05, (800, 2))) * 1e150
+
+
+@pytest.mark.parametrize("name,points", list(_orthogonal_cases()), ids=[c[0] for c in _orthogonal_cases()])
+def test_orthogonal_fit_compiled_matches_the_numpy_path(monkeypatch, name, points):
+    """ellipse.orthogonal with the fused kernel against the NumPy reference path (phi, then the Jacobian): the
+    same minimum to 1e-9 of the data's size (both paths stop at MINPACK's xtol = 1e-15 relative; their Jacobians
+    differ by rounding, so the iterates do too), the same flags and a stationary point on both."""
+    import methods
+
+    monkeypatch.delenv("FITBENCH_KERNELS", raising=False)
+    fast = methods.fit("ellipse.orthogonal", points)
+    monkeypatch.setenv("FITBENCH_KERNELS", "numpy")
+    ref = methods.fit("ellipse.orthogonal", points)
+    size = float(np.ptp(points, axis=0).max())
+    assert fast.converged and ref.converged, (fast.message, ref.message)
+    assert fast.extra["stationarity"]["stationary"] and ref.extra["stationarity"]["stationary"]
+    assert np.allclose(fast.center, ref.center, rtol=0, atol=1e-9 * size)
+    assert np.allclose(fast.semi_axes, ref.semi_axes, rtol=0, atol=1e-9 * size)
+    assert abs((fast.angle - ref.angle + np.pi / 2) % np.pi - np.pi / 2) <= 1e-9 * size / min(ref.semi_axes)
+    assert np.allclose(fast.residuals, ref.residuals, rtol=0, atol=1e-9 * size)
+    assert len(fast.history) == fast.iterations and fast.nfev >= fast.iterations

@@ -270,7 +270,103 @@ static PyObject *orthogonal(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* ---- one Levenberg-Marquardt evaluation of ellipse.orthogonal: distances AND Jacobian in one sweep ---------
+ *
+ *   distances_jacobian(x, y, xc, yc, c, s, a, b, iterations, d_out, J_out)
+ *
+ * d_out[i] as orthogonal() (the same closest points, the same bits), and column i of the (5, N) C-contiguous J_out
+ * (MINPACK's column-major N x 5 Jacobian, no transposed copy) the derivative of d_i with respect to p = (xc, yc, a, b, theta) at the closest point (X, Y) held fixed
+ * (envelope theorem; methods/ellipse/orthogonal.py::distance_jacobian): with (cos phi, sin phi) = (X/a, Y/b)
+ * normalised (no atan2, cos, sin: the same angle, to rounding), the outward unit normal (nx', ny') ~ (cos phi / a,
+ * sin phi / b) in the ellipse frame and n = R(theta) (nx', ny'),
+ *     J = -(n_x, n_y, nx' cos phi, ny' sin phi, ny' a cos phi - nx' b sin phi)
+ * (-n . dX/dp with dX/da = R [cos phi, 0], dX/db = R [0, sin phi], dX/dtheta = R [-b sin phi, a cos phi]). */
+static void jacobian_row(double X, double Y, double a, double b, double ia, double ib, double c, double s,
+                         double *J, Py_ssize_t n) {
+    double ex = X * ia, ey = Y * ib, r = norm2(ex, ey), cp, sp, nxl, nyl, m;
+    if (!(r > 0.0)) r = 1.0;
+    cp = ex / r;
+    sp = ey / r;
+    nxl = cp * ia;
+    nyl = sp * ib;
+    m = norm2(nxl, nyl);
+    if (!(m > 0.0)) m = 1.0;
+    nxl = nxl / m;
+    nyl = nyl / m;
+    J[0] = -(c * nxl - s * nyl);
+    J[n] = -(s * nxl + c * nyl);
+    J[2 * n] = -(nxl * cp);
+    J[3 * n] = -(nyl * sp);
+    J[4 * n] = -(nyl * (a * cp) - nxl * (b * sp));
+}
+
+static PyObject *distances_jacobian(PyObject *self, PyObject *args) {
+    PyObject *xo, *yo, *do_, *jo;
+    double xc, yc, c, s, a, b;
+    int iterations;
+    Py_buffer xv, yv, dv, jv;
+    Py_ssize_t n, i, sx, sy, sd;
+    if (!PyArg_ParseTuple(args, "OOddddddiOO", &xo, &yo, &xc, &yc, &c, &s, &a, &b, &iterations, &do_, &jo))
+        return NULL;
+    if (!(a > 0.0) || !(b > 0.0) || iterations < 0) {
+        PyErr_SetString(PyExc_ValueError, "distances_jacobian: the semi-axes must be positive and iterations >= 0");
+        return NULL;
+    }
+    if (vector_of(xo, &xv, 0, "x") < 0) return NULL;
+    if (vector_of(yo, &yv, 0, "y") < 0) { PyBuffer_Release(&xv); return NULL; }
+    if (vector_of(do_, &dv, 1, "d_out") < 0) { PyBuffer_Release(&xv); PyBuffer_Release(&yv); return NULL; }
+    if (PyObject_GetBuffer(jo, &jv, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | PyBUF_WRITABLE) < 0) {
+        PyBuffer_Release(&xv); PyBuffer_Release(&yv); PyBuffer_Release(&dv); return NULL;
+    }
+    n = xv.shape[0];
+    if (jv.ndim != 2 || jv.itemsize != 8 || !jv.format || strcmp(jv.format, "d") != 0 || jv.shape[0] != 5 ||
+        jv.shape[1] != n || yv.shape[0] != n || dv.shape[0] != n) {
+        PyErr_SetString(PyExc_ValueError, "distances_jacobian: x, y, d_out of length N and J_out a C-contiguous "
+                                          "(5, N) float64 array are needed");
+        PyBuffer_Release(&xv); PyBuffer_Release(&yv); PyBuffer_Release(&dv); PyBuffer_Release(&jv);
+        return NULL;
+    }
+    sx = xv.strides[0] / 8; sy = yv.strides[0] / 8; sd = dv.strides[0] / 8;
+    {
+        const double *x = (const double *)xv.buf, *y = (const double *)yv.buf;
+        double *d = (double *)dv.buf, *J = (double *)jv.buf;
+        double ia = 1.0 / a, ib = 1.0 / b;
+        int swap = a < b;
+        Py_BEGIN_ALLOW_THREADS
+        for (i = 0; i + LANES <= n; i += LANES) {
+            double U[LANES], V[LANES], X[LANES], Y[LANES], D[LANES];
+            int j;
+            for (j = 0; j < LANES; j++) {
+                double dx = x[(i + j) * sx] - xc, dy = y[(i + j) * sy] - yc;
+                U[j] = dx * c + dy * s;
+                V[j] = -dx * s + dy * c;
+            }
+            if (swap) closest_block(V, U, b, a, iterations, Y, X, D);
+            else closest_block(U, V, a, b, iterations, X, Y, D);
+            for (j = 0; j < LANES; j++) {
+                d[(i + j) * sd] = D[j];
+                jacobian_row(X[j], Y[j], a, b, ia, ib, c, s, J + (i + j), n);
+            }
+        }
+        for (; i < n; i++) {
+            double dx = x[i * sx] - xc, dy = y[i * sy] - yc;
+            double u = dx * c + dy * s, v = -dx * s + dy * c;
+            double X, Y, dist;
+            if (swap) closest(v, u, b, a, iterations, &Y, &X, &dist);
+            else closest(u, v, a, b, iterations, &X, &Y, &dist);
+            d[i * sd] = dist;
+            jacobian_row(X, Y, a, b, ia, ib, c, s, J + i, n);
+        }
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&xv); PyBuffer_Release(&yv); PyBuffer_Release(&dv); PyBuffer_Release(&jv);
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef Methods[] = {
+    {"distances_jacobian", distances_jacobian, METH_VARARGS,
+     "distances_jacobian(x, y, xc, yc, cos_theta, sin_theta, a, b, iterations, d_out, J_out): the signed "
+     "orthogonal distances (as orthogonal()) and their Jacobian, transposed (5, N), in (xc, yc, a, b, theta), in place"},
     {"orthogonal", orthogonal, METH_VARARGS,
      "orthogonal(x, y, xc, yc, cos_theta, sin_theta, a, b, iterations, d_out[, phi_out]): signed orthogonal "
      "distances (and closest-point parameters) of the points to the ellipse, written in place"},

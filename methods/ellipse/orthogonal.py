@@ -1,8 +1,11 @@
 """Orthogonal-distance (geometric) least-squares ellipse fit."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from methods._compiled import kernels
 from methods._registry import register
 from methods._validation import check_positive, check_vector
 from methods.ellipse._checks import degenerate_reason, stationarity_probe, sum_of_squares_noise
@@ -33,6 +36,17 @@ def distance_jacobian(x, y, p, phi):
     lx, ly = a * cp, b * sp_                         # dX/dtheta = R' [a cos phi, b sin phi]
     J[:, 4] = -(nx * (-s * lx - c * ly) + ny * (c * lx - s * ly))
     return J
+
+
+#: MINPACK's info -> scipy.optimize.least_squares' status, and its messages (the values this fit reported when it
+#: called least_squares(method="lm"); info 6-8 cannot occur with tolerances >= eps)
+_FROM_MINPACK = {0: -1, 1: 2, 2: 3, 3: 4, 4: 1, 5: 0}
+_MESSAGES = {-1: "Improper input parameters status returned from `leastsq`",
+             0: "The maximum number of function evaluations is exceeded.",
+             1: "`gtol` termination condition is satisfied.",
+             2: "`ftol` termination condition is satisfied.",
+             3: "`xtol` termination condition is satisfied.",
+             4: "Both `ftol` and `xtol` termination conditions are satisfied."}
 
 
 @register("ellipse.orthogonal", kind="iterative",
@@ -66,42 +80,63 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
                                   f"(RMS radius {frame.scale:.3g}); give positive semi-axes near the data")
     history = []
     cache = {}
+    n = len(x)
+    ck = kernels("methods.ellipse._ckernels")
 
     def solve(p):
-        """Closest points of every point for p, once per p (fun and jac share them)."""
+        """Distances and Jacobian at p, once per p (fun and jac share them). Compiled: one sweep computing both
+        (methods/ellipse/_ckernels.c distances_jacobian), the Jacobian written transposed, (5, N), which is
+        MINPACK's column-major N x 5 (no transposed copy). NumPy reference path (FITBENCH_KERNELS=numpy), and any
+        p that is not a finite ellipse with positive semi-axes: the closest points' phi, then the Jacobian."""
         if "p" not in cache or not np.array_equal(cache["p"], p):
-            d, phi = orthogonal_residuals(x, y, p)
-            cache["p"], cache["d"], cache["phi"] = p.copy(), d, phi
-        return cache["d"], cache["phi"]
+            xc, yc, a, b, t = (float(v) for v in p)
+            if ck is not None and a > 0 and b > 0 and all(map(math.isfinite, (xc, yc, a, b, t))):
+                d, Jt = np.empty(n), np.empty((5, n))
+                ck.distances_jacobian(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d, Jt)
+                cache.update(p=p.copy(), d=d, Jt=Jt, phi=None)
+            else:
+                d, phi = orthogonal_residuals(x, y, p)
+                cache.update(p=p.copy(), d=d, Jt=None, phi=phi)
+        return cache["d"]
 
-    def fun(p):
-        return solve(p)[0]
+    def jac_t(p):
+        """The Jacobian at p, transposed: (5, N)."""
+        solve(p)
+        if cache["Jt"] is None:
+            cache["Jt"] = np.ascontiguousarray(distance_jacobian(x, y, p, cache["phi"]).T)
+        return cache["Jt"]
 
-    def jac(p):
-        d, phi = solve(p)
+    def minpack_jac(p):
+        d = solve(p)
         history.append(float(d @ d))
-        return distance_jacobian(x, y, p, phi)
+        return jac_t(p)
 
     eps = np.finfo(float).eps
-    from scipy.optimize import least_squares  # imported on first use (light import)
+    from scipy.optimize import leastsq  # imported on first use (light import)
 
-    res = least_squares(fun, p0, jac=jac, method="lm", xtol=max(xtol, eps), ftol=max(ftol, eps),
-                        gtol=max(gtol, eps), max_nfev=max_nfev, x_scale="jac")
-    q = res.x
-    converged, message = bool(res.status > 0 and np.isfinite(q).all()), str(res.message)
-    extra = {"status": int(res.status)}
+    # MINPACK's lmder, as scipy's least_squares(method="lm", x_scale="jac") calls it (diag None, factor 100), with
+    # the Jacobian given column-major (col_deriv) and without least_squares' wrappers, which copy every Jacobian
+    # twice. leastsq first calls fun and Dfun once at p0 to check their shapes (the cache answers both); the
+    # history keeps MINPACK's own Jacobian evaluations: the objective at each accepted iterate.
+    q, _, info, _, ier = leastsq(solve, np.array(p0, dtype=np.float64), Dfun=minpack_jac, full_output=True,
+                                 col_deriv=True, ftol=max(ftol, eps), xtol=max(xtol, eps), gtol=max(gtol, eps),
+                                 maxfev=max_nfev, factor=100.0, diag=None)
+    njev, nfev = int(info.get("njev", 0)), int(info["nfev"])
+    history = history[1:1 + njev]
+    status = _FROM_MINPACK.get(int(ier), -1)
+    converged, message = bool(status > 0 and np.isfinite(q).all()), _MESSAGES.get(status, f"MINPACK info {ier}")
+    extra = {"status": int(status)}
     why = degenerate_reason(abs(q[2]), abs(q[3])) if np.isfinite(q).all() else "the solution is not finite"
     if why is not None:
         converged, message = False, f"{why} ({message})"
         extra["degenerate"] = why
     elif converged:
         def residuals(p):
-            return fun(p) if p[2] > 0 and p[3] > 0 else np.full(len(x), np.inf)
+            return solve(p) if p[2] > 0 and p[3] > 0 else np.full(n, np.inf)
 
-        probe = stationarity_probe(residuals, lambda p: jac(p) if p[2] > 0 and p[3] > 0 else np.full((len(x), 5), np.nan),
+        probe = stationarity_probe(residuals, lambda p: jac_t(p).T if p[2] > 0 and p[3] > 0 else np.full((n, 5), np.nan),
                                    q, noise=lambda r, p: sum_of_squares_noise(r, np.abs(x) + np.abs(y) + abs(p[0]) +
                                                                               abs(p[1]) + max(abs(p[2]), abs(p[3]))))
-        history = history[:int(res.njev or 0)]
         extra["stationarity"] = probe.as_dict()
         if not probe.stationary:
             converged, message = False, f"{probe.reason()} (MINPACK: {message})"
@@ -115,6 +150,6 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
     hist = history_to_data(history, frame.scale, 2)
     if hist is None:
         hist, extra["history_units"] = history, "unit frame (the data-unit values, length^2, overflow)"
-    return ellipse_result(points, p, converged=converged, message=message, iterations=int(res.njev or 0),
-                          nfev=int(res.nfev), history=hist, extra=extra,
+    return ellipse_result(points, p, converged=converged, message=message, iterations=njev,
+                          nfev=nfev, history=hist, extra=extra,
                           residuals=residuals)

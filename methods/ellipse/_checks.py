@@ -51,13 +51,17 @@ class Stationarity:
                 f"{self.relative:.2e} relative (tolerance {STATIONARY_RTOL:.0e} plus rounding)")
 
 
-def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONARY_RTOL, steps: int = 4) -> Stationarity:
+def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONARY_RTOL, steps: int = 4,
+                       qr_first: bool = False) -> Stationarity:
     """Up to ``steps`` Levenberg–Marquardt steps on S = |r(q)|^2 from ``q`` (each trying the Gauss–Newton
     step first, then more and more damping down to a short steepest-descent step, in column-scaled
     variables); ``noise(r, q)`` is the rounding noise of S at q. Stationary when the total decrease
     achieved is at most ``rtol`` S(q) + noise. Damping stops once the model's own decrease
     sum_i (2 m_i - m_i^2) g_i^2, m_i = s_i^2 / (s_i^2 + lambda), falls below that tolerance: no step of the
-    trust-region path can then show a significant decrease."""
+    trust-region path can then show a significant decrease. ``qr_first`` (for N >> 5 points): the singular values,
+    V and g = U^T r from a Householder QR of the (N, 6) [J / col, r] and the SVD of its 5 x 5 R (J = Q R,
+    R = U_R S V^T, so U^T r = U_R^T (Q^T r), Q^T r being R's sixth column): the same quantities as the SVD of J,
+    both backward stable, without the SVD's N x 5 U."""
     q0 = np.asarray(q, dtype=np.float64)
     r = np.asarray(residuals(q0), dtype=np.float64)
     f0 = dot(r, r)
@@ -72,8 +76,17 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
             break
         col = np.sqrt(np.einsum("ij,ij->j", J, J))
         col[col == 0] = 1.0
-        U, sv, Vt = np.linalg.svd(J / col, full_matrices=False)
-        g = U.T @ rk
+        if qr_first and J.shape[0] > J.shape[1]:
+            k = J.shape[1]
+            A = np.empty((J.shape[0], k + 1), order="F")
+            np.divide(J, col, out=A[:, :k])
+            A[:, k] = rk
+            R = np.linalg.qr(A, mode="r")
+            Ur, sv, Vt = np.linalg.svd(R[:k, :k])
+            g = Ur.T @ R[:k, k]
+        else:
+            U, sv, Vt = np.linalg.svd(J / col, full_matrices=False)
+            g = U.T @ rk
         keep = sv > sv[0] * len(rk) * EPS
         improved = False
         for lam in (0.0, *(sv[0] ** 2 * 10.0 ** np.arange(-12, 5))):

@@ -285,14 +285,16 @@ static void jacobian_row(double X, double Y, double a, double b, double ia, doub
                          double *J, Py_ssize_t n) {
     double ex = X * ia, ey = Y * ib, r = norm2(ex, ey), cp, sp, nxl, nyl, m;
     if (!(r > 0.0)) r = 1.0;
-    cp = ex / r;
-    sp = ey / r;
+    r = 1.0 / r;  /* one division per normalisation (a reciprocal, then products: rounding-level changes only) */
+    cp = ex * r;
+    sp = ey * r;
     nxl = cp * ia;
     nyl = sp * ib;
     m = norm2(nxl, nyl);
     if (!(m > 0.0)) m = 1.0;
-    nxl = nxl / m;
-    nyl = nyl / m;
+    m = 1.0 / m;
+    nxl = nxl * m;
+    nyl = nyl * m;
     J[0] = -(c * nxl - s * nyl);
     J[n] = -(s * nxl + c * nyl);
     J[2 * n] = -(nxl * cp);

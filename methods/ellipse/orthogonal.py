@@ -136,7 +136,8 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
 
         probe = stationarity_probe(residuals, lambda p: jac_t(p).T if p[2] > 0 and p[3] > 0 else np.full((n, 5), np.nan),
                                    q, noise=lambda r, p: sum_of_squares_noise(r, np.abs(x) + np.abs(y) + abs(p[0]) +
-                                                                              abs(p[1]) + max(abs(p[2]), abs(p[3]))))
+                                                                              abs(p[1]) + max(abs(p[2]), abs(p[3]))),
+                                   qr_first=True)
         extra["stationarity"] = probe.as_dict()
         if not probe.stationary:
             converged, message = False, f"{probe.reason()} (MINPACK: {message})"

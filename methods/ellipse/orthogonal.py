@@ -83,16 +83,23 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
     n = len(x)
     ck = kernels("methods.ellipse._ckernels")
 
-    def solve(p):
+    def solve(p, with_jacobian=True):
         """Distances and Jacobian at p, once per p (fun and jac share them). Compiled: one sweep computing both
         (methods/ellipse/_ckernels.c distances_jacobian), the Jacobian written transposed, (5, N), which is
-        MINPACK's column-major N x 5 (no transposed copy). NumPy reference path (FITBENCH_KERNELS=numpy), and any
-        p that is not a finite ellipse with positive semi-axes: the closest points' phi, then the Jacobian."""
+        MINPACK's column-major N x 5 (no transposed copy); ``with_jacobian=False`` (the probe's trial points, whose
+        Jacobian is rarely needed): the distances alone (orthogonal(), the same bits). NumPy reference path
+        (FITBENCH_KERNELS=numpy), and any p that is not a finite ellipse with positive semi-axes: the closest
+        points' phi, then the Jacobian when asked for."""
         if "p" not in cache or not np.array_equal(cache["p"], p):
             xc, yc, a, b, t = (float(v) for v in p)
             if ck is not None and a > 0 and b > 0 and all(map(math.isfinite, (xc, yc, a, b, t))):
-                d, Jt = np.empty(n), np.empty((5, n))
-                ck.distances_jacobian(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d, Jt)
+                d = np.empty(n)
+                if with_jacobian:
+                    Jt = np.empty((5, n))
+                    ck.distances_jacobian(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d, Jt)
+                else:
+                    Jt = None
+                    ck.orthogonal(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d)
                 cache.update(p=p.copy(), d=d, Jt=Jt, phi=None)
             else:
                 d, phi = orthogonal_residuals(x, y, p)
@@ -103,7 +110,11 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
         """The Jacobian at p, transposed: (5, N)."""
         solve(p)
         if cache["Jt"] is None:
-            cache["Jt"] = np.ascontiguousarray(distance_jacobian(x, y, p, cache["phi"]).T)
+            if cache["phi"] is None:  # distances-only evaluation at p: solve again with the Jacobian
+                del cache["p"]
+                solve(p)
+            else:
+                cache["Jt"] = np.ascontiguousarray(distance_jacobian(x, y, p, cache["phi"]).T)
         return cache["Jt"]
 
     def minpack_jac(p):
@@ -132,7 +143,7 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
         extra["degenerate"] = why
     elif converged:
         def residuals(p):
-            return solve(p) if p[2] > 0 and p[3] > 0 else np.full(n, np.inf)
+            return solve(p, with_jacobian=False) if p[2] > 0 and p[3] > 0 else np.full(n, np.inf)
 
         probe = stationarity_probe(residuals, lambda p: jac_t(p).T if p[2] > 0 and p[3] > 0 else np.full((n, 5), np.nan),
                                    q, noise=lambda r, p: sum_of_squares_noise(r, np.abs(x) + np.abs(y) + abs(p[0]) +

@@ -114,3 +114,19 @@ def test_four_points_at_a_time_gives_the_bits_of_one_at_a_time(iterations):
             d1, p1 = np.empty(1), np.empty(1)
             ck.orthogonal(x[i:i + 1], y[i:i + 1], 0.3, -0.1, c, s, a, b, iterations, d1, p1)
             assert d1[0] == d[i] and p1[0] == phi[i], (a, b, i)
+
+
+@pytest.mark.parametrize("n", [5, 255, 256, 257, 3358, 100_000])
+def test_compiled_scatter_matches_the_numpy_moments(n, monkeypatch):
+    """The direct fits' 6 x 6 scatter from one compiled sweep (blocked pairwise sums) against NumPy's
+    products and pairwise sums: equal to a few ulps of each moment's scale (sum of |terms|)."""
+    from methods.ellipse import direct
+    rng = np.random.default_rng(n)
+    t = rng.uniform(0, 2.0, n)
+    pts = np.c_[3 * np.cos(t), np.sin(t)] + 1e-3 * rng.standard_normal((n, 2))
+    frame = geometry.Frame.of(pts)
+    compiled = direct.scatter(frame.x, frame.y)
+    monkeypatch.setenv("FITBENCH_KERNELS", "numpy")
+    reference = direct.scatter(frame.x, frame.y)
+    absolute = direct.scatter(np.abs(frame.x), np.abs(frame.y))
+    assert np.all(np.abs(compiled - reference) <= 64 * np.finfo(float).eps * absolute + 1e-300)

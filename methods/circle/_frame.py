@@ -191,7 +191,8 @@ def compiled_moments(points, ck, frame: KernelFrame) -> tuple[KernelFrame, np.nd
 def frame_and_moments(points) -> tuple["Frame", np.ndarray, object]:
     """The circle frame (shift and scale; x, y only on the NumPy path), the moment matrix M of
     :func:`moments` and the kernels: compiled passes 1-2 (no unit-frame copy), or the NumPy reference
-    path (kernels None)."""
+    path (kernels None). (The closed-form fits read the compiled sums as floats instead:
+    :func:`compiled_moment_means`.)"""
     compiled = compiled_frame(points)
     if compiled is None:
         frame = Frame.of(points)

@@ -145,10 +145,9 @@ def _constrained_fit(points, kind: str):
     frame = Frame.of(points)  # the NumPy reference path
     m = moments(frame.x, frame.y)
     a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])))
-    shift, scale = frame.shift, frame.scale
-    del frame  # release the unit-frame copy before the residual sweep
-    to_unit = Frame(shift=shift, scale=scale, x=np.empty(0), y=np.empty(0))
-    return _circle_from_conic(points, lambda xc, yc, r: to_unit.circle_to_data(np.array([xc, yc, r])),
+    frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))  # release the unit-frame
+    # copy before the residual sweep
+    return _circle_from_conic(points, lambda xc, yc, r: frame.circle_to_data(np.array([xc, yc, r])),
                               [float(v) for v in a], message)
 
 

@@ -188,19 +188,6 @@ def compiled_moments(points, ck, frame: KernelFrame) -> tuple[KernelFrame, np.nd
                             [sz, sx, sy, 1.0]])
 
 
-def frame_and_moments(points) -> tuple["Frame", np.ndarray, object]:
-    """The circle frame (shift and scale; x, y only on the NumPy path), the moment matrix M of
-    :func:`moments` and the kernels: compiled passes 1-2 (no unit-frame copy), or the NumPy reference
-    path (kernels None). (The closed-form fits read the compiled sums as floats instead:
-    :func:`compiled_moment_means`.)"""
-    compiled = compiled_frame(points)
-    if compiled is None:
-        frame = Frame.of(points)
-        return frame, moments(frame.x, frame.y), None
-    kf, m = compiled_moments(points, *compiled)
-    return Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES), m, compiled[0]
-
-
 _NO_COORDINATES = np.empty(0)
 
 

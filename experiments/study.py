@@ -249,11 +249,11 @@ def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Fig
     return Figure(caption=f["caption"], file=name)
 
 
-def save_figure(fig, path: Path, **kwargs) -> None:
-    """Save a matplotlib figure atomically (a kill never leaves a half-written PNG)."""
-    buf = io.BytesIO()
-    fig.savefig(buf, format=path.suffix.lstrip(".") or "png", dpi=kwargs.pop("dpi", 110), **kwargs)
-    write_bytes_atomic(path, buf.getvalue())
+def save_figure(fig, path: Path, dpi: float = 110) -> None:
+    """Save a matplotlib figure atomically (:func:`methods._figures.save_atomic`: a kill never leaves a
+    half-written PNG)."""
+    from methods._figures import save_atomic
+    save_atomic(fig, path, dpi=dpi)
 
 
 def save_csv(df: pd.DataFrame, path: Path, **kwargs) -> None:
@@ -273,23 +273,6 @@ def atomic_path(path: Path):
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
-
-
-def write_bytes_atomic(path: Path, data: bytes) -> None:
-    import os
-    import tempfile
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def remove_leftover_tmp(folder: Path) -> None:

@@ -5,6 +5,8 @@ and compares every non-timing column of each ``results.csv`` with the committed 
 ``results/``, or ``results/quick`` with ``--quick``), with the tolerances declared with the metrics
 (``experiments.metrics.TOLERANCES``: exact for ids, statuses and counts; relative + absolute per metric).
 Rows are matched by their identity (study, data set, data stream, repetition, seed, method, parameters).
+A row with the same status other than "ok" in both runs (an iteration that did not converge) is compared by
+its status and counts only: its values are where the iteration stopped, not a result.
 
 Prints one line per study and a table of the columns outside tolerance with their worst rows; writes the
 verdict atomically to ``RESULTS/verify.json`` (:func:`last_verdict` reads it for the report).

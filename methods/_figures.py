@@ -19,15 +19,17 @@ def pyplot():
     return plt
 
 
-def save_atomic(fig, path, *, dpi: float) -> None:
-    """Write ``fig`` to ``path`` (format from the suffix) through a temporary file in the same folder and
-    ``os.replace``: readers see the old file or the whole new one, never a partial one."""
+def save_atomic(fig, path, *, dpi: float | None = None) -> None:
+    """Write ``fig`` to ``path`` (format from the suffix; ``dpi`` None: matplotlib's ``savefig.dpi``) through a
+    temporary file in the same folder and ``os.replace``: readers see the old file or the whole new one, never
+    a partial one, and a failed write leaves no temporary file. The one atomic figure writer of fitbench."""
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
     fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".tmp")
     os.close(fd)
     try:
-        fig.savefig(tmp, dpi=dpi, format=path.suffix.lower().lstrip(".") or "png")
+        fig.savefig(tmp, format=path.suffix.lower().lstrip(".") or "png", **({} if dpi is None else {"dpi": dpi}))
+        os.chmod(tmp, 0o644)  # mkstemp makes it private; a figure is for reading
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

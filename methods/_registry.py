@@ -155,11 +155,15 @@ def register(method_id: str, *, summary: str, reference: str, kind: str, min_poi
 
 
 def _run(spec: MethodSpec, points, params: dict):
-    unknown = sorted(set(params) - set(spec.defaults))
-    if unknown:
-        accepted = ", ".join(spec.defaults) or "none"
-        raise InvalidInputError(f"{spec.id} has no parameter {', '.join(map(repr, unknown))}; its parameters are: {accepted}")
-    merged = {**spec.defaults, **params}
+    if params:
+        unknown = sorted(set(params) - set(spec.defaults))
+        if unknown:
+            accepted = ", ".join(spec.defaults) or "none"
+            raise InvalidInputError(f"{spec.id} has no parameter {', '.join(map(repr, unknown))}; "
+                                    f"its parameters are: {accepted}")
+        merged = {**spec.defaults, **params}
+    else:
+        merged = spec.defaults.copy()  # the result's own dict, as above
     if spec.validator is not None:
         pts = spec.validator(points, spec.id)
     else:

@@ -164,9 +164,9 @@ def _compiled_residuals(points, center, radius: float):
 def circle_result(points: np.ndarray, center, radius: float, *, converged: bool, message: str,
                   iterations=None, nfev=None, history=None, extra=None) -> CircleFit:
     """Build a :class:`CircleFit`, computing residuals and form error from the data in data units."""
-    center = (float(center[0]), float(center[1]))
-    radius = float(radius)
-    ok_geometry = all(map(math.isfinite, center)) and math.isfinite(radius)
+    xc, yc, radius = float(center[0]), float(center[1]), float(radius)
+    center = (xc, yc)
+    ok_geometry = math.isfinite(xc) and math.isfinite(yc) and math.isfinite(radius)
     residuals = _compiled_residuals(points, center, radius) if ok_geometry else None
     if residuals is not None:
         residuals, form_error = residuals
@@ -178,7 +178,8 @@ def circle_result(points: np.ndarray, center, radius: float, *, converged: bool,
         residuals = r - radius
     return CircleFit(center=center, radius=radius, form_error=form_error, residuals=residuals,
                      converged=bool(converged and ok_geometry), iterations=iterations, nfev=nfev,
-                     history=list(history or []), message=message, extra=dict(extra or {}))
+                     history=list(history) if history else [], message=message,
+                     extra=dict(extra) if extra else {})
 
 
 @dataclass(kw_only=True)

@@ -13,6 +13,7 @@ from methods._frame import dot, kernel_frame, offer_frame, point_kernels, unit_f
 #: is larger, so the test is scale-free: it depends on the shape of the data, not on their unit.
 COLLINEAR_RTOL = 1e-12
 EPS = float(np.finfo(float).eps)
+_FLOAT64 = np.dtype(np.float64)
 
 
 def _as_array(points, who: str) -> np.ndarray:
@@ -56,19 +57,16 @@ def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndar
     Scale-free at any float64 magnitude: identity and collinearity are decided on the unit frame
     (:func:`methods._frame.unit_frame`, computed without overflow or underflow), which is then handed
     to the method's own :meth:`UnitFrame.of` so that the data are normalised once."""
-    who = f"{method}: " if method else ""
-    arr = _as_array(points, who)
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        hint = " (it looks transposed: pass points.T)" if arr.ndim == 2 and arr.shape[0] == 2 else ""
-        raise InvalidInputError(f"{who}points must be an (N, 2) array of x, y; got shape {arr.shape}{hint}")
-    n = arr.shape[0]
-    masked = " after dropping masked points" if isinstance(points, np.ma.MaskedArray) else ""
-    if n < min_points:
-        raise InvalidInputError(f"{who}needs at least {min_points} points, got {n}{masked}")
-    arr = np.ascontiguousarray(arr)
+    if (type(points) is np.ndarray and points.dtype == _FLOAT64 and points.ndim == 2 and points.shape[1] == 2
+            and points.shape[0] >= min_points and points.flags.c_contiguous):
+        arr = points  # what the conversions and shape checks below return for such an array: itself
+    else:
+        arr = _checked_array(points, min_points, method)
     ck = point_kernels()
     if ck is not None and _clearly_valid(arr, ck):
         return arr
+    who = f"{method}: " if method else ""
+    n = arr.shape[0]
     with np.errstate(over="ignore", invalid="ignore"):
         total = arr.sum()
     if not np.isfinite(total):  # one cheap sweep; the elementwise test only when it fails
@@ -97,6 +95,21 @@ def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndar
                                 "no circle or ellipse passes through them")
     offer_frame(arr, (shift, scale, x, y), total)
     return arr
+
+
+def _checked_array(points, min_points: int, method: str) -> np.ndarray:
+    """The points as a C-contiguous float64 (N, 2) array of at least ``min_points`` rows (:func:`_as_array`),
+    or the error saying what is wrong with their shape or number."""
+    who = f"{method}: " if method else ""
+    arr = _as_array(points, who)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        hint = " (it looks transposed: pass points.T)" if arr.ndim == 2 and arr.shape[0] == 2 else ""
+        raise InvalidInputError(f"{who}points must be an (N, 2) array of x, y; got shape {arr.shape}{hint}")
+    n = arr.shape[0]
+    masked = " after dropping masked points" if isinstance(points, np.ma.MaskedArray) else ""
+    if n < min_points:
+        raise InvalidInputError(f"{who}needs at least {min_points} points, got {n}{masked}")
+    return np.ascontiguousarray(arr)
 
 
 def _clearly_valid(arr: np.ndarray, ck) -> bool:

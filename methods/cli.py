@@ -78,18 +78,12 @@ def check_plot_path(path) -> Path | None:
 
 
 def save_figure(fig, path, dpi=120) -> None:
-    """Write a matplotlib figure atomically (a temporary file in the same folder, then a rename)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
+    """Write a matplotlib figure atomically (:func:`methods._figures.save_atomic`); a failed write is one line."""
+    from methods._figures import save_atomic
     try:
-        fig.savefig(tmp, dpi=dpi, format=path.suffix.lower().lstrip("."))
-        os.replace(tmp, path)
+        save_atomic(fig, path, dpi=dpi)
     except OSError as exc:
         raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def write_text_atomic(path, text: str) -> None:

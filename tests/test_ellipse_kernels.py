@@ -185,3 +185,19 @@ def test_orthogonal_fit_compiled_matches_the_numpy_path(monkeypatch, name, point
     assert abs((fast.angle - ref.angle + np.pi / 2) % np.pi - np.pi / 2) <= 1e-9 * size / min(ref.semi_axes)
     assert np.allclose(fast.residuals, ref.residuals, rtol=0, atol=1e-9 * size)
     assert len(fast.history) == fast.iterations and fast.nfev >= fast.iterations
+
+
+@pytest.mark.parametrize("n", [5, 255, 256, 257, 3358, 100_000])
+def test_compiled_scatter_matches_the_numpy_moments(n, monkeypatch):
+    """The direct fits' 6 x 6 scatter from one compiled sweep (blocked pairwise sums) against NumPy's
+    products and pairwise sums: equal to a few ulps of each moment's scale (sum of |terms|)."""
+    from methods.ellipse import direct
+    rng = np.random.default_rng(n)
+    t = rng.uniform(0, 2.0, n)
+    pts = np.c_[3 * np.cos(t), np.sin(t)] + 1e-3 * rng.standard_normal((n, 2))
+    frame = geometry.Frame.of(pts)
+    compiled = direct.scatter(frame.x, frame.y)
+    monkeypatch.setenv("FITBENCH_KERNELS", "numpy")
+    reference = direct.scatter(frame.x, frame.y)
+    absolute = direct.scatter(np.abs(frame.x), np.abs(frame.y))
+    assert np.all(np.abs(compiled - reference) <= 64 * np.finfo(float).eps * absolute + 1e-300)

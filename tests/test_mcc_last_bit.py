@@ -95,3 +95,33 @@ def test_smooth_profiles_mcc_certified_and_equal_to_reference(seed):
             R = mcc_reference(p)
             assert abs(mcc.radius - R) <= 4 * CHECK_RTOL * (R + np.abs(c).max()), (k, mcc.radius, R)
     assert status == {"global"}, status
+
+
+from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(200, 2000), lobes=st.lists(st.integers(2, 40), min_size=1,
+                                                                                 max_size=4),
+       amplitude=st.floats(1e-6, 1e-2), ulp=st.integers(0, 3))
+def test_mic_certificate_never_wrong_under_search(seed, n, lobes, amplitude, ulp):
+    """A hypothesis search over smooth and rough profiles (1-40 lobes, amplitudes 1e-6 to 1e-2 of the radius,
+    with noise) and one-ulp perturbations: a MIC (and MCC) certified "global" is the independent reference's
+    optimum; an uncertified one says so (never a wrong certificate)."""
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.uniform(0, 2 * np.pi, n))
+    R0 = float(rng.uniform(1, 50))
+    dev = sum(amplitude * R0 * rng.uniform(0.2, 1) * np.cos(k * t + rng.uniform(0, 2 * np.pi)) for k in lobes)
+    dev = dev + 0.1 * amplitude * R0 * rng.standard_normal(n)
+    c = rng.uniform(-100, 100, 2)
+    p = _perturbed(np.column_stack([c[0] + (R0 + dev) * np.cos(t), c[1] + (R0 + dev) * np.sin(t)]), ulp)
+    mic = methods.fit("circle.max_inscribed", p)
+    if mic.extra["certified"] == "global":
+        r, R = mic_reference(p), R0 + np.abs(c).max()
+        assert abs(mic.radius - r) <= EPS_REL * r + EPS_ABS * R + 4 * CHECK_RTOL * R, (mic.radius, r)
+    else:
+        assert not mic.converged or mic.extra["certified"] == "local", mic.message
+    mcc = methods.fit("circle.min_circumscribed", p)
+    if mcc.extra["certified"] == "global":
+        R = mcc_reference(p)
+        assert abs(mcc.radius - R) <= 4 * CHECK_RTOL * (R + np.abs(c).max()), (mcc.radius, R)

@@ -130,3 +130,18 @@ def test_committed_quick_results_exist_for_the_ci_verify_step():
     for name in defaults:
         meta = json.loads((quick / name / "meta.json").read_text())
         assert meta["quick"] is True and (quick / name / "results.csv").is_file(), name
+
+
+def test_rows_that_did_not_converge_in_both_runs_compare_status_and_counts_only(committed, tmp_path, capsys):
+    """Where both runs say "not converged", the values are where an iteration stopped (rounding moves them):
+    they are not compared, and verify says how many it left out; the counts still are."""
+    base = copy_run(committed, tmp_path / "a")
+    edit(base, 3, "status", lambda v: "not converged")
+    fresh = copy_run(base, tmp_path / "b")
+    edit(fresh, 3, "radius", lambda v: repr(float(v) * 1.5))
+    assert verify.main(["--results", str(base), "--against", str(fresh)]) == 0, capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "of rows that did not converge in both runs not compared" in out
+    edit(fresh, 3, "iterations", lambda v: str(int(v) + 1))
+    assert verify.main(["--results", str(base), "--against", str(fresh)]) == 1
+    assert " iterations " in capsys.readouterr().out

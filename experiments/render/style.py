@@ -191,13 +191,13 @@ def smallest_font_pt(fig) -> float:
 
 def save(fig, path, *, pdf: bool = False) -> Path:
     """Write ``fig`` atomically to ``path`` (PNG), and a PDF next to it when ``pdf``; close the figure."""
-    import os
     import matplotlib.pyplot as plt
+    from methods._figures import save_atomic
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    for target in [path] + ([path.with_suffix(".pdf")] if pdf else []):
-        tmp = target.with_name(f".{target.stem}.tmp{target.suffix}")
-        fig.savefig(tmp)
-        os.replace(tmp, target)
-    plt.close(fig)
+    try:
+        for target in [path] + ([path.with_suffix(".pdf")] if pdf else []):
+            save_atomic(fig, target)
+    finally:
+        plt.close(fig)
     return path

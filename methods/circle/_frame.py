@@ -100,23 +100,21 @@ def kasa_moments(m: np.ndarray, ck=None) -> np.ndarray:
     w = xc^2 + yc^2 - R^2) from the moment matrix of :func:`moments`: its 3x3 normal equations
     (``ck``: solved by the compiled ``solve3``, Gaussian elimination with partial pivoting as LAPACK's
     dgesv, without NumPy's per-call overhead; else by the same elimination in Python, :func:`solve3`)."""
-    if ck is not None:
-        (_, m01, m02, m03), (_, m11, m12, m13), (_, _, m22, m23), (_, _, _, m33) = m.tolist()
-        sol = ck.solve3((4 * m11, 4 * m12, -2 * m13, 4 * m12, 4 * m22, -2 * m23, -2 * m13, -2 * m23, m33),
-                        (2 * m01, 2 * m02, -m03))
-        if sol is None:
-            return np.full(3, np.nan)
-        xc, yc, w = sol
-        r2 = xc * xc + yc * yc - w
-        return np.array([xc, yc, math.sqrt(r2) if r2 > 0 else math.nan])
     (_, m01, m02, m03), (_, m11, m12, m13), (_, _, m22, m23), (_, _, _, m33) = m.tolist()
-    sol = solve3((4 * m11, 4 * m12, -2 * m13, 4 * m12, 4 * m22, -2 * m23, -2 * m13, -2 * m23, m33),
-                 (2 * m01, 2 * m02, -m03))
+    return np.array(kasa_sums(m01, m02, m03, m11, m12, m13, m22, m23, m33, ck))
+
+
+def kasa_sums(m01, m02, m03, m11, m12, m13, m22, m23, m33, ck=None) -> tuple[float, float, float]:
+    """:func:`kasa_moments` from the entries (row, column) of the moment matrix M as plain floats (the
+    compiled closed-form path has them so, without the matrix): the unit-frame (xc, yc, R), NaNs when the
+    system is singular or gives R^2 <= 0."""
+    sol = (ck.solve3 if ck is not None else solve3)(
+        (4 * m11, 4 * m12, -2 * m13, 4 * m12, 4 * m22, -2 * m23, -2 * m13, -2 * m23, m33), (2 * m01, 2 * m02, -m03))
     if sol is None:
-        return np.full(3, np.nan)
+        return math.nan, math.nan, math.nan
     xc, yc, w = sol
     r2 = xc * xc + yc * yc - w
-    return np.array([xc, yc, math.sqrt(r2) if r2 > 0 else math.nan])
+    return xc, yc, math.sqrt(r2) if r2 > 0 else math.nan
 
 
 
@@ -167,32 +165,27 @@ def compiled_frame(points):
     return (ck, frame) if frame is not None else None
 
 
-def compiled_moments(points, ck, frame: KernelFrame) -> tuple[KernelFrame, np.ndarray]:
-    """(frame, M = Z^T Z / N) by the compiled pass 2: Z = [z, x, y, 1] of the centred, scaled data (as
-    :func:`moments`). The pass returns the data's token: if the points changed since ``frame`` was
-    computed, the frame is computed again (pass 1) and the moments with it."""
+def compiled_moment_means(points, ck, frame: KernelFrame) -> tuple[KernelFrame, tuple]:
+    """(frame, (zz, zx, zy, xx, yy, xy, sx, sy, sz)): the distinct entries of M = Z^T Z / N (see
+    :func:`compiled_moments`) as plain floats, by the compiled pass 2. The pass returns the data's token:
+    if the points changed since ``frame`` was computed, the frame is computed again (pass 1) and the
+    moments with it."""
     t, zz, zx, zy, xx, yy, xy, sx, sy, sz = ck.moments(points, frame.cx, frame.cy, frame.scale)
     if t != frame.token:
         frame = kernel_frame(points, ck)
         t, zz, zx, zy, xx, yy, xy, sx, sy, sz = ck.moments(points, frame.cx, frame.cy, frame.scale)
     n = float(points.shape[0])
-    zz, zx, zy, xx, yy, xy, sx, sy, sz = zz / n, zx / n, zy / n, xx / n, yy / n, xy / n, sx / n, sy / n, sz / n
+    return frame, (zz / n, zx / n, zy / n, xx / n, yy / n, xy / n, sx / n, sy / n, sz / n)
+
+
+def compiled_moments(points, ck, frame: KernelFrame) -> tuple[KernelFrame, np.ndarray]:
+    """(frame, M = Z^T Z / N) by the compiled pass 2: Z = [z, x, y, 1] of the centred, scaled data (as
+    :func:`moments`); see :func:`compiled_moment_means`."""
+    frame, (zz, zx, zy, xx, yy, xy, sx, sy, sz) = compiled_moment_means(points, ck, frame)
     return frame, np.array([[zz, zx, zy, sz],
                             [zx, xx, xy, sx],
                             [zy, xy, yy, sy],
                             [sz, sx, sy, 1.0]])
-
-
-def frame_and_moments(points) -> tuple["Frame", np.ndarray, object]:
-    """The circle frame (shift and scale; x, y only on the NumPy path), the moment matrix M of
-    :func:`moments` and the kernels: compiled passes 1-2 (no unit-frame copy), or the NumPy reference
-    path (kernels None)."""
-    compiled = compiled_frame(points)
-    if compiled is None:
-        frame = Frame.of(points)
-        return frame, moments(frame.x, frame.y), None
-    kf, m = compiled_moments(points, *compiled)
-    return Frame(shift=kf.shift, scale=kf.scale, x=_NO_COORDINATES, y=_NO_COORDINATES), m, compiled[0]
 
 
 _NO_COORDINATES = np.empty(0)

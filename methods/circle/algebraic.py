@@ -11,8 +11,10 @@ and form error are one more sweep. Through ``methods.fit`` that is three sweeps 
 (compiled path, ``methods/circle/_ckernels.c``; the NumPy reference path computes the same quantities):
 
 1. validation + frame: ``frame_stats`` (finite, centroid, scale, collinearity; ``methods._validation``);
-2. the moments of the centred, scaled data: ``moments`` (:func:`methods.circle._frame.frame_and_moments`);
+2. the moments of the centred, scaled data: ``moments`` (:func:`methods.circle._frame.compiled_moment_means`);
 3. residuals r_i - R, form error max r - min r: ``radial`` (:func:`methods._result.circle_result`).
+Between the sweeps the compiled path stays in plain floats (the sums, the 3x3 or 4x4 problem solved by
+``solve3`` / ``eigen_fit`` in C, the circle mapped to data units): about 7 µs of Python per fit at N = 3358.
 In the unit frame M is as well conditioned as the circle's shape allows (no offset, no unit), so the
 squared condition number of the moments costs nothing measurable: tests/test_algebraic_moments.py
 compares every fit with an SVD of Z on the NIST sets and on ill-conditioned exact circles.
@@ -25,7 +27,19 @@ import numpy as np
 
 from methods._registry import register
 from methods._result import circle_result
-from methods.circle._frame import Frame, frame_and_moments, kasa_moments
+from methods.circle._frame import Frame, compiled_frame, compiled_moment_means, kasa_moments, kasa_sums, moments
+
+# Compiled path (issue 20): the fits below read the compiled passes' sums as plain floats and map the unit-frame
+# circle to data units in plain floating point (the same IEEE operations as NumPy's on 2-element arrays, so the
+# same bits as the NumPy reference path's own arithmetic), without building matrices or frames in between.
+
+
+def _to_data(cx: float, cy: float, scale: float, xc: float, yc: float, r: float):
+    """The unit-frame circle (xc, yc, R) in data units: as :meth:`Frame.circle_to_data` (center, radius)."""
+    return (xc * scale + cx, yc * scale + cy), abs(r) * scale
+
+
+_KASA_NO_CIRCLE = "Kåsa system gives R^2 <= 0: no real circle fits these points"
 
 
 @register("circle.kasa", kind="closed form",
@@ -34,11 +48,19 @@ from methods.circle._frame import Frame, frame_and_moments, kasa_moments
 def kasa(points):
     """Minimise S_CA = sum((x_i - xc)^2 + (y_i - yc)^2 - R^2)^2 (circle/ellipse paper eq. 5) by
     solving the linear least-squares system of roundness-paper eq. 7 for (xc, yc, w)."""
-    frame, m, ck = frame_and_moments(points)
-    p = kasa_moments(m, ck)
+    compiled = compiled_frame(points)
+    if compiled is not None:
+        ck, kf = compiled
+        kf, (_, zx, zy, xx, yy, xy, sx, sy, sz) = compiled_moment_means(points, ck, kf)
+        xc, yc, r = kasa_sums(zx, zy, sz, xx, xy, sx, yy, sy, 1.0, ck)
+        if not (math.isfinite(xc) and math.isfinite(yc) and math.isfinite(r)):
+            return circle_result(points, (np.nan, np.nan), np.nan, converged=False, message=_KASA_NO_CIRCLE)
+        center, radius = _to_data(kf.cx, kf.cy, kf.scale, xc, yc, r)
+        return circle_result(points, center, radius, converged=True, message="closed-form solution")
+    frame = Frame.of(points)  # the NumPy reference path
+    p = kasa_moments(moments(frame.x, frame.y))
     if not all(map(math.isfinite, p.tolist())):
-        return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
-                             message="Kåsa system gives R^2 <= 0: no real circle fits these points")
+        return circle_result(points, (np.nan, np.nan), np.nan, converged=False, message=_KASA_NO_CIRCLE)
     center, radius = frame.circle_to_data(p)
     del frame  # the result's residual sweep does not need the unit-frame copy
     return circle_result(points, center, radius, converged=True, message="closed-form solution")
@@ -49,17 +71,15 @@ _EIGEN_MESSAGES = ("closed-form solution (generalised eigenvector)",
                    "no positive generalised eigenvalue: the constraint admits no circle")
 
 
-def _eigen_fit(m: np.ndarray, constraint: np.ndarray, ck=None) -> tuple[np.ndarray, str]:
+def _eigen_fit(m: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, str]:
     """Solve min a^T M a s.t. a^T N a = 1 (smallest positive eigenvalue of M a = eta N a), M = Z^T Z / N.
 
     With M = V S^2 V^T (its eigendecomposition, S^2 >= 0), put a = V S^-1 b: then K b = (1/eta) b with
     K = S^-1 V^T N V S^-1 symmetric; the wanted a comes from the largest positive eigenvalue of K.
     When the smallest eigenvalue of M is at its rounding level (points on a circle to ~1e-7 of
-    its size), a is the null vector of M: every constraint then gives the same circle.
+    its size), a is the null vector of M: every constraint then gives the same circle. (The compiled path
+    makes the same computation in C: ``methods/circle/_ckernels.c`` eigen_fit, cyclic Jacobi.)
     """
-    if ck is not None:  # the same computation in C (methods/circle/_ckernels.c eigen_fit, cyclic Jacobi)
-        status, *a = ck.eigen_fit(tuple(m.ravel().tolist()), tuple(constraint.ravel().tolist()))
-        return np.array(a), _EIGEN_MESSAGES[status]
     lam, v = np.linalg.eigh(m)
     lam, v = lam[::-1], v[:, ::-1]  # largest first
     if lam[-1] <= 64 * np.finfo(float).eps * lam[0]:
@@ -73,8 +93,9 @@ def _eigen_fit(m: np.ndarray, constraint: np.ndarray, ck=None) -> tuple[np.ndarr
     return v @ (b[:, j] / s), _EIGEN_MESSAGES[0]
 
 
-def _circle_from_conic(points, frame: Frame, a: np.ndarray, message: str):
-    a = [float(v) for v in a]  # plain floats: the same IEEE operations as NumPy scalars, less overhead
+def _circle_from_conic(points, to_data, a: list, message: str):
+    """The circle of the conic A(x^2 + y^2) + Bx + Cy + D = 0, ``a`` = [A, B, C, D] (plain floats, unit frame),
+    as a result; ``to_data(xc, yc, R)`` -> (center, radius) in data units."""
     A, B, C, D = a
     finite = all(map(math.isfinite, a))
     disc = B * B + C * C - 4 * A * D if finite else math.nan
@@ -85,8 +106,7 @@ def _circle_from_conic(points, frame: Frame, a: np.ndarray, message: str):
     if disc <= 0:
         return circle_result(points, (np.nan, np.nan), np.nan, converged=False,
                              message="algebraic solution has B^2 + C^2 - 4AD <= 0: no real circle")
-    p = np.array([-B / (2 * A), -C / (2 * A), math.sqrt(disc) / (2 * abs(A))])
-    center, radius = frame.circle_to_data(p)
+    center, radius = to_data(-B / (2 * A), -C / (2 * A), math.sqrt(disc) / (2 * abs(A)))
     return circle_result(points, center, radius, converged=True, message=message,
                          extra={"algebraic_parameters_unit_frame": a})
 
@@ -95,20 +115,40 @@ _PRATT = np.array([[0, 0, 0, -2], [0, 1, 0, 0], [0, 0, 1, 0], [-2, 0, 0, 0]], dt
 
 
 def _constraint(kind: str, zbar: float) -> np.ndarray:
+    return np.array(_constraint_entries(kind, zbar)).reshape(4, 4)
+
+
+def _constraint_entries(kind: str, zbar: float) -> tuple:
+    """The constraint matrix N (row major, 16 floats) of ``kind`` for data centred in the unit frame with
+    mean(z) = ``zbar``."""
     if kind == "pratt":
-        return _PRATT
+        return _PRATT_ENTRIES
     z4 = 4 * zbar  # Taubin: diag(4 mean(z), 1, 1, 0) (data centred: the A*B and A*C terms vanish); Hyper: 2 N_T - N_P
     if kind == "taubin":
-        return np.array([[z4, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 0.0]])
-    return np.array([[2 * z4, 0.0, 0.0, 2.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [2.0, 0.0, 0.0, 0.0]])
+        return (z4, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return (2 * z4, 0.0, 0.0, 2.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 0.0, 0.0)
+
+
+_PRATT_ENTRIES = tuple(_PRATT.ravel().tolist())
 
 
 def _constrained_fit(points, kind: str):
-    frame, m, ck = frame_and_moments(points)
-    a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])), ck)
-    if frame.x.size:  # NumPy path: release the unit-frame copy before the residual sweep
-        frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))
-    return _circle_from_conic(points, frame, a, message)
+    compiled = compiled_frame(points)
+    if compiled is not None:  # passes 1 (validation) and 2 (moments), the 4x4 problem in C, pass 3 (residuals)
+        ck, kf = compiled
+        kf, (zz, zx, zy, xx, yy, xy, sx, sy, sz) = compiled_moment_means(points, ck, kf)
+        status, *a = ck.eigen_fit((zz, zx, zy, sz, zx, xx, xy, sx, zy, xy, yy, sy, sz, sx, sy, 1.0),
+                                  _constraint_entries(kind, sz))
+        cx, cy, scale = kf.cx, kf.cy, kf.scale
+        return _circle_from_conic(points, lambda xc, yc, r: _to_data(cx, cy, scale, xc, yc, r), a,
+                                  _EIGEN_MESSAGES[status])
+    frame = Frame.of(points)  # the NumPy reference path
+    m = moments(frame.x, frame.y)
+    a, message = _eigen_fit(m, _constraint(kind, float(m[0, 3])))
+    frame = Frame(shift=frame.shift, scale=frame.scale, x=np.empty(0), y=np.empty(0))  # release the unit-frame
+    # copy before the residual sweep
+    return _circle_from_conic(points, lambda xc, yc, r: frame.circle_to_data(np.array([xc, yc, r])),
+                              [float(v) for v in a], message)
 
 
 @register("circle.pratt", kind="closed form",

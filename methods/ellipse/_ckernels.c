@@ -1,4 +1,5 @@
-/* Compiled kernel of the ellipse fits (issue 20): the orthogonal residuals in ONE sweep over the points.
+/* Compiled kernels of the ellipse fits (issue 20): the orthogonal residuals in ONE sweep over the points, and
+ * the moments of the direct fits' 6 x 6 scatter in one more (scatter(), at the end of this file).
  *
  *   orthogonal(x, y, xc, yc, c, s, a, b, iterations, d_out[, phi_out])
  *
@@ -364,7 +365,93 @@ static PyObject *distances_jacobian(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* ---- the 6 x 6 scatter of the direct fits: the 14 moments sum x^p y^q (1 <= p + q <= 4) in one sweep ---- */
+/* Blocked pairwise summation (as the circle kernel's moments): each block of SBLOCK points is summed in order,
+   the block sums are added pairwise (a binary counter), so the rounding grows like (SBLOCK + log2(N/SBLOCK)) eps. */
+#define SBLOCK 256
+#define SMAXLEV 64
+#define SNSUM 14
+typedef struct {
+    unsigned char used[SMAXLEV];
+    double acc[SMAXLEV][SNSUM];
+} spairwise_t;
+
+static void spw_add(spairwise_t *p, const double *v) {
+    double carry[SNSUM];
+    int j, lev;
+    memcpy(carry, v, sizeof carry);
+    for (lev = 0; lev < SMAXLEV; lev++) {
+        if (!p->used[lev]) {
+            memcpy(p->acc[lev], carry, sizeof carry);
+            p->used[lev] = 1;
+            return;
+        }
+        for (j = 0; j < SNSUM; j++) carry[j] = p->acc[lev][j] + carry[j];
+        p->used[lev] = 0;
+    }
+}
+
+static PyObject *scatter(PyObject *self, PyObject *args) {
+    PyObject *xo, *yo;
+    Py_buffer xv, yv;
+    Py_ssize_t n, sx, sy, i0, i;
+    double out[SNSUM];
+    spairwise_t pw;
+    int lev, j, first = 1;
+    if (!PyArg_ParseTuple(args, "OO", &xo, &yo)) return NULL;
+    if (vector_of(xo, &xv, 0, "x") < 0) return NULL;
+    if (vector_of(yo, &yv, 0, "y") < 0) { PyBuffer_Release(&xv); return NULL; }
+    n = xv.shape[0];
+    if (yv.shape[0] != n) {
+        PyErr_SetString(PyExc_ValueError, "scatter: x and y must have the same length");
+        PyBuffer_Release(&xv); PyBuffer_Release(&yv);
+        return NULL;
+    }
+    sx = xv.strides[0] / 8; sy = yv.strides[0] / 8;
+    memset(pw.used, 0, sizeof pw.used);
+    Py_BEGIN_ALLOW_THREADS
+    {
+        const double *x = (const double *)xv.buf, *y = (const double *)yv.buf;
+        for (i0 = 0; i0 < n; i0 += SBLOCK) {
+            Py_ssize_t i1 = i0 + SBLOCK < n ? i0 + SBLOCK : n;
+            double b[SNSUM] = {0.0};
+            for (i = i0; i < i1; i++) {
+                double u = x[i * sx], v = y[i * sy];
+                double uu = u * u, uv = u * v, vv = v * v;
+                b[0] = b[0] + uu * uu;   /* m40 */
+                b[1] = b[1] + uu * uv;   /* m31 */
+                b[2] = b[2] + uu * vv;   /* m22 */
+                b[3] = b[3] + uv * vv;   /* m13 */
+                b[4] = b[4] + vv * vv;   /* m04 */
+                b[5] = b[5] + uu * u;    /* m30 */
+                b[6] = b[6] + uu * v;    /* m21 */
+                b[7] = b[7] + vv * u;    /* m12 */
+                b[8] = b[8] + vv * v;    /* m03 */
+                b[9] = b[9] + uu;        /* m20 */
+                b[10] = b[10] + uv;      /* m11 */
+                b[11] = b[11] + vv;      /* m02 */
+                b[12] = b[12] + u;       /* m10 */
+                b[13] = b[13] + v;       /* m01 */
+            }
+            spw_add(&pw, b);
+        }
+        for (j = 0; j < SNSUM; j++) out[j] = 0.0;
+        for (lev = 0; lev < SMAXLEV; lev++) {
+            if (!pw.used[lev]) continue;
+            for (j = 0; j < SNSUM; j++) out[j] = first ? pw.acc[lev][j] : out[j] + pw.acc[lev][j];
+            first = 0;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&xv); PyBuffer_Release(&yv);
+    return Py_BuildValue("(dddddddddddddd)", out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8],
+                         out[9], out[10], out[11], out[12], out[13]);
+}
+
 static PyMethodDef Methods[] = {
+    {"scatter", scatter, METH_VARARGS,
+     "scatter(x, y) -> (m40, m31, m22, m13, m04, m30, m21, m12, m03, m20, m11, m02, m10, m01): the moments "
+     "sum x^p y^q of the direct fits' scatter matrix, one sweep, blocked pairwise sums"},
     {"distances_jacobian", distances_jacobian, METH_VARARGS,
      "distances_jacobian(x, y, xc, yc, cos_theta, sin_theta, a, b, iterations, d_out, J_out): the signed "
      "orthogonal distances (as orthogonal()) and their Jacobian, transposed (5, N), in (xc, yc, a, b, theta), in place"},

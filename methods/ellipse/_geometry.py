@@ -116,22 +116,26 @@ def conic_to_params(k) -> np.ndarray | None:
     return canonical([xc, yc, axes[0], axes[1], theta])
 
 
+def _sqrt_or_nan(v: float) -> float:
+    return math.sqrt(v) if v >= 0 else float("nan")
+
+
 def paper_gamma_solutions(k) -> dict:
     """The circle/ellipse paper's conversion (eq. 23-25) of a conic (a, b, c, d, e, f), in its sign
     convention (a + c < 0, the interior positive, as its table 5), giving both angle solutions:
     gamma_1 = atan2(b, a - c) / 2 and gamma_2 = gamma_1 + 90 deg, with p_x along gamma and p_y across."""
-    a, b, c, d, e, f = np.asarray(k, dtype=np.float64) * (-1.0 if k[0] + k[2] > 0 else 1.0)
+    sign = -1.0 if k[0] + k[2] > 0 else 1.0
+    a, b, c, d, e, f = (sign * float(v) for v in k)
     out = {}
-    g1 = np.arctan2(b, a - c) / 2  # eq. 23
-    for name, g in (("1", g1), ("2", g1 + np.pi / 2 if g1 <= 0 else g1 - np.pi / 2)):
-        s2, c2 = np.sin(2 * g), np.cos(2 * g)
+    g1 = math.atan2(b, a - c) / 2  # eq. 23
+    for name, g in (("1", g1), ("2", g1 + math.pi / 2 if g1 <= 0 else g1 - math.pi / 2)):
+        s2, c2 = math.sin(2 * g), math.cos(2 * g)
         a2 = ((a + c) + b * s2 + (a - c) * c2) / 2  # eq. 24
         c2_ = ((a + c) - b * s2 - (a - c) * c2) / 2
-        d2 = d * np.cos(g) + e * np.sin(g)
-        e2 = -d * np.sin(g) + e * np.cos(g)
-        with np.errstate(invalid="ignore"):
-            px = np.sqrt(d2 ** 2 + a2 * e2 ** 2 / c2_ - 4 * a2 * f) / (2 * a2)  # eq. 25
-            py = np.sqrt(e2 ** 2 + c2_ * d2 ** 2 / a2 - 4 * c2_ * f) / (2 * c2_)
+        d2 = d * math.cos(g) + e * math.sin(g)
+        e2 = -d * math.sin(g) + e * math.cos(g)
+        px = _sqrt_or_nan(d2 ** 2 + a2 * e2 ** 2 / c2_ - 4 * a2 * f) / (2 * a2)  # eq. 25
+        py = _sqrt_or_nan(e2 ** 2 + c2_ * d2 ** 2 / a2 - 4 * c2_ * f) / (2 * c2_)
         out[f"gamma{name}"] = float(g)
         out[f"px{name}"] = float(abs(px))
         out[f"py{name}"] = float(abs(py))

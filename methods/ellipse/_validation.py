@@ -9,11 +9,11 @@ from methods._errors import InvalidInputError
 def count_distinct(points: np.ndarray, enough: int) -> int:
     """The number of distinct points, counted up to ``enough`` (exact equality; the first 64 rows decide
     in the common case, the whole set is sorted only when they hold fewer than ``enough`` distinct points)."""
-    pts = np.ascontiguousarray(points, dtype=np.float64) + 0.0  # + 0.0 makes -0.0 equal to 0.0
-    head = pts[:64]
+    head = np.ascontiguousarray(points[:64], dtype=np.float64) + 0.0  # + 0.0 makes -0.0 equal to 0.0
     n_head = len(np.unique(head.view(np.complex128)))
-    if n_head >= enough or len(pts) <= 64:
+    if n_head >= enough or len(points) <= 64:
         return n_head
+    pts = np.ascontiguousarray(points, dtype=np.float64) + 0.0  # the whole set only when the head is not enough
     return len(np.unique(pts.view(np.complex128)))
 
 

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from methods._registry import register
+from methods._compiled import kernels
 from methods._frame import dot, solve3
 from methods.ellipse._geometry import Frame, conic_to_params, normalise_conic
 from methods.ellipse._result import ellipse_result, failed, residuals_from_unit
@@ -20,6 +21,10 @@ from methods.ellipse._validation import check_distinct_points
 from methods._lazy import lazy_module
 
 sla = lazy_module("scipy.linalg")
+
+
+def _ellipse_kernels():
+    return kernels("methods.ellipse._ckernels")
 
 
 #: Fitzgibbon's constraint matrix: a^T C a = 4AC - B^2
@@ -32,13 +37,22 @@ ILL_POSED_RTOL = 1e-10
 
 
 def scatter(x, y) -> np.ndarray:
-    """S = D^T D for D = [x^2, xy, y^2, x, y, 1] from the moments sum x^p y^q, p + q <= 4 (one sweep of
-    three products and twelve dot products; S[i, j] depends only on the sum of the monomials' exponents)."""
+    """S = D^T D for D = [x^2, xy, y^2, x, y, 1] from the moments sum x^p y^q, p + q <= 4 (S[i, j] depends only on
+    the sum of the monomials' exponents): one compiled sweep (``methods/ellipse/_ckernels.c`` ``scatter``,
+    blocked pairwise sums), or on the NumPy path three products and twelve sums of products."""
+    ck = _ellipse_kernels()
+    if ck is not None:
+        m40, m31, m22, m13, m04, m30, m21, m12, m03, m20, m11, m02, m10, m01 = ck.scatter(x, y)
+        return _scatter_matrix(m40, m31, m22, m13, m04, m30, m21, m12, m03, m20, m11, m02, m10, m01, float(len(x)))
     xx, xy, yy = x * x, x * y, y * y   # sums of products by methods._frame.dot: never BLAS, the same bits on every CPU
     m40, m31, m22, m13, m04 = dot(xx, xx), dot(xx, xy), dot(xx, yy), dot(xy, yy), dot(yy, yy)
     m30, m21, m12, m03 = dot(xx, x), dot(xx, y), dot(yy, x), dot(yy, y)
     m20, m11, m02 = dot(x, x), dot(x, y), dot(y, y)
     m10, m01, m00 = x.sum(), y.sum(), float(len(x))
+    return _scatter_matrix(m40, m31, m22, m13, m04, m30, m21, m12, m03, m20, m11, m02, m10, m01, m00)
+
+
+def _scatter_matrix(m40, m31, m22, m13, m04, m30, m21, m12, m03, m20, m11, m02, m10, m01, m00) -> np.ndarray:
     return np.array([[m40, m31, m22, m30, m21, m20],
                      [m31, m22, m13, m21, m12, m11],
                      [m22, m13, m04, m12, m03, m02],

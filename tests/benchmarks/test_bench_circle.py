@@ -5,12 +5,12 @@ measured in the same run.
 Run:  python -m pytest tests/benchmarks --benchmark-enable --benchmark-group-by=param:n
 (the default test run executes each case once, as a smoke test, with benchmarking disabled).
 """
-import warnings
 
 import numpy as np
 import pytest
 
 import methods
+from _baselines import circle_model
 from datasets.synthetic import circle_points
 
 SIZES = [3358, 100_000]
@@ -43,21 +43,11 @@ def test_fitbench(benchmark, trace, method_id):
 
 
 def test_baseline_skimage_circlemodel(benchmark, trace):
-    measure = pytest.importorskip("skimage.measure", reason="scikit-image is a test extra (pip install -e .[test])")
+    fit = circle_model()
     n, pts = trace
     benchmark.group = f"circle n={n}"
 
-    def fit():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", FutureWarning)
-            if hasattr(measure.CircleModel, "from_estimate"):
-                model = measure.CircleModel.from_estimate(pts)
-                return model.center, model.radius
-            model = measure.CircleModel()
-            model.estimate(pts)
-            return model.params[:2], model.params[2]
-
-    center, radius = benchmark(fit)
+    center, radius = benchmark(fit, pts)
     _check(center, radius)
 
 

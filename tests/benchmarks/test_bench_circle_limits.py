@@ -8,12 +8,12 @@ The ratio table (median / baseline median) and the peak memory are printed at th
 (``-s``) and stored in each case's ``extra_info``. Without --benchmark-enable each case runs once (smoke).
 """
 import tracemalloc
-import warnings
 
 import numpy as np
 import pytest
 
 import methods
+from _baselines import circle_model
 from datasets.synthetic import circle_points
 
 SIZES = [3358, 100_000, 1_000_000]
@@ -82,20 +82,10 @@ def test_baseline_hyperlsq(benchmark, trace):
 
 
 def test_baseline_circlemodel(benchmark, trace):
-    measure = pytest.importorskip("skimage.measure", reason="scikit-image is a test extra")
+    fit = circle_model()
     n, pts = trace
     benchmark.group = f"circle limits n={n}"
 
-    def fit():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", FutureWarning)
-            if hasattr(measure.CircleModel, "from_estimate"):
-                model = measure.CircleModel.from_estimate(pts)
-                return model.center, model.radius
-            model = measure.CircleModel()
-            model.estimate(pts)
-            return model.params[:2], model.params[2]
-
-    center, radius = benchmark(fit)
+    center, radius = benchmark(fit, pts)
     _record(benchmark, "CircleModel", n)
     _check(center, radius)

@@ -79,9 +79,16 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
             return failed(points, f"start {p_start.tolist()} is not an ellipse representable in the data's frame "
                                   f"(RMS radius {frame.scale:.3g}); give positive semi-axes near the data")
     history = []
-    cache = {}
+    cache = []   # the last two evaluations, newest first: MINPACK's answer is often the one before its last trial
+    spare = []   # Jacobian buffers of evicted evaluations, reused (no fresh 8 N x 5 bytes per evaluation)
     n = len(x)
     ck = kernels("methods.ellipse._ckernels")
+
+    def lookup(p):
+        for e in cache:
+            if np.array_equal(e["p"], p):
+                return e
+        return None
 
     def solve(p, with_jacobian=True):
         """Distances and Jacobian at p, once per p (fun and jac share them). Compiled: one sweep computing both
@@ -89,36 +96,45 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
         MINPACK's column-major N x 5 (no transposed copy); ``with_jacobian=False`` (the probe's trial points, whose
         Jacobian is rarely needed): the distances alone (orthogonal(), the same bits). NumPy reference path
         (FITBENCH_KERNELS=numpy), and any p that is not a finite ellipse with positive semi-axes: the closest
-        points' phi, then the Jacobian when asked for."""
-        if "p" not in cache or not np.array_equal(cache["p"], p):
+        points' phi, then the Jacobian when asked for. Returns the cache entry."""
+        e = lookup(p)
+        if e is None:
             xc, yc, a, b, t = (float(v) for v in p)
             if ck is not None and a > 0 and b > 0 and all(map(math.isfinite, (xc, yc, a, b, t))):
                 d = np.empty(n)
                 if with_jacobian:
-                    Jt = np.empty((5, n))
+                    Jt = spare.pop() if spare else np.empty((5, n))
                     ck.distances_jacobian(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d, Jt)
                 else:
                     Jt = None
                     ck.orthogonal(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d)
-                cache.update(p=p.copy(), d=d, Jt=Jt, phi=None)
+                e = {"p": p.copy(), "d": d, "Jt": Jt, "phi": None, "own": Jt is not None}
             else:
                 d, phi = orthogonal_residuals(x, y, p)
-                cache.update(p=p.copy(), d=d, Jt=None, phi=phi)
-        return cache["d"]
+                e = {"p": p.copy(), "d": d, "Jt": None, "phi": phi, "own": False}
+            cache.insert(0, e)
+            if len(cache) > 2:
+                old = cache.pop()
+                if old["own"]:  # MINPACK copies every Jacobian it gets, the probe uses one within its step
+                    spare.append(old["Jt"])
+        return e
+
+    def fun(p):
+        return solve(p)["d"]
 
     def jac_t(p):
         """The Jacobian at p, transposed: (5, N)."""
-        solve(p)
-        if cache["Jt"] is None:
-            if cache["phi"] is None:  # distances-only evaluation at p: solve again with the Jacobian
-                del cache["p"]
-                solve(p)
+        e = solve(p)
+        if e["Jt"] is None:
+            if e["phi"] is None:  # distances-only evaluation at p: solve again with the Jacobian
+                cache.remove(e)
+                e = solve(p)
             else:
-                cache["Jt"] = np.ascontiguousarray(distance_jacobian(x, y, p, cache["phi"]).T)
-        return cache["Jt"]
+                e["Jt"] = np.ascontiguousarray(distance_jacobian(x, y, p, e["phi"]).T)
+        return e["Jt"]
 
     def minpack_jac(p):
-        d = solve(p)
+        d = fun(p)
         history.append(float(d @ d))
         return jac_t(p)
 
@@ -129,7 +145,7 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
     # the Jacobian given column-major (col_deriv) and without least_squares' wrappers, which copy every Jacobian
     # twice. leastsq first calls fun and Dfun once at p0 to check their shapes (the cache answers both); the
     # history keeps MINPACK's own Jacobian evaluations: the objective at each accepted iterate.
-    q, _, info, _, ier = leastsq(solve, np.array(p0, dtype=np.float64), Dfun=minpack_jac, full_output=True,
+    q, _, info, _, ier = leastsq(fun, np.array(p0, dtype=np.float64), Dfun=minpack_jac, full_output=True,
                                  col_deriv=True, ftol=max(ftol, eps), xtol=max(xtol, eps), gtol=max(gtol, eps),
                                  maxfev=max_nfev, factor=100.0, diag=None)
     njev, nfev = int(info.get("njev", 0)), int(info["nfev"])
@@ -143,7 +159,7 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
         extra["degenerate"] = why
     elif converged:
         def residuals(p):
-            return solve(p, with_jacobian=False) if p[2] > 0 and p[3] > 0 else np.full(n, np.inf)
+            return solve(p, with_jacobian=False)["d"] if p[2] > 0 and p[3] > 0 else np.full(n, np.inf)
 
         probe = stationarity_probe(residuals, lambda p: jac_t(p).T if p[2] > 0 and p[3] > 0 else np.full((n, 5), np.nan),
                                    q, noise=lambda r, p: sum_of_squares_noise(r, np.abs(x) + np.abs(y) + abs(p[0]) +
@@ -155,9 +171,9 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
     p = canonical(frame.params_to_data(q))
     residuals = None
     if np.isfinite(q).all() and min(abs(q[2]), abs(q[3])) > 0:
-        # the closest points of the last evaluation when it was at q (MINPACK's answer usually is)
-        d_unit = cache["d"] if np.array_equal(cache.get("p"), q) else \
-            orthogonal_residuals(x, y, canonical(q), with_phi=False)[0]
+        # the closest points of an evaluation at q (MINPACK's answer, then the probe, evaluate there)
+        e = lookup(q)
+        d_unit = e["d"] if e is not None else orthogonal_residuals(x, y, canonical(q), with_phi=False)[0]
         residuals = d_unit * frame.scale
     hist = history_to_data(history, frame.scale, 2)
     if hist is None:

@@ -77,3 +77,23 @@ def test_conic_to_params_as_accurate_as_lapack():
         if b / a < 0.999:
             assert abs((got[4] - p[4] + np.pi / 2) % np.pi - np.pi / 2) < 1e-12
     assert worst <= 2 * worst_lapack + 1e-15, (worst, worst_lapack)
+
+
+def test_solve3_columns_gives_the_bits_of_separate_solves():
+    """Halir-Flusser's T = -S3^-1 S2^T: one elimination for the three right-hand sides, bitwise the same as three
+    methods._frame.solve3 calls (random, badly scaled, pivoting and singular systems)."""
+    from methods._frame import solve3
+    from methods.ellipse.direct import solve3_columns
+
+    rng = np.random.default_rng(33)
+    for trial in range(2000):
+        a = rng.standard_normal(9) * 10.0 ** rng.integers(-150, 150, 9) if trial % 3 == 0 else rng.standard_normal(9)
+        if trial % 7 == 0:
+            a[3:6] = a[0:3] * 2.0  # singular
+        rhs = [list(rng.standard_normal(3)) for _ in range(3)]
+        got = solve3_columns(list(a), rhs)
+        want = [solve3(list(a), b) for b in rhs]
+        if any(w is None for w in want):
+            assert got is None
+        else:
+            assert got is not None and all(g == w for g, w in zip(got, want)), trial

@@ -26,19 +26,20 @@ class Frame(UnitFrame):
     def of(cls, points: np.ndarray):
         x0, y0 = points[:, 0], points[:, 1]
         n = len(x0)
-        with np.errstate(over="ignore"):
-            mx, my = x0.mean(), y0.mean()
+        with np.errstate(over="ignore"):  # x0.mean() is this sum over n (the same bits, less call overhead)
+            mx, my = np.add.reduce(x0) / n, np.add.reduce(y0) / n
         if not (np.isfinite(mx) and np.isfinite(my)):  # the sum overflowed: average the scaled values
             mx, my = (x0 / n).sum(), (y0 / n).sum()
-        x, y = x0 - mx, y0 - my
-        big = float(max(np.abs(x).max(), np.abs(y).max()))
+        xy = np.empty((2, n))  # x and y as the rows of one buffer: each step below is one operation on both
+        x, y = xy
+        np.subtract(x0, mx, out=x)
+        np.subtract(y0, my, out=y)
+        big = float(max(xy.max(), -xy.min()))  # = max |x|, |y| (negation is exact), without a temporary
         if not (np.isfinite(big) and big > 0):
             return super().of(points)  # refused by validation before (identical or non-finite points)
-        x /= big
-        y /= big
+        xy /= big
         rms = float(np.sqrt((dot(x, x) + dot(y, y)) / n))
-        x /= rms
-        y /= rms
+        xy /= rms
         return cls(shift=np.array([mx, my]), scale=big * rms, x=x, y=y)
 
     def params_to_unit(self, p) -> np.ndarray:

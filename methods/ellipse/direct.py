@@ -119,6 +119,41 @@ def _halir_flusser_conic(frame):
     return halir_flusser_conic(S)
 
 
+def solve3_columns(a, rhs):
+    """[solve3(a, b) for b in rhs], or None when singular: :func:`methods._frame.solve3`'s elimination with
+    partial pivoting done once for every right-hand side (the same operations in the same order on each,
+    hence the same bits as separate calls; ``tests/test_ellipse_small_algebra.py`` checks it)."""
+    A = [list(a[0:3]), list(a[3:6]), list(a[6:9])]
+    B = [list(b) for b in rhs]
+    for k in range(3):
+        piv = k
+        for i in range(k + 1, 3):
+            if abs(A[i][k]) > abs(A[piv][k]):
+                piv = i
+        if A[piv][k] == 0.0:
+            return None
+        if piv != k:
+            A[k], A[piv] = A[piv], A[k]
+            for bb in B:
+                bb[k], bb[piv] = bb[piv], bb[k]
+        rp = 1.0 / A[k][k]
+        for i in range(k + 1, 3):
+            lik = A[i][k] * rp
+            for j in range(k + 1, 3):
+                A[i][j] = A[i][j] - lik * A[k][j]
+            for bb in B:
+                bb[i] = bb[i] - lik * bb[k]
+    out = []
+    for bb in B:
+        x = bb[:]
+        for k in (2, 1, 0):
+            x[k] = x[k] / A[k][k]
+            for i in range(k):
+                x[i] = x[i] - x[k] * A[i][k]
+        out.append(x)
+    return out
+
+
 def halir_flusser_conic(S):
     """Halir & Flusser's conic from the 6 x 6 scatter ``S`` (nested lists): (k, eigenvalue, "") or
     (None, None, reason). Every step is 3 x 3 and done in plain floating point, never LAPACK/BLAS (whose
@@ -130,8 +165,8 @@ def halir_flusser_conic(S):
     S2 = [row[3:] for row in S[:3]]
     S3 = [row[3:] for row in S[3:]]
     s3 = [v for row in S3 for v in row]
-    cols = [solve3(s3, S2[c]) for c in range(3)]  # column c of S3^-1 S2^T: S3^-1 times row c of S2
-    if any(col is None for col in cols):
+    cols = solve3_columns(s3, S2)  # column c of S3^-1 S2^T: S3^-1 times row c of S2
+    if cols is None:
         return None, None, "the linear part of the scatter is singular (degenerate data)"
     T = [[-cols[c][r] for c in range(3)] for r in range(3)]              # T[r][c] = -(S3^-1 S2^T)[r][c]
     M = [[S1[i][j] + (S2[i][0] * T[0][j] + S2[i][1] * T[1][j] + S2[i][2] * T[2][j]) for j in range(3)]

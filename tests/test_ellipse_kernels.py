@@ -202,3 +202,41 @@ def test_compiled_scatter_matches_the_numpy_moments(n, monkeypatch):
     reference = direct.scatter(frame.x, frame.y)
     absolute = direct.scatter(np.abs(frame.x), np.abs(frame.y))
     assert np.all(np.abs(compiled - reference) <= 64 * np.finfo(float).eps * absolute + 1e-300)
+
+
+def _hard_scatter_cases():
+    rng = np.random.default_rng(150)
+    s = rng.uniform(0.0, 0.3, 2000)  # a short arc (0.3 rad) of a 3:1 ellipse
+    arc = np.c_[3.0 * np.cos(s), np.sin(s)] + 1e-6 * rng.standard_normal((2000, 2))
+    yield "short arc at 1e6", arc + 1e6
+    yield "short arc at 1e-150", arc * 1e-150
+    yield "short arc at 1e150, centre 1e152", arc * 1e150 + 1e152
+    t = rng.uniform(0, 2 * np.pi, 100_001)
+    yield "near circle 1e5 points at 1e6", np.c_[299.0243 * np.cos(t), 299.0022 * np.sin(t)] + 1e6 + \
+        0.005 * rng.standard_normal((100_001, 2))
+
+
+@pytest.mark.parametrize("name,points", list(_hard_scatter_cases()), ids=[c[0] for c in _hard_scatter_cases()])
+def test_compiled_scatter_on_hard_data(monkeypatch, name, points):
+    """The compiled scatter of the unit-frame coordinates against NumPy's on far-away, short-arc and extreme-scale
+    data: within 64 eps of each moment's scale (the same moments of |x|, |y|). Halir-Flusser's ellipse from either
+    path: the same to 1e-9 of its size on the well-conditioned full ring; on the 0.3 rad arcs the fit itself
+    amplifies rounding by ~1e7 (measured: the two paths differ by ~1.3e-9 of the size at 1e+-150, as any two
+    summation orders would), so there only the flags are compared."""
+    from methods.ellipse import direct
+    import methods
+
+    frame = geometry.Frame.of(points)
+    compiled = direct.scatter(frame.x, frame.y)
+    monkeypatch.setenv("FITBENCH_KERNELS", "numpy")
+    reference = direct.scatter(frame.x, frame.y)
+    absolute = direct.scatter(np.abs(frame.x), np.abs(frame.y))
+    assert np.all(np.abs(compiled - reference) <= 64 * EPS * absolute + 1e-300)
+    ref_fit = methods.fit("ellipse.halir_flusser", points)
+    monkeypatch.delenv("FITBENCH_KERNELS")
+    fit = methods.fit("ellipse.halir_flusser", points)
+    size = float(np.ptp(points, axis=0).max())
+    assert fit.converged == ref_fit.converged
+    if fit.converged and not name.startswith("short arc"):
+        assert np.allclose(fit.center, ref_fit.center, rtol=0, atol=1e-9 * max(size, np.abs(fit.semi_axes).max()))
+        assert np.allclose(fit.semi_axes, ref_fit.semi_axes, rtol=1e-9, atol=0)

@@ -221,8 +221,8 @@ def test_compiled_scatter_on_hard_data(monkeypatch, name, points):
     """The compiled scatter of the unit-frame coordinates against NumPy's on far-away, short-arc and extreme-scale
     data: within 64 eps of each moment's scale (the same moments of |x|, |y|). Halir-Flusser's ellipse from either
     path: the same to 1e-9 of its size on the well-conditioned full ring; on the 0.3 rad arcs the fit itself
-    amplifies rounding by ~1e7 (measured: the two paths differ by ~1.3e-9 of the size at 1e+-150, as any two
-    summation orders would), so there only the flags are compared."""
+    amplifies the moments' last-bit differences (measured: the two paths' centres differ by ~1.3e-9 of the size at
+    1e+-150), so there only the flags are compared."""
     from methods.ellipse import direct
     import methods
 

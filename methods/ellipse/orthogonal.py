@@ -57,7 +57,8 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
     """Minimise the sum of squared orthogonal distances d_i from the points to the ellipse
     p = (xc, yc, a, b, theta) (circle/ellipse paper eq. 22, S_EG) by MINPACK's Levenberg–Marquardt
     with the analytic Jacobian of :func:`distance_jacobian`; every evaluation solves the closest
-    points of all points at once, once (the Jacobian reuses them). Start: ``start`` = (xc, yc, a, b,
+    points of all points at once, once (the Jacobian reuses them; compiled: distances and Jacobian in one sweep,
+    methods/ellipse/_ckernels.c distances_jacobian, handed to MINPACK column-major). Start: ``start`` = (xc, yc, a, b,
     theta) in data units, default Halir & Flusser's direct fit. In the unit frame; tolerances are
     MINPACK's. ``converged`` needs MINPACK's success, a stationary point for the Levenberg–Marquardt probe of
     :mod:`methods.ellipse._checks` and a non-degenerate ellipse."""

@@ -87,7 +87,8 @@ def test_bad_buffers_are_refused_with_a_message():
 @pytest.mark.parametrize("scale", [1e-150, 1.0, 1e150])
 def test_compiled_distances_scale_with_the_data(scale):
     """On-axis points inside the evolute (closed form X = a^2 u / (a^2 - b^2)) and general points give the
-    unit-size distances times the scale: no overflow of a^2 u at 1e150, no underflow at 1e-150."""
+    unit-size distances times the scale: no overflow of a^2 u at 1e150, no underflow at 1e-150 (on both the
+    compiled and the NumPy path)."""
     pts = np.array([[1.0, 0.0], [-1.5, 0.0], [0.3, 0.0], [4.0, 1.0], [-0.2, 0.7]])
     unit, _ = geometry.orthogonal_residuals(pts[:, 0], pts[:, 1], (0.0, 0.0, 3.0, 2.0, 0.0), with_phi=False)
     scaled, _ = geometry.orthogonal_residuals(pts[:, 0] * scale, pts[:, 1] * scale,

@@ -232,7 +232,8 @@ def closest_points(u, v, a, b, iterations=60):
         num = a * au_ax
         den = a * a - b * b
         inside_evolute = num < den
-        xa = np.where(inside_evolute, a * a * au_ax / np.where(den > 0, den, 1.0), a)
+        # (a / den) a u, not a^2 u / den: a^2 u overflows at 1e150 (the compiled kernel's order)
+        xa = np.where(inside_evolute, (a / np.where(den > 0, den, 1.0)) * a * au_ax, a)
         xa = np.minimum(xa, a)
         X[on_axis] = xa
         Y[on_axis] = np.where(inside_evolute, b * np.sqrt(np.maximum(1 - (xa / a) ** 2, 0.0)), 0.0)

@@ -56,12 +56,19 @@ EINSUM_FROM = 8192
 
 def solve3(a, b, rtol: float = 0.0):
     """x of the 3x3 system A x = b (``a``: 9 numbers, row major) by Gaussian elimination with partial pivoting,
-    the same operations in the same order as the circle kernel's compiled ``solve3`` (hence the same bits) and as LAPACK's
-    dgetf2/dtrsm; None when singular (an exact zero pivot, or with ``rtol`` > 0 one <= rtol max|a_ij|).
+    the same operations in the same order as the circle kernel's compiled ``solve3`` (hence the same bits) and as
+    LAPACK's dgetf2/dtrsm; None when singular (an exact zero pivot, or with ``rtol`` > 0 one <= rtol max|a_ij|).
     Plain float arithmetic, never BLAS: LAPACK's solve goes through a BLAS kernel chosen per CPU, and a
     last-bit change in a start moves a Nelder–Mead simplex to another iteration count on another CPU."""
+    out = solve3_columns(a, [b], rtol)
+    return None if out is None else out[0]
+
+
+def solve3_columns(a, rhs, rtol: float = 0.0):
+    """[solve3(a, b, rtol) for b in rhs], or None when singular: the elimination done once for every right-hand
+    side (the same operations in the same order on each, hence the same bits as separate solves)."""
     A = [list(a[0:3]), list(a[3:6]), list(a[6:9])]
-    bb = list(b)
+    B = [list(b) for b in rhs]
     amax = max(abs(v) for v in a)
     for k in range(3):
         piv = k
@@ -72,19 +79,24 @@ def solve3(a, b, rtol: float = 0.0):
             return None
         if piv != k:
             A[k], A[piv] = A[piv], A[k]
-            bb[k], bb[piv] = bb[piv], bb[k]
+            for bb in B:
+                bb[k], bb[piv] = bb[piv], bb[k]
         rp = 1.0 / A[k][k]
         for i in range(k + 1, 3):
             lik = A[i][k] * rp
             for j in range(k + 1, 3):
                 A[i][j] = A[i][j] - lik * A[k][j]
-            bb[i] = bb[i] - lik * bb[k]
-    x = bb[:]
-    for k in (2, 1, 0):
-        x[k] = x[k] / A[k][k]
-        for i in range(k):
-            x[i] = x[i] - x[k] * A[i][k]
-    return x
+            for bb in B:
+                bb[i] = bb[i] - lik * bb[k]
+    out = []
+    for bb in B:
+        x = bb[:]
+        for k in (2, 1, 0):
+            x[k] = x[k] / A[k][k]
+            for i in range(k):
+                x[i] = x[i] - x[k] * A[i][k]
+        out.append(x)
+    return out
 
 
 def _pow2_scale(m: float) -> float:

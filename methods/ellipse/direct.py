@@ -14,7 +14,7 @@ import numpy as np
 
 from methods._registry import register
 from methods._compiled import kernels
-from methods._frame import dot, solve3
+from methods._frame import dot, solve3_columns
 from methods.ellipse._geometry import Frame, conic_to_params, normalise_conic
 from methods.ellipse._result import ellipse_result, failed, residuals_from_unit
 from methods.ellipse._validation import check_distinct_points
@@ -144,41 +144,6 @@ def halir_flusser_unit(frame):
 def _halir_flusser_conic(frame):
     S = scatter(frame.x, frame.y).tolist()
     return halir_flusser_conic(S)
-
-
-def solve3_columns(a, rhs):
-    """[solve3(a, b) for b in rhs], or None when singular: :func:`methods._frame.solve3`'s elimination with
-    partial pivoting done once for every right-hand side (the same operations in the same order on each,
-    hence the same bits as separate calls; ``tests/test_ellipse_small_algebra.py`` checks it)."""
-    A = [list(a[0:3]), list(a[3:6]), list(a[6:9])]
-    B = [list(b) for b in rhs]
-    for k in range(3):
-        piv = k
-        for i in range(k + 1, 3):
-            if abs(A[i][k]) > abs(A[piv][k]):
-                piv = i
-        if A[piv][k] == 0.0:
-            return None
-        if piv != k:
-            A[k], A[piv] = A[piv], A[k]
-            for bb in B:
-                bb[k], bb[piv] = bb[piv], bb[k]
-        rp = 1.0 / A[k][k]
-        for i in range(k + 1, 3):
-            lik = A[i][k] * rp
-            for j in range(k + 1, 3):
-                A[i][j] = A[i][j] - lik * A[k][j]
-            for bb in B:
-                bb[i] = bb[i] - lik * bb[k]
-    out = []
-    for bb in B:
-        x = bb[:]
-        for k in (2, 1, 0):
-            x[k] = x[k] / A[k][k]
-            for i in range(k):
-                x[i] = x[i] - x[k] * A[i][k]
-        out.append(x)
-    return out
 
 
 def halir_flusser_conic(S):

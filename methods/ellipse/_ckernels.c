@@ -233,6 +233,31 @@ static void closest_block(const double *U, const double *V, double a, double b, 
     }
 }
 
+/* The closest points of the points i, i + 1, ... in the ellipse's frame (u = dx c + dy s, v = -dx s + dy c): a
+   block of LANES (closest_block) while LANES remain, else the one point i (closest). X, Y are in the frame of
+   the axes (a, b), D the signed distances; returns how many points were solved. The one sweep of orthogonal()
+   and distances_jacobian(). */
+static int solve_points(const double *x, const double *y, Py_ssize_t i, Py_ssize_t n, Py_ssize_t sx,
+                        Py_ssize_t sy, double xc, double yc, double c, double s, double a, double b, int iterations,
+                        double *X, double *Y, double *D) {
+    double U[LANES], V[LANES];
+    int j, m = (n - i >= LANES) ? LANES : 1, swap = a < b;
+    for (j = 0; j < m; j++) {
+        double dx = x[(i + j) * sx] - xc, dy = y[(i + j) * sy] - yc;
+        U[j] = dx * c + dy * s;
+        V[j] = -dx * s + dy * c;
+    }
+    if (m == LANES) {
+        if (swap) closest_block(V, U, b, a, iterations, Y, X, D);
+        else closest_block(U, V, a, b, iterations, X, Y, D);
+    } else if (swap) {
+        closest(V[0], U[0], b, a, iterations, &Y[0], &X[0], &D[0]);
+    } else {
+        closest(U[0], V[0], a, b, iterations, &X[0], &Y[0], &D[0]);
+    }
+    return m;
+}
+
 static int vector_of(PyObject *obj, Py_buffer *view, int writable, const char *what) {
     int flags = PyBUF_STRIDES | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
     if (PyObject_GetBuffer(obj, view, flags) < 0) return -1;
@@ -251,6 +276,7 @@ static PyObject *orthogonal(PyObject *self, PyObject *args) {
     int iterations;
     Py_buffer xv, yv, dv, pv;
     Py_ssize_t n, i, sx, sy, sd, sp = 0;
+    int m = 1;
     int with_phi;
     if (!PyArg_ParseTuple(args, "OOddddddiO|O", &xo, &yo, &xc, &yc, &c, &s, &a, &b, &iterations, &do_, &po))
         return NULL;
@@ -277,31 +303,15 @@ static PyObject *orthogonal(PyObject *self, PyObject *args) {
     {
         const double *x = (const double *)xv.buf, *y = (const double *)yv.buf;
         double *d = (double *)dv.buf, *ph = with_phi ? (double *)pv.buf : NULL;
-        int swap = a < b;
         Py_BEGIN_ALLOW_THREADS
-        for (i = 0; i + LANES <= n; i += LANES) {
-            double U[LANES], V[LANES], X[LANES], Y[LANES], D[LANES];
+        for (i = 0; i < n; i += m) {
+            double X[LANES], Y[LANES], D[LANES];
             int j;
-            for (j = 0; j < LANES; j++) {
-                double dx = x[(i + j) * sx] - xc, dy = y[(i + j) * sy] - yc;
-                U[j] = dx * c + dy * s;
-                V[j] = -dx * s + dy * c;
-            }
-            if (swap) closest_block(V, U, b, a, iterations, Y, X, D);
-            else closest_block(U, V, a, b, iterations, X, Y, D);
-            for (j = 0; j < LANES; j++) {
+            m = solve_points(x, y, i, n, sx, sy, xc, yc, c, s, a, b, iterations, X, Y, D);
+            for (j = 0; j < m; j++) {
                 d[(i + j) * sd] = D[j];
                 if (ph) ph[(i + j) * sp] = atan2(Y[j] / b, X[j] / a);
             }
-        }
-        for (; i < n; i++) {
-            double dx = x[i * sx] - xc, dy = y[i * sy] - yc;
-            double u = dx * c + dy * s, v = -dx * s + dy * c;
-            double X, Y, dist;
-            if (swap) closest(v, u, b, a, iterations, &Y, &X, &dist);
-            else closest(u, v, a, b, iterations, &X, &Y, &dist);
-            d[i * sd] = dist;
-            if (ph) ph[i * sp] = atan2(Y / b, X / a);
         }
         Py_END_ALLOW_THREADS
     }
@@ -348,6 +358,7 @@ static PyObject *distances_jacobian(PyObject *self, PyObject *args) {
     int iterations;
     Py_buffer xv, yv, dv, jv;
     Py_ssize_t n, i, sx, sy, sd;
+    int m = 1;
     if (!PyArg_ParseTuple(args, "OOddddddiOO", &xo, &yo, &xc, &yc, &c, &s, &a, &b, &iterations, &do_, &jo))
         return NULL;
     if (!(a > 0.0) || !(b > 0.0) || iterations < 0) {
@@ -373,31 +384,15 @@ static PyObject *distances_jacobian(PyObject *self, PyObject *args) {
         const double *x = (const double *)xv.buf, *y = (const double *)yv.buf;
         double *d = (double *)dv.buf, *J = (double *)jv.buf;
         double ia = 1.0 / a, ib = 1.0 / b;
-        int swap = a < b;
         Py_BEGIN_ALLOW_THREADS
-        for (i = 0; i + LANES <= n; i += LANES) {
-            double U[LANES], V[LANES], X[LANES], Y[LANES], D[LANES];
+        for (i = 0; i < n; i += m) {
+            double X[LANES], Y[LANES], D[LANES];
             int j;
-            for (j = 0; j < LANES; j++) {
-                double dx = x[(i + j) * sx] - xc, dy = y[(i + j) * sy] - yc;
-                U[j] = dx * c + dy * s;
-                V[j] = -dx * s + dy * c;
-            }
-            if (swap) closest_block(V, U, b, a, iterations, Y, X, D);
-            else closest_block(U, V, a, b, iterations, X, Y, D);
-            for (j = 0; j < LANES; j++) {
+            m = solve_points(x, y, i, n, sx, sy, xc, yc, c, s, a, b, iterations, X, Y, D);
+            for (j = 0; j < m; j++) {
                 d[(i + j) * sd] = D[j];
                 jacobian_row(X[j], Y[j], a, b, ia, ib, c, s, J + (i + j), n);
             }
-        }
-        for (; i < n; i++) {
-            double dx = x[i * sx] - xc, dy = y[i * sy] - yc;
-            double u = dx * c + dy * s, v = -dx * s + dy * c;
-            double X, Y, dist;
-            if (swap) closest(v, u, b, a, iterations, &Y, &X, &dist);
-            else closest(u, v, a, b, iterations, &X, &Y, &dist);
-            d[i * sd] = dist;
-            jacobian_row(X, Y, a, b, ia, ib, c, s, J + i, n);
         }
         Py_END_ALLOW_THREADS
     }

@@ -118,42 +118,94 @@ def test_four_points_at_a_time_gives_the_bits_of_one_at_a_time(iterations):
             assert d1[0] == d[i] and p1[0] == phi[i], (a, b, i)
 
 
-# ---- ellipse.orthogonal's per-iteration kernel: distances and Jacobian in one sweep ----------------------------
+# ---- ellipse.orthogonal's per-iteration kernel: distances and the R of [J d] in one sweep --------------------
 
-@pytest.mark.parametrize("name,points,p", list(cases()), ids=[c[0] for c in cases()])
-def test_distances_jacobian_match_the_residual_kernel_and_the_numpy_jacobian(monkeypatch, name, points, p):
-    """distances_jacobian's d is orthogonal()'s, bit for bit (the same closest points); its Jacobian (transposed,
-    (5, N)) is methods.ellipse.orthogonal.distance_jacobian at the reference phi to rounding: every entry is a
-    product of unit-size factors (normal components, cos/sin phi) and, for theta, the semi-axes, so 64 eps
-    max(1, a, b) bounds the difference where the closest point is well defined (away from the centre's ambiguous
-    closest points, where phi itself is ill-conditioned)."""
-    from methods.ellipse.orthogonal import distance_jacobian
+def _unit(points, p):
+    """Points and ellipse in the unit frame ellipse.orthogonal calls the kernel in (centred, unit RMS radius)."""
+    frame = geometry.Frame.of(points)
+    return frame.x, frame.y, frame.params_to_unit(p)
 
+
+def _kernel_qr(x, y, p):
     ck = kernels("methods.ellipse._ckernels")
     assert ck is not None, "the ellipse kernel must be built for this test"
-    x, y = points[:, 0], points[:, 1]
-    xc, yc, a, b, t = p
-    d, Jt = np.empty(len(x)), np.empty((5, len(x)))
-    ck.distances_jacobian(x, y, xc, yc, float(np.cos(t)), float(np.sin(t)), a, b, 60, d, Jt)
+    xc, yc, a, b, t = (float(v) for v in p)
+    d, R = np.empty(len(x)), np.empty((6, 6))
+    S = ck.distances_qr(x, y, xc, yc, float(np.cos(t)), float(np.sin(t)), a, b, 60, d, R)
+    return d, R, S
+
+
+@pytest.mark.parametrize("name,points,p", list(cases()), ids=[c[0] for c in cases()])
+def test_distances_qr_matches_the_residual_kernel_and_lapack(monkeypatch, name, points, p):
+    """distances_qr's d is orthogonal()'s, bit for bit (the same closest points), its sum of squares is sum d^2 to
+    (64 + log2 N) eps, and its R is the R of a QR of [J d] with J = methods.ellipse.orthogonal.distance_jacobian at
+    the NumPy reference's closest points: upper triangular, and R^T R = [J d]^T [J d] to 64 eps w_i w_j per entry,
+    w_j = |A_j| + sqrt(N) s_j covering the two Jacobians' own rounding (backward stability; Householder's R is
+    unique only up to the signs of its rows). Where [J d] has full,
+    moderate condition and entries well above their rounding, the least-squares step -R1^-1 q equals LAPACK's lstsq(J, -d) to 1e4 eps cond. Every case in
+    the unit frame, as ellipse.orthogonal calls it (the QR is unscaled: entries must stay below ~1e150 / sqrt N)."""
+    from methods.ellipse.orthogonal import distance_jacobian
+
+    x, y, pu = _unit(points, p)
+    d, R, S = _kernel_qr(x, y, pu)
+    ck = kernels("methods.ellipse._ckernels")
     d_kernel = np.empty(len(x))
-    ck.orthogonal(x, y, xc, yc, float(np.cos(t)), float(np.sin(t)), a, b, 60, d_kernel)
+    ck.orthogonal(x, y, *pu[:2], float(np.cos(pu[4])), float(np.sin(pu[4])), *pu[2:4], 60, d_kernel)
     assert np.array_equal(d, d_kernel)
+    assert abs(S - float(np.dot(d, d))) <= (64 + np.log2(len(d))) * EPS * float(np.dot(d, d)) + 1e-300
+    assert np.array_equal(R, np.triu(R)) and np.isfinite(R).all()
     monkeypatch.setenv("FITBENCH_KERNELS", "numpy")
-    d_ref, phi_ref = geometry.orthogonal_residuals(x, y, p)
-    J_ref = distance_jacobian(x, y, p, phi_ref)
-    well_defined = np.abs(d_ref) < 0.5 * min(a, b)
-    assert np.all(np.isfinite(Jt))
-    err = np.abs(Jt.T - J_ref)[well_defined] / np.array([1, 1, 1, 1, max(1.0, a, b)])
-    assert np.all(err <= 64 * EPS), err.max() / EPS
+    d_ref, phi_ref = geometry.orthogonal_residuals(x, y, pu)
+    well_defined = np.abs(d_ref) < 0.5 * min(pu[2], pu[3])  # away from the centre's ambiguous closest points
+    if not well_defined.all():
+        return  # a different closest point (both exact) changes J's rows: only the kernel's own consistency above
+    A = np.column_stack([distance_jacobian(x, y, pu, phi_ref), d])
+    norms = np.sqrt(np.einsum("ij,ij->j", A, A))
+    # the two Jacobians differ per entry by up to 64 eps s_j (s = 1, and max(1, a, b) for theta, whose entries
+    # cancel on near-circles; d is the same): |A_i| + sqrt(N) s_i bounds what each column contributes
+    s = np.array([1.0, 1.0, 1.0, 1.0, max(1.0, pu[2], pu[3]), 0.0])
+    w = norms + np.sqrt(len(d)) * s
+    assert np.all(np.abs(R.T @ R - A.T @ A) <= 64 * EPS * np.outer(w, w) + 1e-300)
+    J = A[:, :5]
+    cond = np.linalg.cond(J / norms[:5])
+    if cond < 1e8 and np.all(np.sqrt(len(d)) * s[:5] <= 1e6 * norms[:5]):  # (the near circle's theta column is
+        # below its entries' own rounding, eps max(a, b): the two Jacobians disagree there before any QR)
+        step = np.linalg.solve(R[:5, :5], -R[:5, 5])
+        ref = np.linalg.lstsq(J, -d, rcond=None)[0]
+        scale = np.abs(ref).max() + np.linalg.norm(d) / norms[:5].min()
+        assert np.all(np.abs(step - ref) <= 1e4 * EPS * cond * scale), (np.abs(step - ref).max(), cond)
 
 
-def test_distances_jacobian_refuses_bad_buffers():
+@pytest.mark.parametrize("n", [1, 2, 15, 16, 17, 63, 64, 65, 129, 1000, 4097])
+def test_distances_qr_blocks_and_tails(n):
+    """Every partition of the sweep (16-point blocks, single points at the tail, 64-point leaves and their pairwise
+    merges): R^T R = [J d]^T [J d] to rounding and d bitwise the one-point solver's, for N around the block sizes."""
+    from methods.ellipse.orthogonal import distance_jacobian
+
+    rng = np.random.default_rng(n)
+    t = rng.uniform(0, 2 * np.pi, n)
+    x, y = 1.3 * np.cos(t) + 1e-3 * rng.standard_normal(n), 0.7 * np.sin(t) + 1e-3 * rng.standard_normal(n)
+    p = np.array([0.01, -0.02, 1.3, 0.7, 0.3])
+    d, R, S = _kernel_qr(x, y, p)
+    for i in range(0, n, max(1, n // 7)):
+        d1, _, S1 = _kernel_qr(x[i:i + 1], y[i:i + 1], p)
+        assert d1[0] == d[i] and S1 == d[i] * d[i]
+    _, phi = geometry.orthogonal_residuals(x, y, p)
+    A = np.column_stack([distance_jacobian(x, y, p, phi), d])
+    norms = np.sqrt(np.einsum("ij,ij->j", A, A))
+    assert np.array_equal(R, np.triu(R))
+    assert np.all(np.abs(R.T @ R - A.T @ A) <= 64 * EPS * np.outer(norms, norms))
+
+
+def test_distances_qr_refuses_bad_buffers():
     ck = kernels("methods.ellipse._ckernels")
     x = np.zeros(4)
-    with pytest.raises(ValueError, match=r"\(5, N\)"):
-        ck.distances_jacobian(x, x, 0.0, 0.0, 1.0, 0.0, 2.0, 1.0, 60, np.empty(4), np.empty((4, 5)))
+    with pytest.raises(ValueError, match=r"\(6, 6\)"):
+        ck.distances_qr(x, x, 0.0, 0.0, 1.0, 0.0, 2.0, 1.0, 60, np.empty(4), np.empty((5, 6)))
+    with pytest.raises((ValueError, BufferError), match="C-contiguous"):
+        ck.distances_qr(x, x, 0.0, 0.0, 1.0, 0.0, 2.0, 1.0, 60, np.empty(4), np.empty((6, 12))[:, ::2])
     with pytest.raises(ValueError, match="semi-axes"):
-        ck.distances_jacobian(x, x, 0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 60, np.empty(4), np.empty((5, 4)))
+        ck.distances_qr(x, x, 0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 60, np.empty(4), np.empty((6, 6)))
 
 
 def _orthogonal_cases():
@@ -170,8 +222,8 @@ def _orthogonal_cases():
 
 @pytest.mark.parametrize("name,points", list(_orthogonal_cases()), ids=[c[0] for c in _orthogonal_cases()])
 def test_orthogonal_fit_compiled_matches_the_numpy_path(monkeypatch, name, points):
-    """ellipse.orthogonal with the fused kernel against the NumPy reference path (phi, then the Jacobian): the
-    same minimum to 1e-9 of the data's size (both paths stop at MINPACK's xtol = 1e-15 relative; their Jacobians
+    """ellipse.orthogonal with the fused kernel against the NumPy reference path (phi, the Jacobian, LAPACK's QR):
+    the same minimum to 1e-9 of the data's size (both paths stop at MINPACK's xtol = 1e-15 relative; their Jacobians
     differ by rounding, so the iterates do too), the same flags and a stationary point on both."""
     import methods
 
@@ -241,3 +293,53 @@ def test_compiled_scatter_on_hard_data(monkeypatch, name, points):
     if fit.converged and not name.startswith("short arc"):
         assert np.allclose(fit.center, ref_fit.center, rtol=0, atol=1e-9 * max(size, np.abs(fit.semi_axes).max()))
         assert np.allclose(fit.semi_axes, ref_fit.semi_axes, rtol=1e-9, atol=0)
+
+
+def _build_without_clones(tmp_path):
+    """The ellipse kernel compiled as setup.py compiles it, plus -DFITBENCH_NO_CLONES (no AVX clone: SSE2 only)."""
+    import ast
+    import importlib.util
+    import pathlib
+    import sysconfig
+
+    from setuptools import Distribution, Extension
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    tree = ast.parse((root / "setup.py").read_text())
+    flags = next(ast.literal_eval(node.value) for node in tree.body if isinstance(node, ast.Assign)
+                 and getattr(node.targets[0], "id", "") == "COMPILE_ARGS")
+    ext = Extension("_ckernels", [str(root / "methods/ellipse/_ckernels.c")],
+                    extra_compile_args=[*flags, "-DFITBENCH_NO_CLONES"])
+    dist = Distribution({"ext_modules": [ext], "script_name": "setup.py"})
+    cmd = dist.get_command_obj("build_ext")
+    cmd.build_lib, cmd.build_temp = str(tmp_path / "lib"), str(tmp_path / "tmp")
+    cmd.ensure_finalized()
+    cmd.run()
+    path = tmp_path / "lib" / ("_ckernels" + sysconfig.get_config_var("EXT_SUFFIX"))
+    spec = importlib.util.spec_from_file_location("_ckernels", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_sse2_only_build_gives_the_same_bits(tmp_path):
+    """The QR of distances_qr runs in 4-lane vectors: AVX instructions where the CPU has AVX (a load-time clone),
+    SSE2 pairs elsewhere. Lane-wise IEEE operations in the same order give the same bits: the SSE2-only build
+    (-DFITBENCH_NO_CLONES) against the installed one on awkward sizes and a 10^5-point near circle (on a CPU with
+    AVX this compares the two instruction sets; on one without, both builds run SSE2)."""
+    ck = kernels("methods.ellipse._ckernels")
+    assert ck is not None, "the ellipse kernel must be built for this test"
+    sse2 = _build_without_clones(tmp_path)
+    rng = np.random.default_rng(7)
+    for n, axes in ((1, (2.0, 1.0)), (63, (2.0, 1.0)), (1000, (1.0, 3.0)), (100_000, (1.0, 1.0 - 1e-5))):
+        t = rng.uniform(0, 2 * np.pi, n)
+        x = axes[0] * np.cos(t) + 1e-3 * rng.standard_normal(n)
+        y = axes[1] * np.sin(t) + 1e-3 * rng.standard_normal(n)
+        args = (x, y, 0.01, -0.02, float(np.cos(0.3)), float(np.sin(0.3)), axes[0], axes[1], 60)
+        outs = []
+        for module in (ck, sse2):
+            d, R = np.empty(n), np.empty((6, 6))
+            S = module.distances_qr(*args, d, R)
+            outs.append((d, R, S))
+        assert np.array_equal(outs[0][0], outs[1][0]) and np.array_equal(outs[0][1], outs[1][1]), n
+        assert outs[0][2] == outs[1][2]

@@ -52,16 +52,17 @@ class Stationarity:
 
 
 def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONARY_RTOL, steps: int = 4,
-                       qr_first: bool = False) -> Stationarity:
+                       triangular=None) -> Stationarity:
     """Up to ``steps`` Levenberg–Marquardt steps on S = |r(q)|^2 from ``q`` (each trying the Gauss–Newton
     step first, then more and more damping down to a short steepest-descent step, in column-scaled
     variables); ``noise(r, q)`` is the rounding noise of S at q. Stationary when the total decrease
     achieved is at most ``rtol`` S(q) + noise. Damping stops once the model's own decrease
     sum_i (2 m_i - m_i^2) g_i^2, m_i = s_i^2 / (s_i^2 + lambda), falls below that tolerance: no step of the
-    trust-region path can then show a significant decrease. ``qr_first`` (for N >> 5 points): the singular values,
-    V and g = U^T r from a Householder QR of the (N, 6) [J / col, r] and the SVD of its 5 x 5 R (J = Q R,
-    R = U_R S V^T, so U^T r = U_R^T (Q^T r), Q^T r being R's sixth column): the same quantities as the SVD of J,
-    both backward stable, without the SVD's N x 5 U."""
+    trust-region path can then show a significant decrease. ``triangular`` (for N >> 5 points, in place of
+    ``jacobian``): p -> the (k+1) x (k+1) R of a QR of [J r] at p (R^T R = [J r]^T [J r]); the singular values, V and
+    g = U^T r then come from the SVD of its k x k block scaled by its column norms (J D^-1 = Q R1 D^-1, R1 D^-1 =
+    U_R S V^T, so U^T r = U_R^T (Q^T r), Q^T r being R's last column above the diagonal): the same quantities as the
+    SVD of J, both backward stable, from (k+1)^2 numbers instead of N x k."""
     q0 = np.asarray(q, dtype=np.float64)
     r = np.asarray(residuals(q0), dtype=np.float64)
     f0 = dot(r, r)
@@ -71,20 +72,21 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
     threshold = rtol * f0 + floor
     qk, fk, rk, taken = q0, f0, r, 0
     for _ in range(steps):
-        J = np.asarray(jacobian(qk), dtype=np.float64)
-        if not np.isfinite(J).all():
-            break
-        col = np.sqrt(np.einsum("ij,ij->j", J, J))
-        col[col == 0] = 1.0
-        if qr_first and J.shape[0] > J.shape[1]:
-            k = J.shape[1]
-            A = np.empty((J.shape[0], k + 1), order="F")
-            np.divide(J, col, out=A[:, :k])
-            A[:, k] = rk
-            R = np.linalg.qr(A, mode="r")
-            Ur, sv, Vt = np.linalg.svd(R[:k, :k])
-            g = Ur.T @ R[:k, k]
+        if triangular is not None:
+            T = np.asarray(triangular(qk), dtype=np.float64)
+            if not np.isfinite(T).all():
+                break
+            k = T.shape[1] - 1
+            col = np.sqrt(np.einsum("ij,ij->j", T[:, :k], T[:, :k]))
+            col[col == 0] = 1.0
+            Ur, sv, Vt = np.linalg.svd(T[:k, :k] / col)
+            g = Ur.T @ T[:k, k]
         else:
+            J = np.asarray(jacobian(qk), dtype=np.float64)
+            if not np.isfinite(J).all():
+                break
+            col = np.sqrt(np.einsum("ij,ij->j", J, J))
+            col[col == 0] = 1.0
             U, sv, Vt = np.linalg.svd(J / col, full_matrices=False)
             g = U.T @ rk
         keep = sv > sv[0] * len(rk) * EPS
@@ -108,11 +110,27 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
     return Stationarity(bool(decrease <= threshold), f0, float(decrease), floor, taken)
 
 
+#: Points per block of :func:`sum_of_squares_noise` (its temporaries hold a block, not N values).
+NOISE_BLOCK = 2048
+
+
 def sum_of_squares_noise(r, term_size) -> float:
-    """Rounding noise of S = sum r_i^2 when each r_i is a sum of terms of size ``term_size`` (array or
-    scalar) computed with a few roundings: |dS| <= 2 sum |r_i| dr_i + sum dr_i^2, dr_i = 4 eps term_size."""
-    dr = 4.0 * EPS * np.broadcast_to(np.asarray(term_size, dtype=np.float64), r.shape)
-    return float(2.0 * np.abs(r) @ dr + dr @ dr)
+    """Rounding noise of S = sum r_i^2 when each r_i is a sum of terms of size ``term_size`` computed with a few
+    roundings: |dS| <= 2 sum |r_i| dr_i + sum dr_i^2, dr_i = 4 eps term_size_i. ``term_size``: a scalar, an array
+    like r, or a function of a slice of the points returning their sizes; taken in blocks of NOISE_BLOCK points,
+    so the temporaries stay small for any N."""
+    r = np.asarray(r, dtype=np.float64)
+    total = 0.0
+    for lo in range(0, len(r), NOISE_BLOCK):
+        part = slice(lo, min(lo + NOISE_BLOCK, len(r)))
+        if callable(term_size):
+            size = np.asarray(term_size(part), dtype=np.float64)
+        else:
+            size = np.asarray(term_size, dtype=np.float64)
+            size = size[part] if size.ndim else np.full(part.stop - lo, float(size))
+        dr = 4.0 * EPS * size
+        total += float(2.0 * dot(np.abs(r[part]), dr) + dot(dr, dr))
+    return total
 
 
 def degenerate_reason(a_unit: float, b_unit: float) -> str | None:

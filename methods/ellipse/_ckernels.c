@@ -20,8 +20,8 @@
  * one-point closest(), hence the same bits; the solve is latency-bound, so sixteen independent points in flight
  * overlap their divisions and square roots: 3.1 -> 2.3 ms at 10^5 points on this machine, 4 -> 16 lanes).
  *
- * distances_jacobian() (ellipse.orthogonal's per-iteration sweep) adds the Jacobian of the distances to the
- * same closest points; scatter() is the direct fits' moment sweep.
+ * distances_qr() (ellipse.orthogonal's per-iteration sweep) adds the Jacobian of the distances at the same closest
+ * points, folded into the R of a QR as it goes; scatter() is the direct fits' moment sweep.
  *
  * x and y may be strided 1-D float64 views (a column of an (N, 2) array). Operation order is explicit
  * (compiled without fast-math or FP contraction: same bits on any x86-64).
@@ -236,7 +236,7 @@ static void closest_block(const double *U, const double *V, double a, double b, 
 /* The closest points of the points i, i + 1, ... in the ellipse's frame (u = dx c + dy s, v = -dx s + dy c): a
    block of LANES (closest_block) while LANES remain, else the one point i (closest). X, Y are in the frame of
    the axes (a, b), D the signed distances; returns how many points were solved. The one sweep of orthogonal()
-   and distances_jacobian(). */
+   and distances_qr(). */
 static int solve_points(const double *x, const double *y, Py_ssize_t i, Py_ssize_t n, Py_ssize_t sx,
                         Py_ssize_t sy, double xc, double yc, double c, double s, double a, double b, int iterations,
                         double *X, double *Y, double *D) {
@@ -320,19 +320,27 @@ static PyObject *orthogonal(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
-/* ---- one Levenberg-Marquardt evaluation of ellipse.orthogonal: distances AND Jacobian in one sweep ---------
+/* ---- one Levenberg-Marquardt evaluation of ellipse.orthogonal: the distances and the R of [J d] in one sweep --
  *
- *   distances_jacobian(x, y, xc, yc, c, s, a, b, iterations, d_out, J_out)
+ *   distances_qr(x, y, xc, yc, c, s, a, b, iterations, d_out, R_out) -> sum d_i^2
  *
- * d_out[i] as orthogonal() (the same closest points, the same bits), and column i of the (5, N) C-contiguous J_out
- * (MINPACK's column-major N x 5 Jacobian, no transposed copy) the derivative of d_i with respect to p = (xc, yc, a, b, theta) at the closest point (X, Y) held fixed
- * (envelope theorem; methods/ellipse/orthogonal.py::distance_jacobian): with (cos phi, sin phi) = (X/a, Y/b)
- * normalised (no atan2, cos, sin: the same angle, to rounding), the outward unit normal (nx', ny') ~ (cos phi / a,
- * sin phi / b) in the ellipse frame and n = R(theta) (nx', ny'),
+ * d_out[i] as orthogonal() (the same closest points, the same bits). Row i of the N x 6 matrix [J d] holds the
+ * derivative of d_i with respect to p = (xc, yc, a, b, theta) at the closest point (X, Y) held fixed (envelope
+ * theorem; methods/ellipse/orthogonal.py::distance_jacobian): with (cos phi, sin phi) = (X/a, Y/b) normalised (no
+ * atan2, cos, sin: the same angle, to rounding), the outward unit normal (nx', ny') ~ (cos phi / a, sin phi / b) in
+ * the ellipse frame and n = R(theta) (nx', ny'),
  *     J = -(n_x, n_y, nx' cos phi, ny' sin phi, ny' a cos phi - nx' b sin phi)
- * (-n . dX/dp with dX/da = R [cos phi, 0], dX/db = R [0, sin phi], dX/dtheta = R [-b sin phi, a cos phi]). */
+ * (-n . dX/dp with dX/da = R [cos phi, 0], dX/db = R [0, sin phi], dX/dtheta = R [-b sin phi, a cos phi]),
+ * then d_i. That matrix is never stored: each block of rows is folded into the 6 x 6 upper-triangular R of its
+ * Householder QR (Golub & Van Loan, 4th ed., sec. 5.2.2 and 5.1.3, dlarfg's reflector), the triangles of QBLOCK
+ * points merged pairwise as a binary counter (TSQR; the rounding grows with log2(N / QBLOCK), as the blocked
+ * pairwise sums do), so an evaluation costs 6 x 6 doubles instead of the N x 5 Jacobian and its copies. R_out
+ * (C-contiguous (6, 6) float64) gets R: R^T R = [J d]^T [J d], so everything a Levenberg-Marquardt step needs
+ * (J^T J = R1^T R1, J^T d = R1^T q with R = [[R1, q], [0, rho]]) is in it. The return value is sum d_i^2 by
+ * blocked pairwise sums. Plain IEEE operations in source order: the same bits on every x86-64 CPU. */
+
 static void jacobian_row(double X, double Y, double a, double b, double ia, double ib, double c, double s,
-                         double *J, Py_ssize_t n) {
+                         double *J, Py_ssize_t st) {
     /* (ex, ey) = (X/a, Y/b) ~ (cos phi, sin phi) and the normal direction (X/a^2, Y/b^2), normalised by their
        lengths r and m through ONE division 1 / (r m) (independent chains: shorter latency than normalising in turn) */
     double ex = X * ia, ey = Y * ib, nx = ex * ia, ny = ey * ib, r = norm2(ex, ey), m = norm2(nx, ny), inv, cp, sp,
@@ -345,59 +353,252 @@ static void jacobian_row(double X, double Y, double a, double b, double ia, doub
     nxl = nx * (r * inv);
     nyl = ny * (r * inv);
     J[0] = -(c * nxl - s * nyl);
-    J[n] = -(s * nxl + c * nyl);
-    J[2 * n] = -(nxl * cp);
-    J[3 * n] = -(nyl * sp);
-    J[4 * n] = -(nyl * (a * cp) - nxl * (b * sp));
+    J[st] = -(s * nxl + c * nyl);
+    J[2 * st] = -(nxl * cp);
+    J[3 * st] = -(nyl * sp);
+    J[4 * st] = -(nyl * (a * cp) - nxl * (b * sp));
 }
 
+/* jacobian_row() of LANES points in packed pairs (each lane sees jacobian_row's IEEE operations in its order: the
+   same bits), written to column-major rows r0, r0 + 1, ... of B (stride st). */
+static void jacobian_rows(const double *X, const double *Y, double a, double b, double ia, double ib, double c,
+                          double s, double *J, Py_ssize_t st) {
+    int j, i;
+    for (j = 0; j < LANES; j += 2) {
+        v2d Xv = {X[j], X[j + 1]}, Yv = {Y[j], Y[j + 1]};
+        v2d ex = Xv * ia, ey = Yv * ib, nx = ex * ia, ny = ey * ib, r = vnorm2(ex, ey), m = vnorm2(nx, ny), inv, cp, sp,
+            nxl, nyl, o0, o1, o2, o3, o4;
+        for (i = 0; i < 2; i++) {
+            if (!(r[i] > 0.0)) r[i] = 1.0;
+            if (!(m[i] > 0.0)) m[i] = 1.0;
+        }
+        inv = 1.0 / (r * m);
+        cp = ex * (m * inv);
+        sp = ey * (m * inv);
+        nxl = nx * (r * inv);
+        nyl = ny * (r * inv);
+        o0 = -(c * nxl - s * nyl);
+        o1 = -(s * nxl + c * nyl);
+        o2 = -(nxl * cp);
+        o3 = -(nyl * sp);
+        o4 = -(nyl * (a * cp) - nxl * (b * sp));
+        memcpy(J + j, &o0, 16);
+        memcpy(J + st + j, &o1, 16);
+        memcpy(J + 2 * st + j, &o2, 16);
+        memcpy(J + 3 * st + j, &o3, 16);
+        memcpy(J + 4 * st + j, &o4, 16);
+    }
+}
 
-static PyObject *distances_jacobian(PyObject *self, PyObject *args) {
-    PyObject *xo, *yo, *do_, *jo;
-    double xc, yc, c, s, a, b;
+#define QC 6          /* columns of [J d] */
+#define QBLOCK 64     /* points per leaf triangle */
+#define QMAXLEV 64
+
+/* T <- the R of the Householder QR of [T; B] (T: QC x QC upper triangular, B: m x QC, overwritten). For each column
+   k, dlarfg's reflector H = I - tau v v^T with v = (1, B[:, k] / (alpha - beta)) maps (alpha, B[:, k]) = (T[k][k],
+   B[:, k]) to (beta, 0), beta = -sign(alpha) |(alpha, B[:, k])|, and is applied to the columns right of k. */
+static void tri_update(double T[QC][QC], double (*B)[QC], int m) {
+    int k, i, j;
+    double sigma = 0.0;
+    for (i = 0; i < m; i++) sigma = sigma + B[i][0] * B[i][0];
+    for (k = 0; k < QC; k++) {
+        double alpha = T[k][k], nrm, beta, tau, scal, w[QC], next = 0.0;
+        if (sigma != 0.0) {                    /* else the column is already reduced: H = I */
+            nrm = sqrt(alpha * alpha + sigma);
+            beta = alpha > 0.0 ? -nrm : nrm;
+            tau = (beta - alpha) / beta;
+            scal = 1.0 / (alpha - beta);
+            T[k][k] = beta;
+            /* w = T[k][k+1:] + v^T B[:, k+1:]: one pass over the rows, the columns' sums independent */
+            for (j = k + 1; j < QC; j++) w[j] = T[k][j];
+            for (i = 0; i < m; i++) {
+                double v = B[i][k] * scal;
+                B[i][k] = v;
+                for (j = k + 1; j < QC; j++) w[j] = w[j] + v * B[i][j];
+            }
+            for (j = k + 1; j < QC; j++) {
+                w[j] = tau * w[j];
+                T[k][j] = T[k][j] - w[j];
+            }
+            /* the update, and the next column's sum of squares in the same pass */
+            for (i = 0; i < m; i++) {
+                double v = B[i][k];
+                for (j = k + 1; j < QC; j++) B[i][j] = B[i][j] - w[j] * v;
+                if (k + 1 < QC) next = next + B[i][k + 1] * B[i][k + 1];
+            }
+        } else if (k + 1 < QC) {
+            for (i = 0; i < m; i++) next = next + B[i][k + 1] * B[i][k + 1];
+        }
+        sigma = next;
+    }
+}
+
+/* A leaf: the R of the Householder QR of a QBLOCK x QC block B, stored column-major (B[j] is column j; rows past the
+   block's points are zero, which adds exact zeros), into T (zeroed by the caller). The operations of tri_update for
+   T = 0, every sum over the rows taken by col_dot in a fixed order: the same bits on every CPU. */
+typedef double v4d __attribute__((vector_size(32)));
+/* 4-lane loads and stores through memcpy (no alignment assumed; no vector passed by value, so no ABI change) */
+#define LD4(v, p) memcpy(&(v), (p), sizeof(v4d))
+#define ST4(p, v) memcpy((p), &(v), sizeof(v4d))
+
+/* sum_i u_i v_i over a block's rows: eight partial sums (rows i mod 8, two 4-lane accumulators), added as
+   ((s0 + s4) + (s1 + s5)) + ((s2 + s6) + (s3 + s7)). */
+static inline double col_dot(const double *u, const double *v) {
+    v4d s0 = {0.0, 0.0, 0.0, 0.0}, s1 = {0.0, 0.0, 0.0, 0.0}, a0, b0, a1, b1, t;
+    int i;
+    for (i = 0; i < QBLOCK; i += 8) {
+        LD4(a0, u + i); LD4(b0, v + i); LD4(a1, u + i + 4); LD4(b1, v + i + 4);
+        s0 = s0 + a0 * b0;
+        s1 = s1 + a1 * b1;
+    }
+    t = s0 + s1;
+    return (t[0] + t[1]) + (t[2] + t[3]);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(FITBENCH_NO_CLONES)
+#define CLONES __attribute__((target_clones("avx", "default")))
+#else
+#define CLONES
+#endif
+
+/* (The 4-lane vectors are lane-wise IEEE operations: 256-bit AVX instructions where the CPU has them (the "avx"
+   clone, picked at load time), pairs of SSE2 instructions elsewhere, the same bits either way; compiled with
+   -DFITBENCH_NO_CLONES there is only the SSE2 one, which tests/test_ellipse_kernels.py compares bit for bit.) */
+CLONES static void leaf_qr(double T[QC][QC], double B[QC][QBLOCK]) {
+    int k, i, j;
+    for (k = 0; k < QC; k++) {
+        double alpha = T[k][k], sigma = col_dot(B[k], B[k]), nrm, beta, tau, scal, w;
+        v4d vs, vw;
+        if (sigma == 0.0) continue;            /* the column is already reduced: H = I */
+        nrm = sqrt(alpha * alpha + sigma);
+        beta = alpha > 0.0 ? -nrm : nrm;
+        tau = (beta - alpha) / beta;
+        scal = 1.0 / (alpha - beta);
+        T[k][k] = beta;
+        vs = (v4d){scal, scal, scal, scal};
+        for (i = 0; i < QBLOCK; i += 4) {
+            v4d bk;
+            LD4(bk, B[k] + i);
+            bk = bk * vs;
+            ST4(B[k] + i, bk);
+        }
+        for (j = k + 1; j < QC; j++) {
+            w = tau * (T[k][j] + col_dot(B[k], B[j]));
+            T[k][j] = T[k][j] - w;
+            vw = (v4d){w, w, w, w};
+            for (i = 0; i < QBLOCK; i += 4) {
+                v4d bj, bk;
+                LD4(bj, B[j] + i);
+                LD4(bk, B[k] + i);
+                bj = bj - vw * bk;
+                ST4(B[j] + i, bj);
+            }
+        }
+    }
+}
+
+typedef struct {
+    unsigned char used[QMAXLEV];
+    double R[QMAXLEV][QC][QC];
+    double s[QMAXLEV];
+} qtree_t;
+
+/* Push a leaf (triangle T, sum of squares s) into the binary counter: equal levels merge, as spw_add's sums do. */
+static void qtree_add(qtree_t *q, double T[QC][QC], double s) {
+    int lev;
+    for (lev = 0; lev < QMAXLEV; lev++) {
+        if (!q->used[lev]) {
+            memcpy(q->R[lev], T, sizeof(double) * QC * QC);
+            q->s[lev] = s;
+            q->used[lev] = 1;
+            return;
+        }
+        tri_update(T, q->R[lev], QC);
+        s = q->s[lev] + s;
+        q->used[lev] = 0;
+    }
+}
+
+static PyObject *distances_qr(PyObject *self, PyObject *args) {
+    PyObject *xo, *yo, *do_, *ro;
+    double xc, yc, c, s, a, b, total = 0.0;
     int iterations;
-    Py_buffer xv, yv, dv, jv;
-    Py_ssize_t n, i, sx, sy, sd;
-    int m = 1;
-    if (!PyArg_ParseTuple(args, "OOddddddiOO", &xo, &yo, &xc, &yc, &c, &s, &a, &b, &iterations, &do_, &jo))
+    Py_buffer xv, yv, dv, rv;
+    Py_ssize_t n, sx, sy, sd;
+    qtree_t *tree;
+    if (!PyArg_ParseTuple(args, "OOddddddiOO", &xo, &yo, &xc, &yc, &c, &s, &a, &b, &iterations, &do_, &ro))
         return NULL;
     if (!(a > 0.0) || !(b > 0.0) || iterations < 0) {
-        PyErr_SetString(PyExc_ValueError, "distances_jacobian: the semi-axes must be positive and iterations >= 0");
+        PyErr_SetString(PyExc_ValueError, "distances_qr: the semi-axes must be positive and iterations >= 0");
         return NULL;
     }
     if (vector_of(xo, &xv, 0, "x") < 0) return NULL;
     if (vector_of(yo, &yv, 0, "y") < 0) { PyBuffer_Release(&xv); return NULL; }
     if (vector_of(do_, &dv, 1, "d_out") < 0) { PyBuffer_Release(&xv); PyBuffer_Release(&yv); return NULL; }
-    if (PyObject_GetBuffer(jo, &jv, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | PyBUF_WRITABLE) < 0) {
+    if (PyObject_GetBuffer(ro, &rv, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | PyBUF_WRITABLE) < 0) {
         PyBuffer_Release(&xv); PyBuffer_Release(&yv); PyBuffer_Release(&dv); return NULL;
     }
     n = xv.shape[0];
-    if (jv.ndim != 2 || jv.itemsize != 8 || !jv.format || strcmp(jv.format, "d") != 0 || jv.shape[0] != 5 ||
-        jv.shape[1] != n || yv.shape[0] != n || dv.shape[0] != n) {
-        PyErr_SetString(PyExc_ValueError, "distances_jacobian: x, y, d_out of length N and J_out a C-contiguous "
-                                          "(5, N) float64 array are needed");
-        PyBuffer_Release(&xv); PyBuffer_Release(&yv); PyBuffer_Release(&dv); PyBuffer_Release(&jv);
+    if (rv.ndim != 2 || rv.itemsize != 8 || !rv.format || strcmp(rv.format, "d") != 0 || rv.shape[0] != QC ||
+        rv.shape[1] != QC || yv.shape[0] != n || dv.shape[0] != n) {
+        PyErr_SetString(PyExc_ValueError, "distances_qr: x, y, d_out of length N and R_out a C-contiguous (6, 6) "
+                                          "float64 array are needed");
+        PyBuffer_Release(&xv); PyBuffer_Release(&yv); PyBuffer_Release(&dv); PyBuffer_Release(&rv);
         return NULL;
+    }
+    tree = (qtree_t *)PyMem_RawCalloc(1, sizeof(qtree_t));
+    if (!tree) {
+        PyBuffer_Release(&xv); PyBuffer_Release(&yv); PyBuffer_Release(&dv); PyBuffer_Release(&rv);
+        return PyErr_NoMemory();
     }
     sx = xv.strides[0] / 8; sy = yv.strides[0] / 8; sd = dv.strides[0] / 8;
     {
         const double *x = (const double *)xv.buf, *y = (const double *)yv.buf;
-        double *d = (double *)dv.buf, *J = (double *)jv.buf;
+        double *d = (double *)dv.buf, *Rout = (double *)rv.buf;
         double ia = 1.0 / a, ib = 1.0 / b;
+        Py_ssize_t i0, i;
+        int lev, first = 1;
         Py_BEGIN_ALLOW_THREADS
-        for (i = 0; i < n; i += m) {
-            double X[LANES], Y[LANES], D[LANES];
-            int j;
-            m = solve_points(x, y, i, n, sx, sy, xc, yc, c, s, a, b, iterations, X, Y, D);
-            for (j = 0; j < m; j++) {
-                d[(i + j) * sd] = D[j];
-                jacobian_row(X[j], Y[j], a, b, ia, ib, c, s, J + (i + j), n);
+        for (i0 = 0; i0 < n; i0 += QBLOCK) {
+            Py_ssize_t i1 = i0 + QBLOCK < n ? i0 + QBLOCK : n;
+            double T[QC][QC], B[QC][QBLOCK] __attribute__((aligned(16))), leaf = 0.0;
+            int m = 1;
+            for (i = i0; i < i1; i += m) {
+                double X[LANES], Y[LANES], D[LANES];
+                int j;
+                m = solve_points(x, y, i, i1, sx, sy, xc, yc, c, s, a, b, iterations, X, Y, D);
+                if (m == LANES) jacobian_rows(X, Y, a, b, ia, ib, c, s, &B[0][i - i0], QBLOCK);
+                else jacobian_row(X[0], Y[0], a, b, ia, ib, c, s, &B[0][i - i0], QBLOCK);
+                for (j = 0; j < m; j++) {
+                    Py_ssize_t r = i - i0 + j;
+                    d[(i + j) * sd] = D[j];
+                    B[QC - 1][r] = D[j];
+                    leaf = leaf + D[j] * D[j];
+                }
+            }
+            for (i = i1 - i0; i < QBLOCK; i++)
+                for (m = 0; m < QC; m++) B[m][i] = 0.0;
+            memset(T, 0, sizeof T);
+            leaf_qr(T, B);
+            qtree_add(tree, T, leaf);
+        }
+        memset(Rout, 0, sizeof(double) * QC * QC);
+        for (lev = 0; lev < QMAXLEV; lev++) {
+            if (!tree->used[lev]) continue;
+            if (first) {
+                memcpy(Rout, tree->R[lev], sizeof(double) * QC * QC);
+                total = tree->s[lev];
+                first = 0;
+            } else {
+                tri_update((double (*)[QC])Rout, tree->R[lev], QC);
+                total = total + tree->s[lev];
             }
         }
         Py_END_ALLOW_THREADS
     }
-    PyBuffer_Release(&xv); PyBuffer_Release(&yv); PyBuffer_Release(&dv); PyBuffer_Release(&jv);
-    Py_RETURN_NONE;
+    PyMem_RawFree(tree);
+    PyBuffer_Release(&xv); PyBuffer_Release(&yv); PyBuffer_Release(&dv); PyBuffer_Release(&rv);
+    return PyFloat_FromDouble(total);
 }
 
 /* ---- the 6 x 6 scatter of the direct fits: the 14 moments sum x^p y^q (1 <= p + q <= 4) in one sweep ---- */
@@ -487,9 +688,10 @@ static PyMethodDef Methods[] = {
     {"scatter", scatter, METH_VARARGS,
      "scatter(x, y) -> (m40, m31, m22, m13, m04, m30, m21, m12, m03, m20, m11, m02, m10, m01): the moments "
      "sum x^p y^q of the direct fits' scatter matrix, one sweep, blocked pairwise sums"},
-    {"distances_jacobian", distances_jacobian, METH_VARARGS,
-     "distances_jacobian(x, y, xc, yc, cos_theta, sin_theta, a, b, iterations, d_out, J_out): the signed "
-     "orthogonal distances (as orthogonal()) and their Jacobian, transposed (5, N), in (xc, yc, a, b, theta), in place"},
+    {"distances_qr", distances_qr, METH_VARARGS,
+     "distances_qr(x, y, xc, yc, cos_theta, sin_theta, a, b, iterations, d_out, R_out) -> sum d^2: the signed "
+     "orthogonal distances (as orthogonal()) in place, and in R_out (6, 6) the R of the QR of [J d], J the "
+     "distances' Jacobian in (xc, yc, a, b, theta): one sweep, the Jacobian never stored"},
     {"orthogonal", orthogonal, METH_VARARGS,
      "orthogonal(x, y, xc, yc, cos_theta, sin_theta, a, b, iterations, d_out[, phi_out]): signed orthogonal "
      "distances (and closest-point parameters) of the points to the ellipse, written in place"},

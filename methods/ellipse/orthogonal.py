@@ -6,6 +6,7 @@ import math
 import numpy as np
 
 from methods._compiled import kernels
+from methods._frame import dot
 from methods._registry import register
 from methods._validation import check_positive, check_vector
 from methods.ellipse._checks import degenerate_reason, stationarity_probe, sum_of_squares_noise
@@ -56,12 +57,13 @@ _MESSAGES = {-1: "Improper input parameters status returned from `leastsq`",
 def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=500):
     """Minimise the sum of squared orthogonal distances d_i from the points to the ellipse
     p = (xc, yc, a, b, theta) (circle/ellipse paper eq. 22, S_EG) by MINPACK's Levenberg–Marquardt
-    with the analytic Jacobian of :func:`distance_jacobian`; every evaluation solves the closest
-    points of all points at once, once (the Jacobian reuses them; compiled: distances and Jacobian in one sweep,
-    methods/ellipse/_ckernels.c distances_jacobian, handed to MINPACK column-major). Start: ``start`` = (xc, yc, a, b,
-    theta) in data units, default Halir & Flusser's direct fit. In the unit frame; tolerances are
-    MINPACK's. ``converged`` needs MINPACK's success, a stationary point for the Levenberg–Marquardt probe of
-    :mod:`methods.ellipse._checks` and a non-degenerate ellipse."""
+    with the analytic Jacobian of :func:`distance_jacobian`. Every evaluation solves the closest points of all
+    points once and reduces [J d] (N x 6) to the R of its QR in the same sweep (compiled:
+    methods/ellipse/_ckernels.c distances_qr); MINPACK gets the equivalent 6-row problem f = (q, rho), R1 (see
+    ``fun`` below), so no N x 5 Jacobian is ever stored. Start: ``start`` = (xc, yc, a, b, theta) in data units,
+    default Halir & Flusser's direct fit. In the unit frame; tolerances are MINPACK's. ``converged`` needs
+    MINPACK's success, a stationary point for the Levenberg–Marquardt probe of :mod:`methods.ellipse._checks`
+    (on the same R) and a non-degenerate ellipse."""
     name = "ellipse.orthogonal"
     for key, val in (("xtol", xtol), ("ftol", ftol), ("gtol", gtol)):
         check_positive(key, val, name)
@@ -81,7 +83,6 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
                                   f"(RMS radius {frame.scale:.3g}); give positive semi-axes near the data")
     history = []
     cache = []   # the last two evaluations, newest first: MINPACK's answer is often the one before its last trial
-    spare = []   # Jacobian buffers of evicted evaluations, reused (no fresh 8 N x 5 bytes per evaluation)
     n = len(x)
     ck = kernels("methods.ellipse._ckernels")
 
@@ -91,63 +92,71 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
                 return e
         return None
 
-    def solve(p, with_jacobian=True):
-        """Distances and Jacobian at p, once per p (fun and jac share them). Compiled: one sweep computing both
-        (methods/ellipse/_ckernels.c distances_jacobian), the Jacobian written transposed, (5, N), which is
-        MINPACK's column-major N x 5 (no transposed copy); ``with_jacobian=False`` (the probe's trial points, whose
-        Jacobian is rarely needed): the distances alone (orthogonal(), the same bits). NumPy reference path
-        (FITBENCH_KERNELS=numpy), and any p that is not a finite ellipse with positive semi-axes: the closest
-        points' phi, then the Jacobian when asked for. Returns the cache entry."""
+    def evaluate(p, with_qr=True):
+        """The distances d at p, their sum of squares S and (``with_qr``) the 6 x 6 R of the QR of [J d], once per p
+        (MINPACK's function and Jacobian share them). Compiled: one sweep computing d and folding the rows of
+        [J d] into R as it goes (methods/ellipse/_ckernels.c distances_qr: the N x 5 Jacobian is never stored);
+        without R (the probe's trial points), the distances alone (orthogonal(), the same bits). NumPy reference
+        path (FITBENCH_KERNELS=numpy), and any p that is not a finite ellipse with positive semi-axes: the closest
+        points' phi, the Jacobian of :func:`distance_jacobian` and LAPACK's QR. Returns the cache entry."""
         e = lookup(p)
-        if e is None:
-            xc, yc, a, b, t = (float(v) for v in p)
-            if ck is not None and a > 0 and b > 0 and all(map(math.isfinite, (xc, yc, a, b, t))):
-                d = np.empty(n)
-                if with_jacobian:
-                    Jt = spare.pop() if spare else np.empty((5, n))
-                    ck.distances_jacobian(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d, Jt)
-                else:
-                    Jt = None
-                    ck.orthogonal(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d)
-                e = {"p": p.copy(), "d": d, "Jt": Jt, "phi": None, "own": Jt is not None}
+        if e is not None and (e["R"] is not None or not with_qr):
+            return e
+        if e is not None:  # distances-only evaluation at p: again, with R
+            cache.remove(e)
+        xc, yc, a, b, t = (float(v) for v in p)
+        R = None
+        if ck is not None and a > 0 and b > 0 and all(map(math.isfinite, (xc, yc, a, b, t))):
+            d = np.empty(n)
+            if with_qr:
+                R = np.empty((6, 6))
+                S = ck.distances_qr(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d, R)
             else:
-                d, phi = orthogonal_residuals(x, y, p)
-                e = {"p": p.copy(), "d": d, "Jt": None, "phi": phi, "own": False}
-            cache.insert(0, e)
-            if len(cache) > 2:
-                old = cache.pop()
-                if old["own"]:  # MINPACK copies every Jacobian it gets, the probe uses one within its step
-                    spare.append(old["Jt"])
+                ck.orthogonal(x, y, xc, yc, math.cos(t), math.sin(t), a, b, 60, d)
+                S = dot(d, d)
+        else:
+            d, phi = orthogonal_residuals(x, y, p)
+            S = dot(d, d)
+            if with_qr:
+                A = np.empty((n, 6), order="F")
+                A[:, :5] = distance_jacobian(x, y, p, phi)
+                A[:, 5] = d
+                R = np.linalg.qr(A, mode="r") if np.isfinite(A).all() else np.full((6, 6), np.nan)
+        e = {"p": p.copy(), "d": d, "S": float(S), "R": R, "f": None}
+        cache.insert(0, e)
+        del cache[2:]
         return e
 
     def fun(p):
-        return solve(p)["d"]
-
-    def jac_t(p):
-        """The Jacobian at p, transposed: (5, N)."""
-        e = solve(p)
-        if e["Jt"] is None:
-            if e["phi"] is None:  # distances-only evaluation at p: solve again with the Jacobian
-                cache.remove(e)
-                e = solve(p)
-            else:
-                e["Jt"] = np.ascontiguousarray(distance_jacobian(x, y, p, e["phi"]).T)
-        return e["Jt"]
+        """MINPACK's residual vector at p: f = (q, rho) with R = [[R1, q], [0, rho]], rho = sqrt(S - |q|^2), so that
+        |f|^2 = S = sum d_i^2 (taken directly, to its own rounding) and f's Jacobian R1 gives MINPACK the same
+        Levenberg-Marquardt subproblem as the N distances would (|J dp + d|^2 = |R1 dp + q|^2 + rho^2): MINPACK
+        works on 6 x 5 instead of N x 5."""
+        e = evaluate(p)
+        if e["f"] is None:
+            R, S = e["R"], e["S"]
+            f = np.full(6, np.inf)
+            if math.isfinite(S) and np.isfinite(R).all():
+                f[:5] = R[:5, 5]
+                f[5] = math.sqrt(max(S - dot(f[:5], f[:5]), 0.0))
+            e["f"] = f
+        return e["f"]
 
     def minpack_jac(p):
-        d = fun(p)
-        history.append(float(d @ d))
-        return jac_t(p)
+        e = evaluate(p)
+        history.append(e["S"])
+        J = np.zeros((6, 5))
+        J[:5] = e["R"][:5, :5]
+        return J
 
     eps = np.finfo(float).eps
     from scipy.optimize import leastsq  # imported on first use (light import)
 
-    # MINPACK's lmder, as scipy's least_squares(method="lm", x_scale="jac") calls it (diag None, factor 100), with
-    # the Jacobian given column-major (col_deriv) and without least_squares' wrappers, which copy every Jacobian
-    # twice. leastsq first calls fun and Dfun once at p0 to check their shapes (the cache answers both); the
-    # history keeps MINPACK's own Jacobian evaluations: the objective at each accepted iterate.
+    # MINPACK's lmder, as scipy's least_squares(method="lm", x_scale="jac") calls it (diag None, factor 100),
+    # without least_squares' wrappers. leastsq first calls fun and Dfun once at p0 to check their shapes (the cache
+    # answers both); the history keeps MINPACK's own Jacobian evaluations: the objective at each accepted iterate.
     q, _, info, _, ier = leastsq(fun, np.array(p0, dtype=np.float64), Dfun=minpack_jac, full_output=True,
-                                 col_deriv=True, ftol=max(ftol, eps), xtol=max(xtol, eps), gtol=max(gtol, eps),
+                                 ftol=max(ftol, eps), xtol=max(xtol, eps), gtol=max(gtol, eps),
                                  maxfev=max_nfev, factor=100.0, diag=None)
     njev, nfev = int(info.get("njev", 0)), int(info["nfev"])
     history = history[1:1 + njev]
@@ -160,12 +169,16 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
         extra["degenerate"] = why
     elif converged:
         def residuals(p):
-            return solve(p, with_jacobian=False)["d"] if p[2] > 0 and p[3] > 0 else np.full(n, np.inf)
+            return evaluate(p, with_qr=False)["d"] if p[2] > 0 and p[3] > 0 else np.full(n, np.inf)
 
-        probe = stationarity_probe(residuals, lambda p: jac_t(p).T if p[2] > 0 and p[3] > 0 else np.full((n, 5), np.nan),
-                                   q, noise=lambda r, p: sum_of_squares_noise(r, np.abs(x) + np.abs(y) + abs(p[0]) +
-                                                                              abs(p[1]) + max(abs(p[2]), abs(p[3]))),
-                                   qr_first=True)
+        def triangular(p):
+            return evaluate(p)["R"] if p[2] > 0 and p[3] > 0 else np.full((6, 6), np.nan)
+
+        def noise(r, p):
+            c = abs(p[0]) + abs(p[1]) + max(abs(p[2]), abs(p[3]))
+            return sum_of_squares_noise(r, lambda part: np.abs(x[part]) + np.abs(y[part]) + c)
+
+        probe = stationarity_probe(residuals, None, q, noise=noise, triangular=triangular)
         extra["stationarity"] = probe.as_dict()
         if not probe.stationary:
             converged, message = False, f"{probe.reason()} (MINPACK: {message})"
@@ -175,7 +188,7 @@ def orthogonal(points, *, start=None, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nf
         # the closest points of an evaluation at q (MINPACK's answer, then the probe, evaluate there)
         e = lookup(q)
         d_unit = e["d"] if e is not None else orthogonal_residuals(x, y, canonical(q), with_phi=False)[0]
-        residuals = d_unit * frame.scale
+        residuals = np.multiply(d_unit, frame.scale, out=d_unit)  # the evaluation's own array: no copy
     hist = history_to_data(history, frame.scale, 2)
     if hist is None:
         hist, extra["history_units"] = history, "unit frame (the data-unit values, length^2, overflow)"

@@ -1,0 +1,38 @@
+"""Issue 20: peak memory of an ellipse fit <= 4x the input array. tracemalloc counts NumPy's allocations exactly,
+so this is a deterministic test, not a timing; each fit runs in a fresh interpreter, since tracemalloc also counts
+what other threads of a long test session allocate."""
+import os
+import subprocess
+import sys
+
+import pytest
+
+from conftest import REPO
+
+_PEAK = """
+import sys, tracemalloc
+import numpy as np
+import methods
+from datasets.synthetic import ellipse_points
+n, method_id = int(sys.argv[1]), sys.argv[2]
+pts = ellipse_points(n=n, noise=0.005, rng=np.random.default_rng(3358), center=(1200.0, 650.0),
+                     semi_axes=(299.0243, 299.0022), angle=np.radians(32.04))
+methods.fit(method_id, pts)  # imports and caches outside the measurement
+tracemalloc.start()
+res = methods.fit(method_id, pts)
+peak = tracemalloc.get_traced_memory()[1]
+tracemalloc.stop()
+print(res.converged, peak / pts.nbytes)
+"""
+
+
+@pytest.mark.parametrize("n", [3358, 100_000])
+@pytest.mark.parametrize("method_id", ["ellipse.orthogonal", "ellipse.halir_flusser", "ellipse.fitzgibbon"])
+def test_peak_memory_of_an_ellipse_fit_is_at_most_four_times_the_input(method_id, n):
+    env = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-c", _PEAK, str(n), method_id], cwd=REPO, env=env, capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    converged, ratio = out.stdout.split()
+    assert converged == "True"
+    assert float(ratio) <= 4.0, f"{method_id} at N = {n}: peak memory {float(ratio):.2f}x the input"

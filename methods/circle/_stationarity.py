@@ -86,16 +86,20 @@ def geometric(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity
     if reason:
         return _refuse(reason)
     dx, dy = x - p[0], y - p[1]
-    r = np.sqrt(dx * dx + dy * dy)
+    r = dx * dx  # r = sqrt(dx dx + dy dy), d, c, s, delta in place: the same operations, four arrays of N
+    d = dy * dy
+    r += d
+    np.sqrt(r, out=r)
     if not r.all():
         return _refuse("the centre coincides with a data point (S_CG not differentiable there)")
-    d = r - p[2]
-    c, s = dx / r, dy / r
+    np.subtract(r, p[2], out=d)
+    c, s = np.divide(dx, r, out=dx), np.divide(dy, r, out=dy)
     jtj = np.array([[dot(c, c), dot(c, s), c.sum()], [dot(c, s), dot(s, s), s.sum()], [c.sum(), s.sum(), float(len(x))]])
     g = np.array([dot(c, d), dot(s, d), d.sum()])
     f = dot(d, d)
-    delta = 4 * EPS * (r + abs(p[2]))
-    noise = 2 * dot(np.abs(d), delta) + dot(delta, delta)
+    delta = np.add(r, abs(p[2]), out=r)
+    delta *= 4 * EPS
+    noise = 2 * dot(np.abs(d, out=c), delta) + dot(delta, delta)
     return _decide(g, jtj, f, noise, "S_CG", ulp)
 
 
@@ -106,15 +110,18 @@ def algebraic(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity
     if reason:
         return _refuse(reason)
     du, dv = x - p[0], y - p[1]
-    q = du * du + dv * dv
-    e = q - p[2] * p[2]
+    q = du * du  # q = du du + dv dv and e = q - R^2 in place (the same operations; peak memory)
+    e = dv * dv
+    q += e
+    np.subtract(q, p[2] * p[2], out=e)
     # residual Jacobian rows -2 [du, dv, R]
     jtj = 4 * np.array([[dot(du, du), dot(du, dv), p[2] * du.sum()], [dot(du, dv), dot(dv, dv), p[2] * dv.sum()],
                         [p[2] * du.sum(), p[2] * dv.sum(), p[2] * p[2] * len(x)]])
     g = -2 * np.array([dot(e, du), dot(e, dv), p[2] * e.sum()])
     f = dot(e, e)
-    delta = 4 * EPS * (q + p[2] * p[2])
-    noise = 2 * dot(np.abs(e), delta) + dot(delta, delta)
+    delta = np.add(q, p[2] * p[2], out=q)
+    delta *= 4 * EPS
+    noise = 2 * dot(np.abs(e, out=du), delta) + dot(delta, delta)
     return _decide(g, jtj, f, noise, "S_CA", ulp)
 
 

@@ -47,9 +47,14 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-15, 
     lam_unit = np.full(3, 1e-3) if lam is None else lam / frame.scale
 
     def objective(p):
+        # sqrt(dx dx + dy dy) - R in place: the same operations in the same order, two arrays of N
         dx, dy = x - p[0], y - p[1]
-        d = np.sqrt(dx * dx + dy * dy) - p[2]
-        return dot(d, d)
+        dx *= dx
+        dy *= dy
+        dx += dy
+        np.sqrt(dx, out=dx)
+        dx -= p[2]
+        return dot(dx, dx)
 
     # Stopping tolerances at the objective's resolution (README, NIST): values of S_CG scatter by their
     # rounding noise once the simplex is small, so asking for a smaller simplex makes the stop a matter of
@@ -99,13 +104,20 @@ def _resolution_tolerances(x, y, p, xatol: float, fatol: float) -> tuple[float, 
     that size (values there differ by ~noise/16: shrink steps still reduce the simplex), at least the
     caller's values. Unit frame."""
     dx, dy = x - p[0], y - p[1]
-    r = np.sqrt(dx * dx + dy * dy)
-    d = r - p[2]
-    w = r + abs(float(p[2]))
-    eps = np.finfo(float).eps
-    noise = 4 * eps * np.sqrt(dot(d * d, w * w)) + eps * eps * dot(w, w)
+    r = dx * dx  # the operations of r = sqrt(dx dx + dy dy), c, s = dx / r, dy / r, d = r - R, w = r + |R|,
+    d = dy * dy  # in place: four arrays of N (peak memory), the same values
+    r += d
+    np.sqrt(r, out=r)
     with np.errstate(divide="ignore", invalid="ignore"):
-        c, s = dx / r, dy / r
+        c, s = np.divide(dx, r, out=dx), np.divide(dy, r, out=dy)
+    np.subtract(r, p[2], out=d)
+    w = np.add(r, abs(float(p[2])), out=r)
+    eps = np.finfo(float).eps
+    ww = dot(w, w)
+    d *= d
+    w *= w
+    noise = 4 * eps * np.sqrt(dot(d, w)) + eps * eps * ww
+    del d, w
     jtj = np.array([[dot(c, c), dot(c, s), c.sum()], [dot(c, s), dot(s, s), s.sum()], [c.sum(), s.sum(), float(len(x))]])
     if not np.isfinite(jtj).all():
         return xatol, fatol

@@ -56,7 +56,11 @@ def powell_hybrid(points, *, start=None, xtol=1e-12, maxfev=2000):
     def equations(p):
         a, b, rr = p
         du, dv = x - a, y - b
-        e = du * du + dv * dv - rr * rr
+        e = du * du  # du du + dv dv - R^2 in place (the same operations; peak memory)
+        t = dv * dv
+        e += t
+        del t
+        e -= rr * rr
         history.append(dot(e, e))
         se, su, sv = e.sum(), du.sum(), dv.sum()
         f = -4.0 * np.array([dot(e, du), dot(e, dv), rr * se])

@@ -114,6 +114,29 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
 NOISE_BLOCK = 2048
 
 
+def triangular_by_blocks(jacobian, residuals, n: int, block: int | None = None):
+    """For :func:`stationarity_probe`'s ``triangular``: p -> the R of a QR of [J r] at p, from the rows of
+    ``block`` points at a time (``jacobian(p, part)``, ``residuals(p, part)`` of the slice ``part``; LAPACK's
+    Householder QR of [R; next block]): a block's memory instead of the N x k Jacobian and its copies.
+    Default block: N / 16 points, at least 256."""
+    block = max(256, -(-n // 16)) if block is None else int(block)
+
+    def triangular(p):
+        R = None
+        for lo in range(0, n, block):
+            part = slice(lo, min(lo + block, n))
+            J = np.asarray(jacobian(p, part), dtype=np.float64)
+            A = np.empty((J.shape[0], J.shape[1] + 1))
+            A[:, :-1] = J
+            A[:, -1] = residuals(p, part)
+            R = np.linalg.qr(A if R is None else np.vstack([R, A]), mode="r")
+        k = R.shape[1]
+        if R.shape[0] < k:  # fewer rows than columns: the missing rows of R are zero
+            R = np.vstack([R, np.zeros((k - R.shape[0], k))])
+        return R
+    return triangular
+
+
 def sum_of_squares_noise(r, term_size) -> float:
     """Rounding noise of S = sum r_i^2 when each r_i is a sum of terms of size ``term_size`` computed with a few
     roundings: |dS| <= 2 sum |r_i| dr_i + sum dr_i^2, dr_i = 4 eps term_size_i. ``term_size``: a scalar, an array

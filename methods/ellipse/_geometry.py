@@ -147,10 +147,17 @@ def paper_gamma_solutions(k) -> dict:
 
 
 def to_local(x, y, p):
-    """Point coordinates in the ellipse frame O' (circle/ellipse paper eq. 14)."""
+    """Point coordinates in the ellipse frame O' (circle/ellipse paper eq. 14): u = dx c + dy s,
+    v = -dx s + dy c, computed in place (four arrays of N at most; v as dy c - dx s, the same IEEE result)."""
     c, s = np.cos(p[4]), np.sin(p[4])
     dx, dy = x - p[0], y - p[1]
-    return dx * c + dy * s, -dx * s + dy * c
+    u = dx * c
+    v = dy * s
+    u += v
+    np.multiply(dy, c, out=v)
+    dx *= s
+    v -= dx
+    return u, v
 
 
 def _norm(x, y):

@@ -23,7 +23,7 @@ from methods._frame import dot
 from methods._registry import register
 from methods._validation import check_choice, check_positive, check_vector
 from methods.circle._frame import kasa_xy
-from methods.ellipse._checks import degenerate_reason, stationarity_probe, sum_of_squares_noise
+from methods.ellipse._checks import degenerate_reason, stationarity_probe, sum_of_squares_noise, triangular_by_blocks
 from methods.ellipse._geometry import Frame, orthogonal_residuals, to_local
 from methods.ellipse._result import ellipse_result, failed, history_to_data, residuals_from_unit
 from methods.ellipse._validation import check_distinct_points
@@ -68,10 +68,13 @@ def _setup(points, name, backend, start, step, xatol, fatol, max_fev):
     return frame, x0, lam_unit, max_fev
 
 
-def _minimise(objective, residuals, jacobian, noise, x0, lam, *, backend, xatol, fatol, max_fev):
+def _minimise(objective, residuals, jacobian, noise, x0, lam, *, n, backend, xatol, fatol, max_fev):
     """Nelder–Mead rounds until the probe finds the best vertex stationary (see the module docstring).
+    ``residuals(q, part)`` and ``jacobian(q, part)`` evaluate a slice of the points: the probe's R of [J r] is
+    built block by block (:func:`~methods.ellipse._checks.triangular_by_blocks`), never the N x 5 Jacobian.
     Returns (x, converged, message, iterations, nfev, history, stationarity)."""
     x = np.asarray(x0, dtype=np.float64)
+    triangular = triangular_by_blocks(jacobian, residuals, n)
     history, iterations, nfev, probe, message = [], 0, 0, None, ""
     f_best = float(objective(x))
     stalled = 0
@@ -81,7 +84,9 @@ def _minimise(objective, residuals, jacobian, noise, x0, lam, *, backend, xatol,
             message = f"evaluation budget max_fev={max_fev} spent"
             break
         r_now = residuals(x)
-        fatol_eff = max(float(fatol or 0.0), sum_of_squares_noise(r_now, noise(x)) if np.isfinite(r_now).all() else 0.0)
+        fatol_eff = max(float(fatol or 0.0), sum_of_squares_noise(r_now, lambda part: noise(x, part))
+                        if np.isfinite(r_now).all() else 0.0)
+        del r_now  # not held through the run (peak memory)
         xtol = xatol if xatol is not None else (np.inf if backend == "scipy" else 1e-13)
         # after a restart without progress, one more from a simplex reflected and ten times larger (a collapsed
         # simplex can stall Nelder-Mead away from a minimum: McKinnon 1998; Kelley 1999 restarts it afresh)
@@ -94,7 +99,8 @@ def _minimise(objective, residuals, jacobian, noise, x0, lam, *, backend, xatol,
         progressed = f_run < f_best
         if progressed or round_ == 1:
             x, f_best = np.asarray(run.x, dtype=np.float64), min(f_run, f_best)
-        probe = stationarity_probe(residuals, jacobian, x, noise=lambda r, q: sum_of_squares_noise(r, noise(q)))
+        probe = stationarity_probe(residuals, None, x, noise=lambda r, q: sum_of_squares_noise(r, lambda part: noise(q, part)),
+                                   triangular=triangular)
         if probe.stationary:
             message = f"Nelder-Mead stopped ({run.message}); stationary point (Levenberg-Marquardt probe" \
                       f"{'' if round_ == 1 else f', after {round_ - 1} restart(s)'})"
@@ -136,16 +142,23 @@ def _finish(points, frame, x, converged, message, iterations, nfev, history, pro
 
 def _algebraic_model(x, y):
     """Residuals e_i of eq. 15, their Jacobian in (p_x, p_y, gamma, x_C, y_C), and the size of their terms."""
-    def residuals(q):
+    def residuals(q, part=slice(None)):
         px, py, g, xc, yc = q
-        u, v = to_local(x, y, (xc, yc, px, py, g))
-        return py * py * u * u + px * px * v * v - px * px * py * py
+        u, v = to_local(x[part], y[part], (xc, yc, px, py, g))
+        # py py u u + px px v v - px px py py in place, the same operations in the same order: three arrays of N
+        e = u * (py * py)
+        e *= u
+        np.multiply(v, px * px, out=u)
+        u *= v
+        e += u
+        e -= px * px * py * py
+        return e
 
-    def jacobian(q):
+    def jacobian(q, part=slice(None)):
         px, py, g, xc, yc = q
         c, s = np.cos(g), np.sin(g)
-        u, v = to_local(x, y, (xc, yc, px, py, g))
-        J = np.empty((len(x), 5))
+        u, v = to_local(x[part], y[part], (xc, yc, px, py, g))
+        J = np.empty((len(u), 5))
         J[:, 0] = 2 * px * (v * v - py * py)
         J[:, 1] = 2 * py * (u * u - px * px)
         J[:, 2] = 2 * u * v * (py * py - px * px)
@@ -153,10 +166,10 @@ def _algebraic_model(x, y):
         J[:, 4] = -2 * py * py * u * s - 2 * px * px * v * c
         return J
 
-    def term_size(q):
+    def term_size(q, part=slice(None)):
         px, py, g, xc, yc = q
-        u, v = to_local(x, y, (xc, yc, px, py, g))
-        reach = np.abs(x) + np.abs(y) + abs(xc) + abs(yc)
+        u, v = to_local(x[part], y[part], (xc, yc, px, py, g))
+        reach = np.abs(x[part]) + np.abs(y[part]) + abs(xc) + abs(yc)
         return py * py * u * u + px * px * v * v + px * px * py * py + 2 * (py * py * np.abs(u) + px * px * np.abs(v)) * reach
 
     return residuals, jacobian, term_size
@@ -164,21 +177,21 @@ def _algebraic_model(x, y):
 
 def _geometric_model(x, y):
     """Orthogonal distances d_i, their Jacobian in (p_x, p_y, gamma, x_C, y_C), and the size of their terms."""
-    def residuals(q):
+    def residuals(q, part=slice(None)):
         px, py, g, xc, yc = q
         if not (px > 0 and py > 0):
-            return np.full(len(x), np.inf)
-        return orthogonal_residuals(x, y, (xc, yc, px, py, g), with_phi=False)[0]
+            return np.full(len(x[part]), np.inf)
+        return orthogonal_residuals(x[part], y[part], (xc, yc, px, py, g), with_phi=False)[0]
 
-    def jacobian(q):
+    def jacobian(q, part=slice(None)):
         px, py, g, xc, yc = q
         p = (xc, yc, px, py, g)
-        _, phi = orthogonal_residuals(x, y, p)
-        return distance_jacobian(x, y, p, phi)[:, [2, 3, 4, 0, 1]]
+        _, phi = orthogonal_residuals(x[part], y[part], p)
+        return distance_jacobian(x[part], y[part], p, phi)[:, [2, 3, 4, 0, 1]]
 
-    def term_size(q):
+    def term_size(q, part=slice(None)):
         px, py, g, xc, yc = q
-        return np.abs(x) + np.abs(y) + abs(xc) + abs(yc) + max(abs(px), abs(py))
+        return np.abs(x[part]) + np.abs(y[part]) + abs(xc) + abs(yc) + max(abs(px), abs(py))
 
     return residuals, jacobian, term_size
 
@@ -191,8 +204,8 @@ def _fit(points, model, name, scale_power, backend, start, step, xatol, fatol, m
         r = residuals(q)
         return dot(r, r) if np.isfinite(r).all() else np.inf   # not BLAS: the same bits on every CPU
 
-    out = _minimise(objective, residuals, jacobian, term_size, x0, lam, backend=backend, xatol=xatol, fatol=fatol,
-                    max_fev=max_fev)
+    out = _minimise(objective, residuals, jacobian, term_size, x0, lam, n=len(frame.x), backend=backend, xatol=xatol,
+                    fatol=fatol, max_fev=max_fev)
     return _finish(points, frame, *out, scale_power)
 
 

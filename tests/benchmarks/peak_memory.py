@@ -1,0 +1,67 @@
+"""Peak memory of every circle and ellipse fit as a multiple of its input array (issue 20: "<= 4x the input"),
+measured, printed, not asserted here (tests/test_circle_memory.py and tests/test_ellipse_memory.py assert it for
+the fits that meet it).
+
+Run (from the repository root, ~30 s):
+    python tests/benchmarks/peak_memory.py [N]        (default N = 100000)
+
+Each fit runs in a fresh interpreter (tracemalloc also counts what other threads allocate), once to import and
+warm up, then once under tracemalloc: the peak of all Python and NumPy allocations during that call, divided by
+the input's bytes (16 N). The circle fits fit the 299 mm circle of the benchmarks with 5 um noise, the ellipse
+fits the paper's near-circular ellipse (tables 3-5); the Nelder-Mead fits start from the paper's s1S.
+"""
+import os
+import subprocess
+import sys
+
+SCRIPT = """
+import sys, time, tracemalloc
+import numpy as np
+import methods
+from datasets.synthetic import circle_points, ellipse_points
+n, method_id = int(sys.argv[1]), sys.argv[2]
+if method_id.startswith("circle."):
+    pts, kw = circle_points((1200.0, 650.0), 299.0, n, noise=0.005, rng=np.random.default_rng(3358)), {}
+else:
+    pts = ellipse_points(n=n, noise=0.005, rng=np.random.default_rng(3358), center=(1200.0, 650.0),
+                         semi_axes=(299.0243, 299.0022), angle=np.radians(32.04))
+    kw = {"start": (299.0, 299.0, 0.0, 1200.0, 650.0), "step": (1e-3, 1e-3, 1e-2, 1e-3, 1e-3)} \\
+        if method_id.endswith("_nm") else {}
+methods.fit(method_id, pts, **kw)
+tracemalloc.start()
+t = time.perf_counter()
+res = methods.fit(method_id, pts, **kw)
+seconds = time.perf_counter() - t
+peak = tracemalloc.get_traced_memory()[1]
+tracemalloc.stop()
+print(peak / pts.nbytes, res.converged, seconds)
+"""
+
+FITS = ["circle.kasa", "circle.pratt", "circle.taubin", "circle.hyper", "circle.gauss_newton",
+        "circle.levenberg_marquardt", "circle.nelder_mead", "circle.powell_hybrid", "circle.minimum_zone",
+        "circle.max_inscribed", "circle.min_circumscribed", "circle.chebyshev_lp", "ellipse.halir_flusser",
+        "ellipse.fitzgibbon", "ellipse.orthogonal", "ellipse.algebraic_nm", "ellipse.geometric_nm"]
+
+
+def main(n: int) -> int:
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    env = {**os.environ, "PYTHONPATH": root, "OPENBLAS_NUM_THREADS": "1"}
+    print(f"peak memory of one fit / input array (16 N bytes), N = {n}")
+    print(f"{'fit':28s} {'peak / input':>12s}  {'<= 4x':>5s}  {'converged':>9s}  {'time under tracemalloc':>22s}")
+    worst = 0.0
+    for method_id in FITS:
+        out = subprocess.run([sys.executable, "-c", SCRIPT, str(n), method_id], cwd=root, env=env,
+                             capture_output=True, text=True, timeout=900)
+        if out.returncode != 0:
+            print(f"{method_id:28s} failed: {out.stderr.strip().splitlines()[-1]}")
+            continue
+        ratio, converged, seconds = out.stdout.split()
+        worst = max(worst, float(ratio))
+        print(f"{method_id:28s} {float(ratio):11.2f}x  {'yes' if float(ratio) <= 4 else 'NO':>5s}  {converged:>9s}  "
+              f"{float(seconds) * 1e3:19.1f} ms")
+    print(f"largest: {worst:.2f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(int(sys.argv[1]) if len(sys.argv) > 1 else 100_000))

@@ -38,6 +38,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from methods.circle._zone import radii
+
 #: relative and absolute (unit-frame) resolution of the global certificate
 EPS_REL = 1e-10
 EPS_ABS = 1e-13
@@ -139,19 +141,21 @@ class ProfilePolygon:
         self._path = None
 
     def _build(self):
+        """The closed vertex list (N + 1 rows, the first repeated last), once: the path, and the edges' starts
+        ``_a`` and ends ``_b`` as views of it (no rolled copy)."""
         if self._path is None:
             from matplotlib.path import Path
             order = np.argsort(np.arctan2(self.y, self.x))
-            V = np.column_stack([self.x[order], self.y[order]])
-            self._path = Path(V, closed=False)
-            self._a = V
-            self._b = np.roll(V, -1, axis=0)
+            V = np.empty((len(order) + 1, 2))
+            np.take(self.x, order, out=V[:-1, 0])
+            np.take(self.y, order, out=V[:-1, 1])
+            V[-1] = V[0]
+            self._path = Path(V)
+            self._a, self._b = V[:-1], V[1:]
         return self._path
 
     def contains(self, C: np.ndarray) -> np.ndarray:
-        from matplotlib.path import Path
-        self._build()
-        return Path(np.vstack([self._a, self._a[:1]])).contains_points(C)
+        return self._build().contains_points(C)
 
     def boundary_distance(self, C: np.ndarray) -> np.ndarray:
         """Distance from each centre to the polygon's boundary (all edges; vectorised)."""
@@ -288,8 +292,7 @@ def alternating_contacts(x, y, c, O, I, hulls_meet, limit: int = 12, normalise: 
 
 
 def _value(x, y, c, zone):
-    dx, dy = x - c[0], y - c[1]
-    r = np.sqrt(dx * dx + dy * dy)
+    r = radii(x, y, c)
     return (r.max() - r.min() if zone else r.min()), r
 
 
@@ -437,6 +440,7 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
             outcome = Outcome(True)
         exact_note = " by exact enumeration of the Voronoi-overlay vertices (branch and bound inconclusive)"
         info["exact_enumeration"] = True
+    r = None  # the loop's radii are not held while the final ones are computed (peak memory)
     f, r = _value(x, y, c, zone)
     O, I = _tied(r)
     alt = alternating_contacts(x, y, c, O if zone else np.empty(0, dtype=np.intp), I, hulls_meet)

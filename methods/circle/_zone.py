@@ -27,9 +27,13 @@ ZERO_WIDTH = 1e-11
 
 
 def radii(x: np.ndarray, y: np.ndarray, c) -> np.ndarray:
+    """sqrt((x - cx)^2 + (y - cy)^2), in place: two arrays of N at most (the same operations)."""
     dx = x - c[0]
     dy = y - c[1]
-    return np.sqrt(dx * dx + dy * dy)
+    dx *= dx
+    dy *= dy
+    dx += dy
+    return np.sqrt(dx, out=dx)
 
 
 def kasa_normal(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -49,7 +53,8 @@ def extremes(r: np.ndarray, k: int, largest: bool) -> np.ndarray:
     k = min(k, r.size)
     if k >= r.size:
         return np.arange(r.size)
-    return np.argpartition(r, r.size - k)[r.size - k:] if largest else np.argpartition(r, k - 1)[:k]
+    # copies of the k indices: a slice would keep argpartition's N indices alive (peak memory)
+    return np.argpartition(r, r.size - k)[r.size - k:].copy() if largest else np.argpartition(r, k - 1)[:k].copy()
 
 
 def add_violators(active: np.ndarray, excess: np.ndarray, k: int) -> np.ndarray:
@@ -165,11 +170,21 @@ def trust_rows(ck, delta, nvar):
 CANDIDATE_RADIUS = 1e-3
 
 
+class _Rows:
+    """P[i] = the points i as rows (x_i, y_i), gathered on demand: no N x 2 copy of the data for a few contacts."""
+
+    def __init__(self, x, y):
+        self.x, self.y = x, y
+
+    def __getitem__(self, i):
+        return np.column_stack([self.x[i], self.y[i]])
+
+
 def zone_candidates(x, y, outer_c, inner_c, near):
     """Closed-form centres of the minimum-zone contact configurations: 2 outer + 2 inner (the two
     bisectors meet), 3 + 1 and 1 + 3 (circumcentres). Rows of ``configs``: 4 point indices and the
     number of outer contacts."""
-    P = np.column_stack([x, y])
+    P = _Rows(x, y)
     cands, configs = [], []
     po, pi = pairs(outer_c), pairs(inner_c)
     if len(po) and len(pi):
@@ -200,7 +215,7 @@ def circle_candidates(x, y, idx, near, side: str):
     """Closed-form centres of circles touching 2 points as a diameter (midpoints) or 3 points
     (circumcentres), for MCC (side='outer') or MIC (side='inner'). Rows: 3 indices (-1 = none) and
     the number of outer contacts (all or none)."""
-    P = np.column_stack([x, y])
+    P = _Rows(x, y)
     pr, tr = pairs(idx), triples(idx)
     C = [0.5 * (P[pr[:, 0]] + P[pr[:, 1]])] if len(pr) else []
     rows = [np.column_stack([pr, np.full(len(pr), -1)])] if len(pr) else []
@@ -275,6 +290,7 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
         stats["history"] += hist
         act = np.union1d(out, inn)
         c, (oc, ic) = relabel_extremes(x, y, act, *exact(act, ck))
+        r_all = None  # the previous pass's radii are not held while these are computed (peak memory)
         r_all = radii(x, y, c)
         before = out.size + inn.size
         violated = False
@@ -282,10 +298,12 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
             over = r_all - r_all[list(oc)].max() * (1 + CHECK_RTOL) - 1e-15
             if (over > 0).any():
                 out, violated = add_violators(out, over, k), True
+            over = None  # not held into the next pass (peak memory)
         if "inner" in sides:
             under = r_all[list(ic)].min() * (1 - CHECK_RTOL) - 1e-15 - r_all
             if (under > 0).any():
                 inn, violated = add_violators(inn, under, k), True
+            under = None
         if violated and out.size + inn.size == before:
             stats["active"] = np.union1d(out, inn)
             stats["active_points"] = int(stats["active"].size)
@@ -293,6 +311,7 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
                                         "new point can be added: no optimum is claimed"), stats
         if violated:
             continue
+        r_all = None
         ok, message = certify(c, oc, ic)
         stats["active"] = np.union1d(out, inn)
         stats["active_points"] = int(stats["active"].size)

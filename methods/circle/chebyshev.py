@@ -66,8 +66,7 @@ def chebyshev_lp(points, *, solver="highs", active_size=16, max_rounds=50):
         r = z.radii(x, y, c)
         if r.max() - r.min() <= z.ZERO_WIDTH:
             return True, "points lie on one circle (zero algebraic residual)"
-        P = np.column_stack([x, y]) - c
-        ok = z.hulls_meet(P[list(oc)], P[list(ic)])
+        ok = z.hulls_meet(np.column_stack([x[list(oc)], y[list(oc)]]) - c, np.column_stack([x[list(ic)], y[list(ic)]]) - c)
         if not ok:  # ties (symmetric lobes): look for an alternating choice among the tied contacts
             r2 = r * r
             tol = 4e-14 * r2.max()

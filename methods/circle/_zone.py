@@ -208,7 +208,7 @@ def zone_candidates(x, y, outer_c, inner_c, near):
     if len(tri):  # 3 + 0: the circle through three points (an exact circle, or N = 3)
         cands.append(bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]]))
         configs.append(np.column_stack([tri, np.full(len(tri), -1), np.full(len(tri), 3)]))
-    return _near(np.vstack(cands), np.vstack(configs), near)
+    return _near(cands, configs, near)
 
 
 def circle_candidates(x, y, idx, near, side: str):
@@ -224,21 +224,40 @@ def circle_candidates(x, y, idx, near, side: str):
         rows.append(tr)
     rows = np.vstack(rows)
     n_outer = np.where(rows[:, 2] >= 0, 3, 2) if side == "outer" else np.zeros(len(rows), dtype=np.intp)
-    return _near(np.vstack(C), np.column_stack([rows, n_outer]), near)
+    return _near([np.vstack(C)], [np.column_stack([rows, n_outer])], near)
 
 
-def _near(C, configs, near):
-    keep = np.isfinite(C).all(axis=1) & (np.hypot(C[:, 0] - near[0], C[:, 1] - near[1]) <= CANDIDATE_RADIUS)
-    if not keep.any():  # nothing close: keep all finite candidates (the final check decides)
-        keep = np.isfinite(C).all(axis=1)
-    return C[keep], configs[keep]
+def _near(cands, configs, near):
+    """The candidates (and their configuration rows) within CANDIDATE_RADIUS of ``near``; if none is, every finite
+    one (the final check decides). ``cands``, ``configs``: lists of blocks, filtered block by block before they are
+    stacked (the candidates in their order, without a stacked copy of them all)."""
+    finite = [np.isfinite(C).all(axis=1) for C in cands]
+    close = [f & (np.hypot(C[:, 0] - near[0], C[:, 1] - near[1]) <= CANDIDATE_RADIUS) for C, f in zip(cands, finite)]
+    keep = close if any(k.any() for k in close) else finite
+    return np.vstack([C[k] for C, k in zip(cands, keep)]), np.vstack([g[k] for g, k in zip(configs, keep)])
 
 
-def candidate_radii(x, y, act, C):
-    """Distances (K, M) from K candidate centres to the M active points."""
-    dx = x[act][None, :] - C[:, 0:1]
-    dy = y[act][None, :] - C[:, 1:2]
-    return np.sqrt(dx * dx + dy * dy)
+def candidate_extremes(x, y, act, C, *, squared: bool = False):
+    """(largest, smallest) distance from each of K candidate centres to the M active points (``squared``: of the
+    squared distances, each a distance squared). The (K, M) distances are formed a block of candidates at a time,
+    at most max(4096, N / 2) numbers per block (two such temporaries: peak memory stays below the data's), never
+    K x M at once; the values are those of the whole matrix."""
+    ax, ay = x[act], y[act]
+    k, m = len(C), len(ax)
+    step = max(1, max(4096, len(x) // 2) // max(m, 1))
+    hi, lo = np.empty(k), np.empty(k)
+    for s in range(0, k, step):
+        dx = ax[None, :] - C[s:s + step, 0:1]
+        dy = ay[None, :] - C[s:s + step, 1:2]
+        dx *= dx
+        dy *= dy
+        dx += dy
+        np.sqrt(dx, out=dx)
+        if squared:
+            dx *= dx
+        dx.max(axis=1, out=hi[s:s + step])
+        dx.min(axis=1, out=lo[s:s + step])
+    return hi, lo
 
 
 def pick(C, configs, score, minimise: bool):

@@ -59,8 +59,8 @@ def chebyshev_lp(points, *, solver="highs", active_size=16, max_rounds=50):
         order = np.argsort(r)
         m = min(act.size, 8)
         C, configs = z.zone_candidates(x, y, act[order[::-1][:m]], act[order[:m]], c)
-        rr = z.candidate_radii(x, y, act, C) ** 2
-        return z.pick(C, configs, rr.max(axis=1) - rr.min(axis=1), minimise=True)
+        hi, lo = z.candidate_extremes(x, y, act, C, squared=True)
+        return z.pick(C, configs, hi - lo, minimise=True)
 
     def certify(c, oc, ic):
         r = z.radii(x, y, c)

@@ -30,9 +30,8 @@ def _best_single_sided(x, y, act, c, side):
         m = min(act.size, m)
         idx = act[ranked[:m]]
         C, configs = z.circle_candidates(x, y, idx, c, side)
-        rr = z.candidate_radii(x, y, act, C)
-        best = (z.pick(C, configs, rr.max(axis=1), minimise=True) if side == "outer"
-                else z.pick(C, configs, rr.min(axis=1), minimise=False))
+        hi, lo = z.candidate_extremes(x, y, act, C)
+        best = (z.pick(C, configs, hi, minimise=True) if side == "outer" else z.pick(C, configs, lo, minimise=False))
         if m >= act.size or _surrounds(x, y, act, best[0], side):
             return best
     return best

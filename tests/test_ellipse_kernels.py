@@ -323,10 +323,12 @@ def _build_without_clones(tmp_path):
 
 
 def test_sse2_only_build_gives_the_same_bits(tmp_path):
-    """The QR of distances_qr runs in 4-lane vectors: AVX instructions where the CPU has AVX (a load-time clone),
-    SSE2 pairs elsewhere. Lane-wise IEEE operations in the same order give the same bits: the SSE2-only build
-    (-DFITBENCH_NO_CLONES) against the installed one on awkward sizes and a 10^5-point near circle (on a CPU with
-    AVX this compares the two instruction sets; on one without, both builds run SSE2)."""
+    """The closest-point solver and the QR of distances_qr run in 4-lane vectors: AVX instructions where the CPU
+    has AVX (load-time clones), SSE2 pairs elsewhere. Lane-wise IEEE operations in the same order give the same
+    bits: the SSE2-only build (-DFITBENCH_NO_CLONES) against the installed one, orthogonal() (distances and phi,
+    points on the axes and at the centre included, 1 to 60 Newton steps) and distances_qr, on awkward sizes and a
+    10^5-point near circle (on a CPU with AVX this compares the two instruction sets; on one without, both builds
+    run SSE2)."""
     ck = kernels("methods.ellipse._ckernels")
     assert ck is not None, "the ellipse kernel must be built for this test"
     sse2 = _build_without_clones(tmp_path)
@@ -343,3 +345,13 @@ def test_sse2_only_build_gives_the_same_bits(tmp_path):
             outs.append((d, R, S))
         assert np.array_equal(outs[0][0], outs[1][0]) and np.array_equal(outs[0][1], outs[1][1]), n
         assert outs[0][2] == outs[1][2]
+    for iterations in (1, 3, 60):
+        pts = np.vstack([rng.standard_normal((250, 2)) * 3, [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1e-9, 1e-9]]])
+        x, y = np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1])
+        for a, b in ((3.0, 1.0), (1.0, 3.0), (2.0, 2.0 * (1 - 1e-9)), (10.0, 0.1)):
+            res = []
+            for module in (ck, sse2):
+                d, phi = np.empty(len(x)), np.empty(len(x))
+                module.orthogonal(x, y, 0.3, -0.1, float(np.cos(0.4)), float(np.sin(0.4)), a, b, iterations, d, phi)
+                res.append((d, phi))
+            assert np.array_equal(res[0][0], res[1][0]) and np.array_equal(res[0][1], res[1][1]), (a, b, iterations)

@@ -16,9 +16,10 @@
  * finished by bisection in the bracket; points on the major axis are solved in closed form. The reference
  * stops Newton when the largest step of a block of points is small; here each point stops on its own step,
  * so the two paths agree to the solver's rounding, not bit for bit. Points are solved LANES = 16 at a time
- * (closest_block: every step of two points per packed operation, the same IEEE operations per point as the
+ * (closest_block: every step of four points per vector operation, the same IEEE operations per point as the
  * one-point closest(), hence the same bits; the solve is latency-bound, so sixteen independent points in flight
- * overlap their divisions and square roots: 3.1 -> 2.3 ms at 10^5 points on this machine, 4 -> 16 lanes).
+ * overlap their divisions and square roots: 3.1 -> 2.3 ms at 10^5 points on this machine, 4 -> 16 lanes; the
+ * 4-lane vectors as AVX instructions where the CPU has AVX (a load-time clone): 2.5 -> 1.7 ms).
  *
  * distances_qr() (ellipse.orthogonal's per-iteration sweep) adds the Jacobian of the distances at the same closest
  * points, folded into the R of a QR as it goes; scatter() is the direct fits' moment sweep.
@@ -116,9 +117,13 @@ static void closest(double u, double v, double a, double b, int iterations, doub
 /* closest() for LANES points at once: the same operations in the same order for every point (hence the same
    bits), interleaved so that the divisions of different points overlap in the CPU instead of waiting for each
    other. A point on the major axis, or one whose Newton iteration has not converged within `iterations` steps,
-   is finished by closest() itself (which repeats the identical Newton steps, then bisects). */
+   is finished by closest() itself (which repeats the identical Newton steps, then bisects). The steps run on
+   4-lane vectors (vector extensions: lane-wise IEEE operations): 256-bit AVX instructions in the "avx" clone
+   where the CPU has AVX, pairs of SSE2 instructions elsewhere, the same bits either way. */
 #define LANES 16
+#define W 4
 typedef double v2d __attribute__((vector_size(16)));
+typedef double v4d __attribute__((vector_size(32)));
 #if defined(__SSE2__)
 #include <emmintrin.h>
 static inline v2d vsqrt2(v2d a) { return (v2d)_mm_sqrt_pd((__m128d)a); }
@@ -133,24 +138,55 @@ static inline v2d vnorm2(v2d x, v2d y) {
         if (!(d[j] >= 1e-150) || d[j] > 1e150) d[j] = hypot(x[j], y[j]);
     return d;
 }
+/* 4-lane loads, stores and the correctly rounded square root (two packed halves), through pointers: no vector is
+   passed by value (no ABI change between the clones) */
+#define LDV(v, p) memcpy(&(v), (p), sizeof(v4d))
+#define STV(p, v) memcpy((p), &(v), sizeof(v4d))
+static inline void vsqrt4(v4d *a) {
+    v2d lo = {(*a)[0], (*a)[1]}, hi = {(*a)[2], (*a)[3]};
+    lo = vsqrt2(lo);
+    hi = vsqrt2(hi);
+    (*a)[0] = lo[0]; (*a)[1] = lo[1]; (*a)[2] = hi[0]; (*a)[3] = hi[1];
+}
+static inline void vnorm4(const v4d *x, const v4d *y, v4d *d) {
+    int j;
+    *d = *x * *x + *y * *y;
+    vsqrt4(d);
+    for (j = 0; j < W; j++)
+        if (!((*d)[j] >= 1e-150) || (*d)[j] > 1e150) (*d)[j] = hypot((*x)[j], (*y)[j]);
+}
 
-static void closest_block(const double *U, const double *V, double a, double b, int iterations,
-                          double *Xo, double *Yo, double *Do) {
-    /* every per-point quantity in packed pairs (lanes j, j + 1): each lane sees the IEEE operations of closest()
-       in the same order, so the bits are closest()'s; only the divisions of two points share an instruction */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(FITBENCH_NO_CLONES)
+#define CLONES __attribute__((target_clones("avx", "default")))
+#else
+#define CLONES
+#endif
+
+CLONES static void closest_block(const double *U, const double *V, double a, double b, int iterations,
+                                 double *Xo, double *Yo, double *Do) {
+    /* every per-point quantity in 4-lane vectors (lanes j .. j + 3): each lane sees the IEEE operations of
+       closest() in the same order, so the bits are closest()'s; only the divisions of four points share an
+       instruction */
     double au[LANES], z1[LANES], n0[LANES], g[LANES], lo[LANES], w[LANES];
     int active[LANES], scalar[LANES], state[LANES], j, k, nact = 0;
     double ab = a / b;
     double r0 = ab * ab, rm1 = r0 - 1.0;
-    for (j = 0; j < LANES; j += 2) {
-        v2d auv = {fabs(U[j]), fabs(U[j + 1])}, avv = {fabs(V[j]), fabs(V[j + 1])};
-        v2d z0v = auv / a, z1v = avv / b;
-        v2d n0v = r0 * z0v;
-        v2d gv = z0v * z0v + z1v * z1v - 1.0;
-        v2d hv = vnorm2(n0v, z1v);
-        v2d wv = (rm1 < 0.1) ? hv - n0v * n0v * rm1 / (hv * hv) : hv;
+    for (j = 0; j < LANES; j += W) {
+        v4d uv, vv, auv, avv, z0v, z1v, n0v, gv, hv, wv;
         int i;
-        for (i = 0; i < 2; i++) {
+        LDV(uv, U + j);
+        LDV(vv, V + j);
+        for (i = 0; i < W; i++) {
+            auv[i] = fabs(uv[i]);
+            avv[i] = fabs(vv[i]);
+        }
+        z0v = auv / a;
+        z1v = avv / b;
+        n0v = r0 * z0v;
+        gv = z0v * z0v + z1v * z1v - 1.0;
+        vnorm4(&n0v, &z1v, &hv);
+        wv = (rm1 < 0.1) ? hv - n0v * n0v * rm1 / (hv * hv) : hv;
+        for (i = 0; i < W; i++) {
             au[j + i] = auv[i];
             z1[j + i] = z1v[i];
             n0[j + i] = n0v[i];
@@ -176,24 +212,28 @@ static void closest_block(const double *U, const double *V, double a, double b, 
         for (j = 0; j < LANES; j++)
             if (state[j] == 2 || (state[j] == 1 && k < iterations)) any = 1;
         if (!any) break;
-        for (j = 0; j < LANES; j += 2) {
-            v2d wv = {w[j], w[j + 1]}, n0v = {n0[j], n0[j + 1]}, z1v = {z1[j], z1[j + 1]}, lov = {lo[j], lo[j + 1]};
-            v2d t0 = wv + rm1;
-            v2d q0 = n0v / t0, q1 = z1v / wv;
-            v2d q0s = q0 * q0, q1s = q1 * q1;
-            v2d st = (q0s + q1s - 1.0) / (2.0 * (q0s / t0 + q1s / wv));
-            v2d wn = wv + st, dw;
+        for (j = 0; j < LANES; j += W) {
+            v4d wv, n0v, z1v, lov, t0, q0, q1, q0s, q1s, st, wn, dw;
             int i;
-            for (i = 0; i < 2; i++)
+            LDV(wv, w + j);
+            LDV(n0v, n0 + j);
+            LDV(z1v, z1 + j);
+            LDV(lov, lo + j);
+            t0 = wv + rm1;
+            q0 = n0v / t0;
+            q1 = z1v / wv;
+            q0s = q0 * q0;
+            q1s = q1 * q1;
+            st = (q0s + q1s - 1.0) / (2.0 * (q0s / t0 + q1s / wv));
+            wn = wv + st;
+            for (i = 0; i < W; i++)
                 if (!(wn[i] >= lov[i])) wn[i] = lov[i];
             dw = wn - wv;
-            for (i = 0; i < 2; i++) dw[i] = fabs(dw[i]);
+            for (i = 0; i < W; i++) dw[i] = fabs(dw[i]);
             dw = dw / wv;  /* rel = |wn - w| / w of the iterating lanes */
-            for (i = 0; i < 2; i++) {
-                step[j + i] = st[i];
-                relv[j + i] = dw[i];
-                wnv[j + i] = wn[i];
-            }
+            STV(step + j, st);
+            STV(relv + j, dw);
+            STV(wnv + j, wn);
         }
         for (j = 0; j < LANES; j++) {
             double wn;
@@ -209,19 +249,24 @@ static void closest_block(const double *U, const double *V, double a, double b, 
             }
         }
     }
-    for (j = 0; j < LANES; j += 2) {
-        v2d auv = {au[j], au[j + 1]}, z1v = {z1[j], z1[j + 1]}, wv = {w[j], w[j + 1]};
-        v2d xv = r0 * auv / (wv + rm1), yv = z1v * b / wv, dv;
+    for (j = 0; j < LANES; j += W) {
+        v4d auv, z1v, wv, xv, yv, uv, vv, ex, ey, dv;
         int i;
-        for (i = 0; i < 2; i++) {
-            xv[i] = copysign(xv[i], U[j + i]);
-            yv[i] = copysign(yv[i], V[j + i]);
+        LDV(auv, au + j);
+        LDV(z1v, z1 + j);
+        LDV(wv, w + j);
+        LDV(uv, U + j);
+        LDV(vv, V + j);
+        xv = r0 * auv / (wv + rm1);
+        yv = z1v * b / wv;
+        for (i = 0; i < W; i++) {
+            xv[i] = copysign(xv[i], uv[i]);
+            yv[i] = copysign(yv[i], vv[i]);
         }
-        {
-            v2d uv = {U[j], U[j + 1]}, vv = {V[j], V[j + 1]};
-            dv = vnorm2(uv - xv, vv - yv);
-        }
-        for (i = 0; i < 2; i++) {
+        ex = uv - xv;
+        ey = vv - yv;
+        vnorm4(&ex, &ey, &dv);
+        for (i = 0; i < W; i++) {
             if (scalar[j + i] || active[j + i]) {
                 closest(U[j + i], V[j + i], a, b, iterations, &Xo[j + i], &Yo[j + i], &Do[j + i]);
                 continue;
@@ -359,16 +404,22 @@ static void jacobian_row(double X, double Y, double a, double b, double ia, doub
     J[4 * st] = -(nyl * (a * cp) - nxl * (b * sp));
 }
 
-/* jacobian_row() of LANES points in packed pairs (each lane sees jacobian_row's IEEE operations in its order: the
-   same bits), written to column-major rows r0, r0 + 1, ... of B (stride st). */
-static void jacobian_rows(const double *X, const double *Y, double a, double b, double ia, double ib, double c,
-                          double s, double *J, Py_ssize_t st) {
+/* jacobian_row() of LANES points in 4-lane vectors (each lane sees jacobian_row's IEEE operations in its order:
+   the same bits; AVX where the CPU has it, as closest_block), written to column-major rows of B (stride st). */
+CLONES static void jacobian_rows(const double *X, const double *Y, double a, double b, double ia, double ib,
+                                 double c, double s, double *J, Py_ssize_t st) {
     int j, i;
-    for (j = 0; j < LANES; j += 2) {
-        v2d Xv = {X[j], X[j + 1]}, Yv = {Y[j], Y[j + 1]};
-        v2d ex = Xv * ia, ey = Yv * ib, nx = ex * ia, ny = ey * ib, r = vnorm2(ex, ey), m = vnorm2(nx, ny), inv, cp, sp,
-            nxl, nyl, o0, o1, o2, o3, o4;
-        for (i = 0; i < 2; i++) {
+    for (j = 0; j < LANES; j += W) {
+        v4d Xv, Yv, ex, ey, nx, ny, r, m, inv, cp, sp, nxl, nyl, o;
+        LDV(Xv, X + j);
+        LDV(Yv, Y + j);
+        ex = Xv * ia;
+        ey = Yv * ib;
+        nx = ex * ia;
+        ny = ey * ib;
+        vnorm4(&ex, &ey, &r);
+        vnorm4(&nx, &ny, &m);
+        for (i = 0; i < W; i++) {
             if (!(r[i] > 0.0)) r[i] = 1.0;
             if (!(m[i] > 0.0)) m[i] = 1.0;
         }
@@ -377,16 +428,16 @@ static void jacobian_rows(const double *X, const double *Y, double a, double b, 
         sp = ey * (m * inv);
         nxl = nx * (r * inv);
         nyl = ny * (r * inv);
-        o0 = -(c * nxl - s * nyl);
-        o1 = -(s * nxl + c * nyl);
-        o2 = -(nxl * cp);
-        o3 = -(nyl * sp);
-        o4 = -(nyl * (a * cp) - nxl * (b * sp));
-        memcpy(J + j, &o0, 16);
-        memcpy(J + st + j, &o1, 16);
-        memcpy(J + 2 * st + j, &o2, 16);
-        memcpy(J + 3 * st + j, &o3, 16);
-        memcpy(J + 4 * st + j, &o4, 16);
+        o = -(c * nxl - s * nyl);
+        STV(J + j, o);
+        o = -(s * nxl + c * nyl);
+        STV(J + st + j, o);
+        o = -(nxl * cp);
+        STV(J + 2 * st + j, o);
+        o = -(nyl * sp);
+        STV(J + 3 * st + j, o);
+        o = -(nyl * (a * cp) - nxl * (b * sp));
+        STV(J + 4 * st + j, o);
     }
 }
 
@@ -436,10 +487,9 @@ static void tri_update(double T[QC][QC], double (*B)[QC], int m) {
 /* A leaf: the R of the Householder QR of a QBLOCK x QC block B, stored column-major (B[j] is column j; rows past the
    block's points are zero, which adds exact zeros), into T (zeroed by the caller). The operations of tri_update for
    T = 0, every sum over the rows taken by col_dot in a fixed order: the same bits on every CPU. */
-typedef double v4d __attribute__((vector_size(32)));
 /* 4-lane loads and stores through memcpy (no alignment assumed; no vector passed by value, so no ABI change) */
-#define LD4(v, p) memcpy(&(v), (p), sizeof(v4d))
-#define ST4(p, v) memcpy((p), &(v), sizeof(v4d))
+#define LD4(v, p) LDV(v, p)
+#define ST4(p, v) STV(p, v)
 
 /* sum_i u_i v_i over a block's rows: eight partial sums (rows i mod 8, two 4-lane accumulators), added as
    ((s0 + s4) + (s1 + s5)) + ((s2 + s6) + (s3 + s7)). */
@@ -454,12 +504,6 @@ static inline double col_dot(const double *u, const double *v) {
     t = s0 + s1;
     return (t[0] + t[1]) + (t[2] + t[3]);
 }
-
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(FITBENCH_NO_CLONES)
-#define CLONES __attribute__((target_clones("avx", "default")))
-#else
-#define CLONES
-#endif
 
 /* (The 4-lane vectors are lane-wise IEEE operations: 256-bit AVX instructions where the CPU has them (the "avx"
    clone, picked at load time), pairs of SSE2 instructions elsewhere, the same bits either way; compiled with

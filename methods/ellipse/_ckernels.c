@@ -156,7 +156,10 @@ static inline void vnorm4(const v4d *x, const v4d *y, v4d *d) {
         if (!((*d)[j] >= 1e-150) || (*d)[j] > 1e150) (*d)[j] = hypot((*x)[j], (*y)[j]);
 }
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(FITBENCH_NO_CLONES)
+/* target_clones needs GCC and the loader's ifunc (glibc); elsewhere (clang, macOS, Windows, musl) only the default
+   clone is built: the same bits, without AVX */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__) && \
+    !defined(FITBENCH_NO_CLONES)
 #define CLONES __attribute__((target_clones("avx", "default")))
 #else
 #define CLONES

@@ -422,8 +422,9 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
             c, contacts, ok, message = outcome.better, ((), ()), False, "centre from the branch and bound"
         valid = True
     exact_note = ""
-    if outcome is not None and not outcome.certified and len(x) <= EXACT_MAX_POINTS:
-        cb, fb = exact_enumeration(x, y, kind, polygon)
+    overlay = zone and EXACT_MAX_POINTS < len(x) <= OVERLAY_MAX_POINTS
+    if outcome is not None and not outcome.certified and (len(x) <= EXACT_MAX_POINTS or overlay):
+        cb, fb = overlay_enumeration(x, y) if overlay else exact_enumeration(x, y, kind, polygon)
         f, _ = _value(x, y, c, zone)
         if cb is not None and ((fb < f) if zone else (fb > f or not valid)):
             c, contacts, ok, message, valid = cb, ((), ()), False, "exact enumeration", True
@@ -438,7 +439,9 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
                                                  f"infinity): least strip width {W * scale:.6g} {unit}"))
         elif valid:
             outcome = Outcome(True)
-        exact_note = " by exact enumeration of the Voronoi-overlay vertices (branch and bound inconclusive)"
+        exact_note = (" by exact enumeration of the Voronoi-overlay vertices" +
+                      (" (nearest- and farthest-point diagrams by Qhull)" if overlay else "") +
+                      " (branch and bound inconclusive)")
         info["exact_enumeration"] = True
     r = None  # the loop's radii are not held while the final ones are computed (peak memory)
     f, r = _value(x, y, c, zone)
@@ -533,6 +536,136 @@ def exact_enumeration(x, y, kind: str, polygon: ProfilePolygon | None = None):
         j = int(np.argmin(val) if kind == "zone" else np.argmax(val))
         if (val[j] < best) if kind == "zone" else (val[j] > best):
             best, best_c = float(val[j]), B[j]
+    return best_c, best
+
+
+#: largest N for which a minimum zone the branch and bound leaves open is decided by :func:`overlay_enumeration`
+OVERLAY_MAX_POINTS = 5000
+
+
+def _bisector_edges(P, simplices, neighbours, ok, cc, outward: bool):
+    """The Voronoi edges dual to the triangulation ``simplices`` (rows of point indices; ``ok`` marks the
+    triangles of this diagram, ``cc`` their circumcentres): for each pair of adjacent triangles the segment
+    between their circumcentres, and for each triangle side without a neighbour in the diagram the ray from the
+    circumcentre along the side's normal (``outward``: away from the triangle's third vertex, as the nearest-point
+    diagram's unbounded edges go; else towards it, as the farthest-point diagram's). Returns the two sites of each
+    edge (E, 2), its origin (E, 2), direction (E, 2) and whether it is a ray (E,)."""
+    sites, origin, direction, ray = [], [], [], []
+    idx = np.flatnonzero(ok)
+    for k in range(3):
+        i, j = simplices[idx, (k + 1) % 3], simplices[idx, (k + 2) % 3]
+        nb = neighbours[idx, k]
+        inner = (nb >= 0) & ok[np.maximum(nb, 0)] & (nb > idx)
+        sites.append(np.column_stack([i[inner], j[inner]]))
+        origin.append(cc[idx[inner]])
+        direction.append(cc[nb[inner]] - cc[idx[inner]])
+        ray.append(np.zeros(inner.sum(), dtype=bool))
+        edge = ~((nb >= 0) & ok[np.maximum(nb, 0)])
+        e = P[j[edge]] - P[i[edge]]
+        n = np.column_stack([-e[:, 1], e[:, 0]])
+        towards = ((P[simplices[idx[edge], k]] - P[i[edge]]) * n).sum(axis=1) > 0
+        flip = towards if outward else ~towards
+        n[flip] *= -1.0
+        sites.append(np.column_stack([i[edge], j[edge]]))
+        origin.append(cc[idx[edge]])
+        direction.append(n)
+        ray.append(np.ones(edge.sum(), dtype=bool))
+    return np.vstack(sites), np.vstack(origin), np.vstack(direction), np.concatenate(ray)
+
+
+def overlay_enumeration(x, y):
+    """The minimum zone's global optimum over the finite centres, from the overlay of the nearest- and the
+    farthest-point Voronoi diagrams (Qhull, through scipy.spatial): the optimum centre is a vertex of either
+    diagram or a crossing of an edge of one with an edge of the other (Roy & Zhang, Comput.-Aided Des. 24 (1992)
+    161-168; Le & Lee, CAD 23 (1991) 591-599), where its nearest and farthest points are the sites of the two
+    edges. Every crossing's width |z - p_far| - |z - p_near| is computed from those sites (O(1)); the candidates
+    are then evaluated over all points in increasing order of that width until it exceeds the best width found
+    (a crossing's own width is its true width), the diagrams' vertices over all points. Cocircular points (a
+    degenerate lifted hull) are triangulated from Qhull's joggled input; every candidate is still evaluated on the
+    true points. Returns (centre, width), or (None, inf) when Qhull cannot build the diagrams (collinear points)."""
+    from scipy.spatial import ConvexHull, Delaunay, QhullError
+
+    P = np.column_stack([x, y])
+    L = np.column_stack([x, y, x * x + y * y])
+    near = far = None
+    for options in (None, "QJ"):  # cocircular points lift to a plane: then Qhull's joggled input (QJ)
+        try:
+            near = Delaunay(P, qhull_options=options)
+            far = ConvexHull(L, qhull_options=options)
+            break
+        except (QhullError, ValueError):
+            near = far = None
+    if near is None:
+        return None, np.inf
+    up = far.equations[:, 2] > 0  # the upper hull of the lifted points: the farthest-point triangulation
+    ccn = _equidistant(P[near.simplices[:, 0]], P[near.simplices[:, 1]], P[near.simplices[:, 1]],
+                       P[near.simplices[:, 2]])
+    ccf = _equidistant(P[far.simplices[:, 0]], P[far.simplices[:, 1]], P[far.simplices[:, 1]], P[far.simplices[:, 2]])
+    okn = np.isfinite(ccn).all(axis=1)
+    okf = up & np.isfinite(ccf).all(axis=1)
+    sn, on, dn, rn = _bisector_edges(P, near.simplices, near.neighbors, okn, ccn, outward=True)
+    sf, of, df, rf = _bisector_edges(P, far.simplices, far.neighbors, okf, ccf, outward=False)
+    best_c, best = None, np.inf
+
+    def gap(z, a, b):
+        """|z - a| - |z - b| as (b - a).(2 z - a - b) / (|z - a| + |z - b|): exact to rounding also for centres far
+        from the points (the plain difference of two nearly equal distances loses every digit there)."""
+        num = (b[..., 0] - a[..., 0]) * (2 * z[..., 0] - a[..., 0] - b[..., 0]) + \
+            (b[..., 1] - a[..., 1]) * (2 * z[..., 1] - a[..., 1] - b[..., 1])
+        den = np.hypot(z[..., 0] - a[..., 0], z[..., 1] - a[..., 1]) + np.hypot(z[..., 0] - b[..., 0], z[..., 1] - b[..., 1])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(den > 0, num / den, 0.0)
+
+    def widths(C):
+        """max r - min r at each centre, from the gaps to point 0 (:func:`gap`); non-finite centres get inf."""
+        out = np.full(len(C), np.inf)
+        for s in range(0, len(C), 256):
+            Z = C[s:s + 256]
+            g = gap(Z[:, None, :], P[None, :, :], P[None, :1, :])
+            w = g.max(axis=1) - g.min(axis=1)
+            out[s:s + 256] = np.where(np.isfinite(Z).all(axis=1) & np.isfinite(w), w, np.inf)
+        return out
+
+    vertices = np.vstack([ccn[okn], ccf[okf]])
+    if len(vertices):
+        w = widths(vertices)
+        j = int(np.argmin(w))
+        if np.isfinite(w[j]):
+            best_c, best = vertices[j], float(w[j])
+    # crossings of a nearest-point edge (o1 + t d1) with a farthest-point edge (o2 + u d2), t and u within
+    # their ranges ([0, 1] for segments, [0, inf) for rays), with a generous slack: an extra candidate costs
+    # an evaluation, a missed one the certificate
+    slack = 1e-6
+    cand, cand_w = [], []
+    step = max(1, 2_000_000 // max(len(sf), 1))
+    for a in range(0, len(sn), step):
+        o1, d1, r1, s1 = on[a:a + step, None, :], dn[a:a + step, None, :], rn[a:a + step, None], sn[a:a + step]
+        det = d1[..., 0] * df[None, :, 1] - d1[..., 1] * df[None, :, 0]
+        b = of[None, :, :] - o1
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (b[..., 0] * df[None, :, 1] - b[..., 1] * df[None, :, 0]) / det
+            u = (b[..., 0] * d1[..., 1] - b[..., 1] * d1[..., 0]) / det
+        hit = np.isfinite(t) & np.isfinite(u) & (t >= -slack) & (u >= -slack) & \
+            (r1 | (t <= 1 + slack)) & (rf[None, :] | (u <= 1 + slack))
+        ia, ib = np.nonzero(hit)
+        if not ia.size:
+            continue
+        z = on[a + ia] + t[ia, ib, None] * dn[a + ia]
+        fin = np.isfinite(z).all(axis=1)
+        z, ia, ib = z[fin], ia[fin], ib[fin]
+        cand.append(z)
+        cand_w.append(gap(z, P[sf[ib, 0]], P[s1[ia, 0]]))
+    if cand:
+        Z, W = np.vstack(cand), np.concatenate(cand_w)
+        order = np.argsort(W)
+        for s in range(0, len(order), 256):
+            block = order[s:s + 256]
+            if not W[block[0]] <= best:
+                break
+            w = widths(Z[block])
+            j = int(np.argmin(w))
+            if w[j] < best:
+                best_c, best = Z[block[j]], float(w[j])
     return best_c, best
 
 

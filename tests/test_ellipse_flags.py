@@ -223,3 +223,48 @@ def test_stationarity_probe_on_a_known_problem():
     for q in ([-1.2, 1.0], [0.5, 0.25], [1.0 + 1e-4, 1.0 + 2e-4]):
         probe = stationarity_probe(r, J, np.array(q), noise=noise)
         assert not probe.stationary and probe.decrease > 0
+
+
+def test_probe_from_a_triangular_factor_decides_as_from_the_jacobian():
+    """``triangular=`` (the R of a QR of [J r], as ellipse.orthogonal's kernel and triangular_by_blocks give it)
+    reaches the decisions of the Jacobian route on Rosenbrock as least squares, over many blocks of rows (the
+    residuals repeated, scaled): stationary at (1, 1), not elsewhere, with the same decrease to rounding."""
+    from methods.ellipse._checks import triangular_by_blocks
+    reps = 3000
+    w = np.linspace(0.5, 1.5, reps)
+
+    def r(q, part=slice(None)):
+        base = np.array([10 * (q[1] - q[0] ** 2), 1 - q[0]])
+        return (w[:, None] * base[None, :]).ravel()[part]
+
+    def J(q, part=slice(None)):
+        base = np.array([[-20 * q[0], 10.0], [-1.0, 0.0]])
+        return (w[:, None, None] * base[None, :, :]).reshape(-1, 2)[part]
+
+    noise = lambda r_, q: 1e-30  # noqa: E731
+    tri = triangular_by_blocks(J, r, 2 * reps, block=256)
+    assert stationarity_probe(r, None, np.array([1.0, 1.0]), noise=noise, triangular=tri).stationary
+    for q in ([-1.2, 1.0], [0.5, 0.25], [1.0 + 1e-4, 1.0 + 2e-4]):
+        a = stationarity_probe(r, J, np.array(q), noise=noise)
+        b = stationarity_probe(r, None, np.array(q), noise=noise, triangular=tri)
+        assert not a.stationary and not b.stationary
+        assert b.decrease == pytest.approx(a.decrease, rel=1e-9)
+
+
+def test_blocked_noise_bound_is_the_formula():
+    """sum_of_squares_noise, taken in blocks of NOISE_BLOCK points (small temporaries), equals 2 sum |r_i| dr_i +
+    sum dr_i^2, dr_i = 4 eps size_i, to rounding, whether the sizes are a scalar, an array or a function of a
+    slice."""
+    from methods.ellipse import _checks
+    rng = np.random.default_rng(3)
+    eps = np.finfo(float).eps
+    for n in (1, 100, _checks.NOISE_BLOCK, 3 * _checks.NOISE_BLOCK + 17):
+        r = rng.standard_normal(n) * 1e-3
+        size = rng.uniform(0.5, 3.0, n)
+        dr = 4 * eps * size
+        want = 2 * np.sum(np.abs(r) * dr) + np.sum(dr * dr)
+        assert _checks.sum_of_squares_noise(r, size) == pytest.approx(want, rel=1e-12)
+        assert _checks.sum_of_squares_noise(r, lambda part: size[part]) == pytest.approx(want, rel=1e-12)
+        dr1 = 4 * eps * 2.0
+        assert _checks.sum_of_squares_noise(r, 2.0) == pytest.approx(2 * np.sum(np.abs(r)) * dr1 + n * dr1 * dr1,
+                                                                        rel=1e-12)

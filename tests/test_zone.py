@@ -219,3 +219,20 @@ def test_large_data_only_extreme_points_reach_the_solver(rng):
         assert res.extra["active_points"] < 200
         r = np.hypot(*(pts - res.center).T)
         assert r.max() - r.min() == pytest.approx(res.form_error, rel=1e-12)
+
+
+def test_candidate_extremes_are_those_of_the_whole_distance_matrix():
+    """_zone.candidate_extremes forms the (K, M) distances a block of candidates at a time (peak memory): its
+    largest and smallest distance per candidate are bitwise those of the whole matrix, squared or not, for K
+    around the block size and for an N that makes the blocks a single row."""
+    from methods.circle import _zone as z
+    rng = np.random.default_rng(12)
+    for n, m, k in ((3358, 40, 1000), (300, 100, 7), (20, 20, 1), (50_000, 9, 30_000)):
+        x, y = rng.standard_normal(n), rng.standard_normal(n)
+        act = rng.choice(n, m, replace=False)
+        C = rng.standard_normal((k, 2)) * 3
+        R = np.sqrt((x[act][None, :] - C[:, 0:1]) ** 2 + (y[act][None, :] - C[:, 1:2]) ** 2)
+        hi, lo = z.candidate_extremes(x, y, act, C)
+        assert np.array_equal(hi, R.max(axis=1)) and np.array_equal(lo, R.min(axis=1))
+        hi2, lo2 = z.candidate_extremes(x, y, act, C, squared=True)
+        assert np.array_equal(hi2, (R ** 2).max(axis=1)) and np.array_equal(lo2, (R ** 2).min(axis=1))

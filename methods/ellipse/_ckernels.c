@@ -487,20 +487,13 @@ static void tri_update(double T[QC][QC], double (*B)[QC], int m) {
     }
 }
 
-/* A leaf: the R of the Householder QR of a QBLOCK x QC block B, stored column-major (B[j] is column j; rows past the
-   block's points are zero, which adds exact zeros), into T (zeroed by the caller). The operations of tri_update for
-   T = 0, every sum over the rows taken by col_dot in a fixed order: the same bits on every CPU. */
-/* 4-lane loads and stores through memcpy (no alignment assumed; no vector passed by value, so no ABI change) */
-#define LD4(v, p) LDV(v, p)
-#define ST4(p, v) STV(p, v)
-
 /* sum_i u_i v_i over a block's rows: eight partial sums (rows i mod 8, two 4-lane accumulators), added as
    ((s0 + s4) + (s1 + s5)) + ((s2 + s6) + (s3 + s7)). */
 static inline double col_dot(const double *u, const double *v) {
     v4d s0 = {0.0, 0.0, 0.0, 0.0}, s1 = {0.0, 0.0, 0.0, 0.0}, a0, b0, a1, b1, t;
     int i;
     for (i = 0; i < QBLOCK; i += 8) {
-        LD4(a0, u + i); LD4(b0, v + i); LD4(a1, u + i + 4); LD4(b1, v + i + 4);
+        LDV(a0, u + i); LDV(b0, v + i); LDV(a1, u + i + 4); LDV(b1, v + i + 4);
         s0 = s0 + a0 * b0;
         s1 = s1 + a1 * b1;
     }
@@ -508,6 +501,9 @@ static inline double col_dot(const double *u, const double *v) {
     return (t[0] + t[1]) + (t[2] + t[3]);
 }
 
+/* A leaf: the R of the Householder QR of a QBLOCK x QC block B, stored column-major (B[j] is column j; rows past the
+   block's points are zero, which adds exact zeros), into T (zeroed by the caller). The operations of tri_update for
+   T = 0, every sum over the rows taken by col_dot in a fixed order: the same bits on every CPU. */
 /* (The 4-lane vectors are lane-wise IEEE operations: 256-bit AVX instructions where the CPU has them (the "avx"
    clone, picked at load time), pairs of SSE2 instructions elsewhere, the same bits either way; compiled with
    -DFITBENCH_NO_CLONES there is only the SSE2 one, which tests/test_ellipse_kernels.py compares bit for bit.) */
@@ -525,9 +521,9 @@ CLONES static void leaf_qr(double T[QC][QC], double B[QC][QBLOCK]) {
         vs = (v4d){scal, scal, scal, scal};
         for (i = 0; i < QBLOCK; i += 4) {
             v4d bk;
-            LD4(bk, B[k] + i);
+            LDV(bk, B[k] + i);
             bk = bk * vs;
-            ST4(B[k] + i, bk);
+            STV(B[k] + i, bk);
         }
         for (j = k + 1; j < QC; j++) {
             w = tau * (T[k][j] + col_dot(B[k], B[j]));
@@ -535,10 +531,10 @@ CLONES static void leaf_qr(double T[QC][QC], double B[QC][QBLOCK]) {
             vw = (v4d){w, w, w, w};
             for (i = 0; i < QBLOCK; i += 4) {
                 v4d bj, bk;
-                LD4(bj, B[j] + i);
-                LD4(bk, B[k] + i);
+                LDV(bj, B[j] + i);
+                LDV(bk, B[k] + i);
                 bj = bj - vw * bk;
-                ST4(B[j] + i, bj);
+                STV(B[j] + i, bj);
             }
         }
     }

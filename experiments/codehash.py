@@ -17,6 +17,11 @@ installer's bookkeeping files ``RECORD``, ``INSTALLER``, ``REQUESTED``, ``direct
 byte code), so that editing any helper module of a plugin recomputes its rows. A plugin module found
 without distribution metadata (a plain file on ``PYTHONPATH``) is hashed with its static closure.
 
+A method called **by name** (``methods.fit("circle.minimum_zone", ...)``: the roundness evaluation's reference
+circles, the circular test's fits) is a dependency no import statement shows: every string constant in a
+scanned module that is a registered method id adds that method's module (and its closure), so editing the
+minimum zone recomputes the roundness rows that use it.
+
 A built-in method's closure is its own import graph: ``methods/__init__.py`` does not import the
 families (the registry loads them by name on first use), so editing one family recomputes only the rows
 of the methods whose modules import it (``circle.kasa``: the circle family and the shared helpers).
@@ -47,13 +52,22 @@ def _origin(name: str) -> Path | None:
     return path if path.suffix == ".py" and path.exists() else None
 
 
-def _imported_names(path: Path, module: str) -> set[str]:
-    """Every module name an import statement in ``path`` (module ``module``) may load."""
+def _method_modules() -> dict[str, str]:
+    """{registered method id: its module}: built-in methods and installed plugins."""
+    import methods
+    return {spec.id: spec.module for spec in methods.list_methods()}
+
+
+def _imported_names(path: Path, module: str, by_name: dict[str, str] | None = None) -> set[str]:
+    """Every module name an import statement in ``path`` (module ``module``) may load, and the module of every
+    method id in ``by_name`` that the file names in a string constant (a call by name)."""
     is_package = path.name == "__init__.py"
     package = module if is_package else module.rpartition(".")[0]
     names: set[str] = set()
     tree = ast.parse(path.read_bytes(), filename=str(path))
     for node in ast.walk(tree):
+        if by_name and isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in by_name:
+            names.add(by_name[node.value])
         if isinstance(node, ast.Import):
             names.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -78,6 +92,8 @@ def module_closure(module: str) -> tuple[tuple[str, Path], ...]:
     """(module name, file) of ``module`` and every module of fitbench or of its own top-level package
     that it imports, directly or not (sorted by name)."""
     follow = set(FITBENCH_PACKAGES) | {module.split(".")[0]}
+    by_name = _method_modules()
+    follow |= {m.split(".")[0] for m in by_name.values()}
     seen: dict[str, Path] = {}
     todo = [p for p in _imported_names_of_parents(module)]
     while todo:
@@ -88,7 +104,7 @@ def module_closure(module: str) -> tuple[tuple[str, Path], ...]:
         if path is None:
             continue
         seen[name] = path
-        todo.extend(_imported_names(path, name) - set(seen))
+        todo.extend(_imported_names(path, name, by_name) - set(seen))
     return tuple(sorted(seen.items()))
 
 

@@ -108,13 +108,12 @@ def unit_frame(points: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.nd
     """(shift, scale, x, y): the centroid, the RMS distance from it, and the contiguous unit-frame
     coordinates x = (X - shift_x) / scale, y = (Y - shift_y) / scale.
 
-    ``x`` and ``y`` are the first two rows of one (3, N) buffer (``x.base``); the third row is free
-    for a caller's use (the algebraic circle fits put z = x^2 + y^2 there). ``scale`` is 0 when all
+    ``x`` and ``y`` are the two rows of one (2, N) buffer (``x.base``). ``scale`` is 0 when all
     points are identical (``x``, ``y`` are then zero); it is inf when the spread itself exceeds the
     float64 range."""
     pts = np.asarray(points, dtype=np.float64)
     n = pts.shape[0]
-    buf = np.empty((3, n))
+    buf = np.empty((2, n))
     x, y = buf[0], buf[1]
     x[...] = pts[:, 0]  # contiguous copies first: numpy's axis-0 sum of an (N, 2) array is ~50x slower
     y[...] = pts[:, 1]
@@ -196,9 +195,9 @@ class KernelFrame(NamedTuple):
         return np.array([self.cx, self.cy])
 
     def coordinates(self, points: np.ndarray, ck):
-        """(shift, scale, x, y) as :func:`unit_frame` returns them (x, y rows 0, 1 of a (3, N) buffer), written
-        in one sweep; None when the points changed since this frame was computed (token differs)."""
-        buf = np.empty((3, points.shape[0]))
+        """(shift, scale, x, y) as :func:`unit_frame` returns them (the rows of a (2, N) buffer), written in one
+        sweep; None when the points changed since this frame was computed (token differs)."""
+        buf = np.empty((2, points.shape[0]))
         if ck.unit_coords(points, self.cx, self.cy, self.scale, buf) != self.token:
             return None
         return self.shift, self.scale, buf[0], buf[1]

@@ -120,3 +120,37 @@ def test_study_code_of_a_custom_study_is_keyed(repo_copy, tmp_path):
     assert "datasets/multilateration.py" in files
     assert {str(p.relative_to(REPO)) for p in codehash.files_of("experiments.metrics")} == \
         {"experiments/__init__.py", "experiments/metrics.py"}
+
+
+BY_NAME = '''
+"""A plugin fitter that calls a built-in method by its id (no import statement shows the dependency)."""
+import methods
+from methods import register
+
+
+@register("circle.keyed_by_name", kind="closed form", summary="Kasa's circle by name (cache-key test)",
+          reference="fitbench cache-key test")
+def keyed_by_name(points):
+    return methods.fit("circle.kasa", points)
+'''
+
+
+def test_a_method_called_by_name_is_keyed(repo_copy, tmp_path):
+    """The roundness evaluation fits its reference circles with ``methods.fit("circle.minimum_zone", ...)``: the
+    rows of a method that calls another by name are recomputed when that method's code changes (they were
+    served stale before: the minimum zone's certificate changed and the committed roundness rows did not)."""
+    from experiments import codehash
+    import methods
+    files = {str(p.relative_to(REPO)) for p in codehash.files_of(methods.get("roundness.iso12181").module)}
+    assert {"methods/circle/minimum_zone.py", "methods/circle/_global.py", "methods/circle/gauss_newton.py"} <= files
+    files = {str(p.relative_to(REPO)) for p in codehash.files_of(methods.get("circle.kasa").module)}
+    assert not any(f.startswith("methods/roundness/") for f in files)
+    site = install_plugin(tmp_path, "fitbench-keyed-by-name", {"fitbench_keyed_by_name": BY_NAME},
+                          {"fitbench.methods": {"keyed_by_name": "fitbench_keyed_by_name"}})
+    study = tmp_path / "keyed.toml"
+    study.write_text(STUDY.format(kind="grid", method="circle.keyed_by_name"))
+    out = tmp_path / "out"
+    assert run(repo_copy, study, out, [site]) == (2, 2)
+    assert run(repo_copy, study, out, [site]) == (2, 0)
+    append(repo_copy / "methods/circle/algebraic.py")  # circle.kasa's module; the plugin is unchanged
+    assert run(repo_copy, study, out, [site]) == (2, 2)

@@ -236,3 +236,78 @@ def test_candidate_extremes_are_those_of_the_whole_distance_matrix():
         assert np.array_equal(hi, R.max(axis=1)) and np.array_equal(lo, R.min(axis=1))
         hi2, lo2 = z.candidate_extremes(x, y, act, C, squared=True)
         assert np.array_equal(hi2, (R ** 2).max(axis=1)) and np.array_equal(lo2, (R ** 2).min(axis=1))
+
+
+def test_every_candidate_centre_is_equidistant_from_its_configuration():
+    """_zone.zone_candidates and circle_candidates keep only the candidates' centres and rebuild a configuration's
+    point indices on demand (Candidates.row): each centre must be equidistant from the points its row names (the
+    2 + 2 bisectors meet, the 3-point circumcentres, the 2-point midpoints), every kind of row must occur, and the
+    rows must be distinct configurations."""
+    from methods.circle import _zone as z
+    rng = np.random.default_rng(20)
+    x, y = rng.standard_normal(40), rng.standard_normal(40)
+    outer, inner = np.arange(0, 8), np.arange(8, 16)
+    for cands, kinds in ((z.zone_candidates(x, y, outer, inner, np.zeros(2)), {2, 3, 1}),
+                         (z.circle_candidates(x, y, outer, np.zeros(2), "outer"), {2, 3}),
+                         (z.circle_candidates(x, y, inner, np.zeros(2), "inner"), {0})):
+        assert len(cands) > 50  # none near the origin: every finite centre is kept
+        seen, rows = set(), set()
+        for k in range(len(cands)):
+            row = cands.row(k)
+            members, n_outer = [int(i) for i in row[:-1] if i >= 0], int(row[-1])
+            seen.add(n_outer)
+            rows.add(tuple(row))
+            d = np.hypot(x[members] - cands.C[k, 0], y[members] - cands.C[k, 1])
+            if len(row) == 5 and len(members) == 4:  # equal among the outer and among the inner contacts
+                for g in (members[:n_outer], members[n_outer:]):  # outer contacts, inner contacts
+                    dg = np.hypot(x[g] - cands.C[k, 0], y[g] - cands.C[k, 1])
+                    assert np.ptp(dg) <= 1e-9 * dg.max()
+            else:
+                assert np.ptp(d) <= 1e-9 * d.max()
+        assert kinds <= seen and len(rows) == len(cands)
+
+
+def test_least_width_by_rotating_calipers_equals_every_pair_normal():
+    """_global.least_width_exact (rotating calipers on Qhull's hull) against the minimum over every pair of
+    points' normal directions of the extent along it (all pairs; no hull): equal to 1e-15 relative, never above
+    (it is used as a lower bound), on noisy arcs, clouds, near-lines and regular polygons."""
+    from methods.circle._global import least_width_exact
+    rng = np.random.default_rng(7)
+    for t in range(400):
+        m = int(rng.integers(3, 120))
+        if t % 4 == 0:
+            x, y = rng.standard_normal((2, m))
+        elif t % 4 == 1:
+            th = rng.uniform(0, rng.uniform(0.01, 6.3), m)
+            r = 1 + rng.standard_normal(m) * 10 ** rng.uniform(-8, -1)
+            x, y = r * np.cos(th), r * np.sin(th)
+        elif t % 4 == 2:
+            x = rng.uniform(size=m)
+            y = 0.3 * x + 1e-6 * rng.standard_normal(m)
+        else:
+            th = 2 * np.pi * np.arange(m) / m
+            x, y = np.cos(th), np.sin(th)
+        i, j = np.array(list(combinations(range(m), 2))).T
+        ex, ey = x[j] - x[i], y[j] - y[i]
+        n = np.hypot(ex, ey)
+        nx, ny = -ey[n > 0] / n[n > 0], ex[n > 0] / n[n > 0]
+        proj = nx[:, None] * x[None, :] + ny[:, None] * y[None, :]
+        brute = float((proj.max(axis=1) - proj.min(axis=1)).min())
+        w = least_width_exact(x, y)
+        assert w <= brute * (1 + 1e-15) + 1e-300 and w >= brute * (1 - 1e-15), (t, w, brute)
+
+
+def test_box_bounds_by_blocks_are_those_of_all_boxes_at_once():
+    """_global.box_values bounds the branch and bound's boxes a block at a time (peak memory): bitwise the values
+    computed for all boxes at once (the distance intervals, the pair bound, the centre values)."""
+    from methods.circle import _global as g
+    rng = np.random.default_rng(3)
+    xs, ys = rng.standard_normal(37), rng.standard_normal(37)
+    cx, cy = rng.uniform(-2, 2, 500), rng.uniform(-2, 2, 500)
+    dmin, dmax, dc = g.box_distance_bounds(cx, cy, 0.05, xs, ys)
+    whole_zone = np.maximum(dmin.max(axis=1) - dmax.min(axis=1), g.pair_bound(cx, cy, 0.05, xs, ys, dc))
+    for budget in (1, 37, 100, 1024, 10 ** 6):
+        bound, centre = g.box_values(cx, cy, 0.05, xs, ys, True, budget)
+        assert np.array_equal(bound, whole_zone) and np.array_equal(centre, dc.max(axis=1) - dc.min(axis=1))
+        bound, centre = g.box_values(cx, cy, 0.05, xs, ys, False, budget)
+        assert np.array_equal(bound, dmax.min(axis=1)) and np.array_equal(centre, dc.min(axis=1))

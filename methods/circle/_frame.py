@@ -64,31 +64,16 @@ def kasa_unit(u: np.ndarray) -> np.ndarray:
     return kasa_xy(np.ascontiguousarray(u[:, 0]), np.ascontiguousarray(u[:, 1]))
 
 
-def _buffer(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The (3, N) buffer whose rows 0, 1 are x, y (the unit frame's layout), or a new one."""
-    base = x.base
-    if (isinstance(base, np.ndarray) and base.shape == (3, len(x)) and base.flags.c_contiguous
-            and np.shares_memory(base[0], x) and x.ctypes.data == base[0].ctypes.data
-            and y.ctypes.data == base[1].ctypes.data):
-        return base
-    buf = np.empty((3, len(x)))
-    buf[0], buf[1] = x, y
-    return buf
-
-
 def moments(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """M = Z^T Z / N for Z = [z, x, y, 1], z = x^2 + y^2, in one sweep (unit-frame data: centred and
     scaled, so the moments are O(1) and M is as well conditioned as the circle's shape allows).
 
-    z is written into the free third row of the frame's buffer; the six second moments are sums of
-    products (:func:`methods._frame.dot`, no temporaries)."""
+    One array of N for z; the six second moments are sums of products (:func:`methods._frame.dot`)."""
     n = len(x)
-    buf = _buffer(x, y)
-    z = buf[2]
-    np.multiply(x, x, out=z)
+    z = np.multiply(x, x)
     z += y * y
     zz, zx, zy, xx, yy, xy = dot(z, z), dot(z, x), dot(z, y), dot(x, x), dot(y, y), dot(x, y)
-    sx, sy, sz = buf.sum(axis=1)
+    sx, sy, sz = x.sum(), y.sum(), z.sum()
     return np.array([[zz, zx, zy, sz],
                      [zx, xx, xy, sx],
                      [zy, xy, yy, sy],

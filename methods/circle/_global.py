@@ -73,7 +73,10 @@ def growth_rate(A: np.ndarray, B: np.ndarray | None) -> float:
     D = D[n > 0] / n[n > 0, None]
     if not len(D):
         return 0.0
-    return float(((D @ A.T).max(axis=1) + (D @ B.T).max(axis=1)).min())
+    # products and sums, not BLAS (``D @ A.T``): the bits must not depend on the CPU's BLAS kernel
+    dA = (D[:, 0, None] * A[None, :, 0] + D[:, 1, None] * A[None, :, 1]).max(axis=1)
+    dB = (D[:, 0, None] * B[None, :, 0] + D[:, 1, None] * B[None, :, 1]).max(axis=1)
+    return float((dA + dB).min())
 
 
 def least_width_lower_bound(x: np.ndarray, y: np.ndarray, rho: float, m: int = 2048) -> float:
@@ -93,6 +96,30 @@ def box_distance_bounds(cx, cy, h, xs, ys):
     dmin = np.hypot(np.maximum(dx - h, 0.0), np.maximum(dy - h, 0.0))
     dmax = np.hypot(dx + h, dy + h)
     return dmin, dmax, np.hypot(dx, dy)
+
+
+#: boxes x working points per block of :func:`box_values` (at least; N / 8 for larger data)
+BOX_BLOCK = 1024
+
+
+def box_values(cx, cy, h, xs, ys, zone: bool, budget: int):
+    """For each box, a lower bound of the zone width over it (``zone``; the distance intervals and
+    :func:`pair_bound`) or an upper bound of the inscribed radius (the least greatest distance), and the value
+    at its centre; computed for blocks of boxes of at most ``budget`` box-point pairs (memory), the same
+    numbers as for all boxes at once."""
+    k = len(cx)
+    bound, centre = np.empty(k), np.empty(k)
+    step = max(1, budget // max(len(xs), 1))
+    for s in range(0, k, step):
+        b = slice(s, s + step)
+        dmin, dmax, dc = box_distance_bounds(cx[b], cy[b], h, xs, ys)
+        if zone:
+            np.maximum(dmin.max(axis=1) - dmax.min(axis=1), pair_bound(cx[b], cy[b], h, xs, ys, dc), out=bound[b])
+            centre[b] = dc.max(axis=1) - dc.min(axis=1)
+        else:
+            dmax.min(axis=1, out=bound[b])
+            dc.min(axis=1, out=centre[b])
+    return bound, centre
 
 
 def pair_bound(cx, cy, h, xs, ys, dc, k: int = 4):
@@ -183,6 +210,7 @@ def branch_and_bound(x, y, *, kind: str, c0, f0: float, S, ball: float, region: 
     zone = kind == "zone"
     S = np.unique(np.asarray(S, dtype=np.intp))
     xs, ys = x[S], y[S]
+    budget = max(BOX_BLOCK, len(x) // 8)  # numbers per (boxes x working points) array: peak memory
     g = 8
     h = region / g
     ticks = -region + h * (2 * np.arange(g) + 1)
@@ -196,16 +224,12 @@ def branch_and_bound(x, y, *, kind: str, c0, f0: float, S, ball: float, region: 
         cx, cy = cx[keep], cy[keep]
         boxes += cx.size
         while True:
-            dmin, dmax, dc = box_distance_bounds(cx, cy, h, xs, ys)
+            bound, centre_val = box_values(cx, cy, h, xs, ys, zone, budget)
             if zone:
-                bound = np.maximum(dmin.max(axis=1) - dmax.min(axis=1), pair_bound(cx, cy, h, xs, ys, dc))
                 keep = bound < f0 - eps
-                centre_val = dc.max(axis=1) - dc.min(axis=1)
                 suspect = keep & (centre_val < f0 - eps)
             else:
-                bound = dmax.min(axis=1)
                 keep = bound > f0 + eps
-                centre_val = dc.min(axis=1)
                 suspect = keep & (centre_val > f0 + eps)
                 if suspect.any():  # a candidate centre must lie inside the profile
                     idx = np.flatnonzero(suspect)
@@ -331,7 +355,10 @@ def polish_inscribed(x, y, c, polygon: ProfilePolygon, steps: int = 12):
     for _ in range(steps):
         a, b = pair
         v = np.array([-(y[b] - y[a]), x[b] - x[a]])
-        v /= np.hypot(*v)
+        length = np.hypot(*v)
+        if not length > 0:  # the two contacts coincide (repeated points): no bisector to walk along
+            break
+        v /= length
         if v @ (c - 0.5 * np.array([x[a] + x[b], y[a] + y[b]])) < 0:
             v = -v                                                  # away from the pair's midpoint
         t, p3 = _first_hit(x, y, c, v, a)
@@ -399,6 +426,7 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
         else:
             region = rho
             info["region"] = "centres inside the profile polygon (points joined in angular order about their centroid)"
+        r = None  # the radii are not held during the branch and bound (peak memory)
         outcome = branch_and_bound(x, y, kind=kind, c0=np.asarray(c, dtype=float), f0=f0, S=S, ball=ball,
                                    region=region, eps=eps, polygon=polygon)
         info["boxes"] += outcome.boxes
@@ -670,25 +698,39 @@ def overlay_enumeration(x, y):
 
 
 def least_width_exact(x, y) -> float:
-    """The least width of a point set over all directions. It is attained normal to an edge of the
-    convex hull, i.e. to some pair of points, and no direction gives less: so up to 200 points the
-    minimum over all pairs' normals (vectorised), beyond that over the hull edges (Qhull)."""
+    """The least width of a point set over all directions (0.0 when Qhull finds the points flat).
+
+    It is attained normal to an edge of the convex hull (Qhull's vertices, counter-clockwise): for each
+    edge, rotating calipers (Shamos 1978) find the antipodal vertex, the vertex whose two edges' direction
+    angles bracket the edge's angle + pi (one ``searchsorted`` over the unwrapped angles; the two
+    vertices either side are taken too, against rounding of the angles). O(h) memory and time for h
+    hull vertices. Projections are products and sums, never BLAS, so the value does not depend on the
+    CPU. Any error (a missed antipode, a vertex Qhull left out) can only lower the value: it stays a lower
+    bound of the data's least width."""
+    from scipy.spatial import ConvexHull, QhullError
     P = np.column_stack([x, y])
-    if len(P) <= 200:
-        H = P
-        i, j = np.triu_indices(len(H), 1)
-        e = H[j] - H[i]
-    else:
-        from scipy.spatial import ConvexHull, QhullError
-        try:
-            H = P[ConvexHull(P).vertices]
-        except QhullError:
-            return 0.0
-        e = np.roll(H, -1, axis=0) - H
-    n = np.hypot(e[:, 0], e[:, 1])
-    e, n = e[n > 0], n[n > 0]
-    if not len(e):
+    if len(P) < 3:
         return 0.0
-    nrm = np.column_stack([-e[:, 1], e[:, 0]]) / n[:, None]
-    proj = nrm @ H.T
-    return float((proj.max(axis=1) - proj.min(axis=1)).min())
+    try:
+        H = P[ConvexHull(P).vertices]
+    except QhullError:
+        return 0.0
+    e = np.roll(H, -1, axis=0) - H
+    n = np.hypot(e[:, 0], e[:, 1])
+    keep = n > 0
+    H, e, n = H[keep], e[keep], n[keep]
+    h = len(H)
+    if h < 3:
+        return 0.0
+    nx, ny = -e[:, 1] / n, e[:, 0] / n  # inward (left) unit normals of the counter-clockwise edges
+    angle = np.arctan2(e[:, 1], e[:, 0])
+    turn = np.diff(angle)
+    turn[turn < 0] += 2 * np.pi  # counter-clockwise: every turn between consecutive edges is in (0, pi)
+    angle[1:] = angle[0] + np.cumsum(turn)
+    turn = np.concatenate([angle, angle + 2 * np.pi, angle[:1] + 4 * np.pi])
+    k = np.searchsorted(turn, angle + np.pi)  # vertex k (mod h) starts the first edge turned by >= pi
+    cand = (k[:, None] + np.arange(-2, 3)[None, :]) % h
+    far = (nx[:, None] * H[cand, 0] + ny[:, None] * H[cand, 1]).max(axis=1)
+    ends = np.stack([np.arange(h), (np.arange(h) + 1) % h], axis=1)
+    near = (nx[:, None] * H[ends, 0] + ny[:, None] * H[ends, 1]).min(axis=1)
+    return float((far - near).min())

@@ -168,6 +168,8 @@ def trust_rows(ck, delta, nvar):
 #: candidate centres further than this from the solver's centre (unit frame) are discarded: the
 #: solver is accurate to ~1e-8, and far-away circumcentres of near-collinear points are spurious.
 CANDIDATE_RADIUS = 1e-3
+#: rows per block of the 2 + 2 configurations' centres (peak memory; the values do not depend on it)
+CENTRE_BLOCK = 128
 
 
 class _Rows:
@@ -180,99 +182,146 @@ class _Rows:
         return np.column_stack([self.x[i], self.y[i]])
 
 
-def zone_candidates(x, y, outer_c, inner_c, near):
+class Candidates:
+    """Candidate centres ``C`` (K rows, unit frame) and, on demand, each one's contact configuration
+    (:meth:`row`: 4 point indices, -1 = none, or 3 for one-sided fits, then the number of outer contacts).
+
+    Built from blocks of candidates (:meth:`add`), each with a function that gives the configuration of its
+    i-th row, and filtered block by block (:meth:`near`): only the kept candidates are stacked and no
+    configuration is materialised except the one asked for (fixed memory of a few kB per candidate pool)."""
+
+    def __init__(self):
+        self._blocks = []   # (centres, config(i) -> row)
+        self.C = np.empty((0, 2))
+        self._kept = []     # (offset in C, positions kept in the block, config)
+
+    def add(self, centres: np.ndarray, config) -> None:
+        if len(centres):
+            self._blocks.append((centres, config))
+
+    def near(self, near) -> "Candidates":
+        """Keep the candidates within CANDIDATE_RADIUS of ``near``; if none is, every finite one (the final
+        check decides). The kept centres are stacked in their order."""
+        finite = [np.isfinite(C).all(axis=1) for C, _ in self._blocks]
+        close = [f & (np.hypot(C[:, 0] - near[0], C[:, 1] - near[1]) <= CANDIDATE_RADIUS)
+                 for (C, _), f in zip(self._blocks, finite)]
+        keep = close if any(k.any() for k in close) else finite
+        positions = [np.flatnonzero(k) for k in keep]
+        self.C = np.empty((sum(len(p) for p in positions), 2))
+        offset = 0
+        for (C, config), pos in zip(self._blocks, positions):
+            np.take(C, pos, axis=0, out=self.C[offset:offset + len(pos)])
+            self._kept.append((offset, pos, config))
+            offset += len(pos)
+        self._blocks = []
+        return self
+
+    def __len__(self) -> int:
+        return len(self.C)
+
+    def row(self, k: int) -> np.ndarray:
+        """The configuration of candidate ``k`` (a row of C)."""
+        for offset, pos, config in reversed(self._kept):
+            if k >= offset:
+                return np.asarray(config(int(pos[k - offset])), dtype=np.intp)
+        raise IndexError(k)
+
+
+def zone_candidates(x, y, outer_c, inner_c, near) -> Candidates:
     """Closed-form centres of the minimum-zone contact configurations: 2 outer + 2 inner (the two
-    bisectors meet), 3 + 1 and 1 + 3 (circumcentres). Rows of ``configs``: 4 point indices and the
+    bisectors meet), 3 + 1 and 1 + 3 (circumcentres), and 3 + 0. Configuration rows: 4 point indices and the
     number of outer contacts."""
     P = _Rows(x, y)
-    cands, configs = [], []
+    out = Candidates()
     po, pi = pairs(outer_c), pairs(inner_c)
     if len(po) and len(pi):
-        a = np.repeat(po, len(pi), axis=0)
-        b = np.tile(pi, (len(po), 1))
-        distinct = (a[:, :1] != b[:, :1]).all(axis=1) & (a[:, :1] != b[:, 1:]).all(axis=1) & \
-                   (a[:, 1:] != b[:, :1]).all(axis=1) & (a[:, 1:] != b[:, 1:]).all(axis=1)
-        a, b = a[distinct], b[distinct]  # a point cannot be an outer and an inner contact at once
-        cands.append(bisector_centres(P[a[:, 0]], P[a[:, 1]], P[b[:, 0]], P[b[:, 1]]))
-        configs.append(np.column_stack([a, b, np.full(len(a), 2)]))
+        # row j of the block: the outer pair j div Q with the inner pair j mod Q (Q inner pairs), unless they share
+        # a point (a point cannot be an outer and an inner contact at once); centres a block of rows at a time
+        q = len(pi)
+        o0, o1, i0, i1 = po[:, 0, None], po[:, 1, None], pi[None, :, 0], pi[None, :, 1]
+        distinct = np.flatnonzero(((o0 != i0) & (o0 != i1) & (o1 != i0) & (o1 != i1)).ravel())
+        centres = np.empty((len(distinct), 2))
+        for s in range(0, len(distinct), CENTRE_BLOCK):
+            j = distinct[s:s + CENTRE_BLOCK]
+            a, b = po[j // q], pi[j % q]
+            centres[s:s + len(j)] = bisector_centres(P[a[:, 0]], P[a[:, 1]], P[b[:, 0]], P[b[:, 1]])
+        out.add(centres, lambda i, po=po, pi=pi, j=distinct, q=q: (*po[j[i] // q], *pi[j[i] % q], 2))
     for tri, singles, n_outer in ((triples(outer_c), inner_c, 3), (triples(inner_c), outer_c, 1)):
         if len(tri) and len(singles):
             cc = bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]])
-            t = np.tile(tri, (len(singles), 1))
-            s = np.repeat(singles, len(tri))
-            keep = (t != s[:, None]).all(axis=1)
-            cands.append(np.tile(cc, (len(singles), 1))[keep])
-            rows = np.column_stack([t, s]) if n_outer == 3 else np.column_stack([s, t])
-            configs.append(np.column_stack([rows, np.full(len(t), n_outer)])[keep])
+            # row i of the block: the triangle i mod T with the single i div T (T triangles), unless it is one of them
+            singles = np.asarray(singles)
+            t_all = len(tri)
+            j = np.flatnonzero((np.tile(tri, (len(singles), 1)) != np.repeat(singles, t_all)[:, None]).all(axis=1))
+            if n_outer == 3:
+                out.add(cc[j % t_all], lambda i, tri=tri, singles=singles, j=j, t=t_all:
+                        (*tri[j[i] % t], singles[j[i] // t], 3))
+            else:
+                out.add(cc[j % t_all], lambda i, tri=tri, singles=singles, j=j, t=t_all:
+                        (singles[j[i] // t], *tri[j[i] % t], 1))
     tri = triples(outer_c)
     if len(tri):  # 3 + 0: the circle through three points (an exact circle, or N = 3)
-        cands.append(bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]]))
-        configs.append(np.column_stack([tri, np.full(len(tri), -1), np.full(len(tri), 3)]))
-    return _near(cands, configs, near)
+        out.add(bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]]),
+                lambda i, tri=tri: (*tri[i], -1, 3))
+    return out.near(near)
 
 
-def circle_candidates(x, y, idx, near, side: str):
+def circle_candidates(x, y, idx, near, side: str) -> Candidates:
     """Closed-form centres of circles touching 2 points as a diameter (midpoints) or 3 points
-    (circumcentres), for MCC (side='outer') or MIC (side='inner'). Rows: 3 indices (-1 = none) and
+    (circumcentres), for MCC (side='outer') or MIC (side='inner'). Configuration rows: 3 indices (-1 = none) and
     the number of outer contacts (all or none)."""
     P = _Rows(x, y)
     pr, tr = pairs(idx), triples(idx)
-    C = [0.5 * (P[pr[:, 0]] + P[pr[:, 1]])] if len(pr) else []
-    rows = [np.column_stack([pr, np.full(len(pr), -1)])] if len(pr) else []
+    out = Candidates()
+    outer = side == "outer"
+    if len(pr):
+        out.add(0.5 * (P[pr[:, 0]] + P[pr[:, 1]]), lambda i, pr=pr: (*pr[i], -1, 2 if outer else 0))
     if len(tr):
-        C.append(bisector_centres(P[tr[:, 0]], P[tr[:, 1]], P[tr[:, 1]], P[tr[:, 2]]))
-        rows.append(tr)
-    rows = np.vstack(rows)
-    n_outer = np.where(rows[:, 2] >= 0, 3, 2) if side == "outer" else np.zeros(len(rows), dtype=np.intp)
-    return _near([np.vstack(C)], [np.column_stack([rows, n_outer])], near)
-
-
-def _near(cands, configs, near):
-    """The candidates (and their configuration rows) within CANDIDATE_RADIUS of ``near``; if none is, every finite
-    one (the final check decides). ``cands``, ``configs``: lists of blocks, filtered block by block before they are
-    stacked (the candidates in their order, without a stacked copy of them all)."""
-    finite = [np.isfinite(C).all(axis=1) for C in cands]
-    close = [f & (np.hypot(C[:, 0] - near[0], C[:, 1] - near[1]) <= CANDIDATE_RADIUS) for C, f in zip(cands, finite)]
-    keep = close if any(k.any() for k in close) else finite
-    return np.vstack([C[k] for C, k in zip(cands, keep)]), np.vstack([g[k] for g, k in zip(configs, keep)])
+        out.add(bisector_centres(P[tr[:, 0]], P[tr[:, 1]], P[tr[:, 1]], P[tr[:, 2]]),
+                lambda i, tr=tr: (*tr[i], 3 if outer else 0))
+    return out.near(near)
 
 
 def candidate_extremes(x, y, act, C, *, squared: bool = False):
     """(largest, smallest) distance from each of K candidate centres to the M active points (``squared``: of the
-    squared distances, each a distance squared). The (K, M) distances are formed a block of candidates at a time,
-    at most max(4096, N / 2) numbers per block (two such temporaries: peak memory stays below the data's), never
-    K x M at once; the values are those of the whole matrix."""
+    squared distances, each a distance squared). The (K, M) distances are formed a block of candidates at a time
+    in two buffers of at most max(1024, N / 8) numbers (a quarter of the data's size at most), never K x M at
+    once; the values are those of the whole matrix."""
     ax, ay = x[act], y[act]
     k, m = len(C), len(ax)
-    step = max(1, max(4096, len(x) // 2) // max(m, 1))
+    step = max(1, max(1024, len(x) // 8) // max(m, 1))
     hi, lo = np.empty(k), np.empty(k)
+    bx, by = np.empty((min(step, k), m)), np.empty((min(step, k), m))
     for s in range(0, k, step):
-        dx = ax[None, :] - C[s:s + step, 0:1]
-        dy = ay[None, :] - C[s:s + step, 1:2]
+        rows = min(step, k - s)
+        dx, dy = bx[:rows], by[:rows]
+        np.subtract(ax[None, :], C[s:s + rows, 0:1], out=dx)
+        np.subtract(ay[None, :], C[s:s + rows, 1:2], out=dy)
         dx *= dx
         dy *= dy
         dx += dy
         np.sqrt(dx, out=dx)
         if squared:
             dx *= dx
-        dx.max(axis=1, out=hi[s:s + step])
-        dx.min(axis=1, out=lo[s:s + step])
+        dx.max(axis=1, out=hi[s:s + rows])
+        dx.min(axis=1, out=lo[s:s + rows])
     return hi, lo
 
 
-def pick(C, configs, score, minimise: bool):
-    """Best candidate and its (outer, inner) contact index tuples."""
+def pick(cands: Candidates, score, minimise: bool):
+    """Best candidate (the first of equal scores) and its (outer, inner) contact index tuples."""
     score = np.where(np.isfinite(score), score, np.inf if minimise else -np.inf)
     best = int(np.argmin(score) if minimise else np.argmax(score))
-    row = configs[best]
+    row = cands.row(best)
+    c = cands.C[best].copy()  # not a view: the candidates are not held by the centre (peak memory)
     width = row.size - 1
     members = [int(i) for i in row[:width] if i >= 0]
     n_outer = int(row[width])
     if width == 3:  # single-sided (MIC / MCC)
-        return C[best], ((tuple(members), ()) if n_outer else ((), tuple(members)))
+        return c, ((tuple(members), ()) if n_outer else ((), tuple(members)))
     if len(members) == 3:  # 3 + 0: every point on one circle; the inner contacts are the same points
-        return C[best], (tuple(members), tuple(members))
-    return C[best], (tuple(members[:n_outer]), tuple(members[n_outer:]))
+        return c, (tuple(members), tuple(members))
+    return c, (tuple(members[:n_outer]), tuple(members[n_outer:]))
 
 
 def relabel_extremes(x, y, act, c, contacts):
@@ -308,8 +357,8 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
         stats["solver_iterations"] += iters
         stats["history"] += hist
         act = np.union1d(out, inn)
+        r_all = None  # the previous pass's radii are not held during the exact step and the next pass (peak memory)
         c, (oc, ic) = relabel_extremes(x, y, act, *exact(act, ck))
-        r_all = None  # the previous pass's radii are not held while these are computed (peak memory)
         r_all = radii(x, y, c)
         before = out.size + inn.size
         violated = False

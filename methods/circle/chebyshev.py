@@ -58,9 +58,9 @@ def chebyshev_lp(points, *, solver="highs", active_size=16, max_rounds=50):
         r = z.radii(x[act], y[act], c)
         order = np.argsort(r)
         m = min(act.size, 8)
-        C, configs = z.zone_candidates(x, y, act[order[::-1][:m]], act[order[:m]], c)
-        hi, lo = z.candidate_extremes(x, y, act, C, squared=True)
-        return z.pick(C, configs, hi - lo, minimise=True)
+        cands = z.zone_candidates(x, y, act[order[::-1][:m]], act[order[:m]], c)
+        hi, lo = z.candidate_extremes(x, y, act, cands.C, squared=True)
+        return z.pick(cands, hi - lo, minimise=True)
 
     def certify(c, oc, ic):
         r = z.radii(x, y, c)

@@ -29,9 +29,9 @@ def _best_single_sided(x, y, act, c, side):
     for m in POOL_SIZES:
         m = min(act.size, m)
         idx = act[ranked[:m]]
-        C, configs = z.circle_candidates(x, y, idx, c, side)
-        hi, lo = z.candidate_extremes(x, y, act, C)
-        best = (z.pick(C, configs, hi, minimise=True) if side == "outer" else z.pick(C, configs, lo, minimise=False))
+        cands = z.circle_candidates(x, y, idx, c, side)
+        hi, lo = z.candidate_extremes(x, y, act, cands.C)
+        best = (z.pick(cands, hi, minimise=True) if side == "outer" else z.pick(cands, lo, minimise=False))
         if m >= act.size or _surrounds(x, y, act, best[0], side):
             return best
     return best

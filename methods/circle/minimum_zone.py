@@ -112,9 +112,9 @@ def minimum_zone(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1
         r = z.radii(x[act], y[act], c)
         order = np.argsort(r)
         m = min(act.size, 8)
-        C, configs = z.zone_candidates(x, y, act[order[::-1][:m]], act[order[:m]], c)
-        hi, lo = z.candidate_extremes(x, y, act, C)
-        return z.pick(C, configs, hi - lo, minimise=True)
+        cands = z.zone_candidates(x, y, act[order[::-1][:m]], act[order[:m]], c)
+        hi, lo = z.candidate_extremes(x, y, act, cands.C)
+        return z.pick(cands, hi - lo, minimise=True)
 
     return z.fit_zone(points, frame, start=z.kasa_normal(x, y), local_solve=local_solve, exact=exact,
                       certify=z.certify_hulls(x, y), sides=("outer", "inner"), k=k, max_rounds=max_rounds,

@@ -1,6 +1,6 @@
 """Peak memory of every circle and ellipse fit as a multiple of its input array (issue 20: "<= 4x the input"),
-measured, printed, not asserted here (tests/test_circle_memory.py and tests/test_ellipse_memory.py assert it for
-the fits that meet it).
+measured, printed, not asserted here (tests/test_circle_memory.py and tests/test_ellipse_memory.py assert it with
+:func:`measure`).
 
 Run (from the repository root, ~30 s):
     python tests/benchmarks/peak_memory.py [N]        (default N = 100000)
@@ -43,22 +43,32 @@ FITS = ["circle.kasa", "circle.pratt", "circle.taubin", "circle.hyper", "circle.
         "ellipse.fitzgibbon", "ellipse.orthogonal", "ellipse.algebraic_nm", "ellipse.geometric_nm"]
 
 
-def main(n: int) -> int:
+def measure(method_id: str, n: int) -> tuple[float, bool, float]:
+    """(peak / input, converged, seconds) of one fit of ``method_id`` to N = ``n`` points, in a fresh interpreter
+    (also used by tests/test_circle_memory.py and tests/test_ellipse_memory.py)."""
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     env = {**os.environ, "PYTHONPATH": root, "OPENBLAS_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-c", SCRIPT, str(n), method_id], cwd=root, env=env,
+                         capture_output=True, text=True, timeout=900)
+    if out.returncode != 0:
+        raise RuntimeError(f"{method_id} at N = {n} failed: {out.stderr.strip().splitlines()[-1]}")
+    ratio, converged, seconds = out.stdout.split()
+    return float(ratio), converged == "True", float(seconds)
+
+
+def main(n: int) -> int:
     print(f"peak memory of one fit / input array (16 N bytes), N = {n}")
     print(f"{'fit':28s} {'peak / input':>12s}  {'<= 4x':>5s}  {'converged':>9s}  {'time under tracemalloc':>22s}")
     worst = 0.0
     for method_id in FITS:
-        out = subprocess.run([sys.executable, "-c", SCRIPT, str(n), method_id], cwd=root, env=env,
-                             capture_output=True, text=True, timeout=900)
-        if out.returncode != 0:
-            print(f"{method_id:28s} failed: {out.stderr.strip().splitlines()[-1]}")
+        try:
+            ratio, converged, seconds = measure(method_id, n)
+        except RuntimeError as exc:
+            print(f"{method_id:28s} {exc}")
             continue
-        ratio, converged, seconds = out.stdout.split()
-        worst = max(worst, float(ratio))
-        print(f"{method_id:28s} {float(ratio):11.2f}x  {'yes' if float(ratio) <= 4 else 'NO':>5s}  {converged:>9s}  "
-              f"{float(seconds) * 1e3:19.1f} ms")
+        worst = max(worst, ratio)
+        print(f"{method_id:28s} {ratio:11.2f}x  {'yes' if ratio <= 4 else 'NO':>5s}  {str(converged):>9s}  "
+              f"{seconds * 1e3:19.1f} ms")
     print(f"largest: {worst:.2f}x")
     return 0
 

@@ -169,7 +169,7 @@ def trust_rows(ck, delta, nvar):
 #: solver is accurate to ~1e-8, and far-away circumcentres of near-collinear points are spurious.
 CANDIDATE_RADIUS = 1e-3
 #: rows per block of the 2 + 2 configurations' centres (peak memory; the values do not depend on it)
-CENTRE_BLOCK = 128
+CENTRE_BLOCK = 256
 
 
 class _Rows:
@@ -187,32 +187,33 @@ class Candidates:
     (:meth:`row`: 4 point indices, -1 = none, or 3 for one-sided fits, then the number of outer contacts).
 
     Built from blocks of candidates (:meth:`add`), each with a function that gives the configuration of its
-    i-th row, and filtered block by block (:meth:`near`): only the kept candidates are stacked and no
-    configuration is materialised except the one asked for (fixed memory of a few kB per candidate pool)."""
+    i-th row and a mask of the rows that are configurations at all, and filtered block by block (:meth:`near`):
+    only the kept centres are stacked, a block's kept rows are a boolean mask, and no configuration is
+    materialised except the one asked for (a few bytes per candidate besides the centres)."""
 
     def __init__(self):
-        self._blocks = []   # (centres, config(i) -> row)
+        self._blocks = []   # (centres, config(i) -> row, valid rows or None)
         self.C = np.empty((0, 2))
-        self._kept = []     # (offset in C, positions kept in the block, config)
+        self._kept = []     # (offset in C, mask of the block's kept rows, config)
 
-    def add(self, centres: np.ndarray, config) -> None:
+    def add(self, centres: np.ndarray, config, valid: np.ndarray | None = None) -> None:
         if len(centres):
-            self._blocks.append((centres, config))
+            self._blocks.append((centres, config, valid))
 
     def near(self, near) -> "Candidates":
-        """Keep the candidates within CANDIDATE_RADIUS of ``near``; if none is, every finite one (the final
-        check decides). The kept centres are stacked in their order."""
-        finite = [np.isfinite(C).all(axis=1) for C, _ in self._blocks]
+        """Keep the valid candidates within CANDIDATE_RADIUS of ``near``; if none is, every finite valid one (the
+        final check decides). The kept centres are stacked in their order."""
+        finite = [np.isfinite(C).all(axis=1) & (True if v is None else v) for C, _, v in self._blocks]
         close = [f & (np.hypot(C[:, 0] - near[0], C[:, 1] - near[1]) <= CANDIDATE_RADIUS)
-                 for (C, _), f in zip(self._blocks, finite)]
+                 for (C, _, _), f in zip(self._blocks, finite)]
         keep = close if any(k.any() for k in close) else finite
-        positions = [np.flatnonzero(k) for k in keep]
-        self.C = np.empty((sum(len(p) for p in positions), 2))
+        self.C = np.empty((sum(int(k.sum()) for k in keep), 2))
         offset = 0
-        for (C, config), pos in zip(self._blocks, positions):
-            np.take(C, pos, axis=0, out=self.C[offset:offset + len(pos)])
-            self._kept.append((offset, pos, config))
-            offset += len(pos)
+        for (C, config, _), k in zip(self._blocks, keep):
+            count = int(k.sum())
+            np.compress(k, C, axis=0, out=self.C[offset:offset + count])
+            self._kept.append((offset, k, config))
+            offset += count
         self._blocks = []
         return self
 
@@ -221,9 +222,9 @@ class Candidates:
 
     def row(self, k: int) -> np.ndarray:
         """The configuration of candidate ``k`` (a row of C)."""
-        for offset, pos, config in reversed(self._kept):
+        for offset, kept, config in reversed(self._kept):
             if k >= offset:
-                return np.asarray(config(int(pos[k - offset])), dtype=np.intp)
+                return np.asarray(config(int(np.flatnonzero(kept)[k - offset])), dtype=np.intp)
         raise IndexError(k)
 
 
@@ -235,30 +236,28 @@ def zone_candidates(x, y, outer_c, inner_c, near) -> Candidates:
     out = Candidates()
     po, pi = pairs(outer_c), pairs(inner_c)
     if len(po) and len(pi):
-        # row j of the block: the outer pair j div Q with the inner pair j mod Q (Q inner pairs), unless they share
-        # a point (a point cannot be an outer and an inner contact at once); centres a block of rows at a time
+        # row i of the block: the outer pair i div Q with the inner pair i mod Q (Q inner pairs); valid unless they
+        # share a point (a point cannot be an outer and an inner contact at once); centres a block of rows at a time
         q = len(pi)
         o0, o1, i0, i1 = po[:, 0, None], po[:, 1, None], pi[None, :, 0], pi[None, :, 1]
-        distinct = np.flatnonzero(((o0 != i0) & (o0 != i1) & (o1 != i0) & (o1 != i1)).ravel())
+        distinct = ((o0 != i0) & (o0 != i1) & (o1 != i0) & (o1 != i1)).ravel()
         centres = np.empty((len(distinct), 2))
         for s in range(0, len(distinct), CENTRE_BLOCK):
-            j = distinct[s:s + CENTRE_BLOCK]
-            a, b = po[j // q], pi[j % q]
-            centres[s:s + len(j)] = bisector_centres(P[a[:, 0]], P[a[:, 1]], P[b[:, 0]], P[b[:, 1]])
-        out.add(centres, lambda i, po=po, pi=pi, j=distinct, q=q: (*po[j[i] // q], *pi[j[i] % q], 2))
+            i = np.arange(s, min(s + CENTRE_BLOCK, len(distinct)))
+            a, b = po[i // q], pi[i % q]
+            centres[s:s + len(i)] = bisector_centres(P[a[:, 0]], P[a[:, 1]], P[b[:, 0]], P[b[:, 1]])
+        out.add(centres, lambda i, po=po, pi=pi, q=q: (*po[i // q], *pi[i % q], 2), distinct)
     for tri, singles, n_outer in ((triples(outer_c), inner_c, 3), (triples(inner_c), outer_c, 1)):
         if len(tri) and len(singles):
             cc = bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]])
-            # row i of the block: the triangle i mod T with the single i div T (T triangles), unless it is one of them
+            # row i of the block: the triangle i mod T with the single i div T (T triangles); valid unless the single
+            # is one of the triangle's points
             singles = np.asarray(singles)
-            t_all = len(tri)
-            j = np.flatnonzero((np.tile(tri, (len(singles), 1)) != np.repeat(singles, t_all)[:, None]).all(axis=1))
-            if n_outer == 3:
-                out.add(cc[j % t_all], lambda i, tri=tri, singles=singles, j=j, t=t_all:
-                        (*tri[j[i] % t], singles[j[i] // t], 3))
-            else:
-                out.add(cc[j % t_all], lambda i, tri=tri, singles=singles, j=j, t=t_all:
-                        (singles[j[i] // t], *tri[j[i] % t], 1))
+            t = len(tri)
+            valid = (np.tile(tri, (len(singles), 1)) != np.repeat(singles, t)[:, None]).all(axis=1)
+            config = ((lambda i, tri=tri, singles=singles, t=t: (*tri[i % t], singles[i // t], 3)) if n_outer == 3
+                      else (lambda i, tri=tri, singles=singles, t=t: (singles[i // t], *tri[i % t], 1)))
+            out.add(np.tile(cc, (len(singles), 1)), config, valid)
     tri = triples(outer_c)
     if len(tri):  # 3 + 0: the circle through three points (an exact circle, or N = 3)
         out.add(bisector_centres(P[tri[:, 0]], P[tri[:, 1]], P[tri[:, 1]], P[tri[:, 2]]),
@@ -285,11 +284,11 @@ def circle_candidates(x, y, idx, near, side: str) -> Candidates:
 def candidate_extremes(x, y, act, C, *, squared: bool = False):
     """(largest, smallest) distance from each of K candidate centres to the M active points (``squared``: of the
     squared distances, each a distance squared). The (K, M) distances are formed a block of candidates at a time
-    in two buffers of at most max(1024, N / 8) numbers (a quarter of the data's size at most), never K x M at
+    in two buffers of at most max(1536, N / 8) numbers, never K x M at
     once; the values are those of the whole matrix."""
     ax, ay = x[act], y[act]
     k, m = len(C), len(ax)
-    step = max(1, max(1024, len(x) // 8) // max(m, 1))
+    step = max(1, max(1536, len(x) // 8) // max(m, 1))
     hi, lo = np.empty(k), np.empty(k)
     bx, by = np.empty((min(step, k), m)), np.empty((min(step, k), m))
     for s in range(0, k, step):

@@ -269,9 +269,9 @@ def test_every_candidate_centre_is_equidistant_from_its_configuration():
 
 def test_least_width_by_rotating_calipers_equals_every_pair_normal():
     """_global.least_width_exact (rotating calipers on Qhull's hull) against the minimum over every pair of
-    points' normal directions of the extent along it (all pairs; no hull): equal to 1e-15 relative, never above
-    (it is used as a lower bound), on noisy arcs, clouds, near-lines and regular polygons."""
-    from methods.circle._global import least_width_exact
+    points' normal directions of the extent along it (all pairs; no hull): within WIDTH_ROUNDING eps max|coordinate|
+    of it (the margin the certificate subtracts), on noisy arcs, clouds, near-lines and regular polygons."""
+    from methods.circle._global import WIDTH_ROUNDING, least_width_exact
     rng = np.random.default_rng(7)
     for t in range(400):
         m = int(rng.integers(3, 120))
@@ -294,7 +294,8 @@ def test_least_width_by_rotating_calipers_equals_every_pair_normal():
         proj = nx[:, None] * x[None, :] + ny[:, None] * y[None, :]
         brute = float((proj.max(axis=1) - proj.min(axis=1)).min())
         w = least_width_exact(x, y)
-        assert w <= brute * (1 + 1e-15) + 1e-300 and w >= brute * (1 - 1e-15), (t, w, brute)
+        ulps = np.finfo(float).eps * max(np.abs(x).max(), np.abs(y).max())
+        assert abs(w - brute) <= WIDTH_ROUNDING * ulps, (t, w, brute)
 
 
 def test_box_bounds_by_blocks_are_those_of_all_boxes_at_once():

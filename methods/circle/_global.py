@@ -73,10 +73,21 @@ def growth_rate(A: np.ndarray, B: np.ndarray | None) -> float:
     D = D[n > 0] / n[n > 0, None]
     if not len(D):
         return 0.0
-    # products and sums, not BLAS (``D @ A.T``): the bits must not depend on the CPU's BLAS kernel
-    dA = (D[:, 0, None] * A[None, :, 0] + D[:, 1, None] * A[None, :, 1]).max(axis=1)
-    dB = (D[:, 0, None] * B[None, :, 0] + D[:, 1, None] * B[None, :, 1]).max(axis=1)
-    return float((dA + dB).min())
+    return float((_max_projection(D, A) + _max_projection(D, B)).min())
+
+
+def _max_projection(D: np.ndarray, V: np.ndarray, block: int = 65536) -> np.ndarray:
+    """max over the rows v of V of d.v, for each row d of D: products and sums, not BLAS (``D @ V.T``, whose bits
+    depend on the CPU's BLAS kernel), a block of rows of D at a time (at most ``block`` products: with many tied
+    contacts D has |V|^2 rows)."""
+    out = np.empty(len(D))
+    step = max(1, block // max(len(V), 1))
+    for s in range(0, len(D), step):
+        d = D[s:s + step]
+        p = np.multiply.outer(d[:, 0], V[:, 0])
+        p += np.multiply.outer(d[:, 1], V[:, 1])
+        p.max(axis=1, out=out[s:s + step])
+    return out
 
 
 def least_width_lower_bound(x: np.ndarray, y: np.ndarray, rho: float, m: int = 2048) -> float:
@@ -458,7 +469,8 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
             c, contacts, ok, message, valid = cb, ((), ()), False, "exact enumeration", True
             f = fb
         if zone:
-            W = least_width_exact(x, y)
+            W = least_width_exact(x, y)  # minus its rounding: a strict lower bound of the straight zones' width
+            W -= WIDTH_ROUNDING * np.finfo(float).eps * max(float(np.abs(x).max()), float(np.abs(y).max()))
             if f < W:
                 outcome = Outcome(True)
                 info["region"] = "all of R^2"
@@ -705,8 +717,9 @@ def least_width_exact(x, y) -> float:
     angles bracket the edge's angle + pi (one ``searchsorted`` over the unwrapped angles; the two
     vertices either side are taken too, against rounding of the angles). O(h) memory and time for h
     hull vertices. Projections are products and sums, never BLAS, so the value does not depend on the
-    CPU. Any error (a missed antipode, a vertex Qhull left out) can only lower the value: it stays a lower
-    bound of the data's least width."""
+    CPU. A missed antipode or a vertex Qhull merged away can only lower the value; rounding can raise it
+    by a few ulps of the coordinates (``WIDTH_ROUNDING`` eps max|coordinate| bounds that): a caller that needs a
+    strict lower bound subtracts it, or compares with a margin larger than it."""
     from scipy.spatial import ConvexHull, QhullError
     P = np.column_stack([x, y])
     if len(P) < 3:
@@ -734,3 +747,8 @@ def least_width_exact(x, y) -> float:
     ends = np.stack([np.arange(h), (np.arange(h) + 1) % h], axis=1)
     near = (nx[:, None] * H[ends, 0] + ny[:, None] * H[ends, 1]).min(axis=1)
     return float((far - near).min())
+
+
+#: least_width_exact may exceed the exact least width by at most this many eps times the largest |coordinate|
+#: (two rounded products and a sum per projection, a difference of two projections)
+WIDTH_ROUNDING = 8

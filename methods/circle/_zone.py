@@ -208,6 +208,7 @@ class Candidates:
                  for (C, _, _), f in zip(self._blocks, finite)]
         keep = close if any(k.any() for k in close) else finite
         self.C = np.empty((sum(int(k.sum()) for k in keep), 2))
+        self._kept = []
         offset = 0
         for (C, config, _), k in zip(self._blocks, keep):
             count = int(k.sum())

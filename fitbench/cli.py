@@ -48,5 +48,7 @@ def main(argv=None) -> int:
             return int(module.main(rest) or 0)
         except SystemExit as exc:  # argparse's --help / errors inside the delegated module
             return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    from fitbench.compensation import write_tables
     from methods.cli import main as methods_main
-    return methods_main(argv, prog="fitbench", extra_commands={k: v[1] for k, v in DELEGATED.items()})
+    return methods_main(argv, prog="fitbench", extra_commands={k: v[1] for k, v in DELEGATED.items()},
+                        exporter=write_tables)

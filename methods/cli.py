@@ -358,7 +358,6 @@ def add_circular_test(sub):
 # ----------------------------------------------------------------------------------------- positioning
 def cmd_positioning(args) -> int:
     from methods.positioning import read_csv
-    from methods.positioning.compensation import WRITERS, compensation_table
     from methods.positioning.report import plot, text
 
     plot_path = check_plot_path(args.plot)
@@ -373,12 +372,10 @@ def cmd_positioning(args) -> int:
         res.figures, res.per_target = other.figures, other.per_target
     comp = None
     if args.compensation:
-        interval = finite("--interval", args.interval, positive=True)
-        comp = compensation_table(res, data, interval=interval, source=args.compensation_from)
-        for fmt, path in args.compensation:
-            if fmt not in WRITERS:
-                raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
-            write_text_atomic(path, WRITERS[fmt](comp, axis=args.axis))
+        if args.exporter is None:  # controller tables belong to the fitbench layer, which passes its writer in
+            raise InvalidInputError("--compensation: controller tables are written by the fitbench command: run 'fitbench positioning ...'")
+        comp = args.exporter(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
+                             source=args.compensation_from, axis=args.axis, write=write_text_atomic)
     if plot_path:
         plot(res, plot_path, title=str(args.file), data=data, save=save_figure)
     if args.json:
@@ -633,12 +630,13 @@ def build_parser(prog: str = PROG, extra_commands: dict | None = None) -> argpar
     return p
 
 
-def main(argv=None, prog: str = PROG, extra_commands: dict | None = None) -> int:
+def main(argv=None, prog: str = PROG, extra_commands: dict | None = None, exporter=None) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", category=UserWarning)
             try:
                 args = build_parser(prog, extra_commands).parse_args(argv)
+                args.exporter = exporter
                 return args.func(args)
             finally:
                 for w in caught:

@@ -429,34 +429,6 @@ def test_positioning_text_has_per_target_table_readable_coefficients_and_vdi_hea
     assert "VDI/DGQ 3441" in vdi and "ISO 230-2" not in vdi
 
 
-def test_compensation_tables(tmp_path):
-    from methods.positioning.compensation import compensation_table
-    from methods.positioning.model import evaluate_band
-    data, _ = axis_test(rng=np.random.default_rng(2), mpe=0.002)
-    to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
-    out = cli("positioning", tmp_path / "a.csv", "--mpe", 0.002, "--interval", 25, "--compensation", "csv",
-              tmp_path / "c.csv", "--compensation", "siemens-eec", tmp_path / "eec.mpf", "--compensation", "fanuc-pitch",
-              tmp_path / "f.txt")
-    assert out.returncode == 0, out.stderr
-    res = methods.fit("positioning.gls_polynomial", data, mpe=0.002)
-    pos = np.arange(0, 1000.0 + 1e-9, 25.0)
-    want = -0.5 * (evaluate_band(res.polynomial["up"], pos)[0] + evaluate_band(res.polynomial["down"], pos)[0])
-    csv = pd.read_csv(tmp_path / "c.csv", comment="#")
-    np.testing.assert_allclose(csv.position_mm, pos)
-    np.testing.assert_allclose(csv.compensation_mm, want, atol=1e-6)
-    eec = (tmp_path / "eec.mpf").read_text().splitlines()
-    assert eec[0] == "%_N_AX_EEC_INI" and eec[-1] == "M17" and "CHANDATA(1)" in eec
-    vals = [float(l.split("=")[1]) for l in eec if l.startswith("$AA_ENC_COMP[0,")]
-    np.testing.assert_allclose(vals, want, atol=1e-6)
-    assert "$AA_ENC_COMP_STEP[0,X1]=25.000000" in eec and "$AA_ENC_COMP_MAX[0,X1]=1000.000000" in eec
-    fanuc = (tmp_path / "f.txt").read_text().splitlines()
-    inc = [int(l.split("P")[1]) for l in fanuc if l.startswith("N1")]
-    assert len(inc) == len(pos) and inc[0] == 0
-    np.testing.assert_allclose(np.cumsum(inc) * 1e-3, want - want[0], atol=0.5e-3 + 1e-12)  # 1 µm detection unit
-    mean = compensation_table(res, data, interval=100.0, source="mean")
-    np.testing.assert_allclose(mean.compensation_mm, -res.per_target["mean_bidirectional"], atol=1e-12)
-
-
 def test_multilateration_21_errors_csv(tmp_path):
     from datasets.multilateration import write_example
     meas, st = write_example(tmp_path, stations=6, noise=0.0)

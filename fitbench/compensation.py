@@ -41,15 +41,13 @@ import warnings
 
 import numpy as np
 
-from methods._errors import InvalidInputError
+from methods import InvalidInputError
 from methods.positioning.model import evaluate_band
-from methods._lazy import lazy_module
-
-pd = lazy_module("pandas")
 
 
 def compensation_table(res, data, *, interval: float | None = None, source: str = "model") -> pd.DataFrame:
     """The table (see the module docstring); ``res`` a positioning.gls_polynomial result, ``data`` its input."""
+    import pandas as pd  # loaded when a table is made (the fitbench command stays light)
     P = np.asarray(data.targets, float)
     if interval is None:
         interval = float(np.min(np.diff(P)))
@@ -133,3 +131,16 @@ def write_fanuc_pitch(table: pd.DataFrame, axis: str = "X", detection_unit_mm: f
 
 
 WRITERS = {"csv": write_csv, "siemens-eec": write_siemens_eec, "fanuc-pitch": write_fanuc_pitch}
+
+
+def write_tables(res, data, requests, *, interval=None, source="model", axis="X1", write) -> pd.DataFrame:
+    """Build the table once and write it in every requested ``(format, path)`` with ``write(path, text)``;
+    every format is checked before any file is written. Returns the table."""
+    for fmt, _ in requests:
+        if fmt not in WRITERS:
+            raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
+    table = compensation_table(res, data, interval=interval, source=source)
+    texts = [(path, WRITERS[fmt](table, axis=axis)) for fmt, path in requests]
+    for path, text in texts:
+        write(path, text)
+    return table

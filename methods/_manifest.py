@@ -1,12 +1,11 @@
 """The manifest of the built-in methods: what ``python -m methods list`` shows, without importing the
-method families (issue 20: start-up). Generated from the registry, never edited by hand::
-
-    python -m methods._manifest          # rewrite methods/_manifest.json after changing a built-in method
-
-The registry stays the one source of truth: the manifest records a digest of the source files it was built
-from (the modules of the ``methods`` package), and :func:`describe_methods` uses it only while that digest
-matches the files on disk (else it imports the families and reads the registry); tests/test_manifest.py
-fails when the committed manifest and the registry disagree.
+method families (start-up time). It is a cache of the registry, never a file to edit or commit: it records
+a digest of the source files it was built from (the modules of the ``methods`` package) and lives in the
+user's cache folder (``$FITBENCH_CACHE_DIR``, else ``$XDG_CACHE_HOME/fitbench``, else ``~/.cache/fitbench``)
+under that digest. :func:`describe_methods` reads it while the digest matches the files on disk; otherwise it
+imports the families, reads the registry and stores the manifest for the next call (when the cache folder is
+not writable, every call imports the families: slower, the same listing). Adding a method module therefore
+needs no regeneration step.
 """
 from __future__ import annotations
 
@@ -21,8 +20,21 @@ from pathlib import Path
 from methods import _registry
 from methods._registry import MethodInfo
 
-PATH = Path(__file__).with_name("_manifest.json")
 _PACKAGE_DIR = Path(__file__).parent
+
+
+def cache_dir() -> Path:
+    """The folder of the manifest cache: ``$FITBENCH_CACHE_DIR``, ``$XDG_CACHE_HOME/fitbench`` or
+    ``~/.cache/fitbench``."""
+    if os.environ.get("FITBENCH_CACHE_DIR"):
+        return Path(os.environ["FITBENCH_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "fitbench"
+
+
+def path_for(digest: str) -> Path:
+    """Where the manifest of the sources with ``digest`` is cached."""
+    return cache_dir() / f"methods-manifest-{digest[:32]}.json"
 
 
 #: modules of the package that no built-in method imports (the command line, this module): not hashed
@@ -53,12 +65,15 @@ def build() -> dict:
     _registry.load_builtins()
     infos = [asdict(info_of(s)) for k, s in sorted(_registry._REGISTRY.items())
              if s.module.startswith("methods.")]
-    return {"generated_by": "python -m methods._manifest", "source_digest": source_digest(), "methods": infos}
+    return {"generated_by": "methods._manifest", "source_digest": source_digest(), "methods": infos}
 
 
-def write(path: Path = PATH) -> Path:
-    """Write :func:`build` to ``path`` atomically."""
-    text = json.dumps(build(), indent=1, ensure_ascii=False) + "\n"
+def write(path: Path | None = None) -> Path:
+    """Write :func:`build` atomically to ``path`` (default: the cache file of the current sources)."""
+    manifest = build()
+    path = path or path_for(manifest["source_digest"])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps(manifest, indent=1, ensure_ascii=False) + "\n"
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
@@ -70,15 +85,16 @@ def write(path: Path = PATH) -> Path:
     return path
 
 
-def read(path: Path = PATH) -> list[MethodInfo] | None:
+def read(path: Path | None = None) -> list[MethodInfo] | None:
     """The stored built-in methods, or None when there is no manifest or it was built from other sources."""
+    digest = source_digest()
     try:
-        stored = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        stored = json.loads((path or path_for(digest)).read_text(encoding="utf-8"))
+        if stored.get("source_digest") != digest:
+            return None
+        return [MethodInfo(**m) for m in stored["methods"]]
+    except (OSError, ValueError, TypeError, KeyError):
         return None
-    if stored.get("source_digest") != source_digest():
-        return None
-    return [MethodInfo(**m) for m in stored["methods"]]
 
 
 def describe_methods(family: str | None = None) -> list[MethodInfo]:
@@ -90,10 +106,14 @@ def describe_methods(family: str | None = None) -> list[MethodInfo]:
     if stored is None:
         _registry.load_builtins()
         stored = []
+        try:
+            write()
+        except OSError:
+            pass  # a read-only cache folder: the next call imports the families again (documented above)
     infos = {m.id: m for m in stored}
     infos.update((k, info_of(s)) for k, s in _registry._REGISTRY.items())
     return [m for k, m in sorted(infos.items()) if family is None or m.family == family]
 
 
 if __name__ == "__main__":
-    print(f"wrote {write()}", file=sys.stderr)
+    print(f"wrote {write()}", file=sys.stderr)  # fills the cache ahead of the first listing

@@ -52,7 +52,10 @@ def test_wheel_install_runs_from_another_directory(tmp_path):
     where = subprocess.run([sys.executable, "-c", "import methods, fitbench; print(methods.__file__, fitbench.__file__)"],
                            capture_output=True, text=True, cwd=elsewhere, env=env).stdout
     assert str(target) in where and str(REPO) not in where
-    # the manifest of the built-in methods is installed and current ('list' need not import the families)
+    # the first listing caches the manifest of the built-in methods in the user's cache folder, never in the install
+    env["FITBENCH_CACHE_DIR"] = str(tmp_path / "cache")
+    listing = subprocess.run([str(script), "list"], capture_output=True, text=True, cwd=elsewhere, env=env)
+    assert listing.returncode == 0 and "circle.kasa" in listing.stdout, listing
     current = subprocess.run([sys.executable, "-c", "from methods import _manifest; print(_manifest.read() is not None)"],
                              capture_output=True, text=True, cwd=elsewhere, env=env)
     assert current.stdout.strip() == "True", current

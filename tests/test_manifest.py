@@ -1,8 +1,9 @@
-"""The manifest of the built-in methods (methods/_manifest.json, issue 20 start-up): ``python -m methods list``
-reads it instead of importing the method families, and it is never a second source of truth: generated from
-the registry (``python -m methods._manifest``), checked against it here, and used only while the digest of the
-``methods`` sources it was built from matches the files on disk."""
+"""The manifest of the built-in methods (a cache in the user's cache folder): ``python -m methods list`` reads it
+instead of importing the method families, and it is never a second source of truth: built from the registry by
+the first listing, checked against it here, and used only while the digest of the ``methods`` sources it was
+built from matches the files on disk. Adding a method is one new file: no regeneration step."""
 import json
+import re
 import shutil
 from dataclasses import asdict
 
@@ -13,15 +14,14 @@ from conftest import REPO, run_python
 from methods import _manifest
 from methods.cli import _jsonable
 
-REGENERATE = "the manifest is out of date: run 'python -m methods._manifest' and commit methods/_manifest.json"
-
-
-def test_committed_manifest_is_the_registry():
-    stored = json.loads(_manifest.PATH.read_text(encoding="utf-8"))
-    built = _manifest.build()
-    assert stored["methods"] == built["methods"], REGENERATE
-    assert stored["source_digest"] == built["source_digest"], REGENERATE
+def test_the_manifest_is_the_registry(tmp_path, monkeypatch):
+    monkeypatch.setenv("FITBENCH_CACHE_DIR", str(tmp_path))
+    written = _manifest.write()
+    assert written.parent == tmp_path and written.name.startswith("methods-manifest-")
+    stored = json.loads(written.read_text(encoding="utf-8"))
+    assert stored == _manifest.build()
     assert {m["id"] for m in stored["methods"]} == {s.id for s in methods.list_methods() if s.module.startswith("methods.")}
+    assert [asdict(m) for m in _manifest.read()] == stored["methods"]
 
 
 def registry_listing():
@@ -30,12 +30,14 @@ def registry_listing():
 
 
 @pytest.mark.parametrize("family", [None, "circle", "positioning"])
-def test_list_from_the_manifest_equals_the_registry_and_imports_no_family(family):
+def test_list_from_the_manifest_equals_the_registry_and_imports_no_family(family, tmp_path, monkeypatch):
+    monkeypatch.setenv("FITBENCH_CACHE_DIR", str(tmp_path))
+    _manifest.write()
     probe = ("import json, sys, runpy\n"
              f"sys.argv = ['methods', 'list', '--json'] + {['--family', family] if family else []!r}\n"
              "try:\n    runpy.run_module('methods', run_name='__main__')\nexcept SystemExit:\n    pass\n"
              "print(json.dumps(sorted(m for m in sys.modules if m.startswith('methods.') and m.count('.') >= 2)))\n")
-    out = run_python("-c", probe)
+    out = run_python("-c", probe, FITBENCH_CACHE_DIR=str(tmp_path))
     assert out.returncode == 0, out.stderr
     listing, imported = out.stdout.rsplit("\n[", 1)
     families = {m.split(".")[1] for m in json.loads("[" + imported)}
@@ -46,8 +48,9 @@ def test_list_from_the_manifest_equals_the_registry_and_imports_no_family(family
     assert json.loads(listing) == expected and expected
 
 
-def test_a_manifest_of_other_sources_is_not_used(tmp_path):
-    stale = json.loads(_manifest.PATH.read_text(encoding="utf-8"))
+def test_a_manifest_of_other_sources_is_not_used(tmp_path, monkeypatch):
+    monkeypatch.setenv("FITBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    stale = json.loads(_manifest.write().read_text(encoding="utf-8"))
     stale["methods"][0]["summary"] = "an old summary"
     stale["source_digest"] = "0" * 64
     path = tmp_path / "manifest.json"
@@ -72,3 +75,40 @@ def test_editing_a_method_without_regenerating_never_lists_stale_values(tmp_path
     out = run_python("-m", "methods", "list", "--json", "--family", "circle", cwd=copy, repo=copy)
     assert out.returncode == 0, out.stderr
     assert {m["id"]: m["summary"] for m in json.loads(out.stdout)}["circle.kasa"] == "EDITED summary"
+
+
+def test_the_first_listing_fills_the_cache_and_the_next_one_reads_it(tmp_path):
+    cache = tmp_path / "cache"
+    first = run_python("-m", "methods", "list", "--json", FITBENCH_CACHE_DIR=str(cache))
+    assert first.returncode == 0, first.stderr
+    assert [p.name for p in cache.iterdir()] == [_manifest.path_for(_manifest.source_digest()).name]
+    second = run_python("-m", "methods", "list", "--json", FITBENCH_CACHE_DIR=str(cache))
+    assert second.returncode == 0 and json.loads(second.stdout) == json.loads(first.stdout)
+
+
+METHOD_COPY = "gauss_newton_copy"
+
+
+@pytest.mark.slow
+def test_a_new_method_is_one_new_file(tmp_path):
+    """Copy a circle method's module under a new name (its id renamed) into a copy of the repository: with no
+    other edit it is registered, listed, and passes the registry-driven contract tests (exact data, similarity
+    equivariance, the result interface)."""
+    copy = tmp_path / "repo"
+    for part in ("methods", "datasets", "experiments", "fitbench", "tests"):
+        shutil.copytree(REPO / part, copy / part, ignore=shutil.ignore_patterns("__pycache__", ".hypothesis"))
+    shutil.copy(REPO / "pyproject.toml", copy)
+    source = (REPO / "methods" / "circle" / "gauss_newton.py").read_text(encoding="utf-8")
+    assert source.count('@register("circle.gauss_newton"') == 1
+    (copy / "methods" / "circle" / f"{METHOD_COPY}.py").write_text(
+        source.replace('"circle.gauss_newton"', f'"circle.{METHOD_COPY}"'), encoding="utf-8")
+    env = {"FITBENCH_CACHE_DIR": str(tmp_path / "cache")}
+    listing = run_python("-m", "methods", "list", "--json", "--family", "circle", cwd=copy, repo=copy, **env)
+    assert listing.returncode == 0, listing.stderr
+    assert f"circle.{METHOD_COPY}" in {m["id"] for m in json.loads(listing.stdout)}
+    contract = run_python("-m", "pytest", "-q", "-p", "no:cacheprovider", "-k", METHOD_COPY,
+                          "tests/test_circle_exact.py", "tests/test_properties.py", "tests/test_registry.py",
+                          cwd=copy, repo=copy, timeout=600, **env)
+    assert contract.returncode == 0, contract.stdout[-3000:] + contract.stderr[-2000:]
+    passed = int(re.search(r"(\d+) passed", contract.stdout).group(1))
+    assert passed >= 5 and "failed" not in contract.stdout, contract.stdout[-2000:]

@@ -7,14 +7,17 @@ import pytest
 import methods
 from datasets.synthetic import circle_points
 
-CIRCLE_IDS = ["circle.chebyshev_lp", "circle.gauss_newton", "circle.hyper", "circle.kasa",
-              "circle.levenberg_marquardt", "circle.max_inscribed", "circle.min_circumscribed",
-              "circle.minimum_zone", "circle.nelder_mead", "circle.powell_hybrid", "circle.pratt", "circle.taubin"]
+CIRCLE_IDS = [s.id for s in methods.list_methods("circle")]
+#: the circle methods of the circle/ellipse paper and of the form-error literature this project reproduces
+PUBLISHED_CIRCLE_IDS = {"circle.chebyshev_lp", "circle.gauss_newton", "circle.hyper", "circle.kasa",
+                        "circle.levenberg_marquardt", "circle.max_inscribed", "circle.min_circumscribed",
+                        "circle.minimum_zone", "circle.nelder_mead", "circle.powell_hybrid", "circle.pratt",
+                        "circle.taubin"}
 
 
 def test_all_circle_methods_registered_with_metadata():
     specs = methods.list_methods("circle")
-    assert [s.id for s in specs] == CIRCLE_IDS
+    assert PUBLISHED_CIRCLE_IDS <= set(CIRCLE_IDS) and CIRCLE_IDS == sorted(CIRCLE_IDS)
     for s in specs:
         assert s.family == "circle" and s.id == f"{s.family}.{s.name}"
         assert s.kind in methods.KINDS

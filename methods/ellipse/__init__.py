@@ -1,5 +1,8 @@
-"""Ellipse family: importing this package registers its methods."""
-from methods.ellipse import direct, nelder_mead, orthogonal  # noqa: F401
+"""Ellipse family: importing this package registers its methods, one public module each (every module of this
+folder whose name does not start with an underscore is imported and registers what it decorates)."""
+from methods._families import import_method_modules
+
+METHOD_MODULES = import_method_modules(__name__, __path__)
 
 
 def parameter_covariance(points, params, sigma: float):

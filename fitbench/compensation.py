@@ -1,131 +1,310 @@
-"""Pitch-error compensation tables from a positioning test, and writers for controllers.
+"""Pitch-error compensation tables from an ISO 230-2 positioning test, and writers for controllers.
 
-The table holds, at equally spaced positions from the first target (``interval`` mm apart, default the
-target spacing), the mean bidirectional deviation x(P) (the mean of the ↑ and ↓ curves: from the GLS
-polynomials, ``source='model'``, or linearly interpolated between the mean deviations at the targets,
-``source='mean'``), the ↑ and ↓ deviations, and the compensation value c(P) = -x(P) (what the
-controller adds to the commanded position so that the axis reaches it). The mean reversal value B is
-not in the table: controllers take it as a separate backlash parameter; it is written in the header.
-**Check the sign convention of the controller with a verification run after loading a table.**
+The table (``compensation_table``) is one equally spaced grid for every format:
 
-Writers (``WRITERS``):
+* it is anchored at the machine's **reference point** R (a grid point; default: position 0 when the
+  measured travel contains it, else the end of the travel nearer 0) and **covers the measured travel**:
+  its first point is at or before the first target, its last point at or after the last target. Without
+  ``interval`` the step is chosen so that the longer side of the travel from R is a whole number of steps
+  (within 0.001 mm, the step being a multiple of 0.001 mm, no coarser than the smallest target spacing);
+  with ``interval`` the table goes on to the first grid point at or beyond each end. Beyond the targets
+  the values come from the model (``source='model'``) or are held at the end targets' means
+  (``source='mean'``); the header of every file says what range it covers and how far it was extended.
+* values are the mean bidirectional deviation x(P) (ISO 230-2: deviation = reached - target; the mean of
+  the up and down curves, from the GLS polynomials or linearly interpolated between the mean deviations
+  at the targets) **relative to its value at R**, so that every format holds 0 at the reference point
+  (SINUMERIK 808D Function Manual 01/2017 p. 106: "the compensation value at the reference point should be
+  zero"; FANUC: the pitch error is counted from the reference position). A constant offset only moves
+  the axis' zero, which the reference point defines anyway.
+* ``compensation_mm`` = -(x(P) - x(R)): what a controller must add to the commanded position. Each writer
+  converts it to its controller's sign (see the writer's docstring).
+* the mean reversal value B = mean over the targets of (x_up - x_down) (ISO 230-2:2014 sec. 2.17, exactly
+  the figure of the ISO table) is not in the table: controllers take the backlash as a separate parameter,
+  and the header says what to enter (-B; see ``_backlash_line``).
 
-A unidirectional test gives the table of its one direction (the other column is empty, B unknown).
-
-* ``csv``: generic CSV, one row per position, lengths in mm (``position_mm, deviation_mm,
-  deviation_up_mm, deviation_down_mm, compensation_mm``).
-* ``siemens-eec``: SINUMERIK interpolatory compensation (LEC/EEC) as an MPF/INI part program setting the
-  system variables ``$AA_ENC_COMP[0, i, AXIS]`` (compensation value of point i, mm),
-  ``$AA_ENC_COMP_STEP`` (spacing, mm), ``$AA_ENC_COMP_MIN``/``_MAX`` (first and last position, mm) and
-  ``$AA_ENC_COMP_IS_MODULO``, between ``%_N_AX_EEC_INI`` / ``CHANDATA(1)`` and ``M17``. Source: the
-  SINUMERIK Function Manual Extended Functions, K3 Compensations, sec. 4.4.2.3 (example of compensation
-  values for axis X1; edition 03/2013, 6FC5397-1BP40-3BA1), read on a public mirror of the manual.
-  Confidence: high for the variable names and file layout; the number of points must not exceed the
-  axis' MD38000 $MA_MM_ENC_COMP_MAX_POINTS (the header says how many are needed).
-* ``fanuc-pitch``: FANUC pitch-error compensation data in the parameter-tape format: one line
-  ``N<10000 + point number> P<value>`` per compensation point, the values *incremental* (the change of the
-  compensation over the interval ending at that point) in detection units (default 0.001 mm), with the
-  parameters to set written as comments: 3620 (point number of the reference position), 3621/3622
-  (smallest/largest point number), 3623 (magnification), 3624 (interval). Sources: FANUC Series 0i-PB
-  parameter manual B-63980EN/01 sec. 4 (parameters 3620-3624 and the incremental example), FANUC
-  technical report A-77810E (bidirectional pitch-error compensation, parameters 3605#0, 3620-3627),
-  cnc.wiki "Fanuc pitch error compensation" (input as incremental values seen from the negative
-  direction, the 128-point hint). Confidence: high for the parameter numbers and the incremental
-  convention; medium for the ``N10000 + n`` numbering of the tape (it depends on the series and on the
-  axis' block of point numbers: check 3620-3622 of the axis). Values beyond ±127 detection units per
-  interval (older series accept ±7 x magnification) get a warning.
+Formats (``WRITERS``; each checks the axis name against its grammar and its controller's limits, and
+refuses what does not fit with one line saying what to change): ``csv``, ``siemens-eec``, ``fanuc-pitch``.
+The simulated controllers in the tests read each file with a strict parser of its grammar, apply it by
+the manual's rule and must at least halve the measured positioning error. docs/compensation.md has the
+formats, signs, limits and citations.
 """
 from __future__ import annotations
 
-import warnings
+import math
+import re
 
 import numpy as np
 
 from methods import InvalidInputError
 from methods.positioning.model import evaluate_band
 
+NM = 1e-6                 # grid positions are whole multiples of 1e-6 mm (printed exactly with 6 decimals)
+AUTO_QUANTUM = 1000       # an automatic step is a multiple of 0.001 mm (1000 x 1e-6 mm)
+MAX_POINTS = 100_000      # a generic table longer than this is certainly a mistaken --interval
+AXIS = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
 
-def compensation_table(res, data, *, interval: float | None = None, source: str = "model") -> pd.DataFrame:
-    """The table (see the module docstring); ``res`` a positioning.gls_polynomial result, ``data`` its input."""
+
+class CompensationError(InvalidInputError):
+    """A compensation table that does not fit the controller (too many points, a field out of range)."""
+
+
+def _exact(q: int) -> str:
+    """A position of q x 1e-6 mm written exactly with 6 decimals (no float rounding)."""
+    sign = "-" if q < 0 else ""
+    q = abs(int(q))
+    return f"{sign}{q // 1_000_000}.{q % 1_000_000:06d}"
+
+
+def _fixed6(x: float) -> str:
+    """A value with 6 decimals, never '-0.000000'."""
+    s = f"{x:.6f}"
+    return "0.000000" if float(s) == 0.0 else s
+
+
+def _ceil_div(a: int, b: int) -> int:
+    return -((-a) // b)
+
+
+def compensation_table(res, data, *, interval: float | None = None, source: str = "model",
+                       reference_mm: float | None = None):
+    """The table (see the module docstring) as a DataFrame with columns position_mm, deviation_mm,
+    deviation_up_mm, deviation_down_mm, compensation_mm and the grid in ``.attrs``. ``res`` is a
+    positioning.gls_polynomial result (or positioning.iso230_2 with ``source='mean'``), ``data`` its input."""
     import pandas as pd  # loaded when a table is made (the fitbench command stays light)
     P = np.asarray(data.targets, float)
+    first, last = float(P[0]), float(P[-1])
+    if source not in ("model", "mean"):
+        raise InvalidInputError(f"--compensation-from must be 'model' or 'mean', got {source!r}")
+    if source == "model" and not getattr(res, "polynomial", None):
+        raise InvalidInputError("--compensation-from model needs the GLS polynomial (positioning.gls_polynomial)")
+    if reference_mm is None:
+        reference_mm = 0.0 if first <= 0.0 <= last else (first if abs(first) <= abs(last) else last)
+    ref = float(reference_mm)
+    if not (np.isfinite(ref) and first - 1e-9 <= ref <= last + 1e-9):
+        raise InvalidInputError(f"the reference point ({ref:g} mm) must lie within the measured travel "
+                                f"{first:g} to {last:g} mm; measure from the reference point or give a target")
+    ref_q = int(round(ref / NM))
+    lo_q, hi_q = math.floor(first / NM + 1e-3), math.ceil(last / NM - 1e-3)
     if interval is None:
-        interval = float(np.min(np.diff(P)))
-    if not (np.isfinite(interval) and interval > 0):
-        raise InvalidInputError(f"--interval must be a positive length in mm, got {interval!r}")
-    n = int(np.floor((P[-1] - P[0]) / interval + 1e-9))
-    if n < 1:
-        raise InvalidInputError(f"--interval {interval:g} mm is longer than the travel measured ({P[-1] - P[0]:g} mm)")
-    if n + 1 > 100_000:
-        raise InvalidInputError(f"--interval {interval:g} mm gives {n + 1} points; choose a coarser interval")
-    pos = P[0] + interval * np.arange(n + 1)
+        spacing = float(np.min(np.diff(P)))
+        longest = max(hi_q - ref_q, ref_q - lo_q)
+        steps = max(1, math.ceil(longest * NM / spacing - 1e-9))
+        step_q = _ceil_div(_ceil_div(longest, steps), AUTO_QUANTUM) * AUTO_QUANTUM
+    else:
+        if not (np.isfinite(interval) and interval > 0):
+            raise InvalidInputError(f"--interval must be a positive length in mm, got {interval!r}")
+        step_q = int(round(interval / NM))
+        if step_q < 1 or abs(step_q * NM - interval) > 1e-9 * max(1.0, interval):
+            raise InvalidInputError(f"--interval {interval!r} mm is not a whole number of 0.000001 mm; "
+                                    "round it to 6 decimals")
+    k_lo, k_hi = -_ceil_div(ref_q - lo_q, step_q), _ceil_div(hi_q - ref_q, step_q)
+    n = k_hi - k_lo + 1
+    if n > MAX_POINTS:
+        raise CompensationError(f"--interval {step_q * NM:g} mm gives {n} points over {last - first:g} mm "
+                                f"(at most {MAX_POINTS}); choose a coarser interval")
+    pos_q = ref_q + step_q * np.arange(k_lo, k_hi + 1, dtype=np.int64)
+    pos = pos_q * NM
     dirs = data.directions
     curves = {}
-    if source == "model":
-        if not res.polynomial:
-            raise InvalidInputError("--compensation-from model needs the GLS polynomial (positioning.gls_polynomial)")
-        for d in dirs:
+    for d in dirs:
+        if source == "model":
             curves[d] = evaluate_band(res.polynomial[d], pos)[0]
-    elif source == "mean":
-        for d in dirs:
+        else:
             curves[d] = np.interp(pos, P, res.per_target[f"mean_{d}"])
-    else:
-        raise InvalidInputError(f"--compensation-from must be 'model' or 'mean', got {source!r}")
     up = curves.get("up", np.full_like(pos, np.nan))
     down = curves.get("down", np.full_like(pos, np.nan))
     mean = np.mean([curves[d] for d in dirs], axis=0)
+    at_ref = float(mean[-k_lo])
     table = pd.DataFrame({"position_mm": pos, "deviation_mm": mean, "deviation_up_mm": up,
-                          "deviation_down_mm": down, "compensation_mm": -mean})
-    table.attrs.update(interval_mm=float(interval), source=source,
-                       backlash_mm=float(np.mean(up - down)) if len(dirs) == 2 else float("nan"))
+                          "deviation_down_mm": down, "compensation_mm": -(mean - at_ref)})
+    backlash = (float(np.mean(data.up.mean(axis=1) - data.down.mean(axis=1))) if len(dirs) == 2 else float("nan"))
+    table.attrs.update(interval_mm=step_q * NM, step_q=int(step_q), first_q=int(pos_q[0]), last_q=int(pos_q[-1]),
+                       reference_q=ref_q, reference_index=int(-k_lo), measured_mm=(first, last), source=source,
+                       deviation_at_reference_mm=at_ref, backlash_mm=backlash, directions=tuple(dirs))
     return table
 
 
-def _header(table, comment: str) -> list[str]:
-    uni = not np.isfinite(table.attrs.get("backlash_mm", float("nan")))
-    return [f"{comment} fitbench pitch-error compensation: c(P) = -({'deviation of the one direction measured' if uni else 'mean bidirectional deviation'}), "
-            f"from the {table.attrs.get('source', '?')}",
-            f"{comment} {len(table)} points, {table.position_mm.iloc[0]:g} to {table.position_mm.iloc[-1]:g} mm every "
-            f"{table.attrs.get('interval_mm', float('nan')):g} mm; mean reversal value B = " +
-            (f"{table.attrs['backlash_mm'] * 1e3:.2f} µm (set as backlash separately)" if not uni else
-             "unknown (unidirectional test)"),
-            f"{comment} check the controller's sign convention with a verification run"]
+# --------------------------------------------------------------------------------------------- header
+def _header(table, axis: str, values: str) -> list[str]:
+    """The lines every format carries (ASCII, without the comment mark): what the table covers, the
+    reference point, the sign of the values, the backlash to enter and the verification run."""
+    a = table.attrs
+    first, last = a["measured_mm"]
+    lo, hi = a["first_q"] * NM, a["last_q"] * NM
+    ext = (f"values beyond the targets, {first - lo:.6g} mm before the first and {hi - last:.6g} mm after the last, "
+           + ("from the model" if a["source"] == "model" else "held at the end targets' means")
+           if (lo < first - 1e-9 or hi > last + 1e-9) else "no point beyond the targets")
+    what = ("mean bidirectional deviation" if len(a["directions"]) == 2
+            else f"deviation of the one direction measured, {a['directions'][0]},")
+    return [f"fitbench pitch-error compensation table, axis {axis}, from the {a['source']} of the {what}",
+            f"covers {_exact(a['first_q'])} to {_exact(a['last_q'])} mm: {len(table)} points every "
+            f"{_exact(a['step_q'])} mm; measured travel {first:.6g} to {last:.6g} mm; {ext}",
+            f"reference point at {_exact(a['reference_q'])} mm holds 0: deviations taken relative to the "
+            f"{a['deviation_at_reference_mm'] * 1e3:.3f} um there",
+            f"values: {values}",
+            _backlash_line(table),
+            "check the result with a verification run after loading"]
 
 
-def write_csv(table: pd.DataFrame, axis: str = "X") -> str:
-    lines = _header(table, "#")
-    return "\n".join(lines) + "\n" + table.to_csv(index=False, float_format="%.6f", lineterminator="\n")
+def _backlash_line(table) -> str:
+    """The mean reversal value B of ISO 230-2 (x_up - x_down, mean over the targets) and the backlash to
+    enter: -B. A normal backlash (the axis travels too little after a reversal) makes B negative and is
+    entered positive; SINUMERIK 808D Parameter Manual 08/2013, MD32450 $MA_BACKLASH: "positive, if the
+    encoder is leading the machine part (normal situation); negative, if the encoder is behind the
+    machine part"; FANUC parameter 1851 (backlash compensation, detection units) likewise."""
+    b = table.attrs["backlash_mm"]
+    if not np.isfinite(b):
+        return "mean reversal value B unknown, unidirectional test: no backlash figure"
+    enter = -b
+    kind = ("normal backlash: the axis travels too little after a reversal" if enter > 0 else
+            "negative backlash: the axis travels too far after a reversal" if enter < 0 else "no backlash")
+    return (f"mean reversal value B = {b * 1e3:.3f} um, ISO 230-2: mean of x_up - x_down over the targets; "
+            f"enter the backlash as -B = {enter * 1e3:.3f} um, {kind}; SINUMERIK MD32450 $MA_BACKLASH in mm, "
+            f"FANUC 1851 in detection units; not in this table")
 
 
-def write_siemens_eec(table: pd.DataFrame, axis: str = "X1") -> str:
-    step = table.attrs["interval_mm"]
-    out = ["%_N_AX_EEC_INI", *_header(table, ";"),
-           f"; MD38000 $MA_MM_ENC_COMP_MAX_POINTS of {axis} must be >= {len(table)}", "CHANDATA(1)"]
-    for i, c in enumerate(table.compensation_mm.to_numpy()):
-        out.append(f"$AA_ENC_COMP[0,{i},{axis}]={c:.6f}")
-    out += [f"$AA_ENC_COMP_STEP[0,{axis}]={step:.6f}", f"$AA_ENC_COMP_MIN[0,{axis}]={table.position_mm.iloc[0]:.6f}",
-            f"$AA_ENC_COMP_MAX[0,{axis}]={table.position_mm.iloc[-1]:.6f}", f"$AA_ENC_COMP_IS_MODULO[0,{axis}]=0", "M17"]
+def check_axis(axis, fmt: str) -> str:
+    """An axis name of the format's grammar: a letter then letters, digits or '_' (at most 32), as
+    SINUMERIK machine-axis names (MD10000 $MN_AXCONF_MACHAX_NAME_TAB, e.g. X1) are; nothing that could
+    end a comment, a line or an index of the file."""
+    if not isinstance(axis, str) or not AXIS.fullmatch(axis):
+        raise InvalidInputError(f"--axis {axis!r} is not a valid axis name for {fmt}: use a letter followed by "
+                                "letters, digits or '_' (at most 32), e.g. X1")
+    return axis
+
+
+# --------------------------------------------------------------------------------------------- writers
+def write_csv(table, axis: str = "X") -> str:
+    """Generic CSV: ``#`` header lines, then one row per grid point with the columns position_mm,
+    deviation_mm, deviation_up_mm, deviation_down_mm (ISO 230-2 deviations as measured; empty for a
+    direction not measured) and compensation_mm = -(deviation_mm - deviation at the reference point), the
+    value to **add to the commanded position** (a controller that adds it reaches the target). Numbers
+    with 6 decimals in mm, never -0.000000."""
+    axis = check_axis(axis, "csv")
+    lines = ["# " + h for h in _header(table, axis, "compensation_mm is added to the commanded position; "
+                                                    "it is minus the deviation relative to the reference point")]
+    lines.append("position_mm,deviation_mm,deviation_up_mm,deviation_down_mm,compensation_mm")
+    a = table.attrs
+    cols = [table[c].to_numpy() for c in ("deviation_mm", "deviation_up_mm", "deviation_down_mm", "compensation_mm")]
+    for k in range(len(table)):
+        cells = [_exact(a["first_q"] + k * a["step_q"])]
+        cells += ["" if not np.isfinite(c[k]) else _fixed6(c[k]) for c in cols]
+        lines.append(",".join(cells))
+    return "\n".join(lines) + "\n"
+
+
+SINUMERIK_MAX_POINTS = 200
+
+
+def write_siemens_eec(table, axis: str = "X1", max_points: int = SINUMERIK_MAX_POINTS) -> str:
+    """SINUMERIK leadscrew / measuring-system error compensation (LEC/MSEC) as a part program
+    ``%_N_AX_EEC_INI``, ``CHANDATA(1)``, ``$AA_ENC_COMP[0,N,AXIS]`` (mm), ``$AA_ENC_COMP_STEP``,
+    ``_MIN``, ``_MAX``, ``_IS_MODULO``, ``M17`` (SINUMERIK Function Manual Extended Functions, K3
+    Compensation, sec. 4.4.2, 03/2013, 6FC5397-1BP40-3BA1: layout and example).
+
+    Sign: "A positive compensation value causes the corresponding machine axis to move in the negative
+    direction" (same manual sec. 4.4.2.1; SINUMERIK 808D Function Manual 01/2017 p. 106), the value
+    modifying the actual position value. An axis that reaches target + x(P) must move by -x(P), so the
+    table holds **+(x(P) - x(R))**, the ISO 230-2 deviation relative to the reference point.
+
+    Limits: N = 0 ... MD38000 $MA_MM_ENC_COMP_MAX_POINTS - 1; the 808D allows "up to 200 interpolation
+    points (N = 0...199)" (808D Function Manual p. 106), the default ``max_points``; an 840D with a larger
+    MD38000 may pass it. The controller takes the table's end as MIN + k STEP (840D sl Function Manual
+    01/2008 p. 355), so STEP, MIN and MAX are printed exactly with MIN + STEP (n - 1) = MAX. The value at
+    the reference point is 0 (808D p. 106). Values beyond MIN / MAX stay at the first / last value."""
+    axis = check_axis(axis, "siemens-eec")
+    n = len(table)
+    if n > max_points:
+        raise CompensationError(f"siemens-eec: {n} points do not fit the controller's {max_points} "
+                                f"(MD38000 MM_ENC_COMP_MAX_POINTS); choose --interval of at least "
+                                f"{_exact(_ceil_div(table.attrs['last_q'] - table.attrs['first_q'], max_points - 1))} mm")
+    a = table.attrs
+    out = ["%_N_AX_EEC_INI"]
+    out += ["; " + h for h in _header(table, axis, "$AA_ENC_COMP = +(deviation - deviation at the reference point) "
+                                                   "in mm: a positive value moves the axis in the negative direction")]
+    out += [f"; MD38000 $MA_MM_ENC_COMP_MAX_POINTS of {axis} must be >= {n}; MD32700 ENC_COMP_ENABLE = 0 "
+            "while loading", "CHANDATA(1)"]
+    comp = table.deviation_mm.to_numpy() - a["deviation_at_reference_mm"]
+    out += [f"$AA_ENC_COMP[0,{i},{axis}]={_fixed6(c)}" for i, c in enumerate(comp)]
+    out += [f"$AA_ENC_COMP_STEP[0,{axis}]={_exact(a['step_q'])}", f"$AA_ENC_COMP_MIN[0,{axis}]={_exact(a['first_q'])}",
+            f"$AA_ENC_COMP_MAX[0,{axis}]={_exact(a['last_q'])}", f"$AA_ENC_COMP_IS_MODULO[0,{axis}]=0", "M17"]
     return "\n".join(out) + "\n"
 
 
-def write_fanuc_pitch(table: pd.DataFrame, axis: str = "X", detection_unit_mm: float = 0.001,
-                      reference_number: int = 0, magnification: int = 1) -> str:
-    counts = np.rint(table.compensation_mm.to_numpy() / (detection_unit_mm * magnification)).astype(np.int64)
-    inc = np.diff(counts, prepend=counts[0])       # incremental; 0 at the reference (first) point
-    if np.any(np.abs(inc) > 127):
-        warnings.warn(f"fanuc-pitch: increments up to {np.abs(inc).max()} detection units per interval; check the "
-                      "controller's range (older series: +-7 x magnification) or use a larger magnification (3623)",
-                      UserWarning, stacklevel=2)
-    interval_units = table.attrs["interval_mm"] / detection_unit_mm
-    last = reference_number + len(table) - 1
-    out = ["%", f"(FITBENCH PITCH ERROR COMPENSATION, AXIS {axis.upper()}, INCREMENTAL VALUES IN DETECTION UNITS OF "
-                f"{detection_unit_mm:g} MM)",
-           *("(" + h[2:].replace("µm", "UM").replace("(", "").replace(")", "").upper().encode("ascii", "replace").decode()
-             .strip() + ")" for h in _header(table, "#")),
-           f"(SET 3620 = {reference_number} REFERENCE POINT AT {table.position_mm.iloc[0]:g} MM, 3621 = {reference_number}, "
-           f"3622 = {last}, 3623 = {magnification}, 3624 = {interval_units:g})"]
-    for k, v in enumerate(inc):
-        out.append(f"N{10000 + reference_number + k} P{int(v)}")
+FANUC_POINTS = 1024            # pitch-error compensation point numbers 0 ... 1023, tape addresses N10000 ... N11023
+FANUC_VALUE = (-128, 127)      # compensation value per point, in units of detection unit x magnification
+FANUC_MAGNIFICATION = (1, 100)  # parameter 3623 (0 means 1)
+FANUC_INTERVAL_MAX = 99_999_999  # parameter 3624 (two-word, in the least input increment)
+
+
+def write_fanuc_pitch(table, axis: str = "X", detection_unit_mm: float = 0.001, increment_mm: float = 0.001,
+                      first_number: int = 0, magnification: int | None = None) -> str:
+    """FANUC pitch-error compensation data in the parameter-tape format: ``%``, comments ``(...)``, one
+    line ``N<10000 + point number> P<value>`` per compensation point, ``%`` (FANUC Series 0i-PB
+    parameter manual B-63980EN/01 sec. 4, parameters 3620-3624 and the linear-axis example p. 99-100;
+    technical report A-77810E, bidirectional pitch-error compensation, parameter table 3620-3627).
+
+    Grid: point 3620 is the reference position R; point 3620 + k (k >= 1) holds the pitch error of the
+    section (R + (k-1) d, R + k d], point 3620 - j (j >= 0) that of (R - (j+1) d, R - j d], with d = 3624;
+    3621 / 3622 are the most negative / positive point numbers (3621 <= 3620 < 3622). Values are
+    **incremental** (the change of the compensation over the point's section, "as viewed from the
+    negative direction"), in units of detection unit x 3623 (magnification), each in -128 ... 127.
+
+    Sign: the compensation pulses are output with the move command, so a positive value moves the axis
+    in the positive direction; an axis that reaches target + x(P) needs -x(P): the increments are those
+    of **-(x(P) - x(R))**, rounded on the absolute curve (no accumulated rounding).
+
+    Limits: the point block 0 ... 1023 (tape N10000 ... N11023): the axis' points start at
+    ``first_number`` (3621) and must end by 1023; 3624 = d / ``increment_mm`` (the least input increment,
+    IS-B 0.001 mm) must be a whole number in 1 ... 99999999 (FANUC also requires d >= rapid traverse /
+    7500, which the header states); 3623 in 1 ... 100, by default the smallest that keeps every value
+    within -128 ... 127. What does not fit is refused."""
+    label = check_axis(axis, "fanuc-pitch").upper()
+    a = table.attrs
+    k0 = a["reference_index"]
+    rel = -(table.deviation_mm.to_numpy() - a["deviation_at_reference_mm"])      # what to add, mm, 0 at R
+    k = np.arange(len(table)) - k0                                            # grid index relative to R
+    k_lo, k_hi = int(k[0]), int(k[-1])
+    lowest, highest = min(k_lo + 1, 0), max(k_hi, 1)     # sections covered, with R's point and one above it
+    n = highest - lowest + 1
+    ref_no = first_number - lowest
+    if not (isinstance(first_number, (int, np.integer)) and first_number >= 0) or ref_no + highest > FANUC_POINTS - 1:
+        raise CompensationError(f"fanuc-pitch: {n} points from number {first_number} do not fit the pitch block "
+                                f"0 ... {FANUC_POINTS - 1} (N10000 ... N{10000 + FANUC_POINTS - 1}); choose a "
+                                f"coarser --interval (at least {_exact(_ceil_div(a['last_q'] - a['first_q'], (FANUC_POINTS - 2) * AUTO_QUANTUM) * AUTO_QUANTUM)} mm)")
+    step_mm = a["step_q"] * NM
+    interval = step_mm / increment_mm
+    if abs(interval - round(interval)) > 1e-6 or not 1 <= round(interval) <= FANUC_INTERVAL_MAX:
+        raise CompensationError(f"fanuc-pitch: the point interval {_exact(a['step_q'])} mm is not a whole number "
+                                f"1 ... {FANUC_INTERVAL_MAX} of {increment_mm:g} mm (parameter 3624); "
+                                f"choose --interval as a multiple of {increment_mm:g} mm")
+    interval = int(round(interval))
+    mags = range(FANUC_MAGNIFICATION[0], FANUC_MAGNIFICATION[1] + 1) if magnification is None else [magnification]
+    for m in mags:
+        if not (isinstance(m, (int, np.integer)) and FANUC_MAGNIFICATION[0] <= m <= FANUC_MAGNIFICATION[1]):
+            raise CompensationError(f"fanuc-pitch: magnification {m!r} (parameter 3623) must be a whole number "
+                                    f"{FANUC_MAGNIFICATION[0]} ... {FANUC_MAGNIFICATION[1]}")
+        absolute = np.rint(rel / (detection_unit_mm * m)).astype(np.int64)
+        inc = np.diff(absolute)                                  # section k (k_lo < k <= k_hi) -> inc[k - k_lo - 1]
+        if inc.size == 0 or (inc.min() >= FANUC_VALUE[0] and inc.max() <= FANUC_VALUE[1]):
+            break
+    else:
+        raise CompensationError(f"fanuc-pitch: a change of {np.abs(inc).max()} x {detection_unit_mm:g} mm x {m} over "
+                                f"one interval exceeds {FANUC_VALUE[1]} (per point); choose a finer --interval or a larger magnification")
+    values = np.zeros(n, dtype=np.int64)
+    values[(k_lo + 1) - lowest:(k_hi + 1) - lowest] = inc
+    numbers = ref_no + np.arange(lowest, highest + 1)
+    def comment(text: str) -> str:
+        return "(" + re.sub(r"[^A-Z0-9 .,:;=+\-/*]", " ", text.upper()).strip() + ")"
+    out = ["%", comment(f"FANUC PITCH ERROR COMPENSATION AXIS {label} VALUES INCREMENTAL IN {detection_unit_mm:g} MM "
+                        f"X MAGNIFICATION {m}")]
+    out += [comment(h) for h in _header(table, label, "increments of minus the deviation relative to the reference "
+                                                       "point; a positive value moves the axis in the positive direction")]
+    out.append(comment(f"SET 3620 = {ref_no} REFERENCE POSITION AT {_exact(a['reference_q'])} MM, "
+                       f"3621 = {numbers[0]}, 3622 = {numbers[-1]}, 3623 = {m}, 3624 = {interval} "
+                       f"I.E. {_exact(a['step_q'])} MM IN UNITS OF {increment_mm:g} MM; RAPID TRAVERSE MM/MIN / 7500 "
+                       f"MUST NOT EXCEED {_exact(a['step_q'])} MM"))
+    out += [f"N{10000 + int(no)} P{int(v)}" for no, v in zip(numbers, values)]
     out.append("%")
     return "\n".join(out) + "\n"
 
@@ -133,13 +312,13 @@ def write_fanuc_pitch(table: pd.DataFrame, axis: str = "X", detection_unit_mm: f
 WRITERS = {"csv": write_csv, "siemens-eec": write_siemens_eec, "fanuc-pitch": write_fanuc_pitch}
 
 
-def write_tables(res, data, requests, *, interval=None, source="model", axis="X1", write) -> pd.DataFrame:
+def write_tables(res, data, requests, *, interval=None, source="model", axis="X1", write, reference_mm=None):
     """Build the table once and write it in every requested ``(format, path)`` with ``write(path, text)``;
-    every format is checked before any file is written. Returns the table."""
+    every format is checked (name, axis, limits) before any file is written. Returns the table."""
     for fmt, _ in requests:
         if fmt not in WRITERS:
             raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
-    table = compensation_table(res, data, interval=interval, source=source)
+    table = compensation_table(res, data, interval=interval, source=source, reference_mm=reference_mm)
     texts = [(path, WRITERS[fmt](table, axis=axis)) for fmt, path in requests]
     for path, text in texts:
         write(path, text)

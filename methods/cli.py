@@ -394,8 +394,8 @@ def cmd_positioning(args) -> int:
     print(text(res, degree=args.degree))
     if comp is not None:
         for fmt, path in args.compensation:
-            print(f"compensation table ({fmt}, {len(comp)} points every {comp.attrs['interval_mm']:g} mm, from the "
-                  f"{args.compensation_from}) written to {path}")
+            print(f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
+                  f"to {comp.position_mm.iloc[-1]:g} mm, from the {args.compensation_from}) written to {path}")
     return 0
 
 

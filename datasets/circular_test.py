@@ -2,7 +2,8 @@
 
 The commanded path is a circle of nominal radius R about the nominal centre, run at feed F (mm/min)
 clockwise or counter-clockwise from a start angle, sampled at f_s (Hz), with optional run-in and
-run-out arcs (not part of the evaluated trace). Each error source moves the actual axis positions:
+run-out arcs (not part of the evaluated trace). A partial arc (``arc_deg`` < 360) also has a sample at
+exactly its start and its end angle, as ballbar software records the nominal arc. Each error source moves the actual axis positions:
 
 * ``scale_x``, ``scale_y`` (dimensionless, e.g. 30e-6 = 30 um/m): dx = s_x (x - x_c), dy = s_y (y - y_c);
 * ``squareness`` (rad): dx = alpha (y - y_c), the X axis leans towards Y;
@@ -98,6 +99,8 @@ def trace(direction: str, cond: TestConditions, err: MachineErrors, rng: np.rand
     total_angle = arc + run_in + run_out
     dt = 1.0 / cond.sampling_hz
     t = np.arange(0.0, total_angle / omega, dt)
+    if cond.arc_deg < 360:  # a partial arc is recorded from exactly its start to exactly its end angle
+        t = np.union1d(t, [run_in / omega, (run_in + arc) / omega])
     theta = np.radians(cond.start_angle_deg) - d * run_in + d * omega * t
     x = xc + R * np.cos(theta)
     y = yc + R * np.sin(theta)

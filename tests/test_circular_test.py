@@ -7,9 +7,11 @@ import pytest
 from scipy.optimize import least_squares
 
 from conftest import run_python
-from datasets.circular_test import MachineErrors, TestConditions, circular_test, lola_hbg130
+import methods
+from datasets.circular_test import MachineErrors, TestConditions, circular_test, lola_hbg130, trace
 from methods import InvalidInputError
 from methods.circular_test import diagnose, evaluate
+from methods.circular_test.runs import trim
 
 COND = TestConditions(nominal_radius=150.0, nominal_center=(300.0, 200.0), feed_mm_min=2000.0, sampling_hz=100.0,
                       start_angle_deg=17.0, run_in_deg=20.0, run_out_deg=20.0)
@@ -183,7 +185,125 @@ def test_cli_bad_input(files, args, match):
 def test_arc_under_90_degrees_is_refused():
     """ISO 230-4 partial arcs are evaluated from 90 deg up; a shorter run is refused with the arc it covers."""
     cw, ccw, _ = circular_test(COND, MachineErrors(), seed=0)
-    with pytest.raises(InvalidInputError, match="covers an arc of 8[0-9] deg"):
+    with pytest.raises(InvalidInputError, match=r"covers an arc of 8[0-9](\.[0-9]+)? deg"):
         evaluate(cw[: int(len(cw) * 85 / 360)], ccw, 150.0)
     half = evaluate(cw[: len(cw) // 2], ccw, 150.0)   # a 180 deg arc is a partial arc now, not an error
     assert half.partial_arc and 175 < half.arc_deg["cw"] <= 180
+
+
+# ------------------------------------------------------------------------------------------ H at the data's resolution
+def direct_hysteresis(cw, ccw, c, common=None):
+    """max |r_a - r_b(theta_a)| over the points a of each run, r_b linear between the two points of the other run
+    that bracket theta_a on the circle (found by brute force over all pairs); ``common`` = (lo, hi) angles of a
+    partial arc (about its middle ``common[2]``): only points inside, and no wrap-around."""
+    out = 0.0
+    for a, b in ((cw, ccw), (ccw, cw)):
+        ta, ra = np.arctan2(a[:, 1] - c[1], a[:, 0] - c[0]), np.hypot(*(a - c).T)
+        tb, rb = np.arctan2(b[:, 1] - c[1], b[:, 0] - c[0]), np.hypot(*(b - c).T)
+        if common is not None:
+            lo, hi, mid = common
+            ta, tb = np.angle(np.exp(1j * (ta - mid))), np.angle(np.exp(1j * (tb - mid)))
+            inside = (ta >= lo) & (ta <= hi)
+            ta, ra = ta[inside], ra[inside]
+        for i0 in range(0, len(ta), 500):
+            delta = tb[None, :] - ta[i0:i0 + 500, None]
+            if common is None:
+                delta = np.angle(np.exp(1j * delta))
+            below = np.where(delta <= 0, delta, -np.inf).argmax(axis=1)
+            above = np.where(delta > 0, delta, np.inf).argmin(axis=1)
+            rows = np.arange(len(delta))
+            d0, d1 = delta[rows, below], delta[rows, above]
+            w = np.where(np.isfinite(d1) & (d1 > d0), -d0 / np.where(d1 > d0, d1 - d0, 1.0), 0.0)
+            rb_at = rb[below] + w * (rb[above] - rb[below])
+            out = max(out, float(np.max(np.abs(ra[i0:i0 + 500] - rb_at))))
+    return out
+
+
+def test_hysteresis_is_the_largest_difference_of_the_runs_at_every_point():
+    """Noisy, backlash-laden runs of 4200+ points each: H is the direct computation at every point of both runs
+    (the other run linear in angle between its bracketing points), not a 0.1 deg grid (which subsampled here)."""
+    cond = TestConditions(nominal_radius=150.0, nominal_center=(300.0, 200.0), feed_mm_min=2000.0, sampling_hz=150.0,
+                          start_angle_deg=17.0)
+    err = MachineErrors(backlash_x=0.008, backlash_y=0.005, spike_y=0.004, spike_tau=0.05, squareness=20e-6,
+                        lag_x=0.002, lag_y=0.0012, noise=0.0008)
+    cw, ccw, _ = circular_test(cond, err, seed=11)
+    assert min(len(cw), len(ccw)) >= 3600
+    ev = evaluate(cw, ccw, 150.0, (300.0, 200.0))
+    c = np.array(methods.fit("circle.gauss_newton", np.vstack([cw, ccw])).center)
+    assert ev.figures["H"] == pytest.approx(direct_hysteresis(cw, ccw, c), abs=1e-12)
+    # the maximum over every angle of the two interpolated runs (a fine grid) is not above it
+    grid = np.linspace(-np.pi, np.pi, 200_001)
+    interp = [np.interp(grid, *sorted_polar(p, c), period=2 * np.pi) for p in (cw, ccw)]
+    assert np.max(np.abs(interp[0] - interp[1])) <= ev.figures["H"] + 1e-12
+
+
+def sorted_polar(p, c):
+    t, r = np.arctan2(p[:, 1] - c[1], p[:, 0] - c[0]), np.hypot(*(p - c).T)
+    o = np.argsort(t)
+    return t[o], r[o]
+
+
+def test_hysteresis_of_a_partial_arc_over_the_common_angles():
+    err = MachineErrors(backlash_x=0.006, backlash_y=0.004, squareness=30e-6, noise=0.0006)
+    c1 = TestConditions(nominal_radius=150.0, nominal_center=(0.0, 0.0), feed_mm_min=1000.0, sampling_hz=50.0,
+                        arc_deg=200.0, start_angle_deg=-10.0)
+    c2 = TestConditions(**{**c1.__dict__, "start_angle_deg": 188.0})   # the CW run ends 2 deg short of the CCW start
+    ccw, _ = trace("ccw", c1, err, np.random.default_rng(1))
+    cw, _ = trace("cw", c2, err, np.random.default_rng(2))
+    ev = evaluate(cw, ccw, 150.0, (0.0, 0.0))
+    assert ev.partial_arc
+    both = np.vstack([cw, ccw])
+    c = np.array(methods.fit("circle.gauss_newton", both).center)
+    mid = np.arctan2(np.mean(both[:, 1] - c[1]), np.mean(both[:, 0] - c[0]))
+    spans = [np.angle(np.exp(1j * (np.arctan2(p[:, 1] - c[1], p[:, 0] - c[0]) - mid))) for p in (cw, ccw)]
+    lo, hi = max(s.min() for s in spans), min(s.max() for s in spans)
+    assert ev.figures["H"] == pytest.approx(direct_hysteresis(cw, ccw, c, (lo, hi, mid)), abs=1e-12)
+
+
+# ------------------------------------------------------------------------------------------ arcs of exactly 90 deg
+def exact_arc_pair(arc, start, err, seed=1):
+    c1 = TestConditions(nominal_radius=150.0, nominal_center=(300.0, 200.0), feed_mm_min=1000.0, sampling_hz=50.0,
+                        arc_deg=arc, start_angle_deg=start)
+    c2 = TestConditions(**{**c1.__dict__, "start_angle_deg": start + arc})
+    ccw, _ = trace("ccw", c1, err, np.random.default_rng(seed))
+    cw, _ = trace("cw", c2, err, np.random.default_rng(seed + 1))
+    return cw, ccw
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.0005])
+def test_runs_over_exactly_90_degrees_are_evaluated_with_their_end_points(noise):
+    """Runs recorded over exactly the nominal 90 deg, noise-free and noisy, from 11 start angles: each is
+    evaluated (not refused as under 90 deg) and trimming to --arc 90 keeps every point (no endpoint lost as overrun)."""
+    err = MachineErrors(squareness=15e-6, scale_x=20e-6, scale_y=-10e-6, backlash_x=0.004, lag_x=0.002, lag_y=0.0015,
+                        noise=noise)
+    for start in range(0, 360, 33):
+        cw, ccw = exact_arc_pair(90.0, start, err, seed=start)
+        ev = evaluate(cw, ccw, 150.0, (300.0, 200.0))
+        assert ev.partial_arc and all(abs(a - 90.0) < 0.05 for a in ev.arc_deg.values()), start
+        for pts in (cw, ccw):
+            kept, rep = trim(pts, (300.0, 200.0), arc_deg=90.0)
+            assert rep["overrun_trimmed_points"] == 0 and len(kept) == len(pts), start
+        assert evaluate(*[trim(p, (300.0, 200.0), arc_deg=90.0)[0] for p in (cw, ccw)], 150.0,
+                        (300.0, 200.0)).figures == ev.figures
+
+
+def test_overrun_beyond_a_partial_arc_is_still_trimmed():
+    err = MachineErrors(squareness=15e-6, noise=0.0003)
+    cw, ccw = exact_arc_pair(100.0, 30.0, err)
+    kept, rep = trim(ccw, (300.0, 200.0), arc_deg=90.0)
+    assert rep["overrun_trimmed_points"] > 0 and 90.0 - 0.128 < rep["evaluated_arc_deg"] <= 90.0 + 1e-3  # one 0.127 deg step
+    short = ccw[: np.searchsorted(np.degrees(np.unwrap(np.arctan2(ccw[:, 1] - 200, ccw[:, 0] - 300))), 30.0 + 89.5)]
+    with pytest.raises(InvalidInputError, match=r"covers an arc of 89\.[0-9]+ deg"):
+        evaluate(cw, short, 150.0, (300.0, 200.0))
+
+
+def test_cli_arc_90(tmp_path):
+    cw, ccw = exact_arc_pair(90.0, 200.0, MachineErrors(squareness=15e-6, backlash_y=0.003, noise=0.0003))
+    for name, pts in (("cw", cw), ("ccw", ccw)):
+        np.savetxt(tmp_path / f"{name}.csv", pts, delimiter=",", header="x,y", comments="", fmt="%.9f")
+    out = run_cli(tmp_path / "cw.csv", tmp_path / "ccw.csv", "--nominal-radius", 150, "--nominal-center", 300, 200,
+                  "--arc", 90, "--json")
+    assert out.returncode == 0, out.stderr
+    d = json.loads(out.stdout)
+    assert d["details"]["n_points"] == {"cw": len(cw), "ccw": len(ccw)}
+    assert not any("overrun" in n and "0 point(s) of overrun" not in n for n in d["notes"])

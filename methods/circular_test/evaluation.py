@@ -5,7 +5,11 @@
   standard's usual evaluation) or as the minimum zone (``center='mz'``).
 * G(b) (bidirectional circular deviation): the same for both runs together.
 * H (circular hysteresis, ISO 230-4:1996): the largest radial difference between the two runs at the
-  same angle, about the least-squares centre of both runs together.
+  same angle, about the least-squares centre of both runs together. Each run is read as the linear
+  interpolation of its radius in angle between its consecutive points (periodic for a full circle); H is
+  the maximum of |r_cw(theta) - r_ccw(theta)| over every angle both runs cover. That difference is linear
+  between the angles of the two runs' points, so its maximum lies at one of them: H is evaluated exactly at
+  every point of both runs (the data's resolution; no grid, no subsampling) by :func:`hysteresis`.
 * F_max, F_min (radial deviation): the largest and smallest deviation of the path from the nominal
   radius, about the nominal centre when given, else the least-squares centre of both runs.
 * mean radial deviation: the mean of those deviations.
@@ -13,7 +17,9 @@
 Partial arcs (ISO 230-4 allows arcs smaller than 360 deg, e.g. in vertical planes where the
 ballbar's fixture blocks part of the circle: 180 deg or 220 deg): G, G(b) and F are evaluated on the
 arc measured (the least-squares centre of an arc of at least 90 deg is well determined); H on the
-angles both runs cover. Arcs under ``MIN_ARC_DEG`` are refused.
+angles both runs cover. Arcs under ``MIN_ARC_DEG`` are refused; arc spans are compared within
+:func:`arc_tolerance_deg` (the angles' floating-point resolution plus the path's own deviations, which
+move its ends), so a run recorded over exactly 90 deg is accepted.
 """
 from __future__ import annotations
 
@@ -30,6 +36,35 @@ RADIUS_TOLERANCE = 0.05     # the data's mean radius may differ from the nominal
 RUNS_TOLERANCE = 0.01       # the two runs' circles may differ by 1 % of the radius at most
 MAX_ANGULAR_GAP_DEG = 30.0  # a run with no angular gap wider than this counts as a full circle
 MIN_ARC_DEG = 90.0          # the shortest arc evaluated (ISO 230-4 partial arcs)
+ARC_ULPS = 64               # arc spans equal within this many units of roundoff of the angles (arc_tolerance_deg)
+ARC_DEVIATIONS = 4.0        # ... and within this many radial peak-to-valleys over the radius (arc_tolerance_deg)
+
+
+def arc_tolerance_deg(points, center, deviations: bool = True) -> float:
+    """Tolerance (deg) within which an arc span of ``points`` about ``center`` equals a nominal arc.
+
+    A run recorded over exactly its nominal arc spans it only up to (a) the floating-point resolution of
+    its polar angles, ``ARC_ULPS`` units of roundoff of angles up to 2 pi computed from coordinates as large
+    as M = max |coordinate| at radii r (eps M / r rad for the coordinate, the subtraction and the centre
+    each), and (b) the path's own deviations, which move its ends along the circle: ``ARC_DEVIATIONS``
+    times the run's radial peak-to-valley over its radius. For a linear error (squareness, scale or servo
+    mismatch) the deviation along the path is half the angular derivative of the radial one, so a 90 deg
+    arc's span moves by up to twice its radial peak-to-valley (a squareness alpha moves the end of a
+    0-90 deg arc by alpha R along the path, its radial peak-to-valley being alpha R / 2); the factor
+    doubles that for noise and the non-linear errors. ``deviations=False``: (a) only (the point that closes
+    a full circle).
+    """
+    pts = np.asarray(points, float)
+    c = np.asarray(center, float)
+    if not len(pts):
+        return 0.0
+    r = np.hypot(pts[:, 0] - c[0], pts[:, 1] - c[1])
+    m = max(float(np.max(np.abs(pts))), float(np.max(np.abs(c))))
+    r_min, r_mid = float(r.min()), float(np.median(r))
+    if not r_min > 0:
+        return 0.0
+    roundoff = ARC_ULPS * np.finfo(float).eps * (2 * np.pi + 3 * m / r_min)
+    return float(np.degrees(roundoff + (ARC_DEVIATIONS * (float(r.max()) - r_min) / r_mid if deviations else 0.0)))
 
 
 def coverage_deg(points, center) -> tuple[float, float]:
@@ -53,8 +88,8 @@ def _check_run(points, name, nominal_radius, center):
                                 f"{nominal_radius:g} mm (more than {RADIUS_TOLERANCE:.0%}); check --nominal-radius and "
                                 f"--unit{hint}")
     arc, gap = coverage_deg(points, center)
-    if arc < MIN_ARC_DEG:
-        raise InvalidInputError(f"{name} run: it covers an arc of {arc:.0f} deg; an evaluation needs at least "
+    if arc < MIN_ARC_DEG - arc_tolerance_deg(points, center):
+        raise InvalidInputError(f"{name} run: it covers an arc of {arc:.6g} deg; an evaluation needs at least "
                                 f"{MIN_ARC_DEG:g} deg of arc (ISO 230-4 partial arcs) or the full circle")
     return arc, gap
 
@@ -71,31 +106,34 @@ def _zone(points, center_kind):
     return np.array(res.center), res.form_error
 
 
-def hysteresis(cw, ccw, center, samples=3600, partial=False):
-    """Largest |r_cw(theta) - r_ccw(theta)| over a common angle grid (periodic linear interpolation; for
-    partial arcs linear interpolation over the angles both runs cover)."""
+def _run_polar(pts, center, ref=0.0):
+    """(angles in (-pi, pi] about ``center`` relative to ``ref``, sorted; their radii)."""
+    ang = np.angle(np.exp(1j * (np.arctan2(pts[:, 1] - center[1], pts[:, 0] - center[0]) - ref)))
+    order = np.argsort(ang, kind="stable")
+    return ang[order], radii(pts, center)[order]
+
+
+def hysteresis(cw, ccw, center, partial=False):
+    """H = max |r_cw(theta) - r_ccw(theta)| (ISO 230-4:1996) about ``center``, each run's radius
+    linearly interpolated in angle between its neighbouring points (periodic for full circles; for partial
+    arcs over the angles both runs cover, measured from the middle of the arc). The difference of two
+    piecewise-linear functions is linear between their knots, so evaluating it at every point of both runs
+    gives its maximum exactly."""
+    ref = 0.0
+    if partial:
+        both = np.vstack([cw, ccw])
+        ref = np.arctan2(np.mean(both[:, 1] - center[1]), np.mean(both[:, 0] - center[0]))  # middle of the arc
+    (a1, r1), (a2, r2) = _run_polar(cw, center, ref), _run_polar(ccw, center, ref)
     if not partial:
-        grid = np.linspace(-np.pi, np.pi, samples, endpoint=False)
-        out = []
-        for pts in (cw, ccw):
-            ang = np.arctan2(pts[:, 1] - center[1], pts[:, 0] - center[0])
-            order = np.argsort(ang)
-            out.append(np.interp(grid, ang[order], radii(pts, center)[order], period=2 * np.pi))
-        return float(np.max(np.abs(out[0] - out[1])))
-    both = np.vstack([cw, ccw])
-    ref = np.arctan2(np.mean(both[:, 1] - center[1]), np.mean(both[:, 0] - center[0]))  # middle of the arc
-    angs, rads = [], []
-    for pts in (cw, ccw):
-        ang = np.angle(np.exp(1j * (np.arctan2(pts[:, 1] - center[1], pts[:, 0] - center[0]) - ref)))
-        order = np.argsort(ang)
-        angs.append(ang[order])
-        rads.append(radii(pts, center)[order])
-    lo, hi = max(a[0] for a in angs), min(a[-1] for a in angs)
-    if hi <= lo:
+        d12 = r1 - np.interp(a1, a2, r2, period=2 * np.pi)
+        d21 = r2 - np.interp(a2, a1, r1, period=2 * np.pi)
+        return float(max(np.max(np.abs(d12)), np.max(np.abs(d21))))
+    lo, hi = max(a1[0], a2[0]), min(a1[-1], a2[-1])
+    if hi < lo:
         raise InvalidInputError("the CW and CCW runs cover no common arc: H cannot be evaluated")
-    grid = np.linspace(lo, hi, samples)
-    out = [np.interp(grid, a, r) for a, r in zip(angs, rads)]
-    return float(np.max(np.abs(out[0] - out[1])))
+    i1, i2 = (a1 >= lo) & (a1 <= hi), (a2 >= lo) & (a2 <= hi)
+    d = [np.abs(r1[i1] - np.interp(a1[i1], a2, r2)), np.abs(r2[i2] - np.interp(a2[i2], a1, r1))]
+    return float(max(np.max(v, initial=0.0) for v in d))
 
 
 def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = "lsq",

@@ -6,7 +6,10 @@
 * Lead-in and lead-out arcs (the feed-in/feed-out segments ballbar software records around the data
   arc) are removed by angle swept from the start and before the end; overrun beyond the nominal arc
   (e.g. 380 deg recorded for a 360 deg test) is trimmed and reported. The arc swept is measured along the
-  point order, so the result does not depend on where the run starts.
+  point order, so the result does not depend on where the run starts. Arcs are compared within
+  :func:`~methods.circular_test.evaluation.arc_tolerance_deg` (roundoff and the path's own deviations): a
+  partial run recorded over exactly its nominal arc keeps its end point; a full circle drops only the point
+  that closes it (back at 360 deg within roundoff).
 * A nominal centre or radius far from the data's own least-squares circle gives F values dominated by
   the set-up error: warned with the fitted values (threshold ``NOMINAL_WARN_FRACTION`` of the radius).
 """
@@ -15,11 +18,11 @@ from __future__ import annotations
 import numpy as np
 
 from methods._errors import InvalidInputError
+from methods.circular_test.evaluation import MIN_ARC_DEG, arc_tolerance_deg
 
 #: nominal centre or radius further than this fraction of the radius from the fitted circle: a warning
 #: (2e-4 R = 60 µm at R = 300 mm, 20 µm for a 100 mm ballbar: well above a careful set-up)
 NOMINAL_WARN_FRACTION = 2e-4
-MIN_ARC_DEG = 90.0
 
 
 def unwrapped_angle(points, center) -> np.ndarray:
@@ -37,23 +40,30 @@ def direction(points, center) -> tuple[str, float]:
 
 def trim(points, center, *, arc_deg: float | None = 360.0, lead_in_deg: float = 0.0, lead_out_deg: float = 0.0):
     """Drop ``lead_in_deg`` of arc at the start and ``lead_out_deg`` at the end (along the point order),
-    then anything beyond ``arc_deg`` of swept arc (overrun). Returns (points, report dict)."""
+    then anything beyond ``arc_deg`` of swept arc (overrun; a partial arc keeps a point at exactly
+    ``arc_deg`` within ``arc_tolerance_deg``, a full circle drops the one back at 360 deg within roundoff;
+    the leads are cut within roundoff). Returns (points, report dict)."""
     for v, n in ((lead_in_deg, "--lead-in"), (lead_out_deg, "--lead-out")):
         if not (np.isfinite(v) and v >= 0):
             raise InvalidInputError(f"{n} must be a non-negative angle in degrees, got {v!r}")
     if arc_deg is not None and not (np.isfinite(arc_deg) and MIN_ARC_DEG <= arc_deg <= 360.0):
         raise InvalidInputError(f"--arc must be between {MIN_ARC_DEG:g} and 360 degrees, got {arc_deg!r}")
+    tol = arc_tolerance_deg(points, center)                           # a recorded arc's end
+    eps = arc_tolerance_deg(points, center, deviations=False)         # roundoff only
     a = unwrapped_angle(points, center)
     swept = np.degrees(np.abs(a - a[0]))        # monotone for a clean run; max-accumulate for noise
     swept = np.maximum.accumulate(swept)
     total = float(swept[-1])
-    keep = (swept >= lead_in_deg - 1e-9) & (swept <= total - lead_out_deg + 1e-9)
+    keep = (swept >= lead_in_deg - eps) & (swept <= total - lead_out_deg + eps)
     n_lead = int(len(points) - keep.sum())
     pts = points[keep]
     sw = swept[keep] - (swept[keep][0] if keep.any() else 0.0)
     overrun = 0
     if arc_deg is not None and len(pts):
-        within = sw < arc_deg - 1e-9 if arc_deg >= 360.0 else sw <= arc_deg + 1e-9
+        if arc_deg >= 360.0:   # the full circle: only the point back at its start (within roundoff) is not kept
+            within = sw < arc_deg - eps
+        else:
+            within = sw <= arc_deg + tol
         overrun = int(len(pts) - within.sum())
         pts, sw = pts[within], sw[within]
     report = {"recorded_arc_deg": total, "lead_removed_points": n_lead, "overrun_trimmed_points": overrun,

@@ -72,6 +72,8 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     positioning.gls_polynomial result (or positioning.iso230_2 with ``source='mean'``), ``data`` its input."""
     import pandas as pd  # loaded when a table is made (the fitbench command stays light)
     P = np.asarray(data.targets, float)
+    if P.size < 2 or not np.all(np.diff(P) > 0):
+        raise InvalidInputError("a compensation table needs at least two targets in increasing order")
     first, last = float(P[0]), float(P[-1])
     if source not in ("model", "mean"):
         raise InvalidInputError(f"--compensation-from must be 'model' or 'mean', got {source!r}")

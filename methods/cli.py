@@ -375,7 +375,8 @@ def cmd_positioning(args) -> int:
         if args.exporter is None:  # controller tables belong to the fitbench layer, which passes its writer in
             raise InvalidInputError("--compensation: controller tables are written by the fitbench command: run 'fitbench positioning ...'")
         comp = args.exporter(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
-                             source=args.compensation_from, axis=args.axis, write=write_text_atomic)
+                             source=args.compensation_from, axis=args.axis, write=write_text_atomic,
+                             reference_mm=finite("--reference", args.reference))
     if plot_path:
         plot(res, plot_path, title=str(args.file), data=data, save=save_figure)
     if args.json:
@@ -420,6 +421,8 @@ def add_positioning(sub):
     pp.add_argument("--compensation-from", choices=("model", "mean"), default="model",
                     help="compensation values from the GLS polynomial (default) or the mean deviations at the targets")
     pp.add_argument("--axis", default="X1", help="axis name in the controller's table (default X1)")
+    pp.add_argument("--reference", type=float, metavar="MM", help="the machine's reference point, where the table "
+                    "holds 0 (mm; default 0 if the travel contains it, else the nearer end)")
     pp.add_argument("--json", action="store_true", help="print one JSON object (mm; see its 'units')")
     pp.add_argument("--plot", metavar="FILE", help="write the plot (.png, .pdf, .svg)")
     pp.set_defaults(func=cmd_positioning)

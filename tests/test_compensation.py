@@ -257,3 +257,30 @@ def test_unidirectional_test_gives_the_table_of_its_direction():
         np.testing.assert_allclose(encoder(one.targets, "up") - encoder(one.targets, "down"), 0.0)   # no backlash
     np.testing.assert_allclose(t.deviation_mm, t.deviation_up_mm)
     assert np.all(np.isnan(t.deviation_down_mm))
+
+
+def test_reference_option_moves_the_zero_and_the_fanuc_reference_point(tmp_path):
+    """--reference R: the table holds 0 at R in every format, FANUC's 3620 is R's point, and a reference
+    outside the measured travel is refused in one line."""
+    data, truth, _ = axis(6, irregular=0.3)
+    to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
+    out = cli("positioning", tmp_path / "a.csv", "--reference", 1000, "--compensation", "siemens-eec", tmp_path / "e.mpf",
+              "--compensation", "fanuc-pitch", tmp_path / "f.txt")
+    assert out.returncode == 0, out.stderr
+    _, sie = read_siemens((tmp_path / "e.mpf").read_text())
+    assert sie["values"][-1] == 0.0 and sie["grid"][-1] == 1000.0 and sie["values"][0] != 0.0
+    ftext = (tmp_path / "f.txt").read_text()
+    enc, fan = read_fanuc(ftext)
+    assert "REFERENCE POSITION AT 1000.000000 MM" in ftext and fan["numbers"][-1] == fan["reference_number"] + 1
+    after = methods.fit("positioning.iso230_2", remeasure(data, truth, enc, np.random.default_rng(1))).figures
+    assert after["E"] <= 0.5 * methods.fit("positioning.iso230_2", data).figures["E"]
+    bad = cli("positioning", tmp_path / "a.csv", "--reference", 1200, "--compensation", "csv", tmp_path / "c.csv")
+    assert bad.returncode == 2 and "must lie within the measured travel" in bad.stderr and not (tmp_path / "c.csv").exists()
+
+
+def test_targets_must_increase():
+    from methods.positioning.data import PositioningData
+    data, _, res = axis(2)
+    swapped = PositioningData(targets=data.targets[::-1].copy(), up=data.up, down=data.down, unit="mm")
+    with pytest.raises(InvalidInputError, match="increasing order"):
+        compensation_table(res, swapped, source="mean")

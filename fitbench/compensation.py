@@ -153,7 +153,9 @@ def _backlash_line(table) -> str:
     enter: -B. A normal backlash (the axis travels too little after a reversal) makes B negative and is
     entered positive; SINUMERIK 808D Parameter Manual 08/2013, MD32450 $MA_BACKLASH: "positive, if the
     encoder is leading the machine part (normal situation); negative, if the encoder is behind the
-    machine part"; FANUC parameter 1851 (backlash compensation, detection units) likewise."""
+    machine part"; FANUC 0i-C Parameter Manual B-64120EN/01 p. 116, parameter 1851 (detection units,
+    -9999 ... +9999): "the positive or negative direction for compensating values is the direction of
+    movement", so a positive value adds travel after a reversal, likewise."""
     b = table.attrs["backlash_mm"]
     if not np.isfinite(b):
         return "mean reversal value B unknown, unidirectional test: no backlash figure"
@@ -225,7 +227,10 @@ def write_siemens_eec(table, axis: str = "X1", max_points: int = SINUMERIK_MAX_P
     out += ["; " + h for h in _header(table, axis, "$AA_ENC_COMP = +(deviation - deviation at the reference point) "
                                                    "in mm: a positive value moves the axis in the negative direction")]
     out += [f"; MD38000 $MA_MM_ENC_COMP_MAX_POINTS of {axis} must be >= {n}; MD32700 ENC_COMP_ENABLE = 0 "
-            "while loading", "CHANDATA(1)"]
+            "while loading"]
+    if np.isfinite(a["backlash_mm"]):
+        out.append(f"; backlash: MD32450 $MA_BACKLASH[0] of {axis} = {_fixed6(-a['backlash_mm'])} mm, i.e. -B")
+    out.append("CHANDATA(1)")
     comp = table.deviation_mm.to_numpy() - a["deviation_at_reference_mm"]
     out += [f"$AA_ENC_COMP[0,{i},{axis}]={_fixed6(c)}" for i, c in enumerate(comp)]
     out += [f"$AA_ENC_COMP_STEP[0,{axis}]={_exact(a['step_q'])}", f"$AA_ENC_COMP_MIN[0,{axis}]={_exact(a['first_q'])}",
@@ -306,6 +311,12 @@ def write_fanuc_pitch(table, axis: str = "X", detection_unit_mm: float = 0.001, 
                        f"3621 = {numbers[0]}, 3622 = {numbers[-1]}, 3623 = {m}, 3624 = {interval} "
                        f"I.E. {_exact(a['step_q'])} MM IN UNITS OF {increment_mm:g} MM; RAPID TRAVERSE MM/MIN / 7500 "
                        f"MUST NOT EXCEED {_exact(a['step_q'])} MM"))
+    if np.isfinite(a["backlash_mm"]):
+        units = int(np.rint(-a["backlash_mm"] / detection_unit_mm))
+        if abs(units) > 9999:
+            raise CompensationError(f"fanuc-pitch: the backlash -B = {-a['backlash_mm']:g} mm is {units} detection "
+                                    "units, beyond parameter 1851's -9999 ... 9999")
+        out.append(comment(f"BACKLASH: SET 1851 = {units} DETECTION UNITS OF {detection_unit_mm:g} MM, I.E. -B"))
     out += [f"N{10000 + int(no)} P{int(v)}" for no, v in zip(numbers, values)]
     out.append("%")
     return "\n".join(out) + "\n"

@@ -284,3 +284,15 @@ def test_targets_must_increase():
     swapped = PositioningData(targets=data.targets[::-1].copy(), up=data.up, down=data.down, unit="mm")
     with pytest.raises(InvalidInputError, match="increasing order"):
         compensation_table(res, swapped, source="mean")
+
+
+def test_files_name_the_backlash_parameter_value():
+    """-B in the controller's unit: SINUMERIK MD32450 in mm, FANUC 1851 in detection units."""
+    data, _, res = axis(7, reversal=-0.004)
+    t = compensation_table(res, data)
+    b = t.attrs["backlash_mm"]
+    sie = write_siemens_eec(t)
+    assert re.search(r"MD32450 \$MA_BACKLASH\[0\] of X1 = (\S+) mm", sie).group(1) == f"{-b:.6f}"
+    fan = write_fanuc_pitch(t, detection_unit_mm=0.0001)
+    assert re.search(r"SET 1851 = (-?\d+) DETECTION UNITS OF 0.0001 MM", fan).group(1) == str(int(np.rint(-b / 1e-4)))
+    read_siemens(sie), read_fanuc(fan, detection_unit_mm=0.0001)

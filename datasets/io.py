@@ -1,17 +1,23 @@
-"""Readers for users' files: points (any two columns), circular-test runs (x, y or angle + radial
-deviation, one or both directions in one file). Header optional; comma, semicolon, tab or whitespace
-separated; ``#`` and ``%`` comment lines; a semicolon file may use decimal commas; ``skip_rows`` drops a
-preamble (instrument software writes test conditions above the table). Every reader takes the file's
-length unit (``unit``, default mm) and returns millimetres.
+"""The instrument reader: every file a user hands to fitbench is read here. Points (any two columns),
+circular-test runs (x, y or angle + radial deviation, one or both directions in one file), ISO 230-2
+positioning tables (long or wide laser exports, :func:`read_positioning`) and multilateration lengths
+(:func:`read_multilateration`). Header optional; comma, semicolon, tab or whitespace separated (tab and
+whitespace files may use decimal commas, header or not); ``#`` and ``%`` comment lines; ``skip_rows``
+drops a preamble (instrument software writes test conditions above the table). Every reader takes the
+file's length unit (``unit``, default mm) and returns millimetres.
 
-The numbers are parsed by pandas' C parser straight from the file with a float64 dtype and only the
-columns used (issue 16 item 20: peak memory within 3x the returned array; measured in
-/work/notes/frontdoor.md). Malformed input is refused with the file name and line number (a
-:class:`DataFileError`, one kind of :class:`InvalidInputError`); the line-by-line diagnosis runs only
-after the fast parser failed.
+One number grammar for every file and size (:data:`NUMBER`: optional sign, digits with an optional
+decimal point, optional exponent; ``nan``/``inf`` are read and then refused as not finite): Python's
+``float('117_677670')`` would accept what a person reads as two numbers. Only regular files are read (a
+FIFO or a device is refused without blocking, :func:`methods.files.open_regular`) and no line may exceed
+:data:`MAX_LINE_CHARS`. Large numeric files are parsed by pandas' C parser straight from the file with a
+float64 dtype and only the columns used (peak memory within 3x the returned array). Malformed input is
+refused with the file name and line number (a :class:`DataFileError`, one kind of
+:class:`InvalidInputError`); the line-by-line diagnosis runs only after the fast parser failed.
 """
 from __future__ import annotations
 
+import importlib
 import os
 import re
 from dataclasses import dataclass, field
@@ -19,11 +25,24 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from methods import InvalidInputError
-from methods._lazy import lazy_module
-from methods._validation import read_text_file
+from methods.files import NotRegularFileError, open_regular
 from methods.units import canonical, to_mm
 
-pd = lazy_module("pandas")
+
+class _Lazy:
+    """pandas imported on first use (its import costs ~0.3 s; small files are read without it)."""
+
+    def __getattr__(self, name):
+        return getattr(importlib.import_module("pandas"), name)
+
+
+pd = _Lazy()
+
+#: longest line read (characters): a measurement table's line is far shorter; /dev/zero-like content is refused
+MAX_LINE_CHARS = 1 << 16
+#: the one number grammar of every reader (ASCII digits; no '_' separators, no hexadecimal, no 'd' exponent)
+NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_NON_FINITE = {"nan", "+nan", "-nan", "inf", "+inf", "-inf", "infinity", "+infinity", "-infinity"}
 
 COMMENT_PREFIXES = ("#", "%", "//")
 SNIFF_LINES = 200
@@ -35,11 +54,111 @@ class DataFileError(InvalidInputError):
 
 
 def _is_number(token: str) -> bool:
+    """``token`` is a number of the readers' grammar (:data:`NUMBER`, or a nan/inf word refused later as not finite)."""
+    return NUMBER.fullmatch(token) is not None or token.lower() in _NON_FINITE
+
+
+def _number(token: str) -> float:
+    """``float(token)`` for a token of the grammar, else ValueError."""
+    if not _is_number(token):
+        raise ValueError(token)
+    return float(token)
+
+
+def _open_text(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'"):
+    """``path`` opened as UTF-8 text (BOM skipped), refusing a FIFO or a device; errors are one line."""
+    name = os.fspath(path)
     try:
-        float(token)
-        return True
-    except ValueError:
-        return False
+        return open_regular(name)
+    except FileNotFoundError:
+        raise DataFileError(f"{name}: no such file{f' ({missing_hint})' if missing_hint else ''}") from None
+    except NotRegularFileError as exc:
+        raise DataFileError(str(exc)) from None
+    except OSError as exc:
+        raise DataFileError(f"{name}: cannot be read ({exc.strerror or exc})") from None
+
+
+def _too_long(name, lineno) -> DataFileError:
+    return DataFileError(f"{name} line {lineno}: longer than {MAX_LINE_CHARS} characters; not a table of "
+                         "measurements (is it the right file?)")
+
+
+def iter_lines(fh, name):
+    """(line number, line) of an open text file, each line at most :data:`MAX_LINE_CHARS` characters."""
+    lineno = 0
+    while True:
+        try:
+            line = fh.readline(MAX_LINE_CHARS + 1)
+        except (UnicodeDecodeError, OSError) as exc:
+            raise DataFileError(f"{name}: cannot be read as text ({exc})") from None
+        if not line:
+            return
+        lineno += 1
+        if len(line.rstrip("\r\n")) > MAX_LINE_CHARS:
+            raise _too_long(name, lineno)
+        yield lineno, line
+
+
+def read_lines(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'") -> list[str]:
+    """The lines of a text file (without line ends), read with :func:`iter_lines`."""
+    name = os.fspath(path)
+    with _open_text(name, missing_hint) as fh:
+        return [ln.rstrip("\r\n") for _, ln in iter_lines(fh, name)]
+
+
+def check_line_lengths(path) -> None:
+    """Refuse a file holding a line longer than :data:`MAX_LINE_CHARS` bytes (vectorised over 4 MiB blocks),
+    before a parser that reads a whole line into memory sees it."""
+    name = os.fspath(path)
+    with _open_text(name) as text:
+        fh = text.buffer
+        lineno, run = 1, 0
+        while True:
+            block = fh.read(1 << 22)
+            if not block:
+                return
+            a = np.frombuffer(block, dtype=np.uint8)
+            nl = np.flatnonzero(a == 10)
+            if nl.size == 0:
+                run += a.size
+                if run > MAX_LINE_CHARS + 1:
+                    raise _too_long(name, lineno)
+                continue
+            lengths = np.diff(nl, prepend=-1) - 1
+            lengths[0] += run
+            long = np.flatnonzero(lengths > MAX_LINE_CHARS + 1)  # + 1: a CR before the LF
+            if long.size:
+                raise _too_long(name, lineno + int(long[0]))
+            lineno += nl.size
+            run = a.size - 1 - int(nl[-1])
+            if run > MAX_LINE_CHARS + 1:
+                raise _too_long(name, lineno)
+
+
+def _separator(lines: list[str]) -> tuple[str | None, bool]:
+    """(separator, decimal comma) of a table from its first data lines: semicolon, tab, comma or whitespace
+    (None). A comma between digits inside tab- or whitespace-separated fields is a decimal comma, so a
+    header-less ``1,5<TAB>2,25`` is two numbers, not three fields."""
+    first = lines[0]
+    dec = re.compile(r"[+-]?[0-9]*,[0-9]+(?:[eE][+-]?[0-9]+)?")
+    if ";" in first:
+        sep = ";"
+    elif "," in first:
+        sep = ","
+        for cand in ("\t", None):
+            fields = _split(first, cand)
+            if len(fields) >= 2 and (cand is None or "\t" in first) and \
+                    all(dec.fullmatch(f) or _is_number(f) for f in fields) and any(dec.fullmatch(f) for f in fields):
+                sep = cand
+                break
+    elif "\t" in first:
+        sep = "\t"
+    else:
+        sep = None
+    if sep == "\t" and any(" " in ln.replace("\t", "") and "\t" not in ln for ln in lines[1:]):
+        sep = None  # tabs and spaces mixed: whitespace
+    decimal_comma = sep in (";", "\t", None) and any(re.search(r"[0-9],[0-9]", ln) for ln in lines[:50])
+    return sep, decimal_comma
 
 
 def _split(line: str, sep: str | None) -> list[str]:
@@ -86,16 +205,11 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     name = os.fspath(path)
     if skip_rows < 0:
         raise DataFileError(f"{name}: --skip-rows must be >= 0, got {skip_rows}")
-    try:
-        fh = open(name, encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise DataFileError(f"{name}: no such file (give a path or a data set name from 'datasets.list()')") from None
-    except OSError as exc:
-        raise DataFileError(f"{name}: cannot be read as text ({exc})") from None
+    fh = _open_text(name)
     body, preamble, comment = [], [], "#"
     try:
         with fh:
-            for lineno, raw in enumerate(fh, start=1):
+            for lineno, raw in iter_lines(fh, name):
                 ln = raw.strip()
                 if lineno <= skip_rows:
                     preamble.append(ln)
@@ -114,10 +228,7 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     if not body:
         raise DataFileError(f"{name}: no data lines (only blank or comment lines)")
     first = body[0][1]
-    sep = ";" if ";" in first else "," if "," in first else "\t" if "\t" in first else None
-    if sep == "\t" and any(" " in ln.replace("\t", "") and "\t" not in ln for _, ln in body[1:]):
-        sep = None  # tabs and spaces mixed: whitespace
-    decimal_comma = sep in (";", "\t", None) and any(re.search(r"\d,\d", ln) for _, ln in body[:50])
+    sep, decimal_comma = _separator([ln for _, ln in body])
     head = _split(first, sep)
     numeric = all(_is_number(t.replace(",", ".") if decimal_comma else t) for t in head)
     if numeric:
@@ -130,8 +241,7 @@ def sniff(path, skip_rows: int = 0) -> Layout:
 def _diagnose(layout: Layout, idx, skip_rows: int):
     """Locate the first bad line (runs only after the fast parser failed)."""
     name = layout.name
-    text = read_text_file(name, error=DataFileError)
-    for lineno, ln in enumerate(text.splitlines(), start=1):
+    for lineno, ln in enumerate(read_lines(name), start=1):
         ln = ln.strip()
         if lineno < layout.first_data_line or not ln or ln.startswith(COMMENT_PREFIXES):
             continue
@@ -142,7 +252,7 @@ def _diagnose(layout: Layout, idx, skip_rows: int):
             tok = toks[j].replace(",", ".") if layout.decimal_comma else toks[j]
             if not _is_number(tok):
                 raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a number")
-            if not np.isfinite(float(tok)):
+            if not np.isfinite(_number(tok)):
                 raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a finite number; remove or repair the point")
     raise DataFileError(f"{name}: could not be parsed (unexpected format); use one row of numbers per line")
 
@@ -153,17 +263,16 @@ SMALL_FILE_BYTES = 1 << 16
 
 def _read_small(layout: Layout, usecols: list[int]) -> dict | None:
     """The float columns ``usecols`` of a small, plain numeric file, read with Python's float (correctly
-    rounded); None when the file is large or anything is unusual (an inline comment, a short row, a token
-    that is not a number), and the pandas reader below decides (and explains)."""
+    rounded) after the grammar check (:data:`NUMBER`); None when the file is large or unusual (an inline
+    comment, a short row), and the pandas reader below decides (and explains). A token outside the
+    grammar is explained by the same diagnosis as in a large file."""
     try:
         if os.path.getsize(layout.name) > SMALL_FILE_BYTES:
             return None
-        with open(layout.name, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except (OSError, UnicodeDecodeError):
+    except OSError:
         return None
     rows = []
-    for lineno, raw in enumerate(text.splitlines(), start=1):
+    for lineno, raw in enumerate(read_lines(layout.name), start=1):
         ln = raw.strip()
         if lineno < layout.first_data_line or not ln or ln.startswith(layout.comment):
             continue
@@ -173,9 +282,9 @@ def _read_small(layout: Layout, usecols: list[int]) -> dict | None:
         if len(tokens) != layout.ncol:
             return None
         try:
-            rows.append([float(tokens[k].replace(",", ".") if layout.decimal_comma else tokens[k]) for k in usecols])
+            rows.append([_number(tokens[k].replace(",", ".") if layout.decimal_comma else tokens[k]) for k in usecols])
         except ValueError:
-            return None
+            _diagnose(layout, usecols, 0)
     if not rows:
         return None
     table = np.array(rows, dtype=np.float64)
@@ -190,6 +299,7 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
         if not all(np.isfinite(small[k]).all() for k in idx):
             _diagnose(layout, idx, skip_rows)
         return small
+    check_line_lengths(layout.name)
     dtype = {k: (object if k in strings else np.float64) for k in usecols}
     try:
         frame = pd.read_csv(layout.name, sep=r"\s+" if layout.sep is None else layout.sep, header=None,
@@ -361,3 +471,164 @@ def read_runs(path, *, columns=None, plane=None, unit: str = "mm", skip_rows: in
                             "a circular test has two (CW and CCW)")
     return CircularRuns(runs, name, "polar" if polar else "xy", canonical(unit),
                         notes=[f"{len(runs)} run(s) read from the column {layout.header[r_col]!r}"])
+
+
+# ------------------------------------------------------------------ tables with named columns
+TARGET_NAMES = ("target", "position", "target position", "target [mm]", "target (mm)", "target position (mm)",
+                "target position [mm]", "position [mm]", "position (mm)", "nominal", "soll", "sollposition")
+RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[]*"
+                  r"(\+|-|up|down|u|d|fwd|rev|forward|reverse|pos|neg|↑|↓|hin|rück|rueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
+                  re.IGNORECASE)
+
+
+
+def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, skip_rows: int = 0):
+    """A delimited text table with a header (separator and decimal comma as :func:`sniff` decides; blank and
+    comment lines skipped; ``skip_rows`` preamble lines dropped; decimal commas turned into points) as a
+    DataFrame of strings, with the file's line number of each data row. Errors are one line."""
+    import io
+
+    if skip_rows < 0:
+        raise DataFileError(f"--skip-rows must be >= 0, got {skip_rows}")
+    kept, lines = [], []
+    for k, line in enumerate(read_lines(path, ""), start=1):
+        if k > skip_rows and line.strip() and not line.lstrip().startswith(COMMENT_PREFIXES):
+            kept.append(line)
+            lines.append(k)
+    if len(kept) < 2:
+        raise DataFileError(f"{path}: no data lines{f' ({no_data_hint})' if no_data_hint else ''}")
+    sep, decimal_comma = _separator([ln.strip() for ln in kept])
+    try:
+        df = pd.read_csv(io.StringIO("\n".join(kept)), sep=r"\s+" if sep is None else sep, engine="python", dtype=str,
+                         keep_default_na=keep_default_na)
+    except pd.errors.ParserError as exc:
+        raise DataFileError(f"{path}: malformed table ({str(exc).splitlines()[0]})") from None
+    if decimal_comma:
+        df = df.apply(lambda col: col.str.replace(r"^\s*([+-]?[0-9]*),([0-9]+(?:[eE][+-]?[0-9]+)?)\s*$", r"\1.\2",
+                                                  regex=True)
+                      if pd.api.types.is_string_dtype(col) or col.dtype == object else col)
+    return df, lines[1:]
+
+
+def _numeric_column(col, what: str, name, lines) -> np.ndarray:
+    """A column of strings as float64 by the readers' one grammar (:data:`NUMBER`); the first token outside
+    it, or not finite, is refused with its line."""
+    text = col.astype(str).str.strip()
+    ok = text.str.fullmatch(NUMBER.pattern).to_numpy(dtype=bool)
+    values = np.full(len(text), np.nan)
+    values[ok] = text[ok].astype(float).to_numpy()
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        k = int(bad[0])
+        kind = "a finite number" if ok[k] or text.iloc[k].lower() in _NON_FINITE else "a number"
+        raise DataFileError(f"{name} line {lines[k]}: {what} {col.iloc[k]!r} is not {kind}")
+    return values
+
+
+def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.ndarray] | None:
+    """A wide export (one column per run) as the long table; None when ``df`` is not wide."""
+    cols = [str(c).strip() for c in df.columns]
+    low = [c.lower() for c in cols]
+    t = next((low.index(n) for n in TARGET_NAMES if n in low), None)
+    if t is None or "run" in low:
+        return None
+    d_col = low.index("direction") if "direction" in low else None
+    runs = {}
+    for k, c in enumerate(cols):
+        if k in (t, d_col):
+            continue
+        m = RUN_COLUMN.match(c)
+        if not m:
+            raise DataFileError(f"{name}: column {c!r} is neither the target, a direction nor a run "
+                                    "(wide layout: target, run 1 +, run 1 -, ... or target, direction, run 1, run 2, ...)")
+        runs[k] = (int(m.group(1)), m.group(2))
+    if not runs:
+        return None
+    rows = []
+    for k, (run, tag) in runs.items():
+        if d_col is not None:
+            if tag:
+                raise DataFileError(f"{name}: column {cols[k]!r} names a direction and the file has a direction column")
+            direction = df.iloc[:, d_col].to_numpy()
+        else:
+            # no direction anywhere: a unidirectional test approached in the + direction
+            direction = np.full(len(df), "+" if tag is None or tag.lower() in ("+", "up", "u", "fwd", "forward", "pos",
+                                                                                "↑", "hin") else "-")
+        rows.append(pd.DataFrame({"target": df.iloc[:, t].to_numpy(), "direction": direction, "run": run,
+                                  "deviation": df.iloc[:, k].to_numpy(), "_line": lines}))
+    long = pd.concat(rows, ignore_index=True)
+    return long.drop(columns="_line"), long["_line"].to_numpy()
+
+
+
+def read_positioning(path, *, unit: str = "mm", deviation_unit: str | None = None, skip_rows: int = 0):
+    """An ISO 230-2 positioning file, long or wide layout (:mod:`methods.positioning.data` describes them), as
+    :class:`methods.positioning.PositioningData`. Lengths converted to mm from ``unit`` (targets) and
+    ``deviation_unit`` (deviations)."""
+    from methods.positioning import from_frame
+
+    df, lines = read_table(path, skip_rows=skip_rows)
+    if df.isna().any().any():
+        k = int(np.flatnonzero(df.isna().any(axis=1).to_numpy())[0])
+        raise DataFileError(f"{path} line {lines[k]}: missing field(s)")
+    lines = np.array(lines)
+    wide = _wide_to_long(df, str(path), lines)
+    if wide is not None:
+        df, lines = wide
+    cols = {str(c).lower().strip(): c for c in df.columns}
+    for key in ("target", "run", "deviation", "actual"):
+        if key in cols:
+            df[cols[key]] = _numeric_column(df[cols[key]], key, path, lines)
+    return from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit)
+
+
+def _multilateration_table(path, need: tuple[str, ...], optional: tuple[str, ...] = (), skip_rows: int = 0):
+    df, line_of = read_table(path, keep_default_na=False, skip_rows=skip_rows,
+                             no_data_hint=f"need a header {','.join(need)} and one row per measurement")
+    df.columns = [str(c).strip().lower() if str(c).strip().lower() != "l" else "L" for c in df.columns]
+    missing = [c for c in need if c not in df.columns]
+    if missing:
+        raise DataFileError(f"{path}: missing column(s) {', '.join(missing)}; the header must name {', '.join(need)}")
+    empty = (df[list(need)].isna() | (df[list(need)].apply(lambda c: c.str.strip()) == "")).any(axis=1).to_numpy()
+    if empty.any():
+        k = int(np.flatnonzero(empty)[0])
+        raise DataFileError(f"{path} line {line_of[k]}: missing field(s)")
+    line_of = np.array(line_of)
+    numeric = {}
+    present = [c for c in optional if c in df.columns]
+    if present and len(present) != len(optional):
+        raise DataFileError(f"{path}: give all of {', '.join(optional)} or none (found {', '.join(present)})")
+    for c in list(need[1:]) + present:
+        numeric[c] = _numeric_column(df[c], c, path, line_of)
+    return df["station"].astype(str).str.strip().to_numpy(), numeric, line_of
+
+
+
+
+def read_multilateration(path, stations_path=None, *, unit: str = "mm", skip_rows: int = 0) -> MultilaterationData:
+    """Multilateration lengths: a measurements table (station, x, y, z, length; optionally xp, yp, zp) and,
+    optionally, a stations table (station, x, y, z, L), as :class:`methods.multilateration.MultilaterationData`
+    (``from_frame``). ``unit``: the files' length unit (returned in mm)."""
+    from methods.multilateration import from_frame
+    from methods.units import mm_per
+    f = mm_per(unit)
+    st, num, lines = _multilateration_table(path, ("station", "x", "y", "z", "length"), optional=("xp", "yp", "zp"),
+                                 skip_rows=skip_rows)
+    if f != 1.0:
+        num = {k: v * f for k, v in num.items()}
+    df = pd.DataFrame({"station": st, **num})
+    data = from_frame(df, str(path), lines=lines)
+    if stations_path is None:
+        return data
+    sst, snum, slines = _multilateration_table(stations_path, ("station", "x", "y", "z", "L"), skip_rows=skip_rows)
+    if f != 1.0:
+        snum = {k: v * f for k, v in snum.items()}
+    pos = {}
+    for r, s in enumerate(sst):
+        if s in pos:
+            raise DataFileError(f"{stations_path} line {slines[r]}: station {s} appears twice")
+        pos[s] = [snum["x"][r], snum["y"][r], snum["z"][r], snum["L"][r]]
+    absent = [s for s in data.stations if s not in pos]
+    if absent:
+        raise DataFileError(f"{stations_path}: no position for station(s) {', '.join(absent)} of {path}")
+    return data.with_stations([pos[s] for s in data.stations])

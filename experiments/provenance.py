@@ -8,9 +8,10 @@ import os
 import platform
 import subprocess
 import sys
-import tempfile
 from importlib import metadata
 from pathlib import Path
+
+from methods.files import write_atomic  # noqa: F401  (the one atomic writer; experiments import it from here)
 
 REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ("numpy", "scipy", "cvxpy", "clarabel", "nlopt", "pandas", "matplotlib")
@@ -68,19 +69,3 @@ def collect(config: dict) -> dict:
         "config": config,
         "config_hash": config_hash(config),
     }
-
-
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` so that readers see the old or the new file, never a partial one."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)  # mkstemp creates 0600; results are for everyone to read
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

@@ -58,7 +58,6 @@ per table under ``target/tables/``; everything atomically.
 """
 from __future__ import annotations
 
-import contextlib
 import io
 import json
 import os
@@ -71,6 +70,7 @@ import pandas as pd
 
 from experiments.engine import ConfigError
 from experiments.provenance import write_atomic
+from methods.files import atomic_path  # noqa: F401  (the one atomic writer, for writers that take a file name)
 
 DEFAULT_SECTION = "Other studies"
 AGGREGATES = {
@@ -250,9 +250,9 @@ def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Fig
 
 
 def save_figure(fig, path: Path, dpi: float = 110) -> None:
-    """Save a matplotlib figure atomically (:func:`methods._figures.save_atomic`: a kill never leaves a
+    """Save a matplotlib figure atomically (:func:`fitbench.plots.save_atomic`: a kill never leaves a
     half-written PNG)."""
-    from methods._figures import save_atomic
+    from fitbench.plots import save_atomic
     save_atomic(fig, path, dpi=dpi)
 
 
@@ -261,18 +261,6 @@ def save_csv(df: pd.DataFrame, path: Path, **kwargs) -> None:
     buf = io.StringIO()
     df.to_csv(buf, **kwargs)
     write_atomic(path, buf.getvalue())
-
-
-@contextlib.contextmanager
-def atomic_path(path: Path):
-    """A temporary path in ``path``'s folder for a writer that takes a file name (e.g. a plot function);
-    it replaces ``path`` only when the writer finished."""
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def remove_leftover_tmp(folder: Path) -> None:

@@ -1,5 +1,7 @@
+"""``python -m methods``: the ``fitbench`` command line (:mod:`fitbench.cli`), kept as an alias. A program,
+not a module anything imports: the methods package itself imports no command-line code."""
 import sys
 
-from methods.cli import main
+from fitbench.cli.commands import main
 
 sys.exit(main())

@@ -13,12 +13,12 @@ import hashlib
 import json
 import os
 import sys
-import tempfile
 from dataclasses import asdict, fields
 from pathlib import Path
 
 from methods import _registry
 from methods._registry import MethodInfo
+from methods.files import write_atomic
 
 _PACKAGE_DIR = Path(__file__).parent
 
@@ -38,7 +38,7 @@ def path_for(digest: str) -> Path:
 
 
 #: modules of the package that no built-in method imports (the command line, this module): not hashed
-_NOT_SOURCES = {"cli.py", "__main__.py", "_manifest.py"}
+_NOT_SOURCES = {"__main__.py", "_manifest.py", "files.py"}
 
 
 def source_files() -> list[Path]:
@@ -72,16 +72,7 @@ def write(path: Path | None = None) -> Path:
     """Write :func:`build` atomically to ``path`` (default: the cache file of the current sources)."""
     manifest = build()
     path = path or path_for(manifest["source_digest"])
-    path.parent.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(manifest, indent=1, ensure_ascii=False) + "\n"
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    write_atomic(path, json.dumps(manifest, indent=1, ensure_ascii=False) + "\n", fsync=False)
     return path
 
 

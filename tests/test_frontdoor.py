@@ -20,7 +20,7 @@ from datasets.positioning import axis_test, to_frame
 from methods import InvalidInputError
 from methods.circular_test import diagnose, evaluate
 from methods.circular_test.runs import check_pair, direction, trim
-from methods.cli import main
+from fitbench.cli.commands import main
 from methods.units import UnitWarning, mm_per
 
 COND = TestConditions(nominal_radius=150.0, nominal_center=(300.0, 200.0), feed_mm_min=2000.0, sampling_hz=100.0,
@@ -211,7 +211,7 @@ def wide_laser_export(path, data, *, sep=";", decimal=",", dev_factor=1e3, pream
 @pytest.mark.parametrize("direction_column", [False, True])
 def test_wide_laser_exports_match_the_long_format(tmp_path, direction_column):
     data, _ = axis_test(rng=np.random.default_rng(5), mpe=0.002)
-    from methods.positioning import read_csv
+    from datasets.io import read_positioning as read_csv
     p = wide_laser_export(tmp_path / "wide.csv", data, direction_column=direction_column)
     got = read_csv(p, skip_rows=3, deviation_unit="um")
     np.testing.assert_allclose(got.targets, data.targets)
@@ -222,7 +222,7 @@ def test_wide_laser_exports_match_the_long_format(tmp_path, direction_column):
 def test_unidirectional_wide_export_gives_the_unidirectional_figures(tmp_path):
     """A wide export without directions is a unidirectional (+) test: A, E, R of that direction by their
     definitions (k = 2), no M or B; VDI 3441 refused; the model and the plot work on the one direction."""
-    from methods.positioning import read_csv
+    from datasets.io import read_positioning as read_csv
     p = tmp_path / "uni.csv"
     p.write_text("target,run 1,run 2,run 3\n0,1,2,1.5\n100,2,3,2.2\n200,1,1,1.4\n300,0,1,0.5\n")
     data = read_csv(p, deviation_unit="um")
@@ -243,8 +243,8 @@ def test_unidirectional_wide_export_gives_the_unidirectional_figures(tmp_path):
 
 def test_decimal_commas_in_positioning_and_multilateration_readers(tmp_path):
     """Issue 16 item 19."""
-    from methods.multilateration import read_csv as read_ml
-    from methods.positioning import read_csv as read_pos
+    from datasets.io import read_multilateration as read_ml
+    from datasets.io import read_positioning as read_pos
     data, _ = axis_test(rng=np.random.default_rng(3))
     df = to_frame(data, actual=False)
     df.to_csv(tmp_path / "p.csv", index=False, float_format="%.6f")
@@ -377,13 +377,13 @@ def test_arc_without_an_x_reversal_reports_backlash_x_not_identifiable():
     for k in ("backlash_x", "reversal_spike_x"):
         assert dg[k]["value"] is None and "no reversal of the X axis" in dg[k]["note"]
     assert dg["backlash_y"]["value"] is not None
-    out_text = __import__("methods.circular_test.report", fromlist=["text"]).text(evaluate(cw, ccw, 150.0, (0, 0)), dg)
+    out_text = __import__("fitbench.plots.circular_test", fromlist=["text"]).text(evaluate(cw, ccw, 150.0, (0, 0)), dg)
     assert "not identifiable" in out_text and "partial arc" in out_text
 
 
 # ------------------------------------------------------------------------------------------ plots
 def test_polar_plot_carries_scale_units_markers_and_panel(lola):
-    from methods.circular_test.report import polar_plot
+    from fitbench.plots.circular_test import polar_plot
     _, cond, cw, ccw = lola
     ev = evaluate(cw, ccw, cond.nominal_radius, cond.nominal_center,
                   conditions={"machine": "HBG 130", "date": "2026-11-22", "feed_mm_min": 1000.0, "plane": "xy"})
@@ -406,7 +406,7 @@ def test_polar_plot_carries_scale_units_markers_and_panel(lola):
 
 
 def test_positioning_plot_carries_units_runs_and_figures(tmp_path):
-    from methods.positioning.report import plot
+    from fitbench.plots.positioning import plot
     data, _ = axis_test(rng=np.random.default_rng(2), mpe=0.002)
     res = methods.fit("positioning.gls_polynomial", data, mpe=0.002)
     figs = []

@@ -12,7 +12,7 @@ import pytest
 import methods
 from conftest import REPO, run_python
 from methods import _manifest
-from methods.cli import _jsonable
+from fitbench.cli.commands import _jsonable
 
 def test_the_manifest_is_the_registry(tmp_path, monkeypatch):
     monkeypatch.setenv("FITBENCH_CACHE_DIR", str(tmp_path))
@@ -41,8 +41,8 @@ def test_list_from_the_manifest_equals_the_registry_and_imports_no_family(family
     assert out.returncode == 0, out.stderr
     listing, imported = out.stdout.rsplit("\n[", 1)
     families = {m.split(".")[1] for m in json.loads("[" + imported)}
-    # the roundness package is imported by the CLI's parser itself (methods/cli.py add_roundness builds the
-    # 'roundness' subcommand from methods/roundness/cli.py); no other family may load for 'list'
+    # the roundness package is imported by the CLI's parser itself (fitbench/cli/commands.py add_roundness builds the
+    # 'roundness' subcommand from fitbench/cli/roundness.py); no other family may load for 'list'
     assert families <= {"roundness"}, f"list imported the method families {sorted(families)}"
     expected = [m for m in registry_listing() if family is None or m["family"] == family]
     assert json.loads(listing) == expected and expected

@@ -12,8 +12,9 @@ from scipy.optimize import least_squares
 import methods
 from datasets.multilateration import TOOL_OFFSETS, mcv754_errors, simulate, write_example
 from methods import InvalidInputError
-from methods.cli import main
-from methods.multilateration import from_frame, read_csv
+from fitbench.cli.commands import main
+from datasets.io import read_multilateration as read_csv
+from methods.multilateration import from_frame
 from methods.multilateration.kinematics import (ErrorModel, design_matrix, identify, parameter_names,
                                                 volumetric_errors)
 from methods.multilateration.solvers import cond_svd, cond_theorem1, kabsch

@@ -11,7 +11,7 @@ import methods
 from conftest import run_python
 from datasets.positioning import axis_test, to_frame
 from methods import InvalidInputError
-from methods.positioning import read_csv
+from datasets.io import read_positioning as read_csv
 from methods.positioning.data import PositioningData
 from methods.positioning.model import evaluate_band
 

@@ -1,5 +1,5 @@
 """The method reports' figures (circular-test polar plot, positioning plot) go through one helper,
-methods._figures.report_figure: the figure is closed on every path (drawing error, write error, success)
+fitbench.plots.report_figure: the figure is closed on every path (drawing error, write error, success)
 and the file is written atomically (a failed write leaves the previous file whole and no temporary file)."""
 import dataclasses
 
@@ -9,10 +9,10 @@ import pytest
 import methods
 from datasets.circular_test import circular_test, lola_hbg130
 from datasets.positioning import axis_test
-from methods._figures import pyplot, report_figure, save_atomic
+from fitbench.plots import pyplot, report_figure, save_atomic
 from methods.circular_test import evaluate
-from methods.circular_test.report import polar_plot
-from methods.positioning.report import plot as positioning_plot
+from fitbench.plots.circular_test import polar_plot
+from fitbench.plots.positioning import plot as positioning_plot
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

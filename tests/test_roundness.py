@@ -293,7 +293,7 @@ def _write_profile(tmp_path, unit_scale=1.0):
 
 
 def test_cli_table_json_units_and_plot(tmp_path, capsys):
-    from methods.cli import main
+    from fitbench.cli.commands import main
     f = _write_profile(tmp_path)
     png = tmp_path / "r.png"
     assert main(["roundness", str(f), "--cutoff", "15", "--plot", str(png)]) in (0, 1)
@@ -319,7 +319,7 @@ def test_cli_table_json_units_and_plot(tmp_path, capsys):
                                         (["--cutoff", "abc"], "not a number of UPR"),
                                         (["--reference", "lsq"], "invalid choice")])
 def test_cli_bad_input_one_line_exit_2(tmp_path, capsys, argv, match):
-    from methods.cli import main
+    from fitbench.cli.commands import main
     f = _write_profile(tmp_path)
     assert main(["roundness", str(f), *argv]) == 2
     err = capsys.readouterr().err.strip()
@@ -327,7 +327,7 @@ def test_cli_bad_input_one_line_exit_2(tmp_path, capsys, argv, match):
 
 
 def test_cli_undersampled_warns_on_stderr(capsys):
-    from methods.cli import main
+    from fitbench.cli.commands import main
     main(["roundness", "roundness_set1", "--cutoff", "15"])
     cap = capsys.readouterr()
     assert "fitbench: warning: 25 points per revolution" in cap.err

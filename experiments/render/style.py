@@ -192,7 +192,7 @@ def smallest_font_pt(fig) -> float:
 def save(fig, path, *, pdf: bool = False) -> Path:
     """Write ``fig`` atomically to ``path`` (PNG), and a PDF next to it when ``pdf``; close the figure."""
     import matplotlib.pyplot as plt
-    from methods._figures import save_atomic
+    from fitbench.plots import save_atomic
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     try:

@@ -124,7 +124,7 @@ def _num(v):
 def analyse(df, cfg, target, log):
     """Fits against the scenario's exact truth and the published values; ISO 230-4 figures; diagnostics."""
     from methods.circular_test import evaluate
-    from methods.circular_test.report import polar_plot
+    from fitbench.plots.circular_test import polar_plot
 
     evaluation = df[df["method"] == EVALUATION].iloc[0]
     df = df[df["method"] != EVALUATION]

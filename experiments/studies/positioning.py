@@ -127,7 +127,7 @@ def analyse(df, cfg, target, log):
 
 def example(cfg, target):
     """The paper's figures 2 and 3 for one synthetic axis with the periodic error."""
-    from methods.positioning.report import plot
+    from fitbench.plots.positioning import plot
     s = cfg["scenarios"][-1]
     data, _ = axis_test(rng=np.random.default_rng(cfg["seed"]), **s["params"])
     band = next(b for b in cfg["bands"] if b["label"] == cfg["example_band"])

@@ -1,4 +1,5 @@
-"""Multilateration measurements: one length per (station, nominal point), and optionally known stations.
+"""Multilateration measurements: one length per (station, nominal point), and optionally known stations
+(files are read by :func:`datasets.io.read_multilateration`).
 
 Measurements CSV: ``station, x, y, z, length`` (nominal point, measured length P_i(k) in mm, eq. 5), and
 optionally ``xp, yp, zp``: the tool (reflector) offset of that point, needed to identify the geometric errors
@@ -13,7 +14,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from methods._errors import InvalidInputError
-from methods._validation import read_table
 from methods._lazy import lazy_module
 
 pd = lazy_module("pandas")
@@ -65,31 +65,6 @@ def _check_stations(stations, k):
     return s
 
 
-def _read_table(path, need: tuple[str, ...], optional: tuple[str, ...] = (), skip_rows: int = 0):
-    df, line_of = read_table(path, keep_default_na=False, skip_rows=skip_rows,
-                             no_data_hint=f"need a header {','.join(need)} and one row per measurement")
-    df.columns = [str(c).strip().lower() if str(c).strip().lower() != "l" else "L" for c in df.columns]
-    missing = [c for c in need if c not in df.columns]
-    if missing:
-        raise InvalidInputError(f"{path}: missing column(s) {', '.join(missing)}; the header must name {', '.join(need)}")
-    empty = (df[list(need)].isna() | (df[list(need)].apply(lambda c: c.str.strip()) == "")).any(axis=1).to_numpy()
-    if empty.any():
-        k = int(np.flatnonzero(empty)[0])
-        raise InvalidInputError(f"{path} line {line_of[k]}: missing field(s)")
-    line_of = np.array(line_of)
-    numeric = {}
-    present = [c for c in optional if c in df.columns]
-    if present and len(present) != len(optional):
-        raise InvalidInputError(f"{path}: give all of {', '.join(optional)} or none (found {', '.join(present)})")
-    for c in list(need[1:]) + present:
-        col = pd.to_numeric(df[c], errors="coerce").to_numpy(dtype=float)
-        bad = np.flatnonzero(~np.isfinite(col))
-        if bad.size:
-            raise InvalidInputError(f"{path} line {line_of[bad[0]]}: {c} {df[c].iloc[bad[0]]!r} is not a finite number")
-        numeric[c] = col
-    return df["station"].astype(str).str.strip().to_numpy(), numeric, line_of
-
-
 def from_frame(df: pd.DataFrame, name: str = "data", lines=None, known_stations=None) -> MultilaterationData:
     """Long table (station, x, y, z, length) -> :class:`MultilaterationData`."""
     cols = {str(c).strip().lower(): c for c in df.columns}
@@ -135,33 +110,6 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, known_stations=
             raise InvalidInputError(f"{name} line {lines[r]}: point ({xyz[r, 0]:g}, {xyz[r, 1]:g}, {xyz[r, 2]:g}) appears "
                                     f"with two different tool offsets")
     return MultilaterationData(stations, points, lengths, _check_stations(known_stations, len(stations)), offsets)
-
-
-def read_csv(path, stations_path=None, *, unit: str = "mm", skip_rows: int = 0) -> MultilaterationData:
-    """Read a measurements CSV and, optionally, a stations CSV (station, x, y, z, L); comma, semicolon
-    (with decimal commas), tab or whitespace separated. ``unit``: the files' length unit (returned in mm)."""
-    from methods.units import mm_per
-    f = mm_per(unit)
-    st, num, lines = _read_table(path, ("station", "x", "y", "z", "length"), optional=("xp", "yp", "zp"),
-                                 skip_rows=skip_rows)
-    if f != 1.0:
-        num = {k: v * f for k, v in num.items()}
-    df = pd.DataFrame({"station": st, **num})
-    data = from_frame(df, str(path), lines=lines)
-    if stations_path is None:
-        return data
-    sst, snum, slines = _read_table(stations_path, ("station", "x", "y", "z", "L"), skip_rows=skip_rows)
-    if f != 1.0:
-        snum = {k: v * f for k, v in snum.items()}
-    pos = {}
-    for r, s in enumerate(sst):
-        if s in pos:
-            raise InvalidInputError(f"{stations_path} line {slines[r]}: station {s} appears twice")
-        pos[s] = [snum["x"][r], snum["y"][r], snum["z"][r], snum["L"][r]]
-    absent = [s for s in data.stations if s not in pos]
-    if absent:
-        raise InvalidInputError(f"{stations_path}: no position for station(s) {', '.join(absent)} of {path}")
-    return data.with_stations([pos[s] for s in data.stations])
 
 
 def validate(data, method_id: str = "") -> MultilaterationData:

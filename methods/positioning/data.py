@@ -1,6 +1,5 @@
-"""Positioning measurements (ISO 230-2): readers and the validated container.
-
-Layouts read (``read_csv``):
+"""Positioning measurements (ISO 230-2): the validated container and its table form (:func:`from_frame`).
+Files are read by :func:`datasets.io.read_positioning`, which accepts these layouts:
 
 * long format, one measurement per row: ``target, direction, run, deviation`` (or ``actual``), the
   layout of ISO 230-2's own data tables (a value per target, approach direction and run);
@@ -22,12 +21,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import re
-
 import numpy as np
 
 from methods._errors import InvalidInputError
-from methods._validation import read_table
 from methods.units import canonical, to_mm, warn_implausible
 from methods._lazy import lazy_module
 
@@ -35,12 +31,6 @@ pd = lazy_module("pandas")
 
 
 MAX_ABS_DEVIATION_MM = 1e6     # larger deviations are not measurements (and overflow the statistics)
-TARGET_NAMES = ("target", "position", "target position", "target [mm]", "target (mm)", "target position (mm)",
-                "target position [mm]", "position [mm]", "position (mm)", "nominal", "soll", "sollposition")
-_RUN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[]*"
-                  r"(\+|-|up|down|u|d|fwd|rev|forward|reverse|pos|neg|↑|↓|hin|rück|rueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
-                  re.IGNORECASE)
-
 UP = {"+", "up", "u", "positive", "pos", "↑"}
 DOWN = {"-", "down", "d", "negative", "neg", "↓"}
 
@@ -138,56 +128,6 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
         runs = piv.shape[1]
         arrays[d] = piv.to_numpy(dtype=float)
     return PositioningData(targets=targets, up=arrays["up"], down=arrays["down"], unit="mm")
-
-
-def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.ndarray] | None:
-    """A wide export (one column per run) as the long table; None when ``df`` is not wide."""
-    cols = [str(c).strip() for c in df.columns]
-    low = [c.lower() for c in cols]
-    t = next((low.index(n) for n in TARGET_NAMES if n in low), None)
-    if t is None or "run" in low:
-        return None
-    d_col = low.index("direction") if "direction" in low else None
-    runs = {}
-    for k, c in enumerate(cols):
-        if k in (t, d_col):
-            continue
-        m = _RUN.match(c)
-        if not m:
-            raise InvalidInputError(f"{name}: column {c!r} is neither the target, a direction nor a run "
-                                    "(wide layout: target, run 1 +, run 1 -, ... or target, direction, run 1, run 2, ...)")
-        runs[k] = (int(m.group(1)), m.group(2))
-    if not runs:
-        return None
-    rows = []
-    for k, (run, tag) in runs.items():
-        if d_col is not None:
-            if tag:
-                raise InvalidInputError(f"{name}: column {cols[k]!r} names a direction and the file has a direction column")
-            direction = df.iloc[:, d_col].to_numpy()
-        else:
-            # no direction anywhere: a unidirectional test approached in the + direction
-            direction = np.full(len(df), "+" if tag is None or tag.lower() in ("+", "up", "u", "fwd", "forward", "pos",
-                                                                                "↑", "hin") else "-")
-        rows.append(pd.DataFrame({"target": df.iloc[:, t].to_numpy(), "direction": direction, "run": run,
-                                  "deviation": df.iloc[:, k].to_numpy(), "_line": lines}))
-    long = pd.concat(rows, ignore_index=True)
-    return long.drop(columns="_line"), long["_line"].to_numpy()
-
-
-def read_csv(path, *, unit: str = "mm", deviation_unit: str | None = None, skip_rows: int = 0) -> PositioningData:
-    """Read a positioning file, long or wide layout (see the module docstring); comma, semicolon, tab or
-    whitespace separated, decimal commas in semicolon/tab files, '#' comments, ``skip_rows`` preamble
-    lines. Lengths converted to mm from ``unit`` (targets) and ``deviation_unit`` (deviations)."""
-    df, lines = read_table(path, skip_rows=skip_rows)
-    if df.isna().any().any():
-        k = int(np.flatnonzero(df.isna().any(axis=1).to_numpy())[0])
-        raise InvalidInputError(f"{path} line {lines[k]}: missing field(s)")
-    lines = np.array(lines)
-    wide = _wide_to_long(df, str(path), lines)
-    if wide is not None:
-        df, lines = wide
-    return from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit)
 
 
 def validate(data, method_id="") -> PositioningData:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from methods._figures import report_figure
+from fitbench.plots import report_figure
 from methods.positioning.model import evaluate_band
 
 ARROW = {"up": "↑", "down": "↓"}

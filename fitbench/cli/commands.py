@@ -1,5 +1,6 @@
-"""Command line: ``fitbench`` / ``python -m methods``: ``list``, ``fit METHOD_ID FILE`` and the
-machine-test subcommands (circular-test, positioning, magnify, multilaterate).
+"""The subcommands of ``fitbench`` (also ``python -m fitbench`` and ``python -m methods``): ``list``,
+``fit METHOD_ID FILE`` and the machine-test subcommands (circular-test, positioning, magnify,
+multilaterate, roundness), one argparse tree built by :func:`build_parser`.
 
 Bad input ends with one line on stderr and exit status 2, never a traceback; warnings (a likely unit
 mix-up, a swapped pair of runs, a nominal centre far from the data) are lines ``fitbench: warning: ...``
@@ -13,16 +14,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
-import tempfile
 import warnings
 from pathlib import Path
 
 import numpy as np
 
 import methods
-from methods._errors import InvalidInputError
+from methods import InvalidInputError
+from methods.files import write_atomic
 from methods.units import JSON_UNITS, UNIT_CHOICES, canonical
 
 EXIT_BAD_INPUT = 2
@@ -78,8 +78,8 @@ def check_plot_path(path) -> Path | None:
 
 
 def save_figure(fig, path, dpi=120) -> None:
-    """Write a matplotlib figure atomically (:func:`methods._figures.save_atomic`); a failed write is one line."""
-    from methods._figures import save_atomic
+    """Write a matplotlib figure atomically (:func:`fitbench.plots.save_atomic`); a failed write is one line."""
+    from fitbench.plots import save_atomic
     try:
         save_atomic(fig, path, dpi=dpi)
     except OSError as exc:
@@ -87,20 +87,15 @@ def save_figure(fig, path, dpi=120) -> None:
 
 
 def write_text_atomic(path, text: str) -> None:
+    """Write a text output file (:func:`methods.files.write_atomic`) into an existing folder; one line on failure."""
     path = Path(path)
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise InvalidInputError(f"{path}: the folder {parent} does not exist; create it first")
-    fd, tmp = tempfile.mkstemp(dir=parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
+        write_atomic(path, text, make_parents=False, fsync=False)
     except OSError as exc:
         raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def add_reader_options(p, *, columns=True):
@@ -256,7 +251,7 @@ def _read_circular_runs(args):
 
 def cmd_circular_test(args) -> int:
     from methods.circular_test import diagnose, evaluate
-    from methods.circular_test.report import diagnostics_json, polar_plot, text
+    from fitbench.plots.circular_test import diagnostics_json, polar_plot, text
     from methods.circular_test.runs import check_nominal, check_pair, trim
 
     R = finite("--nominal-radius", args.nominal_radius, positive=True, allow_none=False)
@@ -312,7 +307,7 @@ def cmd_circular_test(args) -> int:
         out["units"] = dict(JSON_UNITS, input_unit=canonical(args.unit))
         out["diagnostics"] = (diagnostics_json(dg) if dg else "not estimated: give --nominal-center X Y")
         from dataclasses import fields
-        from methods._result import FitResult
+        from methods import FitResult
         shared = {f.name for f in fields(FitResult)}  # the evaluation's own fields only
         out["details"] = {k: v for k, v in d.items() if k not in shared}
         out["notes"] = notes
@@ -357,26 +352,25 @@ def add_circular_test(sub):
 
 # ----------------------------------------------------------------------------------------- positioning
 def cmd_positioning(args) -> int:
-    from methods.positioning import read_csv
-    from methods.positioning.report import plot, text
+    from datasets.io import read_positioning
+    from fitbench.plots.positioning import plot, text
 
     plot_path = check_plot_path(args.plot)
     instrument_u = finite("--instrument-u", args.instrument_u)
     mpe = finite("--mpe", args.mpe)
     if args.degree < 0:
         raise InvalidInputError(f"--degree must be >= 0, got {args.degree}")
-    data = read_csv(args.file, unit=args.unit, deviation_unit=args.deviation_unit, skip_rows=args.skip_rows)
+    data = read_positioning(args.file, unit=args.unit, deviation_unit=args.deviation_unit, skip_rows=args.skip_rows)
     res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
     if args.standard != "iso230-2:2014" or len(data.directions) == 1:
         other = methods.fit("positioning.iso230_2", data, standard=args.standard)
         res.figures, res.per_target = other.figures, other.per_target
     comp = None
     if args.compensation:
-        if args.exporter is None:  # controller tables belong to the fitbench layer, which passes its writer in
-            raise InvalidInputError("--compensation: controller tables are written by the fitbench command: run 'fitbench positioning ...'")
-        comp = args.exporter(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
-                             source=args.compensation_from, axis=args.axis, write=write_text_atomic,
-                             reference_mm=finite("--reference", args.reference))
+        from fitbench.compensation import write_tables
+        comp = write_tables(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
+                            source=args.compensation_from, axis=args.axis, write=write_text_atomic,
+                            reference_mm=finite("--reference", args.reference))
     if plot_path:
         plot(res, plot_path, title=str(args.file), data=data, save=save_figure)
     if args.json:
@@ -446,7 +440,8 @@ def cmd_magnify(args) -> int:
         raise InvalidInputError("--delta is a parameter of --method offset")
     res = methods.fit(f"magnify.{args.method}", data, **params)
     if plot_path:
-        plot_magnified(data, res, plot_path, eta)
+        from fitbench.plots.magnify import plot_magnified
+        plot_magnified(data, res, plot_path, eta, save=save_figure)
     if args.json:
         d = res.to_dict(residuals=not args.no_residuals)
         d["units"] = {"length": "mm", "input_unit": canonical(args.unit)}
@@ -478,7 +473,7 @@ def add_magnify(sub):
 
 # ----------------------------------------------------------------------------------------- multilateration
 def cmd_multilaterate(args) -> int:
-    from methods.multilateration import read_csv
+    from datasets.io import read_multilateration
 
     if args.max_iter is not None and args.max_iter < 1:
         raise InvalidInputError(f"--max-iter must be a positive integer, got {args.max_iter}")
@@ -487,7 +482,7 @@ def cmd_multilaterate(args) -> int:
                                 f"got {args.degree}")
     if args.errors_csv and not args.identify:
         raise InvalidInputError("--errors-csv needs --identify (the 21 errors come from the identification)")
-    data = read_csv(args.file, args.stations, unit=args.unit, skip_rows=args.skip_rows)
+    data = read_multilateration(args.file, args.stations, unit=args.unit, skip_rows=args.skip_rows)
     method = args.method if "." in args.method else f"multilateration.{args.method}"
     spec = methods.get(method)
     if spec.family != "multilateration":
@@ -569,26 +564,6 @@ def _identify(data, res, degree):
     return identify(axes, data.offsets, res.volumetric_errors, degree=degree, travel=tuple(travel), rigid=True)
 
 
-def plot_magnified(data, res, path, eta):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6, 6))
-    ax.plot(*data.reference.T, color="0.5", lw=1, label="reference")
-    ax.plot(*res.points.T, lw=0.8, label=f"{res.method}, magnification {eta:g}")
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    ax.legend(fontsize=8)
-    ax.set_title(f"continuity {res.extra['continuity']:.2f}, loops {res.extra['self_intersections']}; "
-                 f"largest error {res.form_error * 1e3:.2f} µm", fontsize=9)
-    fig.tight_layout()
-    try:
-        save_figure(fig, path)
-    finally:
-        plt.close(fig)
-
-
 # ----------------------------------------------------------------------------------------- the table
 def add_list(sub):
     pl = sub.add_parser("list", help="one line per registered method: id, kind, reference")
@@ -609,9 +584,9 @@ def add_fit(sub):
 
 
 def add_roundness(sub):
-    """ISO 12181 roundness: the parser and command live in methods/roundness/cli.py."""
-    from methods.roundness import cli as roundness_cli
-    roundness_cli.add_parser(sub)
+    """ISO 12181 roundness: the parser and command live in fitbench/cli/roundness.py."""
+    from fitbench.cli import roundness
+    roundness.add_parser(sub)
 
 
 #: the subcommands: name -> function adding its parser (another module may add an entry)
@@ -633,13 +608,12 @@ def build_parser(prog: str = PROG, extra_commands: dict | None = None) -> argpar
     return p
 
 
-def main(argv=None, prog: str = PROG, extra_commands: dict | None = None, exporter=None) -> int:
+def main(argv=None, prog: str = PROG, extra_commands: dict | None = None) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", category=UserWarning)
             try:
                 args = build_parser(prog, extra_commands).parse_args(argv)
-                args.exporter = exporter
                 return args.func(args)
             finally:
                 for w in caught:

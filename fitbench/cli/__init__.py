@@ -1,8 +1,10 @@
-"""The ``fitbench`` command: ``fitbench SUBCOMMAND ...``.
+"""The ``fitbench`` command: ``fitbench SUBCOMMAND ...`` (also ``python -m fitbench``; ``python -m methods``
+is the same command without the experiment subcommands).
 
 ``run``, ``report`` and ``verify`` hand their arguments to ``experiments.run.main``,
 ``experiments.report.main`` and ``experiments.verify.main`` (imported only when used, by module name);
-every other subcommand is ``methods.cli`` (``python -m methods``). ``--version`` works everywhere.
+every other subcommand is in :mod:`fitbench.cli.commands` (one argparse tree, :func:`build_parser`).
+``--version`` works everywhere.
 
 Output folders not given on the command line are relative to the current directory (``results/`` for
 ``run``; ``results/`` and ``paper/`` for ``report``), never inside the installed package (the
@@ -48,7 +50,11 @@ def main(argv=None) -> int:
             return int(module.main(rest) or 0)
         except SystemExit as exc:  # argparse's --help / errors inside the delegated module
             return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
-    from fitbench.compensation import write_tables
-    from methods.cli import main as methods_main
-    return methods_main(argv, prog="fitbench", extra_commands={k: v[1] for k, v in DELEGATED.items()},
-                        exporter=write_tables)
+    from fitbench.cli.commands import main as commands_main
+    return commands_main(argv, prog="fitbench", extra_commands={k: v[1] for k, v in DELEGATED.items()})
+
+
+def build_parser(prog: str = "fitbench"):
+    """The whole argparse tree of the ``fitbench`` command (the delegated subcommands as names only)."""
+    from fitbench.cli.commands import build_parser as build
+    return build(prog, extra_commands={k: v[1] for k, v in DELEGATED.items()})

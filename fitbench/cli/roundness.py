@@ -1,0 +1,83 @@
+"""``fitbench roundness FILE``: an ISO 12181 roundness report (table, JSON, polar and spectrum plot)."""
+from __future__ import annotations
+
+import json
+import sys
+import warnings
+
+import numpy as np
+
+from methods.units import UNIT_CHOICES, to_mm
+from methods.roundness.evaluation import REFERENCE_NAMES
+from methods.roundness.filter import UndersampledWarning, parse_cutoff
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser("roundness", help="ISO 12181 roundness: filtered profile, RONt/p/v/q about the "
+                                                "reference circles, harmonic spectrum")
+    p.add_argument("file", metavar="FILE", help="a points file (x, y) or a published data set name")
+    p.add_argument("--cutoff", default="50", metavar="UPR",
+                   help="Gaussian filter cut-off in undulations per revolution: none, 15, 50 (default), 150, 500, "
+                        "1500 or any positive value (ISO 16610-21)")
+    p.add_argument("--reference", choices=("lsci", "mzci", "mici", "mcci", "all"), default="all",
+                   help="reference circle(s) (default: all four)")
+    p.add_argument("--unit", choices=UNIT_CHOICES, default="mm", help="length unit of the file (default mm)")
+    p.add_argument("--json", action="store_true", help="print one JSON object (lengths in mm)")
+    p.add_argument("--plot", metavar="PNG", help="write the polar plot and the harmonic spectrum")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args) -> int:
+    import methods
+    from datasets import points_from
+
+    from fitbench.cli.commands import check_plot_path, save_figure
+    from fitbench.plots.roundness import plot
+
+    cutoff = parse_cutoff(args.cutoff, "--cutoff")
+    plot_path = check_plot_path(args.plot)
+    source, points = points_from(args.file)
+    points = to_mm(np.asarray(points, dtype=float), args.unit)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UndersampledWarning)
+        res = methods.fit("roundness.iso12181", points, cutoff_upr=cutoff, reference=args.reference)
+    for w in caught:
+        if issubclass(w.category, UndersampledWarning):
+            print(f"fitbench: warning: {w.message}", file=sys.stderr)
+    if plot_path:
+        plot(res, plot_path, title=f"{source}", save=lambda fig, path: save_figure(fig, path, dpi=110))
+    if args.json:
+        d = res.to_dict(residuals=False)
+        d["spectrum"] = {k: np.asarray(v).tolist() for k, v in res.spectrum.items()}
+        d.update(source=source, input_unit=args.unit,
+                 units={"lengths": "mm", "angles": "rad", "cutoff_upr": "undulations per revolution",
+                        "spectrum.amplitude": "mm", "spectrum.phase": "rad"})
+        d.pop("extra", None)
+        print(json.dumps(d))
+        return 0 if res.converged else 1
+    print(report(res, source))
+    return 0 if res.converged else 1
+
+
+def report(res, source: str) -> str:
+    """The instrument-style table: one row per reference circle, lengths in µm (centre and radius in mm)."""
+    cut = "none (unfiltered)" if res.cutoff_upr is None else f"{res.cutoff_upr:g} UPR Gaussian (ISO 16610-21)"
+    lines = [f"data          {source} ({res.n_points} points)",
+             f"filter        {cut}" + ("" if res.cutoff_upr is None else f"; {res.filter_path}"),
+             f"raw LSCI      centre ({res.raw_lsci['center'][0]:.6f}, {res.raw_lsci['center'][1]:.6f}) mm, "
+             f"radius {res.raw_lsci['radius']:.6f} mm (deviations filtered about it)", ""]
+    head = (f"{'reference':<38} {'RONt [µm]':>10} {'RONp [µm]':>10} {'RONv [µm]':>10} {'RONq [µm]':>10} "
+            f"{'centre x [mm]':>14} {'centre y [mm]':>14} {'radius [mm]':>12}  status")
+    lines += [head, "-" * len(head)]
+    for kind, r in res.references.items():
+        lines.append(f"{REFERENCE_NAMES[kind]:<38} {r['RONt'] * 1e3:10.4f} {r['RONp'] * 1e3:10.4f} "
+                     f"{r['RONv'] * 1e3:10.4f} {r['RONq'] * 1e3:10.4f} {r['center'][0]:14.6f} "
+                     f"{r['center'][1]:14.6f} {r['radius']:12.6f}  "
+                     + ("ok" if r["converged"] else f"NOT CERTIFIED ({r['message']})"))
+    lobes = ", ".join(f"{d['upr']} UPR {d['amplitude'] * 1e3:.4f} µm" for d in res.dominant_lobes)
+    lines += ["", f"dominant lobes (amplitude of the filtered deviation): {lobes or '-'}"]
+    lines += [f"warning: {w}" for w in res.warnings]
+    return "\n".join(lines)
+
+

@@ -1,0 +1,49 @@
+"""Figures of fitbench's tests (circular-test polar plot, positioning plot, roundness polar plot and
+spectrum, magnified contouring error): one way to make, write and close them.
+
+:func:`report_figure` yields a new pyplot figure, writes it when the drawing finished (atomically,
+:func:`save_atomic`, unless the caller passes its own ``save``) and closes it on every path, so neither an
+error while drawing nor a failed write leaves an open figure or a half-written file. matplotlib is
+imported on first use. This package imports ``methods`` (results) only: the command line
+(:mod:`fitbench.cli`) and the studies' example figures (``experiments``) both use it.
+"""
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+from methods.files import atomic_path
+
+
+def pyplot():
+    """matplotlib.pyplot on the non-interactive Agg backend."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def save_atomic(fig, path, *, dpi: float | None = None) -> None:
+    """Write ``fig`` to ``path`` (format from the suffix; ``dpi`` None: matplotlib's ``savefig.dpi``)
+    through :func:`methods.files.atomic_path`: the whole figure or the old file, through a symlink to its
+    regular target, a FIFO or a device refused; a new file gets the umask's mode."""
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=path.suffix.lower().lstrip(".") or "png", **({} if dpi is None else {"dpi": dpi}))
+
+
+@contextlib.contextmanager
+def report_figure(path, *, dpi: float, save=None, **figure_kwargs):
+    """``with report_figure(path, dpi=120, figsize=(w, h)) as fig:`` draw on ``fig``; when the block ends
+    without error the figure is written by ``save(fig, path)`` if given, else :func:`save_atomic`; the figure
+    is closed on every path."""
+    plt = pyplot()
+    fig = plt.figure(**figure_kwargs)
+    try:
+        yield fig
+        if save is not None:
+            save(fig, path)
+        else:
+            save_atomic(fig, path, dpi=dpi)
+    finally:
+        plt.close(fig)

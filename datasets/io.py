@@ -520,8 +520,7 @@ def _numeric_column(col, what: str, name, lines) -> np.ndarray:
     bad = np.flatnonzero(~np.isfinite(values))
     if bad.size:
         k = int(bad[0])
-        kind = "a finite number" if ok[k] or text.iloc[k].lower() in _NON_FINITE else "a number"
-        raise DataFileError(f"{name} line {lines[k]}: {what} {col.iloc[k]!r} is not {kind}")
+        raise DataFileError(f"{name} line {lines[k]}: {what} {col.iloc[k]!r} is not a finite number")
     return values
 
 

@@ -37,7 +37,11 @@ def _as_array(points, who: str) -> np.ndarray:
                 raise InvalidInputError(f"{who}points must be an (N, 2) array of x, y; got shape {data.shape}")
             data = data[~mask.any(axis=1)]
         points = data
-    raw = np.asarray(points) if not isinstance(points, np.ndarray) else points
+    try:
+        raw = np.asarray(points) if not isinstance(points, np.ndarray) else points
+    except ValueError:  # NumPy refuses a ragged nested list ("inhomogeneous shape")
+        raise InvalidInputError(f"{who}points are ragged (rows of different lengths); pass an (N, 2) array of x, y, "
+                                "one row per point") from None
     if np.iscomplexobj(raw) or (raw.dtype == object and any(isinstance(v, complex) for v in raw.ravel()[:1000])):
         raise InvalidInputError(f"{who}points are complex numbers; pass real x, y columns "
                                 "(e.g. numpy.column_stack([z.real, z.imag]))")

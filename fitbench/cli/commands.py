@@ -22,7 +22,7 @@ import numpy as np
 
 import methods
 from methods import InvalidInputError
-from methods.files import write_atomic
+from methods.files import writable_target, write_atomic
 from methods.units import JSON_UNITS, UNIT_CHOICES, canonical
 
 EXIT_BAD_INPUT = 2
@@ -71,7 +71,8 @@ def check_plot_path(path) -> Path | None:
     if ext not in formats:
         raise InvalidInputError(f"--plot {path}: unknown image format {path.suffix or '(none)'!r}; "
                                 f"use one of .{', .'.join(sorted(formats))}")
-    parent = path.parent if str(path.parent) else Path(".")
+    target = writable_target(path)  # a FIFO, a device or a folder: refused now, not after the computation
+    parent = target.parent if str(target.parent) else Path(".")
     if not parent.is_dir():
         raise InvalidInputError(f"--plot {path}: the folder {parent} does not exist; create it first")
     return path

@@ -182,18 +182,29 @@ class ProfilePolygon:
         """The closed vertex list (N + 1 rows, the first repeated last), once: the path, and the edges' starts
         ``_a`` and ends ``_b`` as views of it (no rolled copy)."""
         if self._path is None:
-            from matplotlib.path import Path
             order = np.argsort(np.arctan2(self.y, self.x))
             V = np.empty((len(order) + 1, 2))
             np.take(self.x, order, out=V[:-1, 0])
             np.take(self.y, order, out=V[:-1, 1])
             V[-1] = V[0]
-            self._path = Path(V)
+            self._path = V
             self._a, self._b = V[:-1], V[1:]
         return self._path
 
     def contains(self, C: np.ndarray) -> np.ndarray:
-        return self._build().contains_points(C)
+        """Inside the polygon by the even-odd crossing rule (a ray towards +x; 256 centres at a time)."""
+        self._build()
+        a, b = self._a, self._b
+        dy = b[:, 1] - a[:, 1]
+        slope = np.divide(b[:, 0] - a[:, 0], dy, out=np.zeros_like(dy), where=dy != 0)
+        out = np.empty(len(C), dtype=bool)
+        for s in range(0, len(C), 256):
+            P = C[s:s + 256]
+            py = P[:, None, 1]
+            straddles = (a[None, :, 1] > py) != (b[None, :, 1] > py)
+            x_cross = a[None, :, 0] + (py - a[None, :, 1]) * slope[None, :]
+            out[s:s + 256] = np.count_nonzero(straddles & (P[:, None, 0] < x_cross), axis=1) % 2 == 1
+        return out
 
     def boundary_distance(self, C: np.ndarray) -> np.ndarray:
         """Distance from each centre to the polygon's boundary (all edges; vectorised)."""

@@ -1,0 +1,156 @@
+"""Layers run one way: fitbench (command line, exports) -> experiments -> fitbench.plots -> datasets -> methods.
+
+The import graph of the product packages is read with ``ast`` (every ``import`` statement, at module level and
+inside functions, resolved to the product module it names): no module imports a higher layer, the module-level
+graph has no cycle, and ``methods`` imports no argparse, matplotlib, datasets, experiments or fitbench.
+``fitbench.plots`` (matplotlib figures of results) sits below ``experiments`` because the studies draw their
+example figures with it; it imports nothing above ``datasets``. The ``fitbench`` package module itself holds
+the one version number and imports nothing, so every layer may read ``fitbench.__version__``. A ``__main__`` module is a program (``python -m
+methods`` runs the fitbench command line), not a module anything imports, so it is not part of the graph.
+"""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+PACKAGES = ("methods", "datasets", "experiments", "fitbench")
+#: layer of a module: the longest matching prefix decides
+LAYERS = {"methods": 0, "datasets": 1, "fitbench.plots": 2, "experiments": 3, "fitbench": 4}
+FORBIDDEN_IN_METHODS = {"argparse", "matplotlib", "datasets", "experiments", "fitbench"}
+
+
+def product_modules() -> dict[str, Path]:
+    mods = {}
+    for pkg in PACKAGES:
+        for path in (REPO / pkg).rglob("*.py"):
+            parts = list(path.relative_to(REPO).with_suffix("").parts)
+            if parts[-1] == "__main__":
+                continue
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            mods[".".join(parts)] = path
+    return mods
+
+
+def layer(module: str) -> int:
+    if module == "fitbench":  # __version__ only (test_the_version_module_imports_nothing)
+        return -1
+    best = max((p for p in LAYERS if module == p or module.startswith(p + ".")), key=len)
+    return LAYERS[best]
+
+
+def imports_of(module: str, path: Path, known: set[str]):
+    """(imported name, line, at module level) for every import statement; a ``from X import Y`` names X.Y
+    when that is a module, else X. Relative imports are resolved against the module's package."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    is_pkg = path.name == "__init__.py"
+    package = module if is_pkg else module.rpartition(".")[0]
+    function_nodes = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            function_nodes.update(id(n) for n in ast.walk(node) if n is not node)
+    for node in ast.walk(tree):
+        top = id(node) not in function_nodes
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name, node.lineno, top
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[:len(base) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            for alias in node.names:
+                full = f"{target}.{alias.name}"
+                yield (full if full in known else target), node.lineno, top
+
+
+def graph():
+    mods = product_modules()
+    known = set(mods)
+    edges = []
+    for mod, path in mods.items():
+        for name, line, top in imports_of(mod, path, known):
+            edges.append((mod, name, line, top))
+    return mods, edges
+
+
+def test_no_import_from_a_lower_layer_to_a_higher_one():
+    _, edges = graph()
+    upward = [f"{m}:{line} imports {n}" for m, n, line, _ in edges
+              if n.split(".")[0] in PACKAGES and layer(n) > layer(m)]
+    assert upward == [], "\n".join(upward)
+
+
+def test_the_version_module_imports_nothing():
+    tree = ast.parse((REPO / "fitbench" / "__init__.py").read_text(encoding="utf-8"))
+    assert not [n for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))]
+
+
+def test_methods_imports_no_command_line_plotting_or_higher_package():
+    _, edges = graph()
+    bad = [f"{m}:{line} imports {n}" for m, n, line, _ in edges
+           if m.split(".")[0] == "methods" and n.split(".")[0] in FORBIDDEN_IN_METHODS]
+    assert bad == [], "\n".join(bad)
+
+
+def test_no_import_cycle_at_module_level():
+    mods, edges = graph()
+    succ = {m: set() for m in mods}
+    for m, n, _, top in edges:
+        if top and n in mods and n != m:
+            succ[m].add(n)
+    # Tarjan's strongly connected components: a component of more than one module is a cycle
+    index, low, stack, on, cycles, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in succ[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(sorted(comp))
+
+    for v in sorted(mods):
+        if v not in index:
+            visit(v)
+    assert cycles == [], cycles
+
+
+def test_the_checker_sees_an_upward_import_a_cycle_and_a_relative_import(tmp_path, monkeypatch):
+    """The walker itself: an upward import inside a function, a module-level cycle and a relative import."""
+    root = tmp_path
+    for pkg in PACKAGES:
+        (root / pkg).mkdir()
+        (root / pkg / "__init__.py").write_text("")
+    (root / "methods" / "a.py").write_text("def f():\n    import matplotlib\n    from experiments import run\n")
+    (root / "datasets" / "b.py").write_text("from . import c\n")
+    (root / "datasets" / "c.py").write_text("from datasets import b\n")
+    (root / "experiments" / "run.py").write_text("")
+    monkeypatch.setattr(__import__(__name__), "REPO", root)
+    mods, edges = graph()
+    assert ("datasets.b", "datasets.c", 1, True) in edges
+    upward = [(m, n) for m, n, _, _ in edges if n.split(".")[0] in PACKAGES and layer(n) > layer(m)]
+    assert upward == [("methods.a", "experiments.run")]
+    try:
+        test_no_import_cycle_at_module_level()
+    except AssertionError as exc:
+        assert "datasets.b" in str(exc)
+    else:
+        raise AssertionError("the cycle datasets.b <-> datasets.c was not found")

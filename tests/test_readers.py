@@ -1,0 +1,81 @@
+"""The instrument reader (datasets.io) on hostile files: one number grammar for every size, long lines, header-less
+tab files with decimal commas, ragged point lists, and the same refusals through every table reader."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import methods
+from datasets.io import (MAX_LINE_CHARS, SMALL_FILE_BYTES, DataFileError, read_multilateration, read_points,
+                         read_positioning)
+from methods import InvalidInputError
+
+
+def circle_lines(n, r=20.0):
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return [f"{r * np.cos(a):.6f},{r * np.sin(a):.6f}" for a in t]
+
+
+@pytest.mark.parametrize("token", ["117_677670", "1d3", "0x1A", "١٢", "1e", "--1", "1.2.3"])
+def test_one_number_grammar_below_and_above_the_small_file_size(tmp_path, token):
+    """Python's float() accepts '117_677670' (and Arabic-Indic digits); pandas does not: the same token is now
+    refused with the same message whatever the file's size."""
+    messages = []
+    for n in (40, 4000):
+        lines = ["x,y"] + circle_lines(n)
+        lines[6] = f"{token},1.0"
+        path = tmp_path / f"f{n}.csv"
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        assert (path.stat().st_size > SMALL_FILE_BYTES) == (n == 4000)
+        with pytest.raises(DataFileError) as exc:
+            read_points(path)
+        messages.append(str(exc.value).replace(str(path), "FILE"))
+    assert messages[0] == messages[1] == f"FILE line 7: {token!r} is not a number"
+
+
+def test_the_grammar_accepts_what_instruments_write(tmp_path):
+    path = tmp_path / "ok.csv"
+    path.write_text("x,y\n+1.5,-2\n.5,3.\n1e-3,-2.5E+02\n 7 , 8 \n")
+    np.testing.assert_array_equal(read_points(path), [[1.5, -2], [0.5, 3.0], [1e-3, -250.0], [7, 8]])
+
+
+def test_table_readers_use_the_same_grammar(tmp_path):
+    pos = tmp_path / "pos.csv"
+    pos.write_text("target,direction,run,deviation\n0,+,1,0.001\n0,+,2,117_677670\n")
+    with pytest.raises(DataFileError, match=r"line 3: deviation '117_677670' is not a finite number"):
+        read_positioning(pos)
+    ml = tmp_path / "ml.csv"
+    ml.write_text("station,x,y,z,length\nA,0,0,0,1_0\n")
+    with pytest.raises(DataFileError, match=r"line 2: x .* length '1_0' is not a finite number|line 2: length '1_0'"):
+        read_multilateration(ml)
+
+
+def test_a_line_longer_than_the_cap_is_refused_in_one_line(tmp_path):
+    small = tmp_path / "small.csv"
+    small.write_text("x,y\n" + "1" * (MAX_LINE_CHARS + 10) + ",2\n")
+    big = tmp_path / "big.csv"
+    big.write_text("\n".join(["x,y"] + circle_lines(5000) + ["0" * (3 * MAX_LINE_CHARS)]) + "\n")
+    for path, line in ((small, 2), (big, 5002)):
+        with pytest.raises(DataFileError, match=f"line {line}: longer than {MAX_LINE_CHARS} characters"):
+            read_points(path)
+
+
+def test_headerless_tab_separated_decimal_commas(tmp_path):
+    """'1,5<TAB>2,25' was sniffed as comma-separated (three fields) and refused."""
+    t = np.linspace(0, 2 * np.pi, 30, endpoint=False)
+    pts = np.c_[10 + 3 * np.cos(t), -4 + 3 * np.sin(t)]
+    for sep in ("\t", " "):
+        path = tmp_path / "tab.txt"
+        path.write_text("".join(f"{x:.6f}{sep}{y:.6f}\n".replace(".", ",") for x, y in pts))
+        np.testing.assert_allclose(read_points(path), pts, atol=1e-6)
+    # a comma-separated file with tab padding stays comma-separated
+    path = tmp_path / "padded.csv"
+    path.write_text("".join(f"{x:.6f},\t{y:.6f}\n" for x, y in pts))
+    np.testing.assert_allclose(read_points(path), pts, atol=1e-6)
+
+
+@pytest.mark.parametrize("method", ["circle.kasa", "circle.gauss_newton", "ellipse.halir_flusser"])
+def test_a_ragged_point_list_is_the_projects_input_error(method):
+    pts = [[0.0, 1.0], [1.0, 0.0], [0.0, -1.0], [-1.0, 0.0, 5.0], [0.7, 0.7]]
+    with pytest.raises(InvalidInputError, match="ragged"):
+        methods.fit(method, pts)

@@ -165,6 +165,71 @@ def _split(line: str, sep: str | None) -> list[str]:
     return [t.strip() for t in (line.split(sep) if sep else line.split())]
 
 
+#: units a header may carry, to their canonical names
+LENGTH_UNITS = {"nm": "nm", "µm": "µm", "um": "µm", "micron": "µm", "microns": "µm", "mm": "mm", "m": "m",
+                "in": "in", "inch": "in"}
+ANGLE_UNITS = {"deg": "deg", "degree": "deg", "degrees": "deg", "°": "deg", "rad": "rad", "radian": "rad",
+               "radians": "rad"}
+#: what a column is, by its header key (lower case; spaces, '_', '-' and '.' removed; unit taken off)
+ROLES = {"x": "x", "y": "y", "z": "z",
+         **dict.fromkeys(("angle", "theta", "phi", "winkel", "sampleangle", "angularposition", "polarangle"), "angle"),
+         **dict.fromkeys(("deviation", "radialdeviation", "dr", "deltar", "error", "radialerror", "raddev",
+                          "radialdev", "dev", "abweichung", "abw", "radialabweichung", "radiusdeviation", "radialdisplacement"), "deviation"),
+         **dict.fromkeys(("radius", "r", "radialposition"), "radius"),
+         **dict.fromkeys(("direction", "dir", "run", "pass", "richtung"), "direction")}
+
+
+def parse_name(name: str) -> tuple[str, str | None]:
+    """(key, unit) of a header name: the unit in ``()`` or ``[]``, after ``/``, or as a ``_um``-style suffix
+    (``Radial deviation (um)``, ``angle[deg]``, ``dr/µm``, ``radial_deviation_um`` -> ``radialdeviation``,
+    ``µm``); the key in lower case without spaces, ``_``, ``-`` or ``.``. The unit is canonical (``µm``,
+    ``deg``) when fitbench knows it, else as written."""
+    n = str(name).strip().lower().replace("μ", "µ")
+    unit = None
+    m = re.fullmatch(r"(.*?)\s*[(\[]\s*([^)\]]*?)\s*[)\]]", n) or re.fullmatch(r"(.*?)\s*/\s*([^/\s]+)", n)
+    if m and m.group(1):
+        n, unit = m.group(1), m.group(2)
+    else:
+        m = re.fullmatch(r"(.*?)[\s_\-]+([a-zµ°]+)", n)
+        if m and m.group(1) and (m.group(2) in LENGTH_UNITS or m.group(2) in ANGLE_UNITS):
+            n, unit = m.group(1), m.group(2)
+    key = re.sub(r"[\s_\-.]+", "", n)
+    if unit is not None:
+        unit = LENGTH_UNITS.get(unit, ANGLE_UNITS.get(unit, unit))
+    return key, unit
+
+
+def column_unit(layout, k: int, kind: str) -> str | None:
+    """The unit the header gives column ``k`` ('length' or 'angle'), None when it gives none; a unit of the
+    other kind or an unknown one is refused in one line."""
+    if not layout.header:
+        return None
+    key, unit = parse_name(layout.header[k])
+    if unit is None:
+        return None
+    known = LENGTH_UNITS if kind == "length" else ANGLE_UNITS
+    if unit in known.values():
+        return unit
+    want = "a length unit (nm, µm, mm, m, in)" if kind == "length" else "an angle unit (deg, rad)"
+    raise DataFileError(f"{layout.name}: column {layout.header[k]!r} carries the unit {unit!r}; expected {want}")
+
+
+def length_unit(layout, idx, unit: str | None) -> str:
+    """The length unit of the columns ``idx``: the header's, the declared ``unit`` (--unit), or mm. A header
+    unit that contradicts ``unit``, or two columns in different units, is an error."""
+    found = {layout.header[k]: column_unit(layout, k, "length") for k in idx} if layout.header else {}
+    given = {c: u for c, u in found.items() if u is not None}
+    if len(set(given.values())) > 1:
+        raise DataFileError(f"{layout.name}: the columns {', '.join(given)} are in different units "
+                            f"({', '.join(sorted(set(given.values())))}); convert them to one unit")
+    header = next(iter(given.values()), None)
+    if unit is not None and header is not None and canonical(unit) != header:
+        col = next(iter(given))
+        raise DataFileError(f"{layout.name}: the header says column {col!r} is in {header} but --unit says "
+                            f"{canonical(unit)}; drop --unit or correct the header")
+    return header or (canonical(unit) if unit is not None else "mm")
+
+
 @dataclass
 class Layout:
     """What the first lines of a delimited file say about it."""
@@ -193,11 +258,20 @@ class Layout:
                 out.append(k)
             else:
                 key = str(n).strip().lower()
-                if key not in lowered:
+                if key in lowered:
+                    out.append(lowered.index(key))
+                    continue
+                keys = [parse_name(h)[0] for h in self.header] if self.header else []
+                want = parse_name(str(n))[0]
+                if want not in keys:
                     have = ", ".join(self.header) if self.header else "no header"
                     raise DataFileError(f"{self.name}: no column {n!r} (columns: {have}); use --columns")
-                out.append(lowered.index(key))
+                out.append(keys.index(want))
         return out
+
+    def fields(self) -> list[tuple[str, str | None]]:
+        """(key, unit) of each header name (:func:`parse_name`); [] without a header."""
+        return [parse_name(h) for h in self.header] if self.header else []
 
 
 def sniff(path, skip_rows: int = 0) -> Layout:
@@ -320,75 +394,105 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
     return cols
 
 
-def read_points(path, columns=("x", "y"), *, plane: str | None = None, unit: str = "mm", skip_rows: int = 0) -> np.ndarray:
-    """Read an (N, 2) float array (mm) from a text file.
+@dataclass
+class Resolved:
+    """Which columns of a file hold what: ``kind`` 'xy' (idx: the two coordinates) or 'polar' (idx: angle,
+    then the radial deviation or the radius, ``polar_value``); ``direction``: the run column or None."""
 
-    ``columns``: two header names (case-insensitive) or 0-based indices; ``plane`` ('xy', 'yz', 'zx')
-    picks the named columns of that plane. Without a header the file must have exactly two columns
-    (or ``columns`` as indices); with a header lacking the names, the first two columns are used only
-    when the file has exactly two, else the error lists the columns. ``unit``: the file's length unit."""
-    layout = sniff(path, skip_rows)
+    kind: str
+    idx: list
+    polar_value: str | None = None
+    direction: int | None = None
+
+
+def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
+    """The instrument layout of a file, decided by its header where it can (:data:`ROLES`, :func:`parse_name`):
+    angle + radial deviation (or radius) when the header names both, else x, y (``plane`` picks its named
+    pair). ``columns`` names any layout's two columns (header names, case and spaces ignored, or 0-based
+    numbers); an angle among them makes the file polar. A header that names an angle is never read as x, y."""
+    name = layout.name
+    roles = [ROLES.get(k) for k, _ in layout.fields()]
+    d_col = roles.index("direction") if "direction" in roles else None
+    if columns is not None and tuple(str(c).strip().lower() for c in columns) == ("x", "y") and \
+            not ("x" in roles and "y" in roles):
+        columns = None  # the default pair, absent from the header: decide by the header
     if plane is not None:
         if plane.lower() not in PLANES:
             raise DataFileError(f"unknown plane {plane!r}; use one of {', '.join(PLANES)}")
-        columns = PLANES[plane.lower()]
+        return Resolved("xy", layout.index(PLANES[plane.lower()]), None, d_col)
+    if columns is not None:
         idx = layout.index(columns)
-    elif layout.header is None:
-        explicit = columns is not None and all(isinstance(c, (int, np.integer)) or str(c).strip().isdigit() for c in columns)
-        if explicit:
-            idx = layout.index(columns)
-        elif layout.ncol != 2:
-            raise DataFileError(f"{layout.name} line {layout.first_data_line}: {layout.ncol} columns and no header; "
+        if len(idx) != 2 or idx[0] == idx[1]:
+            raise DataFileError(f"{name}: give two different columns, got {tuple(columns)!r}")
+        r = [roles[k] for k in idx] if roles else [None, None]
+        if "angle" in r:
+            if r[1] == "angle":
+                idx, r = idx[::-1], r[::-1]
+            return Resolved("polar", idx, "radius" if r[1] == "radius" else "deviation", d_col)
+        return Resolved("xy", idx, None, d_col)
+    if layout.header is None:
+        if layout.ncol != 2:
+            raise DataFileError(f"{name} line {layout.first_data_line}: {layout.ncol} columns and no header; "
                                 "add a header line naming the x and y columns (or --columns 0 1)")
-        else:
-            idx = [0, 1]
+        return Resolved("xy", [0, 1])
+    a = roles.index("angle") if "angle" in roles else None
+    v = next((roles.index(r) for r in ("deviation", "radius") if r in roles), None)
+    if a is not None and v is not None:
+        return Resolved("polar", [a, v], roles[v], d_col)
+    if "x" in roles and "y" in roles:
+        return Resolved("xy", [roles.index("x"), roles.index("y")], None, d_col)
+    if a is not None:
+        raise DataFileError(f"{name}: the column {layout.header[a]!r} is an angle but no radial deviation or radius "
+                            f"column was found (columns: {', '.join(layout.header)}); name it e.g. 'radial deviation "
+                            "(um)' or give --columns ANGLE DEVIATION")
+    if len(layout.header) < 2:
+        raise DataFileError(f"{name} line {layout.header_line}: header has fewer than two columns")
+    others = [k for k in range(layout.ncol) if k != d_col]
+    if len(others) == 2:
+        return Resolved("xy", others, None, d_col)
+    raise DataFileError(f"{name}: which two columns? the header has {', '.join(layout.header)}; "
+                        "give --columns NAME NAME or --plane xy|yz|zx")
+
+
+def angle_unit_of(layout: Layout, k: int, angle_unit: str | None) -> str:
+    """'deg' or 'rad' for the angle column ``k``: the header's unit or ``angle_unit`` (--angle-unit); a
+    contradiction, or neither, is an error."""
+    header = column_unit(layout, k, "angle")
+    if angle_unit is not None and angle_unit not in ("deg", "rad"):
+        raise DataFileError(f"--angle-unit must be deg or rad, got {angle_unit!r}")
+    if header is not None and angle_unit is not None and header != angle_unit:
+        raise DataFileError(f"{layout.name}: the header says column {layout.header[k]!r} is in {header} but "
+                            f"--angle-unit says {angle_unit}; drop --angle-unit or correct the header")
+    au = header or angle_unit
+    if au is None:
+        raise DataFileError(f"{layout.name}: is the angle column {layout.header[k] if layout.header else k!r} in "
+                            "degrees or radians? name it 'angle [deg]' / 'angle [rad]' or give --angle-unit deg|rad")
+    return au
+
+
+#: deviations alone (no nominal radius) are placed about a radius this many times their span: the circle's
+#: curvature then changes the RON parameters by about 1 / this factor (the limaçon approximation of
+#: roundness instruments, ISO 12181-1 clause 3)
+DEVIATION_ALONE_RADIUS_FACTOR = 1e6
+
+
+def polar_to_points(angles_rad, values_mm, polar_value: str, nominal_radius: float | None,
+                    nominal_center=(0.0, 0.0)) -> tuple[np.ndarray, str | None]:
+    """Angle + radial deviation (about ``nominal_radius``) or radius, as x, y about ``nominal_center`` (mm),
+    and a note when the deviations had no nominal radius."""
+    note = None
+    if polar_value == "radius":
+        r = values_mm
     else:
-        if len(layout.header) < 2:
-            raise DataFileError(f"{layout.name} line {layout.header_line}: header has fewer than two columns")
-        lowered = [h.strip().lower() for h in layout.header]
-        wanted = columns or ("x", "y")
-        if all(isinstance(c, str) and c.strip().lower() in lowered for c in wanted) or \
-                any(isinstance(c, (int, np.integer)) for c in wanted) or columns not in (None, ("x", "y")):
-            idx = layout.index(wanted)
-        elif layout.ncol == 2:
-            idx = [0, 1]
-        else:
-            raise DataFileError(f"{layout.name}: which two columns? the header has {', '.join(layout.header)}; "
-                                "give --columns NAME NAME or --plane xy|yz|zx")
-    if len(idx) != 2 or idx[0] == idx[1]:
-        raise DataFileError(f"{layout.name}: give two different columns, got {columns!r}")
-    cols = read_columns(layout, idx, skip_rows=skip_rows)
-    out = np.empty((len(cols[idx[0]]), 2), dtype=np.float64)
-    out[:, 0], out[:, 1] = cols[idx[0]], cols[idx[1]]
-    if unit != "mm":
-        out *= to_mm(1.0, unit)
-    return out
-
-
-# ------------------------------------------------------------------ circular-test runs
-ANGLE_NAMES = ("angle", "theta", "angle_deg", "angle_rad", "angle [deg]", "angle [rad]", "angle (deg)", "angle (rad)",
-               "angle[deg]", "angle[rad]", "angle/deg", "angle/°", "angle [°]", "angle (°)", "winkel")
-DEVIATION_NAMES = ("deviation", "radial_deviation", "radial deviation", "dr", "error", "radial_error",
-                   "deviation [um]", "deviation [µm]", "deviation (um)", "deviation (µm)", "deviation [mm]", "abweichung")
-DIRECTION_NAMES = ("direction", "dir", "run", "pass", "richtung")
-CW_WORDS = {"cw", "g02", "g2", "clockwise", "-", "-1"}
-CCW_WORDS = {"ccw", "g03", "g3", "counterclockwise", "counter-clockwise", "anticlockwise", "+", "+1", "1"}
-
-
-def _find(header_lower, names):
-    for n in names:
-        if n in header_lower:
-            return header_lower.index(n)
-    return None
-
-
-def _angle_unit_from_header(name: str) -> str | None:
-    n = name.lower()
-    if "rad" in n:
-        return "rad"
-    if "deg" in n or "°" in n:
-        return "deg"
-    return None
+        if nominal_radius is None:
+            span = float(np.ptp(values_mm)) if values_mm.size else 0.0
+            nominal_radius = max(DEVIATION_ALONE_RADIUS_FACTOR * span, 1.0)
+            note = (f"radial deviations without a nominal radius: placed about a circle of {nominal_radius:.6g} mm "
+                    f"({DEVIATION_ALONE_RADIUS_FACTOR:g} x their span; form parameters as an instrument's limaçon "
+                    "evaluation; centre and radius are not the part's)")
+        r = float(nominal_radius) + values_mm
+    cx, cy = (float(v) for v in nominal_center)
+    return np.column_stack([cx + r * np.cos(angles_rad), cy + r * np.sin(angles_rad)]), note
 
 
 @dataclass
@@ -400,66 +504,50 @@ class CircularRuns:
     kind: str          # 'xy' or 'polar'
     unit: str
     notes: list = field(default_factory=list)
+    angle_unit: str | None = None
 
 
-def read_runs(path, *, columns=None, plane=None, unit: str = "mm", skip_rows: int = 0, angle_unit: str | None = None,
-              nominal_radius: float | None = None, nominal_center=(0.0, 0.0)) -> CircularRuns:
-    """One circular-test file: x, y columns (any two: ``columns`` or ``plane``), or angle + radial
-    deviation (header names such as ``angle [deg]`` and ``deviation [µm]``; converted to x, y about
-    ``nominal_center`` with ``nominal_radius``, both in mm), holding one run or both directions (a
-    ``direction`` or ``run`` column; rows of each run in the order measured).
+def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
+              angle_unit: str | None = None, nominal_radius: float | None = None, nominal_center=(0.0, 0.0),
+              need_nominal_radius: bool = True) -> CircularRuns:
+    """One measurement file in any instrument layout (:func:`resolve`): x, y columns or angle + radial
+    deviation / radius, holding one run or both directions (a ``direction`` or ``run`` column; rows of each
+    run in the order measured). Lengths in the header's unit or ``unit`` (a contradiction is an error),
+    returned in mm; angle + deviation are placed about ``nominal_center`` with ``nominal_radius`` (mm; with
+    ``need_nominal_radius`` false the deviations alone are evaluated, :func:`polar_to_points`).
 
-    The angle + deviation layout follows what ballbar software lists as its data (sample angle and
-    radial deviation per point, e.g. the Renishaw Ballbar 20 "data" view and its text export); we found
-    no public specification of those exports, so the column names accepted are ours (confidence: low
-    for byte-for-byte compatibility, high for the content)."""
+    The angle + deviation layout follows what ballbar and roundness software lists as its data (sample angle
+    and radial deviation per point, e.g. the Renishaw Ballbar 20 "data" view and its text export); we found
+    no public specification of those exports, so the column names accepted are ours (:data:`ROLES`;
+    confidence: low for byte-for-byte compatibility, high for the content)."""
     layout = sniff(path, skip_rows)
     name = layout.name
-    lowered = [h.strip().lower() for h in layout.header] if layout.header else []
-    a_col = _find(lowered, ANGLE_NAMES) if lowered else None
-    d_col = _find(lowered, DEVIATION_NAMES) if lowered else None
-    r_col = _find(lowered, DIRECTION_NAMES) if lowered else None
-    polar = a_col is not None and d_col is not None and columns is None and plane is None
-    if polar:
-        idx = [a_col, d_col]
-        au = angle_unit or _angle_unit_from_header(layout.header[a_col])
-        if au is None:
-            raise DataFileError(f"{name}: is the angle column {layout.header[a_col]!r} in degrees or radians? "
-                                "name it 'angle [deg]' / 'angle [rad]' or give --angle-unit deg|rad")
-        if au not in ("deg", "rad"):
-            raise DataFileError(f"--angle-unit must be deg or rad, got {au!r}")
-        if nominal_radius is None:
+    res = resolve(layout, columns, plane)
+    notes = []
+    au = None
+    if res.kind == "polar":
+        au = angle_unit_of(layout, res.idx[0], angle_unit)
+        if nominal_radius is None and need_nominal_radius and res.polar_value == "deviation":
             raise DataFileError(f"{name}: an angle + radial-deviation file needs --nominal-radius to place the points")
+        lu = length_unit(layout, [res.idx[1]], unit)
     else:
-        if r_col is not None:
-            # x, y + direction: find the coordinate columns among the others
-            if plane is not None:
-                cols_xy = PLANES.get(plane.lower())
-                if cols_xy is None:
-                    raise DataFileError(f"unknown plane {plane!r}; use one of {', '.join(PLANES)}")
-                idx = layout.index(cols_xy)
-            elif columns is not None:
-                idx = layout.index(columns)
-            else:
-                idx = layout.index(("x", "y")) if "x" in lowered and "y" in lowered else \
-                    [k for k in range(layout.ncol) if k != r_col][:2]
-        else:
-            pts = read_points(path, columns if columns is not None else ("x", "y"), plane=plane, unit=unit,
-                              skip_rows=skip_rows)
-            return CircularRuns([("file", pts)], name, "xy", canonical(unit))
-    strings = (r_col,) if r_col is not None else ()
-    cols = read_columns(layout, idx, skip_rows=skip_rows, strings=strings)
-    f = to_mm(1.0, unit)
-    if polar:
-        ang = cols[idx[0]] if au == "rad" else np.radians(cols[idx[0]])
-        r = float(nominal_radius) + cols[idx[1]] * f
-        cx, cy = (float(v) for v in nominal_center)
-        pts = np.column_stack([cx + r * np.cos(ang), cy + r * np.sin(ang)])
+        lu = length_unit(layout, res.idx, unit)
+    strings = (res.direction,) if res.direction is not None else ()
+    cols = read_columns(layout, res.idx, skip_rows=skip_rows, strings=strings)
+    f = to_mm(1.0, lu)
+    if res.kind == "polar":
+        ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
+        pts, note = polar_to_points(ang, cols[res.idx[1]] * f, res.polar_value, nominal_radius, nominal_center)
+        if note:
+            notes.append(note)
     else:
-        pts = np.column_stack([cols[idx[0]] * f, cols[idx[1]] * f])
-    if r_col is None:
-        return CircularRuns([("file", pts)], name, "polar" if polar else "xy", canonical(unit))
-    labels = pd.Series(cols[r_col]).astype(str).str.strip()
+        pts = np.empty((len(cols[res.idx[0]]), 2), dtype=np.float64)
+        pts[:, 0], pts[:, 1] = cols[res.idx[0]], cols[res.idx[1]]
+        if f != 1.0:
+            pts *= f
+    if res.direction is None:
+        return CircularRuns([("file", pts)], name, res.kind, lu, notes, au)
+    labels = pd.Series(cols[res.direction]).astype(str).str.strip()
     runs = []
     for lab in pd.unique(labels):
         mask = (labels == lab).to_numpy()
@@ -469,8 +557,61 @@ def read_runs(path, *, columns=None, plane=None, unit: str = "mm", skip_rows: in
     if len(runs) > 2:
         raise DataFileError(f"{name}: {len(runs)} runs in the direction/run column ({', '.join(l for l, _ in runs)}); "
                             "a circular test has two (CW and CCW)")
-    return CircularRuns(runs, name, "polar" if polar else "xy", canonical(unit),
-                        notes=[f"{len(runs)} run(s) read from the column {layout.header[r_col]!r}"])
+    return CircularRuns(runs, name, res.kind, lu,
+                        notes + [f"{len(runs)} run(s) read from the column {layout.header[res.direction]!r}"], au)
+
+
+def read_profile(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
+                 angle_unit: str | None = None, nominal_radius: float | None = None) -> CircularRuns:
+    """One closed profile (roundness, a fit) in any instrument layout (:func:`read_runs`); deviations without
+    ``nominal_radius`` are evaluated alone. A file holding two runs is refused (one profile is needed)."""
+    got = read_runs(path, columns=columns, plane=plane, unit=unit, skip_rows=skip_rows, angle_unit=angle_unit,
+                    nominal_radius=nominal_radius, need_nominal_radius=False)
+    if len(got.runs) != 1:
+        raise DataFileError(f"{got.source}: holds {len(got.runs)} runs ({', '.join(l for l, _ in got.runs)}); "
+                            "give a file with one profile")
+    return got
+
+
+def points_unit(path, columns=("x", "y"), *, plane: str | None = None, unit: str | None = None,
+                skip_rows: int = 0) -> str:
+    """The length unit :func:`read_points` reads ``path`` in (the header's, ``unit``, or mm)."""
+    layout = sniff(path, skip_rows)
+    return length_unit(layout, _xy(layout, columns, plane).idx, unit)
+
+
+def _xy(layout: Layout, columns, plane) -> Resolved:
+    """:func:`resolve` for a reader of x, y: an angle + deviation file is refused in one line."""
+    res = resolve(layout, columns, plane)
+    if res.kind == "polar":
+        raise DataFileError(f"{layout.name}: holds an angle ({layout.header[res.idx[0]] if layout.header else res.idx[0]!r}) "
+                            "and a radial deviation, not x, y; this command needs x, y columns")
+    return res
+
+
+def read_points(path, columns=("x", "y"), *, plane: str | None = None, unit: str | None = None,
+                skip_rows: int = 0) -> np.ndarray:
+    """Read an (N, 2) float array of x, y (mm) from a text file.
+
+    ``columns``: two header names (case and spaces ignored; units in the header allowed) or 0-based
+    indices; ``plane`` ('xy', 'yz', 'zx') picks the named columns of that plane. Without a header the file
+    must have exactly two columns (or ``columns`` as indices); with a header lacking the names, the first
+    two columns are used only when the file has exactly two, else the error lists the columns. A file whose
+    header names an angle is refused (it is not x, y; :func:`read_profile` reads it). ``unit``: the file's
+    length unit (default: the header's, else mm; a contradiction with the header is an error)."""
+    layout = sniff(path, skip_rows)
+    res = _xy(layout, columns, plane)
+    lu = length_unit(layout, res.idx, unit)
+    cols = read_columns(layout, res.idx, skip_rows=skip_rows)
+    out = np.empty((len(cols[res.idx[0]]), 2), dtype=np.float64)
+    out[:, 0], out[:, 1] = cols[res.idx[0]], cols[res.idx[1]]
+    if lu != "mm":
+        out *= to_mm(1.0, lu)
+    return out
+
+
+CW_WORDS = {"cw", "g02", "g2", "clockwise", "-", "-1"}
+CCW_WORDS = {"ccw", "g03", "g3", "counterclockwise", "counter-clockwise", "anticlockwise", "+", "+1", "1"}
 
 
 # ------------------------------------------------------------------ tables with named columns

@@ -23,7 +23,7 @@ import numpy as np
 import methods
 from methods import InvalidInputError
 from methods.files import writable_target, write_atomic
-from methods.units import JSON_UNITS, UNIT_CHOICES, canonical
+from methods.units import JSON_UNITS, UNIT_CHOICES, canonical, warn_implausible
 
 EXIT_BAD_INPUT = 2
 
@@ -99,20 +99,26 @@ def write_text_atomic(path, text: str) -> None:
         raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
-def add_reader_options(p, *, columns=True):
-    """--unit, --skip-rows (and --columns / --plane): the options of every file reader."""
-    p.add_argument("--unit", default="mm", choices=UNIT_CHOICES,
-                   help="length unit of the input file(s) (default mm); results are printed in µm")
+def add_reader_options(p, *, columns=True, polar=False):
+    """--unit, --skip-rows (and --columns / --plane; with ``polar`` --angle-unit): the options of every file reader."""
+    p.add_argument("--unit", default=None, choices=UNIT_CHOICES,
+                   help="length unit of the input file(s) (default: the header's unit, e.g. 'x [um]', else mm); "
+                        "results are printed in µm")
     p.add_argument("--skip-rows", type=int, default=0, metavar="N",
                    help="skip N lines at the top of each file (the instrument's preamble)")
     if columns:
         g = p.add_mutually_exclusive_group()
         g.add_argument("--columns", nargs=2, metavar=("A", "B"),
-                       help="the two coordinate columns (header names or 0-based numbers; default x y)")
+                       help="the two columns to read (header names, case and spaces ignored, or 0-based numbers): "
+                            "x y, or an angle and a radial deviation / radius (default: from the header)")
         g.add_argument("--plane", choices=("xy", "yz", "zx"), help="the plane's two named columns (x,y / y,z / z,x)")
+    if polar:
+        p.add_argument("--angle-unit", choices=("deg", "rad"),
+                       help="angle column of an angle + radial-deviation file (default: the header's, e.g. 'angle [deg]')")
 
 
-def header_line(command: str, unit: str, extra: str = "", deviation_unit: str | None = None) -> str:
+def header_line(command: str, unit: str | None, extra: str = "", deviation_unit: str | None = None) -> str:
+    unit = unit or "mm"
     units = canonical(unit) + (f", deviations {canonical(deviation_unit)}" if deviation_unit else "")
     converted = canonical(unit) != "mm" or (deviation_unit and canonical(deviation_unit) != "mm")
     return (f"fitbench {version()} {command}: input unit {units}{' (converted to mm)' if converted else ''}; "
@@ -181,6 +187,40 @@ def _jsonable(v):
     return j(v)
 
 
+#: a profile (fit, roundness) whose half extent exceeds this is implausible for its declared unit: a 10 m part
+PROFILE_LIMIT_MM = 5000.0
+
+
+def read_profile_args(args):
+    """(source, points in mm, length unit used, notes) of ``fit`` and ``roundness``: a file in any instrument
+    layout (x, y or angle + radial deviation, :func:`datasets.io.read_profile`) or a published data set's
+    name; sizes implausible for the unit are warned about, naming the likely unit."""
+    from datasets import points_from
+    from datasets.io import read_profile
+    nominal = finite("--nominal-radius", getattr(args, "nominal_radius", None), positive=True)
+    if Path(args.file).exists() or args.unit or args.columns or args.plane or args.skip_rows or nominal:
+        got = read_profile(args.file, columns=tuple(args.columns) if args.columns else None, plane=args.plane,
+                           unit=args.unit, skip_rows=args.skip_rows, angle_unit=args.angle_unit,
+                           nominal_radius=nominal)
+        source, points, unit, notes = str(args.file), got.runs[0][1], got.unit, list(got.notes)
+        polar_alone = got.kind == "polar" and nominal is None and any("without a nominal radius" in n for n in notes)
+    else:
+        (source, points), unit, notes, polar_alone = points_from(args.file), "mm", [], False
+        got = None
+    points = np.asarray(points, dtype=float)
+    if points.ndim == 2 and points.shape[0] and np.isfinite(points).all():
+        if polar_alone:
+            span = float(np.ptp(np.hypot(*(points - points.mean(axis=0)).T)))
+            warn_implausible("radial deviations spanning", span, 10.0, unit, typical_mm=0.01)
+        else:
+            half = float(np.max(np.ptp(points, axis=0))) / 2
+            warn_implausible("profile half-widths", half, PROFILE_LIMIT_MM, unit, typical_mm=25.0)
+            if got is not None and got.kind == "polar" and nominal:
+                dev = float(np.max(np.abs(np.hypot(*points.T) - nominal)))
+                warn_implausible("radial deviations", dev, 0.05 * nominal, unit, typical_mm=0.01)
+    return source, points, unit, notes
+
+
 def cmd_fit(args) -> int:
     from datasets import points_from  # imported here: 'list' must work without pandas loaded
 
@@ -195,24 +235,21 @@ def cmd_fit(args) -> int:
             raise InvalidInputError(f"{spec.id} has no parameter {key!r}; its parameters are: "
                                     f"{', '.join(spec.defaults) or 'none'}")
         params[key] = parse_value(key, text, spec.defaults[key], spec.id)
-    from pathlib import Path as _P
-    if _P(args.file).exists() or args.unit != "mm" or args.columns or args.plane or args.skip_rows:
-        from datasets import read_points
-        source = str(args.file)
-        points = read_points(args.file, tuple(args.columns) if args.columns else ("x", "y"), plane=args.plane,
-                             unit=args.unit, skip_rows=args.skip_rows)
-    else:
-        source, points = points_from(args.file)
+    source, points, unit, notes = read_profile_args(args)
     result = spec(points, **params)
     if args.json:
         d = result.to_dict(residuals=not args.no_residuals)
         d["source"] = source
         d["n_points"] = int(np.asarray(points).shape[0])
-        d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(args.unit)}
+        d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(unit)}
+        if notes:
+            d["notes"] = notes
         print(json.dumps(d))
         return 0
-    print(f"input unit {canonical(args.unit)}{' (converted to mm)' if canonical(args.unit) != 'mm' else ''}; "
+    print(f"input unit {canonical(unit)}{' (converted to mm)' if canonical(unit) != 'mm' else ''}; "
           "lengths below in mm")
+    for n in notes:
+        print(f"note: {n}")
     rows = [("method", result.method), ("data", f"{source} ({len(points)} points)")]
     rows += result.report_lines()
     rows += [("form error", f"{_fmt(result.form_error)} mm"),
@@ -227,7 +264,8 @@ def cmd_fit(args) -> int:
 
 # ----------------------------------------------------------------------------------------- circular test
 def _read_circular_runs(args):
-    """{'cw': points, 'ccw': points} as the user labelled them, from one file (direction/run column) or two."""
+    """({'cw': points, 'ccw': points} as the user labelled them, the first file's CircularRuns, labelled?), from one
+    file (direction/run column) or two."""
     from datasets.io import read_runs
     kw = dict(columns=tuple(args.columns) if args.columns else None, plane=args.plane, unit=args.unit,
               skip_rows=args.skip_rows, angle_unit=args.angle_unit, nominal_radius=args.nominal_radius,
@@ -239,15 +277,18 @@ def _read_circular_runs(args):
         for f in files:
             if len(f.runs) != 1:
                 raise InvalidInputError(f"{f.source}: holds {len(f.runs)} runs; with two files give one run per file")
-        return {"cw": files[0].runs[0][1], "ccw": files[1].runs[0][1]}, files[0].kind, True
+        if files[0].unit != files[1].unit:
+            raise InvalidInputError(f"{files[0].source} is in {files[0].unit} but {files[1].source} in {files[1].unit}; "
+                                    "give both runs in one unit")
+        return {"cw": files[0].runs[0][1], "ccw": files[1].runs[0][1]}, files[0], True
     runs = files[0].runs
     if len(runs) != 2:
         raise InvalidInputError(f"{files[0].source}: one run only; give the CCW run as a second file or a file with a "
                                 "direction (cw/ccw) or run column holding both")
     tags = [t for t, _ in runs]
     if set(tags) == {"cw", "ccw"}:
-        return {t: pts for t, pts in runs}, files[0].kind, True
-    return {"cw": runs[0][1], "ccw": runs[1][1]}, files[0].kind, False  # labels from the point order
+        return {t: pts for t, pts in runs}, files[0], True
+    return {"cw": runs[0][1], "ccw": runs[1][1]}, files[0], False  # labels from the point order
 
 
 def cmd_circular_test(args) -> int:
@@ -262,14 +303,19 @@ def cmd_circular_test(args) -> int:
     pitch = finite("--cyclic-pitch", args.cyclic_pitch, positive=True)
     arc = finite("--arc", args.arc, positive=True)
     plot_path = check_plot_path(args.plot)
-    runs, kind, labelled = _read_circular_runs(args)
+    runs, first, labelled = _read_circular_runs(args)
+    args.unit = first.unit
+    polar_centre = first.kind == "polar" and args.nominal_center is None
+    if polar_centre:  # angle + radial deviation: the reader placed the points about the nominal centre (0, 0) itself
+        args.nominal_center = [0.0, 0.0]
     for name, pts in runs.items():
         if len(pts) < 10:
             raise InvalidInputError(f"circular test ({name.upper()} run): needs at least 10 points, got {len(pts)}")
     center0 = tuple(args.nominal_center) if args.nominal_center else \
         tuple(methods.fit("circle.gauss_newton", np.vstack(list(runs.values()))).center)
     trimmed = {}
-    notes = []
+    notes = ["angle + radial deviation: points placed about the nominal centre (0, 0), which the diagnostics use"] \
+        if polar_centre else []
     for name in ("cw", "ccw"):
         runs[name], rep = trim(runs[name], center0, arc_deg=arc, lead_in_deg=args.lead_in, lead_out_deg=args.lead_out)
         trimmed[name] = rep
@@ -361,6 +407,7 @@ def cmd_positioning(args) -> int:
     mpe = finite("--mpe", args.mpe)
     if args.degree < 0:
         raise InvalidInputError(f"--degree must be >= 0, got {args.degree}")
+    args.unit = args.unit or "mm"
     data = read_positioning(args.file, unit=args.unit, deviation_unit=args.deviation_unit, skip_rows=args.skip_rows)
     res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
     if args.standard != "iso230-2:2014" or len(data.directions) == 1:
@@ -431,8 +478,17 @@ def cmd_magnify(args) -> int:
     eta = finite("--eta", args.eta, positive=True, allow_none=False)
     plot_path = check_plot_path(args.plot)
     cols = tuple(args.columns) if args.columns else ("x", "y")
+    from datasets.io import points_unit
+    units = {points_unit(f, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows)
+             for f in (args.reference, args.measured)}
+    if len(units) > 1:
+        raise InvalidInputError(f"{args.reference} and {args.measured} are in different units ({', '.join(sorted(units))}); "
+                                "give both in one unit")
+    args.unit = units.pop()
     data = MagnifyInput(read_points(args.reference, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows),
                         read_points(args.measured, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows))
+    half = float(np.max(np.ptp(data.measured, axis=0))) / 2
+    warn_implausible("trajectory half-widths", half, PROFILE_LIMIT_MM, args.unit, typical_mm=50.0)
     params = {"eta": eta}
     if args.method == "offset":
         params["delta"] = finite("--delta", args.delta, positive=True)
@@ -481,6 +537,7 @@ def cmd_multilaterate(args) -> int:
     if args.degree < 1:
         raise InvalidInputError(f"--degree must be a positive integer (the component errors' polynomial degree), "
                                 f"got {args.degree}")
+    args.unit = args.unit or "mm"
     if args.errors_csv and not args.identify:
         raise InvalidInputError("--errors-csv needs --identify (the 21 errors come from the identification)")
     data = read_multilateration(args.file, args.stations, unit=args.unit, skip_rows=args.skip_rows)
@@ -576,9 +633,13 @@ def add_list(sub):
 def add_fit(sub):
     pf = sub.add_parser("fit", help="fit a file or published data set with one method")
     pf.add_argument("method", metavar="METHOD_ID")
-    pf.add_argument("file", metavar="FILE", help="a points file (x, y) or a published data set name")
+    pf.add_argument("file", metavar="FILE", help="a points file (x, y, or angle + radial deviation) or a published "
+                                                "data set name")
     pf.add_argument("--param", action="append", metavar="KEY=VALUE", help="method parameter (repeatable)")
-    add_reader_options(pf)
+    pf.add_argument("--nominal-radius", type=float, metavar="R_MM",
+                    help="angle + radial-deviation files: the radius the deviations are about (mm; default: the "
+                         "deviations alone)")
+    add_reader_options(pf, polar=True)
     pf.add_argument("--json", action="store_true", help="print the result as one JSON object")
     pf.add_argument("--no-residuals", action="store_true", help="leave the per-point residuals out of --json")
     pf.set_defaults(func=cmd_fit)

@@ -7,7 +7,6 @@ import warnings
 
 import numpy as np
 
-from methods.units import UNIT_CHOICES, to_mm
 from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff
 
@@ -15,13 +14,18 @@ from methods.roundness.filter import UndersampledWarning, parse_cutoff
 def add_parser(subparsers):
     p = subparsers.add_parser("roundness", help="ISO 12181 roundness: filtered profile, RONt/p/v/q about the "
                                                 "reference circles, harmonic spectrum")
-    p.add_argument("file", metavar="FILE", help="a points file (x, y) or a published data set name")
+    from fitbench.cli.commands import add_reader_options
+    p.add_argument("file", metavar="FILE", help="a profile file (x, y, or angle + radial deviation as roundness "
+                                                "instruments export it) or a published data set name")
     p.add_argument("--cutoff", default="50", metavar="UPR",
                    help="Gaussian filter cut-off in undulations per revolution: none, 15, 50 (default), 150, 500, "
                         "1500 or any positive value (ISO 16610-21)")
     p.add_argument("--reference", choices=("lsci", "mzci", "mici", "mcci", "all"), default="all",
                    help="reference circle(s) (default: all four)")
-    p.add_argument("--unit", choices=UNIT_CHOICES, default="mm", help="length unit of the file (default mm)")
+    p.add_argument("--nominal-radius", type=float, metavar="R_MM",
+                   help="angle + radial-deviation files: the radius the deviations are about (mm; default: the "
+                        "deviations alone, as an instrument's limaçon evaluation)")
+    add_reader_options(p, polar=True)
     p.add_argument("--json", action="store_true", help="print one JSON object (lengths in mm)")
     p.add_argument("--plot", metavar="PNG", help="write the polar plot and the harmonic spectrum")
     p.set_defaults(func=run)
@@ -30,15 +34,12 @@ def add_parser(subparsers):
 
 def run(args) -> int:
     import methods
-    from datasets import points_from
-
-    from fitbench.cli.commands import check_plot_path, save_figure
+    from fitbench.cli.commands import check_plot_path, read_profile_args, save_figure
     from fitbench.plots.roundness import plot
 
     cutoff = parse_cutoff(args.cutoff, "--cutoff")
     plot_path = check_plot_path(args.plot)
-    source, points = points_from(args.file)
-    points = to_mm(np.asarray(points, dtype=float), args.unit)
+    source, points, unit, notes = read_profile_args(args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UndersampledWarning)
         res = methods.fit("roundness.iso12181", points, cutoff_upr=cutoff, reference=args.reference)
@@ -50,12 +51,14 @@ def run(args) -> int:
     if args.json:
         d = res.to_dict(residuals=False)
         d["spectrum"] = {k: np.asarray(v).tolist() for k, v in res.spectrum.items()}
-        d.update(source=source, input_unit=args.unit,
+        d.update(source=source, input_unit=unit, notes=notes,
                  units={"lengths": "mm", "angles": "rad", "cutoff_upr": "undulations per revolution",
                         "spectrum.amplitude": "mm", "spectrum.phase": "rad"})
         d.pop("extra", None)
         print(json.dumps(d))
         return 0 if res.converged else 1
+    for n in notes:
+        print(f"note: {n}")
     print(report(res, source))
     return 0 if res.converged else 1
 

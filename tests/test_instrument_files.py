@@ -1,0 +1,191 @@
+"""Instrument-style files through every subcommand, with injected truth: polar roundness exports (angle + radial
+deviation, units in the header), the same profile as x, y, units in headers and their contradictions, --columns
+naming any layout's columns, angle headers never read as x, y, plausibility warnings naming the likely unit."""
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import methods
+from datasets.circular_test import MachineErrors, TestConditions, circular_test
+from datasets.io import DataFileError, read_points, read_profile
+from fitbench.cli import main
+
+R = 20.0                                   # a Ø40 mm shaft
+LOBES = [(2, 0.9e-3, 0.3), (3, 1.5e-3, 1.1), (7, 0.3e-3, 2.0), (40, 0.2e-3, 0.7), (160, 0.05e-3, 1.5)]  # mm
+
+
+def cli(*args):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in args])
+    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
+
+
+def shaft(n=1440, seed=4):
+    """Angles (rad) and radial deviations (mm) of a turned shaft's trace: lobes plus noise."""
+    t = 2 * np.pi * np.arange(n) / n
+    d = sum(a * np.cos(k * t + ph) for k, a, ph in LOBES)
+    return t, d + 2e-5 * np.random.default_rng(seed).standard_normal(n)
+
+
+def write_polar(path, t, d_mm, header="Angle (deg);Radial deviation (µm)", sep=";", angle="deg", factor=1e3,
+                decimal_comma=True, preamble=()):
+    a = np.degrees(t) if angle == "deg" else t
+    rows = [f"{x:.8f}{sep}{y * factor:.6f}" for x, y in zip(a, d_mm)]
+    if decimal_comma:
+        rows = [r.replace(".", ",") for r in rows]
+    path.write_text("\n".join([*preamble, header, *rows]) + "\n", encoding="utf-8")
+    return path
+
+
+def write_xy(path, t, d_mm, radius=R, header="X [mm],Y [mm]", factor=1.0):
+    r = radius + d_mm
+    path.write_text(header + "\n" + "".join(f"{x * factor:.9f},{y * factor:.9f}\n"
+                                            for x, y in zip(r * np.cos(t), r * np.sin(t))))
+    return path
+
+
+@pytest.mark.parametrize("cutoff", ["none", "15", "50", "150"])
+def test_polar_export_and_xy_profile_give_the_same_ron_for_every_reference(tmp_path, cutoff):
+    t, d = shaft()
+    polar = write_polar(tmp_path / "talyrond.txt", t, d, preamble=("Roundness trace", "Part: shaft Ø40"))
+    xy = write_xy(tmp_path / "xy.csv", t, d)
+    a = cli("roundness", polar, "--skip-rows", 2, "--nominal-radius", R, "--cutoff", cutoff, "--json")
+    b = cli("roundness", xy, "--cutoff", cutoff, "--json")
+    assert a.returncode == 0 and b.returncode == 0, a.stderr + b.stderr
+    ja, jb = json.loads(a.stdout), json.loads(b.stdout)
+    assert set(ja["references"]) == {"lsci", "mzci", "mici", "mcci"}
+    for kind in ja["references"]:
+        for p in ("RONt", "RONp", "RONv", "RONq"):
+            assert ja["references"][kind][p] == pytest.approx(jb["references"][kind][p], abs=2e-9), (kind, p)
+    assert ja["input_unit"] == "µm" and jb["input_unit"] == "mm"
+    # the deviations alone (no nominal radius): the limaçon evaluation, RONt within 1e-5 of the profile's
+    c = cli("roundness", polar, "--skip-rows", 2, "--cutoff", cutoff, "--json")
+    assert c.returncode == 0, c.stderr
+    jc = json.loads(c.stdout)
+    assert any("without a nominal radius" in n for n in jc["notes"])
+    for kind in jc["references"]:
+        assert jc["references"][kind]["RONt"] == pytest.approx(jb["references"][kind]["RONt"], rel=1e-5, abs=1e-9)
+
+
+def test_unfiltered_ront_is_the_injected_profile_span(tmp_path):
+    """Truth: with lobes of 2 UPR and more the LSCI centre is the origin, so RONt(LSCI) is the span of the
+    injected deviations, to the centre's scatter from the noise (sigma sqrt(2 / N) ~ 1e-6 mm)."""
+    t, d = shaft(seed=9)
+    polar = write_polar(tmp_path / "p.csv", t, d, header="angle_rad,dr_um", sep=",", angle="rad", decimal_comma=False)
+    out = cli("roundness", polar, "--nominal-radius", R, "--cutoff", "none", "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["references"]["lsci"]["RONt"] == pytest.approx(np.ptp(d), abs=3e-6)
+
+
+def test_fit_reads_a_polar_profile(tmp_path):
+    t, d = shaft()
+    polar = write_polar(tmp_path / "p.txt", t, d, header="Winkel/°\tAbw. [um]", sep="\t")
+    out = cli("fit", "circle.gauss_newton", polar, "--nominal-radius", R, "--json", "--no-residuals")
+    assert out.returncode == 0, out.stderr
+    res = json.loads(out.stdout)
+    direct = methods.fit("circle.gauss_newton", np.c_[(R + d) * np.cos(t), (R + d) * np.sin(t)])
+    assert res["radius"] == pytest.approx(direct.radius, abs=1e-8)
+    np.testing.assert_allclose(res["center"], direct.center, atol=1e-8)
+    assert res["units"]["input_unit"] == "µm"
+
+
+def test_a_two_column_file_whose_header_names_an_angle_is_never_xy(tmp_path):
+    t, d = shaft(n=200)
+    p = tmp_path / "a.csv"
+    p.write_text("angle_deg,value\n" + "".join(f"{a:.4f},{v:.6f}\n" for a, v in zip(np.degrees(t), d * 1e3)))
+    for cmd in (("roundness", p), ("fit", "circle.kasa", p)):
+        out = cli(*cmd)
+        assert out.returncode == 2 and out.stderr.count("\n") == 1 and "is an angle" in out.stderr, out.stderr
+    with pytest.raises(DataFileError, match="is an angle"):
+        read_points(p)
+    # --columns naming the angle and the other column reads it as angle + deviation
+    got = read_profile(p, columns=("Angle deg", "value"), unit="um", nominal_radius=R)
+    assert got.kind == "polar"
+    np.testing.assert_allclose(np.hypot(*got.runs[0][1].T), R + d, atol=2e-6)
+    # magnify needs x, y: a polar file is refused in one line
+    xy = write_xy(tmp_path / "ref.csv", t, 0 * d)
+    poolar = write_polar(tmp_path / "m.csv", t, d, header="angle [deg],deviation [um]", sep=",", decimal_comma=False)
+    out = cli("magnify", xy, poolar, "--eta", 100)
+    assert out.returncode == 2 and "not x, y" in out.stderr
+
+
+@pytest.mark.parametrize("header,unit,expect", [("x_um,y_um", None, 1e-3), ("X (µm), Y (µm)", "um", 1e-3),
+                                                ("x [mm],y [mm]", None, 1.0), ("x/m,y/m", None, 1e3)])
+def test_units_in_headers(tmp_path, header, unit, expect):
+    t, d = shaft(n=120)
+    p = write_xy(tmp_path / "u.csv", t, d, header=header, factor=1 / expect)
+    pts = read_points(p, unit=unit)
+    np.testing.assert_allclose(np.hypot(*pts.T), R + d, atol=1e-8)
+
+
+@pytest.mark.parametrize("cmd", [("fit", "circle.kasa"), ("roundness",), ("magnify",)])
+def test_a_header_unit_contradicting_unit_is_an_error(tmp_path, cmd):
+    t, d = shaft(n=120)
+    p = write_xy(tmp_path / "u.csv", t, d, header="x [um],y [um]", factor=1e3)
+    args = [*cmd, p, "--unit", "mm"] if cmd[0] != "magnify" else ["magnify", p, p, "--eta", 10, "--unit", "mm"]
+    out = cli(*args)
+    assert out.returncode == 2 and out.stderr.count("\n") == 1
+    assert "header says" in out.stderr and "µm" in out.stderr and "--unit says mm" in out.stderr
+
+
+def test_a_header_unit_contradicting_the_circular_test_unit_or_angle_unit(tmp_path):
+    cond = TestConditions(nominal_radius=100.0, nominal_center=(0.0, 0.0), sampling_hz=50.0)
+    cw, ccw, _ = circular_test(cond, MachineErrors(), seed=1)
+    rows = [f"{lab},{np.degrees(np.arctan2(y, x)):.6f},{(np.hypot(x, y) - 100.0) * 1e3:.5f}"
+            for lab, pts in (("cw", cw), ("ccw", ccw)) for x, y in pts]
+    p = tmp_path / "bb.csv"
+    p.write_text("Direction, Angle (deg), Radial deviation (um)\n" + "\n".join(rows) + "\n")
+    for extra, word in ((("--unit", "mm"), "--unit says mm"), (("--angle-unit", "rad"), "--angle-unit says rad")):
+        out = cli("circular-test", p, "--nominal-radius", 100, *extra)
+        assert out.returncode == 2 and word in out.stderr and out.stderr.count("\n") == 1, out.stderr
+
+
+def test_radial_deviation_in_um_header_and_diagnostics_without_nominal_center(tmp_path):
+    """A ballbar export 'Radial deviation (um)' is read as angle + deviation in µm (not x, y in mm), and the
+    diagnostics come without --nominal-center 0 0: the reader placed the points about (0, 0) itself."""
+    cond = TestConditions(nominal_radius=150.0, nominal_center=(0.0, 0.0), feed_mm_min=2000.0, sampling_hz=100.0,
+                          start_angle_deg=17.0)
+    err = MachineErrors(squareness=40e-6, scale_x=25e-6, noise=0.0001)
+    cw, ccw, _ = circular_test(cond, err, seed=3)
+    rows = [f"{lab};{np.degrees(np.arctan2(y, x)):.6f};{(np.hypot(x, y) - 150.0) * 1e3:.5f}".replace(".", ",")
+            for lab, pts in (("CW", cw), ("CCW", ccw)) for x, y in pts]
+    p = tmp_path / "ballbar.txt"
+    p.write_text("Run;Angle [°];Radial deviation (um)\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    out = cli("circular-test", p, "--nominal-radius", 150, "--json")
+    assert out.returncode == 0, out.stderr
+    j = json.loads(out.stdout)
+    assert isinstance(j["diagnostics"], dict)
+    assert j["diagnostics"]["squareness"]["value"] == pytest.approx(40e-6, abs=3 * j["diagnostics"]["squareness"]["u"] + 2e-6)
+    assert j["units"]["input_unit"] == "µm" and j["G_b"] < 0.05    # µm deviations, not mm
+
+
+@pytest.mark.parametrize("cmd", [("fit", "circle.gauss_newton"), ("roundness",)])
+def test_a_shaft_in_um_read_as_mm_warns_naming_um(tmp_path, cmd):
+    t, d = shaft(n=720)
+    p = write_xy(tmp_path / "um.csv", t, d, header="x,y", factor=1e3)       # written in µm, no unit in the header
+    out = cli(*cmd, p)
+    assert "fitbench: warning:" in out.stderr and "--unit um" in out.stderr, out.stderr
+    ok = cli(*cmd, p, "--unit", "um")
+    assert "warning" not in ok.stderr.replace("fewer than", ""), ok.stderr
+
+
+def test_polar_deviations_in_mm_that_are_um_warn(tmp_path):
+    t, d = shaft(n=720)
+    p = write_polar(tmp_path / "p.csv", t, d, header="angle [deg],deviation", sep=",", decimal_comma=False)
+    out = cli("roundness", p, "--nominal-radius", R, "--cutoff", "none")          # deviations in µm read as mm
+    assert "radial deviations" in out.stderr and "--unit um" in out.stderr, out.stderr
+
+
+def test_roundness_plot_into_a_missing_folder_is_one_line(tmp_path):
+    t, d = shaft(n=400)
+    p = write_xy(tmp_path / "xy.csv", t, d)
+    out = cli("roundness", p, "--plot", tmp_path / "missing" / "x.png")
+    assert out.returncode == 2 and out.stderr.count("\n") == 1 and "does not exist" in out.stderr
+    assert "Traceback" not in out.stderr

@@ -189,3 +189,75 @@ def test_roundness_plot_into_a_missing_folder_is_one_line(tmp_path):
     out = cli("roundness", p, "--plot", tmp_path / "missing" / "x.png")
     assert out.returncode == 2 and out.stderr.count("\n") == 1 and "does not exist" in out.stderr
     assert "Traceback" not in out.stderr
+
+
+def test_temperature_correction_removes_a_pure_thermal_slope(tmp_path):
+    """ISO 230-2 nominal differential expansion: an axis at 26 °C with alpha = 11.5 µm/(m·K) shows a pure
+    thermal slope alpha dT P; E before is alpha dT x travel (69 µm over 1000 mm), after the correction 0."""
+    from datasets.positioning import axis_test, to_frame
+    data, _ = axis_test(rng=np.random.default_rng(1), pitch=(0.0,), reversal=0.0, mpe=1e-9)
+    alpha, temp = 11.5, 26.0
+    slope = alpha * 1e-6 * (temp - 20.0)
+    import dataclasses
+    noise = np.random.default_rng(2).normal(0.0, 1e-5, (2, *data.up.shape))      # 10 nm of laser noise
+    hot = dataclasses.replace(data, up=noise[0] + slope * data.targets[:, None],
+                              down=noise[1] + slope * data.targets[:, None])
+    p = tmp_path / "laser.csv"
+    to_frame(hot, actual=False).to_csv(p, index=False)
+    travel = float(np.ptp(data.targets))
+    before = json.loads(cli("positioning", p, "--mpe", 0.001, "--json").stdout)
+    out = cli("positioning", p, "--mpe", 0.001, "--json", "--material-temperature", temp, "--expansion-coefficient", alpha)
+    assert out.returncode == 0, out.stderr
+    after = json.loads(out.stdout)
+    assert before["E"] == pytest.approx(slope * travel, abs=1e-4)
+    assert after["E"] < 1e-4 < 0.05 * before["E"]
+    np.testing.assert_allclose(np.array(before["per_target"]["mean_bidirectional"]) - slope * data.targets,
+                               after["per_target"]["mean_bidirectional"], atol=1e-12)
+    assert after["temperature_correction"]["material_temperature_c"] == temp
+    text = cli("positioning", p, "--mpe", 0.001, "--material-temperature", temp, "--expansion-coefficient", alpha)
+    assert "26 °C" in text.stdout and "11.5 µm/(m·K)" in text.stdout
+    one = cli("positioning", p, "--material-temperature", temp)
+    assert one.returncode == 2 and "--expansion-coefficient" in one.stderr and one.stderr.count("\n") == 1
+
+
+def test_tolerances_give_pass_fail_in_table_json_and_plot_with_exit_0(tmp_path):
+    from datasets.positioning import axis_test, to_frame
+    data, _ = axis_test(rng=np.random.default_rng(3), mpe=0.002)
+    p = tmp_path / "axis.csv"
+    to_frame(data, actual=False).to_csv(p, index=False)
+    ref = json.loads(cli("positioning", p, "--mpe", 0.002, "--json").stdout)
+    A_um, E_um = ref["A"] * 1e3, ref["E"] * 1e3
+    out = cli("positioning", p, "--mpe", 0.002, "--json", "--tolerance", f"A={A_um * 1.1:.4f}",
+              "--tolerance", f"e={E_um * 0.9:.4f}", "--plot", tmp_path / "pos.png")
+    assert out.returncode == 0, out.stderr
+    v = json.loads(out.stdout)["verdict"]
+    assert v["overall"] == "FAIL" and [(c["figure"], c["result"]) for c in v["checks"]] == [("A", "PASS"), ("E", "FAIL")]
+    assert (tmp_path / "pos.png").stat().st_size > 0
+    text = cli("positioning", p, "--mpe", 0.002, "--tolerance", f"A={A_um * 1.1:.4f}")
+    assert text.returncode == 0 and "verdict      PASS" in text.stdout
+    t, d = shaft()
+    xy = write_xy(tmp_path / "xy.csv", t, d)
+    r = cli("roundness", xy, "--reference", "mzci", "--tolerance", "RONt=1", "--json")
+    assert r.returncode == 0 and json.loads(r.stdout)["verdict"]["checks"][0]["result"] == "FAIL"
+    cond = TestConditions(nominal_radius=100.0, nominal_center=(0.0, 0.0), sampling_hz=50.0)
+    cw, ccw, _ = circular_test(cond, MachineErrors(squareness=30e-6), seed=2)
+    for name, pts in (("cw", cw), ("ccw", ccw)):
+        (tmp_path / f"{name}.csv").write_text("x,y\n" + "".join(f"{x:.7f},{y:.7f}\n" for x, y in pts))
+    c = cli("circular-test", tmp_path / "cw.csv", tmp_path / "ccw.csv", "--nominal-radius", 100, "--tolerance",
+            "G=50", "--json")
+    assert c.returncode == 0, c.stderr
+    assert json.loads(c.stdout)["verdict"]["overall"] == "PASS"
+    bad = cli("roundness", xy, "--tolerance", "G=3")
+    assert bad.returncode == 2 and "RONt" in bad.stderr and bad.stderr.count("\n") == 1
+
+
+def test_fit_plot_quick_look(tmp_path):
+    t, d = shaft(n=360)
+    xy = write_xy(tmp_path / "xy.csv", t, d)
+    for method in ("circle.gauss_newton", "ellipse.halir_flusser"):
+        png = tmp_path / f"{method}.png"
+        out = cli("fit", method, xy, "--plot", png)
+        assert out.returncode == 0, out.stderr
+        assert png.read_bytes().startswith(b"\x89PNG")
+    out = cli("fit", "circle.kasa", xy, "--plot", tmp_path / "no" / "x.png")
+    assert out.returncode == 2 and "does not exist" in out.stderr and out.stderr.count("\n") == 1

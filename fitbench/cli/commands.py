@@ -125,6 +125,50 @@ def header_line(command: str, unit: str | None, extra: str = "", deviation_unit:
             f"lengths printed in µm{extra}")
 
 
+def add_tolerance_option(p, names: str):
+    p.add_argument("--tolerance", action="append", metavar="NAME=UM",
+                   help=f"a tolerance in µm for one of the standard's figures ({names}); repeatable: PASS/FAIL "
+                        "in the table, the JSON and the plot (the exit status does not change)")
+
+
+def parse_tolerances(items, allowed) -> dict:
+    """``--tolerance NAME=UM`` items as {figure name: tolerance in mm}; ``allowed``: the names (any case)."""
+    out = {}
+    by_lower = {a.lower(): a for a in allowed}
+    for item in items or []:
+        key, eq, text = str(item).partition("=")
+        name = by_lower.get(key.strip().lower())
+        if not eq or name is None:
+            raise InvalidInputError(f"--tolerance {item!r}: give NAME=UM with NAME one of {', '.join(allowed)}")
+        value = finite(f"--tolerance {name}", text, positive=True, allow_none=False)
+        out[name] = value * 1e-3
+    return out
+
+
+def verdict(values_mm: dict, tolerances_mm: dict) -> dict | None:
+    """PASS/FAIL of each figure against its tolerance (value <= tolerance passes), and the overall verdict;
+    None without tolerances."""
+    if not tolerances_mm:
+        return None
+    checks = [{"figure": name, "value_mm": float(values_mm[name]), "tolerance_mm": tol,
+               "result": "PASS" if float(values_mm[name]) <= tol else "FAIL"} for name, tol in tolerances_mm.items()]
+    return {"checks": checks, "overall": "PASS" if all(c["result"] == "PASS" for c in checks) else "FAIL"}
+
+
+def verdict_lines(v: dict | None) -> list[str]:
+    if not v:
+        return []
+    lines = [f"verdict      {v['overall']}"]
+    lines += [f"  {c['figure']:<12} {c['value_mm'] * 1e3:10.3f} µm  tolerance {c['tolerance_mm'] * 1e3:g} µm  "
+              f"{c['result']}" for c in v["checks"]]
+    return lines
+
+
+def verdict_title(v: dict | None) -> str:
+    return "" if not v else f"; verdict {v['overall']} (" + ", ".join(
+        f"{c['figure']} {c['value_mm'] * 1e3:.2f} µm / {c['tolerance_mm'] * 1e3:g} µm" for c in v["checks"]) + ")"
+
+
 def parse_value(key: str, text: str, default, method_id: str):
     """Coerce a ``--param KEY=VALUE`` string to the type of the parameter's default."""
     def bad(kind):
@@ -235,8 +279,15 @@ def cmd_fit(args) -> int:
             raise InvalidInputError(f"{spec.id} has no parameter {key!r}; its parameters are: "
                                     f"{', '.join(spec.defaults) or 'none'}")
         params[key] = parse_value(key, text, spec.defaults[key], spec.id)
+    plot_path = check_plot_path(args.plot)
     source, points, unit, notes = read_profile_args(args)
     result = spec(points, **params)
+    if plot_path:
+        if spec.family not in ("circle", "ellipse"):
+            raise InvalidInputError(f"--plot draws circle and ellipse fits; {spec.id} is a {spec.family} method")
+        from fitbench.plots.fit import plot_fit
+        plot_fit(points, result, spec.family, plot_path, title=f"{source} ({canonical(unit)} read, mm shown)",
+                 save=save_figure)
     if args.json:
         d = result.to_dict(residuals=not args.no_residuals)
         d["source"] = source
@@ -303,6 +354,7 @@ def cmd_circular_test(args) -> int:
     pitch = finite("--cyclic-pitch", args.cyclic_pitch, positive=True)
     arc = finite("--arc", args.arc, positive=True)
     plot_path = check_plot_path(args.plot)
+    tolerances = parse_tolerances(args.tolerance, ("G", "G_cw", "G_ccw", "G_b", "H"))
     runs, first, labelled = _read_circular_runs(args)
     args.unit = first.unit
     polar_centre = first.kind == "polar" and args.nominal_center is None
@@ -346,8 +398,11 @@ def cmd_circular_test(args) -> int:
     dg = None
     if center is not None:
         dg = diagnose(runs["cw"], runs["ccw"], R, center, feed_mm_min=feed, cyclic_pitch=pitch, partial=ev.partial_arc)
+    values = dict(ev.figures, G=max(ev.figures["G_cw"], ev.figures["G_ccw"]))
+    check = verdict({n: values[n] for n in tolerances}, tolerances)
     if plot_path:
-        polar_plot(runs["cw"], runs["ccw"], ev, plot_path, diagnostics=dg, conditions=conditions, save=save_figure)
+        polar_plot(runs["cw"], runs["ccw"], ev, plot_path, title=verdict_title(check).lstrip("; "), diagnostics=dg,
+                   conditions=conditions, save=save_figure)
     if args.json:
         d = ev.to_dict(residuals=False)
         out = {k: d.pop(k) for k in (*ev.FIGURES, "center")}
@@ -358,6 +413,8 @@ def cmd_circular_test(args) -> int:
         shared = {f.name for f in fields(FitResult)}  # the evaluation's own fields only
         out["details"] = {k: v for k, v in d.items() if k not in shared}
         out["notes"] = notes
+        if check:
+            out["verdict"] = check
         if dg:
             out["details"]["diagnostics_model"] = dg["_model"]
         print(json.dumps(_jsonable(out)))
@@ -368,6 +425,8 @@ def cmd_circular_test(args) -> int:
     print(text(ev, dg))
     if dg is None:
         print("diagnostics: not estimated (give --nominal-center X Y)")
+    for line in verdict_lines(check):
+        print(line)
     return 0
 
 
@@ -389,6 +448,7 @@ def add_circular_test(sub):
     pc.add_argument("--as-given", action="store_true",
                     help="keep the CW/CCW labels even when the point order says otherwise (only warn)")
     pc.add_argument("--angle-unit", choices=("deg", "rad"), help="angle column of an angle + radial-deviation file")
+    add_tolerance_option(pc, "G (the larger of CW and CCW), G_cw, G_ccw, G_b, H")
     pc.add_argument("--machine", default="", help="machine name for the plot's test-conditions panel")
     pc.add_argument("--date", default="", help="test date for the plot's test-conditions panel")
     add_reader_options(pc)
@@ -408,7 +468,25 @@ def cmd_positioning(args) -> int:
     if args.degree < 0:
         raise InvalidInputError(f"--degree must be >= 0, got {args.degree}")
     args.unit = args.unit or "mm"
+    temperature = finite("--material-temperature", args.material_temperature)
+    alpha = finite("--expansion-coefficient", args.expansion_coefficient)
+    if (temperature is None) != (alpha is None):
+        raise InvalidInputError("the temperature correction needs both --material-temperature (°C) and "
+                                "--expansion-coefficient (µm/(m·K), e.g. 11.5 for steel)")
+    if temperature is not None and not -50.0 <= temperature <= 100.0:
+        raise InvalidInputError(f"--material-temperature {temperature:g} °C is not a workshop temperature; give °C")
     data = read_positioning(args.file, unit=args.unit, deviation_unit=args.deviation_unit, skip_rows=args.skip_rows)
+    POS_FIGURES = ("A", "E", "R", "B", "M", "A_up", "A_down", "E_up", "E_down", "R_up", "R_down", "B_mean")
+    tolerances = parse_tolerances(args.tolerance, POS_FIGURES)
+    thermal = None
+    if temperature is not None:
+        from methods.positioning.data import thermal_correction
+        data = thermal_correction(data, temperature, alpha)
+        thermal = {"material_temperature_c": temperature, "expansion_coefficient_um_per_m_k": alpha,
+                   "correction_um_per_m": -alpha * (temperature - 20.0)}
+        thermal_text = (f"temperature correction (ISO 230-2 nominal differential expansion): material at "
+                        f"{temperature:g} °C, expansion coefficient {alpha:g} µm/(m·K): deviations corrected by "
+                        f"{-alpha * (temperature - 20.0):+.4g} µm/m x target position, to 20 °C")
     res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
     if args.standard != "iso230-2:2014" or len(data.directions) == 1:
         other = methods.fit("positioning.iso230_2", data, standard=args.standard)
@@ -419,10 +497,21 @@ def cmd_positioning(args) -> int:
         comp = write_tables(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
                             source=args.compensation_from, axis=args.axis, write=write_text_atomic,
                             reference_mm=finite("--reference", args.reference))
+    missing = [n for n in tolerances if n not in res.figures]
+    if missing:
+        raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "
+                                f"({res.figures.get('directions', 'bidirectional')}, {args.standard})")
+    check = verdict({n: abs(res.figures[n]) for n in tolerances}, tolerances)
     if plot_path:
-        plot(res, plot_path, title=str(args.file), data=data, save=save_figure)
+        title = str(args.file) + (f"; corrected to 20 °C from {temperature:g} °C, {alpha:g} µm/(m·K)" if thermal else "")
+        title += verdict_title(check)
+        plot(res, plot_path, title=title, data=data, save=save_figure)
     if args.json:
         out = dict(res.figures)
+        if thermal:
+            out["temperature_correction"] = dict(thermal, correction_unit="µm/m of target position (to 20 °C)")
+        if check:
+            out["verdict"] = check
         out["units"] = dict(JSON_UNITS, input_unit=canonical(args.unit),
                             input_deviation_unit=canonical(args.deviation_unit or args.unit),
                             polynomial="coefficients of increasing powers of the position P in mm: mm / mm^k")
@@ -434,7 +523,11 @@ def cmd_positioning(args) -> int:
         print(json.dumps(_jsonable(out)))
         return 0
     print(header_line("positioning", args.unit, deviation_unit=args.deviation_unit))
+    if thermal:
+        print(thermal_text)
     print(text(res, degree=args.degree))
+    for line in verdict_lines(check):
+        print(line)
     if comp is not None:
         for fmt, path in args.compensation:
             print(f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
@@ -452,6 +545,12 @@ def add_positioning(sub):
     g.add_argument("--instrument-u", type=float, metavar="U_MM", help="standard uncertainty of the instrument (mm)")
     g.add_argument("--mpe", type=float, metavar="MPE_MM", help="the instrument's maximum permissible error (mm, rectangular)")
     pp.add_argument("--standard", choices=("iso230-2:2014", "iso230-2:1988", "vdi3441"), default="iso230-2:2014")
+    add_tolerance_option(pp, "A, E, R, B, M, A_up, ...")
+    pp.add_argument("--material-temperature", type=float, metavar="DEG_C",
+                    help="temperature of the axis scale / workpiece during the test (°C): the deviations are "
+                         "corrected to 20 °C by the nominal differential expansion (needs --expansion-coefficient)")
+    pp.add_argument("--expansion-coefficient", type=float, metavar="UM_PER_M_K",
+                    help="its thermal expansion coefficient in µm/(m·K) (steel about 11.5)")
     pp.add_argument("--deviation-unit", choices=UNIT_CHOICES,
                     help="unit of the deviation columns when it differs from --unit (laser exports: targets in mm, "
                          "errors in µm)")
@@ -642,6 +741,7 @@ def add_fit(sub):
     add_reader_options(pf, polar=True)
     pf.add_argument("--json", action="store_true", help="print the result as one JSON object")
     pf.add_argument("--no-residuals", action="store_true", help="leave the per-point residuals out of --json")
+    pf.add_argument("--plot", metavar="FILE", help="write a quick look: points, fitted curve, residuals (.png, .pdf, .svg)")
     pf.set_defaults(func=cmd_fit)
 
 

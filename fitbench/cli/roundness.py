@@ -28,17 +28,21 @@ def add_parser(subparsers):
     add_reader_options(p, polar=True)
     p.add_argument("--json", action="store_true", help="print one JSON object (lengths in mm)")
     p.add_argument("--plot", metavar="PNG", help="write the polar plot and the harmonic spectrum")
+    from fitbench.cli.commands import add_tolerance_option
+    add_tolerance_option(p, "RONt, RONp, RONv, RONq: checked about each reference circle shown")
     p.set_defaults(func=run)
     return p
 
 
 def run(args) -> int:
     import methods
-    from fitbench.cli.commands import check_plot_path, read_profile_args, save_figure
+    from fitbench.cli.commands import (check_plot_path, parse_tolerances, read_profile_args, save_figure, verdict,
+                                       verdict_lines, verdict_title)
     from fitbench.plots.roundness import plot
 
     cutoff = parse_cutoff(args.cutoff, "--cutoff")
     plot_path = check_plot_path(args.plot)
+    tolerances = parse_tolerances(args.tolerance, ("RONt", "RONp", "RONv", "RONq"))
     source, points, unit, notes = read_profile_args(args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UndersampledWarning)
@@ -46,11 +50,15 @@ def run(args) -> int:
     for w in caught:
         if issubclass(w.category, UndersampledWarning):
             print(f"fitbench: warning: {w.message}", file=sys.stderr)
+    check = verdict({f"{name} {kind.upper()}": r[name] for kind, r in res.references.items() for name in tolerances},
+                    {f"{name} {kind.upper()}": tol for kind in res.references for name, tol in tolerances.items()})
     if plot_path:
-        plot(res, plot_path, title=f"{source}", save=lambda fig, path: save_figure(fig, path, dpi=110))
+        plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))
     if args.json:
         d = res.to_dict(residuals=False)
         d["spectrum"] = {k: np.asarray(v).tolist() for k, v in res.spectrum.items()}
+        if check:
+            d["verdict"] = check
         d.update(source=source, input_unit=unit, notes=notes,
                  units={"lengths": "mm", "angles": "rad", "cutoff_upr": "undulations per revolution",
                         "spectrum.amplitude": "mm", "spectrum.phase": "rad"})
@@ -60,6 +68,8 @@ def run(args) -> int:
     for n in notes:
         print(f"note: {n}")
     print(report(res, source))
+    for line in verdict_lines(check):
+        print(line)
     return 0 if res.converged else 1
 
 

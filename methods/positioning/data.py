@@ -130,6 +130,19 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
     return PositioningData(targets=targets, up=arrays["up"], down=arrays["down"], unit="mm")
 
 
+def thermal_correction(data: PositioningData, material_temperature_c: float,
+                       expansion_coefficient_um_per_m_k: float) -> PositioningData:
+    """The nominal differential expansion (NDE) correction of ISO 230-2:2014 for a test whose axis (scale or
+    workpiece) was at ``material_temperature_c`` instead of the reference temperature 20 °C (ISO 1): a length
+    P measured at T stands for P (1 + alpha (T - 20)) at 20 °C, so each deviation loses alpha (T - 20) P,
+    P the target position as given (mm) and alpha the expansion coefficient (µm/(m·K) = 1e-6 / K). A pure
+    thermal slope alpha (T - 20) P is removed exactly."""
+    slope = float(expansion_coefficient_um_per_m_k) * 1e-6 * (float(material_temperature_c) - 20.0)
+    shift = slope * np.asarray(data.targets, dtype=float)[:, None]
+    return PositioningData(targets=data.targets, up=None if data.up is None else data.up - shift,
+                           down=None if data.down is None else data.down - shift, unit=data.unit)
+
+
 def validate(data, method_id="") -> PositioningData:
     """The registry's validator for the positioning family."""
     if isinstance(data, PositioningData):

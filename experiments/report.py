@@ -4,15 +4,18 @@ the studies' output in ``results/`` (default ``results/`` -> ``paper/``).
 Writes ``report.md``, a self-contained ``report.html`` (images embedded, numbered captions, nav#toc, coloured
 method tables), ``report.tex`` (compiles on A4) with the LaTeX table fragments ``tables/*.tex`` (siunitx,
 split when too wide; ``experiments.render``) and every figure as PNG and PDF under ``figures/``, and the section
-"Rankings across data sets" (performance profiles of every ranking the studies declare, ``[[rankings]]``). A study that is missing
-or whose rows failed is shown as such, never dropped. Also run at the end of ``python -m experiments.run``.
+"Rankings across data sets" (performance profiles of every ranking the studies declare, ``[[rankings]]``). A study
+that is missing or whose rows failed is shown as such, never dropped; each study shows its current
+reproducibility verdict (``experiments.verdict``). Also run at the end of ``python -m experiments.run``.
+
+User text (titles, sections, captions, findings, labels) is text: it never names a file (figures are embedded
+from the files this builder wrote), it is escaped for Markdown, HTML and LaTeX (``experiments.render.page``,
+``experiments.render.text``). A build deletes only the files its previous build listed in ``.report-build.json``.
 """
 from __future__ import annotations
 
 import argparse
-import base64
 import hashlib
-import html
 import json
 import re
 import shutil
@@ -29,9 +32,12 @@ from methods import InvalidInputError
 # ---------------------------------------------------------------- tables
 
 def md_table(df: pd.DataFrame, floatfmt: str = ".7g") -> str:
+    """A GitHub Markdown table; text cells and headers escaped (``page.md_escape``)."""
+    from experiments.render.page import md_escape
+
     def fmt(v):
-        return ("" if v != v else format(v, floatfmt)) if isinstance(v, float) else str(v)
-    out = ["| " + " | ".join(map(str, df.columns)) + " |", "|" + "---|" * len(df.columns)]
+        return ("" if v != v else format(v, floatfmt)) if isinstance(v, float) else md_escape(v)
+    out = ["| " + " | ".join(md_escape(c) for c in df.columns) + " |", "|" + "---|" * len(df.columns)]
     out += ["| " + " | ".join(fmt(v) for v in row) + " |" for row in df.itertuples(index=False)]
     return "\n".join(out)
 
@@ -74,6 +80,8 @@ class BrokenStudy(Exception):
 
 
 def _read_json(path: Path) -> dict:
+    if not path.is_file():
+        raise BrokenStudy(f"{path.name} is not a regular file")   # a FIFO would block the read
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -93,6 +101,8 @@ def load_study(folder: Path) -> tuple[dict, dict]:
     if not (folder / "meta.json").exists() or not (folder / "results.csv").exists():
         raise BrokenStudy("unfinished: no meta.json or results.csv (the run was interrupted; run it again)")
     meta = _read_json(folder / "meta.json")
+    if not (folder / "results.csv").is_file():
+        raise BrokenStudy("results.csv is not a regular file")
     try:
         with open(folder / "results.csv", "rb") as fh:
             digest = hashlib.sha256(fh.read()).hexdigest()
@@ -112,28 +122,24 @@ def _figure_path(folder: Path, name) -> Path:
     path = (folder / name).resolve()
     if folder.resolve() not in path.parents:
         raise BrokenStudy(f"figure {name!r} lies outside the study folder")
+    if not path.exists():
+        raise BrokenStudy(f"figure {name!r} is missing")
+    if not path.is_file():
+        raise BrokenStudy(f"figure {name!r} is not a regular file")   # a FIFO would block the read
     try:
         with open(path, "rb") as fh:
             head = fh.read(8)
     except OSError:
-        raise BrokenStudy(f"figure {name!r} is missing") from None
+        raise BrokenStudy(f"figure {name!r} cannot be read") from None
     if head != PNG_MAGIC:
         raise BrokenStudy(f"figure {name!r} is not a PNG")
     return path
 
 
 def _anchor(text: str) -> str:
-    return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-")
-
-
-def _clear_previous_build(out: Path) -> None:
-    """Tables and figures of an earlier build never mix with this one."""
-    for sub, patterns in (("tables", ("*.tex", "*.csv")), ("figures", ("*.png", "*.pdf"))):
-        for pattern in patterns:
-            for p in (out / sub).glob(pattern) if (out / sub).is_dir() else []:
-                p.unlink()
-    for p in out.glob(".*.tmp"):
-        p.unlink()
+    """An HTML id / LaTeX label from any text: lower-case ASCII letters, digits and hyphens."""
+    slug = re.sub(r"[^a-z0-9]+", "-", str(text).lower()).strip("-")
+    return slug or "s-" + hashlib.sha256(str(text).encode("utf-8")).hexdigest()[:10]
 
 
 def latex_fragments(table: pd.DataFrame, caption: str, label: str, unit: str = "", digits: int = 4) -> list[str]:
@@ -150,19 +156,52 @@ def _with_unit(caption: str, unit: str) -> str:
     return caption
 
 
+BUILD_MANIFEST = ".report-build.json"   #: the files the last build wrote under --out (all it may delete later)
+
+
+def _previous_build(out: Path) -> list[str]:
+    """Files the previous build listed in its manifest (relative paths, inside ``out``)."""
+    try:
+        listed = json.loads((out / BUILD_MANIFEST).read_text(encoding="utf-8")).get("files", [])
+    except (OSError, ValueError, AttributeError):
+        return []
+    return [f for f in listed if isinstance(f, str) and re.fullmatch(r"(tables|figures)/[\w.-]+|report\.\w+", f)]
+
+
+def _clear_previous_build(out: Path) -> None:
+    """Remove what the previous build wrote (listed in its manifest) and nothing else: a user's file in
+    ``tables/`` or ``figures/`` is never touched, nor a study's own files when --out is a study folder; a
+    listed name that is now a link or not a regular file is left alone."""
+    root = out.resolve()
+    for rel in _previous_build(out):
+        p = out / rel
+        if not p.is_symlink() and p.is_file() and root in p.resolve().parents:
+            p.unlink()
+
+
+def _write_build_manifest(out: Path, files: list[str]) -> None:
+    write_atomic(out / BUILD_MANIFEST, json.dumps({"written_by": "python -m experiments.report", "files": sorted(files)},
+                                                  indent=1) + "\n")
+
+
 def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, render_md=md_table) -> Path:
     """Build the report from every study folder in ``results`` and every default study (missing ones
     are shown as missing). ``render_latex(table, caption, label, unit, digits) -> [fragment]`` and
     ``render_md(table, fmt)`` render one table (swap in another renderer).
 
     Writes report.md, report.html (numbered <figcaption>/<caption>, nav#toc, images embedded), report.tex
-    (every table fragment and figure) with tables/*.tex and figures/*.{png,pdf}."""
+    (every table fragment and figure) with tables/*.tex and figures/*.{png,pdf}, and the manifest of what it
+    wrote (the next build deletes only those files). User text is text: see ``experiments.render.page``."""
+    from markupsafe import Markup
     from experiments.render.document import write_report_tex
+    from experiments.render.page import STYLE, Document, md_escape
     from experiments.render.report_tables import html_table
+    from experiments.verdict import study_verdicts
 
     out.mkdir(parents=True, exist_ok=True)
-    (out / "tables").mkdir(exist_ok=True)
     _clear_previous_build(out)
+    (out / "tables").mkdir(exist_ok=True)
+    written: list[str] = []
     known = {}
     for n in configs.available():
         try:
@@ -183,12 +222,12 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
             except BrokenStudy as exc:
                 problem = str(exc)
         decl = manifest or {**cfg.get("report", {}), "title": cfg.get("title", name)}
-        entries.append((decl.get("section", "Other studies"), decl.get("order", 1000), name,
-                        decl.get("title", name), meta, manifest, problem))
+        entries.append((str(decl.get("section", "Other studies")), decl.get("order", 1000), name,
+                        str(decl.get("title", name)), meta, manifest, problem))
     section_order = {}
-    for sec, order, name, *_ in sorted(entries, key=lambda e: (e[1], e[2])):
+    for sec, order, name, *_ in sorted(entries, key=lambda e: (e[1] if isinstance(e[1], int) else 1000, e[2])):
         section_order.setdefault(sec, len(section_order))
-    entries.sort(key=lambda e: (section_order[e[0]], e[1], e[2]))
+    entries.sort(key=lambda e: (section_order[e[0]], e[1] if isinstance(e[1], int) else 1000, e[2]))
     ranked = [(e[2], results / e[2], e[4]) for e in entries if e[4] is not None]
     rankings, ranking_problem = {}, None
     try:
@@ -197,37 +236,33 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     except (ValueError, KeyError, TypeError) as exc:
         ranking_problem = str(exc)
     has_rankings = bool(rankings) or ranking_problem is not None
+    verdicts = study_verdicts(results, [e[2] for e in entries if e[4] is not None],
+                              {n: "not a default study" for n in present if not known.get(n, {}).get("default")})
 
-    blocks: dict[str, str] = {}      # HTML that replaces a marked markdown block in report.html
-
-    def block(html_text: str, md_lines: list[str]) -> list[str]:
-        key = f"b{len(blocks)}"
-        blocks[key] = html_text
-        return [f"<!--block:{key}-->", *md_lines, "<!--/block-->"]
-
-    md = ["# fitbench: comparison report", "",
-          f"Built from `{_shown(results)}` by `python -m experiments.report`; reproduce everything with "
-          "`python -m experiments.run` (the default studies; a study that is not default: "
-          "`python -m experiments.run NAME`).", ""]
-    # --- hook of experiments.verify (engine): the last reproducibility verdict, when there is one
+    doc = Document()
+    doc.heading(1, "fitbench: comparison report")
+    doc.prose(f"Built from `{md_escape(_shown(results))}` by `python -m experiments.report`; reproduce everything with "
+              "`python -m experiments.run` (the default studies; a study that is not default: "
+              "`python -m experiments.run NAME`).")
+    abstract_at = len(doc.parts)
     from experiments.verdict import verdict_markdown
-    md += verdict_markdown(results) + [""]
-    # --- end of hook
+    doc.prose(" ".join(verdict_markdown(results)))
     if any(e[4] and e[4].get("quick") for e in entries):
-        md += ["**Note:** studies marked *quick run* ran the reduced `--quick` grid; their numbers are not the "
-               "published comparison.", ""]
-    toc_md, toc_html = ["## Contents", ""], ['<nav id="toc"><h2>Contents</h2><ul>']
+        doc.prose("**Note:** studies marked *quick run* ran the reduced `--quick` grid; their numbers are not the "
+                  "published comparison.")
+    toc_md, toc_html = ["## Contents", ""], [Markup('<nav id="toc"><h2>Contents</h2><ul>')]
     toc_sections = list(section_order) + ([RANKINGS_SECTION] if has_rankings else [])
     for sec in toc_sections:
-        toc_md.append(f"- [{sec}](#{_anchor(sec)})")
-        toc_html.append(f'<li><a href="#{_anchor(sec)}">{html.escape(sec)}</a>')
+        toc_md.append(f"- [{md_escape(sec)}](#{_anchor(sec)})")
+        toc_html.append(Markup('<li><a href="#{}">{}</a>').format(_anchor(sec), sec))
         subs = [(e[3], f"study-{_anchor(e[2])}") for e in entries if e[0] == sec]
-        toc_md += [f"  - [{t}](#{a})" for t, a in subs]
+        toc_md += [f"  - [{md_escape(t)}](#{a})" for t, a in subs]
         if subs:
-            toc_html.append("<ul>" + "".join(f'<li><a href="#{a}">{html.escape(t)}</a></li>' for t, a in subs) + "</ul>")
-        toc_html.append("</li>")
-    toc_html.append("</ul></nav>")
-    md += block("".join(toc_html), toc_md + [""])
+            toc_html.append(Markup("<ul>") + Markup("").join(Markup('<li><a href="#{}">{}</a></li>').format(a, t)
+                                                             for t, a in subs) + Markup("</ul>"))
+        toc_html.append(Markup("</li>"))
+    toc_html.append(Markup("</ul></nav>"))
+    doc.block(Markup("").join(toc_html), "\n".join(toc_md))
     provenance = None
     n_table = n_figure = 0
     tex_sections = []
@@ -244,115 +279,154 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
             write_atomic(out / "tables" / name, frag)
             files.append(f"tables/{name}")
         save_csv_plain(table, out / "tables" / f"{label}.csv")
+        written.extend(files + [f"tables/{label}.csv"])
         fmt = f".{int(digits or 7)}g"
-        lines = block(html_table(table, caption=f"Table {n_table}: {caption}", unit=unit, digits=digits, colour=colour,
-                                 table_id=label),
-                      [f"*Table {n_table}: {caption}*", "", render_md(table, fmt)])
-        return lines + [""], [{"kind": "table", "file": f} for f in files]
+        doc.block(Markup(html_table(table, caption=f"Table {n_table}: {caption}", unit=unit, digits=digits,
+                                    colour=colour, table_id=label)),
+                  f"*Table {n_table}: {md_escape(caption)}*\n\n" + render_md(table, fmt))
+        return [{"kind": "table", "file": f} for f in files]
 
     def add_figure(png, caption):
         nonlocal n_figure
         n_figure += 1
         dst_png, dst_pdf = export_figure(png, out / "figures", f"figure-{n_figure}")
-        return ([f"![Figure {n_figure}: {caption}](figures/{dst_png.name})", ""],
-                [{"kind": "figure", "file": f"figures/{dst_pdf.name}", "caption": caption,
-                  "label": f"figure-{n_figure}"}])
+        written.extend([f"figures/{dst_png.name}", f"figures/{dst_pdf.name}"])
+        doc.figure(dst_png, n_figure, caption, f"figures/{dst_png.name}")
+        return [{"kind": "figure", "file": f"figures/{dst_pdf.name}", "caption": caption, "label": f"figure-{n_figure}"}]
 
     for sec in section_order:
-        md += [f"## {sec} {{#{_anchor(sec)}}}", ""]
+        doc.heading(2, sec, _anchor(sec))
         tex_studies = []
         for sec_, _, name, title, meta, manifest, problem in entries:
             if sec_ != sec:
                 continue
-            md += [f"### {title} (`{name}`) {{#study-{_anchor(name)}}}", ""]
-            items, findings = [], ""
+            doc.heading(3, title, f"study-{_anchor(name)}", code=name)
+            items = []
             tex_studies.append({"title": title, "findings": "", "items": items})
             if problem == "missing":
                 default = known.get(name, {}).get("default", False)
-                md += [f"**Missing**: no results in `{_shown(results / name)}`. Run `python -m experiments.run {name}`"
-                       + ("" if default else " (not a default study)") + ".", ""]
+                doc.prose(f"**Missing**: no results in `{md_escape(_shown(results / name))}`. Run "
+                          f"`python -m experiments.run {md_escape(name)}`" + ("" if default else " (not a default study)") + ".")
                 tex_studies[-1]["findings"] = f"Missing: no results. Run python -m experiments.run {name}."
                 continue
             if problem:
-                md += [f"**Broken**: {problem}.", ""]
+                doc.prose(f"**Broken**: {md_escape(problem)}.")
                 tex_studies[-1]["findings"] = f"Broken: {problem}."
                 continue
             provenance = provenance or meta
             counts = meta.get("status_counts", {}) if isinstance(meta.get("status_counts"), dict) else {}
             if counts.get("error"):
-                md += [f"**failed rows: {counts['error']} of {meta.get('n_rows')}**: the tables below hold what ran; "
-                       "the failed rows are in `results.csv`.", ""]
-            plugins = meta.get("plugins") or {}
-            md += [f"{meta.get('n_rows')} rows{'; *quick run* (reduced grid)' if meta.get('quick') else ''}; "
-                   f"commit `{(meta.get('git_commit') or '?')[:10]}`"
-                   f"{' (dirty)' if meta.get('git_dirty') else ''}, {meta.get('date')}, config hash `{meta.get('config_hash')}`"
-                   + (f"; plugins: {', '.join(f'{k} {v}' for k, v in plugins.items())}" if plugins else "") + ".", ""]
+                doc.prose(f"**failed rows: {md_escape(counts['error'])} of {md_escape(meta.get('n_rows'))}**: the tables "
+                          "below hold what ran; the failed rows are in `results.csv`.")
+            plugins = meta.get("plugins") if isinstance(meta.get("plugins"), dict) else {}
+            doc.prose(md_escape(f"{meta.get('n_rows')} rows{'; quick run (reduced grid)' if meta.get('quick') else ''}; "
+                                f"commit {str(meta.get('git_commit') or '?')[:10]}"
+                                f"{' (dirty)' if meta.get('git_dirty') else ''}, {meta.get('date')}, config hash "
+                                f"{meta.get('config_hash')}"
+                                + (f"; plugins: {', '.join(f'{k} {v}' for k, v in plugins.items())}" if plugins else "")
+                                + "."))
+            for label, sentence in verdicts.get(name, []):
+                doc.prose(f"**{md_escape(label)}.** {md_escape(sentence)}")
+                tex_studies[-1].setdefault("notes", []).append(f"{label}. {sentence}")
             if manifest.get("findings"):
-                md += [f"**Findings.** {manifest['findings']}", ""]
+                doc.prose(f"**Findings.** {md_escape(manifest['findings'])}")
                 tex_studies[-1]["findings"] = str(manifest["findings"])
-            for t in manifest.get("tables", []):
+            for t in manifest.get("tables", []) if isinstance(manifest.get("tables"), list) else []:
                 try:
                     path = (results / name / t["file"]).resolve()
                     if (results / name).resolve() not in path.parents:
                         raise BrokenStudy(f"table {t['file']!r} lies outside the study folder")
+                    if not path.is_file():
+                        raise BrokenStudy(f"table {t['file']!r} is not a regular file")
                     table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+                    digits = int(t.get("digits") or 7)
                 except (OSError, ValueError, KeyError, TypeError, BrokenStudy, pd.errors.ParserError) as exc:
-                    md += [f"**Broken table**: {exc}.", ""]
+                    doc.prose(f"**Broken table**: {md_escape(exc)}.")
                     continue
-                lines, tex_items = add_table(table, str(t.get("caption", "")), t.get("unit") or "",
-                                             int(t.get("digits") or 7), t.get("colour", ""))
-                md += lines
-                items += tex_items
-            for f in manifest.get("figures", []):
+                items += add_table(table, str(t.get("caption", "")), str(t.get("unit") or ""), digits,
+                                   str(t.get("colour", "")))
+            for f in manifest.get("figures", []) if isinstance(manifest.get("figures"), list) else []:
                 try:
                     png = _figure_path(results / name, f.get("file") if isinstance(f, dict) else None)
                 except BrokenStudy as exc:
-                    md += [f"**Broken figure**: {exc}.", ""]
+                    doc.prose(f"**Broken figure**: {md_escape(exc)}.")
                     continue
-                lines, tex_items = add_figure(png, str(f.get("caption", "")) or f"{title}: {f.get('file')}")
-                md += lines
-                items += tex_items
+                items += add_figure(png, str(f.get("caption", "")) or f"{title}: {f.get('file')}")
         tex_sections.append({"title": sec, "label": _anchor(sec), "studies": tex_studies})
     if has_rankings:
-        lines, tex_studies = _rankings_section(rankings, ranking_problem, out, add_table, add_figure)
-        md += lines
+        tex_studies = _rankings_section(rankings, ranking_problem, out, add_table, add_figure, doc)
         tex_sections.append({"title": RANKINGS_SECTION, "label": _anchor(RANKINGS_SECTION), "studies": tex_studies})
     provenance_text = None
     if provenance:
-        v = provenance.get("versions", {})
-        provenance_text = (f"Machine: {provenance.get('cpu')} ({provenance.get('cores')} cores), "
-                           f"{provenance.get('platform')}; BLAS {provenance.get('blas')}. Versions: "
-                           + ", ".join(f"{k} {val}" for k, val in v.items()) + ".")
-        md += ["## Provenance", "",
-               f"Machine: {provenance.get('cpu')} ({provenance.get('cores')} cores), {provenance.get('platform')}; "
-               f"BLAS {provenance.get('blas')}.", "",
-               "Versions: " + ", ".join(f"{k} {val}" for k, val in v.items()) + ".", "",
-               "Each study's `meta.json` holds its own commit, date, configuration and hash.", ""]
-    text = "\n".join(md)
-    write_atomic(out / "report.md", re.sub(r"<!--/?block(:\w+)?-->\n", "", text))
-    write_atomic(out / "report.html", to_html(text, out, blocks))
-    write_report_tex(out, tex_sections, provenance=provenance_text)
+        v = provenance.get("versions", {}) if isinstance(provenance.get("versions"), dict) else {}
+        machine = (f"Machine: {provenance.get('cpu')} ({provenance.get('cores')} cores), {provenance.get('platform')}; "
+                   f"BLAS {provenance.get('blas')}.")
+        versions = "Versions: " + ", ".join(f"{k} {val}" for k, val in v.items()) + "."
+        provenance_text = f"{machine} {versions}"
+        doc.heading(2, "Provenance")
+        doc.prose(md_escape(machine))
+        doc.prose(md_escape(versions))
+        doc.prose("Each study's `meta.json` holds its own commit, date, configuration and hash.")
+    abstract = _abstract(entries, verdicts)
+    if abstract:
+        from experiments.render.page import Part, prose_html
+        md_abstract = "**Abstract.** " + md_escape(abstract)
+        doc.parts.insert(abstract_at, Part("prose", md_abstract, prose_html(md_abstract)))
+    write_atomic(out / "report.md", doc.markdown())
+    write_atomic(out / "report.html", doc.html("fitbench comparison report", STYLE))
+    write_report_tex(out, tex_sections, provenance=provenance_text, abstract=abstract)
+    written += ["report.md", "report.html", "report.tex"]
+    _write_build_manifest(out, written)
     log(f"report: {out / 'report.md'}, {out / 'report.html'}, {out / 'report.tex'}, {n_table} tables, {n_figure} figures")
     return out
+
+
+def _abstract(entries, verdicts) -> str:
+    """What was compared, the main numbers (each study's findings, first sentence) and what reproduced."""
+    done = [e for e in entries if e[4] is not None]
+    if not done:
+        return ""
+    n_rows = sum(int(e[4].get("n_rows") or 0) for e in done if str(e[4].get("n_rows", "")).isdigit())
+    methods = set()
+    for e in done:
+        cfg_methods = (e[4].get("config") or {}).get("methods", []) if isinstance(e[4].get("config"), dict) else []
+        for m in cfg_methods if isinstance(cfg_methods, list) else []:
+            methods.add(m if isinstance(m, str) else str(m.get("id", "")) if isinstance(m, dict) else "")
+    methods.discard("")
+    parts = [f"{len(done)} studies ({n_rows:,} runs"
+             + (f", {len(methods)} method declarations" if methods else "") + ") compare the fitting methods."]
+    for e in done:
+        findings = str((e[5] or {}).get("findings") or "").strip()
+        if findings:
+            first = re.split(r"(?<=[.;])\s", findings, maxsplit=1)[0].rstrip(".;")
+            parts.append(f"{e[3]}: {first}.")
+    judged = {k: lines[0][0] for k, lines in verdicts.items() if lines[0][0].startswith("Reproducibility")
+              and not lines[0][0].endswith("out of date")}
+    if judged:
+        differ = [k for k, label in judged.items() if label.endswith("differs")]
+        parts.append(f"Reproduced: {len(judged) - len(differ)} of {len(judged)} studies with a current verdict"
+                     + (f" (differ: {', '.join(differ)})" if differ else "") + ".")
+    return " ".join(parts)
 
 
 RANKINGS_SECTION = "Rankings across data sets"
 
 
-def _rankings_section(rankings, problem, out, add_table, add_figure):
+def _rankings_section(rankings, problem, out, add_table, add_figure, doc):
     """Performance profiles of every declared ranking (one panel each) and, per ranking, the median cost of
     each method per data set coloured relative to the row's best."""
-    md = [f"## {RANKINGS_SECTION} {{#{_anchor(RANKINGS_SECTION)}}}", "",
-          f"### Performance profiles {{#study-{_anchor('performance profiles')}}}", ""]
+    from experiments.render.page import md_escape
+    doc.heading(2, RANKINGS_SECTION, _anchor(RANKINGS_SECTION))
+    doc.heading(3, "Performance profiles", f"study-{_anchor('performance profiles')}")
     intro = ("Dolan–Moré performance profiles pool every study that declares a ranking ([[rankings]] in its "
              "configuration): for each problem (study, data set, data stream, repetition) the ratio "
              "τ = cost / best cost over the methods, and ρ(τ) = the share of problems on which a method is within "
              "τ of the best (ρ(1): share of problems where it is best; a failure never reaches any τ).")
     items = []
     if problem:
-        md += [f"**Broken ranking**: {problem}.", ""]
-        return md, [{"title": "Performance profiles", "findings": f"Broken ranking: {problem}.", "items": items}]
-    md += [intro, ""]
+        doc.prose(f"**Broken ranking**: {md_escape(problem)}.")
+        return [{"title": "Performance profiles", "findings": f"Broken ranking: {problem}.", "items": items}]
+    doc.prose(md_escape(intro))
     words = []
     for name, r in rankings.items():
         best1 = (r.table.values == r.table.min(axis=1).values[:, None]).mean(axis=0) if len(r.table) else []
@@ -360,7 +434,7 @@ def _rankings_section(rankings, problem, out, add_table, add_figure):
             k = int(np.argmax(best1))
             words.append(f"{name}: {r.table.columns[k]} is best on {100 * best1[k]:.0f} % of {len(r.table)} problems")
     findings = ("; ".join(words) + ".") if words else "No problem is shared by the methods of a ranking."
-    md += [f"**Findings.** {findings}", ""]
+    doc.prose(f"**Findings.** {md_escape(findings)}")
     import textwrap
     tables = {textwrap.fill(n, 34): r.table for n, r in rankings.items() if r.table is not None and len(r.table)}
     if tables:
@@ -375,23 +449,21 @@ def _rankings_section(rankings, problem, out, add_table, add_figure):
         sources = "; ".join(f"{n}: studies {', '.join(r.studies)}, {len(r.table)} problems"
                             + (f", left out (not run in every study): {', '.join(r.left_out)}" if r.left_out else "")
                             for n, r in rankings.items())
-        lines, tex_items = add_figure(png, "Performance profiles of the methods: share of problems ρ(τ) on which a "
+        tex_items = add_figure(png, "Performance profiles of the methods: share of problems ρ(τ) on which a "
                                       "method's cost is within a factor τ of the best (log₂ τ on the x axis; higher "
                                       f"and further left is better). {sources}.")
         png.unlink(missing_ok=True)
-        md += lines
         items += tex_items
     for name, r in rankings.items():
         if r.by_dataset is None or r.by_dataset.empty:
             continue
-        lines, tex_items = add_table(r.by_dataset.reset_index(),
+        tex_items = add_table(r.by_dataset.reset_index(),
                                      f"Median {name} per data set and method over the data set's problems (failed, "
                                      "or -- in the LaTeX table: failed on at least half of them); colour in the HTML "
                                      "report: ratio to the best method of the row",
                                      r.unit, 3, "lower_is_better")
-        md += lines
         items += tex_items
-    return md, [{"title": "Performance profiles", "findings": intro + " Findings: " + findings, "items": items}]
+    return [{"title": "Performance profiles", "findings": intro + " Findings: " + findings, "items": items}]
 
 
 def save_csv_plain(df: pd.DataFrame, path: Path) -> None:
@@ -399,74 +471,6 @@ def save_csv_plain(df: pd.DataFrame, path: Path) -> None:
     buf = io.StringIO()
     df.to_csv(buf, index=False, float_format="%.10g")
     write_atomic(path, buf.getvalue())
-
-
-def to_html(markdown: str, out: Path, blocks: dict[str, str] | None = None) -> str:
-    """A small Markdown-to-HTML rendering (headings, paragraphs, tables, images embedded as data URIs);
-    a block ``<!--block:KEY-->...<!--/block-->`` is replaced by ``blocks[KEY]`` (ready HTML)."""
-    body, table = [], []
-    blocks = blocks or {}
-    skipping = False
-
-    def inline(s):
-        s = html.escape(s)
-        s = re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", s)
-        s = re.sub(r"\*(.+?)\*", r"<em>\1</em>", s)
-        s = re.sub(r"`(.+?)`", r"<code>\1</code>", s)
-        return re.sub(r"\[(.+?)\]\((#[\w-]+)\)", r'<a href="\2">\1</a>', s)
-
-    def flush():
-        if table:
-            rows = [r.strip().strip("|").split("|") for r in table if not set(r.replace("|", "").strip()) <= {"-"}]
-            head, *rest = rows
-            body.append("<table><thead><tr>" + "".join(f"<th>{inline(c.strip())}</th>" for c in head) + "</tr></thead><tbody>"
-                        + "".join("<tr>" + "".join(f"<td>{inline(c.strip())}</td>" for c in r) + "</tr>" for r in rest)
-                        + "</tbody></table>")
-            table.clear()
-
-    for line in markdown.splitlines():
-        mark = re.match(r"<!--block:(\w+)-->$", line)
-        if mark:
-            flush()
-            body.append(blocks[mark.group(1)])
-            skipping = True
-            continue
-        if line == "<!--/block-->":
-            skipping = False
-            continue
-        if skipping:
-            continue
-        if line.startswith("|"):
-            table.append(line)
-            continue
-        flush()
-        m = re.match(r"!\[(.*?)\]\((.*?)\)", line)
-        if line.startswith("#"):
-            level = len(line) - len(line.lstrip("#"))
-            head = re.match(r"(.*?)\s*\{#([\w-]+)\}$", line[level:].strip())
-            text, ident = (head.group(1), head.group(2)) if head else (line[level:].strip(), "")
-            body.append(f"<h{level}" + (f' id="{ident}"' if ident else "") + f">{inline(text)}</h{level}>")
-        elif line.lstrip().startswith("- "):
-            indent = len(line) - len(line.lstrip())
-            body.append(f'<div style="margin-left:{indent}em">&bull; {inline(line.strip()[2:])}</div>')
-        elif m:
-            data = base64.b64encode((out / m.group(2)).read_bytes()).decode()
-            body.append(f'<figure id="{Path(m.group(2)).stem}"><img alt="{html.escape(m.group(1))}" '
-                        f'src="data:image/png;base64,{data}"><figcaption>{html.escape(m.group(1))}</figcaption></figure>')
-        elif line.strip():
-            body.append(f"<p>{inline(line)}</p>")
-    flush()
-    script = ("<script>window.addEventListener('load',function(){var im=document.images,ok=0;"
-              "for(var i=0;i<im.length;i++){if(im[i].complete&&im[i].naturalWidth>0)ok++;}"
-              "document.body.setAttribute('data-images',ok+'/'+im.length);});</script>")
-    style = ("<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222;line-height:1.4}"
-             "table{border-collapse:collapse;margin:1em 0;font-size:0.85em}th,td{border:1px solid #bbb;padding:3px 6px}"
-             "td.num{text-align:right;font-variant-numeric:tabular-nums}"
-             "caption{caption-side:top;text-align:left;font-size:0.95em;padding-bottom:4px}"
-             "th{background:#eee}img{max-width:100%}figure{margin:1.5em 0}figcaption{font-size:0.9em;color:#333}"
-             "nav#toc{background:#f6f6f6;padding:0.5em 1em;border:1px solid #ddd}nav#toc ul{margin:0.2em 0}</style>")
-    return ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>fitbench comparison report</title>"
-            + style + script + "</head><body>" + "\n".join(body) + "</body></html>\n")
 
 
 def main(argv=None) -> int:

@@ -1,35 +1,106 @@
-"""The verdict of the last ``python -m experiments.verify`` run, as the report reads it.
+"""The reproducibility verdicts the report shows, read from ``RESULTS/verify.json``.
 
-``experiments.verify`` writes ``RESULTS/verify.json``; this module only reads it, so that the report does not
-depend on the command that runs studies (issue 17: "the report shows the verdict of the last verify run").
+``python -m experiments.verify`` and the end of ``python -m experiments.run`` write that file; each study's
+entry names the SHA-256 of the ``results.csv`` it judged (``results_sha256``, the file in the folder that holds
+``verify.json``). The report shows a verdict only while that file is unchanged: after the study is run again
+with other numbers the old verdict is reported as out of date, never as agreement.
+
+This module only reads (the report does not depend on the command that runs studies).
 """
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
 VERDICT_FILE = "verify.json"
 
 
+def results_sha256(folder: Path) -> str | None:
+    """SHA-256 of ``folder/results.csv`` (None when it cannot be read)."""
+    try:
+        with open(Path(folder) / "results.csv", "rb") as fh:
+            return hashlib.sha256(fh.read()).hexdigest()
+    except OSError:
+        return None
+
+
 def last_verdict(results: Path) -> dict | None:
-    """The verdict of the last ``experiments.verify`` against ``results`` (None when there is none or it is unreadable)."""
+    """The verdict file of ``results`` (None when there is none or it is unreadable)."""
     try:
         verdict = json.loads((Path(results) / VERDICT_FILE).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-    return verdict if isinstance(verdict, dict) and "agree" in verdict else None
+    return verdict if isinstance(verdict, dict) and "agree" in verdict and isinstance(verdict.get("studies"), list) \
+        else None
+
+
+def current_entries(results: Path) -> tuple[dict, dict]:
+    """({study: entry} whose judged results.csv is still the one in ``results``, {study: entry} out of date)."""
+    v = last_verdict(results)
+    current, stale = {}, {}
+    for s in (v or {}).get("studies", []):
+        if not isinstance(s, dict) or not isinstance(s.get("study"), str):
+            continue
+        judged = s.get("results_sha256")
+        now = results_sha256(Path(results) / s["study"])
+        (current if judged and judged == now else stale)[s["study"]] = s
+    return current, stale
+
+
+def _columns(entry: dict) -> str:
+    cols = [str(p.get("column")) for p in entry.get("problems", []) if isinstance(p, dict)]
+    return ", ".join(cols[:8]) + (f" and {len(cols) - 8} more" if len(cols) > 8 else "")
+
+
+def study_sentence(entry: dict) -> str:
+    """One sentence (plain text) for a current verdict: reproduces, or which columns differ."""
+    ref = entry.get("reference") or "the committed tables"
+    when = entry.get("date") or "?"
+    if entry.get("agree"):
+        return (f"Verdict ({when}): this run reproduces {ref} within the declared tolerances "
+                f"({entry.get('rows', '?')} rows, {entry.get('columns', '?')} columns).")
+    return f"Verdict ({when}): this run differs from {ref} in: {_columns(entry)} (details: verify.json)."
+
+
+def study_verdicts(results: Path, studies: list[str], reasons: dict[str, str] | None = None) \
+        -> dict[str, list[tuple[str, str]]]:
+    """{study: [(label, plain sentence), ...]} for the report: the current verdict, an out-of-date one said to
+    be out of date, and a study not in the last ``experiments.run`` said to come from an earlier run
+    (``reasons``: why that run did not include it, e.g. "not a default study")."""
+    current, stale = current_entries(results)
+    v = last_verdict(results) or {}
+    run = v.get("run") if isinstance(v.get("run"), dict) else None
+    out: dict[str, list[tuple[str, str]]] = {}
+    for name in studies:
+        lines = []
+        if name in current:
+            e = current[name]
+            lines.append(("Reproducibility" if e.get("agree") else "Reproducibility: differs", study_sentence(e)))
+        elif name in stale:
+            lines.append(("Reproducibility: out of date",
+                          f"The last verification ({stale[name].get('date', '?')}) judged other results than these "
+                          f"(results.csv changed since); run python -m experiments.verify {name} again."))
+        if run and name not in run.get("studies", []):
+            lines.append(("Older results", f"These results are older than the last run ({run.get('date', '?')}), which "
+                          f"did not include this study ({(reasons or {}).get(name, 'not among the studies it ran')}); "
+                          f"rerun it with python -m experiments.run {name}."))
+        if lines:
+            out[name] = lines
+    return out
 
 
 def verdict_markdown(results: Path) -> list[str]:
-    """Lines for the report: the last verdict in one sentence, with the studies that differ."""
-    v = last_verdict(results)
-    if v is None:
-        return ["No reproducibility verdict yet: run `python -m experiments.verify`."]
-    studies = v.get("studies", [])
-    differ = [s.get("study", "?") for s in studies if not s.get("agree")]
-    when = v.get("date", "?")
+    """Lines for the report: the current verdicts in one sentence (out-of-date ones are not counted)."""
+    from experiments.render.page import md_escape
+    current, stale = current_entries(results)
+    if not current:
+        return ["No current reproducibility verdict: run `python -m experiments.verify`"
+                + (f" (the last one judged other results for {len(stale)} studies)" if stale else "") + "."]
+    differ = [k for k, e in current.items() if not e.get("agree")]
+    tail = f" ({len(stale)} older verdicts are out of date and not counted)" if stale else ""
     if not differ:
-        return [f"Reproducibility: `python -m experiments.verify` on {when}: all {len(studies)} studies agree with "
-                f"these results within the declared tolerances."]
-    return [f"Reproducibility: `python -m experiments.verify` on {when}: {len(differ)} of {len(studies)} studies "
-            f"differ beyond the declared tolerances ({', '.join(differ)}); see `verify.json`."]
+        return [f"Reproducibility: all {len(current)} verified studies agree with these results within the declared "
+                f"tolerances{tail}."]
+    return [f"Reproducibility: {len(differ)} of {len(current)} verified studies differ beyond the declared tolerances "
+            f"({md_escape(', '.join(differ))}); see `verify.json`{tail}."]

@@ -27,7 +27,7 @@ import pandas as pd
 
 from experiments.metrics import CHAOTIC, tolerance
 from experiments.provenance import write_atomic
-from experiments.verdict import VERDICT_FILE, last_verdict, verdict_markdown  # noqa: F401  (the report's reading side)
+from experiments.verdict import VERDICT_FILE, last_verdict, results_sha256, verdict_markdown  # noqa: F401  (the report's reading side)
 from fitbench import __version__
 from methods import InvalidInputError
 
@@ -47,6 +47,9 @@ def _read(folder: Path, study: str, which: str) -> pd.DataFrame:
         raise InvalidInputError(f"{path} cannot be read as a table ({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
     if "status" not in df.columns or "method" not in df.columns:
         raise InvalidInputError(f"{path} is not a results table of experiments.run (no status/method column)")
+    if df.empty:
+        raise InvalidInputError(f"{path} has a header but no rows; run python -m experiments.run {study} again "
+                                "(an interrupted or failed run leaves no rows)")
     return df
 
 
@@ -96,8 +99,13 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
     else:
         stopped = np.zeros(len(a), dtype=bool)
     not_compared = 0
+    # a column that one side lacks is a difference (a table that lost radius or every metric never agrees)
+    for col in [c for c in fresh.columns if c not in committed.columns and not c.startswith("_")]:
+        if tolerance(col, study) is not None:
+            problems.append({"column": col, "n_rows": int(len(b)), "problem": "column missing in the committed results",
+                             "worst": []})
     for col in committed.columns:
-        if col.startswith("_") or col in ident:
+        if col.startswith("_") or (col in ident and col in fresh.columns):
             continue
         methods = a["method"] if "method" in a else pd.Series([""] * len(a), index=a.index)
         if col not in b.columns:
@@ -155,10 +163,14 @@ def _table(problems: list[tuple[str, dict]]) -> str:
 def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
     """Compare ``against`` with the committed ``results``; the verdict dict (also written to RESULTS/verify.json)."""
     reports = []
+    date = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     for study in studies:
         committed = _read(results, study, "--results")
         fresh = _read(against, study, "--against")
-        reports.append(compare_study(study, committed, fresh))
+        reports.append({**compare_study(study, committed, fresh), "date": date,
+                        "results_sha256": results_sha256(results / study),   # what this verdict judged
+                        "against_sha256": results_sha256(against / study),
+                        "reference": f"the run in {against / study}"})
     for r in reports:
         n_bad = sum(p["n_rows"] for p in r["problems"])
         skipped = (f"; {r['not_converged_values']} value(s) of rows that did not converge in both runs not compared "
@@ -176,8 +188,7 @@ def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
             by_reason.setdefault(t.why, []).append(f"{s}/{m}/{c} rtol={t.rtol:g} atol={t.atol:g}")
         log("wider tolerances declared for methods chaotic by nature: " +
             "; ".join(f"{', '.join(cols)} (why: {why})" for why, cols in by_reason.items()))
-    verdict = {"agree": not bad, "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-               "results": str(results), "against": str(against), "studies": reports}
+    verdict = {"agree": not bad, "date": date, "results": str(results), "against": str(against), "studies": reports}
     write_atomic(results / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
     return verdict
 

@@ -36,7 +36,12 @@ def built(tmp_path_factory):
     (results / "paper" / "report.md").write_text("old")
     paper = root / "paper"
     (paper / "tables").mkdir(parents=True)
-    (paper / "tables" / "table-99.tex").write_text("an earlier build")
+    (paper / "tables" / "table-99.tex").write_text("an earlier build")    # listed in that build's manifest
+    (paper / ".report-build.json").write_text(json.dumps({"files": ["tables/table-99.tex", "../outside.txt"]}))
+    (paper / "tables" / "measurements.csv").write_text("a user's file")   # not listed: never deleted
+    (paper / "figures").mkdir()
+    (paper / "figures" / "photo.png").write_bytes(b"\x89PNG\r\n\x1a\n a user's photo")
+    (root / "outside.txt").write_text("named by a forged manifest")
     (results / "leftover").mkdir()
     return build(results, paper, log=lambda *a: None)
 
@@ -48,9 +53,12 @@ def test_broken_studies_shown_with_reason_rest_built(built):
     assert "**Broken figure**: figure '../magnification/magnification.png' lies outside the study folder" in section
     assert "**Broken figure**: figure 'fake.png' is not a PNG" in section and "*Table " in section
     assert "(`paper`)" not in md and "(`leftover`)" not in md  # folders that are not studies
-    assert not (built / "tables" / "table-99.tex").exists()  # never mix builds
+    assert not (built / "tables" / "table-99.tex").exists()  # never mix builds: the previous build's files go
+    assert (built / "tables" / "measurements.csv").read_text() == "a user's file"  # what it did not write stays
+    assert (built / "figures" / "photo.png").exists() and (built.parent / "outside.txt").exists()
     # one number per table; a table too wide for the page is split into parts table-N-1.tex, table-N-2.tex ...
     numbers = {re.match(r"table-(\d+)", p.stem).group(1) for p in built.glob("tables/*.tex")}
+    assert len(list(built.glob("tables/*.csv"))) == len(list(built.glob("tables/table-*.csv"))) + 1
     assert len(numbers) == len(list(built.glob("tables/table-*.csv"))) == md.count("*Table ")
 
 
@@ -63,7 +71,7 @@ def test_sections_tables_figures(built):
     for name in ("published", "magnification", "ellipse_angle"):  # a table and a figure per study
         section = md.split(f"(`{name}`)")[1].split("### ")[0]
         assert "*Table " in section and "![" in section, name
-    for png in built.glob("figures/*.png"):
+    for png in built.glob("figures/figure-*.png"):
         assert png.with_suffix(".pdf").exists() and png.stat().st_size > 10_000
 
 

@@ -145,3 +145,53 @@ def test_rows_that_did_not_converge_in_both_runs_compare_status_and_counts_only(
     edit(fresh, 3, "iterations", lambda v: str(int(v) + 1))
     assert verify.main(["--results", str(base), "--against", str(fresh)]) == 1
     assert " iterations " in capsys.readouterr().out
+
+
+def _drop(folder: Path, columns) -> None:
+    path = folder / "vstudy" / "results.csv"
+    df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    df.drop(columns=list(columns)).to_csv(path, index=False)
+
+
+METRICS = ["radius", "center_x", "center_y", "form_error", "center_error", "radius_error", "iterations"]
+
+
+@pytest.mark.parametrize("side", ["committed", "fresh"])
+@pytest.mark.parametrize("columns", [["radius"], ["radius", "center_x", "form_error"], METRICS])
+def test_a_missing_column_is_a_difference(committed, tmp_path, capsys, side, columns):
+    """Results that lost columns (some or every metric) never agree, whichever side lost them."""
+    base = copy_run(committed, tmp_path / "a")
+    fresh = copy_run(committed, tmp_path / "b")
+    _drop(base if side == "committed" else fresh, columns)
+    assert verify.main(["--results", str(base), "--against", str(fresh)]) == 1
+    out = capsys.readouterr().out
+    assert out.startswith("vstudy: DIFFER")
+    named = {p["column"] for p in json.loads((base / verify.VERDICT_FILE).read_text())["studies"][0]["problems"]}
+    assert set(columns) <= named
+
+
+@pytest.mark.parametrize("side", ["--results", "--against"])
+def test_header_only_results_is_bad_input_in_one_line(committed, tmp_path, capsys, side):
+    base = copy_run(committed, tmp_path / "a")
+    fresh = copy_run(committed, tmp_path / "b")
+    path = (base if side == "--results" else fresh) / "vstudy" / "results.csv"
+    path.write_text(path.read_text().splitlines()[0] + "\n")
+    assert verify.main(["--results", str(base), "--against", str(fresh)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("experiments.verify: error:") and "no rows" in err and "\n" not in err
+
+
+def test_verdict_names_the_results_it_judged_and_goes_out_of_date(committed, tmp_path, capsys):
+    """After the study is rerun with other numbers, the old verdict is no longer shown as agreement."""
+    from experiments.verdict import study_verdicts
+    base = copy_run(committed, tmp_path / "a")
+    fresh = copy_run(committed, tmp_path / "b")
+    assert verify.main(["--results", str(base), "--against", str(fresh)]) == 0
+    entry = json.loads((base / verify.VERDICT_FILE).read_text())["studies"][0]
+    assert entry["results_sha256"] == verify.results_sha256(base / "vstudy")
+    assert "all 1 verified studies agree" in verify.verdict_markdown(base)[0]
+    assert study_verdicts(base, ["vstudy"])["vstudy"][0][0] == "Reproducibility"
+    edit(base, 0, "radius", lambda v: repr(float(v) * 2))      # the study's results changed since
+    assert "agree" not in verify.verdict_markdown(base)[0]
+    label, sentence = study_verdicts(base, ["vstudy"])["vstudy"][0]
+    assert label == "Reproducibility: out of date" and "changed since" in sentence

@@ -25,6 +25,7 @@ PREAMBLE = r"""\usepackage[T1]{fontenc}
 \usepackage{lmodern}
 \usepackage[a4paper,margin=2.5cm]{geometry}
 \usepackage{amsmath}
+\usepackage{amssymb}
 \usepackage{booktabs}
 \usepackage{multirow}
 \usepackage{longtable}
@@ -344,8 +345,11 @@ __all__ = ["Column", "TableTooWide", "compile_pdf", "PREAMBLE", "TEXT_WIDTH_PT",
 
 def compile_pdf(tex_source: str, workdir, *, name: str = "doc", pdflatex: str = "pdflatex",
                 runs: int = 1, timeout: float = 120.0) -> dict:
-    """Compile ``tex_source`` with pdflatex in ``workdir``; return ``{"ok", "log", "overfull", "errors"}``
-    where ``overfull`` lists ``(kind, points, line text)`` of every overfull \\hbox/\\vbox in the log."""
+    """Compile ``tex_source`` with pdflatex in ``workdir``, always with ``-no-shell-escape`` (no
+    ``\\write18``, whatever the TeX installation's default); return ``{"ok", "log", "overfull", "errors",
+    "warnings", "pdf"}`` where ``overfull`` lists ``(kind, points, line text)`` of every overfull
+    \\hbox/\\vbox in the log, ``warnings`` every "LaTeX Warning" line (e.g. "Float too large") and ``inputs``
+    every file TeX read (``-recorder``)."""
     import re
     import subprocess
     from pathlib import Path
@@ -354,11 +358,16 @@ def compile_pdf(tex_source: str, workdir, *, name: str = "doc", pdflatex: str = 
     (workdir / f"{name}.tex").write_text(tex_source, encoding="utf-8")
     proc = None
     for _ in range(runs):
-        proc = subprocess.run([pdflatex, "-interaction=nonstopmode", "-halt-on-error", f"{name}.tex"], cwd=workdir,
-                              capture_output=True, timeout=timeout)
+        proc = subprocess.run([pdflatex, "-no-shell-escape", "-recorder", "-interaction=nonstopmode", "-halt-on-error",
+                               f"{name}.tex"], cwd=workdir, capture_output=True, timeout=timeout,
+                              stdin=subprocess.DEVNULL)
     log = (workdir / f"{name}.log").read_text(encoding="latin-1") if (workdir / f"{name}.log").exists() else ""
     overfull = [(m.group(1), float(m.group(2)), m.group(0)) for m in
                 re.finditer(r"Overfull \\([hv])box \(([0-9.]+)pt too (?:wide|high)\)[^\n]*", log)]
     errors = re.findall(r"^! .*$", log, flags=re.M)
+    fls = workdir / f"{name}.fls"
+    inputs = sorted({line[6:] for line in fls.read_text(encoding="utf-8", errors="replace").splitlines()
+                     if line.startswith("INPUT ")}) if fls.exists() else []
+    warnings = re.findall(r"^(?:LaTeX|Package \w+) Warning: .*$", log, flags=re.M)
     return {"ok": proc.returncode == 0 and (workdir / f"{name}.pdf").exists(), "log": log, "overfull": overfull,
-            "errors": errors, "pdf": workdir / f"{name}.pdf"}
+            "errors": errors, "warnings": warnings, "inputs": inputs, "pdf": workdir / f"{name}.pdf"}

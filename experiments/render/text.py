@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import re
+import unicodedata
 
 
 def ordinal(n) -> str:
@@ -46,25 +47,137 @@ def si_unit(unit: str) -> str:
     return f"\\text{{{escape_text(unit)}}}" if unit else ""
 
 
-_TEXT_MAP = [("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("$", r"\$"), ("#", r"\#"), ("_", r"\_"),
-             ("{", r"\{"), ("}", r"\}"), ("~", r"\textasciitilde{}"), ("^", r"\textasciicircum{}")]
+_SPECIALS = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_", "{": r"\{",
+             "}": r"\}", "~": r"\textasciitilde{}", "^": r"\textasciicircum{}",
+             "[": "{[}", "]": "{]}"}   # a bracket after \\ in a table would be read as its optional argument
 _UNICODE = {"µ": r"\textmu{}", "μ": r"\textmu{}", "°": r"\textdegree{}", "±": r"\textpm{}", "×": r"\texttimes{}",
             "≥": r"$\geq$", "≤": r"$\leq$", "≈": r"$\approx$", "→": r"$\to$", "−": "--", "–": "--", "—": "---",
             "κ": r"$\kappa$", "σ": r"$\sigma$", "Δ": r"$\Delta$", "δ": r"$\delta$", "η": r"$\eta$", "ρ": r"$\rho$",
             "τ": r"$\tau$", "α": r"$\alpha$", "β": r"$\beta$", "γ": r"$\gamma$", "ε": r"$\varepsilon$",
+            "λ": r"$\lambda$", "π": r"$\pi$", "θ": r"$\theta$", "φ": r"$\varphi$", "ω": r"$\omega$",
+            "Σ": r"$\Sigma$", "Ω": r"$\Omega$", "∞": r"$\infty$", "≠": r"$\neq$", "·": r"$\cdot$",
             "²": r"\textsuperscript{2}", "³": r"\textsuperscript{3}", "₂": r"$_2$", "√": r"$\surd$", "…": r"\dots{}",
-            "’": "'", "‘": "`", "“": "``", "”": "''"}
+            "’": "'", "‘": "`", "“": "``", "”": "''", "⌀": r"$\varnothing$", "∅": r"$\varnothing$",
+            "✓": r"$\checkmark$", "✔": r"$\checkmark$", "✗": r"$\times$", "•": r"\textbullet{}",
+            "\u00a0": "~", "€": r"\texteuro{}", "«": r"\guillemotleft{}", "»": r"\guillemotright{}"}
+#: what pdflatex sets with T1 + utf8 beyond ASCII: U+00A0-U+017F (Latin-1 and Latin Extended-A) except the nine
+#: letters T1 has no glyph for (found by compiling each; tests/test_report_security.py compiles all of them);
+#: anything else is mapped above or written as [U+XXXX]
+_LATIN = {chr(c) for c in range(0xA0, 0x180)} - set("ĦħĸĿŀŉŦŧſ")
+
+
+def _char(ch: str) -> str:
+    if ch in _SPECIALS:
+        return _SPECIALS[ch]
+    if ch in _UNICODE:
+        return _UNICODE[ch]
+    if " " <= ch < "\x7f" or ch in _LATIN:
+        return ch
+    cat = unicodedata.category(ch)
+    if cat.startswith("Z"):
+        return " "
+    if cat in ("Cc", "Cf", "Cs", "Co", "Cn", "Mn", "Me"):
+        return ""                                # controls, direction marks, joiners, lone combining marks
+    return f"\\texttt{{[U+{ord(ch):04X}]}}"        # a character pdflatex cannot set, named so no text is lost
 
 
 def escape_text(s: str) -> str:
-    """Escape plain text for LaTeX (pdflatex with T1/utf8): specials, and Greek/maths symbols as math."""
-    s = str(s)
-    for a, b in _TEXT_MAP:
-        s = s.replace(a, b)
-    return "".join(_UNICODE.get(ch, ch) for ch in s)
+    """Escape plain text for LaTeX (pdflatex with T1/utf8) in one pass: specials and brackets, Greek and
+    maths symbols as maths, Latin letters as they are, every other character by its code point ``[U+6771]``;
+    line breaks become spaces (a blank line would end a caption's or a heading's argument)."""
+    s = re.sub(r"\s+", " ", unicodedata.normalize("NFC", str(s)))
+    return "".join(_char(ch) for ch in s)
+
+
+#: the maths a ``$...$`` span may hold (anything else is set as text): ASCII letters, digits, spacing and
+#: operators, one subscript and one superscript per atom, braces, and these control words
+MATH_SYMBOLS = frozenset("""alpha beta gamma delta epsilon varepsilon zeta eta theta vartheta kappa lambda mu nu xi pi
+    rho sigma tau upsilon phi varphi chi psi omega Gamma Delta Theta Lambda Xi Pi Sigma Phi Psi Omega
+    le leq ge geq ne neq approx sim simeq equiv propto pm mp times cdot div circ infty partial nabla sum prod
+    lvert rvert ldots cdots dots to rightarrow leftarrow quad qquad surd max min log ln exp sin cos tan""".split())
+MATH_ONE_ARG = frozenset("sqrt mathrm mathit mathbf mathcal operatorname text hat bar tilde vec overline".split())
+_MATH_TOKEN = re.compile(r"\\[A-Za-z]+|\\[,;:! ]|[A-Za-z0-9]|[ +\-=<>()/.,;:|!*]|[_^{}]")
+
+
+def safe_math(body: str) -> bool:
+    """Whether ``body`` (between the dollars) is in the declared maths subset, so that it can neither run a
+    command outside ``MATH_SYMBOLS``/``MATH_ONE_ARG``/``\\frac`` nor stop the compilation: at most 200
+    characters, balanced groups, every argument present, at most one sub- and one superscript per atom."""
+    if len(body) > 200 or not body.strip():
+        return False
+    toks, pos = [], 0
+    for m in _MATH_TOKEN.finditer(body):
+        if m.start() != pos:
+            return False
+        toks.append(m.group(0))
+        pos = m.end()
+    if pos != len(body):
+        return False
+    i = 0
+
+    def group() -> bool:               # '{' sequence '}'
+        nonlocal i
+        if i >= len(toks) or toks[i] != "{":
+            return False
+        i += 1
+        if not sequence():
+            return False
+        if i >= len(toks) or toks[i] != "}":
+            return False
+        i += 1
+        return True
+
+    def atom() -> bool:
+        nonlocal i
+        t = toks[i]
+        if t == "{":
+            return group()
+        if t in ("}", "_", "^"):
+            return False
+        i += 1
+        if t.startswith("\\") and t[1:].isalpha():
+            word = t[1:]
+            if word == "frac":
+                return group() and group()
+            if word in MATH_ONE_ARG:
+                return group()
+            return word in MATH_SYMBOLS
+        return True
+
+    def sequence() -> bool:
+        nonlocal i
+        while i < len(toks) and toks[i] != "}":
+            if not atom():
+                return False
+            seen = set()
+            while i < len(toks) and toks[i] in ("_", "^"):
+                if toks[i] in seen:
+                    return False
+                seen.add(toks[i])
+                i += 1
+                if i >= len(toks) or toks[i] in ("}", "_", "^") or toks[i] == " ":
+                    return False
+                if toks[i] == "{":
+                    if not group():
+                        return False
+                elif toks[i].startswith("\\") and toks[i][1:].isalpha():
+                    word = toks[i][1:]
+                    i += 1
+                    if word in MATH_ONE_ARG:
+                        if not group():
+                            return False
+                    elif word not in MATH_SYMBOLS:
+                        return False
+                else:
+                    i += 1
+        return True
+
+    return sequence() and i == len(toks)
 
 
 def tex(s: str) -> str:
-    """Text that may contain ``$...$`` maths: the maths is kept verbatim, the rest is escaped."""
-    parts = re.split(r"(\$[^$]+\$)", str(s))
-    return "".join(p if p.startswith("$") and p.endswith("$") and len(p) > 1 else escape_text(p) for p in parts)
+    """Text that may contain ``$...$`` maths: a span in the declared subset (``safe_math``) is kept as maths,
+    everything else (other spans included) is escaped as text."""
+    parts = re.split(r"(\$[^$\n]+\$)", str(s))
+    return "".join(p if len(p) > 2 and p.startswith("$") and p.endswith("$") and safe_math(p[1:-1])
+                   else escape_text(p) for p in parts)

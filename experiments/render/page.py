@@ -1,0 +1,124 @@
+"""The report as one document with two outputs, ``report.md`` and a self-contained ``report.html``.
+
+The report is assembled as a list of parts (headings, prose, ready blocks such as tables, figures); each part
+knows its Markdown and its HTML. Nothing is ever parsed back out of Markdown: a figure is embedded only because
+the builder added it with the path of a file it wrote itself, so user text (titles, captions, findings, data-set
+labels) can never name a file to read. User text goes into prose through :func:`md_escape` (every Markdown
+special backslash-escaped, line breaks folded) and the prose becomes HTML through markdown-it-py with raw HTML
+and images disabled; the page itself is a jinja2 template with autoescaping, so every user string is text in
+the HTML, attributes included.
+"""
+from __future__ import annotations
+
+import base64
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import jinja2
+from markdown_it import MarkdownIt
+from markupsafe import Markup, escape
+
+_MD_SPECIAL = re.compile(r"[\\`*\[\]<>!|&~{}#]|(?<![A-Za-z0-9])_|_(?![A-Za-z0-9])")
+
+
+def md_escape(text) -> str:
+    """``text`` as literal Markdown text: the characters that could start a link, an image, HTML, code,
+    emphasis, an entity or a table cell backslash-escaped (CommonMark lets any ASCII punctuation be escaped;
+    an underscore inside a word cannot open emphasis and stays as it is), whitespace and line breaks folded
+    into one space (so user text never starts a line, hence never a heading, list or block)."""
+    return _MD_SPECIAL.sub(lambda m: "\\" + m.group(0), re.sub(r"\s+", " ", str(text))).strip()
+
+
+def _markdown() -> MarkdownIt:
+    md = MarkdownIt("commonmark", {"html": False, "linkify": False, "typographer": False})
+    md.disable("image")          # the prose never shows an image: figures are parts of their own
+    return md
+
+
+_MD = _markdown()
+
+
+def prose_html(markdown: str) -> Markup:
+    """Prose (the builder's Markdown with escaped user text) as HTML; raw HTML is shown as text."""
+    return Markup(_MD.render(markdown))
+
+
+@dataclass
+class Part:
+    kind: str            # heading | prose | block | figure
+    md: str
+    html: Markup
+
+
+class Document:
+    """Parts in order; ``markdown()`` and ``html()`` render all of them."""
+
+    def __init__(self):
+        self.parts: list[Part] = []
+
+    def heading(self, level: int, text: str, ident: str = "", code: str = "") -> None:
+        """A heading of user text; ``code`` (a study's name) is shown in code font; ``ident``: the anchor."""
+        if ident and not re.fullmatch(r"[a-z0-9-]+", ident):
+            raise ValueError(f"heading anchor {ident!r} must be lower-case letters, digits and hyphens")
+        shown = (f" (`{code}`)" if "`" not in code else f" ({md_escape(code)})") if code else ""
+        md = "#" * level + " " + md_escape(text) + shown + (f" {{#{ident}}}" if ident else "")
+        html = Markup("<h{l}{i}>{t}{c}</h{l}>").format(
+            l=level, i=Markup(' id="{}"').format(ident) if ident else "", t=text,
+            c=Markup(" (<code>{}</code>)").format(code) if code else "")
+        self.parts.append(Part("heading", md, html))
+
+    def prose(self, markdown: str) -> None:
+        """A paragraph (or list) in Markdown written by the builder, user text passed through ``md_escape``."""
+        self.parts.append(Part("prose", markdown, prose_html(markdown)))
+
+    def block(self, html: Markup, md: str) -> None:
+        """Ready HTML (built with escaping, e.g. a table) and its Markdown form."""
+        if not isinstance(html, Markup):
+            raise TypeError("Document.block takes markupsafe.Markup built with escaping, not a plain string")
+        self.parts.append(Part("block", md, html))
+
+    def figure(self, png: Path, number: int, caption: str, rel: str) -> None:
+        """Figure ``number``: ``png`` is a file the builder wrote (``rel``: its path relative to the report)."""
+        data = base64.b64encode(Path(png).read_bytes()).decode("ascii")
+        html = Markup('<figure id="figure-{n}"><img alt="Figure {n}: {c}" src="data:image/png;base64,{d}">'
+                      "<figcaption>Figure {n}: {c}</figcaption></figure>").format(n=int(number), c=caption, d=data)
+        md = f"![Figure {int(number)}: {md_escape(caption)}]({rel})"
+        self.parts.append(Part("figure", md, html))
+
+    def markdown(self) -> str:
+        return "\n\n".join(p.md for p in self.parts) + "\n"
+
+    def html(self, title: str, style: str = "") -> str:
+        env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
+        return env.from_string(PAGE).render(title=title, style=Markup(style), parts=self.parts)
+
+
+PAGE = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
+<title>{{ title }}</title>
+<style>{{ style }}</style>
+<script>window.addEventListener('load',function(){var im=document.images,ok=0;
+for(var i=0;i<im.length;i++){if(im[i].complete&&im[i].naturalWidth>0)ok++;}
+document.body.setAttribute('data-images',ok+'/'+im.length);});</script>
+</head><body>
+{% for part in parts %}{{ part.html }}
+{% endfor %}</body></html>
+"""
+
+STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222;line-height:1.4;"
+         "overflow-wrap:anywhere}"
+         ".table-box{overflow-x:auto;max-width:100%}"
+         "table{border-collapse:collapse;margin:1em 0;font-size:0.85em}th,td{border:1px solid #bbb;padding:3px 6px}"
+         "td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}"
+         "caption{caption-side:top;text-align:left;font-size:0.95em;padding-bottom:4px}"
+         "th{background:#eee}img{max-width:100%;height:auto}figure{margin:1.5em 0}"
+         "figcaption{font-size:0.9em;color:#333}"
+         "nav#toc{background:#f6f6f6;padding:0.5em 1em;border:1px solid #ddd}nav#toc ul{margin:0.2em 0}"
+         ".verdict{border-left:4px solid #1a9850;padding:0.2em 0.8em;background:#f3faf5}"
+         ".verdict.differ{border-left-color:#d73027;background:#fdf3f2}"
+         ".older{border-left:4px solid #fc8d59;padding:0.2em 0.8em;background:#fff8f0}")
+
+
+def escape_html(text) -> Markup:
+    return escape(text)

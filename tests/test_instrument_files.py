@@ -261,3 +261,18 @@ def test_fit_plot_quick_look(tmp_path):
         assert png.read_bytes().startswith(b"\x89PNG")
     out = cli("fit", "circle.kasa", xy, "--plot", tmp_path / "no" / "x.png")
     assert out.returncode == 2 and "does not exist" in out.stderr and out.stderr.count("\n") == 1
+
+
+def test_multilateration_lengths_in_um_read_as_mm_warn(tmp_path):
+    import pandas as pd
+    from datasets.multilateration import write_example
+    meas, _ = write_example(tmp_path, stations=4, noise=0.0)
+    scaled = tmp_path / "um.csv"
+    df = pd.read_csv(meas)
+    for c in ("x", "y", "z", "length"):
+        df[c] = df[c] * 1e3                                    # the file in µm
+    df.to_csv(scaled, index=False)
+    out = cli("multilaterate", scaled)
+    assert "measured lengths" in out.stderr and "--unit um" in out.stderr, out.stderr
+    ok = cli("multilaterate", scaled, "--unit", "um")
+    assert "measured lengths" not in ok.stderr, ok.stderr

@@ -640,6 +640,8 @@ def cmd_multilaterate(args) -> int:
     if args.errors_csv and not args.identify:
         raise InvalidInputError("--errors-csv needs --identify (the 21 errors come from the identification)")
     data = read_multilateration(args.file, args.stations, unit=args.unit, skip_rows=args.skip_rows)
+    # tracking interferometers measure up to ~15-20 m: longer lengths are a unit mistake
+    warn_implausible("measured lengths", float(np.nanmax(data.lengths)), 50_000.0, args.unit, typical_mm=2000.0)
     method = args.method if "." in args.method else f"multilateration.{args.method}"
     spec = methods.get(method)
     if spec.family != "multilateration":

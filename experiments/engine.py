@@ -28,6 +28,10 @@ import importlib
 import inspect
 import itertools
 import json
+import math
+import signal
+import sys
+import threading
 import time
 from pathlib import Path
 
@@ -40,7 +44,7 @@ from experiments.metrics import metrics
 from experiments.timing import time_call
 from methods import InvalidInputError
 
-ENGINE_VERSION = 1
+ENGINE_VERSION = 2
 REPO = Path(__file__).resolve().parents[1]
 
 
@@ -170,16 +174,62 @@ def expand_methods(cfg: dict, where: str) -> list[tuple[str, dict]]:
 
 # ---------------------------------------------------------------- cache keys
 
+#: versions of the libraries whose arithmetic can change a row's numbers (part of every key and of meta.json)
+NUMBER_PACKAGES = ("numpy", "scipy", "cvxpy", "clarabel", "nlopt")
+_CODE: dict = {}
+_ENV: dict = {}
+
+
+def environment() -> dict:
+    """What changes numbers besides the code (computed once per process): the kernel backend
+    (``FITBENCH_KERNELS``: compiled or numpy), Python's version and those of :data:`NUMBER_PACKAGES`."""
+    if not _ENV:
+        from importlib import metadata
+        from methods._compiled import kernel_path
+        versions = {"python": ".".join(map(str, sys.version_info[:3]))}
+        for pkg in NUMBER_PACKAGES:
+            try:
+                versions[pkg] = metadata.version(pkg)
+            except metadata.PackageNotFoundError:
+                versions[pkg] = None
+        _ENV.update(kernels=kernel_path(), versions=versions)
+    return _ENV
+
+
+def reset_caches() -> None:
+    """Forget the code hashes and the environment (a test that edits code in the same process)."""
+    from experiments import codehash
+    _CODE.clear()
+    _ENV.clear()
+    codehash.code_hash.cache_clear()
+    codehash.module_closure.cache_clear()
+    codehash.file_hash.cache_clear()
+
+
 def task_code(task: dict) -> dict:
     """Hashes of all code (and data files) a task's row depends on (see ``experiments.codehash``): the
-    method's module and its imports, the data source, the metrics and the study's own module."""
-    from experiments import codehash
-    study = f"experiments.studies.{task['kind']}"
-    method = methods.get(task["method"]).module if task["method"] in _method_ids() else None
-    return {"method": codehash.code_hash(method) if method else None,
-            "source": source_hash(task["dataset"]) if _has_source(task["dataset"]) else None,
-            "metrics": codehash.code_hash("experiments.metrics", "experiments.timing"),
-            "study": codehash.code_hash(study)}
+    method's module and its imports, the data source, the metrics and the study's own module. Computed once
+    per (method, study kind, data set) in a run: the files are hashed once, not per row."""
+    spec = task["dataset"]
+    memo = (task["method"], task["kind"], json.dumps(spec, sort_keys=True, default=str))
+    code = _CODE.get(memo)
+    if code is None:
+        from experiments import codehash
+        study = f"experiments.studies.{task['kind']}"
+        method = methods.get(task["method"]).module if task["method"] in _method_ids() else None
+        code = {"method": codehash.code_hash(method) if method else None,
+                "source": source_hash(spec) if _has_source(spec) else None,
+                "metrics": codehash.code_hash("experiments.metrics", "experiments.timing"),
+                "study": codehash.code_hash(study)}
+        _CODE[memo] = code
+    return code
+
+
+def _source_name(spec) -> str | None:
+    """The registered source a data set spec names, if any."""
+    if isinstance(spec, dict) and any(k in spec for k in ("published", "file", "source", "generator")):
+        return _source_of(spec)
+    return None
 
 
 def _has_source(spec: dict) -> bool:
@@ -195,15 +245,24 @@ def _method_ids() -> set[str]:
     return {s.id for s in methods.list_methods()}
 
 
-def task_key(task: dict) -> str:
-    ident = {k: task[k] for k in ("kind", "dataset", "stream", "seed", "method", "params", "timing")}
-    ident.update(code=task_code(task), engine=ENGINE_VERSION,
+def _ident(task: dict) -> str:
+    """Everything a row depends on except its seed stream, as canonical JSON."""
+    ident = {k: task[k] for k in ("kind", "dataset", "seed", "method", "params", "timing")}
+    ident.update(code=task_code(task), engine=ENGINE_VERSION, env=environment(),
                  extra={k: v for k, v in task.items() if k.startswith("x_")})
-    return hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode()).hexdigest()[:24]
+    return json.dumps(ident, sort_keys=True, default=str)
 
 
-def grid_tasks(cfg: dict, where: str) -> list[dict]:
-    """The generic expansion: data sets x repetitions x methods (x method grid)."""
+def _key(ident: str, stream) -> str:
+    return hashlib.sha256(f"{ident}|{stream}".encode()).hexdigest()[:24]
+
+
+def task_key(task: dict) -> str:
+    """The row's cache key: its identity, the code it depends on, the environment that changes numbers."""
+    return _key(_ident(task), task["stream"])
+
+
+def _grid_parts(cfg: dict, where: str):
     specs = expand_datasets(cfg, where)
     runs = expand_methods(cfg, where)
     reps = cfg.get("repetitions", 1)
@@ -214,20 +273,41 @@ def grid_tasks(cfg: dict, where: str) -> list[dict]:
         bad = set(timing) - {"min_time_s", "rounds"}
         if bad:
             raise ConfigError(f"{where}: timing has unknown key(s) {', '.join(sorted(bad))} (min_time_s, rounds)")
-    tasks = []
-    for spec in specs:
+    return specs, runs, reps, timing
+
+
+def iter_grid_tasks(cfg: dict, where: str, *, keyed: bool = False):
+    """The generic expansion, lazily: data sets x repetitions x methods (x method grid), in row order.
+    With ``keyed`` each task also gets its ``index`` and cache ``key`` (the identity of each (data set,
+    method) pair is serialised once, not per repetition)."""
+    specs, runs, reps, timing = _grid_parts(cfg, where)
+    index = 0
+    idents: dict = {}
+    for si, spec in enumerate(specs):
         n_rep = 1 if ("published" in spec or "file" in spec or spec.get("fixed")) else reps
         for r in range(n_rep):
-            for m, extra in runs:
+            for mi, (m, extra) in enumerate(runs):
                 if extra["on"] is not None and spec["label"] not in extra["on"]:
                     continue
                 n = spec.get("params", {}).get("n")
                 if extra["max_n"] is not None and n is not None and n > extra["max_n"]:
                     continue
-                tasks.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": r,
-                              "stream": [spec["entry"], spec["point"], r], "seed": cfg["seed"], "method": m,
-                              "params": extra["params"], "timing": timing})
-    return tasks
+                task = {"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": r,
+                        "stream": [spec["entry"], spec["point"], r], "seed": cfg["seed"], "method": m,
+                        "params": extra["params"], "timing": timing}
+                if keyed:
+                    ident = idents.get((si, mi))
+                    if ident is None:
+                        ident = idents[(si, mi)] = _ident(task)
+                    task["index"] = index
+                    task["key"] = _key(ident, task["stream"])
+                    index += 1
+                yield task
+
+
+def grid_tasks(cfg: dict, where: str) -> list[dict]:
+    """The generic expansion: data sets x repetitions x methods (x method grid)."""
+    return list(iter_grid_tasks(cfg, where))
 
 
 # ---------------------------------------------------------------- running one task (in a worker)
@@ -259,15 +339,37 @@ def source_hash(spec: dict) -> str:
     return ":".join(parts)
 
 
+_COLUMNS_OF: dict = {}
+
+
+def _columns_of(spec_params: dict, params: dict) -> dict:
+    """The parameter columns of a (data set, method) pair. Tasks of one pair share these dicts (also after
+    pickling to a worker), so the columns are built once per pair; the cache holds the dicts themselves,
+    so an id is never reused while cached."""
+    memo = (id(spec_params), id(params))
+    hit = _COLUMNS_OF.get(memo)
+    if hit is not None and hit[0] is spec_params and hit[1] is params:
+        return hit[2]
+    cols = {"params": json.dumps(params, sort_keys=True)}
+    for k, v in spec_params.items():
+        cols[f"data_{k}"] = v if np.isscalar(v) else json.dumps(v)
+    for k, v in params.items():
+        cols[f"param_{k}"] = v if np.isscalar(v) or v is None else json.dumps(v)
+    if len(_COLUMNS_OF) > 4096:
+        _COLUMNS_OF.clear()
+    _COLUMNS_OF[memo] = (spec_params, params, cols)
+    return cols
+
+
+_NO_PARAMS: dict = {}
+
+
 def base_row(task: dict) -> dict:
     spec = task["dataset"]
+    cols = _columns_of(spec.get("params", _NO_PARAMS), task["params"])
     row = {"study": task["study"], "dataset": spec["label"], "repetition": task["repetition"], "seed": task["seed"],
-           "data_stream": ".".join(map(str, task["stream"])), "method": task["method"],
-           "params": json.dumps(task["params"], sort_keys=True)}
-    for k, v in spec.get("params", {}).items():
-        row[f"data_{k}"] = v if np.isscalar(v) else json.dumps(v)
-    for k, v in task["params"].items():
-        row[f"param_{k}"] = v if np.isscalar(v) or v is None else json.dumps(v)
+           "data_stream": ".".join(map(str, task["stream"])), "method": task["method"], "params": cols["params"]}
+    row.update(cols)  # "params" first, then the data_ and param_ columns, as they always came
     return row
 
 
@@ -296,28 +398,159 @@ def fit_row(task: dict, points, truth) -> dict:
     return row
 
 
-def run_task(task: dict) -> dict:
-    """Worker entry point: the study module's ``execute`` if it has one, else the generic fit."""
-    study = importlib.import_module(f"experiments.studies.{task['kind']}")
-    try:
-        if hasattr(study, "execute"):
-            row = study.execute(task)
+#: statuses the environment causes (not the method): never served from the cache, recomputed on the next run
+ENVIRONMENT_STATUSES = ("timeout", "crashed", "unavailable")
+#: statuses recomputed on the next run (a method's error may be a bug fixed since)
+RERUN_STATUSES = ("error",) + ENVIRONMENT_STATUSES
+#: the prefix of the message of a compiled kernel that was not built (methods._compiled)
+_NOT_BUILT = "fitbench's compiled kernel"
+
+
+class RowTimeout(BaseException):
+    """Raised inside a row that ran longer than its time limit (a BaseException: a method's ``except
+    Exception`` does not swallow it)."""
+
+
+#: set when the run itself received SIGINT/SIGTERM: a KeyboardInterrupt is then the user's, not a method's
+_SIGNALLED = threading.Event()
+
+
+def note_signal() -> None:
+    """Record that the run received an interrupt (a signal handler calls this before raising)."""
+    _SIGNALLED.set()
+
+
+class _time_limit:
+    """A row's time limit: SIGALRM in a process's main thread (it also interrupts a sleep), else a timer
+    that raises :class:`RowTimeout` asynchronously in the row's thread (Dask workers run rows in threads)."""
+
+    def __init__(self, seconds):
+        self.seconds = seconds
+
+    def __enter__(self):
+        if not self.seconds:
+            return self
+        self.main = threading.current_thread() is threading.main_thread() and hasattr(signal, "setitimer")
+        if self.main:
+            def fire(signum, frame):
+                raise RowTimeout()
+            self.old = signal.signal(signal.SIGALRM, fire)
+            signal.setitimer(signal.ITIMER_REAL, self.seconds)
         else:
-            points, truth = load_data(task["dataset"], task["seed"], task["stream"])
-            row = fit_row(task, points, truth)
-    except Exception as exc:
-        row = {**base_row(task), "status": "error", "message": f"{type(exc).__name__}: {exc}"}
-    row["task_index"] = task["index"]
+            import ctypes
+            tid, self.lock, self.active = threading.get_ident(), threading.Lock(), True
+
+            def fire():
+                with self.lock:
+                    if self.active:
+                        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(tid), ctypes.py_object(RowTimeout))
+            self.timer = threading.Timer(self.seconds, fire)
+            self.timer.daemon = True
+            self.timer.start()
+        return self
+
+    def __exit__(self, *exc):
+        if not self.seconds:
+            return False
+        if self.main:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, self.old)
+        else:
+            with self.lock:
+                self.active = False
+            self.timer.cancel()
+        return False
+
+
+def failed_row(task: dict, status: str, message: str) -> dict:
+    """The row of a task that produced no result (time-out, crash, ...), with its identity columns."""
+    return {**base_row(task), "status": status, "message": message, "task_index": task.get("index")}
+
+
+def run_task(task: dict, row_timeout: float | None = None) -> dict:
+    """Worker entry point: the study module's ``execute`` if it has one, else the generic fit. A row that
+    runs longer than ``row_timeout`` seconds is ``timeout``; one that raises SystemExit or
+    KeyboardInterrupt (not the run's own interrupt) is ``crashed``; a kernel or module that cannot be
+    loaded makes it ``unavailable``."""
+    try:
+        with _time_limit(row_timeout):
+            study = importlib.import_module(f"experiments.studies.{task['kind']}")
+            try:
+                if hasattr(study, "execute"):
+                    row = study.execute(task)
+                else:
+                    points, truth = load_data(task["dataset"], task["seed"], task["stream"])
+                    row = fit_row(task, points, truth)
+            except ImportError as exc:
+                row = {**base_row(task), "status": "unavailable", "message": f"{type(exc).__name__}: {exc}"}
+            except Exception as exc:
+                row = {**base_row(task), "status": "error", "message": f"{type(exc).__name__}: {exc}"}
+    except RowTimeout:
+        row = failed_row(task, "timeout", f"the row ran longer than its limit of {row_timeout:g} s")
+    except (KeyboardInterrupt, SystemExit, GeneratorExit) as exc:
+        if isinstance(exc, KeyboardInterrupt) and _SIGNALLED.is_set():
+            raise  # the run was interrupted: stop
+        row = failed_row(task, "crashed", f"the row raised {type(exc).__name__}({', '.join(map(repr, exc.args))})")
+    if row.get("status") == "skipped" and str(row.get("message", "")).startswith(_NOT_BUILT):
+        row["status"] = "unavailable"
+    row["task_index"] = task.get("index")
     return _plain(row)
+
+
+def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None) -> dict:
+    """Run a chunk of tasks in a worker; the rows come back as columns (:func:`to_columns`). ``progress``
+    (a shared array of two doubles) receives the start time and position of the running row, so that
+    the parent can end a row stuck in compiled code."""
+    rows = []
+    t0 = time.perf_counter()
+    for pos, task in enumerate(tasks):
+        if progress is not None:
+            progress[0], progress[1] = time.monotonic(), pos
+        rows.append(run_task(task, row_timeout))
+    return {"columns": to_columns(rows), "seconds": time.perf_counter() - t0}
+
+
+def to_columns(rows: list[dict]) -> dict:
+    """Rows as columns: ``{"n", "names", "values": [list per name], "absent": {name: [positions]}}``
+    (a column missing from some rows lists them, so that the rows come back exactly)."""
+    names: dict = {}
+    for r in rows:
+        for k in r:
+            names.setdefault(k, None)
+    values, absent = [], {}
+    for name in names:
+        col, miss = [], []
+        for i, r in enumerate(rows):
+            if name in r:
+                col.append(r[name])
+            else:
+                col.append(None)
+                miss.append(i)
+        values.append(col)
+        if miss:
+            absent[name] = miss
+    return {"n": len(rows), "names": list(names), "values": values, "absent": absent}
+
+
+def from_columns(batch: dict) -> list[dict]:
+    """The rows of a :func:`to_columns` batch."""
+    rows = [dict(zip(batch["names"], vals)) for vals in zip(*batch["values"])] if batch["names"] else \
+        [{} for _ in range(batch["n"])]
+    for name, positions in batch["absent"].items():
+        for i in positions:
+            del rows[i][name]
+    return rows
 
 
 def _plain(row: dict) -> dict:
     out = {}
     for k, v in row.items():
-        if isinstance(v, np.generic):
-            v = v.item()
-        if isinstance(v, float) and not np.isfinite(v):
-            v = None
+        t = type(v)
+        if t is not str and t is not int and t is not bool and v is not None:
+            if isinstance(v, np.generic):
+                v = v.item()
+            if isinstance(v, float) and not math.isfinite(v):
+                v = None
         out[k] = v
     return out
 
@@ -334,22 +567,112 @@ def prepare(tasks: list[dict]) -> list[dict]:
     return tasks
 
 
-def run(tasks: list[dict], store: RowStore, *, force: bool, jobs: int, executor: str, scheduler: str | None,
-        desc: str, log=print) -> tuple[list[dict], dict]:
-    """Run what is not stored yet (and stored errors again); return the rows in task order."""
-    keys = [t["key"] for t in tasks]
-    if force:
-        store.forget(keys)
-    status = store.done(keys)
-    todo = [t for t in tasks if status.get(t["key"]) in (None, "error")]
-    counts = {"tasks": len(tasks), "stored": len(tasks) - len(todo), "to_run": len(todo),
-              "retried_errors": sum(status.get(t["key"]) == "error" for t in tasks)}
+def iter_prepared(tasks):
+    """Index and key the tasks of an iterable, lazily."""
+    for i, t in enumerate(tasks):
+        t["index"] = i
+        t["key"] = task_key(t)
+        yield t
+
+
+def _blocks(iterable, size: int):
+    it = iter(iterable)
+    while True:
+        block = list(itertools.islice(it, size))
+        if not block:
+            return
+        yield block
+
+
+class _Interner:
+    """Equal strings of decoded rows share one object (the study, method, status, params of 10^5 rows)."""
+
+    def __init__(self, limit: int = 200_000):
+        self.table: dict = {}
+        self.limit = limit
+
+    def __call__(self, text: str) -> dict:
+        row = json.loads(text)
+        table = self.table
+        for k, v in row.items():
+            if type(v) is str and len(v) < 256:
+                s = table.get(v)
+                if s is None:
+                    if len(table) < self.limit:
+                        table[v] = v
+                else:
+                    row[k] = s
+        return row
+
+
+def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, scheduler: str | None,
+        desc: str, log=print, row_timeout: float | None = None, chunk_rows: int | None = None):
+    """Run what is not stored yet (and rows whose status is in :data:`RERUN_STATUSES`); return the rows
+    as one DataFrame in task order, and the counts.
+
+    ``tasks`` is a list of prepared tasks or a function returning a fresh iterable of them (it is called
+    once to run, once to collect the rows): the tasks of a large study are never all in memory, rows go
+    to the store as their chunk finishes, and the frame is built a block at a time."""
+    import pandas as pd
+    make = tasks if callable(tasks) else (lambda: tasks)
+    counts = {"tasks": 0, "stored": 0, "to_run": 0, "retried_errors": 0}
+    used = set()
+    for block in _blocks(make(), 2000):
+        status = {} if force else store.done([t["key"] for t in block])
+        counts["tasks"] += len(block)
+        for t in block:
+            used.add((t["method"], _source_name(t["dataset"])))
+            s = status.get(t["key"])
+            if s is None or s in RERUN_STATUSES:
+                counts["to_run"] += 1
+                counts["retried_errors"] += s is not None
+    counts["stored"] = counts["tasks"] - counts["to_run"]
     log(f"   {counts['tasks']} rows: {counts['stored']} already stored, {counts['to_run']} to run"
-        + (f" ({counts['retried_errors']} failed before, retried)" if counts["retried_errors"] else ""))
+        + (f" ({counts['retried_errors']} failed before, retried)"
+           if counts["retried_errors"] else ""))
+
+    def todo():
+        for block in _blocks(make(), 2000):
+            status = {} if force else store.done([t["key"] for t in block])
+            for t in block:
+                s = status.get(t["key"])
+                if force or s is None or s in RERUN_STATUSES:
+                    yield t
     t0 = time.perf_counter()
-    execute(todo, store, work=run_task, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc)
+    execute(todo(), store, work=run_chunk, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc,
+            total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log)
     counts["wall_s"] = time.perf_counter() - t0
-    stored = store.get_by_key(keys)
-    # the order of the rows is the order of the tasks of this config, whatever order they were stored in
-    rows = [{**stored[t["key"]], "task_index": t["index"]} for t in tasks if t["key"] in stored]
-    return rows, counts
+    frames = []
+    decode = _Interner()
+    for block in _blocks(make(), 20000):
+        stored = store.get_by_key([t["key"] for t in block], decode=decode)
+        rows = [stored[t["key"]] for t in block if t["key"] in stored]
+        for r in rows:  # the order of the rows is the order of the tasks, whatever order they were stored in
+            r.pop("task_index", None)
+        if rows:
+            frames.append(pd.DataFrame(rows))
+        del rows, stored
+    df = _concat(frames)
+    counts["used"] = used
+    return df, counts
+
+
+def _concat(frames):
+    """One frame from the blocks, with the column types one frame of all rows would have (a block whose
+    rows all failed has an object column of None where another has floats)."""
+    import pandas as pd
+    if not frames:
+        return pd.DataFrame()
+    if len(frames) == 1:
+        return frames[0]
+    df = pd.concat(frames, ignore_index=True, sort=False)
+    for col in df.columns[df.dtypes == object]:
+        kinds = {f[col].dtype.kind for f in frames if col in f}
+        if "O" in kinds and kinds - {"O"}:
+            s = df[col]
+            non_null = s.dropna()
+            if len(non_null) and non_null.map(type).isin([float, int]).all():
+                df[col] = pd.to_numeric(s)
+            elif len(non_null) and non_null.map(type).isin([bool]).all() and s.isna().sum() == 0:
+                df[col] = s.astype(bool)
+    return df

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import contextlib
+import itertools
 import os
 import signal
 import sys
@@ -13,28 +14,132 @@ from experiments.store import RowStore
 
 
 
-def _progress(total: int, desc: str):
-    from tqdm import tqdm
-    return tqdm(total=total, desc=desc, unit="row", disable=not sys.stderr.isatty(), leave=False, dynamic_ncols=True)
+class Progress:
+    """Rows done, rows/s and the ETA: a bar on a terminal, else a line every :attr:`every_s` seconds once a
+    study has run that long (a log file of a long study says how far it is)."""
+
+    every_s = 10.0
+
+    def __init__(self, total: int, desc: str, log=print):
+        from tqdm import tqdm
+        self.total, self.desc, self.log, self.done = total, desc, log, 0
+        self.t0 = self.last = time.monotonic()
+        self.bar = tqdm(total=total, desc=desc, unit="row", disable=not sys.stderr.isatty(), leave=False,
+                        dynamic_ncols=True)
+
+    def line(self) -> str:
+        elapsed = max(time.monotonic() - self.t0, 1e-9)
+        rate = self.done / elapsed
+        eta = (self.total - self.done) / rate if rate > 0 else float("inf")
+        return (f"   {self.desc}: {self.done:,}/{self.total:,} rows ({self.done / max(self.total, 1):.0%}), "
+                f"{rate:,.0f} rows/s, ETA {_duration(eta)}")
+
+    def update(self, n: int = 1) -> None:
+        self.done += n
+        self.bar.update(n)
+        now = time.monotonic()
+        if self.bar.disable and now - self.last >= self.every_s and self.done < self.total:
+            self.last = now
+            self.log(self.line())
+
+    def close(self) -> None:
+        self.bar.close()
 
 
-def execute(tasks: list[dict], store: RowStore, *, work, jobs: int, executor: str, scheduler: str | None, desc: str):
-    """Run tasks and store each row as it finishes. KeyboardInterrupt cancels what is pending; what
+def _duration(seconds: float) -> str:
+    if seconds == float("inf"):
+        return "unknown"
+    seconds = int(round(seconds))
+    h, rest = divmod(seconds, 3600)
+    m, s = divmod(rest, 60)
+    return f"{h} h {m:02d} min" if h else (f"{m} min {s:02d} s" if m else f"{s} s")
+
+
+class Chunks:
+    """Tasks cut into chunks whose size follows the measured cost of a row: a chunk takes about
+    :attr:`target_s` seconds of a worker (between 1 and :attr:`max_rows` rows), so that microsecond
+    fits travel in thousands and slow rows one by one; ``declared`` fixes the size. Rows of a chunk that
+    failed as a whole (a worker died) come back one at a time first."""
+
+    target_s = 0.2
+    max_rows = 4000
+
+    def __init__(self, tasks, declared: int | None = None, workers: int = 1):
+        self.it = iter(tasks)
+        self.declared = declared
+        self.size = declared or 4
+        self.workers = workers
+        self.retry: list[list] = []
+        self.cost = None  # seconds per row, smoothed
+
+    def measured(self, rows: int, seconds: float) -> None:
+        if self.declared or rows == 0:
+            return
+        per_row = seconds / rows
+        self.cost = per_row if self.cost is None else 0.5 * self.cost + 0.5 * per_row
+        self.size = int(min(self.max_rows, max(1, self.target_s / max(self.cost, 1e-7))))
+
+    def next(self) -> list | None:
+        if self.retry:
+            return self.retry.pop(0)
+        chunk = list(itertools.islice(self.it, self.size))
+        if not self.declared and self.cost is None:
+            self.size = min(self.size * 2, 64)  # until a cost is measured: small chunks, growing
+        return chunk or None
+
+    def again(self, tasks: list) -> None:
+        """Tasks to run again, one per chunk, before any new chunk."""
+        self.retry[:0] = [[t] for t in tasks]
+
+
+def execute(tasks, store: RowStore, *, work, jobs: int, executor: str, scheduler: str | None, desc: str,
+            total: int | None = None, row_timeout: float | None = None, chunk_rows: int | None = None, log=print):
+    """Run tasks (an iterable) in chunks and store each chunk's rows as it finishes. With one job and no
+    time limit the rows run in this process; with a time limit, or several jobs, in worker processes that
+    a crash or a stuck row cannot take down with the run. KeyboardInterrupt cancels what is pending; what
     finished stays stored."""
-    if not tasks:
+    if total == 0:
         return
-    bar = _progress(len(tasks), desc)
+    bar = Progress(total if total is not None else 0, desc, log)
+    chunks = Chunks(tasks, chunk_rows, jobs)
     try:
         if executor == "dask":
-            _run_dask(work, tasks, store, jobs, scheduler, bar)
-        elif jobs <= 1:
-            for t in tasks:
-                store.put(t["key"], work(t))
-                bar.update()
+            _run_dask(work, chunks, store, jobs, scheduler, bar, row_timeout)
+        elif jobs <= 1 and not row_timeout:
+            _run_here(work, chunks, store, bar)
         else:
-            _run_processes(work, tasks, store, jobs, bar)
+            _run_processes(work, chunks, store, max(jobs, 1), bar, row_timeout)
     finally:
         bar.close()
+
+
+def _store(store: RowStore, batch: dict, tasks: list, bar) -> None:
+    from experiments.engine import from_columns
+    rows = from_columns(batch)
+    store.put_many([t["key"] for t in tasks], rows)
+    bar.update(len(rows))
+
+
+def _run_here(work, chunks: Chunks, store: RowStore, bar) -> None:
+    from experiments.engine import note_signal
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        handler = signal.getsignal(signal.SIGINT)
+
+        def on_sigint(signum, frame):  # the run's own Ctrl-C: not a method's KeyboardInterrupt
+            note_signal()
+            if callable(handler):
+                handler(signum, frame)
+            raise KeyboardInterrupt
+        previous = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        while (chunk := chunks.next()) is not None:
+            out = work(chunk)
+            chunks.measured(len(chunk), out["seconds"])
+            _store(store, out["columns"], chunk, bar)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
 
 
 BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
@@ -111,22 +216,141 @@ def _stop_pool(pool) -> None:
             proc.join(timeout=5)
 
 
-def _run_processes(work, tasks, store, jobs, bar):
+#: extra seconds a row may run past its limit before its worker is killed (a row stuck in compiled code
+#: does not see the SIGALRM that ends a row running Python)
+KILL_GRACE_S = 2.0
+
+
+def _worker_main(conn, parent_pid: int, progress) -> None:
+    """A local worker: receive chunks, send back their rows as columns, until told to stop."""
+    _die_with_parent(parent_pid)
+    from experiments.engine import run_chunk
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            return
+        if msg is None:
+            return
+        chunk_id, tasks, row_timeout = msg
+        try:
+            out = run_chunk(tasks, row_timeout, progress)
+        except BaseException as exc:  # a failure of the engine itself: reported, the chunk is retried alone
+            out = {"failed": f"{type(exc).__name__}: {exc}"}
+        progress[0] = 0.0
+        conn.send((chunk_id, out))
+
+
+class _Worker:
+    def __init__(self, ctx):
+        self.conn, child = ctx.Pipe()
+        self.progress = ctx.RawArray("d", 2)
+        self.proc = ctx.Process(target=_worker_main, args=(child, os.getpid(), self.progress), daemon=True,
+                                name="fitbench-worker")
+        self.proc.start()
+        child.close()
+        self.chunk = None
+        self.chunk_id = None
+
+    def send(self, chunk_id: int, chunk: list, row_timeout) -> None:
+        self.chunk, self.chunk_id = chunk, chunk_id
+        self.progress[0] = 0.0
+        self.conn.send((chunk_id, chunk, row_timeout))
+
+    def stop(self, now: bool = False) -> None:
+        with contextlib.suppress(Exception):
+            if now:
+                self.proc.kill()
+            else:
+                self.conn.send(None)
+        self.proc.join(timeout=5)
+        if self.proc.is_alive():
+            self.proc.kill()
+            self.proc.join(timeout=5)
+        with contextlib.suppress(Exception):
+            self.conn.close()
+
+
+def _lost_chunk(chunks: Chunks, store: RowStore, bar, chunk: list, pos: int, status: str, message: str) -> None:
+    """A worker died (or was killed) at row ``pos`` of ``chunk``: that row gets ``status``; the rows before
+    it (their results died with the worker) and after it run again, one per chunk."""
+    from experiments.engine import failed_row, to_columns
+    pos = min(max(int(pos), 0), len(chunk) - 1)
+    bad = chunk[pos]
+    _store(store, to_columns([failed_row(bad, status, message)]), [bad], bar)
+    chunks.again(chunk[:pos] + chunk[pos + 1:])
+
+
+def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_timeout) -> None:
+    """Chunks on ``jobs`` worker processes (spawned; one BLAS thread each). A worker that dies labels the
+    row it was running ``crashed``; a row past its limit by :data:`KILL_GRACE_S` gets its worker killed
+    and is labelled ``timeout``; a new worker takes over and the study goes on."""
     import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from multiprocessing.connection import wait
+    ctx = mp.get_context("spawn")
+    workers: list[_Worker] = []
+    next_id = 0
     with _one_blas_thread_per_worker():
-        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"),
-                                   initializer=_die_with_parent, initargs=(os.getpid(),))
         try:
             with _workers_ignore_ctrl_c():
-                futures = {pool.submit(work, t): t for t in tasks}  # the workers start here
-            for fut in as_completed(futures):
-                store.put(futures[fut]["key"], fut.result())
-                bar.update()
+                workers = [_Worker(ctx) for _ in range(jobs)]
+            exhausted = False
+            while True:
+                for w in workers:
+                    if w.chunk is None and not exhausted:
+                        chunk = chunks.next()
+                        if chunk is None:
+                            exhausted = True
+                            break
+                        w.send(next_id, chunk, row_timeout)
+                        next_id += 1
+                busy = [w for w in workers if w.chunk is not None]
+                if not busy:
+                    break
+                ready = wait([w.conn for w in busy] + [w.proc.sentinel for w in busy], timeout=0.5)
+                for w in busy:
+                    died = w.proc.sentinel in ready and not w.conn.poll()
+                    if w.conn in ready and not died:
+                        try:
+                            chunk_id, out = w.conn.recv()
+                        except (EOFError, OSError):
+                            died = True
+                        else:
+                            chunk = w.chunk
+                            w.chunk = None
+                            if "failed" in out:
+                                if len(chunk) > 1:
+                                    chunks.again(chunk)
+                                else:
+                                    _lost_chunk(chunks, store, bar, chunk, 0, "error", out["failed"])
+                                continue
+                            chunks.measured(len(chunk), out["seconds"])
+                            _store(store, out["columns"], chunk, bar)
+                            continue
+                    if died:
+                        pos = w.progress[1]
+                        w.proc.join(timeout=5)
+                        code = w.proc.exitcode
+                        _lost_chunk(chunks, store, bar, w.chunk, pos, "crashed",
+                                    f"the worker process ended (exit code {code}) while running this row")
+                        w.stop(now=True)
+                        with _workers_ignore_ctrl_c():
+                            workers[workers.index(w)] = _Worker(ctx)
+                        continue
+                    started = w.progress[0]
+                    if row_timeout and started and time.monotonic() - started > row_timeout + KILL_GRACE_S:
+                        pos = w.progress[1]
+                        w.stop(now=True)
+                        _lost_chunk(chunks, store, bar, w.chunk, pos, "timeout",
+                                    f"the row ran longer than its limit of {row_timeout:g} s (its worker was ended)")
+                        with _workers_ignore_ctrl_c():
+                            workers[workers.index(w)] = _Worker(ctx)
         except BaseException:
-            _stop_pool(pool)
+            for w in workers:
+                w.stop(now=True)
             raise
-        pool.shutdown()
+        for w in workers:
+            w.stop()
 
 
 #: how long a connection to a Dask scheduler may take before the run gives up (seconds)
@@ -162,27 +386,59 @@ def connect_dask(scheduler: str):
             lg.setLevel(level)
 
 
-def _run_dask(work, tasks, store, jobs, scheduler, bar):
+def _run_dask(work, chunks: Chunks, store: RowStore, jobs: int, scheduler, bar, row_timeout) -> None:
+    """Chunks as Dask tasks (a LocalCluster of ``jobs`` single-threaded worker processes, or the cluster at
+    ``scheduler``), at most a few per worker in flight; rows are written by the client. A chunk whose
+    worker died (KilledWorker) runs again a row at a time; a row that kills its worker again is
+    ``crashed``. Time limits act inside the worker's thread (:class:`experiments.engine.RowTimeout`)."""
+    import dask
     from distributed import Client, LocalCluster, as_completed
+    from experiments.engine import failed_row, to_columns
     cluster = None
-    if scheduler is not None:
-        client = connect_dask(scheduler)
-    else:
-        with _one_blas_thread_per_worker():
-            cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=40)
-        client = Client(cluster)
-    try:
-        futures = client.map(work, tasks, pure=False)
-        index = {f.key: t for f, t in zip(futures, tasks)}
-        for fut in as_completed(futures):
-            store.put(index[fut.key]["key"], fut.result())  # rows are written by the client, not the workers
-            bar.update()
-    except BaseException:
-        with contextlib.suppress(Exception):
-            client.cancel(futures)
-        raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        if scheduler is not None:
+            client = connect_dask(scheduler)
+        else:
+            with _one_blas_thread_per_worker():
+                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
+                                       dashboard_address=None, silence_logs=40)
+            client = Client(cluster)
+        pending = {}
+        try:
+            n_workers = max(len(client.scheduler_info().get("workers", {})), jobs, 1)
+            ac = as_completed()
+
+            def submit():
+                chunk = chunks.next()
+                if chunk is None:
+                    return False
+                fut = client.submit(work, chunk, row_timeout, pure=False)
+                pending[fut.key] = (fut, chunk)
+                ac.add(fut)
+                return True
+            for _ in range(2 * n_workers):
+                if not submit():
+                    break
+            for fut in ac:
+                _, chunk = pending.pop(fut.key)
+                try:
+                    out = fut.result()
+                except Exception as exc:  # KilledWorker: the worker died running this chunk
+                    if len(chunk) > 1:
+                        chunks.again(chunk)
+                    else:
+                        msg = f"the worker process died while running this row ({type(exc).__name__})"
+                        _store(store, to_columns([failed_row(chunk[0], "crashed", msg)]), chunk, bar)
+                else:
+                    chunks.measured(len(chunk), out["seconds"])
+                    _store(store, out["columns"], chunk, bar)
+                while len(pending) < 2 * n_workers and submit():
+                    pass
+        except BaseException:
+            with contextlib.suppress(Exception):
+                client.cancel([f for f, _ in pending.values()])
+            raise
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()

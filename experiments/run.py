@@ -1,11 +1,11 @@
 """``python -m experiments.run [NAME ...] [--list] [--quick] [--jobs N] [--executor local|dask]
-[--scheduler ADDRESS] [--out DIR] [--force] [--seed S]``
+[--scheduler ADDRESS] [--out DIR] [--force] [--seed S] [--max-rows N] [--row-timeout SECONDS] [--no-report]``
 
 Runs studies (no NAME: the default studies) and writes, per study, ``OUT/NAME/results.csv`` (long
 format, one row per run; timing columns start with ``time_``), ``meta.json`` (provenance, counts,
 findings), ``summary.csv``/``summary.md`` and the study's figures. Rows are stored as they finish
-in ``OUT/NAME/rows.sqlite``: an interrupted run resumes; ``--force`` recomputes. At the end the report
-is rebuilt (``paper/`` for the default ``results/``, else ``OUT/paper``; ``python -m experiments.report``).
+in ``OUT/NAME/rows.sqlite``: an interrupted run resumes; ``--force`` recomputes. One run at a time writes
+into an ``--out`` folder (a lock; a second run says so in one line). At the end the report is rebuilt (``paper/`` for the default ``results/``, else ``OUT/paper``; ``python -m experiments.report``).
 """
 from __future__ import annotations
 
@@ -19,9 +19,8 @@ import signal
 import sys
 import threading
 import time
+from itertools import islice
 from pathlib import Path
-
-import pandas as pd
 
 from experiments import config as configs
 from experiments import engine
@@ -78,46 +77,116 @@ def summary_columns(cfg: dict, df) -> list[str]:
     return [c for c in cfg.get("summary_by", default) if c not in ("data_stream", "repetition")]
 
 
-def plugin_distributions(tasks: list[dict]) -> dict[str, str]:
-    """{distribution: version} of every plugin method or data source the study's tasks use."""
+def plugin_distributions(used) -> dict[str, str]:
+    """{distribution: version} of every plugin method or data source among ``used`` ((method id, source
+    name) pairs of the study's tasks)."""
     from datasets import sources
     from experiments.codehash import distributions_of
     mods = set()
-    for t in tasks:
-        if t["method"] in {s.id for s in methods.list_methods()}:
-            mods.add(methods.get(t["method"]).module)
+    known = {s.id for s in methods.list_methods()}
+    for method, source in used:
+        if method in known:
+            mods.add(methods.get(method).module)
         try:
-            mods.add(sources.get_source(engine._source_of(t["dataset"])).module)
+            mods.add(sources.get_source(source).module)
         except KeyError:
             pass
     return distributions_of(sorted(mods))
 
 
+class EnvironmentFailure(InvalidInputError):
+    """Every row of a study failed for a reason of the environment (a kernel not built, a module that does
+    not import, time-outs, crashes): nothing to analyse, and nothing of it was cached as a result."""
+
+
+def _limited(tasks, cfg: dict, max_rows: int):
+    """The tasks, refused with one line as soon as there are more than ``max_rows`` (a study's own task
+    list is counted while it is expanded, never built whole first)."""
+    for n, t in enumerate(tasks, 1):
+        if n > max_rows:
+            raise configs.ConfigError(f"{cfg['_where']}: the study has more than {max_rows:,} rows, more than the "
+                                      f"limit; shrink the grid or pass a larger --max-rows")
+        yield t
+
+
+def check_size(cfg: dict, max_rows: int) -> None:
+    """Refuse a study above ``max_rows`` from its grid sizes alone, before anything is expanded (a study
+    that multiplies its rows declares ``count_rows(cfg)``; its task list is also counted while it is made)."""
+    configs.check_rows(cfg, configs.count_rows(cfg), max_rows)
+    study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
+    if hasattr(study, "count_rows"):
+        configs.check_rows(cfg, study.count_rows(cfg), max_rows)
+
+
+def task_source(cfg: dict, study, max_rows: int):
+    """A function returning a fresh iterable of the study's prepared tasks (index and cache key), lazily."""
+    if hasattr(study, "tasks"):
+        return lambda: engine.iter_prepared(_limited(study.tasks(cfg), cfg, max_rows))
+    return lambda: _limited(engine.iter_grid_tasks(cfg, cfg["_where"], keyed=True), cfg, max_rows)
+
+
+def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
+    """The one-line error of a study whose rows all failed for reasons of the environment, else None."""
+    if not len(df) or not df["status"].isin(engine.ENVIRONMENT_STATUSES).all():
+        return None
+    reasons = df.groupby(["status", "message"], sort=False, dropna=False).size().sort_values(ascending=False)
+    (status, message), n = reasons.index[0], int(reasons.iloc[0])
+    more = f" ({len(reasons) - 1} other reasons for the other rows)" if len(reasons) > 1 else ""
+    return EnvironmentFailure(f"{cfg['_where']}: all {len(df)} rows failed for a reason of the environment, not "
+                              f"of the methods: {status}: {message} ({n} rows){more}; nothing of it is cached as a "
+                              f"result: fix it and run the same command again")
+
+
+def write_results(df, path: Path, block: int = 20000) -> str:
+    """``df`` as CSV, streamed a block of rows at a time into a temporary file that replaces ``path`` at the
+    end (atomic); return the SHA-256 of the bytes written."""
+    import tempfile
+    path.parent.mkdir(parents=True, exist_ok=True)
+    digest = hashlib.sha256()
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            for i in range(0, max(len(df), 1), block):
+                buf = io.StringIO()
+                df.iloc[i:i + block].to_csv(buf, index=False, header=(i == 0), float_format="%.17g")
+                text = buf.getvalue()
+                digest.update(text.encode("utf-8"))
+                fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return digest.hexdigest()
+
+
 def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", scheduler=None, force=False,
-              seed=None, log=print, max_rows=configs.MAX_ROWS) -> Path:
+              seed=None, log=print, max_rows=configs.MAX_ROWS, row_timeout=None) -> Path:
     cfg = configs.load(name, quick=quick, seed=seed)
     study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
     target = confined(out, cfg["name"])
     log(f"== {cfg['name']}: {cfg['title']}" + (" [quick]" if quick else ""))
-    configs.check_rows(cfg, configs.count_rows(cfg), max_rows)
-    tasks = study.tasks(cfg) if hasattr(study, "tasks") else engine.grid_tasks(cfg, cfg["_where"])
-    configs.check_rows(cfg, len(tasks), max_rows)
-    check_summary_by(cfg, study, tasks)
-    engine.prepare(tasks)
+    check_size(cfg, max_rows)
+    make = task_source(cfg, study, max_rows)
+    if cfg.get("summary_by"):
+        check_summary_by(cfg, study, list(islice(make(), 10000)))
     jobs = min(jobs, cfg.get("max_jobs", jobs))
+    row_timeout = row_timeout if row_timeout is not None else cfg.get("row_timeout")
     store = engine.RowStore(target / "rows.sqlite", log=log)
     _CURRENT["store"] = target / "rows.sqlite"
     try:
-        rows, counts = engine.run(tasks, store, force=force, jobs=jobs, executor=executor, scheduler=scheduler,
-                                  desc=cfg["name"], log=log)
+        df, counts = engine.run(make, store, force=force, jobs=jobs, executor=executor, scheduler=scheduler,
+                                desc=cfg["name"], log=log, row_timeout=row_timeout, chunk_rows=cfg.get("chunk_rows"))
     finally:
         store.close()
-    df = pd.DataFrame(rows).sort_values("task_index").drop(columns=["task_index"]).reset_index(drop=True)
+    failure = environment_failure(cfg, df)
+    if failure is not None:
+        raise failure
+    used = counts.pop("used")
     remove_leftover_tmp(target)
-    buf = io.StringIO()
-    df.to_csv(buf, index=False, float_format="%.17g")
-    write_atomic(target / "results.csv", buf.getvalue())
-    results_sha256 = hashlib.sha256(buf.getvalue().encode("utf-8")).hexdigest()
+    results_sha256 = write_results(df, target / "results.csv")
     t0 = time.perf_counter()
     log("   analysis, tables and figures ...")
     findings, analysis = contract.analyse(study, df, cfg, target, log)
@@ -129,8 +198,9 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     summary = summarise(df, summary_columns(cfg, df))
     public_cfg = {k: v for k, v in cfg.items() if not k.startswith("_")}
     meta = {**collect(public_cfg), "study": cfg["name"], "quick": quick, "executor": executor, "jobs": jobs,
+            "row_timeout_s": row_timeout, "environment": engine.environment(),
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
-            "plugins": plugin_distributions(tasks), "results_sha256": results_sha256, "findings": findings}
+            "plugins": plugin_distributions(used), "results_sha256": results_sha256, "findings": findings}
     contract.write_manifest(target, cfg, analysis, summary)
     buf = io.StringIO()
     summary.to_csv(buf, index=False, float_format="%.10g")
@@ -158,15 +228,45 @@ def usable_jobs(jobs: int, log=print) -> int:
 
 def check_out(out: Path) -> None:
     """--out must be a folder we can write into (created when missing)."""
-    if out.exists() and not out.is_dir():
-        raise InvalidInputError(f"--out {out} is a file, not a folder; give a folder")
     try:
+        if out.exists() and not out.is_dir():
+            raise InvalidInputError(f"--out {out} is a file, not a folder; give a folder")
         out.mkdir(parents=True, exist_ok=True)
         probe = out / f".write-test-{os.getpid()}"
         probe.write_bytes(b"")
         probe.unlink()
     except OSError as exc:
-        raise InvalidInputError(f"--out {out} cannot be written ({exc.strerror}); give a folder you can write") from None
+        shown = str(out) if len(str(out)) <= 80 else f"{str(out)[:40]}...{str(out)[-30:]} ({len(str(out))} characters)"
+        raise InvalidInputError(f"--out {shown} cannot be written ({exc.strerror}); give a folder you can write") from None
+
+
+#: the lock file of an --out folder (one run at a time writes into it)
+LOCK_NAME = ".experiments-run.lock"
+_LOCKS: list = []
+
+
+def lock_out(out: Path):
+    """Hold an exclusive lock on ``out`` for the rest of the run (``fcntl.flock``, released by the kernel when
+    the process ends, however it ends); a second run into the same folder gets one line and exit 2."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock (documented)
+        return None
+    fh = open(out / LOCK_NAME, "a+")
+    try:
+        fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        fh.seek(0)
+        holder = fh.read().strip()
+        fh.close()
+        raise InvalidInputError(f"--out {out} is in use by another experiments.run ({holder or 'a running process'}); "
+                                f"wait for it to finish or give another --out") from None
+    fh.seek(0)
+    fh.truncate()
+    fh.write(f"pid {os.getpid()}")
+    fh.flush()
+    _LOCKS.append(fh)
+    return fh
 
 
 class Terminated(KeyboardInterrupt):
@@ -174,6 +274,7 @@ class Terminated(KeyboardInterrupt):
 
 
 def _on_sigterm(signum, frame):
+    engine.note_signal()
     raise Terminated()
 
 
@@ -194,6 +295,10 @@ def main(argv=None) -> int:
     parser.add_argument("--seed", type=int, help="override the studies' base seed")
     parser.add_argument("--max-rows", type=int, default=configs.MAX_ROWS,
                         help=f"refuse a study with more rows than this (default: {configs.MAX_ROWS:,})")
+    parser.add_argument("--row-timeout", type=float, metavar="SECONDS",
+                        help="end a row that runs longer (status timeout) and run rows in worker processes "
+                             "(default: the study's row_timeout, else none)")
+    parser.add_argument("--no-report", action="store_true", help="do not rebuild the report after the studies")
     args = parser.parse_args(argv)
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if threading.current_thread() is threading.main_thread() else None
     try:
@@ -206,6 +311,8 @@ def main(argv=None) -> int:
             raise InvalidInputError(f"--jobs must be at least 1, got {args.jobs}")
         if args.max_rows < 1:
             raise InvalidInputError(f"--max-rows must be at least 1, got {args.max_rows}")
+        if args.row_timeout is not None and not (args.row_timeout > 0 and args.row_timeout < 1e7):
+            raise InvalidInputError(f"--row-timeout must be a positive number of seconds, got {args.row_timeout:g}")
         if args.scheduler is not None and args.executor != "dask":
             raise InvalidInputError("--scheduler needs --executor dask")
         if args.scheduler is not None and not args.scheduler.strip():
@@ -214,23 +321,31 @@ def main(argv=None) -> int:
         names = args.names or default_studies()
         for name in names:  # validate every config (and its size) before running any
             cfg = configs.load(name, quick=args.quick, seed=args.seed)
-            configs.check_rows(cfg, configs.count_rows(cfg), args.max_rows)
+            check_size(cfg, args.max_rows)
             confined(args.out, cfg["name"])
         check_out(args.out)
+        lock_out(args.out)
         jobs = args.jobs if args.scheduler else usable_jobs(args.jobs)
         t0 = time.perf_counter()
         for name in names:
             run_study(name, args.out, quick=args.quick, jobs=jobs, executor=args.executor,
-                      scheduler=args.scheduler, force=args.force, seed=args.seed, max_rows=args.max_rows)
+                      scheduler=args.scheduler, force=args.force, seed=args.seed, max_rows=args.max_rows,
+                      row_timeout=args.row_timeout)
         print(f"done: {len(names)} studies in {time.perf_counter() - t0:.0f} s")
-        from experiments.report import build
-        paper = Path("paper") if args.out == DEFAULT_OUT else args.out / "paper"
-        t1 = time.perf_counter()
-        print("report ...")
-        build(args.out, paper)
-        print(f"report done ({time.perf_counter() - t1:.0f} s)")
+        if not args.no_report:
+            from experiments.report import build
+            paper = Path("paper") if args.out == DEFAULT_OUT else args.out / "paper"
+            t1 = time.perf_counter()
+            print("report ...")
+            build(args.out, paper)
+            print(f"report done ({time.perf_counter() - t1:.0f} s)")
     except InvalidInputError as exc:
         print(f"experiments.run: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # disk full, a file-size limit, an I/O error while writing the outputs
+        where = f" {exc.filename}" if exc.filename else ""
+        print(f"experiments.run: error: cannot write{where}: {exc.strerror or exc}; the finished rows are kept, "
+              f"fix the cause and run the same command again", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
         what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"

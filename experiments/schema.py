@@ -57,6 +57,8 @@ TOP_LEVEL: dict[str, dict] = {
     "seed": {"type": "integer", "minimum": 0},
     "repetitions": _POSITIVE_INT,
     "max_jobs": _POSITIVE_INT,
+    "row_timeout": {"type": "number", "exclusiveMinimum": 0, "description": "seconds a row may run (engine)"},
+    "chunk_rows": _POSITIVE_INT,  # rows sent to a worker at a time (default: from the measured cost of a row)
     "summary_by": {"type": "array", "items": {"type": "string"}, "minItems": 1},
     "datasets": {"type": "array", "minItems": 1, "items": {"type": "object"}},  # entries: _dataset_schema()
     "methods": {"type": "array", "minItems": 1, "items": _METHOD_ENTRY},

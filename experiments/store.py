@@ -1,4 +1,10 @@
-"""The row store: finished rows by cache key in SQLite, one committed transaction per row."""
+"""The row store: finished rows by cache key in SQLite, a committed transaction per batch of rows.
+
+A store that is not a row store (garbage, a truncated file, a wrong table, rows that are not JSON) is
+moved aside and recomputed; a store that cannot be *written* (disk full, an I/O error, a file-size limit,
+a read-only folder) is left where it is, untouched, and the run stops with one line (:class:`StoreIOError`):
+its rows are healthy and a later run uses them.
+"""
 from __future__ import annotations
 
 import json
@@ -7,9 +13,42 @@ import sqlite3
 import time
 from pathlib import Path
 
+from methods import InvalidInputError
+
+#: sqlite messages of a store that is not readable as a row store (everything else is the environment's)
+_CORRUPT = ("file is not a database", "malformed", "integrity check", "table 'rows' has columns", "not json")
+
+
+class StoreIOError(InvalidInputError):
+    """The row store cannot be written or read for a reason of the environment (disk full, I/O error,
+    permissions); the store itself is healthy and kept."""
+
+
+def _io_error(path: Path, exc: Exception) -> StoreIOError:
+    text = str(exc)
+    if "full" in text or getattr(exc, "errno", None) == 28:
+        why = "the disk is full"
+    elif getattr(exc, "errno", None) == 27:
+        why = "the file-size limit is reached (ulimit -f)"
+    elif "readonly" in text or "read-only" in text:
+        why = "it is read-only"
+    elif "locked" in text:
+        why = "another process holds it locked"
+    else:
+        why = "an I/O error"
+    return StoreIOError(f"cannot write the row store {path}: {why} ({text}); its finished rows are kept, "
+                        f"free the space or fix the cause and run the same command again")
+
+
+def _is_corruption(exc: Exception) -> bool:
+    if isinstance(exc, (ValueError, TypeError)):
+        return True
+    text = str(exc).lower()
+    return any(s in text for s in _CORRUPT)
+
 
 class RowStore:
-    """Finished rows by cache key in SQLite: one committed transaction per row (atomic, crash-safe)."""
+    """Finished rows by cache key in SQLite: one committed transaction per batch (atomic, crash-safe)."""
 
     def __init__(self, path: Path, log=print):
         path = Path(path)
@@ -17,7 +56,9 @@ class RowStore:
         self.path = path
         try:
             self.db = self._open(path)
-        except sqlite3.DatabaseError as exc:  # garbage, a truncated file, a wrong table: never fatal
+        except sqlite3.DatabaseError as exc:
+            if not _is_corruption(exc):  # disk full, I/O error, permissions: the store is not to blame
+                raise _io_error(path, exc) from None
             stamp, n = time.strftime('%Y%m%dT%H%M%S'), 0
             aside = path.with_name(f"{path.name}.corrupt-{stamp}")
             while aside.exists():
@@ -28,7 +69,10 @@ class RowStore:
                 if src.exists():
                     os.replace(src, Path(str(aside) + suffix))
             log(f"   {path} is not a readable row store ({exc}); moved aside to {aside.name}, its rows are recomputed")
-            self.db = self._open(path)
+            try:
+                self.db = self._open(path)
+            except sqlite3.DatabaseError as exc2:
+                raise _io_error(path, exc2) from None
 
     @staticmethod
     def _open(path: Path) -> sqlite3.Connection:
@@ -46,10 +90,21 @@ class RowStore:
                 raise sqlite3.DatabaseError(f"table 'rows' has columns {cols}, not key, status, row")
             for (text,) in db.execute("SELECT row FROM rows"):
                 json.loads(text)
-        except (sqlite3.DatabaseError, ValueError, TypeError) as exc:
+        except (ValueError, TypeError) as exc:
             db.close()
-            raise sqlite3.DatabaseError(str(exc)) from None
+            raise sqlite3.DatabaseError(f"a row is not JSON: {exc}") from None
+        except sqlite3.DatabaseError:
+            db.close()
+            raise
         return db
+
+    def _guard(self, func, *args):
+        try:
+            return func(*args)
+        except sqlite3.DatabaseError as exc:
+            if _is_corruption(exc):
+                raise
+            raise _io_error(self.path, exc) from None
 
     def done(self, keys: list[str]) -> dict[str, str]:
         """Status of the stored rows among ``keys``."""
@@ -57,30 +112,37 @@ class RowStore:
         for i in range(0, len(keys), 500):
             chunk = keys[i:i + 500]
             q = f"SELECT key, status FROM rows WHERE key IN ({','.join('?' * len(chunk))})"
-            out.update(dict(self.db.execute(q, chunk).fetchall()))
+            out.update(dict(self._guard(lambda: self.db.execute(q, chunk).fetchall())))
         return out
 
     def put(self, key: str, row: dict) -> None:
-        with self.db:
-            self.db.execute("INSERT OR REPLACE INTO rows VALUES (?, ?, ?)", (key, row.get("status"), json.dumps(row)))
+        self.put_many([key], [row])
+
+    def put_many(self, keys: list[str], rows: list[dict]) -> None:
+        """Store rows in one transaction (all or none)."""
+        data = [(k, r.get("status"), json.dumps(r)) for k, r in zip(keys, rows)]
+
+        def write():
+            with self.db:
+                self.db.executemany("INSERT OR REPLACE INTO rows VALUES (?, ?, ?)", data)
+        self._guard(write)
 
     def get(self, keys: list[str]) -> list[dict]:
-        rows = {}
-        for i in range(0, len(keys), 500):
-            chunk = keys[i:i + 500]
-            q = f"SELECT key, row FROM rows WHERE key IN ({','.join('?' * len(chunk))})"
-            rows.update({k: json.loads(r) for k, r in self.db.execute(q, chunk).fetchall()})
+        rows = self.get_by_key(keys)
         return [rows[k] for k in keys if k in rows]
 
-    def get_by_key(self, keys: list[str]) -> dict[str, dict]:
+    def get_by_key(self, keys: list[str], decode=json.loads) -> dict[str, dict]:
         rows = {}
         for i in range(0, len(keys), 500):
             chunk = keys[i:i + 500]
             q = f"SELECT key, row FROM rows WHERE key IN ({','.join('?' * len(chunk))})"
-            rows.update({k: json.loads(r) for k, r in self.db.execute(q, chunk).fetchall()})
+            rows.update({k: decode(r) for k, r in self._guard(lambda: self.db.execute(q, chunk).fetchall())})
         return rows
 
     def forget(self, keys: list[str]) -> None:
+        self._guard(lambda: self._forget(keys))
+
+    def _forget(self, keys):
         with self.db:
             self.db.executemany("DELETE FROM rows WHERE key = ?", [(k,) for k in keys])
 

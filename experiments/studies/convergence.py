@@ -44,16 +44,20 @@ def validate(cfg, where):
             raise ConfigError(f"{where}: {m} has no 'start' parameter, so it cannot be started far away")
 
 
+def count_rows(cfg):
+    """The rows of the study from its grid sizes (nothing expanded): each run of the grid x distances x
+    directions."""
+    from experiments import config
+    return config.count_rows({**cfg, "repetitions": 1}) * len(cfg["start_distances"]) * cfg["start_directions"]
+
+
 def tasks(cfg):
-    base = engine.grid_tasks({**cfg, "repetitions": 1}, cfg["_where"])
-    out = []
-    for t in base:
+    """The tasks, lazily (a generator: the engine counts and expands them a block at a time)."""
+    for t in engine.iter_grid_tasks({**cfg, "repetitions": 1}, cfg["_where"]):
         for d in cfg["start_distances"]:
             for k in range(cfg["start_directions"]):
-                out.append({**t, "x_start_distance": float(d), "x_start_direction": k,
-                            "x_directions": cfg["start_directions"],
-                            "x_reference_optimum": cfg["reference_optimum"]})
-    return out
+                yield {**t, "x_start_distance": float(d), "x_start_direction": k,
+                       "x_directions": cfg["start_directions"], "x_reference_optimum": cfg["reference_optimum"]}
 
 
 def reference_method(cfg_or_task: dict, method_id: str) -> str:

@@ -1,0 +1,396 @@
+"""The engine at scale and its isolation: keys computed once per run, rows in chunks with the same rows
+whatever the chunking and the executor, a frame built a block at a time with the types of one frame, time
+limits, crashes and exits labelled and never cached, environment failures stopped in one line, the row
+store's I/O errors told from corruption, the --out lock, a long --out, limits before expansion, progress.
+
+The hostile methods live in a plugin distribution built offline (:func:`conftest.install_plugin`), so that
+worker processes (spawned: they import everything afresh) find them too."""
+from __future__ import annotations
+
+import fcntl
+import json
+import sqlite3
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import install_plugin, subprocess_env
+from experiments import codehash, engine, executors, run
+from experiments.store import RowStore, StoreIOError
+
+STUDY = '''name = "{name}"
+title = "engine test study"
+kind = "grid"
+seed = 5
+repetitions = {reps}
+{extra}
+[[datasets]]
+source = "circle"
+params = {{ center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 20 }}
+grid = {{ arc_deg = [360.0, 90.0] }}
+{methods}'''
+
+KASA_GN = '[[methods]]\nid = "circle.kasa"\n[[methods]]\nid = "circle.gauss_newton"\n'
+
+
+def write_study(folder: Path, name="eng", reps=3, methods=KASA_GN, extra="") -> Path:
+    path = folder / f"{name}.toml"
+    path.write_text(STUDY.format(name=name, reps=reps, methods=methods, extra=extra))
+    return path
+
+
+def non_timing(df: pd.DataFrame) -> pd.DataFrame:
+    return df[[c for c in df.columns if not c.startswith("time_")]]
+
+
+# ---------------------------------------------------------------- keys, chunks, columns, frames
+
+def test_code_is_hashed_once_per_pair_not_per_row(tmp_path, monkeypatch):
+    """A run of N rows hashes the code of each (method, data set) pair once (it hashed it for every row)."""
+    cfg = run.configs.load(str(write_study(tmp_path, reps=200)))
+    engine.reset_caches()
+    calls = []
+    original = codehash.code_hash
+
+    def counting(*modules):
+        calls.append(modules)
+        return original(*modules)
+    monkeypatch.setattr(codehash, "code_hash", counting)
+    tasks = list(engine.iter_grid_tasks(cfg, cfg["_where"], keyed=True))
+    assert len(tasks) == 2 * 200 * 2
+    assert 0 < len(calls) <= 4 * 4  # 4 pairs x (method, source, metrics, study) at most, whatever the rows
+    # the fast keys are the keys of the general rule
+    assert all(t["key"] == engine.task_key(t) for t in tasks[:50])
+    assert len({t["key"] for t in tasks}) == len(tasks)
+
+
+def test_kernel_backend_and_versions_are_in_the_key(tmp_path, monkeypatch):
+    cfg = run.configs.load(str(write_study(tmp_path, reps=1)))
+    task = next(engine.iter_grid_tasks(cfg, cfg["_where"]))
+    engine.reset_caches()
+    compiled = engine.task_key(task)
+    assert engine.environment()["kernels"] == "compiled" and engine.environment()["versions"]["numpy"]
+    monkeypatch.setenv("FITBENCH_KERNELS", "numpy")
+    engine.reset_caches()
+    assert engine.environment()["kernels"] == "numpy"
+    assert engine.task_key(task) != compiled
+    monkeypatch.delenv("FITBENCH_KERNELS")
+    engine.reset_caches()
+    assert engine.task_key(task) == compiled
+
+
+def test_rows_travel_as_columns_and_come_back_exactly():
+    rows = [{"a": 1, "b": "x", "c": None}, {"a": 2.5, "d": True}, {}, {"b": "y", "a": None}]
+    batch = engine.to_columns(rows)
+    assert batch["names"] == ["a", "b", "c", "d"] and batch["absent"]["d"] == [0, 2, 3]
+    back = engine.from_columns(batch)
+    assert back == rows
+    assert list(pd.DataFrame(back).columns) == list(pd.DataFrame(rows).columns)
+
+
+def test_frame_built_in_blocks_has_the_types_of_one_frame():
+    """A block whose rows all failed holds None where other blocks hold floats, ints or bools: the frame of
+    the blocks must equal the frame of all rows (else results.csv writes repr() floats, not %.17g)."""
+    rng = np.random.default_rng(1)
+    rows = []
+    for i in range(60):
+        failed = 20 <= i < 40
+        rows.append({"status": "error" if failed else "ok", "radius": None if failed else float(rng.normal()),
+                     "iterations": None if failed else int(i), "converged": None if failed else bool(i % 2),
+                     **({} if i < 50 else {"extra": 0.1 * i}), "label": str(i % 3)})
+    whole = pd.DataFrame(rows)
+    blocks = engine._concat([pd.DataFrame(rows[i:i + 20]) for i in range(0, 60, 20)])
+    pd.testing.assert_frame_equal(whole, blocks)
+    assert whole.to_csv(index=False, float_format="%.17g") == blocks.to_csv(index=False, float_format="%.17g")
+
+
+def test_chunk_size_follows_the_measured_cost_of_a_row():
+    chunks = executors.Chunks(iter(range(100_000)))
+    sizes = [len(chunks.next()) for _ in range(3)]
+    assert sizes == [4, 8, 16]  # growing until a cost is measured
+    chunks.measured(10, 10 * 20e-6)  # 20 us a row
+    assert chunks.size == executors.Chunks.max_rows
+    chunks.measured(2, 2 * 0.5)
+    assert 1 <= chunks.size <= 2
+    declared = executors.Chunks(iter(range(100)), declared=7)
+    declared.measured(7, 7 * 1e-6)
+    assert len(declared.next()) == 7
+    declared.again([1, 2])
+    assert declared.next() == [1] and declared.next() == [2]
+
+
+def test_progress_reports_rows_per_second_and_eta(monkeypatch):
+    lines = []
+    now = [100.0]
+    monkeypatch.setattr(executors.time, "monotonic", lambda: now[0])
+    bar = executors.Progress(10_000, "big", log=lines.append)
+    bar.bar.disable = True
+    now[0] += 11.0
+    bar.update(2_200)
+    bar.close()
+    assert len(lines) == 1
+    assert "2,200/10,000 rows (22%)" in lines[0] and "200 rows/s" in lines[0] and "ETA 39 s" in lines[0]
+
+
+def test_generic_chunks_give_the_rows_of_single_rows(tmp_path):
+    """In-process chunks of any size give the same rows as one row at a time."""
+    cfg = run.configs.load(str(write_study(tmp_path, reps=5)))
+    make = run.task_source(cfg, run.importlib.import_module("experiments.studies.grid"), 10**6)
+    frames = []
+    for size, folder in ((1, "a"), (7, "b")):
+        store = RowStore(tmp_path / folder / "rows.sqlite", log=lambda *a: None)
+        df, counts = engine.run(make, store, force=False, jobs=1, executor="local", scheduler=None, desc="t",
+                                log=lambda *a: None, chunk_rows=size)
+        store.close()
+        assert counts["to_run"] == 20 and len(df) == 20
+        frames.append(df)
+    pd.testing.assert_frame_equal(frames[0], frames[1])
+
+
+# ---------------------------------------------------------------- limits before expansion, --out
+
+def test_a_huge_study_is_refused_before_it_is_expanded(tmp_path, capsys):
+    """start_directions = 20,000,000 in the convergence study: refused from the grid sizes at once (it built
+    1.4e9 tasks first); one line, exit 2."""
+    src = (run.configs.CONFIG_DIR / "convergence.toml").read_text()
+    big = tmp_path / "conv_big.toml"
+    big.write_text(src.replace('name = "convergence"', 'name = "conv_big"')
+                   .replace("start_directions = 8", "start_directions = 20000000"))
+    assert "20000000" in big.read_text()
+    assert run.main([str(big), "--out", str(tmp_path / "out"), "--no-report"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "more than the limit" in err[0]
+    assert not (tmp_path / "out" / "conv_big").exists()
+
+
+def test_lazy_task_lists_are_counted_while_made(tmp_path):
+    cfg = {"_where": "x.toml"}
+    with pytest.raises(run.configs.ConfigError, match="more than 5"):
+        list(run._limited(iter(range(10**12)), cfg, 5))
+
+
+def test_a_busy_out_folder_is_one_line(tmp_path, capsys):
+    study = write_study(tmp_path, reps=1)
+    out = tmp_path / "out"
+    out.mkdir()
+    with open(out / run.LOCK_NAME, "a+") as fh:  # another run holds the folder
+        fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fh.write("pid 4242")
+        fh.flush()
+        assert run.main([str(study), "--out", str(out), "--jobs", "1", "--no-report"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "in use by another experiments.run" in err[0] and "pid 4242" in err[0]
+    assert not (out / "eng").exists()
+
+
+def test_a_300_character_out_is_one_line(tmp_path, capsys):
+    study = write_study(tmp_path, reps=1)
+    assert run.main([str(study), "--out", str(tmp_path / ("o" * 300)), "--jobs", "1", "--no-report"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "characters) cannot be written (File name too long)" in err[0]
+
+
+# ---------------------------------------------------------------- the row store: I/O errors are not corruption
+
+def test_an_io_error_does_not_move_a_healthy_store_aside(tmp_path, monkeypatch):
+    path = tmp_path / "rows.sqlite"
+    store = RowStore(path, log=lambda *a: None)
+    store.put_many(["k1", "k2"], [{"status": "ok", "x": 1}, {"status": "ok", "x": 2}])
+    store.close()
+
+    def failing(p):
+        raise sqlite3.OperationalError("disk I/O error")
+    monkeypatch.setattr(RowStore, "_open", staticmethod(failing))
+    with pytest.raises(StoreIOError, match="I/O error.*kept"):
+        RowStore(path, log=lambda *a: None)
+    monkeypatch.undo()
+    assert not list(tmp_path.glob("*.corrupt-*"))
+    assert RowStore(path).get(["k1", "k2"]) == [{"status": "ok", "x": 1}, {"status": "ok", "x": 2}]
+
+
+def test_a_full_disk_is_one_line_and_a_real_corruption_still_moves_aside(tmp_path):
+    path = tmp_path / "rows.sqlite"
+    store = RowStore(path, log=lambda *a: None)
+
+    class Full:
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def executemany(self, *a):
+            raise sqlite3.OperationalError("database or disk is full")
+    store.db, real = Full(), store.db
+    with pytest.raises(StoreIOError, match="the disk is full"):
+        store.put_many(["k"], [{"status": "ok"}])
+    real.close()
+    path.write_bytes(b"this is not a database" * 100)
+    for suffix in ("-wal", "-shm"):
+        Path(str(path) + suffix).unlink(missing_ok=True)
+    said = []
+    RowStore(path, log=said.append).close()
+    assert len(list(tmp_path.glob("rows.sqlite.corrupt-*"))) == 1 and "moved aside" in said[0]
+
+
+# ---------------------------------------------------------------- isolation: hostile methods
+
+HOSTILE = '''
+"""Methods that misbehave on purpose (engine isolation tests)."""
+import os
+import signal
+import time
+
+from methods import register
+try:
+    from methods.results import circle_result
+except ImportError:
+    from methods._result import circle_result
+
+
+@register("circle.hostile", kind="closed form", summary="misbehaves on purpose", reference="fitbench tests")
+def hostile(points, *, what="ok"):
+    """Return the centroid circle, or hang, exit, raise SystemExit / KeyboardInterrupt, as asked."""
+    if what == "hang":
+        while True:
+            time.sleep(0.01)
+    if what == "hang_in_c":  # a row that the worker's own alarm cannot end
+        signal.signal(signal.SIGALRM, signal.SIG_IGN)
+        time.sleep(600)
+    if what == "exit":
+        os._exit(3)
+    if what == "sysexit":
+        raise SystemExit(4)
+    if what == "kbint":
+        raise KeyboardInterrupt
+    if what == "no_kernel":
+        from methods._compiled import KernelsNotBuiltError
+        raise KernelsNotBuiltError("fitbench's compiled kernel methods.circle._ckernels is not built (test)")
+    c = points.mean(axis=0)
+    return circle_result(points, c, float(((points - c) ** 2).sum(axis=1).mean() ** 0.5), converged=True,
+                         message="centroid")
+'''
+
+
+@pytest.fixture(scope="module")
+def hostile_site(tmp_path_factory):
+    return install_plugin(tmp_path_factory.mktemp("hostile"), "fitbench-hostile", {"fitbench_hostile": HOSTILE},
+                          {"fitbench.methods": {"hostile": "fitbench_hostile"}})
+
+
+def cli(args, cwd, site, timeout=300):
+    return subprocess.run([sys.executable, "-m", "experiments.run", *map(str, args), "--no-report"], cwd=cwd,
+                          capture_output=True, text=True, timeout=timeout,
+                          env=subprocess_env(site, OPENBLAS_NUM_THREADS="1"))
+
+
+def hostile_methods(*whats):
+    return KASA_GN + "".join(f'[[methods]]\nid = "circle.hostile"\nparams = {{ what = "{w}" }}\n' for w in whats)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_hangs_exits_and_interrupts_are_labelled_and_the_study_goes_on(tmp_path, hostile_site, jobs):
+    """A method that hangs is ``timeout``; one that os._exit()s, raises SystemExit or KeyboardInterrupt is
+    ``crashed``; the other rows are ok, results.csv is written, exit 0. A rerun recomputes exactly the
+    labelled rows (never served from the cache)."""
+    study = write_study(tmp_path, reps=2, methods=hostile_methods("hang", "hang_in_c", "exit", "sysexit", "kbint"))
+    out = tmp_path / "out"
+    res = cli([study, "--jobs", jobs, "--row-timeout", "1", "--out", out], tmp_path, hostile_site)
+    assert res.returncode == 0, res.stderr
+    df = pd.read_csv(out / "eng" / "results.csv")
+    what = df["param_what"].fillna("")
+    status = dict(zip(zip(what, df.index), df["status"]))
+    assert set(df.loc[what == "", "status"]) == {"ok"}
+    assert set(df.loc[what.isin(["hang", "hang_in_c"]), "status"]) == {"timeout"}
+    assert set(df.loc[what.isin(["exit", "sysexit", "kbint"]), "status"]) == {"crashed"}, status
+    assert df.loc[what == "exit", "message"].str.contains("exit code 3").all()
+    assert df.loc[what == "sysexit", "message"].str.contains("SystemExit").all()
+    meta = json.loads((out / "eng" / "meta.json").read_text())
+    assert meta["row_timeout_s"] == 1 and meta["environment"]["kernels"] == "compiled"
+    again = cli([study, "--jobs", jobs, "--row-timeout", "1", "--out", out], tmp_path, hostile_site)
+    assert again.returncode == 0, again.stderr
+    assert f"{len(df) - (what == '').sum()} to run" in again.stdout
+
+
+@pytest.mark.slow
+def test_a_study_default_time_limit_and_sysexit_in_process(tmp_path, hostile_site):
+    """``row_timeout`` in the TOML isolates --jobs 1 in a child; without a limit --jobs 1 runs in this process,
+    where SystemExit and KeyboardInterrupt of a method are still ``crashed``."""
+    study = write_study(tmp_path, name="eng2", reps=1, methods=hostile_methods("hang", "sysexit", "kbint"),
+                        extra="row_timeout = 1\n")
+    res = cli([study, "--jobs", "1", "--out", tmp_path / "a"], tmp_path, hostile_site)
+    assert res.returncode == 0, res.stderr
+    df = pd.read_csv(tmp_path / "a" / "eng2" / "results.csv")
+    assert sorted(df["status"].unique()) == ["crashed", "ok", "timeout"]
+    plain = write_study(tmp_path, name="eng3", reps=1, methods=hostile_methods("sysexit", "kbint"))
+    res = cli([plain, "--jobs", "1", "--out", tmp_path / "b"], tmp_path, hostile_site)
+    assert res.returncode == 0, res.stderr
+    df = pd.read_csv(tmp_path / "b" / "eng3" / "results.csv")
+    assert (df.loc[df["param_what"].notna(), "status"] == "crashed").all()
+
+
+@pytest.mark.slow
+def test_all_rows_failing_for_the_environment_stop_in_one_line_and_are_not_cached(tmp_path, hostile_site):
+    """Every row says a kernel is not built: one line naming it, exit 2, no results.csv; the rows are kept in
+    the store but recomputed by the next run (they were served from the cache as results)."""
+    study = write_study(tmp_path, name="env", reps=2,
+                        methods='[[methods]]\nid = "circle.hostile"\nparams = { what = "no_kernel" }\n')
+    res = cli([study, "--jobs", "1", "--out", tmp_path / "out"], tmp_path, hostile_site)
+    assert res.returncode == 2
+    err = res.stderr.strip().splitlines()
+    assert len(err) == 1 and "environment" in err[0] and "is not built" in err[0] and "(4 rows)" in err[0]
+    assert not (tmp_path / "out" / "env" / "results.csv").exists()
+    again = cli([study, "--jobs", "1", "--out", tmp_path / "out"], tmp_path, hostile_site)
+    assert again.returncode == 2 and "0 already stored, 4 to run" in again.stdout
+
+
+@pytest.mark.slow
+def test_jobs_1_jobs_2_and_dask_give_identical_rows(tmp_path):
+    """The same non-timing rows whatever the executor, the number of jobs and the chunking."""
+    study = write_study(tmp_path, reps=30)
+    frames = {}
+    for name, extra in (("j1", ["--jobs", "1"]), ("j2", ["--jobs", "2"]),
+                        ("dask", ["--jobs", "2", "--executor", "dask"])):
+        res = subprocess.run([sys.executable, "-m", "experiments.run", str(study), "--out", str(tmp_path / name),
+                              "--no-report", *extra], cwd=tmp_path, capture_output=True, text=True, timeout=600,
+                             env=subprocess_env(OPENBLAS_NUM_THREADS="1"))
+        assert res.returncode == 0, res.stderr
+        frames[name] = non_timing(pd.read_csv(tmp_path / name / "eng" / "results.csv"))
+    assert len(frames["j1"]) == 120
+    pd.testing.assert_frame_equal(frames["j1"], frames["j2"])
+    pd.testing.assert_frame_equal(frames["j1"], frames["dask"])
+
+
+@pytest.mark.slow
+def test_an_exceeded_file_size_limit_keeps_the_store(tmp_path):
+    """ulimit -f while the store grows: one line, exit 2, the store is not moved aside as corrupt and a later
+    run uses its rows."""
+    import resource
+    study = write_study(tmp_path, reps=2)
+    out = tmp_path / "out"
+    env = subprocess_env(OPENBLAS_NUM_THREADS="1")
+    first = subprocess.run([sys.executable, "-m", "experiments.run", str(study), "--out", str(out), "--jobs", "1",
+                            "--no-report"], cwd=tmp_path, capture_output=True, text=True, env=env, timeout=300)
+    assert first.returncode == 0, first.stderr
+    size = max(p.stat().st_size for p in (out / "eng").glob("rows.sqlite*"))
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (size, size))
+    (tmp_path / "big").mkdir()
+    big = write_study(tmp_path / "big", reps=400)
+    res = subprocess.run([sys.executable, "-m", "experiments.run", str(big), "--out", str(out), "--jobs", "1",
+                          "--no-report"], cwd=tmp_path, capture_output=True, text=True, env=env, timeout=300,
+                         preexec_fn=limit)
+    assert res.returncode == 2, res.stderr
+    err = res.stderr.strip().splitlines()
+    assert len(err) == 1 and ("row store" in err[0] or "cannot write" in err[0]), err
+    assert not list((out / "eng").glob("*.corrupt-*"))
+    again = subprocess.run([sys.executable, "-m", "experiments.run", str(study), "--out", str(out), "--jobs", "1",
+                            "--no-report"], cwd=tmp_path, capture_output=True, text=True, env=env, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert "8 rows: 8 already stored, 0 to run" in again.stdout

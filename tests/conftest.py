@@ -61,3 +61,22 @@ def install_plugin(workdir: Path, name: str, modules: dict, entry_points: dict, 
                           "--quiet", "--target", str(site), str(src)], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     return site
+
+
+def pytest_addoption(parser):
+    parser.addoption("--system", action="store_true",
+                     help="also run the system tier (tests marked 'system': the quick studies on "
+                          "two simulated CPUs); .ci/run runs it as its own step")
+
+
+def pytest_collection_modifyitems(config, items):
+    """The system tier is deselected (not skipped) unless ``--system`` is given: the default command runs the
+    whole suite but for those, and ``-m system --system`` runs them alone."""
+    if config.getoption("--system"):
+        return
+    kept, dropped = [], []
+    for item in items:
+        (dropped if item.get_closest_marker("system") else kept).append(item)
+    if dropped:
+        config.hook.pytest_deselected(items=dropped)
+        items[:] = kept

@@ -127,6 +127,8 @@ BY_NAME = '''
 import methods
 from methods import register
 
+pytestmark = pytest.mark.slow  # each case runs a study several times in a copy of the repository
+
 
 @register("circle.keyed_by_name", kind="closed form", summary="Kasa's circle by name (cache-key test)",
           reference="fitbench cache-key test")

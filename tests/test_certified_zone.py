@@ -178,6 +178,7 @@ def test_dense_lobed_mic_is_not_lost_outside_the_profile():
 
 # ---- beyond the brute-force size: the overlay of Qhull's nearest- and farthest-point Voronoi diagrams -------------
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None)
 @given(P=profiles())
 def test_overlay_enumeration_equals_the_exhaustive_reference(P):
@@ -197,6 +198,7 @@ def _short_arc(n, seed, span=0.01, radius=1000.0, noise=1e-3):
     return np.c_[radius * np.cos(t), radius * np.sin(t)] + rng.normal(0, noise, (n, 2))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n,seed", [(61, 1), (64, 2), (70, 3)])
 def test_short_arc_beyond_the_brute_force_size_is_certified_and_exact(n, seed):
     """A 0.01 rad arc of a 1000 mm circle with 1 um noise and more points than the brute-force enumeration takes:
@@ -210,6 +212,7 @@ def test_short_arc_beyond_the_brute_force_size_is_certified_and_exact(n, seed):
     assert z.form_error == pytest.approx(mz, rel=1e-9, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_short_arc_of_400_points_no_start_finds_a_narrower_zone():
     """N = 400 (no exhaustive reference): the certified width is not beaten by a local search (Nelder-Mead on
     max r - min r over the centre) from 200 starts spread over the region a short arc's centre can be in (around

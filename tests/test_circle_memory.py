@@ -11,6 +11,7 @@ CIRCLE_FITS = ["circle.kasa", "circle.pratt", "circle.taubin", "circle.hyper", "
                "circle.max_inscribed", "circle.min_circumscribed", "circle.chebyshev_lp"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n", [3358, 200_000])
 @pytest.mark.parametrize("method_id", CIRCLE_FITS)
 def test_peak_memory_of_a_fit_is_at_most_four_times_the_input(method_id, n):

@@ -28,6 +28,7 @@ def _cpu_flags() -> set[str]:
         return set()
 
 
+@pytest.mark.system
 @pytest.mark.skipif(not {"avx2", "fma"} <= _cpu_flags(),
                     reason="the two simulated machines need a CPU with AVX2 and FMA (OpenBLAS's Haswell kernels)")
 def test_quick_studies_agree_across_blas_kernels_and_simd_levels(tmp_path):

@@ -15,6 +15,8 @@ import pytest
 
 from conftest import subprocess_env
 
+pytestmark = pytest.mark.slow  # starts a Dask scheduler and workers
+
 DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
 
 STUDY = '''name = "cluster"

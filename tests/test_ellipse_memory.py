@@ -12,6 +12,7 @@ CASES = [(m, n) for m in ("ellipse.orthogonal", "ellipse.halir_flusser", "ellips
     [("ellipse.algebraic_nm", 100_000), ("ellipse.geometric_nm", 100_000)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method_id,n", CASES)
 def test_peak_memory_of_an_ellipse_fit_is_at_most_four_times_the_input(method_id, n):
     ratio, converged, _ = measure(method_id, n)

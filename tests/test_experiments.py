@@ -65,6 +65,7 @@ def test_list_and_defaults(capsys):
         n for n in configs.available() if configs.load(n).get("default")}
 
 
+@pytest.mark.slow
 def test_two_runs_identical_and_rows_complete(tmp_path):
     cfg = tiny(tmp_path)
     run_study(str(cfg), tmp_path / "a", jobs=1, log=lambda *a: None)
@@ -97,6 +98,7 @@ def test_every_method_sees_the_same_noise(tmp_path):
                                    .set_index("data_stream")["radius"])
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_same_rows(tmp_path):
     pytest.importorskip("distributed")
     cfg = tiny(tmp_path, reps=2)
@@ -105,6 +107,7 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
     pd.testing.assert_frame_equal(table(tmp_path / "local"), table(tmp_path / "dask"))
 
 
+@pytest.mark.slow
 def test_interrupted_run_resumes_to_the_uninterrupted_rows(tmp_path):
     """Ctrl-C (SIGINT) in the middle of a run; the next run finishes without redoing or duplicating."""
     cfg = tiny(tmp_path, reps=25)
@@ -224,6 +227,7 @@ def test_unknown_study_and_bad_flags(capsys):
     assert main(["--scheduler", "tcp://x:1", "published"]) == 2
 
 
+@pytest.mark.slow
 def test_quick_published_study(tmp_path):
     run_study("published", tmp_path, quick=True, jobs=2, log=lambda *a: None)
     rows = pd.read_csv(tmp_path / "published" / "results.csv")
@@ -243,6 +247,7 @@ def test_quick_published_study(tmp_path):
     assert (rows.loc[mc, "rounding_min"] <= rows.loc[mc, "rounding_max"]).all()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["noise", "convergence", "ellipse_angle", "scaling", "circular_test", "positioning",
                                   "magnification", "multilateration"])
 def test_quick_default_studies_run(tmp_path, name):

@@ -505,6 +505,7 @@ def test_plot_is_written_atomically_and_no_temporary_files_left(small, tmp_path)
     assert [p.name for p in tmp_path.iterdir()] == ["p.svg"]
 
 
+@pytest.mark.slow
 # ------------------------------------------------------------------------------------------ issue 16 item 20
 def test_reader_peak_memory_within_3x_the_array(tmp_path):
     """2e6 points (a 32 MB array): the reader's peak resident memory grows by less than 3x the array

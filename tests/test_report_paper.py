@@ -26,6 +26,8 @@ from experiments.render.rankings import collect
 from experiments.render.report_tables import html_table, latex_fragments
 from tests.report_checks import check_html_report, chromium
 
+pytestmark = pytest.mark.slow  # builds the report of a quick run, compiles it with TeX, renders it in Chromium
+
 REPO = Path(__file__).resolve().parents[1]
 PDFLATEX = shutil.which("pdflatex")
 needs_pdflatex = pytest.mark.skipif(PDFLATEX is None, reason="pdflatex is not installed (Debian: apt-get install "

@@ -17,6 +17,8 @@ import pytest
 
 from conftest import subprocess_env
 
+pytestmark = pytest.mark.slow  # kills, interrupts and restarts whole study runs
+
 STUDY = '''name = "{name}"
 title = "fault test study"
 kind = "grid"

@@ -59,6 +59,7 @@ def width(c, pts):
     return r.max() - r.min()
 
 
+@pytest.mark.slow
 def test_baseline_nelder_mead_width(benchmark, trace):
     n, pts = trace
     start = np.array(methods.fit("circle.kasa", pts).center)
@@ -92,6 +93,7 @@ def cvxpy_minimum_zone(pts, iterations=30):
     return c0 + m, R.value - r.value
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("trace", [25, 3358], indirect=True, ids=lambda n: f"n={n}")
 def test_baseline_cvxpy_all_points(benchmark, trace):
     pytest.importorskip("cvxpy")

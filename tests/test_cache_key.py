@@ -7,6 +7,8 @@ import pytest
 
 from conftest import REPO, install_plugin, run_python
 
+pytestmark = pytest.mark.slow  # each case runs a study several times in a copy of the repository
+
 STUDY = """
 name = "keyed"
 title = "cache key test"
@@ -126,8 +128,6 @@ BY_NAME = '''
 """A plugin fitter that calls a built-in method by its id (no import statement shows the dependency)."""
 import methods
 from methods import register
-
-pytestmark = pytest.mark.slow  # each case runs a study several times in a copy of the repository
 
 
 @register("circle.keyed_by_name", kind="closed form", summary="Kasa's circle by name (cache-key test)",

@@ -33,7 +33,7 @@ from typing import Callable
 
 import numpy as np
 
-from methods._plugins import load_entry_points
+from methods.plugins import add_entry, load_entry_points
 
 ENTRY_POINT_GROUP = "fitbench.datasets"
 
@@ -63,15 +63,15 @@ def register_source(name: str, *, random: bool, summary: str, files: Callable | 
     def deco(func):
         if name in _REGISTRY and _REGISTRY[name].load is not func:
             raise ValueError(f"data source {name!r} is already registered (by {_REGISTRY[name].module})")
-        _REGISTRY[name] = DataSource(name=name, load=func, random=random, summary=summary,
-                                     module=func.__module__, files=files)
+        add_entry(_REGISTRY, name, DataSource(name=name, load=func, random=random, summary=summary,
+                                              module=func.__module__, files=files))
         return func
     return deco
 
 
 def load_plugins() -> None:
     """Import every entry point of ``fitbench.datasets`` once (a broken plugin warns, see
-    :func:`methods._plugins.load_entry_points`)."""
+    :func:`methods.plugins.load_entry_points`)."""
     load_entry_points(ENTRY_POINT_GROUP, "data source")
 
 

@@ -373,11 +373,9 @@ def base_row(task: dict) -> dict:
     return row
 
 
-#: columns a generic row may have besides those of base_row (status, counts, every metric, timing)
-RESULT_COLUMNS = ("status", "message", "converged", "iterations", "nfev", "form_error", "residual_rms", "center_x",
-                  "center_y", "radius", "semi_axis_a", "semi_axis_b", "angle", "inner_radius", "outer_radius",
-                  "center_error_x", "center_error_y", "center_error", "radius_error", "semi_axis_a_error",
-                  "semi_axis_b_error", "angle_error", "task_index")
+#: columns a generic row may have besides those of base_row: the engine's own and every column a result class
+#: declares (``methods.results.row_columns``)
+RESULT_COLUMNS = ("status", "message", "converged", "iterations", "nfev", *methods.results.row_columns(), "task_index")
 
 
 def fit_row(task: dict, points, truth) -> dict:
@@ -389,6 +387,9 @@ def fit_row(task: dict, points, truth) -> dict:
         return {**row, "status": "skipped", "message": str(exc)}
     except Exception as exc:  # a method's bug: recorded, retried on the next run
         return {**row, "status": "error", "message": f"{type(exc).__name__}: {exc}"}
+    problem = methods.check_result(res, points)  # the gate: a result that breaks its family's contract is no row
+    if problem:
+        return {**row, "status": "invalid", "message": f"invalid result: {problem}"}
     row.update(status="ok" if res.converged else "not converged", message=res.message, converged=res.converged,
                iterations=res.iterations, nfev=res.nfev, **metrics(res, truth))
     if task.get("timing"):

@@ -1,9 +1,10 @@
 """Benchmark metrics: computed from a result and the truth, never inside a method."""
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
+
+from methods import results
+from methods.results import ERRORS as _ERRORS, EXACT, GEOMETRY as _GEOMETRY, Tolerance  # noqa: F401
 
 
 def metrics(result, truth: dict | None) -> dict:
@@ -19,36 +20,11 @@ def metrics(result, truth: dict | None) -> dict:
 
 # ---------------------------------------------------------------- tolerances of the verify command
 
-class Tolerance(NamedTuple):
-    """How far a re-computed value may lie from the committed one: |new - old| <= atol + rtol * |old|
-    (rtol = atol = 0: exact). ``why`` is the one-line justification from the method's resolution."""
-
-    rtol: float
-    atol: float
-    why: str
-
-
-EXACT = Tolerance(0.0, 0.0, "an identity, a status or a count of a deterministic method: must be identical")
-#: Geometric fits stop at a step of <= 1e-12 (Gauss-Newton, LM, Powell hybrid; unit-frame coordinates) or are
-#: closed forms / convex programs solved to 1e-9 relative gap; a different CPU changes the last bits of the BLAS
-#: reductions (about 1e-16 relative per operation, amplified by the condition number, below 1e3 for the data sets
-#: here), so 1e-9 relative leaves a margin of three decades over the observed differences.
-_GEOMETRY = Tolerance(1e-9, 1e-12, "fits converge to ~1e-12 relative in the unit frame; 1e-9 covers CPU rounding")
-#: Errors against the truth are differences of two numbers of the data's size: their absolute resolution is that
-#: of the fitted geometry (1e-9 relative of lengths of order 1 to 1e3 data units -> 1e-9 absolute for unit-sized
-#: data, 1e-6 for the 1000-mm machine-tool data: atol 1e-9 with rtol 1e-6 on the error itself).
-_ERRORS = Tolerance(1e-6, 1e-9, "a difference of two fitted lengths: absolute resolution of the fit (1e-9 data units)")
-
-#: Per column of a results.csv. Columns not listed: exact when not numeric (ids, statuses, strings), else DEFAULT.
-#: ``message`` is text describing the stop (its facts are in status, iterations, nfev): not compared.
+#: The row columns' tolerances are declared by the result classes (``methods.results``: each class's ``COLUMNS``);
+#: this table adds the engine's own columns and the columns of studies that compute their own rows.
 TOLERANCES: dict[str, Tolerance | None] = {
     "status": EXACT, "converged": EXACT, "iterations": EXACT, "nfev": EXACT,
-    "form_error": _GEOMETRY, "residual_rms": _GEOMETRY,
-    "center_x": _GEOMETRY, "center_y": _GEOMETRY, "radius": _GEOMETRY,
-    "semi_axis_a": _GEOMETRY, "semi_axis_b": _GEOMETRY, "angle": _GEOMETRY,
-    "inner_radius": _GEOMETRY, "outer_radius": _GEOMETRY,
-    "center_error_x": _ERRORS, "center_error_y": _ERRORS, "center_error": _ERRORS, "radius_error": _ERRORS,
-    "semi_axis_a_error": _ERRORS, "semi_axis_b_error": _ERRORS, "angle_error": _ERRORS,
+    **results.tolerances(),
     "message": None,
     # multilateration (lengths in µm of a 1000-mm machine): least-squares adjustments with condition numbers 1e4-1e8 (4-6
     # stations) and up to 9e11 (4 stations within 1.3 mm of a plane, the paper's bad case). Between OpenBLAS's
@@ -89,4 +65,7 @@ def tolerance(column: str, study: str = "", method: str = "") -> Tolerance | Non
             return tol
     if column.startswith("time_"):
         return None  # timing: measured, never reproducible
-    return TOLERANCES.get(column, DEFAULT_TOLERANCE)
+    if column in TOLERANCES:
+        return TOLERANCES[column]
+    declared = results.row_columns().get(column)  # a result class defined after this import (a plugin's)
+    return declared.tolerance if declared is not None else DEFAULT_TOLERANCE

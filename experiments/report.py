@@ -448,6 +448,8 @@ def _rankings_section(rankings, problem, out, add_table, add_figure, doc):
             plot_profiles(tables, tmp)
         sources = "; ".join(f"{n}: studies {', '.join(r.studies)}, {len(r.table)} problems"
                             + (f", left out (not run in every study): {', '.join(r.left_out)}" if r.left_out else "")
+                            + (f", {r.unsolved} solved by no method left out" if r.unsolved else "")
+                            + "".join(f"; {m} ran on {k} of them" for m, k in r.runs.items() if k < len(r.table))
                             for n, r in rankings.items())
         tex_items = add_figure(png, "Performance profiles of the methods: share of problems ρ(τ) on which a "
                                       "method's cost is within a factor τ of the best (log₂ τ on the x axis; higher "

@@ -81,7 +81,7 @@ def plugin_distributions(used) -> dict[str, str]:
     """{distribution: version} of every plugin method or data source among ``used`` ((method id, source
     name) pairs of the study's tasks)."""
     from datasets import sources
-    from experiments.codehash import distributions_of
+    from methods.plugins import distributions_of
     mods = set()
     known = {s.id for s in methods.list_methods()}
     for method, source in used:

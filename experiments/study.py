@@ -58,9 +58,13 @@ per table under ``target/tables/``; everything atomically.
 """
 from __future__ import annotations
 
+import difflib
+import inspect
 import io
 import json
 import os
+import re
+import string
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -71,6 +75,8 @@ import pandas as pd
 from experiments.engine import ConfigError
 from experiments.provenance import write_atomic
 from methods.files import atomic_path  # noqa: F401  (the one atomic writer, for writers that take a file name)
+from methods import results
+from methods.plugins import add_entry
 
 DEFAULT_SECTION = "Other studies"
 AGGREGATES = {
@@ -112,12 +118,17 @@ class Analysis:
 # ---------------------------------------------------------------- plot registry
 
 PLOTS: dict[str, Callable] = {}
+#: plot name -> (arguments that name a column of the rows, of which those aggregated as numbers)
+PLOT_COLUMNS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {}
 
 
-def register_plot(name: str):
-    """Register ``func(df, ax, **arguments)`` (draws on a matplotlib axis) as plot ``name``."""
+def register_plot(name: str, *, columns=("x", "y", "by"), numeric=("y",)):
+    """Register ``func(df, ax, **arguments)`` (draws on a matplotlib axis) as plot ``name``; ``columns``: the
+    arguments that name a column of the rows, ``numeric``: those of them aggregated as numbers (both checked
+    against the study's columns before any row runs)."""
     def deco(func):
-        PLOTS[name] = func
+        add_entry(PLOTS, name, func)  # journaled: a plugin that fails to load leaves no plot behind
+        add_entry(PLOT_COLUMNS, name, (tuple(columns), tuple(numeric)))
         return func
     return deco
 
@@ -162,14 +173,23 @@ REPORT_KEYS = {"section", "order", "findings"}
 
 
 def validate(cfg: dict, where: str) -> None:
-    """Check the declarative keys (tables, figures, report) before any row runs."""
+    """Check the declarative keys (tables, figures, report) before any row runs: their structure, the plot
+    arguments, the findings template, and -- where the study's columns are known from its config
+    (:func:`declared_columns`) -- every column they name and every aggregate against the column's type.
+    Errors are one line: ``FILE: KEY: PROBLEM``."""
     rep = cfg.get("report", {})
     if not isinstance(rep, dict) or set(rep) - REPORT_KEYS:
         raise ConfigError(f"{where}: [report] must be a table with keys {', '.join(sorted(REPORT_KEYS))}")
     if "order" in rep and not isinstance(rep["order"], int):
         raise ConfigError(f"{where}: report.order must be an integer, got {rep['order']!r}")
+    columns = declared_columns(cfg)
+    if rep.get("findings") is not None:
+        fixed = _values_known(cfg)
+        problem = findings_problem(rep["findings"], fixed)
+        if problem:
+            raise ConfigError(f"{where}: report.findings: {problem}")
     for i, t in enumerate(cfg.get("tables", [])):
-        here = f"{where} tables[{i}]"
+        here = f"{where}: tables[{i}]"
         if not isinstance(t, dict):
             raise ConfigError(f"{here}: each table is a TOML table")
         bad = set(t) - TABLE_KEYS
@@ -179,12 +199,32 @@ def validate(cfg: dict, where: str) -> None:
             if k not in t:
                 raise ConfigError(f"{here}: missing key {k!r}")
         if t.get("colour", "lower_is_better") != "lower_is_better":
-            raise ConfigError(f"{here}: colour must be 'lower_is_better' (cells coloured by their ratio to the row's "
+            raise ConfigError(f"{here}.colour: must be 'lower_is_better' (cells coloured by their ratio to the row's "
                               f"lowest value), got {t['colour']!r}")
-        if t.get("aggregate", "mean") not in AGGREGATES and t.get("aggregate") != "ok_share":
-            raise ConfigError(f"{here}: aggregate must be one of {', '.join(AGGREGATES)}, ok_share")
+        how = t.get("aggregate", "mean")
+        if how not in AGGREGATES and how != "ok_share":
+            raise ConfigError(f"{here}.aggregate: must be one of {', '.join(AGGREGATES)}, ok_share; got {how!r}")
+        if not isinstance(t["values"], str):
+            raise ConfigError(f"{here}.values: must be one column name, got {t['values']!r}")
+        rows = [t["rows"]] if isinstance(t["rows"], str) else t["rows"]
+        if not isinstance(rows, list) or not rows or not all(isinstance(r, str) for r in rows):
+            raise ConfigError(f"{here}.rows: must be a column name or a list of them, got {t['rows']!r}")
+        if "columns" in t and not isinstance(t["columns"], str):
+            raise ConfigError(f"{here}.columns: must be one column name, got {t['columns']!r}")
+        _check_where(t.get("where"), columns, f"{here}.where")
+        if columns is not None:
+            for key, names in (("rows", rows), ("columns", [t.get("columns")] if t.get("columns") else []),
+                               ("values", [t["values"]])):
+                for c in names:
+                    _check_column(c, columns, f"{here}.{key}")
+            if how not in ("count", "ok_share", "max", "min") and columns[t["values"]] == "text":
+                raise ConfigError(f"{here}.aggregate: the {how} of {t['values']!r} (a text column) is not defined; "
+                                  "use count, or a numeric column")
+        unit_problem = _unit_problem(t["values"], t.get("unit", ""), how)
+        if unit_problem:
+            raise ConfigError(f"{here}.unit: {unit_problem}")
     for i, f in enumerate(cfg.get("figures", [])):
-        here = f"{where} figures[{i}]"
+        here = f"{where}: figures[{i}]"
         if not isinstance(f, dict):
             raise ConfigError(f"{here}: each figure is a TOML table")
         bad = set(f) - FIGURE_KEYS
@@ -194,9 +234,222 @@ def validate(cfg: dict, where: str) -> None:
             raise ConfigError(f"{here}: needs a caption and exactly one of plot (a registered plot: "
                               f"{', '.join(PLOTS)}) and file (a PNG the study's analysis writes)")
         if "plot" in f and f["plot"] not in PLOTS:
-            raise ConfigError(f"{here}: unknown plot {f['plot']!r}; known: {', '.join(PLOTS)}")
-        if "file" in f and (Path(f["file"]).is_absolute() or ".." in Path(f["file"]).parts):
-            raise ConfigError(f"{here}: file must be a path inside the study's folder, got {f['file']!r}")
+            raise ConfigError(f"{here}.plot: unknown plot {f['plot']!r}; known: {', '.join(PLOTS)}")
+        if "file" in f:
+            if Path(f["file"]).is_absolute() or ".." in Path(f["file"]).parts:
+                raise ConfigError(f"{here}.file: must be a path inside the study's folder, got {f['file']!r}")
+            continue
+        args = _plot_arguments(f)
+        try:
+            inspect.signature(PLOTS[f["plot"]]).bind(None, None, **args)
+        except TypeError as exc:
+            known = [p for p in inspect.signature(PLOTS[f["plot"]]).parameters if p not in ("df", "ax")]
+            raise ConfigError(f"{here}: plot {f['plot']!r}: {exc} (its arguments: {', '.join(known)})") from None
+        how = args.get("aggregate", "mean")
+        if "aggregate" in args and how not in AGGREGATES:
+            raise ConfigError(f"{here}.aggregate: must be one of {', '.join(AGGREGATES)}; got {how!r}")
+        _check_where(f.get("where"), columns, f"{here}.where")
+        names, numeric = PLOT_COLUMNS.get(f["plot"], ((), ()))
+        for a in names:
+            if a in args and not isinstance(args[a], str):
+                raise ConfigError(f"{here}.{a}: must be one column name, got {args[a]!r}")
+            if a in args and columns is not None:
+                _check_column(args[a], columns, f"{here}.{a}")
+                if a in numeric and how not in ("count", "max", "min") and columns[args[a]] == "text":
+                    raise ConfigError(f"{here}.aggregate: the {how} of {args[a]!r} (a text column) is not defined; "
+                                      "use count, or a numeric column")
+
+
+def _plot_arguments(f: dict) -> dict:
+    args = {k: f[k] for k in ("x", "y", "by", "aggregate", "logx", "logy", "xlabel", "ylabel") if k in f}
+    args.update(f.get("args", {}))
+    return args
+
+
+def _check_column(name, columns: dict, key: str) -> None:
+    if name not in columns:
+        close = difflib.get_close_matches(str(name), list(columns), n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise ConfigError(f"{key}: no row will have the column {name!r}{hint} (the rows have: "
+                          f"{', '.join(sorted(columns))})")
+
+
+def _check_where(cond, columns, key: str) -> None:
+    if cond is None:
+        return
+    if not isinstance(cond, dict):
+        raise ConfigError(f"{key}: must be a table column = value or [values], got {cond!r}")
+    if columns is not None:
+        for name in cond:
+            _check_column(name, columns, key)
+
+
+# ---------------------------------------------------------------- the columns a study's rows will have
+
+#: units read from a column name's suffix (data and study columns: ``data_arc_deg``, ``station_error_um``)
+SUFFIX_UNITS = {"_deg": "°", "_rad": "rad", "_urad": "µrad", "_um": "µm", "_mm": "mm", "_nm": "nm", "_s": "s"}
+_LENGTH_UNITS = {"mm", "µm", "um", "nm", "m", "cm"}
+_ANGLE_UNITS = {"rad", "µrad", "urad", "mrad", "deg", "°", "arcsec"}
+
+
+def column_unit(name: str) -> str:
+    """The unit of a row column: declared by the result classes (``methods.results``: lengths in the data's
+    unit, mm for the machine-tool data; angles in rad), timing in s, else read from the name's suffix."""
+    col = results.row_columns().get(name)
+    if col is not None:
+        return col.unit
+    if name.startswith("time_") and name.endswith("_s"):
+        return "s"
+    return next((u for suffix, u in SUFFIX_UNITS.items() if name.endswith(suffix)), "")
+
+
+def _unit_problem(column: str, unit: str, how: str) -> str | None:
+    """A table unit of another dimension than its values' (a degree column is never labelled mm)."""
+    if not unit or how in ("count", "ok_share"):
+        return None
+    own = column_unit(column)
+    for group, what in ((_LENGTH_UNITS, "a length"), (_ANGLE_UNITS, "an angle")):
+        if own in group and unit not in group:
+            return f"{column!r} is {what} in {own}, not in {unit!r}"
+        if unit in group and own and own not in group:
+            return f"{column!r} is in {own}, not {what} ({unit!r})"
+    return None
+
+
+def _kind(values) -> str:
+    vals = [v for v in values if v is not None]
+    if vals and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in vals):
+        return "number"
+    if vals and all(isinstance(v, bool) for v in vals):
+        return "bool"
+    return "text"
+
+
+def declared_columns(cfg: dict) -> dict[str, str] | None:
+    """{column: "number" | "bool" | "text"} of the rows a study will write, from its config alone (nothing is
+    expanded): the identity and parameter columns of its tasks, the engine's status columns, the columns
+    the result classes of its methods declare and the timing columns. None for a study that builds its own
+    rows (its module's ``execute``) without declaring them in ``ROW_COLUMNS``."""
+    import importlib
+
+    import methods
+    try:
+        study = importlib.import_module(f"experiments.studies.{cfg.get('kind')}")
+    except ImportError:
+        return None
+    out = {c: "text" for c in ("study", "dataset", "data_stream", "method", "params", "status", "message")}
+    out.update(repetition="number", seed="number", converged="bool", iterations="number", nfev="number")
+    if hasattr(study, "execute") or hasattr(study, "tasks"):
+        if not hasattr(study, "ROW_COLUMNS"):
+            return None
+        declared = study.ROW_COLUMNS
+        out.update(declared if isinstance(declared, dict) else dict.fromkeys(declared, "number"))
+        return out
+    values: dict[str, list] = {}
+    for entry in cfg.get("datasets", []):
+        for k, v in {**entry.get("params", {}), **{k: vs for k, vs in entry.get("grid", {}).items()}}.items():
+            values.setdefault(f"data_{k}", []).extend(v if k in entry.get("grid", {}) else [v])
+    families = set()
+    for entry in cfg.get("methods", []):
+        entry = {"id": entry} if isinstance(entry, str) else entry
+        families.add(entry["id"].partition(".")[0])
+        for k, v in {**entry.get("params", {}), **entry.get("grid", {})}.items():
+            values.setdefault(f"param_{k}", []).extend(v if k in entry.get("grid", {}) else [v])
+    out.update({name: _kind(vs) for name, vs in values.items()})
+    methods.load_plugins()
+    for family in families:
+        for col in _family_columns(family):
+            out[col] = "number"
+    if cfg.get("timing"):
+        out.update(time_median_s="number", time_iqr_s="number", time_rounds="number", time_calls_per_round="number")
+    return out
+
+
+def _family_columns(family: str) -> list[str]:
+    base = results.contract(family)
+    classes = [c for c in results.result_classes() if base is not None and issubclass(c, base)] \
+        or results.result_classes()
+    return [col.name for cls in classes for col in cls.COLUMNS]
+
+
+def _values_known(cfg: dict) -> set[str] | None:
+    """The named values a findings template may use, when known before the run (a study without its own
+    ``analyse``: the counts every study has); None when its analysis adds values."""
+    import importlib
+    try:
+        study = importlib.import_module(f"experiments.studies.{cfg.get('kind')}")
+    except ImportError:
+        return None
+    return None if hasattr(study, "analyse") else set(BASE_VALUES)
+
+
+# ---------------------------------------------------------------- findings: a sandboxed template
+
+#: the named values every study's findings may use
+BASE_VALUES = ("n_rows", "n_ok")
+#: a format spec of a findings field: [[fill]align][sign][#][0][width][,|_][.precision][type], width <= 99
+_SPEC = re.compile(r"^(?:[^{}]?[<>=^])?[+\- ]?#?0?(?P<width>\d{1,2})?[,_]?(?:\.(?P<precision>\d{1,2}))?[bcdeEfFgGnosxX%]?$")
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+#: the longest findings text (characters): a paragraph, not a document
+MAX_FINDINGS = 4000
+
+
+def _fields(template: str):
+    """(literal, name, spec) of a ``str.format``-style template, or raise ValueError with the problem: a
+    field is a plain name (no attribute or item access, no conversion) with a bounded format spec."""
+    if not isinstance(template, str):
+        raise ValueError(f"must be a string, got {template!r}")
+    out = []
+    for literal, name, spec, conversion in string.Formatter().parse(template):
+        if name is None:
+            out.append((literal, None, ""))
+            continue
+        if not _NAME.match(name):
+            raise ValueError(f"{{{name}}}: a field is a plain value name (no attribute, item or positional access)")
+        if conversion is not None:
+            raise ValueError(f"{{{name}!{conversion}}}: conversions are not allowed")
+        if not _SPEC.match(spec or ""):
+            raise ValueError(f"{{{name}:{spec}}}: the format spec must be [[fill]align][sign][#][0][width <= 99]"
+                             "[,][.precision <= 99][type]")
+        out.append((literal, name, spec or ""))
+    return out
+
+
+def findings_problem(template, names: set[str] | None = None) -> str | None:
+    """The problem with a findings template (None: fine); ``names``: the values it may use, when known."""
+    try:
+        fields_ = _fields(template)
+    except ValueError as exc:
+        return str(exc)
+    if names is not None:
+        unknown = sorted({n for _, n, _ in fields_ if n is not None} - names)
+        if unknown:
+            return f"unknown value(s) {', '.join(unknown)} (the values: {', '.join(sorted(names))})"
+    return None
+
+
+def render_findings(template: str, values: dict) -> str:
+    """Fill ``template`` from ``values`` (numbers and text only), sandboxed: no attribute or item access, no
+    conversions, widths and precisions below 100, the result one paragraph of at most MAX_FINDINGS characters
+    (line breaks become spaces). Raises ValueError with the problem."""
+    parts = []
+    for literal, name, spec in _fields(template):
+        parts.append(literal)
+        if name is None:
+            continue
+        if name not in values:
+            raise ValueError(f"unknown value {name!r} (the values: {', '.join(sorted(values))})")
+        v = values[name]
+        if isinstance(v, np.generic):
+            v = v.item()
+        if not isinstance(v, (int, float, str)) or isinstance(v, bool):
+            v = str(v)
+        try:
+            parts.append(format(v, spec))
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"{{{name}:{spec}}}: {exc}") from None
+    text = " ".join("".join(parts).split())
+    return text if len(text) <= MAX_FINDINGS else text[:MAX_FINDINGS - 1] + "…"
 
 
 def _where(df, cond):
@@ -227,6 +480,9 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
     else:
         out = data.groupby(rows, sort=False, dropna=False)[value].agg(AGGREGATES[how]).reset_index()
         out = out.rename(columns={value: f"{how} of {t['values']}"})
+    # a numeric key column carries its own unit in its name, so the table's unit never labels it
+    out = out.rename(columns={c: f"{c} [{column_unit(c)}]" for c in rows
+                              if column_unit(c) and pd.api.types.is_numeric_dtype(out[c])})
     return Table(caption=t["caption"], data=out, unit=t.get("unit", ""), digits=t.get("digits", 4),  # significant digits
                  colour=t.get("colour", ""))  # significant digits
 
@@ -237,8 +493,13 @@ def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Fig
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    args = {k: f[k] for k in ("x", "y", "by", "aggregate", "logx", "logy", "xlabel", "ylabel") if k in f}
-    args.update(f.get("args", {}))
+    args = _plot_arguments(f)
+    accepted = inspect.signature(PLOTS[f["plot"]]).parameters
+    for axis, label in (("x", "xlabel"), ("y", "ylabel")):  # axes name their column and its unit
+        if isinstance(args.get(axis), str) and label in accepted and label not in args:
+            unit = column_unit(args[axis])
+            what = args[axis] if axis == "x" else f"{args.get('aggregate', 'mean')} of {args[axis]}"
+            args[label] = f"{what} [{unit}]" if unit else what
     fig, ax = plt.subplots(figsize=(f.get("width", 6.4), f.get("height", 4.2)))
     PLOTS[f["plot"]](_where(df[df["status"] == "ok"], f.get("where")), ax, **args)
     ax.grid(True, alpha=0.3)
@@ -292,9 +553,9 @@ def write_manifest(target: Path, cfg: dict, analysis: Analysis, summary: pd.Data
     findings = analysis.findings
     if not findings and rep.get("findings"):
         try:
-            findings = rep["findings"].format(**analysis.values)
-        except (KeyError, ValueError, IndexError) as exc:
-            findings = f"(findings template not filled: {exc})"
+            findings = render_findings(rep["findings"], analysis.values)
+        except ValueError as exc:
+            findings = f"(findings template not filled: {cfg.get('_where', cfg['name'])}: report.findings: {exc})"
     manifest = {"title": cfg["title"], "section": rep.get("section", DEFAULT_SECTION), "order": rep.get("order", 1000),
                 "quick": bool(cfg.get("_quick")), "tables": entries,
                 "figures": [{"caption": f.caption, "file": f.file} for f in analysis.figures],
@@ -314,7 +575,43 @@ def analyse(study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tuple[dict
     analysis = study.analyse(df, cfg, target, log) if hasattr(study, "analyse") else Analysis()
     analysis.values = {"n_rows": len(df), "n_ok": int((df["status"] == "ok").sum()), **analysis.values}
     findings = json.loads(json.dumps(analysis.values, default=_plain))  # what meta.json holds
-    analysis.tables += [declared_table(df, t) for t in cfg.get("tables", [])]
-    for f in cfg.get("figures", []):
+    tables, figures = list(cfg.get("tables", [])), list(cfg.get("figures", []))
+    if not hasattr(study, "analyse") and not (tables and figures):  # a TOML-only study: defaults for what it omits
+        table, figure = default_declarations(cfg, df)
+        tables = tables or ([table] if table else [])
+        figures = figures or ([figure] if figure else [])
+    analysis.tables += [declared_table(df, t) for t in tables]
+    for f in figures:
         analysis.figures.append(declared_figure(df, f, target, len(analysis.figures) + 1))
     return findings, analysis
+
+
+def default_declarations(cfg: dict, df: pd.DataFrame) -> tuple[dict | None, dict | None]:
+    """The table and figure of a study that declares none, chosen from its metrics: the first error against the
+    truth its rows have (RMSE), else the form error (median); per method, against the first data parameter that
+    varies (else per data set). Units come from the metric declarations (``methods.results``)."""
+    ok = df[df["status"] == "ok"] if "status" in df else df
+    errors = results.truth_error_columns()
+    metric = next((c for c in (*errors, "form_error") if c in ok and pd.to_numeric(ok[c], errors="coerce").notna().any()),
+                  None)
+    if metric is None:
+        return None, None
+    how = "rmse" if metric in errors else "median"
+    unit = column_unit(metric)
+    varying = [c for c in df.columns if c.startswith("data_") and c != "data_stream"
+               and pd.api.types.is_numeric_dtype(df[c]) and df[c].nunique() > 1]
+    across = varying[0] if varying else ("dataset" if df["dataset"].nunique() > 1 else None)
+    rows = ["method"] + (["params"] if "params" in df and df["params"].nunique() > 1 else [])
+    what = f"{'RMSE' if how == 'rmse' else 'median'} of {metric}"
+    shown = f"{what} [{unit}]" if unit else what
+    table = {"caption": f"{what} per method{f' and {across}' if across else ''} over {len(df)} rows of "
+                        f"{cfg['name']} (the default table of a study that declares none)",
+             "rows": rows, "values": metric, "aggregate": how, "unit": unit, "digits": 4, "colour": "lower_is_better",
+             **({"columns": across} if across else {})}
+    if varying:
+        figure = {"plot": "lines", "x": varying[0], "y": metric, "by": "method", "aggregate": how,
+                  "caption": f"{shown} against {varying[0]}, one line per method"}
+    else:
+        figure = {"plot": "bars", "x": "method", "y": metric, "aggregate": how,
+                  "caption": f"{shown} per method over all data sets"}
+    return table, figure

@@ -4,7 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-ERROR_COLUMNS = ("center_error", "radius_error", "semi_axis_a_error", "semi_axis_b_error", "angle_error")
+from methods import results
+
+#: the errors against the truth the result classes declare (``methods.results.Column.truth_error``)
+ERROR_COLUMNS = results.truth_error_columns()
 
 
 def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
@@ -19,7 +22,7 @@ def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
         row["ok_share"] = len(ok) / len(g) if len(g) else np.nan
         if "form_error" in g:
             row["form_error_median"] = ok["form_error"].median()
-        for col in ERROR_COLUMNS:
+        for col in results.truth_error_columns():
             if col in g and ok[col].notna().any():
                 v = ok[col].astype(float)
                 if col == "center_error":

@@ -7,8 +7,9 @@
 from methods._errors import InvalidInputError, UnknownMethodError
 from methods._registry import (ENTRY_POINT_GROUP, KINDS, MethodSpec, fit, get, list_methods,
                                load_plugins, register)
-from methods._result import (CircleFit, EllipseFit, FitResult, MagnifyFit, MultilaterationFit, PositioningFit,
-                             ZoneFit)
+from methods import results
+from methods.results import (CircleFit, EllipseFit, FitResult, MagnifyFit, MultilaterationFit, PositioningFit,
+                             ZoneFit, check_result)
 from methods._validation import validate_points
 
 
@@ -23,4 +24,5 @@ def __getattr__(name: str):
 
 
 __all__ = ["InvalidInputError", "UnknownMethodError", "MethodSpec", "register", "get", "list_methods",
-           "fit", "load_plugins", "FitResult", "CircleFit", "ZoneFit", "EllipseFit", "validate_points", "ENTRY_POINT_GROUP", "KINDS"]
+           "fit", "load_plugins", "results", "check_result", "FitResult", "CircleFit", "ZoneFit", "EllipseFit",
+           "validate_points", "ENTRY_POINT_GROUP", "KINDS"]

@@ -6,6 +6,7 @@ module (or object) whose import runs ``@register``.
 """
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import importlib
 import inspect
@@ -14,9 +15,12 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable
 
+import numpy as np
+
 from methods._errors import InvalidInputError, UnknownMethodError
-from methods._plugins import load_entry_points
+from methods.plugins import add_entry, load_entry_points
 from methods._validation import validate_points
+from methods.results import FitResult
 
 ENTRY_POINT_GROUP = "fitbench.methods"
 KINDS = ("closed form", "iterative", "convex program")
@@ -148,7 +152,7 @@ def register(method_id: str, *, summary: str, reference: str, kind: str, min_poi
         existing = _REGISTRY.get(method_id)
         if existing is not None and existing.module != spec.module:
             raise ValueError(f"method id {method_id!r} is already registered by {existing.module}")
-        _REGISTRY[method_id] = spec
+        add_entry(_REGISTRY, method_id, spec)
         return spec
 
     return decorate
@@ -165,15 +169,44 @@ def _run(spec: MethodSpec, points, params: dict):
     else:
         merged = spec.defaults.copy()  # the result's own dict, as above
     if spec.validator is not None:
-        pts = spec.validator(points, spec.id)
+        pts = _read_only(spec.validator(points, spec.id), points)
     else:
+        if isinstance(points, np.ndarray):  # the method gets its own copy: the caller's array cannot change
+            points = points.copy()
+            points.flags.writeable = False
         pts = validate_points(points, min_points=spec.min_points, method=spec.id)
+        if pts.flags.writeable:  # converted from another type (a list, a DataFrame): a new array or a view
+            if pts.base is None:
+                pts.flags.writeable = False  # its own memory: the frame offered for it by validation stays valid
+            else:
+                pts = _read_only(pts, None)
     t0 = time.perf_counter()
     result = spec.func(pts, **merged)
-    result.runtime_s = time.perf_counter() - t0
-    result.method = spec.id
-    result.params = merged
+    runtime = time.perf_counter() - t0
+    if isinstance(result, FitResult):  # anything else is refused by the result gate (methods.check_result)
+        result.runtime_s = runtime
+        result.method = spec.id
+        result.params = merged
     return result
+
+
+def _read_only(data, given):
+    """``data`` as the method may see it: arrays read-only and never the caller's own memory (``given``: what
+    the caller passed). Arrays inside a dataclass, dict, list or tuple are copied the same way."""
+    if isinstance(data, np.ndarray):
+        if data.flags.writeable or given is None or data is given or np.shares_memory(data, given):
+            data = data.copy()
+        data.flags.writeable = False
+        return data
+    if dataclasses.is_dataclass(data) and not isinstance(data, type):
+        changes = {f.name: _read_only(getattr(data, f.name), None) for f in dataclasses.fields(data) if f.init
+                   and isinstance(getattr(data, f.name), (np.ndarray, dict, list, tuple))}
+        return dataclasses.replace(data, **changes) if changes else data
+    if isinstance(data, dict):
+        return {k: _read_only(v, None) for k, v in data.items()}
+    if isinstance(data, (list, tuple)) and any(isinstance(v, np.ndarray) for v in data):
+        return type(data)(_read_only(v, None) for v in data)
+    return data
 
 
 def load_builtins() -> None:
@@ -200,7 +233,7 @@ def builtins_loaded() -> bool:
 
 def load_plugins() -> None:
     """Import every entry point of the ``fitbench.methods`` group once (a broken plugin warns, see
-    :func:`methods._plugins.load_entry_points`)."""
+    :func:`methods.plugins.load_entry_points`)."""
     load_entry_points(ENTRY_POINT_GROUP, "method")
 
 

@@ -9,9 +9,27 @@ BROKEN = '''
 raise RuntimeError("boom: the plugin's own bug\\nsecond line of the message")
 '''
 
+HALF = '''
+"""Registers a method and three data sources, then fails: none of them may stay registered."""
+from methods import register
+from methods.results import circle_result
+from datasets.sources import register_source
+
+for name in ("half_a", "half_b", "half_c"):
+    register_source(name, random=False, summary="half-registered plugin source")(lambda rng=None: (None, None))
+
+
+@register("circle.half_method", kind="closed form", summary="half-registered", reference="fitbench test")
+def half_method(points):
+    return circle_result(points, points[0], 1.0, converged=True, message="closed form")
+
+
+raise ImportError("boom: a dependency of the plugin is missing")
+'''
+
 GOOD = '''
 from methods import register
-from methods._result import circle_result
+from methods.results import circle_result
 
 
 @register("circle.first_point", kind="closed form", summary="plugin-loading test", reference="fitbench test")
@@ -73,7 +91,7 @@ def test_each_group_is_loaded_once_per_process(broken_site):
 
 
 def test_the_registries_share_one_loader():
-    """Both groups go through methods._plugins.load_entry_points (no second copy of the loop)."""
+    """Both groups go through methods.plugins.load_entry_points (no second copy of the loop)."""
     import inspect
 
     import methods._registry
@@ -81,3 +99,45 @@ def test_the_registries_share_one_loader():
     for module in (methods._registry, sources):
         code = inspect.getsource(module)
         assert "load_entry_points(" in code and "entry_points(group" not in code, module.__name__
+
+
+@pytest.fixture(scope="module")
+def half_site(tmp_path_factory):
+    return install_plugin(tmp_path_factory.mktemp("half"), "fitbench-half-plugin", {"fitbench_half": HALF},
+                          {"fitbench.methods": {"half": "fitbench_half"}}, version="1.0")
+
+
+def test_a_plugin_that_fails_to_load_registers_nothing(half_site):
+    """The entry point registered a method and three data sources before its import failed: after the warning
+    neither registry holds any of them (the data sources were registered from a method entry point)."""
+    code = ("import methods; from datasets import sources\n"
+            "ids = [s.id for s in methods.list_methods()]\n"
+            "names = [s.name for s in sources.list_sources()]\n"
+            "print('circle.half_method' in ids, [n for n in names if n.startswith('half_')], 'circle.kasa' in ids)\n")
+    out = run_python("-c", code, path_first=[half_site])
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "False [] True"
+    assert "failed to load and is skipped: ImportError: boom" in out.stderr
+
+
+def test_provenance_names_a_plugin_installed_inside_the_checkout(tmp_path):
+    """An environment inside the checkout (the README's ``.venv``): the plugin's distribution is still named,
+    both for what its entry point registered and for a module found by its top-level package."""
+    import shutil
+    import uuid
+
+    from conftest import REPO
+    inside = REPO / ".venv" / f"plugin-test-{uuid.uuid4().hex[:8]}"
+    try:
+        site = install_plugin(inside, "fitbench-inside-plugin", {"fitbench_inside": GOOD},
+                              {"fitbench.methods": {"good": "fitbench_inside"}}, version="0.7")
+        code = ("import methods; from methods.plugins import distributions_of\n"
+                "print(distributions_of([methods.get('circle.first_point').module, 'methods.circle.algebraic']))\n"
+                "import importlib.metadata as m; print(m.packages_distributions().get('fitbench_inside'))\n")
+        out = run_python("-c", code, path_first=[site])
+        assert out.returncode == 0, out.stderr
+        assert out.stdout.splitlines()[0] == "{'fitbench-inside-plugin': '0.7'}"
+    finally:
+        shutil.rmtree(inside, ignore_errors=True)
+        if inside.parent.is_dir() and not any(inside.parent.iterdir()):
+            inside.parent.rmdir()

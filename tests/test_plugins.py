@@ -13,7 +13,7 @@ PLUGIN = '''
 """A tiny external fitter: the circle through the centroid with the mean distance as radius."""
 import numpy as np
 from methods import register
-from methods._result import circle_result
+from methods.results import circle_result
 
 
 @register("circle.centroid_mean", kind="closed form", summary="centroid and mean distance (plugin demo)",

@@ -92,7 +92,7 @@ def test_html_report_in_chromium(built):
     assert page.count("<strong>Findings.</strong>") >= 2
 
 
-def test_rankings_pool_studies_and_leave_out_methods_not_run_everywhere(tmp_path):
+def test_rankings_pool_studies_and_keep_methods_not_run_everywhere(tmp_path):
     def study(name, methods, costs, decl):
         folder = tmp_path / name
         folder.mkdir()
@@ -105,9 +105,10 @@ def test_rankings_pool_studies_and_leave_out_methods_not_run_everywhere(tmp_path
     a = study("a", ["c.x", "c.y"], [1.0, 2.0, 4.0, 1.0], decl)
     b = study("b", ["c.x", "c.y", "c.z"], [3.0, 3.0, 1.0], decl)
     r = collect([a, b])["error"]
-    assert r.studies == ["a", "b"] and r.left_out == ["c.z"]
-    assert r.table.shape == (3, 2)                      # 2 problems of a + 1 of b, methods x and y
-    assert r.table.loc["b | d | s0 | 0"].tolist() == [3.0, 3.0]
+    assert r.studies == ["a", "b"] and r.left_out == []
+    assert r.table.shape == (3, 3)                      # 2 problems of a + 1 of b, methods x, y and z
+    assert r.table.loc["b | d | s0 | 0"].tolist() == [3.0, 3.0, 1.0]
+    assert r.runs == {"c.x": 3, "c.y": 3, "c.z": 1}     # z ran on b's problem only: absent elsewhere, not failed
     bad = study("c", ["c.x"], [1.0], {"profile": "error", "metric": "nope"})
     with pytest.raises(ValueError, match="nope"):
         collect([bad])

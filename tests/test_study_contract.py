@@ -111,7 +111,7 @@ PLUGIN = '''
 """A plugin: a robust-ish fitter and an outlier scenario, registered through entry points."""
 import numpy as np
 from methods import register
-from methods._result import circle_result
+from methods.results import circle_result
 from datasets.sources import register_source
 
 

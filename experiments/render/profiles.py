@@ -12,6 +12,7 @@ lim rho_s(tau) the share it solves at all. Costs below ``floor`` are raised to i
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -77,22 +78,27 @@ def performance_ratios(table: pd.DataFrame, rtol: float = TIE_RTOL) -> pd.DataFr
     if np.any(t <= 0):
         raise ValueError("performance ratios need positive costs: give problem_table a floor > 0 for errors that "
                          "can be exactly zero")
-    best = np.min(t, axis=1, keepdims=True)
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a problem no method ran on: NaN
+        best = np.nanmin(t, axis=1, keepdims=True)
         r = np.where(np.isfinite(best), t / best, np.inf)
     r = np.where(r <= 1.0 + rtol, 1.0, r)
+    r = np.where(np.isnan(t), np.nan, r)  # a method not run on a problem has no ratio there
     return pd.DataFrame(r, index=table.index, columns=table.columns)
 
 
 def profile(table: pd.DataFrame, taus=None, rtol: float = TIE_RTOL) -> pd.DataFrame:
-    """rho_s(tau) for every method (columns) at the ratios ``taus`` (index; default every distinct ratio)."""
+    """rho_s(tau) for every method (columns) at the ratios ``taus`` (index; default every distinct ratio), over the
+    problems the method ran on (its non-NaN costs)."""
     r = performance_ratios(table, rtol)
     finite = r.to_numpy()[np.isfinite(r.to_numpy())]
     if taus is None:
         taus = np.unique(np.concatenate([[1.0], finite]))
     taus = np.asarray(taus, float)
-    n = len(r)
-    out = {m: np.searchsorted(np.sort(r[m].to_numpy()), taus, side="right") / n for m in r.columns}
+    out = {}
+    for m in r.columns:
+        ran = r[m].to_numpy()[~np.isnan(r[m].to_numpy())]  # the share of the problems the method ran on
+        out[m] = np.searchsorted(np.sort(ran), taus, side="right") / max(len(ran), 1)
     return pd.DataFrame(out, index=pd.Index(taus, name="tau"))
 
 

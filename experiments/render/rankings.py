@@ -10,9 +10,12 @@ A study opts in with ``[[rankings]]`` entries in its TOML (kept in its ``meta.js
     floor = 1e-12                                       # costs below it are equal (default 1e-12; 0 for runtimes)
 
 The report names no study: it reads the declarations of whichever study folders exist. A problem is one
-(study, data set, data stream, repetition); a method is a method id with its parameters. Only methods that
-ran in every contributing study are profiled (the others are named in the caption), so that no problem is
-dropped for a method that was never run on it.
+(study, data set, data stream, repetition); a method is a method id with its parameters. Every method run on
+the pooled problems is profiled, with no config edit (a plugin method run by a study naming ``circle.*``
+joins): a method not run on a problem is absent there (not a failure), and its ρ is the share of the
+problems it ran on; so a study that declares a ranking adds problems and never removes a method from it.
+A problem no method solved is left out (it counts for nobody: no inf == inf "win") and counted in
+``unsolved``.
 """
 from __future__ import annotations
 
@@ -35,7 +38,9 @@ class Ranking:
     unit: str = ""
     studies: list[str] = field(default_factory=list)
     rows: list[pd.DataFrame] = field(default_factory=list, repr=False)
-    left_out: list[str] = field(default_factory=list)
+    left_out: list[str] = field(default_factory=list)   #: methods left out (none: every method run is profiled)
+    unsolved: int = 0   #: pooled problems that no method solved (left out of the table)
+    runs: dict = field(default_factory=dict)   #: method -> number of problems it ran on (of the table's)
     table: pd.DataFrame | None = field(default=None, repr=False)
     by_dataset: pd.DataFrame | None = field(default=None, repr=False)
 
@@ -78,16 +83,20 @@ def _tabulate(r: Ranking) -> None:
     for part in r.rows:
         part = part.assign(label=[method_label(m, p) for m, p in zip(part["method"], part["params"])])
         labelled.append(part)
-    common = set.intersection(*(set(p["label"]) for p in labelled))
-    every = set().union(*(set(p["label"]) for p in labelled))
-    r.left_out = sorted(every - common)
+    r.left_out = []
     rows = pd.concat(labelled, ignore_index=True)
-    rows = rows[rows["label"].isin(common)]
     floor = float(rows["floor"].max()) if len(rows) else 0.0
     rows = rows.assign(problem=rows["study"] + " | " + rows["problem"])
-    r.table = problem_table(rows.assign(**{r.metric: rows["cost"]}).drop(columns=["method", "params"])
-                            .rename(columns={"label": "method"}),
-                            metric=r.metric, problem=("problem",), floor=floor)
+    table = problem_table(rows.assign(**{r.metric: rows["cost"]}).drop(columns=["method", "params"])
+                          .rename(columns={"label": "method"}),
+                          metric=r.metric, problem=("problem",), floor=floor, complete=False)
+    solved = np.isfinite(table.to_numpy(float)).any(axis=1)
+    r.unsolved = int((~solved).sum())
+    attrs = dict(table.attrs)
+    table = table[solved]
+    table.attrs.update(attrs, unsolved_problems=r.unsolved)
+    r.table = table
+    r.runs = {m: int(table[m].notna().sum()) for m in table.columns}
     # per data set: the median cost of each method over the data set's problems (failures count as inf)
     costs = r.table.copy()
     costs["data set"] = [p.split(" | ")[0] + ": " + p.split(" | ")[1] for p in costs.index]

@@ -1,0 +1,99 @@
+"""Loading third-party plugins from entry-point groups, once per group (one loader for all registries).
+
+The method registry (group ``fitbench.methods``, :mod:`methods._registry`) and the data-source registry
+(group ``fitbench.datasets``, :mod:`datasets.sources`) both call :func:`load_entry_points`; each entry point
+names a module (or object) whose import registers what it brings. Loading is transactional: registries
+add their entries through :func:`add_entry`, and whatever an entry point added before it failed is taken
+out again, so a plugin that fails to load registers nothing (no method, no data source). What a plugin registered is
+attributed to its distribution (:func:`distributions_of`, recorded in each study's ``meta.json``).
+This module imports nothing of fitbench, so any registry can use it without an import circle.
+"""
+from __future__ import annotations
+
+import warnings
+from importlib import metadata
+
+#: the top-level packages of fitbench itself: never a plugin, wherever the environment lives
+OWN_PACKAGES = frozenset({"methods", "datasets", "experiments", "fitbench"})
+
+
+class PluginLoadWarning(UserWarning):
+    """A plugin's entry point failed to load; it was skipped and the built-ins still work."""
+
+
+_loaded_groups: set[str] = set()
+_MISSING = object()
+#: (registry, key, what it held before) of every entry added, in order (undone when a plugin fails)
+_JOURNAL: list[tuple[dict, object, object]] = []
+#: module -> (distribution, version) of what entry points registered
+_MODULE_DIST: dict[str, tuple[str, str]] = {}
+
+
+def add_entry(registry: dict, key, entry) -> None:
+    """``registry[key] = entry``, journaled: an entry point that fails while loading has its additions taken out
+    of every registry (methods, data sources, ...), and what a successful one added is attributed to its
+    distribution (``entry.module``)."""
+    _JOURNAL.append((registry, key, registry.get(key, _MISSING)))
+    registry[key] = entry
+
+
+def _one_line(exc: BaseException) -> str:
+    """``Type: first line of the message`` (an exception's message may span lines; a warning must not)."""
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+
+
+def load_entry_points(group: str, what: str) -> None:
+    """Import every entry point of ``group`` once per process; ``what`` names what its plugins add
+    (e.g. ``"method"``, ``"data source"``) for the warning.
+
+    A broken plugin does not take the built-ins down: it is skipped with one :class:`PluginLoadWarning`
+    of one line saying which entry point of which distribution failed, why, and what to do; whatever it
+    registered before it failed is removed again (from every tracked registry).
+    """
+    if group in _loaded_groups:
+        return
+    _loaded_groups.add(group)
+    for ep in metadata.entry_points(group=group):
+        mark = len(_JOURNAL)
+        dist = getattr(ep, "dist", None)
+        try:
+            ep.load()
+        except Exception as exc:  # a third-party bug must not take the built-ins down
+            while len(_JOURNAL) > mark:
+                registry, key, previous = _JOURNAL.pop()
+                if previous is _MISSING:
+                    registry.pop(key, None)
+                else:
+                    registry[key] = previous
+            origin = f"distribution {dist.name} {dist.version}" if dist is not None else "an unknown distribution"
+            warnings.warn(f"{what} plugin {ep.name!r} (entry point {ep.value!r} of group {group!r}, "
+                          f"{origin}) failed to load and is skipped: {_one_line(exc)}; fix or uninstall that "
+                          f"distribution", PluginLoadWarning, stacklevel=3)
+            continue
+        if dist is not None:
+            for registry, key, _ in _JOURNAL[mark:]:
+                module = getattr(registry.get(key), "module", None)
+                if module:
+                    _MODULE_DIST[module] = (dist.name, dist.version)
+
+
+def distributions_of(modules) -> dict[str, str]:
+    """{distribution: version} of the modules that are not fitbench's own (plugins), wherever they are
+    installed (a virtual environment inside the checkout included): the distribution whose entry point
+    registered the module, else the one that provides its top-level package."""
+    out = {}
+    for m in modules:
+        if m in _MODULE_DIST:
+            name, version = _MODULE_DIST[m]
+            out[name] = version
+            continue
+        top = m.split(".")[0]
+        if top in OWN_PACKAGES or top == "__main__":
+            continue
+        for dist_name in metadata.packages_distributions().get(top, []):
+            out[dist_name] = metadata.version(dist_name)
+    return out
+
+
+__all__ = ["PluginLoadWarning", "load_entry_points", "add_entry", "distributions_of", "OWN_PACKAGES"]

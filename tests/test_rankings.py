@@ -1,0 +1,52 @@
+"""Cross-study rankings are open: every method run on the pooled problems is profiled without a config edit, a
+study declaring a ranking never removes a method from it, and a problem no method solved counts for nobody."""
+import numpy as np
+import pandas as pd
+
+from experiments.render.profiles import performance_ratios, profile
+from experiments.render.rankings import collect
+
+DECL = {"profile": "circularity", "metric": "form_error", "methods": "circle.*"}
+
+
+def study(tmp_path, name, costs: dict, status=None):
+    """A study folder whose rows give each method (key) its costs on problems s0, s1, ... (NaN: failed)."""
+    folder = tmp_path / name
+    folder.mkdir()
+    rows = []
+    for method, values in costs.items():
+        for i, v in enumerate(values):
+            rows.append({"study": name, "dataset": "d", "data_stream": f"s{i}", "repetition": 0, "method": method,
+                         "params": "{}", "status": "ok" if np.isfinite(v) else "not converged", "form_error": v})
+    pd.DataFrame(rows).to_csv(folder / "results.csv", index=False)
+    return name, folder, {"config": {"rankings": [DECL]}}
+
+
+def test_a_new_study_with_fewer_methods_removes_none(tmp_path):
+    """A user's study declaring the same profile with kasa and a plugin method: the existing profile keeps its
+    four methods, and the plugin joins over the problems it ran on."""
+    old = study(tmp_path, "published", {"circle.kasa": [1.0, 2.0], "circle.gauss_newton": [1.0, 1.5],
+                                        "circle.minimum_zone": [0.5, 1.0], "circle.max_inscribed": [2.0, 3.0]})
+    new = study(tmp_path, "mine", {"circle.kasa": [1.0], "circle.my_fit": [0.5]})
+    before = collect([old])["circularity"]
+    after = collect([old, new])["circularity"]
+    assert set(before.table.columns) < set(after.table.columns)
+    assert set(after.table.columns) == {"circle.kasa", "circle.gauss_newton", "circle.minimum_zone",
+                                        "circle.max_inscribed", "circle.my_fit"}
+    assert after.left_out == [] and len(after.table) == 3
+    assert after.runs["circle.my_fit"] == 1 and after.runs["circle.kasa"] == 3
+    rho = profile(after.table, taus=[1.0])
+    assert rho.loc[1.0, "circle.my_fit"] == 1.0           # best on the one problem it ran on
+    assert rho.loc[1.0, "circle.minimum_zone"] == 1.0     # best on both problems of 'published' it ran on
+    assert rho.loc[1.0, "circle.kasa"] == 0.0
+
+
+def test_a_problem_no_method_solved_counts_for_nobody(tmp_path):
+    """Every method failed on s1 (inf == inf): it is left out, so kasa is not "best on 100 % of 2 problems"."""
+    nan = float("nan")
+    r = collect([study(tmp_path, "s", {"circle.kasa": [1.0, nan], "circle.taubin": [2.0, nan]})])["circularity"]
+    assert r.unsolved == 1 and list(r.table.index) == ["s | d | s0 | 0"]
+    best = (r.table.values == r.table.min(axis=1).values[:, None]).mean(axis=0)
+    assert best.tolist() == [1.0, 0.0]
+    ratios = performance_ratios(r.table)
+    assert ratios.loc["s | d | s0 | 0"].tolist() == [1.0, 2.0]

@@ -48,6 +48,10 @@ def _jsonable(value):
     return value
 
 
+#: numpy scalars/arrays and non-finite floats as plain JSON values (NaN/inf -> None), for a result's ``to_dict``
+jsonable = _jsonable
+
+
 def _num(v) -> str:
     """A number as a person reads it: 10 significant digits, "nan" for a non-finite value."""
     if v is None:

@@ -18,7 +18,7 @@ from experiments.engine import ConfigError
 import pandas as pd
 
 from experiments.study import Analysis, Figure, Table, atomic_path
-from methods._result import CircularTestFit
+from methods.results import CircularTestFit
 from experiments.provenance import write_atomic
 
 #: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)

@@ -227,7 +227,7 @@ def cmd_list(args) -> int:
 
 
 def _jsonable(v):
-    from methods._result import _jsonable as j
+    from methods.results import jsonable as j
     return j(v)
 
 

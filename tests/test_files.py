@@ -153,3 +153,27 @@ def test_cli_outputs_onto_special_files_are_refused_and_through_links_written(tm
     code, _, err = cli("roundness", data, "--plot", link)
     assert code == 0, err
     assert link.is_symlink() and real.read_bytes().startswith(b"\x89PNG")
+
+
+@needs_fifo
+def test_compensation_tables_onto_a_fifo_a_device_or_through_a_symlink(tmp_path):
+    from datasets.positioning import axis_test, to_frame
+    data, _ = axis_test(rng=np.random.default_rng(2), mpe=0.002)
+    csv = tmp_path / "axis.csv"
+    to_frame(data, actual=False).to_csv(csv, index=False)
+    fifo = tmp_path / "table.mpf"
+    os.mkfifo(fifo)
+    for target, kind in ((fifo, "FIFO"), (os.devnull, "character device")):
+        code, _, err = cli("positioning", csv, "--mpe", 0.002, "--compensation", "siemens-eec", target)
+        assert code == 2 and kind in err and err.count("\n") == 1, err
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode) and stat.S_ISCHR(os.stat(os.devnull).st_mode)
+    real = tmp_path / "real.csv"
+    real.write_text("old")
+    link = tmp_path / "link.csv"
+    link.symlink_to(real)
+    with umask(0o022):
+        code, _, err = cli("positioning", csv, "--mpe", 0.002, "--compensation", "csv", link,
+                           "--compensation", "fanuc-pitch", tmp_path / "new.txt")
+    assert code == 0, err
+    assert link.is_symlink() and "compensation" in real.read_text()
+    assert stat.S_IMODE(os.stat(tmp_path / "new.txt").st_mode) == 0o644       # not 0600

@@ -276,3 +276,28 @@ def test_multilateration_lengths_in_um_read_as_mm_warn(tmp_path):
     assert "measured lengths" in out.stderr and "--unit um" in out.stderr, out.stderr
     ok = cli("multilaterate", scaled, "--unit", "um")
     assert "measured lengths" not in ok.stderr, ok.stderr
+
+
+def test_one_page_reports(tmp_path):
+    import re
+    from datasets.positioning import axis_test, to_frame
+    data, _ = axis_test(rng=np.random.default_rng(3), mpe=0.002)
+    axis = tmp_path / "axis.csv"
+    to_frame(data, actual=False).to_csv(axis, index=False)
+    t, d = shaft(n=720)
+    xy = write_xy(tmp_path / "xy.csv", t, d)
+    cond = TestConditions(nominal_radius=100.0, nominal_center=(0.0, 0.0), sampling_hz=50.0)
+    cw, ccw, _ = circular_test(cond, MachineErrors(squareness=30e-6), seed=2)
+    bb = tmp_path / "bb.csv"
+    bb.write_text("run,x,y\n" + "".join(f"{lab},{x:.7f},{y:.7f}\n" for lab, pts in (("cw", cw), ("ccw", ccw))
+                                        for x, y in pts))
+    for args in (("positioning", axis, "--mpe", 0.002, "--tolerance", "A=30"), ("roundness", xy, "--tolerance", "RONt=9"),
+                 ("circular-test", bb, "--nominal-radius", 100, "--nominal-center", 0, 0, "--tolerance", "G=40")):
+        pdf = tmp_path / f"{args[0]}.pdf"
+        out = cli(*args, "--report", pdf)
+        assert out.returncode == 0, out.stderr
+        body = pdf.read_bytes()
+        assert body.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page[^s]", body)) == 1
+        assert "verdict" in out.stdout                         # the page's text is the printed report
+    out = cli("roundness", xy, "--report", tmp_path / "missing" / "r.pdf")
+    assert out.returncode == 2 and out.stderr.count("\n") == 1 and "does not exist" in out.stderr

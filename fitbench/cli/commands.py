@@ -164,6 +164,17 @@ def verdict_lines(v: dict | None) -> list[str]:
     return lines
 
 
+def add_report_option(p):
+    p.add_argument("--report", metavar="FILE.pdf",
+                   help="write a one-page test report: conditions, figures, verdict, diagnostics and the plot")
+
+
+def write_report(path, title: str, lines: list[str], draw, aspect: float) -> None:
+    """The one-page report (:func:`fitbench.plots.report_page.one_page`), written atomically; one line on failure."""
+    from fitbench.plots.report_page import one_page
+    one_page(path, title=title, lines=lines, draw=draw, aspect=aspect, save=save_figure)
+
+
 def verdict_title(v: dict | None) -> str:
     return "" if not v else f"; verdict {v['overall']} (" + ", ".join(
         f"{c['figure']} {c['value_mm'] * 1e3:.2f} µm / {c['tolerance_mm'] * 1e3:g} µm" for c in v["checks"]) + ")"
@@ -354,6 +365,7 @@ def cmd_circular_test(args) -> int:
     pitch = finite("--cyclic-pitch", args.cyclic_pitch, positive=True)
     arc = finite("--arc", args.arc, positive=True)
     plot_path = check_plot_path(args.plot)
+    report_path = check_plot_path(args.report)
     tolerances = parse_tolerances(args.tolerance, ("G", "G_cw", "G_ccw", "G_b", "H"))
     runs, first, labelled = _read_circular_runs(args)
     args.unit = first.unit
@@ -403,6 +415,16 @@ def cmd_circular_test(args) -> int:
     if plot_path:
         polar_plot(runs["cw"], runs["ccw"], ev, plot_path, title=verdict_title(check).lstrip("; "), diagnostics=dg,
                    conditions=conditions, save=save_figure)
+    lines = [header_line("circular-test", args.unit, "; options in mm, mm/min and degrees")]
+    lines += [f"note: {n}" for n in notes] + [text(ev, dg)]
+    if dg is None:
+        lines.append("diagnostics: not estimated (give --nominal-center X Y)")
+    lines += verdict_lines(check)
+    if report_path:
+        write_report(report_path, f"ISO 230-4 circular test{': ' + args.machine if args.machine else ''}",
+                     [f"files        {', '.join(str(f) for f in args.files)}", f"date         {args.date or '-'}",
+                      *lines], lambda sub: polar_plot(runs["cw"], runs["ccw"], ev, None, diagnostics=dg,
+                                                      conditions=conditions, into=sub), aspect=7.2 / 11.5)
     if args.json:
         d = ev.to_dict(residuals=False)
         out = {k: d.pop(k) for k in (*ev.FIGURES, "center")}
@@ -419,14 +441,7 @@ def cmd_circular_test(args) -> int:
             out["details"]["diagnostics_model"] = dg["_model"]
         print(json.dumps(_jsonable(out)))
         return 0
-    print(header_line("circular-test", args.unit, "; options in mm, mm/min and degrees"))
-    for n in notes:
-        print(f"note: {n}")
-    print(text(ev, dg))
-    if dg is None:
-        print("diagnostics: not estimated (give --nominal-center X Y)")
-    for line in verdict_lines(check):
-        print(line)
+    print("\n".join(lines))
     return 0
 
 
@@ -449,6 +464,7 @@ def add_circular_test(sub):
                     help="keep the CW/CCW labels even when the point order says otherwise (only warn)")
     pc.add_argument("--angle-unit", choices=("deg", "rad"), help="angle column of an angle + radial-deviation file")
     add_tolerance_option(pc, "G (the larger of CW and CCW), G_cw, G_ccw, G_b, H")
+    add_report_option(pc)
     pc.add_argument("--machine", default="", help="machine name for the plot's test-conditions panel")
     pc.add_argument("--date", default="", help="test date for the plot's test-conditions panel")
     add_reader_options(pc)
@@ -463,6 +479,7 @@ def cmd_positioning(args) -> int:
     from fitbench.plots.positioning import plot, text
 
     plot_path = check_plot_path(args.plot)
+    report_path = check_plot_path(args.report)
     instrument_u = finite("--instrument-u", args.instrument_u)
     mpe = finite("--mpe", args.mpe)
     if args.degree < 0:
@@ -506,6 +523,11 @@ def cmd_positioning(args) -> int:
         title = str(args.file) + (f"; corrected to 20 °C from {temperature:g} °C, {alpha:g} µm/(m·K)" if thermal else "")
         title += verdict_title(check)
         plot(res, plot_path, title=title, data=data, save=save_figure)
+    lines = [header_line("positioning", args.unit, deviation_unit=args.deviation_unit)]
+    lines += ([thermal_text] if thermal else []) + [text(res, degree=args.degree)] + verdict_lines(check)
+    if report_path:
+        write_report(report_path, "ISO 230-2 positioning test", [f"file         {args.file}", *lines],
+                     lambda sub: plot(res, None, title=str(args.file), data=data, into=sub), aspect=5 / 13)
     if args.json:
         out = dict(res.figures)
         if thermal:
@@ -522,12 +544,7 @@ def cmd_positioning(args) -> int:
         out["u_delta"] = res.extra["u_delta"]
         print(json.dumps(_jsonable(out)))
         return 0
-    print(header_line("positioning", args.unit, deviation_unit=args.deviation_unit))
-    if thermal:
-        print(thermal_text)
-    print(text(res, degree=args.degree))
-    for line in verdict_lines(check):
-        print(line)
+    print("\n".join(lines))
     if comp is not None:
         for fmt, path in args.compensation:
             print(f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
@@ -546,6 +563,7 @@ def add_positioning(sub):
     g.add_argument("--mpe", type=float, metavar="MPE_MM", help="the instrument's maximum permissible error (mm, rectangular)")
     pp.add_argument("--standard", choices=("iso230-2:2014", "iso230-2:1988", "vdi3441"), default="iso230-2:2014")
     add_tolerance_option(pp, "A, E, R, B, M, A_up, ...")
+    add_report_option(pp)
     pp.add_argument("--material-temperature", type=float, metavar="DEG_C",
                     help="temperature of the axis scale / workpiece during the test (°C): the deviations are "
                          "corrected to 20 °C by the nominal differential expansion (needs --expansion-coefficient)")

@@ -30,6 +30,8 @@ def add_parser(subparsers):
     p.add_argument("--plot", metavar="PNG", help="write the polar plot and the harmonic spectrum")
     from fitbench.cli.commands import add_tolerance_option
     add_tolerance_option(p, "RONt, RONp, RONv, RONq: checked about each reference circle shown")
+    from fitbench.cli.commands import add_report_option
+    add_report_option(p)
     p.set_defaults(func=run)
     return p
 
@@ -37,11 +39,12 @@ def add_parser(subparsers):
 def run(args) -> int:
     import methods
     from fitbench.cli.commands import (check_plot_path, parse_tolerances, read_profile_args, save_figure, verdict,
-                                       verdict_lines, verdict_title)
+                                       verdict_lines, verdict_title, write_report)
     from fitbench.plots.roundness import plot
 
     cutoff = parse_cutoff(args.cutoff, "--cutoff")
     plot_path = check_plot_path(args.plot)
+    report_path = check_plot_path(args.report)
     tolerances = parse_tolerances(args.tolerance, ("RONt", "RONp", "RONv", "RONq"))
     source, points, unit, notes = read_profile_args(args)
     with warnings.catch_warnings(record=True) as caught:
@@ -54,6 +57,10 @@ def run(args) -> int:
                     {f"{name} {kind.upper()}": tol for kind in res.references for name, tol in tolerances.items()})
     if plot_path:
         plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))
+    lines = [f"note: {n}" for n in notes] + [report(res, source)] + verdict_lines(check)
+    if report_path:
+        write_report(report_path, "ISO 12181 roundness", lines, lambda sub: plot(res, None, title=source, into=sub),
+                     aspect=5.4 / 12)
     if args.json:
         d = res.to_dict(residuals=False)
         d["spectrum"] = {k: np.asarray(v).tolist() for k, v in res.spectrum.items()}
@@ -65,11 +72,7 @@ def run(args) -> int:
         d.pop("extra", None)
         print(json.dumps(d))
         return 0 if res.converged else 1
-    for n in notes:
-        print(f"note: {n}")
-    print(report(res, source))
-    for line in verdict_lines(check):
-        print(line)
+    print("\n".join(lines))
     return 0 if res.converged else 1
 
 

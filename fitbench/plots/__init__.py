@@ -32,11 +32,21 @@ def save_atomic(fig, path, *, dpi: float | None = None) -> None:
         fig.savefig(tmp, format=path.suffix.lower().lstrip(".") or "png", **({} if dpi is None else {"dpi": dpi}))
 
 
+def tight(fig) -> None:
+    """``fig.tight_layout()`` for a whole figure; a part of a page (a SubFigure, see ``into``) keeps its layout."""
+    if hasattr(fig, "tight_layout"):
+        fig.tight_layout()
+
+
 @contextlib.contextmanager
-def report_figure(path, *, dpi: float, save=None, **figure_kwargs):
+def report_figure(path, *, dpi: float, save=None, into=None, **figure_kwargs):
     """``with report_figure(path, dpi=120, figsize=(w, h)) as fig:`` draw on ``fig``; when the block ends
     without error the figure is written by ``save(fig, path)`` if given, else :func:`save_atomic`; the figure
-    is closed on every path."""
+    is closed on every path. With ``into`` (a matplotlib SubFigure, part of a page such as the one-page
+    report) the drawing goes there and nothing is written or closed."""
+    if into is not None:
+        yield into
+        return
     plt = pyplot()
     fig = plt.figure(**figure_kwargs)
     try:

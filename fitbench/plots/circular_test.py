@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fitbench.plots import report_figure
+from fitbench.plots import report_figure, tight
 
 LABELS = {"squareness": "squareness", "scale_mismatch": "scale mismatch X-Y", "servo_mismatch": "servo mismatch X-Y",
           "backlash_x": "backlash X", "backlash_y": "backlash Y", "reversal_spike_x": "reversal spike X",
@@ -105,13 +105,13 @@ def _nice_division(span_um: float) -> float:
     return float(10 ** (exp + 1))
 
 
-def polar_plot(cw, ccw, ev, path, title: str = "", *, diagnostics=None, conditions=None, save=None):
+def polar_plot(cw, ccw, ev, path, title: str = "", *, diagnostics=None, conditions=None, save=None, into=None):
     """Both runs as radial deviation (µm) about the evaluation centre, drawn on a polar grid whose
     rings are a fixed number of µm apart (the scale is printed: µm per division); the nominal circle is
     the ring 0; the G band (min and max radius of both runs) shaded; start (o) and direction (arrow)
     markers; a panel of test conditions and the ranked diagnostics. Returns the figure's scale dict
     {'um_per_division', 'divisions'}."""
-    with report_figure(path, dpi=120, save=save, figsize=(11.5, 7.2)) as fig:
+    with report_figure(path, dpi=120, save=save, into=into, figsize=(11.5, 7.2)) as fig:
         c = ev.center
         R = ev.nominal_radius
         cond = dict(ev.conditions)

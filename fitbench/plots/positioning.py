@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fitbench.plots import report_figure
+from fitbench.plots import report_figure, tight
 from methods.positioning.model import evaluate_band
 
 ARROW = {"up": "↑", "down": "↓"}
@@ -66,11 +66,11 @@ def text(res, degree: int | None = None) -> str:
     return "\n".join(lines)
 
 
-def plot(result, path, title: str = "", *, data=None, save=None) -> dict:
+def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> dict:
     """Left: every run (thin), the mean deviations of each direction, the mean bidirectional curve, the
     ±k s bands and the figures A, E, B, M, R annotated; right: the model with U(P). Returns the axes'
     labels (for tests)."""
-    with report_figure(path, dpi=110, save=save, figsize=(13, 5)) as fig:
+    with report_figure(path, dpi=110, save=save, into=into, figsize=(13, 5)) as fig:
         per, figs = result.per_target, result.figures
         k = figs.get("k", 2.0)
         P = per["targets"]
@@ -118,6 +118,6 @@ def plot(result, path, title: str = "", *, data=None, save=None) -> dict:
         axes[0].set_ylabel("positional deviation [µm]")
         if title:
             fig.suptitle(title, fontsize=10)
-        fig.tight_layout()
+        tight(fig)
         labels = {"x": axes[0].get_xlabel(), "y": axes[0].get_ylabel(), "notes": notes}
         return labels

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from fitbench.plots import pyplot, save_atomic
+from fitbench.plots import report_figure, tight
 from methods.roundness.filter import transmission
 
 
@@ -24,64 +24,61 @@ def _circle_deviation(center, radius, c0, r0, theta):
     return proj + np.sqrt(np.maximum(radius ** 2 - (d @ d - proj ** 2), 0.0)) - r0
 
 
-def plot(res, path, title: str = "", *, save=None) -> None:
+def plot(res, path, title: str = "", *, save=None, into=None) -> None:
     """Polar plot of the filtered profile (deviation magnified, µm per division) with the reference circles,
     beside the bar plot of the harmonic spectrum (µm per UPR) with the filter's transmission."""
-    plt = pyplot()
+    with report_figure(path, dpi=110, save=save, into=into, figsize=(12, 5.4)) as fig:
+        c0, r0 = res.raw_lsci["center"], res.raw_lsci["radius"]
+        theta = res.angles
+        dev_um = res.deviations * 1e3
+        ax = fig.add_subplot(1, 2, 1, projection="polar")
+        t_fine = np.linspace(0, 2 * np.pi, 721)
+        curves = {k: _circle_deviation(r["center"], r["radius"], c0, r0, t_fine) * 1e3 for k, r in res.references.items()}
+        lo = min(dev_um.min(), *(c.min() for c in curves.values()))
+        hi = max(dev_um.max(), *(c.max() for c in curves.values()))
+        step = _nice_step(max(hi - lo, 1e-9))
+        lo_t, hi_t = math.floor(lo / step) * step, math.ceil(hi / step) * step
+        ax.set_rorigin(lo_t - 0.6 * (hi_t - lo_t))
+        ax.set_rlim(lo_t, hi_t)
+        ax.set_rticks(np.arange(lo_t, hi_t + step / 2, step))
+        ax.set_yticklabels([])
+        ax.plot(np.append(theta, theta[0]), np.append(dev_um, dev_um[0]), color="k", lw=0.8, label="filtered profile")
+        colors = {"lsci": "tab:blue", "mzci": "tab:red", "mici": "tab:green", "mcci": "tab:purple"}
+        for kind, c in curves.items():
+            r = res.references[kind]
+            if not r["converged"]:  # drawn faint and labelled: its solver claimed no optimum
+                ax.plot(t_fine, c, color="0.6", lw=0.6, ls=":", label=f"{kind.upper()}: not certified by {r['method']}")
+                continue
+            ax.plot(t_fine, c, color=colors[kind], lw=0.9, ls="--",
+                    label=f"{kind.upper()}: RONt {r['RONt'] * 1e3:.3f} µm")
+            if kind == "mzci":
+                ax.plot(t_fine, _circle_deviation(r["center"], r["inner_radius"], c0, r0, t_fine) * 1e3,
+                        color=colors[kind], lw=0.6, ls=":")
+                ax.plot(t_fine, _circle_deviation(r["center"], r["outer_radius"], c0, r0, t_fine) * 1e3,
+                        color=colors[kind], lw=0.6, ls=":")
+        cut = "unfiltered" if res.cutoff_upr is None else f"Gaussian {res.cutoff_upr:g} UPR"
+        ax.set_title(f"{title}\n{cut}, {step:g} µm/div", fontsize=9)
+        ax.legend(loc="upper left", bbox_to_anchor=(-0.25, -0.08), fontsize=7, ncol=2)
 
-    c0, r0 = res.raw_lsci["center"], res.raw_lsci["radius"]
-    theta = res.angles
-    dev_um = res.deviations * 1e3
-    fig = plt.figure(figsize=(12, 5.4))
-    ax = fig.add_subplot(1, 2, 1, projection="polar")
-    t_fine = np.linspace(0, 2 * np.pi, 721)
-    curves = {k: _circle_deviation(r["center"], r["radius"], c0, r0, t_fine) * 1e3 for k, r in res.references.items()}
-    lo = min(dev_um.min(), *(c.min() for c in curves.values()))
-    hi = max(dev_um.max(), *(c.max() for c in curves.values()))
-    step = _nice_step(max(hi - lo, 1e-9))
-    lo_t, hi_t = math.floor(lo / step) * step, math.ceil(hi / step) * step
-    ax.set_rorigin(lo_t - 0.6 * (hi_t - lo_t))
-    ax.set_rlim(lo_t, hi_t)
-    ax.set_rticks(np.arange(lo_t, hi_t + step / 2, step))
-    ax.set_yticklabels([])
-    ax.plot(np.append(theta, theta[0]), np.append(dev_um, dev_um[0]), color="k", lw=0.8, label="filtered profile")
-    colors = {"lsci": "tab:blue", "mzci": "tab:red", "mici": "tab:green", "mcci": "tab:purple"}
-    for kind, c in curves.items():
-        r = res.references[kind]
-        if not r["converged"]:  # drawn faint and labelled: its solver claimed no optimum
-            ax.plot(t_fine, c, color="0.6", lw=0.6, ls=":", label=f"{kind.upper()}: not certified by {r['method']}")
-            continue
-        ax.plot(t_fine, c, color=colors[kind], lw=0.9, ls="--",
-                label=f"{kind.upper()}: RONt {r['RONt'] * 1e3:.3f} µm")
-        if kind == "mzci":
-            ax.plot(t_fine, _circle_deviation(r["center"], r["inner_radius"], c0, r0, t_fine) * 1e3,
-                    color=colors[kind], lw=0.6, ls=":")
-            ax.plot(t_fine, _circle_deviation(r["center"], r["outer_radius"], c0, r0, t_fine) * 1e3,
-                    color=colors[kind], lw=0.6, ls=":")
-    cut = "unfiltered" if res.cutoff_upr is None else f"Gaussian {res.cutoff_upr:g} UPR"
-    ax.set_title(f"{title}\n{cut}, {step:g} µm/div", fontsize=9)
-    ax.legend(loc="upper left", bbox_to_anchor=(-0.25, -0.08), fontsize=7, ncol=2)
-
-    bx = fig.add_subplot(1, 2, 2)
-    k = np.asarray(res.spectrum["upr"])
-    amp = np.asarray(res.spectrum["amplitude"]) * 1e3
-    sel = k >= 1
-    kmax = int(min(k.max(), 3 * res.cutoff_upr if res.cutoff_upr else k.max()))
-    sel &= k <= max(kmax, 10)
-    bx.bar(k[sel], amp[sel], width=0.8 if sel.sum() < 200 else 1.0, color="tab:gray")
-    for d in res.dominant_lobes[:3]:
-        bx.annotate(f"{d['upr']}", (d["upr"], d["amplitude"] * 1e3), fontsize=7, ha="center", va="bottom")
-    bx.set_xlabel("undulations per revolution [UPR]")
-    bx.set_ylabel("amplitude of the filtered deviation [µm]")
-    bx.set_title("harmonic spectrum (about the raw LSCI centre)", fontsize=9)
-    if res.cutoff_upr:
-        tx = bx.twinx()
-        kk = np.linspace(0, max(kmax, 10), 400)
-        tx.plot(kk, transmission(kk, res.cutoff_upr), color="tab:orange", lw=1)
-        tx.set_ylabel("filter transmission a(k)", color="tab:orange")
-        tx.set_ylim(0, 1.05)
-    fig.tight_layout()
-    try:
-        save(fig, path) if save is not None else save_atomic(fig, path, dpi=110)
-    finally:
-        plt.close(fig)
+        bx = fig.add_subplot(1, 2, 2)
+        k = np.asarray(res.spectrum["upr"])
+        amp = np.asarray(res.spectrum["amplitude"]) * 1e3
+        sel = k >= 1
+        kmax = int(min(k.max(), 3 * res.cutoff_upr if res.cutoff_upr else k.max()))
+        sel &= k <= max(kmax, 10)
+        bx.bar(k[sel], amp[sel], width=0.8 if sel.sum() < 200 else 1.0, color="tab:gray")
+        shown = []  # label a dominant lobe only where it does not overlap a label already placed
+        for d in res.dominant_lobes[:5]:
+            if all(abs(d["upr"] - u) > 0.04 * max(kmax, 10) for u in shown):
+                bx.annotate(f"{d['upr']}", (d["upr"], d["amplitude"] * 1e3), fontsize=7, ha="center", va="bottom")
+                shown.append(d["upr"])
+        bx.set_xlabel("undulations per revolution [UPR]")
+        bx.set_ylabel("amplitude of the filtered deviation [µm]")
+        bx.set_title("harmonic spectrum (about the raw LSCI centre)", fontsize=9)
+        if res.cutoff_upr:
+            tx = bx.twinx()
+            kk = np.linspace(0, max(kmax, 10), 400)
+            tx.plot(kk, transmission(kk, res.cutoff_upr), color="tab:orange", lw=1)
+            tx.set_ylabel("filter transmission a(k)", color="tab:orange")
+            tx.set_ylim(0, 1.05)
+        tight(fig)

@@ -1,0 +1,33 @@
+"""A one-page test report (``--report FILE.pdf``): what instrument software hands to a customer. An A4 page
+with the test conditions, the figures of the standard with their verdict, the diagnostics (the text the
+command prints, set in a monospaced font) and the test's plot below them, drawn on the same page by the
+command's own plot function (vector graphics in the PDF)."""
+from __future__ import annotations
+
+import datetime as _dt
+
+from fitbench import __version__
+from fitbench.plots import report_figure
+
+A4_INCHES = (8.27, 11.69)
+_LEFT, _RIGHT, _TOP = 0.05, 0.95, 0.955
+_CHAR_WIDTH = 0.62      # DejaVu Sans Mono: advance width / font size (0.60), with a margin
+
+
+def one_page(path, *, title: str, lines: list[str], draw, aspect: float = 0.6, save=None) -> None:
+    """Write the page: ``title`` and ``lines`` (monospaced text, sized to fit the width and at most half the
+    height) in the upper part; ``draw(subfigure)`` draws the test's plot below (a matplotlib SubFigure: the
+    plot functions' ``into``), ``aspect`` = its height / width."""
+    text = [ln for block in lines for ln in str(block).splitlines()] or [""]
+    width_pt = (_RIGHT - _LEFT) * A4_INCHES[0] * 72
+    longest = max(len(ln) for ln in text)
+    size = min(8.0, width_pt / (_CHAR_WIDTH * max(longest, 1)), 0.5 * A4_INCHES[1] * 72 / (1.2 * len(text)))
+    with report_figure(path, dpi=150, save=save, figsize=A4_INCHES, layout="constrained") as fig:
+        stamp = _dt.datetime.now().strftime("%Y-%m-%d %H:%M")
+        fig.text(_LEFT, 0.98, title, fontsize=12, fontweight="bold", va="top")
+        fig.text(_RIGHT, 0.98, f"fitbench {__version__}, {stamp}", fontsize=7, va="top", ha="right", color="0.4")
+        fig.text(_LEFT, _TOP, "\n".join(text), fontsize=size, family="monospace", va="top", linespacing=1.2)
+        text_bottom = _TOP - len(text) * size * 1.2 / 72 / A4_INCHES[1] - 0.015
+        height = min(text_bottom - 0.02, 1.25 * aspect * A4_INCHES[0] / A4_INCHES[1])
+        rows = fig.subfigures(3, 1, height_ratios=[1 - text_bottom, height, text_bottom - height], facecolor="none")
+        draw(rows[1])

@@ -301,3 +301,32 @@ def test_one_page_reports(tmp_path):
         assert "verdict" in out.stdout                         # the page's text is the printed report
     out = cli("roundness", xy, "--report", tmp_path / "missing" / "r.pdf")
     assert out.returncode == 2 and out.stderr.count("\n") == 1 and "does not exist" in out.stderr
+
+
+def test_history_trends_the_injected_squareness_over_services(tmp_path):
+    """Three services of one machine whose squareness grows 10 -> 20 -> 30 µrad (files named out of date
+    order): the trend lists them by their test dates with the diagnosed squareness of each."""
+    cond = TestConditions(nominal_radius=100.0, nominal_center=(0.0, 0.0), sampling_hz=50.0)
+    folder = tmp_path / "machine"
+    folder.mkdir()
+    for k, (sq, date) in enumerate(((30e-6, "2026-09-01"), (10e-6, "2026-01-10"), (20e-6, "2026-05-03"))):
+        cw, ccw, _ = circular_test(cond, MachineErrors(squareness=sq, noise=0.0002), seed=k)
+        f = tmp_path / f"run{k}.csv"
+        f.write_text("run,x,y\n" + "".join(f"{lab},{x:.7f},{y:.7f}\n" for lab, pts in (("cw", cw), ("ccw", ccw))
+                                           for x, y in pts))
+        out = cli("circular-test", f, "--nominal-radius", 100, "--nominal-center", 0, 0, "--date", date, "--json")
+        assert out.returncode == 0, out.stderr
+        (folder / f"{chr(ord('c') - k)}.json").write_text(out.stdout)
+    (folder / "notes.json").write_text('{"operator": "A. N. Other"}')          # not a result: skipped
+    out = cli("history", folder, "--json", "--plot", tmp_path / "trend.png")
+    assert out.returncode == 0, out.stderr
+    tests = json.loads(out.stdout)["circular-test"]["tests"]
+    assert [t["date"][:10] for t in tests] == ["2026-01-10", "2026-05-03", "2026-09-01"]
+    np.testing.assert_allclose([t["squareness"] for t in tests], [10.0, 20.0, 30.0], atol=1.0)   # µrad
+    assert (tmp_path / "trend.png").read_bytes().startswith(b"\x89PNG")
+    text = cli("history", folder)
+    assert "squareness [µrad]" in text.stdout and text.stdout.index("2026-01-10") < text.stdout.index("2026-09-01")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    bad = cli("history", empty)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "no JSON results" in bad.stderr

@@ -771,9 +771,16 @@ def add_roundness(sub):
     roundness.add_parser(sub)
 
 
+def add_history(sub):
+    """The trend of a machine's tests: fitbench/cli/history.py."""
+    from fitbench.cli import history
+    history.add_parser(sub)
+
+
 #: the subcommands: name -> function adding its parser (another module may add an entry)
 SUBCOMMANDS = {"list": add_list, "fit": add_fit, "circular-test": add_circular_test, "positioning": add_positioning,
-               "magnify": add_magnify, "multilaterate": add_multilaterate, "roundness": add_roundness}
+               "magnify": add_magnify, "multilaterate": add_multilaterate, "roundness": add_roundness,
+               "history": add_history}
 
 
 def build_parser(prog: str = PROG, extra_commands: dict | None = None) -> argparse.ArgumentParser:

@@ -330,3 +330,29 @@ def test_history_trends_the_injected_squareness_over_services(tmp_path):
     empty.mkdir()
     bad = cli("history", empty)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "no JSON results" in bad.stderr
+
+
+def test_magnify_plot_zooms_on_the_corner_of_the_largest_error(tmp_path):
+    import methods as m
+    from fitbench.plots import pyplot
+    from fitbench.plots.magnify import zoom_on_largest_error
+    from methods.magnify import MagnifyInput
+    s = np.linspace(0, 50, 200)
+    ref = np.r_[np.c_[s, 0 * s], np.c_[np.full(199, 50.0), s[1:]]]
+    d = np.hypot(ref[:, 0] - 50, ref[:, 1])
+    meas = ref + np.c_[0.008 * np.exp(-d ** 2 / 4) * (ref[:, 1] > 0), -0.01 * np.exp(-d ** 2 / 4) * (ref[:, 0] < 50)]
+    data = MagnifyInput(ref, meas)
+    res = m.fit("magnify.offset", data, eta=200.0)
+    fig, ax = pyplot().subplots()
+    try:
+        inset = zoom_on_largest_error(ax, data, res, 200.0)
+        (x0, x1), (y0, y1) = inset.get_xlim(), inset.get_ylim()
+        assert x0 < 50 < x1 and y0 < 0 < y1 and x1 - x0 < 0.3 * 50     # the corner, not the whole contour
+    finally:
+        pyplot().close(fig)
+    r = tmp_path / "ref.csv"
+    r.write_text("x,y\n" + "".join(f"{x:.6f},{y:.6f}\n" for x, y in ref))
+    q = tmp_path / "meas.csv"
+    q.write_text("x,y\n" + "".join(f"{x:.6f},{y:.6f}\n" for x, y in meas))
+    out = cli("magnify", r, q, "--eta", 200, "--plot", tmp_path / "m.png")
+    assert out.returncode == 0 and (tmp_path / "m.png").read_bytes().startswith(b"\x89PNG"), out.stderr

@@ -701,10 +701,29 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.
 
 
 
-def read_positioning(path, *, unit: str = "mm", deviation_unit: str | None = None, skip_rows: int = 0):
+def _header_unit(found: dict, given: str | None, option: str, name) -> str | None:
+    """The one unit the header gives columns ``found`` ({column: unit}), checked against the option's value."""
+    units = set(found.values())
+    if len(units) > 1:
+        raise DataFileError(f"{name}: the columns {', '.join(found)} are in different units "
+                            f"({', '.join(sorted(units))}); convert them to one unit")
+    header = units.pop() if units else None
+    if header is not None and header not in LENGTH_UNITS.values():
+        raise DataFileError(f"{name}: column {next(iter(found))!r} carries the unit {header!r}; expected a length "
+                            "unit (nm, µm, mm, m, in)")
+    if header is not None and given is not None and canonical(given) != header:
+        raise DataFileError(f"{name}: the header says column {next(iter(found))!r} is in {header} but {option} says "
+                            f"{canonical(given)}; drop {option} or correct the header")
+    return header or (canonical(given) if given is not None else None)
+
+
+def read_positioning(path, *, unit: str | None = None, deviation_unit: str | None = None, skip_rows: int = 0,
+                     with_units: bool = False):
     """An ISO 230-2 positioning file, long or wide layout (:mod:`methods.positioning.data` describes them), as
-    :class:`methods.positioning.PositioningData`. Lengths converted to mm from ``unit`` (targets) and
-    ``deviation_unit`` (deviations)."""
+    :class:`methods.positioning.PositioningData`. Header names are read like every reader's (:func:`parse_name`:
+    ``Target (mm)``, ``Deviation [µm]``, ``Run 1 + (um)``); lengths are converted to mm from the header's units,
+    else ``unit`` (targets, actual positions; default mm) and ``deviation_unit`` (deviations; default the
+    targets' unit); a header unit contradicting them is an error. ``with_units``: also return the two units."""
     from methods.positioning import from_frame
 
     df, lines = read_table(path, skip_rows=skip_rows)
@@ -712,6 +731,21 @@ def read_positioning(path, *, unit: str = "mm", deviation_unit: str | None = Non
         k = int(np.flatnonzero(df.isna().any(axis=1).to_numpy())[0])
         raise DataFileError(f"{path} line {lines[k]}: missing field(s)")
     lines = np.array(lines)
+    target_keys = {parse_name(n)[0] for n in TARGET_NAMES}
+    renamed, lengths, deviations = {}, {}, {}
+    for c in df.columns:
+        key, u = parse_name(c)
+        role = key if key in ("target", "direction", "run", "deviation", "actual") else \
+            "target" if key in target_keys else None
+        if role is not None and role not in renamed.values():
+            renamed[c] = role
+        if u is not None and role in ("target", "actual"):
+            lengths[str(c)] = u
+        elif u is not None and (role == "deviation" or (role is None and RUN_COLUMN.match(str(c)))):
+            deviations[str(c)] = u
+    unit = _header_unit(lengths, unit, "--unit", path) or "mm"
+    deviation_unit = _header_unit(deviations, deviation_unit, "--deviation-unit", path) or unit
+    df = df.rename(columns=renamed)
     wide = _wide_to_long(df, str(path), lines)
     if wide is not None:
         df, lines = wide
@@ -719,7 +753,8 @@ def read_positioning(path, *, unit: str = "mm", deviation_unit: str | None = Non
     for key in ("target", "run", "deviation", "actual"):
         if key in cols:
             df[cols[key]] = _numeric_column(df[cols[key]], key, path, lines)
-    return from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit)
+    data = from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit)
+    return (data, unit, deviation_unit) if with_units else data
 
 
 def _multilateration_table(path, need: tuple[str, ...], optional: tuple[str, ...] = (), skip_rows: int = 0):

@@ -356,3 +356,35 @@ def test_magnify_plot_zooms_on_the_corner_of_the_largest_error(tmp_path):
     q.write_text("x,y\n" + "".join(f"{x:.6f},{y:.6f}\n" for x, y in meas))
     out = cli("magnify", r, q, "--eta", 200, "--plot", tmp_path / "m.png")
     assert out.returncode == 0 and (tmp_path / "m.png").read_bytes().startswith(b"\x89PNG"), out.stderr
+
+
+@pytest.mark.parametrize("layout", ["wide", "long"])
+def test_positioning_units_in_headers(tmp_path, layout):
+    """A laser export 'Target (mm), Run 1 + (µm), ...' is read with its deviations in µm (not mm), and a
+    header unit contradicting --deviation-unit is a one-line error."""
+    from datasets.io import read_positioning
+    from datasets.positioning import axis_test, to_frame
+    data, _ = axis_test(rng=np.random.default_rng(4), mpe=0.002)
+    long = to_frame(data, actual=False)
+    p = tmp_path / f"{layout}.csv"
+    if layout == "long":
+        long = long.rename(columns={"target": "Target [mm]", "deviation": "Deviation (um)", "run": "Run",
+                                    "direction": "Direction"})
+        long["Deviation (um)"] *= 1e3
+        long.to_csv(p, index=False)
+    else:
+        wide = {"Target (mm)": data.targets}
+        for j in range(data.runs):
+            wide[f"Run {j + 1} + (µm)"] = data.up[:, j] * 1e3
+            wide[f"Run {j + 1} - (µm)"] = data.down[:, j] * 1e3
+        import pandas as pd
+        pd.DataFrame(wide).to_csv(p, index=False)
+    got, unit, dev_unit = read_positioning(p, with_units=True)
+    assert (unit, dev_unit) == ("mm", "µm")
+    np.testing.assert_allclose(got.up, data.up, atol=1e-9)
+    np.testing.assert_allclose(got.down, data.down, atol=1e-9)
+    out = cli("positioning", p, "--mpe", 0.002, "--deviation-unit", "mm")
+    assert out.returncode == 2 and "--deviation-unit says mm" in out.stderr and out.stderr.count("\n") == 1
+    ok = cli("positioning", p, "--mpe", 0.002, "--json")
+    assert ok.returncode == 0 and "warning" not in ok.stderr, ok.stderr
+    assert json.loads(ok.stdout)["units"]["input_deviation_unit"] == "µm"

@@ -484,7 +484,6 @@ def cmd_positioning(args) -> int:
     mpe = finite("--mpe", args.mpe)
     if args.degree < 0:
         raise InvalidInputError(f"--degree must be >= 0, got {args.degree}")
-    args.unit = args.unit or "mm"
     temperature = finite("--material-temperature", args.material_temperature)
     alpha = finite("--expansion-coefficient", args.expansion_coefficient)
     if (temperature is None) != (alpha is None):
@@ -492,7 +491,11 @@ def cmd_positioning(args) -> int:
                                 "--expansion-coefficient (µm/(m·K), e.g. 11.5 for steel)")
     if temperature is not None and not -50.0 <= temperature <= 100.0:
         raise InvalidInputError(f"--material-temperature {temperature:g} °C is not a workshop temperature; give °C")
-    data = read_positioning(args.file, unit=args.unit, deviation_unit=args.deviation_unit, skip_rows=args.skip_rows)
+    given_deviation_unit = args.deviation_unit
+    data, args.unit, args.deviation_unit = read_positioning(args.file, unit=args.unit, deviation_unit=args.deviation_unit,
+                                                            skip_rows=args.skip_rows, with_units=True)
+    if given_deviation_unit is None and args.deviation_unit == args.unit:
+        args.deviation_unit = None  # printed as one unit, as before
     POS_FIGURES = ("A", "E", "R", "B", "M", "A_up", "A_down", "E_up", "E_down", "R_up", "R_down", "B_mean")
     tolerances = parse_tolerances(args.tolerance, POS_FIGURES)
     thermal = None

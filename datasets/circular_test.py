@@ -27,6 +27,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+#: |sin| or |cos| of the commanded angle below which an axis is at its reversal (velocity sign 0: backlash
+#: and spike midway); a partial arc that starts or ends at a reversal angle hits it to roundoff
+REVERSAL_ZONE = 1e-9
+
 
 @dataclass
 class MachineErrors:
@@ -106,6 +110,8 @@ def trace(direction: str, cond: TestConditions, err: MachineErrors, rng: np.rand
     y = yc + R * np.sin(theta)
     vx = -d * omega * R * np.sin(theta)
     vy = d * omega * R * np.cos(theta)
+    vx[np.abs(vx) <= REVERSAL_ZONE * omega * R] = 0.0  # at a reversal (to roundoff): the velocity's sign is 0
+    vy[np.abs(vy) <= REVERSAL_ZONE * omega * R] = 0.0
     dx = err.scale_x * (x - xc) + err.squareness * (y - yc) - err.lag_x * vx - 0.5 * err.backlash_x * np.sign(vx)
     dy = err.scale_y * (y - yc) - err.lag_y * vy - 0.5 * err.backlash_y * np.sign(vy)
     if err.spike_x:

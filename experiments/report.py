@@ -318,6 +318,10 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
             if counts.get("error"):
                 doc.prose(f"**failed rows: {md_escape(counts['error'])} of {md_escape(meta.get('n_rows'))}**: the tables "
                           "below hold what ran; the failed rows are in `results.csv`.")
+            if counts.get("invalid"):
+                doc.prose(f"**invalid results: {md_escape(counts['invalid'])} of {md_escape(meta.get('n_rows'))}**: "
+                          "results that broke their family's contract (left out of the tables; the reasons are in "
+                          "`results.csv`).")
             plugins = meta.get("plugins") if isinstance(meta.get("plugins"), dict) else {}
             doc.prose(md_escape(f"{meta.get('n_rows')} rows{'; quick run (reduced grid)' if meta.get('quick') else ''}; "
                                 f"commit {str(meta.get('git_commit') or '?')[:10]}"

@@ -168,6 +168,7 @@ def test_lies_become_invalid_rows_and_the_study_completes(site, tmp_path):
     assert meta["status_counts"] == {"invalid": 2 * (len(LIES) + 1), "ok": 2}
     report = (out / "paper" / "report.md").read_text()
     assert "plugins: fitbench-hostile 6.6.6" in report
+    assert f"**invalid results: {2 * (len(LIES) + 1)} of {len(df)}**" in report
 
 
 def test_the_caller_s_array_cannot_be_changed_through_the_api(site):

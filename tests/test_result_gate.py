@@ -1,0 +1,89 @@
+"""The result gate (methods.check_result) in process: every kind of lie a result can tell is refused with a
+one-line reason, every built-in method's result passes, and a method cannot change the caller's array."""
+import numpy as np
+import pytest
+
+import methods
+from methods import results
+from methods._registry import _REGISTRY
+
+ANGLES = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+RADII = 299 + np.random.default_rng(2).normal(scale=1e-3, size=40)   # mm: a machine-tool circle, µm deviations
+CIRCLE = np.column_stack([1200 + RADII * np.cos(ANGLES), 650 + RADII * np.sin(ANGLES)])
+
+
+def honest(**changes):
+    res = results.circle_result(CIRCLE, (1200.0, 650.0), 299.0, converged=True, message="exact")
+    res.method = "circle.test"
+    for k, v in changes.items():
+        setattr(res, k, v)
+    return res
+
+
+LIES = {
+    "negative radius": (dict(radius=-5.0), "radius = -5 must be > 0"),
+    "negative form error": (dict(form_error=-1.0), "form_error = -1 must be >= 0"),
+    "centre at infinity": (dict(center=(float("inf"), 1e308)), "center_x = inf is not finite"),
+    "array radius": (dict(radius=np.array([1.0, 2.0])), "radius must be a number, got an array of shape (2,)"),
+    "boolean radius": (dict(radius=True), "radius must be a number"),
+    "text converged": (dict(converged="yes"), "converged must be True or False"),
+    "negative iterations": (dict(iterations=-3), "iterations must be None or a count"),
+    "centre of three": (dict(center=(1.0, 2.0, 3.0)), "center must have shape (2,)"),
+    "residuals of another size": (dict(residuals=np.zeros(3)), "residuals must have shape (40,)"),
+    "object in extra": (dict(extra={"f": open}), "extra is not JSON-serialisable"),
+    "flattering form error": (dict(form_error=1e-9), "radial span"),
+    "non-finite residuals": (dict(residuals=np.full(40, np.nan)), "residuals are not finite"),
+}
+
+
+def test_an_honest_result_passes():
+    assert results.check_result(honest(), CIRCLE) is None
+
+
+@pytest.mark.parametrize("lie", list(LIES))
+def test_each_lie_is_refused_with_its_reason(lie):
+    changes, reason = LIES[lie]
+    problem = results.check_result(honest(**changes), CIRCLE)
+    assert problem is not None and reason in problem and "\n" not in problem, problem
+
+
+def test_the_family_contract_and_non_results():
+    ellipse = results.EllipseFit(center=(0.0, 0.0), semi_axes=(2.0, 1.0), angle=0.0, conic=(0.0,) * 6,
+                                 residuals=np.zeros(40), form_error=0.0, converged=True, method="circle.test")
+    assert "a circle method must return a CircleFit, got a EllipseFit" in results.check_result(ellipse, CIRCLE)
+    assert "not a methods.results.FitResult" in results.check_result((1.0, 2.0, 3.0), CIRCLE)
+
+
+def test_a_result_that_did_not_converge_is_checked_for_types_only():
+    assert results.check_result(honest(converged=False, center=(np.inf, 0.0), form_error=np.nan), CIRCLE) is None
+    assert "radius must be a number" in results.check_result(honest(converged=False, radius=np.ones(2)), CIRCLE)
+
+
+@pytest.mark.parametrize("spec", methods.list_methods("circle") + methods.list_methods("ellipse"), ids=lambda s: s.id)
+def test_every_built_in_result_passes(spec):
+    pts = CIRCLE + np.random.default_rng(1).normal(scale=1e-3, size=CIRCLE.shape)
+    res = methods.fit(spec.id, pts)
+    assert methods.check_result(res, pts) is None
+
+
+def test_a_method_sees_a_read_only_copy_of_the_callers_array():
+    seen = {}
+
+    @methods.register("circle.test_gate_mutator", kind="closed form", summary="writes", reference="gate test")
+    def mutator(points):
+        try:
+            points[0, 0] = 0.0
+        except ValueError as exc:
+            seen["refused"] = str(exc)
+        points.flags.writeable = True   # possible on its own copy only
+        points[:, 0] = 0.0
+        return results.circle_result(points, (0.0, 0.0), 1.0, converged=False, message="wrote")
+
+    try:
+        for given in (CIRCLE.copy(), CIRCLE.tolist(), np.asfortranarray(CIRCLE)):
+            before = np.array(given, copy=True)
+            methods.fit("circle.test_gate_mutator", given)
+            assert "read-only" in seen.pop("refused")
+            assert np.array_equal(np.asarray(given), before)
+    finally:
+        _REGISTRY.pop("circle.test_gate_mutator", None)

@@ -193,6 +193,76 @@ def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
     return verdict
 
 
+def _committed(path: Path) -> bool:
+    """Whether ``path`` is tracked by git and unchanged since the last commit."""
+    import subprocess
+    try:
+        tracked = subprocess.run(["git", "ls-files", "--error-unmatch", "--", path.name], cwd=path.parent,
+                                 capture_output=True, timeout=10)
+        same = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", path.name], cwd=path.parent,
+                              capture_output=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return tracked.returncode == 0 and same.returncode == 0
+
+
+def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path) -> dict[str, dict]:
+    """Before ``experiments.run`` writes into ``out``: for each study, a copy (under ``into``) of the results the
+    fresh run will be compared with, and how to name them. The reference is the study's results already in
+    ``out`` (a rerun), else the committed ones in ``results/`` (``results/quick/`` with ``--quick``) of the
+    current folder; only a run of the same grid (quick or full) is a reference."""
+    refs = {}
+    committed_root = Path("results/quick" if quick else "results")
+    for name in names:
+        for folder in (Path(out) / name, committed_root / name):
+            csv, meta_path = folder / "results.csv", folder / "meta.json"
+            if not csv.is_file() or not meta_path.is_file():
+                continue
+            try:
+                meta = json.loads(meta_path.read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                continue
+            if not isinstance(meta, dict) or bool(meta.get("quick")) != quick:
+                continue
+            (into / name).mkdir(parents=True, exist_ok=True)
+            (into / name / "results.csv").write_bytes(csv.read_bytes())
+            commit = str(meta.get("git_commit") or "?")[:10]
+            what = "the committed tables" if _committed(csv) else "the previous results"
+            refs[name] = {"folder": into, "reference": f"{what} ({folder}, commit {commit}, {meta.get('date', '?')})"}
+            break
+    return refs
+
+
+def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=print) -> dict:
+    """After ``experiments.run``: compare each fresh study in ``out`` with its reference (``reference_snapshot``)
+    and record the verdicts in ``out/verify.json`` (other studies' entries are kept; each names the SHA-256 of
+    the results it judged), with the run's date and studies (the report says which results are older)."""
+    date = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    old = last_verdict(out) or {}
+    entries = {s["study"]: s for s in old.get("studies", []) if isinstance(s, dict) and isinstance(s.get("study"), str)}
+    for name in names:
+        entries.pop(name, None)
+        ref = refs.get(name)
+        if ref is None:
+            log(f"verify: {name}: no committed results to compare with (results/{name} of the same grid)")
+            continue
+        try:
+            r = compare_study(name, _read(ref["folder"], name, "reference"), _read(Path(out), name, "--out"))
+        except InvalidInputError as exc:
+            log(f"verify: {name}: not compared ({exc})")
+            continue
+        entries[name] = {**r, "date": date, "results_sha256": results_sha256(Path(out) / name),
+                         "reference": ref["reference"]}
+        log(f"verify: {name}: " + ("reproduces " + ref["reference"] if r["agree"] else
+                                   f"DIFFERS from {ref['reference']} in: "
+                                   + ", ".join(p["column"] for p in r["problems"])))
+    studies = list(entries.values())
+    verdict = {"agree": all(s.get("agree") for s in studies), "date": date, "results": str(out),
+               "studies": studies, "run": {"date": date, "studies": list(names)}}
+    write_atomic(Path(out) / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
+    return verdict
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.verify",
                                      description="Check that a run reproduces the committed results within declared tolerances.")

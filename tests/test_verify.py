@@ -195,3 +195,27 @@ def test_verdict_names_the_results_it_judged_and_goes_out_of_date(committed, tmp
     assert "agree" not in verify.verdict_markdown(base)[0]
     label, sentence = study_verdicts(base, ["vstudy"])["vstudy"][0]
     assert label == "Reproducibility: out of date" and "changed since" in sentence
+
+
+def test_every_run_ends_with_a_verdict_the_report_shows(tmp_path, capsys):
+    """experiments.run compares each fresh study with the results it replaces (or the committed ones) and the
+    report states per study that it reproduces them or which columns differ; a study the run did not include
+    is said to be older than the run."""
+    for name in ("vstudy", "vother"):
+        (tmp_path / f"{name}.toml").write_text(STUDY.replace('name = "vstudy"', f'name = "{name}"'), encoding="utf-8")
+    out = tmp_path / "out"
+    args = ["--jobs", "1", "--out", str(out)]
+    assert runner.main([str(tmp_path / "vstudy.toml"), str(tmp_path / "vother.toml"), *args]) == 0
+    assert "verify: vstudy: no committed results to compare with" in capsys.readouterr().out
+    assert runner.main([str(tmp_path / "vstudy.toml"), *args]) == 0          # a rerun: compared with the first
+    assert "verify: vstudy: reproduces the previous results" in capsys.readouterr().out
+    md = (out / "paper" / "report.md").read_text(encoding="utf-8")
+    section = md.split("(`vstudy`)")[1].split("### ")[0]
+    assert "**Reproducibility.** Verdict" in section and "this run reproduces the previous results" in section
+    other = md.split("(`vother`)")[1].split("### ")[0]
+    assert "**Older results.** These results are older than the last run" in other and "this run reproduces" not in other
+    edit(out, 0, "radius", lambda v: repr(float(v) * 2))                     # what the next run is compared with
+    assert runner.main([str(tmp_path / "vstudy.toml"), *args]) == 0
+    assert "verify: vstudy: DIFFERS from the previous results" in capsys.readouterr().out
+    section = (out / "paper" / "report.md").read_text(encoding="utf-8").split("(`vstudy`)")[1].split("### ")[0]
+    assert "**Reproducibility: differs.**" in section and "radius" in section

@@ -47,10 +47,11 @@ def _text_colour(bg: str) -> str:
 
 
 def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None = None, digits: int = 3,
-                   floor: float = 0.0, table_id: str | None = None) -> str:
+                   floor: float = 0.0, table_id: str | None = None, formats=None) -> str:
     """HTML ``<table>`` of ``table`` (rows: problems/data sets, columns: methods; lower is better, NaN or inf
     = failed) with each cell coloured by its ratio to the row's best, plus a legend of the colours. ``unit``
-    is shown once, in the corner cell; the table scrolls sideways on a narrow screen."""
+    is shown once, in the corner cell; the table scrolls sideways on a narrow screen. ``formats``: one
+    ``numbers.NumberFormat`` per column (default: ``digits`` significant digits per cell)."""
     if table.empty:
         raise ValueError("coloured_table: the table is empty (no problems or no methods)")
     values = table.apply(pd.to_numeric, errors="coerce").to_numpy(float)
@@ -61,7 +62,7 @@ def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None =
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.where(np.isfinite(cost) & (best > 0), cost / best, np.where(np.isfinite(cost), 1.0, np.inf))
     corner = html.escape(str(table.index.name or "")) + (f" [{html.escape(unit)}]" if unit else "")
-    out = ['<div style="overflow-x:auto">', f'<table{f" id={chr(34)}{html.escape(table_id)}{chr(34)}" if table_id else ""} class="ranked" '
+    out = ['<div class="table-box" style="overflow-x:auto;max-width:100%">', f'<table{f" id={chr(34)}{html.escape(table_id)}{chr(34)}" if table_id else ""} class="ranked" '
            'style="border-collapse:collapse;font-size:0.85em;margin:0.5em 0">']
     if caption:
         out.append(f'<caption style="caption-side:top;text-align:left;padding:0 0 4px 0">{caption}</caption>')
@@ -76,7 +77,8 @@ def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None =
             v, r = values[i, j], ratio[i, j]
             bg = ratio_colour(r)
             if np.isfinite(v):
-                text = f"{format_number(v, digits)}<br><small>{r:.3g}×</small>"
+                shown = formats[j].text(v) if formats is not None else format_number(v, digits)
+                text = f"{shown}<br><small>{r:.3g}×</small>"
                 title = f"{v:.6g}{unit and ' ' + unit}, {r:.4g} × the best of this row"
             else:
                 text, title = "failed", "failed or not converged"

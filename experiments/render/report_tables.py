@@ -12,7 +12,8 @@ import html
 import numpy as np
 import pandas as pd
 
-from experiments.render.html_tables import coloured_table, format_number
+from experiments.render.html_tables import coloured_table
+from experiments.render.numbers import header_unit, human_header, human_unit_text, is_count, table_formats
 from experiments.render.latex import Column, TableTooWide, latex_table
 from experiments.render.text import human_unit, tex
 
@@ -40,26 +41,63 @@ def _integral(s: pd.Series) -> bool:
 
 def column_unit(name, s: pd.Series, unit: str) -> str:
     """The table's unit for this column's header: none for a column whose name already carries one
-    ("error [mm]") or for a count column (whole numbers)."""
-    if not unit or "[" in str(name) or _integral(s):
+    ("error [mm]") or that counts something (runs, iterations, ...: ``numbers.is_count``); every other number
+    column carries it, whole-numbered or not (a share of 100 % is a percentage like 87.5 %)."""
+    if not unit or "[" in str(name) or is_count(name):
         return ""
     return unit
+
+
+def _formats(df: pd.DataFrame, values, unit: str, digits: int) -> dict:
+    """One format per number column (``numbers.table_formats``): columns with the same unit, from their header
+    or the table's, share it; counts are formatted alone."""
+    units = {c: (None if is_count(c) else (header_unit(c) or unit or None)) for c in values}
+    return table_formats(df, values, units, max(1, min(int(digits or 3), MAX_DIGITS)))
+
+
+def _humanised(df: pd.DataFrame) -> pd.DataFrame:
+    """Unit columns (named unit/units) with µm, µrad, µm/m for um, urad, um/m."""
+    cols = [c for c in df.columns if str(c).strip().lower() in ("unit", "units") and not _numeric(df[c])]
+    if not cols:
+        return df
+    df = df.copy()
+    for c in cols:
+        df[c] = df[c].map(human_unit_text)
+    return df
+
+
+def _header(c) -> str | None:
+    """The LaTeX header of column ``c`` when it differs from the name (µ units; underscores outside maths as
+    spaces), else None (the renderer's default)."""
+    shown = human_header(c)
+    if shown == str(c):
+        return None
+    import re
+    return "".join(p if p.startswith("$") else p.replace("_", " ") for p in re.split(r"(\$[^$]+\$)", shown))
 
 
 def _columns(df: pd.DataFrame, keys, values, unit: str, digits: int) -> list[Column]:
     cols = []
     for i, c in enumerate(keys):
         repeated = len(df) > 1 and df[c].duplicated().any() and len(keys) > 1 and i == 0
-        cols.append(Column(str(c), kind="text", group=bool(repeated)))
+        cols.append(Column(str(c), header=_header(c), kind="text", group=bool(repeated)))
+    formats = _formats(df, values, unit, digits)
     for c in values:
-        integer = _integral(df[c])
-        cols.append(Column(str(c), unit=column_unit(c, df[c], unit) or None, kind="integer" if integer else "number",
-                           digits=max(1, min(int(digits or 3), MAX_DIGITS))))
+        fmt = formats[c]
+        header = _header(c)
+        u = column_unit(c, df[c], unit) or None
+        if fmt.kind == "integer":
+            cols.append(Column(str(c), header=header, unit=u, kind="integer"))
+        elif fmt.kind == "fixed":
+            cols.append(Column(str(c), header=header, unit=u, kind="number", decimals=fmt.decimals, exponent=False))
+        else:
+            cols.append(Column(str(c), header=header, unit=u, kind="number", digits=fmt.decimals + 1, exponent=True))
     return cols
 
 
 def latex_fragments(df: pd.DataFrame, *, caption: str, label: str, unit: str = "", digits: int = 4) -> list[str]:
     """One or more LaTeX fragments for the table (more than one when it had to be split)."""
+    df = _humanised(df)
     keys, values = split_columns(df)
     notes = ["-- : no value (the method did not run there or failed)"] if df.isna().any().any() else None
 
@@ -92,6 +130,7 @@ def html_table(df: pd.DataFrame, *, caption: str, unit: str = "", digits: int = 
                table_id: str | None = None) -> str:
     """The table as self-contained HTML with ``<caption>``; ``colour='lower_is_better'``: the number columns
     are methods (or other competitors), each cell coloured by its ratio to the row's lowest value."""
+    df = _humanised(df)
     keys, values = split_columns(df)
     shown_digits = max(1, min(int(digits or 3), MAX_DIGITS))
     if colour == "lower_is_better" and values and keys:
@@ -101,24 +140,24 @@ def html_table(df: pd.DataFrame, *, caption: str, unit: str = "", digits: int = 
         numbers = t.to_numpy(float)
         if np.all(np.isnan(numbers) | (numbers >= 0)):
             return coloured_table(t, unit=human_unit(unit), caption=html.escape(caption), digits=shown_digits,
-                                  table_id=table_id)
+                                  table_id=table_id, formats=[_formats(t, list(t.columns), unit, digits)[c] for c in t.columns])
 
-    counts = {c for c in values if _integral(df[c])}
+    formats = _formats(df, values, unit, digits)
 
-    def cell(v, numeric, count=False):
+    def cell(v, c):
         if v is None or (isinstance(v, float) and np.isnan(v)):
             return "–"
-        if count:
-            return str(int(v))
-        return format_number(float(v), shown_digits) if numeric and not isinstance(v, (bool, np.bool_)) else html.escape(str(v))
+        if c in formats and not isinstance(v, (bool, np.bool_)):
+            return formats[c].text(float(v))
+        return html.escape(str(v))
 
     def unit_h(c):
         u = column_unit(c, df[c], unit)
         return f" [{html.escape(human_unit(u))}]" if u else ""
 
-    head = "".join(f"<th>{html.escape(str(c))}{unit_h(c) if c in values else ''}</th>" for c in df.columns)
-    rows = "".join("<tr>" + "".join(f"<td{' class=num' if c in values else ''}>{cell(v, c in values, c in counts)}</td>"
+    head = "".join(f"<th>{html.escape(human_header(c))}{unit_h(c) if c in values else ''}</th>" for c in df.columns)
+    rows = "".join("<tr>" + "".join(f"<td{' class=num' if c in values else ''}>{cell(v, c)}</td>"
                                     for c, v in zip(df.columns, r)) + "</tr>" for r in df.itertuples(index=False))
     ident = f' id="{html.escape(table_id)}"' if table_id else ""
-    return (f'<div style="overflow-x:auto"><table{ident}><caption>{html.escape(caption)}</caption>'
+    return (f'<div class="table-box"><table{ident}><caption>{html.escape(caption)}</caption>'
             f"<thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table></div>")

@@ -1,0 +1,133 @@
+"""One number format per table column, chosen from the column's values so that the differences the table is
+about stay visible (a 22 µm difference between two 299 mm semi-axes is not rounded away), used alike by the
+HTML, Markdown and LaTeX renderings.
+
+``column_format(values, digits)``: whole numbers as integers; otherwise ``digits`` significant digits of the
+column's largest magnitude, with more decimals (up to 6 more) while two values that differ by more than a
+relative ``MATTERS`` (1e-6) of that magnitude would print alike; scientific notation (one exponent per cell, one
+mantissa width per column) when the largest magnitude is >= 1e5 or below 1e-3, or when the smallest
+value would keep fewer than two significant digits. ``table_formats`` chooses the
+format jointly for the columns that share a unit (semi-axes a and b of 299.024 and 299.002 mm stay apart even
+though each column alone has no spread) and gives every one of them that format.
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+#: header words that make a column a count or a dimensionless number (shown without the table's unit)
+_COUNT = re.compile(r"(?:^|[\s_])(n|runs?|rows?|counts?|iterations?|evaluations?|nfev|nit|points?|repetitions?|"
+                    r"sets?|problems?|starts?|slopes?|ratios?|exponents?)(?:$|[\s_])", re.I)
+MAX_EXTRA_DECIMALS = 6
+
+
+@dataclass(frozen=True)
+class NumberFormat:
+    kind: str            #: "integer" | "fixed" | "exponent"
+    decimals: int = 0    #: decimals (fixed) or mantissa decimals (exponent)
+
+    def text(self, v: float) -> str:
+        """Plain text (HTML, Markdown): 2080, 0.0123, 4.07×10⁸."""
+        if v is None or not np.isfinite(v):
+            return "–"
+        if self.kind == "integer":
+            return f"{int(round(v))}"
+        if self.kind == "fixed":
+            s = f"{v:.{self.decimals}f}"
+            return s[1:] if s.startswith("-") and float(s) == 0 else s
+        if v == 0:
+            return "0"
+        m, e = f"{v:.{self.decimals}e}".split("e")
+        return f"{m}×10{str(int(e)).translate(_SUPERSCRIPT)}"
+
+
+MATTERS = 1e-6   #: relative differences below this (of the largest magnitude) need not stay visible
+
+
+def _distinct(v: np.ndarray, scale: float) -> int:
+    if scale <= 0:
+        return 1
+    q = np.sort(v / scale)
+    return 1 + int(np.sum(np.diff(q) > MATTERS))
+
+
+def column_format(values, digits: int = 3) -> NumberFormat:
+    """The format of a column of numbers (see the module docstring)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    digits = max(1, int(digits))
+    if v.size == 0:
+        return NumberFormat("fixed", 0)
+    if np.all(v == np.round(v)) and np.max(np.abs(v)) < 1e15:
+        return NumberFormat("integer")
+    top = float(np.max(np.abs(v)))
+    if top == 0:
+        return NumberFormat("fixed", 0)
+    need = _distinct(v, top)
+    low = float(np.min(np.abs(v[v != 0]))) if np.any(v != 0) else top
+    fixed = max(0, digits - 1 - math.floor(math.log10(top)))
+    if top >= 1e5 or top < 1e-3 or fixed < 1 - math.floor(math.log10(low)):
+        # huge, tiny, or so spread that the smallest value would keep fewer than two digits: 4.07×10⁸
+        d = digits - 1
+        while d < digits - 1 + MAX_EXTRA_DECIMALS and len({f"{x:.{d}e}" for x in v}) < need:
+            d += 1
+        return NumberFormat("exponent", d)
+    d = max(0, digits - 1 - math.floor(math.log10(top)))
+    base = d
+    while d < base + MAX_EXTRA_DECIMALS and len(np.unique(np.round(v, d))) < need:
+        d += 1
+    return NumberFormat("fixed", d)
+
+
+def table_formats(df, columns, units: dict, digits: int = 3) -> dict:
+    """{column: NumberFormat} for the number ``columns`` of ``df``; columns with the same non-empty unit
+    (``units[column]``) share one format chosen from all their values, the others get their own."""
+    import pandas as pd
+    groups: dict = {}
+    for c in columns:
+        groups.setdefault(("unit", units.get(c)) if units.get(c) else ("column", c), []).append(c)
+    out = {}
+    for cols in groups.values():
+        values = np.concatenate([pd.to_numeric(df[c], errors="coerce").to_numpy(float) for c in cols])
+        joint = column_format(values, digits)
+        alone = {c: column_format(pd.to_numeric(df[c], errors="coerce").to_numpy(float), digits) for c in cols}
+        # fixed decimals shared by the columns of one unit; where that does not suit them all, each its own
+        shared = joint.kind == "fixed" and all(f.kind in ("fixed", "integer") for f in alone.values())
+        for c in cols:
+            out[c] = joint if shared else alone[c]
+    return out
+
+
+def is_count(name) -> bool:
+    """A column whose header names a count (runs, n, iterations, ...) or a dimensionless number (slope, ratio):
+    it carries no unit."""
+    return bool(_COUNT.search(str(name)))
+
+
+_UNIT_WORDS = {"um": "µm", "μm": "µm", "urad": "µrad", "μrad": "µrad", "us": "µs", "μs": "µs", "um/m": "µm/m",
+               "deg": "°"}
+
+
+def human_unit_text(value):
+    """A cell of a unit column as a person reads it (um -> µm, urad -> µrad, um/m -> µm/m); other values as given."""
+    return _UNIT_WORDS.get(value, value) if isinstance(value, str) else value
+
+
+def header_unit(name) -> str:
+    """The unit a header names in brackets ('R [mm]' -> 'mm'), or ''."""
+    m = re.search(r"\[([^\]]+)\]\s*$", str(name))
+    return human_unit_text(m.group(1).strip()) if m else ""
+
+
+def human_header(name) -> str:
+    """A column header as a person reads it: ASCII unit spellings inside [...] or (...) become µm, µrad, µs
+    (``x_c - nominal [um]`` -> ``x_c - nominal [µm]``)."""
+    def fix(m):
+        inner = re.sub(r"(?<![A-Za-z])(um/m|um|urad|us|μm|μrad|μs|deg)(?![A-Za-z])",
+                       lambda w: _UNIT_WORDS[w.group(1)], m.group(2))
+        return m.group(1) + inner + m.group(3)
+    return re.sub(r"([\[(])([^\])]*)([\])])", fix, str(name))

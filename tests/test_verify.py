@@ -205,9 +205,16 @@ def test_every_run_ends_with_a_verdict_the_report_shows(tmp_path, capsys):
         (tmp_path / f"{name}.toml").write_text(STUDY.replace('name = "vstudy"', f'name = "{name}"'), encoding="utf-8")
     out = tmp_path / "out"
     args = ["--jobs", "1", "--out", str(out)]
-    assert runner.main([str(tmp_path / "vstudy.toml"), str(tmp_path / "vother.toml"), *args]) == 0
+
+    def run(*names):
+        code = runner.main([*names, *args])
+        for fh in runner._LOCKS:   # main holds --out locked for the life of its process: here, one run each
+            fh.close()
+        runner._LOCKS.clear()
+        return code
+    assert run(str(tmp_path / "vstudy.toml"), str(tmp_path / "vother.toml")) == 0
     assert "verify: vstudy: no committed results to compare with" in capsys.readouterr().out
-    assert runner.main([str(tmp_path / "vstudy.toml"), *args]) == 0          # a rerun: compared with the first
+    assert run(str(tmp_path / "vstudy.toml")) == 0                          # a rerun: compared with the first
     assert "verify: vstudy: reproduces the previous results" in capsys.readouterr().out
     md = (out / "paper" / "report.md").read_text(encoding="utf-8")
     section = md.split("(`vstudy`)")[1].split("### ")[0]
@@ -215,7 +222,7 @@ def test_every_run_ends_with_a_verdict_the_report_shows(tmp_path, capsys):
     other = md.split("(`vother`)")[1].split("### ")[0]
     assert "**Older results.** These results are older than the last run" in other and "this run reproduces" not in other
     edit(out, 0, "radius", lambda v: repr(float(v) * 2))                     # what the next run is compared with
-    assert runner.main([str(tmp_path / "vstudy.toml"), *args]) == 0
+    assert run(str(tmp_path / "vstudy.toml")) == 0
     assert "verify: vstudy: DIFFERS from the previous results" in capsys.readouterr().out
     section = (out / "paper" / "report.md").read_text(encoding="utf-8").split("(`vstudy`)")[1].split("### ")[0]
     assert "**Reproducibility: differs.**" in section and "radius" in section

@@ -26,7 +26,7 @@ Each measured point q is compared with the model path at the same polar angle ab
 centre: theta is solved from angle(R u(theta) + D(theta)) = angle(q) (fixed-point iteration to
 roundoff), and the residual is |q| - |R u(theta) + D(theta)| - d delta_rho / 2. No small-angle
 linearisation: a noise-free run of the model's sources is fitted to roundoff (tested from 90 to 360 deg).
-The fit is Gauss-Newton with the analytic Jacobian (log phi_tau by central difference; step halving),
+The fit is Gauss-Newton with the analytic Jacobian (log phi_tau included; step halving),
 from the first-order solution at the best phi_tau of a grid. Not modelled: the common servo lag
 l = (l_x + l_y) / 2, a displacement along the path only. It turns the CCW pattern by -l / R and the CW
 pattern by +l / R, which reads as a servo mismatch of -2 l (s_x - s_y) and a scale mismatch of
@@ -157,13 +157,15 @@ class _Model:
 
     def theta(self, beta, phi_tau):
         """The commanded angle of each point: angle(R u(theta) + D(theta)) = the measured angle."""
-        theta = self.phi.copy()
+        warm = getattr(self, "_theta", None)  # the last solution: a warm start (the fit moves it little)
+        theta = self.phi.copy() if warm is None else warm.copy()
         for _ in range(THETA_ITERATIONS):
             p = self.path(theta, beta, phi_tau)
             err = np.mod(np.arctan2(p[:, 1], p[:, 0]) - self.phi + np.pi, 2 * np.pi) - np.pi
             theta = theta - err
             if np.max(np.abs(err)) <= 4 * np.finfo(float).eps * (1 + np.max(np.abs(theta))):
                 break
+        self._theta = theta
         return theta
 
     def residual(self, beta, phi_tau):
@@ -176,9 +178,10 @@ class _Model:
             return 0.5 * self.d * beta[self.names.index("radius_difference")]
         return 0.0
 
-    def jacobian(self, beta, phi_tau, theta):
+    def jacobian(self, beta, phi_tau, theta, log_tau=False):
         """d(model radius at the measured angle)/d beta_j (N, p): G_j . n - (p_theta . n) (G_j . t) / (p_theta . t)
-        with n, t the unit radial and tangential directions of the model point (theta moves with beta)."""
+        with n, t the unit radial and tangential directions of the model point (theta moves with beta); with
+        ``log_tau`` a last column for log phi_tau (the spikes' G_j phi / phi_tau, times their amplitudes)."""
         p, pt, G = self.path(theta, beta, phi_tau, derivative=True)
         rn = np.hypot(p[:, 0], p[:, 1])
         n = p / rn[:, None]
@@ -191,7 +194,23 @@ class _Model:
                 continue
             g = G[name]
             cols.append(np.sum(g * n, axis=1) - ratio * np.sum(g * t, axis=1))
+        if log_tau:
+            g = np.zeros_like(p)
+            for name, at in (("reversal_spike_x", 0.0), ("reversal_spike_y", np.pi / 2)):
+                if name in G:
+                    since = self.spike_decay(theta, at)
+                    g += beta[self.names.index(name)] * G[name] * np.where(np.isfinite(since), since / phi_tau, 0.0)[:, None]
+            cols.append(np.sum(g * n, axis=1) - ratio * np.sum(g * t, axis=1))
         return np.column_stack(cols)
+
+    def spike_first_order(self, theta, phi_tau):
+        """The first-order columns of the X and Y reversal spikes at angles theta (N, 2)."""
+        c, s = np.cos(theta), np.sin(theta)
+        sx = np.where((np.abs(s) <= REVERSAL_ZONE) | self.at_reversal_x, 0.0, np.sign(s))
+        sy = np.where((np.abs(c) <= REVERSAL_ZONE) | self.at_reversal_y, 0.0, np.sign(c))
+        ex = np.exp(-self.spike_decay(theta, 0.0) / phi_tau)
+        ey = np.exp(-self.spike_decay(theta, np.pi / 2) / phi_tau)
+        return np.column_stack([self.d * sx * ex * c, -self.d * sy * ey * s])
 
     def first_order(self, theta, phi_tau):
         """The first-order (small-deviation) columns at angles theta: G_j . u."""
@@ -204,7 +223,7 @@ class _Model:
 def _fit(model, spikes):
     """Least squares of the exact model: (beta, phi_tau, residuals, theta, J with the log phi_tau column).
 
-    Gauss-Newton with the analytic Jacobian (log phi_tau by central difference), halving steps that do not
+    Gauss-Newton with the analytic Jacobian (log phi_tau included), halving steps that do not
     lower the sum of squares, from the first-order solution at the best phi_tau of a grid (and a bounded
     1-D search about it). With spikes in the model, the grid is searched at the commanded angles of the
     exact fit without spikes (points next to a reversal are then on the right side of it), and again at
@@ -215,10 +234,18 @@ def _fit(model, spikes):
     lo, hi = np.log(np.radians(SPIKE_DECAY_BOUNDS_DEG))
     cache = {}
 
+    spike_cols = [j for j, n in enumerate(model.names) if n.startswith("reversal_spike")]
+    spike_axes = [0 if model.names[j].endswith("_x") else 1 for j in spike_cols]
+    base = {}
+
     def linear(phi_tau, theta):
         # points within GRID_REVERSAL_ZONE of a reversal are left out: which side of it a start's angles put
         # them on is uncertain, and a point on the wrong side would decide the grid alone
-        X = model.first_order(theta, phi_tau)
+        if base.get("theta") is not theta:   # the columns but the spikes' depend on theta only
+            base.update(theta=theta, X=model.first_order(theta, phi_tau))
+        X = base["X"].copy()
+        if spike_cols:
+            X[:, spike_cols] = model.spike_first_order(theta, phi_tau)[:, spike_axes]
         keep = (np.abs(np.sin(theta)) > GRID_REVERSAL_ZONE) & (np.abs(np.cos(theta)) > GRID_REVERSAL_ZONE)
         X, y = X[keep], dr0[keep]
         scale = np.linalg.norm(X, axis=0)
@@ -249,13 +276,7 @@ def _fit(model, spikes):
     def jac(x, phi_tau):
         theta = fun(x, phi_tau)[1]
         b = x[:len(model.names)]
-        J = -model.jacobian(b, np.exp(x[-1]) if spikes else phi_tau, theta)
-        if spikes:  # the decay angle: central difference in log phi_tau (the spike fields are smooth in it)
-            h = 1e-6
-            plus = model.residual(b, np.exp(x[-1] + h))[0]
-            minus = model.residual(b, np.exp(x[-1] - h))[0]
-            J = np.column_stack([J, (plus - minus) / (2 * h)])
-        return J
+        return -model.jacobian(b, np.exp(x[-1]) if spikes else phi_tau, theta, log_tau=spikes)
 
     def gauss_newton(phi_tau, beta):
         x = np.concatenate([beta, [np.clip(np.log(phi_tau), lo, hi)]]) if spikes else beta

@@ -33,6 +33,7 @@ from typing import Callable
 
 import numpy as np
 
+from methods import immutable
 from methods.plugins import add_entry, load_entry_points
 
 ENTRY_POINT_GROUP = "fitbench.datasets"
@@ -40,19 +41,24 @@ ENTRY_POINT_GROUP = "fitbench.datasets"
 
 @dataclass(frozen=True)
 class DataSource:
-    """A registered data source: ``load(rng, **params) -> (data, truth | None)``."""
+    """A registered data source: ``load(rng, **params) -> (data, truth | None)``; data that is an array comes
+    back immutable (``methods.immutable``): no method can change it, and the fits of a row copy nothing."""
 
     name: str
-    load: Callable = field(repr=False)
+    func: Callable = field(repr=False)
     random: bool
     summary: str
     module: str
     #: data files the output depends on, given the params (hashed into the cache key)
     files: Callable[..., list] | None = field(default=None, repr=False)
 
+    def load(self, rng, **params):
+        data, truth = self.func(rng, **params)
+        return (immutable(data) if isinstance(data, np.ndarray) else data), truth
+
     @property
     def parameters(self) -> list[str]:
-        return [p for p in inspect.signature(self.load).parameters if p != "rng"]
+        return [p for p in inspect.signature(self.func).parameters if p != "rng"]
 
 
 _REGISTRY: dict[str, DataSource] = {}
@@ -61,9 +67,9 @@ _REGISTRY: dict[str, DataSource] = {}
 def register_source(name: str, *, random: bool, summary: str, files: Callable | None = None):
     """Register ``func(rng, **params) -> (data, truth)`` as data source ``name``."""
     def deco(func):
-        if name in _REGISTRY and _REGISTRY[name].load is not func:
+        if name in _REGISTRY and _REGISTRY[name].func is not func:
             raise ValueError(f"data source {name!r} is already registered (by {_REGISTRY[name].module})")
-        add_entry(_REGISTRY, name, DataSource(name=name, load=func, random=random, summary=summary,
+        add_entry(_REGISTRY, name, DataSource(name=name, func=func, random=random, summary=summary,
                                               module=func.__module__, files=files))
         return func
     return deco

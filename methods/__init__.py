@@ -5,7 +5,7 @@
 >>> res.center, res.radius, res.form_error                # doctest: +SKIP
 """
 from methods._errors import InvalidInputError, UnknownMethodError
-from methods._registry import (ENTRY_POINT_GROUP, KINDS, MethodSpec, fit, get, list_methods,
+from methods._registry import (ENTRY_POINT_GROUP, KINDS, MethodSpec, fit, get, immutable, list_methods,
                                load_plugins, register)
 from methods import results
 from methods.results import (CircleFit, EllipseFit, FitResult, MagnifyFit, MultilaterationFit, PositioningFit,
@@ -24,5 +24,5 @@ def __getattr__(name: str):
 
 
 __all__ = ["InvalidInputError", "UnknownMethodError", "MethodSpec", "register", "get", "list_methods",
-           "fit", "load_plugins", "results", "check_result", "FitResult", "CircleFit", "ZoneFit", "EllipseFit",
+           "fit", "immutable", "load_plugins", "results", "check_result", "FitResult", "CircleFit", "ZoneFit", "EllipseFit",
            "validate_points", "ENTRY_POINT_GROUP", "KINDS"]

@@ -171,9 +171,8 @@ def _run(spec: MethodSpec, points, params: dict):
     if spec.validator is not None:
         pts = _read_only(spec.validator(points, spec.id), points)
     else:
-        if isinstance(points, np.ndarray):  # the method gets its own copy: the caller's array cannot change
-            points = points.copy()
-            points.flags.writeable = False
+        if isinstance(points, np.ndarray) and not is_immutable(points):
+            points = immutable(points)  # the method gets a copy no one can write: the caller's array cannot change
         pts = validate_points(points, min_points=spec.min_points, method=spec.id)
         if pts.flags.writeable:  # converted from another type (a list, a DataFrame): a new array or a view
             if pts.base is None:
@@ -190,14 +189,35 @@ def _run(spec: MethodSpec, points, params: dict):
     return result
 
 
+def is_immutable(a) -> bool:
+    """True for an array no one can write: read-only down to a buffer that is itself immutable (``bytes``);
+    a read-only array that owns its memory, or views a writeable one, can be made writeable again."""
+    while isinstance(a, np.ndarray):
+        if a.flags.writeable:
+            return False
+        a = a.base
+    return isinstance(a, bytes)
+
+
+def immutable(a: np.ndarray) -> np.ndarray:
+    """A copy of ``a`` that no one can write (read-only over a ``bytes`` buffer: ``flags.writeable = True``
+    raises); an ndarray subclass (a masked array) gets a read-only copy of its own class. Pass data that many
+    fits read through this once: :func:`fit` then copies nothing (the benchmark's timed calls pay no copy)."""
+    if is_immutable(a):
+        return a
+    if type(a) is not np.ndarray:
+        out = a.copy()
+        out.flags.writeable = False
+        return out
+    c = np.ascontiguousarray(a)
+    return np.frombuffer(c.tobytes(), dtype=c.dtype).reshape(c.shape)
+
+
 def _read_only(data, given):
     """``data`` as the method may see it: arrays read-only and never the caller's own memory (``given``: what
     the caller passed). Arrays inside a dataclass, dict, list or tuple are copied the same way."""
     if isinstance(data, np.ndarray):
-        if data.flags.writeable or given is None or data is given or np.shares_memory(data, given):
-            data = data.copy()
-        data.flags.writeable = False
-        return data
+        return immutable(data)
     if dataclasses.is_dataclass(data) and not isinstance(data, type):
         changes = {f.name: _read_only(getattr(data, f.name), None) for f in dataclasses.fields(data) if f.init
                    and isinstance(getattr(data, f.name), (np.ndarray, dict, list, tuple))}

@@ -1,6 +1,7 @@
 """A hostile plugin package (built and installed offline, registered through entry points) whose methods lie
 about their results or try to change the caller's data: every lie becomes a row with status ``invalid`` and the
-reason, never ``ok``; the caller's data cannot change; the study completes beside honest methods.
+reason, never ``ok``; the data a method is given cannot be written (nor made writeable again), so the caller's
+data cannot change; the study completes beside honest methods.
 
 The package also registers the methods the engine's isolation tests use (a sleep, ``os._exit``, ``SystemExit``,
 ``KeyboardInterrupt``): :data:`HOSTILE` and :func:`hostile_site` are shared with those tests; nothing here runs
@@ -158,17 +159,16 @@ def test_lies_become_invalid_rows_and_the_study_completes(site, tmp_path):
         assert all(reason in m and m.startswith("invalid result: ") for m in rows["message"]), rows["message"].tolist()
         assert rows["radius"].isna().all() and rows["form_error"].isna().all()
     assert set(df[df["method"] == "circle.kasa"]["status"]) == {"ok"}
-    # the mutator cannot write into the data it is given; it can only make its own copy writeable again, and its
-    # result about that changed copy is not a result about the data: invalid
+    # the mutator can neither write into the data it is given nor make them writeable again: its result is honest
     mutator = df[df["method"] == "circle.mutator"]
-    assert set(mutator["status"]) == {"invalid"}
-    assert all("radial span about the returned centre" in m for m in mutator["message"])
+    assert set(mutator["status"]) == {"ok"}
+    assert set(mutator["message"]) == {"direct write refused; writeable refused"}
     meta = json.loads((out / "hostile" / "meta.json").read_text())
     assert meta["plugins"] == {"fitbench-hostile": "6.6.6"}
-    assert meta["status_counts"] == {"invalid": 2 * (len(LIES) + 1), "ok": 2}
+    assert meta["status_counts"] == {"invalid": 2 * len(LIES), "ok": 4}
     report = (out / "paper" / "report.md").read_text()
     assert "plugins: fitbench-hostile 6.6.6" in report
-    assert f"**invalid results: {2 * (len(LIES) + 1)} of {len(df)}**" in report
+    assert f"**invalid results: {2 * len(LIES)} of {len(df)}**" in report
 
 
 def test_the_caller_s_array_cannot_be_changed_through_the_api(site):
@@ -183,5 +183,5 @@ def test_the_caller_s_array_cannot_be_changed_through_the_api(site):
     proc = run_python("-c", code, path_first=[site])
     assert proc.returncode == 0, proc.stderr
     first, second = proc.stdout.splitlines()
-    assert first == "direct write refused; writeable again | True True"
+    assert first == "direct write refused; writeable refused | True True"
     assert "not finite" in second

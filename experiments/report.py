@@ -45,7 +45,8 @@ def md_table(df: pd.DataFrame, floatfmt: str = ".7g") -> str:
 # ---------------------------------------------------------------- figures
 
 def export_figure(png: Path, out_dir: Path, stem: str) -> tuple[Path, Path]:
-    """Copy the PNG and write a PDF of it (for authors' own documents)."""
+    """Copy the PNG and its PDF: the vector PDF the study saved next to it (``experiments.render.style.save``)
+    when there is one, else a PDF of the PNG (for authors' own documents and the LaTeX report)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.image as mpimg
@@ -53,11 +54,17 @@ def export_figure(png: Path, out_dir: Path, stem: str) -> tuple[Path, Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     dst_png = out_dir / f"{stem}.png"
     shutil.copyfile(png, dst_png)
+    dst_pdf = out_dir / f"{stem}.pdf"
+    vector = png.with_suffix(".pdf")
+    if vector.is_file() and not vector.is_symlink():
+        with open(vector, "rb") as fh:
+            if fh.read(5) == b"%PDF-":
+                shutil.copyfile(vector, dst_pdf)
+                return dst_png, dst_pdf
     img = mpimg.imread(png)
     h, w = img.shape[:2]
     fig = plt.figure(figsize=(w / 100, h / 100), dpi=100)
     fig.figimage(img, 0, 0)
-    dst_pdf = out_dir / f"{stem}.pdf"
     fig.savefig(dst_pdf, dpi=100)
     plt.close(fig)
     return dst_png, dst_pdf
@@ -243,7 +250,7 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     doc.heading(1, "fitbench: comparison report")
     doc.prose(f"Built from `{md_escape(_shown(results))}` by `python -m experiments.report`; reproduce everything with "
               "`python -m experiments.run` (the default studies; a study that is not default: "
-              "`python -m experiments.run NAME`).")
+              "`python -m experiments.run NAME`). Interactive explorer (offline): [explorer.html](explorer.html).")
     abstract_at = len(doc.parts)
     from experiments.verdict import verdict_markdown
     doc.prose(" ".join(verdict_markdown(results)))
@@ -264,6 +271,7 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     toc_html.append(Markup("</ul></nav>"))
     doc.block(Markup("").join(toc_html), "\n".join(toc_md))
     provenance = None
+    explorer_tables: list[dict] = []
     n_table = n_figure = 0
     tex_sections = []
 
@@ -279,6 +287,8 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
             write_atomic(out / "tables" / name, frag)
             files.append(f"tables/{name}")
         save_csv_plain(table, out / "tables" / f"{label}.csv")
+        explorer_tables.append({"caption": f"Table {n_table}: {caption}", "data": table, "unit": unit,
+                                "digits": digits, "colour": colour})
         written.extend(files + [f"tables/{label}.csv"])
         fmt = f".{int(digits or 7)}g"
         doc.block(Markup(html_table(table, caption=f"Table {n_table}: {caption}", unit=unit, digits=digits,
@@ -376,6 +386,10 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
         from experiments.render.page import Part, prose_html
         md_abstract = "**Abstract.** " + md_escape(abstract)
         doc.parts.insert(abstract_at, Part("prose", md_abstract, prose_html(md_abstract)))
+    from experiments.render.explorer import write_explorer
+    write_explorer(out, rankings, explorer_tables, {e[2]: results / e[2] for e in entries if e[4] is not None},
+                   {e[2]: e[4] for e in entries if e[4] is not None})
+    written.append("explorer.html")
     write_atomic(out / "report.md", doc.markdown())
     write_atomic(out / "report.html", doc.html("fitbench comparison report", STYLE))
     write_report_tex(out, tex_sections, provenance=provenance_text, abstract=abstract)
@@ -445,11 +459,9 @@ def _rankings_section(rankings, problem, out, add_table, add_figure, doc):
         import matplotlib
         matplotlib.use("Agg")
         from experiments.render.profiles import plot_profiles
-        from experiments.study import atomic_path
-        png = out / "figures" / ".profiles-source.png"
+        png = out / "figures" / ".profiles-source.png"      # and its vector PDF beside it; both removed below
         png.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(png) as tmp:
-            plot_profiles(tables, tmp)
+        plot_profiles(tables, png)
         sources = "; ".join(f"{n}: studies {', '.join(r.studies)}, {len(r.table)} problems"
                             + (f", left out (not run in every study): {', '.join(r.left_out)}" if r.left_out else "")
                             + (f", {r.unsolved} solved by no method left out" if r.unsolved else "")
@@ -459,6 +471,7 @@ def _rankings_section(rankings, problem, out, add_table, add_figure, doc):
                                       "method's cost is within a factor τ of the best (log₂ τ on the x axis; higher "
                                       f"and further left is better). {sources}.")
         png.unlink(missing_ok=True)
+        png.with_suffix(".pdf").unlink(missing_ok=True)
         items += tex_items
     for name, r in rankings.items():
         if r.by_dataset is None or r.by_dataset.empty:

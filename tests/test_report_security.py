@@ -93,7 +93,7 @@ def _norm(s: str) -> str:
     return re.sub(r"\s+", " ", s).strip()
 
 
-ALLOWED_ATTRS = {"id", "class", "href", "src", "alt", "title", "style", "scope", "data-ratio", "lang", "charset",
+ALLOWED_ATTRS = {"id", "class", "href", "src", "alt", "title", "style", "scope", "data-ratio", "data-value", "lang", "charset",
                  "name", "content", "colspan", "rowspan"}
 
 
@@ -108,7 +108,7 @@ def check_html(html: str, user: list[str], n_figures: int) -> None:
         assert tag not in ("iframe", "object", "embed", "link", "base", "form", "input"), tag
         assert set(attrs) <= ALLOWED_ATTRS, (tag, attrs)
         if "href" in attrs:
-            assert re.fullmatch(r"#[a-z0-9-]+", attrs["href"]), attrs
+            assert re.fullmatch(r"#[a-z0-9-]+|explorer\.html", attrs["href"]), attrs
         if "id" in attrs:
             assert re.fullmatch(r"[a-z0-9-]+", attrs["id"]), attrs
     assert sum(t == "script" for t, _ in page.tags) == 1        # the page's own load check, nothing from user text

@@ -83,6 +83,7 @@ def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None =
             else:
                 text, title = "failed", "failed or not converged"
             cells.append(f'<td title="{html.escape(title)}" data-ratio="{r if np.isfinite(r) else "inf"}" '
+                         f'data-value="{float(v):.15g}" '
                          f'style="border:1px solid #999;padding:3px 6px;text-align:right;background:{bg};'
                          f'color:{_text_colour(bg)}">{text}</td>')
         out.append("<tr>" + "".join(cells) + "</tr>")

@@ -156,7 +156,15 @@ def html_table(df: pd.DataFrame, *, caption: str, unit: str = "", digits: int = 
         return f" [{html.escape(human_unit(u))}]" if u else ""
 
     head = "".join(f"<th>{html.escape(human_header(c))}{unit_h(c) if c in values else ''}</th>" for c in df.columns)
-    rows = "".join("<tr>" + "".join(f"<td{' class=num' if c in values else ''}>{cell(v, c)}</td>"
+    def attrs(v, c):
+        if c not in values:
+            return ""
+        try:
+            return f' class=num data-value="{float(v):.15g}"'
+        except (TypeError, ValueError):
+            return " class=num"
+
+    rows = "".join("<tr>" + "".join(f"<td{attrs(v, c)}>{cell(v, c)}</td>"
                                     for c, v in zip(df.columns, r)) + "</tr>" for r in df.itertuples(index=False))
     ident = f' id="{html.escape(table_id)}"' if table_id else ""
     return (f'<div class="table-box"><table{ident}><caption>{html.escape(caption)}</caption>'

@@ -9,7 +9,7 @@ Figures are drawn at their printed size: ``COLUMN_WIDTH_IN`` is the text width o
         ax.plot(x, y, **style.method_style("circle.kasa"))
         style.plain_log_ticks(ax, "x")
         style.legend_outside(fig)
-        style.save(fig, path)          # PNG (and PDF next to it when pdf=True)
+        style.save(fig, path)          # PNG, and the vector PDF next to it (pdf=False: PNG only)
 """
 from __future__ import annotations
 
@@ -189,8 +189,9 @@ def smallest_font_pt(fig) -> float:
     return min(sizes) if sizes else float("inf")
 
 
-def save(fig, path, *, pdf: bool = False) -> Path:
-    """Write ``fig`` atomically to ``path`` (PNG), and a PDF next to it when ``pdf``; close the figure."""
+def save(fig, path, *, pdf: bool = True) -> Path:
+    """Write ``fig`` atomically to ``path`` (PNG) and, unless ``pdf=False``, the same figure as a vector PDF next
+    to it (the report's LaTeX includes the PDF); close the figure."""
     import matplotlib.pyplot as plt
     from fitbench.plots import save_atomic
     path = Path(path)

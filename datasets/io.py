@@ -780,7 +780,7 @@ def _multilateration_table(path, need: tuple[str, ...], optional: tuple[str, ...
 
 
 
-def read_multilateration(path, stations_path=None, *, unit: str = "mm", skip_rows: int = 0) -> MultilaterationData:
+def read_multilateration(path, stations_path=None, *, unit: str = "mm", skip_rows: int = 0):
     """Multilateration lengths: a measurements table (station, x, y, z, length; optionally xp, yp, zp) and,
     optionally, a stations table (station, x, y, z, L), as :class:`methods.multilateration.MultilaterationData`
     (``from_frame``). ``unit``: the files' length unit (returned in mm)."""

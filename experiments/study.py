@@ -62,7 +62,6 @@ import difflib
 import inspect
 import io
 import json
-import os
 import re
 import string
 from dataclasses import dataclass, field

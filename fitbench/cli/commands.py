@@ -277,8 +277,6 @@ def read_profile_args(args):
 
 
 def cmd_fit(args) -> int:
-    from datasets import points_from  # imported here: 'list' must work without pandas loaded
-
     spec = methods.get(args.method)
     params = {}
     for item in args.param or []:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fitbench.plots import report_figure, tight
+from fitbench.plots import report_figure
 
 LABELS = {"squareness": "squareness", "scale_mismatch": "scale mismatch X-Y", "servo_mismatch": "servo mismatch X-Y",
           "backlash_x": "backlash X", "backlash_y": "backlash Y", "reversal_spike_x": "reversal spike X",

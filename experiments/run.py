@@ -141,12 +141,10 @@ def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
 def write_results(df, path: Path, block: int = 20000) -> str:
     """``df`` as CSV, streamed a block of rows at a time into a temporary file that replaces ``path`` at the
     end (atomic); return the SHA-256 of the bytes written."""
-    import tempfile
-    path.parent.mkdir(parents=True, exist_ok=True)
+    from methods.files import atomic_path
     digest = hashlib.sha256()
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+    with atomic_path(path, make_parents=True) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
             for i in range(0, max(len(df), 1), block):
                 buf = io.StringIO()
                 df.iloc[i:i + block].to_csv(buf, index=False, header=(i == 0), float_format="%.17g")
@@ -155,11 +153,6 @@ def write_results(df, path: Path, block: int = 20000) -> str:
                 fh.write(text)
             fh.flush()
             os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
     return digest.hexdigest()
 
 

@@ -58,14 +58,12 @@ def render_report_tex(sections: list[dict], *, title: str = "fitbench: compariso
 
 def write_report_tex(out_dir, sections: list[dict], **kw) -> Path:
     """Write ``out_dir/report.tex`` atomically; every referenced file must exist under ``out_dir``."""
-    import os
+    from methods.files import write_atomic
     out_dir = Path(out_dir)
     missing = [it["file"] for s in sections for st in s.get("studies", []) for it in st.get("items", [])
                if not (out_dir / it["file"]).exists()]
     if missing:
         raise FileNotFoundError(f"report.tex would reference missing file(s) under {out_dir}: {missing[:5]}")
     path = out_dir / "report.tex"
-    tmp = path.with_name(".report.tex.tmp")
-    tmp.write_text(render_report_tex(sections, **kw), encoding="utf-8")
-    os.replace(tmp, path)
+    write_atomic(path, render_report_tex(sections, **kw))
     return path

@@ -411,13 +411,13 @@ def _abstract(entries, verdicts) -> str:
         for m in cfg_methods if isinstance(cfg_methods, list) else []:
             methods.add(m if isinstance(m, str) else str(m.get("id", "")) if isinstance(m, dict) else "")
     methods.discard("")
-    parts = [f"{len(done)} studies ({n_rows:,} runs"
+    parts = [f"{len(done)} {'study' if len(done) == 1 else 'studies'} ({n_rows:,} runs"
              + (f", {len(methods)} method declarations" if methods else "") + ") compare the fitting methods."]
     for e in done:
         findings = str((e[5] or {}).get("findings") or "").strip()
         if findings:
             first = re.split(r"(?<=[.;])\s", findings, maxsplit=1)[0].rstrip(".;")
-            parts.append(f"{e[3]}: {first}.")
+            parts.append(f"{e[3].split(':')[0].strip()}: {first}.")
     judged = {k: lines[0][0] for k, lines in verdicts.items() if lines[0][0].startswith("Reproducibility")
               and not lines[0][0].endswith("out of date")}
     if judged:

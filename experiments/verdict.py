@@ -96,11 +96,13 @@ def verdict_markdown(results: Path) -> list[str]:
     current, stale = current_entries(results)
     if not current:
         return ["No current reproducibility verdict: run `python -m experiments.verify`"
-                + (f" (the last one judged other results for {len(stale)} studies)" if stale else "") + "."]
+                + (f" (the last one judged other results for {len(stale)} "
+                   f"{'study' if len(stale) == 1 else 'studies'})" if stale else "") + "."]
     differ = [k for k, e in current.items() if not e.get("agree")]
     tail = f" ({len(stale)} older verdicts are out of date and not counted)" if stale else ""
     if not differ:
-        return [f"Reproducibility: all {len(current)} verified studies agree with these results within the declared "
+        return [f"Reproducibility: all {len(current)} verified {'study agrees' if len(current) == 1 else 'studies agree'} "
+                f"with these results within the declared "
                 f"tolerances{tail}."]
     return [f"Reproducibility: {len(differ)} of {len(current)} verified studies differ beyond the declared tolerances "
             f"({md_escape(', '.join(differ))}); see `verify.json`{tail}."]

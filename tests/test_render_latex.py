@@ -231,3 +231,24 @@ def test_multirow_grouping_compiles(tmp_path):
                        caption="grouped with multirow", label="mr", group_style="multirow")
     assert frag.count(r"\multirow") == 2
     _assert_compiles_within_page([frag], tmp_path, "mr")
+
+
+def _grouped(n_groups=17, per_group=2):
+    return pd.DataFrame({"scenario": np.repeat([f"scenario {k}" for k in range(n_groups)], per_group),
+                         "method": [f"m{j}" for _ in range(n_groups) for j in range(per_group)],
+                         "error": np.linspace(0.1, 2.0, n_groups * per_group)})
+
+
+def test_group_heading_rows_count_towards_a_long_table():
+    """34 data rows under 17 group headings print 51 rows: too tall for a float, so a longtable."""
+    frag = latex_table(_grouped(), [C("scenario", group=True), C("method"), C("error", unit="mm")],
+                       caption="grouped", label="g")
+    assert "\\begin{longtable}" in frag
+
+
+@needs_pdflatex
+def test_grouped_table_never_makes_a_float_too_large(tmp_path):
+    frag = latex_table(_grouped(34, 1), [C("scenario", group=True), C("method"), C("error", unit="mm")],
+                       caption="grouped", label="g")
+    result = compile_pdf(standalone_document([frag]), tmp_path)
+    assert result["ok"] and not [w for w in result["warnings"] if "Float too large" in w], result["warnings"]

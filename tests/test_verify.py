@@ -189,7 +189,7 @@ def test_verdict_names_the_results_it_judged_and_goes_out_of_date(committed, tmp
     assert verify.main(["--results", str(base), "--against", str(fresh)]) == 0
     entry = json.loads((base / verify.VERDICT_FILE).read_text())["studies"][0]
     assert entry["results_sha256"] == verify.results_sha256(base / "vstudy")
-    assert "all 1 verified studies agree" in verify.verdict_markdown(base)[0]
+    assert "all 1 verified study agrees" in verify.verdict_markdown(base)[0]
     assert study_verdicts(base, ["vstudy"])["vstudy"][0][0] == "Reproducibility"
     edit(base, 0, "radius", lambda v: repr(float(v) * 2))      # the study's results changed since
     assert "agree" not in verify.verdict_markdown(base)[0]

@@ -239,7 +239,8 @@ def latex_table(df: pd.DataFrame, columns: list[Column] | None = None, *, captio
 
     ``columns``: the ``Column`` of each shown column, in order (default: every column, kinds from dtypes).
     ``size``: 'small', 'footnotesize' or 'scriptsize' (default: the largest whose estimated width fits).
-    ``long``: a ``longtable`` split over pages (default: when more than ``max_rows`` rows).
+    ``long``: a ``longtable`` split over pages (default: when more than ``max_rows`` printed rows, group
+    heading rows included).
     ``group_style``: repeated values of ``group`` columns as heading rows spanning the table ('rows', the
     column disappears) or as ``\\multirow`` cells ('multirow'). ``notes``: lines under the table (e.g. what
     an empty cell means).
@@ -266,7 +267,6 @@ def latex_table(df: pd.DataFrame, columns: list[Column] | None = None, *, captio
         raise TableTooWide(f"table {label!r} is about {estimated_width_pt([f.est_chars for f in fmts], size_pt):.0f} pt "
                            f"wide at \\{size_name} (the page has {TEXT_WIDTH_PT:.0f} pt): split its columns into two "
                            "tables, shorten its headers or draw it as a figure")
-    long = len(df) > max_rows if long is None else long
     spec = "@{}" + "".join(f.spec for f in fmts) + "@{}"
     table_pt = min(estimated_width_pt([f.est_chars for f in fmts], size_pt), FIT_BUDGET_PT) - 12.0
     head = " & ".join(f.header for f in fmts) + r" \\"
@@ -298,6 +298,8 @@ def latex_table(df: pd.DataFrame, columns: list[Column] | None = None, *, captio
                     cell = f"\\multirow[t]{{{run}}}{{{width}}}{{{cell}}}" if run > 1 else cell
             cells.append(cell)
         body.append(" & ".join(cells) + r" \\")
+    # a longtable when the printed rows (data rows and group heading rows) would not fit a page as a float
+    long = sum(1 for b in body if b != r"\addlinespace") > max_rows if long is None else long
     note_text = ""
     if notes:
         note_text = "\n".join(tex(n) for n in notes)

@@ -381,6 +381,15 @@ def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_ro
             continue
         r_all = None
         ok, message = certify(c, oc, ic)
+        if not ok and sides == ("outer",):
+            # an MCC whose contacts do not surround the centre: the solver's centre may have ranked the points of
+            # one flat peak first (extreme points nearly on a semicircle); the k outermost points about the exact
+            # centre join the active set and the round is repeated, while that adds points (the MIC is left to its
+            # global stage: on a partial arc it has no optimum to find)
+            grown = np.union1d(out, extremes(radii(x, y, c), k, True))
+            if grown.size > out.size:
+                out = grown
+                continue
         stats["active"] = np.union1d(out, inn)
         stats["active_points"] = int(stats["active"].size)
         return c, (oc, ic), ok, message, stats
@@ -441,9 +450,47 @@ def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max
                               **{f"global_{k}": v for k, v in info.items()}})
 
 
+def surrounding_contacts(x, y, c, idx, tol: float = 1e-12):
+    """Two or three of the points ``idx`` whose unit directions from c hold c in their convex hull, or None.
+
+    The directions surround c exactly when no open half-plane through c holds them all, i.e. when the
+    largest angular gap between consecutive directions is at most pi (+ ``tol`` rad). Then, from the first
+    direction a, the last direction b within pi of it and the next one c' (b -> c' is one gap) span c: every
+    arc between them is at most pi. Angles sorted once: O(T log T) for T tied points, no limit on T."""
+    idx = np.asarray(idx, dtype=np.intp)
+    if idx.size < 2:
+        return None
+    ang = np.arctan2(y[idx] - c[1], x[idx] - c[0])
+    order = np.argsort(ang, kind="stable")
+    ang, ids = ang[order], idx[order]
+    gaps = np.diff(np.append(ang, ang[0] + 2 * np.pi))
+    if gaps.max() > np.pi + tol:
+        return None
+    k = int(np.searchsorted(ang, ang[0] + np.pi, side="right")) - 1
+    if abs(ang[k] - ang[0] - np.pi) <= tol:
+        pick = (ids[0], ids[k])
+    elif k + 1 < ids.size:
+        pick = (ids[0], ids[k], ids[k + 1])
+    else:
+        return None
+    return tuple(int(i) for i in pick) if hulls_meet(directions(x, y, list(pick), c), np.zeros((1, 2))) else None
+
+
+def tie_tolerance(r_extreme: float) -> float:
+    """Radii within this of the extreme radius (unit frame) count as one-sided contacts: the slack of the final
+    check of every point in :func:`active_set_fit` (CHECK_RTOL relative + 1e-15), so a point the check let through
+    as "not beyond the contacts" is also a contact for the certificate."""
+    return CHECK_RTOL * abs(r_extreme) + 1e-15
+
+
 def certify_hulls(x, y, *, zero_tol=ZERO_WIDTH):
     """Certificate factory: minimum zone (both sides) or MIC/MCC (one side against the origin);
-    a zone of width <= zero_tol (unit frame) about the centre is an exact circle."""
+    a zone of width <= zero_tol (unit frame) about the centre is an exact circle.
+
+    One side (MCC, MIC): the points whose radius is within :func:`tie_tolerance` of the extreme radius (the final
+    check's slack) must surround the centre (:func:`surrounding_contacts`). That proves (convexity of |p - c|:
+    r_i(c') >= r_i(c) - e_i.(c' - c), and some tied e_i has e_i.(c' - c) <= 0) that no centre c' gives a
+    circumscribed circle smaller (MCC), or a local inscribed circle larger (MIC), by more than the tolerance."""
     def certify(c, oc, ic):
         r = radii(x, y, c)
         if r.max() - r.min() <= zero_tol:  # every point is a contact: the zone is a single circle
@@ -455,12 +502,53 @@ def certify_hulls(x, y, *, zero_tol=ZERO_WIDTH):
         side = list(oc or ic)
         if len(side) < 2:
             return False, "fewer than two contacts: no optimality certificate"
-        ok = hulls_meet(directions(x, y, side, c), np.zeros((1, 2)))
-        if not ok:  # ties: look for 2 or 3 tied contacts that surround the centre
-            from methods.circle._global import TIE_REL, alternating_contacts
-            tol = TIE_REL * r.max()
-            tied = np.flatnonzero(r >= r.max() - tol) if oc else np.flatnonzero(r <= r.min() + tol)
-            ok = alternating_contacts(x, y, c, np.empty(0, dtype=np.intp), tied, hulls_meet) is not None
-        return ok, ("optimal: the centre lies in the convex hull of the contacts" if ok else
-                    "the contacts do not surround the centre: not an optimum")
+        if hulls_meet(directions(x, y, side, c), np.zeros((1, 2))):
+            return True, "optimal: the centre lies in the convex hull of the contacts"
+        extreme = r.max() if oc else r.min()
+        tol = tie_tolerance(extreme)
+        tied = np.flatnonzero(r >= extreme - tol) if oc else np.flatnonzero(r <= extreme + tol)
+        found = surrounding_contacts(x, y, c, tied)
+        if found is not None:
+            return True, (f"optimal to {CHECK_RTOL:g} x the radius: the {tied.size} points within {CHECK_RTOL:g} x the "
+                          f"radius of the {'largest' if oc else 'smallest'} one (the final check's slack) surround the "
+                          f"centre (e.g. points {', '.join(map(str, found))})")
+        if oc:  # the MCC's extreme points nearly on a semicircle: a dual bound decides instead
+            lower, subset = enclosing_lower_bound(x, y, np.argsort(r)[::-1][:DUAL_POINTS])
+            if r.max() - lower <= tol:
+                return True, (f"optimal to {(r.max() - lower) / r.max():.1e} x the radius (tolerance {CHECK_RTOL:g}, the "
+                              f"final check's slack): the smallest circle holding points {', '.join(map(str, subset))} "
+                              "alone, a lower bound of the smallest circle holding all, has a radius that much smaller")
+        return False, ("the contacts do not surround the centre, nor do the points within "
+                       f"{CHECK_RTOL:g} x the radius of the {'largest' if oc else 'smallest'} one: not an optimum")
     return certify
+
+
+#: the most extreme points whose pairs and triples give the MCC's dual bound (:func:`enclosing_lower_bound`)
+DUAL_POINTS = 24
+
+
+def enclosing_lower_bound(x, y, idx):
+    """max over the pairs and triples of the points ``idx`` of the radius of the smallest circle holding them: a
+    lower bound of the smallest circle holding all points (it holds every subset). Two points: half their
+    distance; three: the circumradius |ab||bc||ca| / (2 |(b - a) x (c - a)|) when no angle is obtuse, else half
+    the longest side. Lowered by 64 eps relative for the rounding. Returns (bound, the subset attaining it)."""
+    idx = np.asarray(idx, dtype=np.intp)
+    P = np.column_stack([x[idx], y[idx]])
+    pr = pairs(np.arange(len(idx)))
+    best = np.hypot(*(P[pr[:, 0]] - P[pr[:, 1]]).T) / 2
+    j = int(np.argmax(best))
+    value, subset = float(best[j]), tuple(int(idx[i]) for i in pr[j])
+    tr = triples(np.arange(len(idx)))
+    if len(tr):
+        a, b, c = P[tr[:, 0]], P[tr[:, 1]], P[tr[:, 2]]
+        ab, bc, ca = b - a, c - b, a - c
+        lab, lbc, lca = np.hypot(*ab.T), np.hypot(*bc.T), np.hypot(*ca.T)
+        acute = ((-ca * ab).sum(1) > 0) & ((-ab * bc).sum(1) > 0) & ((-bc * ca).sum(1) > 0)
+        cross = np.abs(ab[:, 0] * (-ca[:, 1]) - ab[:, 1] * (-ca[:, 0]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rad = np.where(acute & (cross > 0), lab * lbc * lca / (2 * cross), np.maximum(np.maximum(lab, lbc), lca) / 2)
+        rad = np.where(np.isfinite(rad), rad, 0.0)
+        k = int(np.argmax(rad))
+        if rad[k] > value:
+            value, subset = float(rad[k]), tuple(int(idx[i]) for i in tr[k])
+    return value * (1 - 64 * np.finfo(float).eps), subset

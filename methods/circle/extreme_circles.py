@@ -21,29 +21,51 @@ def _best_single_sided(x, y, act, c, side):
     contact have nearly equal radii, so the 8 most extreme may all lie near one or two contacts and miss
     the third: the pick then depends on the last bit of the data. The pool grows (POOL_SIZES) until the
     picked circle's tied contacts surround its centre (the optimality condition), so the exact step no
-    longer stops on a wrong configuration that a one-ulp change of the data would have avoided."""
-    r = z.radii(x[act], y[act], c)
-    order = np.argsort(r)
-    ranked = order[::-1] if side == "outer" else order
+    longer stops on a wrong configuration that a one-ulp change of the data would have avoided. When no pool
+    does, the points are ranked again about the picked (exact) centre and the pools tried again (up to
+    RECENTRE times): about the solver's centre, accurate to ~1e-8, the points of one flat peak can outrank every
+    point of the opposite one (an ovality of 1e-7 of the radius sampled at 0.05 deg)."""
     best = None
-    for m in POOL_SIZES:
-        m = min(act.size, m)
-        idx = act[ranked[:m]]
-        cands = z.circle_candidates(x, y, idx, c, side)
-        hi, lo = z.candidate_extremes(x, y, act, cands.C)
-        best = (z.pick(cands, hi, minimise=True) if side == "outer" else z.pick(cands, lo, minimise=False))
-        if m >= act.size or _surrounds(x, y, act, best[0], side):
-            return best
+    for _ in range(RECENTRE + 1):
+        r = z.radii(x[act], y[act], c)
+        order = np.argsort(r)
+        ranked = order[::-1] if side == "outer" else order
+        for m in POOL_SIZES:
+            m = min(act.size, m)
+            idx = act[ranked[:m]]
+            cands = z.circle_candidates(x, y, idx, c, side)
+            hi, lo = z.candidate_extremes(x, y, act, cands.C)
+            pick = (z.pick(cands, hi, minimise=True) if side == "outer" else z.pick(cands, lo, minimise=False))
+            if best is None or _better(x, y, act, pick[0], best[0], side):
+                best = pick
+            if _surrounds(x, y, act, best[0], side):
+                return best
+            if m >= act.size:
+                break
+        if np.array_equal(best[0], c):
+            break
+        c = best[0]
     return best
 
 
+#: times :func:`_best_single_sided` ranks the points again about its best exact centre
+RECENTRE = 2
+
+
+def _better(x, y, act, a, b, side) -> bool:
+    """Is centre a strictly better than centre b over the active points (smaller enclosing / larger empty circle)?"""
+    ra, rb = z.radii(x[act], y[act], a), z.radii(x[act], y[act], b)
+    return ra.max() < rb.max() if side == "outer" else ra.min() > rb.min()
+
+
 def _surrounds(x, y, act, c, side) -> bool:
-    """Do the active points tied (within TIE_REL of the extreme radius) at centre c surround it?"""
-    from methods.circle._global import TIE_REL, alternating_contacts
+    """Do the active points tied at centre c (within :func:`methods.circle._zone.tie_tolerance` of the extreme
+    radius, the final check's slack) surround it?"""
     r = z.radii(x[act], y[act], c)
-    tol = TIE_REL * r.max()
-    tied = act[r >= r.max() - tol] if side == "outer" else act[r <= r.min() + tol]
-    return alternating_contacts(x, y, c, np.empty(0, dtype=np.intp), tied, z.hulls_meet) is not None
+    extreme = r.max() if side == "outer" else r.min()
+    tol = z.tie_tolerance(extreme)
+    tied = act[r >= extreme - tol] if side == "outer" else act[r <= extreme + tol]
+    return z.surrounding_contacts(x, y, c, tied) is not None
 
 
 def largest_angular_gap(x, y, c) -> float:
@@ -56,14 +78,14 @@ def largest_angular_gap(x, y, c) -> float:
 def _mcc_certify(x, y):
     """The hull certificate of :func:`methods.circle._zone.certify_hulls`, its message stating what was checked
     and to which tolerance (KKT of the convex program min R s.t. |p_i - c| <= R)."""
-    from methods.circle._global import TIE_REL
     hull = z.certify_hulls(x, y)
 
     def certify(c, oc, ic):
         ok, message = hull(c, oc, ic)
         if ok:
-            message += (f"; checked: every point within (1 + {z.CHECK_RTOL:g}) x the contacts' radius, contacts tied "
-                        f"within {TIE_REL:g} x the radius, the centre in the hull of their unit directions to 1e-12")
+            message += (f"; checked: every point within (1 + {z.CHECK_RTOL:g}) x the contacts' radius, the centre in "
+                        f"the hull of the unit directions of the points within {z.CHECK_RTOL:g} x the radius of the "
+                        "largest (to 1e-12): no circle is smaller by more than that")
         return ok, message
     return certify
 

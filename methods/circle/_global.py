@@ -399,12 +399,16 @@ def polish_inscribed(x, y, c, polygon: ProfilePolygon, steps: int = 12):
     return c0, f0
 
 
-def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet, scale, unit="data units"):
+def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet, scale, shift=None,
+              unit="data units"):
     """The global stage of :mod:`methods.circle._zone`'s fits (see the module docstring).
 
     ``rerun(start)`` runs the local solver from another start and returns what
     ``active_set_fit`` returns. Returns (centre, contacts, converged, certified, message, info) with
-    certified one of "global", "local", False."""
+    certified one of "global", "local", False. With the frame's ``shift``, the centre is also chosen among the
+    float centres in data units (:func:`float_centre`): ``info["center_data"]`` is the one to return, ``centre``
+    its unit-frame image, and ``info["bound"]`` (data units, certified "global" only) what the message states:
+    the zone about the returned centre exceeds the optimum's (the empty circle falls short of it) by at most that."""
     zone = kind == "zone"
     polygon = None if zone else ProfilePolygon(x, y)
     S = np.asarray(stats.get("active", np.empty(0, dtype=np.intp)), dtype=np.intp)
@@ -504,16 +508,30 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
         pass
     local = valid and (alt is not None or bool(ok) or (zone and f <= 1e-11))
     what = "zone narrower" if zone else "empty circle larger"
+    cost = 0.0
+    if valid and shift is not None:
+        centre_data, c, cost = float_centre(x, y, c, f, r, shift, scale, zone, polygon)
+        info["center_data"] = centre_data
     if valid and outcome is not None and outcome.certified:
         certified = "global"
-        eps = (resolution(f, r.max()) + (f if zone and f <= 1e-11 else 0.0)) * scale  # width >= 0 bounds a zero zone
+        # the certificate's resolution (a zero zone: width >= 0), the centre's float resolution and the rounding
+        # of the unit-frame coordinates (points and centre, :data:`FRAME_ROUNDING`)
+        rho = float(np.hypot(c[0], c[1]) + r.max())
+        rounding = FRAME_ROUNDING * np.finfo(float).eps * rho
+        eps = (resolution(f, r.max()) + (f if zone and f <= 1e-11 else 0.0) + max(cost, 0.0) + rounding) * scale
+        eps = round_up(eps)
+        info["bound"] = eps
+        centre_note = (f"; of which {max(cost, 0.0) * scale:.2g} {unit} for the centre's float resolution (the best of "
+                       f"the {(2 * FLOAT_STEPS + 1) ** 2} float centres about the optimum)" if cost * scale > 1e-3 * eps
+                       else "")
         if zone and f <= 1e-11:
             msg = (f"certified global optimum: the points lie on one circle (zone width {f * scale:.2g} {unit}, at "
-                   "rounding level; no zone is narrower than 0)")
+                   f"rounding level; no zone is narrower than 0, none than this one's by more than {eps:.3g} {unit}"
+                   f"{centre_note})")
         else:
-            msg = (f"certified global optimum over {info['region']}{exact_note}: no centre there gives a {what} by more "
-                   f"than {eps:.2g} {unit} (branch and bound over the centre: {info['boxes']} boxes, "
-                   f"{info['full_passes']} extra passes over the points")
+            msg = (f"certified global optimum over {info['region']}{exact_note}: no centre there gives a {what} than "
+                   f"the returned centre by more than {eps:.3g} {unit}{centre_note} (branch and bound over the centre: "
+                   f"{info['boxes']} boxes, {info['full_passes']} extra passes over the points")
             msg += f", local solver restarted {info['restarts']} time(s) from better centres)" if info["restarts"] else ")"
         if f > 1e-11:
             msg += ("; contacts alternate" if alt is not None else
@@ -528,6 +546,66 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
         msg += f"; no global certificate: {outcome.reason if outcome is not None else 'not attempted'}"
     info.pop("region") if info["region"] is None else None
     return c, contacts, certified in ("global", "local"), certified, msg, info
+
+
+#: float neighbours per coordinate either side of the rounded data centre searched by :func:`float_centre`
+FLOAT_STEPS = 3
+#: the unit-frame coordinates of the points and of a centre are (p - shift) / scale rounded twice: each distance
+#: is off by at most 4 eps (|p| + |c|) <= 8 eps rho, a width (two distances) by 16 eps rho
+FRAME_ROUNDING = 16
+
+
+def float_centre(x, y, c, f, r, shift, scale, zone: bool, polygon: ProfilePolygon | None = None):
+    """The centre to return in data units for the unit-frame centre ``c`` (value ``f``, radii ``r``): the best of the
+    (2 FLOAT_STEPS + 1)^2 float pairs nearest ``c scale + shift``, each evaluated in the unit frame (centred on the
+    data: its image (p - shift) / scale is exact to a few eps of the data's size). Far from the origin the data-unit
+    centre's own resolution (an ulp of its coordinates) can exceed the certificate's: rounding ``c scale + shift``
+    to the nearest floats moves it by up to half an ulp a coordinate, which can widen the zone by up to
+    |grad width| <= 2 times that (1 for the MIC's radius), and the nearest float is not always the best one.
+
+    Only the points whose radius about c is within the candidates' reach (2 x their largest distance from c) of the
+    extreme radii can be extreme about a candidate, so the candidates are evaluated on those alone (exactly the
+    values over all points). Returns (centre in data units, its unit-frame image, cost) with cost = value(returned)
+    - f (zone: wider; MIC: smaller circle), which the certificate's bound adds."""
+    c = np.asarray(c, dtype=float)
+    base = c * scale + shift
+    if not np.isfinite(base).all():
+        return base, c, 0.0
+    grid_x = _float_steps(base[0], FLOAT_STEPS)
+    grid_y = _float_steps(base[1], FLOAT_STEPS)
+    X, Y = np.meshgrid(grid_x, grid_y)
+    cand = np.column_stack([X.ravel(), Y.ravel()])
+    U = (cand - shift) / scale
+    reach = float(np.hypot(U[:, 0] - c[0], U[:, 1] - c[1]).max())
+    slack = 2 * reach + 1e-14 * float(r.max())
+    near = np.flatnonzero(r <= r.min() + slack)
+    if zone:
+        near = np.union1d(np.flatnonzero(r >= r.max() - slack), near)
+    R = np.hypot(x[near][None, :] - U[:, 0:1], y[near][None, :] - U[:, 1:2])
+    val = R.max(axis=1) - R.min(axis=1) if zone else -R.min(axis=1)
+    for j in np.argsort(val, kind="stable"):  # the MIC's centre must lie in the profile polygon (one test, rarely more)
+        if not np.isfinite(val[j]):
+            break
+        if zone or polygon.contains(U[j:j + 1])[0]:
+            return cand[j], U[j], float(val[j] - f) if zone else float(f + val[j])
+    return base, c, 0.0
+
+
+def round_up(v: float, digits: int = 3) -> float:
+    """v rounded up to ``digits`` significant digits: printed with that many, it is still a bound."""
+    if not (np.isfinite(v) and v > 0):
+        return v
+    step = 10.0 ** (np.floor(np.log10(v)) - (digits - 1))
+    return float(np.ceil(v / step * (1 + 1e-15)) * step)
+
+
+def _float_steps(v: float, k: int) -> np.ndarray:
+    """The 2k + 1 consecutive floats centred on v."""
+    lo, hi = [v], [v]
+    for _ in range(k):
+        lo.append(np.nextafter(lo[-1], -np.inf))
+        hi.append(np.nextafter(hi[-1], np.inf))
+    return np.array(lo[:0:-1] + hi)
 
 
 #: below this many points a failed branch and bound falls back to the exact enumeration

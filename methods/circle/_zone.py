@@ -431,11 +431,13 @@ def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max
         else:
             c, (oc, ic), ok, certified, message, info = _global.globalise(
                 x, y, kind=proof, c=c, contacts=(oc, ic), ok=ok, message=message, stats=stats, rerun=run,
-                hulls_meet=hulls_meet, scale=frame.scale)
+                hulls_meet=hulls_meet, scale=frame.scale, shift=frame.shift)
     except SolverFailure as exc:
         c, (oc, ic), ok, certified, message = start, ((), ()), False, False, f"{exc}; no result is claimed"
         stats = {"solves": None, "solver_iterations": None, "history": [], "rounds": None, "active_points": None}
-    center, _ = frame.circle_to_data(np.array([c[0], c[1], 1.0]))
+    center = info.pop("center_data", None)
+    if center is None:
+        center, _ = frame.circle_to_data(np.array([c[0], c[1], 1.0]))
     # the radius rule runs in the unit frame and is mapped back (radius = scale x rule(r / scale)): radii
     # squared in data units overflow beyond ~1e154 and underflow below ~1e-154
     radius = frame.scale * float(radius_rule(radii(x, y, c), c))

@@ -36,19 +36,37 @@ class Stationarity:
     decrease: float         # the largest decrease the probe achieved (unit frame)
     noise: float            # rounding noise of S at the returned point (unit frame)
     steps: int              # Levenberg–Marquardt steps tried
+    predicted: float = 0.0  # the decrease the Gauss–Newton model promises at the returned point (unit frame)
+
+    def _rel(self, v: float) -> float:
+        return v / self.objective if self.objective > 0 else (np.inf if v > 0 else 0.0)
 
     @property
     def relative(self) -> float:
-        return self.decrease / self.objective if self.objective > 0 else (np.inf if self.decrease > 0 else 0.0)
+        return self._rel(self.decrease)
+
+    @property
+    def tolerance(self) -> float:
+        """The allowed decrease, relative to S: STATIONARY_RTOL plus the rounding bound of S."""
+        return STATIONARY_RTOL + self._rel(self.noise)
 
     def as_dict(self) -> dict:
         return {"stationary": self.stationary, "objective_unit": self.objective, "decrease_found_unit": self.decrease,
-                "relative_decrease": self.relative, "rounding_noise_unit": self.noise, "probe_steps": self.steps,
-                "probe": "Levenberg-Marquardt steps from the returned point (unit frame)"}
+                "relative_decrease": self.relative, "predicted_decrease_unit": self.predicted,
+                "relative_predicted_decrease": self._rel(self.predicted), "rounding_noise_unit": self.noise,
+                "relative_tolerance": self.tolerance, "probe_steps": self.steps,
+                "probe": "Gauss-Newton model and Levenberg-Marquardt steps from the returned point (unit frame)"}
+
+    def checked(self) -> str:
+        """What was checked, with the numbers (the message of a stationary point)."""
+        return (f"the Gauss-Newton model there promises a further decrease of {self._rel(self.predicted):.2e} of the "
+                f"objective and a Levenberg-Marquardt probe achieves {self.relative:.2e}, both at most "
+                f"{STATIONARY_RTOL:.0e} + {self._rel(self.noise):.2e} (the rounding bound of the objective there)")
 
     def reason(self) -> str:
-        return (f"not a stationary point of the objective: a Levenberg-Marquardt probe started there lowers it by "
-                f"{self.relative:.2e} relative (tolerance {STATIONARY_RTOL:.0e} plus rounding)")
+        return (f"not a stationary point of the objective: the Gauss-Newton model there promises a decrease of "
+                f"{self._rel(self.predicted):.2e} relative and a Levenberg-Marquardt probe achieves {self.relative:.2e} "
+                f"(tolerance {STATIONARY_RTOL:.0e} + {self._rel(self.noise):.2e}, the rounding bound of the objective)")
 
 
 def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONARY_RTOL, steps: int = 4,
@@ -71,6 +89,7 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
         return Stationarity(False, f0, np.inf, floor, 0)
     threshold = rtol * f0 + floor
     qk, fk, rk, taken = q0, f0, r, 0
+    predicted = np.inf
     for _ in range(steps):
         if triangular is not None:
             T = np.asarray(triangular(qk), dtype=np.float64)
@@ -90,6 +109,8 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
             U, sv, Vt = np.linalg.svd(J / col, full_matrices=False)
             g = U.T @ rk
         keep = sv > sv[0] * len(rk) * EPS
+        if taken == 0:  # the Gauss-Newton model's decrease at q0: |projection of r on range(J)|^2 = g^T (J^T J)^+ g
+            predicted = float(np.sum(np.where(keep, g * g, 0.0)))
         improved = False
         for lam in (0.0, *(sv[0] ** 2 * 10.0 ** np.arange(-12, 5))):
             m = np.where(keep, sv * sv / (sv * sv + lam), 0.0) if lam > 0 else keep.astype(float)
@@ -107,7 +128,8 @@ def stationarity_probe(residuals, jacobian, q, *, noise, rtol: float = STATIONAR
         if not improved or f0 - fk > threshold:
             break
     decrease = f0 - fk
-    return Stationarity(bool(decrease <= threshold), f0, float(decrease), floor, taken)
+    return Stationarity(bool(decrease <= threshold and predicted <= threshold), f0, float(decrease), floor, taken,
+                        predicted)
 
 
 #: Points per block of :func:`sum_of_squares_noise` (its temporaries hold a block, not N values).

@@ -102,8 +102,8 @@ def _minimise(objective, residuals, jacobian, noise, x0, lam, *, n, backend, xat
         probe = stationarity_probe(residuals, None, x, noise=lambda r, q: sum_of_squares_noise(r, lambda part: noise(q, part)),
                                    triangular=triangular)
         if probe.stationary:
-            message = f"Nelder-Mead stopped ({run.message}); stationary point (Levenberg-Marquardt probe" \
-                      f"{'' if round_ == 1 else f', after {round_ - 1} restart(s)'})"
+            message = (f"Nelder-Mead stopped ({run.message}); stationary point"
+                       f"{'' if round_ == 1 else f' after {round_ - 1} restart(s)'}: {probe.checked()}")
             return x, True, message, iterations, nfev, history, probe
         message = probe.reason()
         if not progressed and round_ > 1:

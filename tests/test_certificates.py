@@ -78,6 +78,22 @@ def test_mcc_of_near_tied_semicircle_extremes_is_found_and_certified(amp, n, see
     assert fit.radius >= ref * (1 - 1e-13)
 
 
+def test_dual_bound_of_all_points_is_the_smallest_enclosing_circle():
+    """The MCC is fixed by 2 or 3 of the points, so the largest smallest-circle over all pairs and triples is the
+    MCC itself (Welzl's radius), and over a subset it is a lower bound."""
+    from methods.circle._zone import enclosing_lower_bound
+    rng = np.random.default_rng(3)
+    for n in (3, 5, 8, 12):
+        for _ in range(20):
+            P = rng.normal(size=(n, 2)) * rng.uniform(0.1, 10, 2) + rng.uniform(-50, 50, 2)
+            _, ref = welzl_mcc(P, rtol=0.0)
+            low, subset = enclosing_lower_bound(P[:, 0], P[:, 1], np.arange(n))
+            assert ref * (1 - 1e-13) <= low <= ref, (n, low, ref)
+            assert 2 <= len(subset) <= 3
+            part, _ = enclosing_lower_bound(P[:, 0], P[:, 1], np.arange(n // 2 + 1))
+            assert part <= ref
+
+
 def test_roundness_mcci_of_near_tied_profile_is_converged():
     """The ISO 12181 evaluation reports the MCCI of such a profile as converged, with Welzl's radius."""
     P = oval_profile(1e-7, 3600, 10)

@@ -532,7 +532,7 @@ DUAL_POINTS = 24
 def enclosing_lower_bound(x, y, idx):
     """max over the pairs and triples of the points ``idx`` of the radius of the smallest circle holding them: a
     lower bound of the smallest circle holding all points (it holds every subset). Two points: half their
-    distance; three: the circumradius |ab||bc||ca| / (2 |(b - a) x (c - a)|) when no angle is obtuse, else half
+    distance; three: the circumradius |ab||bc||ca| / (2 x twice the area) when no angle is obtuse, else half
     the longest side. Lowered by 64 eps relative for the rounding. Returns (bound, the subset attaining it)."""
     idx = np.asarray(idx, dtype=np.intp)
     P = np.column_stack([x[idx], y[idx]])
@@ -546,7 +546,13 @@ def enclosing_lower_bound(x, y, idx):
         ab, bc, ca = b - a, c - b, a - c
         lab, lbc, lca = np.hypot(*ab.T), np.hypot(*bc.T), np.hypot(*ca.T)
         acute = ((-ca * ab).sum(1) > 0) & ((-ab * bc).sum(1) > 0) & ((-bc * ca).sum(1) > 0)
-        cross = np.abs(ab[:, 0] * (-ca[:, 1]) - ab[:, 1] * (-ca[:, 0]))
+        # twice the area from the two sides at the vertex opposite the longest side (its angle is 60-90 deg in an
+        # acute triangle, so the cross product loses no digits to cancellation: relative rounding ~4 eps)
+        at_a = abs(ab[:, 0] * ca[:, 1] - ab[:, 1] * ca[:, 0])
+        at_b = abs(bc[:, 0] * ab[:, 1] - bc[:, 1] * ab[:, 0])
+        at_c = abs(ca[:, 0] * bc[:, 1] - ca[:, 1] * bc[:, 0])
+        longest = np.argmax(np.column_stack([lab, lbc, lca]), axis=1)   # ab -> vertex c, bc -> a, ca -> b
+        cross = np.choose(longest, [at_c, at_a, at_b])
         with np.errstate(divide="ignore", invalid="ignore"):
             rad = np.where(acute & (cross > 0), lab * lbc * lca / (2 * cross), np.maximum(np.maximum(lab, lbc), lca) / 2)
         rad = np.where(np.isfinite(rad), rad, 0.0)

@@ -83,9 +83,8 @@ def _mcc_certify(x, y):
     def certify(c, oc, ic):
         ok, message = hull(c, oc, ic)
         if ok:
-            message += (f"; checked: every point within (1 + {z.CHECK_RTOL:g}) x the contacts' radius, the centre in "
-                        f"the hull of the unit directions of the points within {z.CHECK_RTOL:g} x the radius of the "
-                        "largest (to 1e-12): no circle is smaller by more than that")
+            message += (f"; checked: every point within (1 + {z.CHECK_RTOL:g}) x the contacts' radius, so no circle "
+                        f"holding all points is smaller by more than {z.CHECK_RTOL:g} x the radius")
         return ok, message
     return certify
 
@@ -97,8 +96,11 @@ def min_circumscribed(points, *, active_size=16, max_rounds=50):
     """Smallest circle containing all points: min R s.t. |p_i - c| <= R (second-order cones, one
     convex program, global optimum). Only the outermost points reach clarabel (active set with a final
     check of every point); the centre is then solved exactly from its 2 (diameter) or 3 contacts and
-    certified by the centre lying in the convex hull of the contacts (searched among tied contacts): the
-    program is convex, so this is a global certificate over all centres (``extra['certified'] == "global"``).
+    certified by the centre lying in the convex hull of the points within 1e-12 of the largest radius (the final
+    check's slack), or, when the extreme points lie nearly on a semicircle, by the smallest circle of a pair or
+    triple of the outermost points (a lower bound) within 1e-12 of R: the program is convex, so this is a
+    global certificate over all centres (``extra['certified'] == "global"``): no circle holding all points is
+    smaller by more than 1e-12 x R (docs/certificates.md).
     ``radius`` = R; ``form_error`` = R - min_i |p_i - c| (roundness about the MCC centre)."""
     name = "circle.min_circumscribed"
     k = int(check_positive("active_size", active_size, name))
@@ -136,7 +138,8 @@ def max_inscribed(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=
     together), so the local certificate (the tied contacts surround the centre) proves a LOCAL maximum
     only. With ``global_search="always"`` (default) a branch and bound over the centre
     (:mod:`methods.circle._global`) proves that no centre inside the profile polygon gives an empty
-    circle larger by more than 1e-10 x r + 1e-13 x the data's RMS radius; a better centre restarts the
+    circle larger by more than 1e-10 x r + 1e-13 x the data's RMS radius + the returned centre's float
+    resolution (the message states the sum in data units; docs/certificates.md); a better centre restarts the
     local solver there, and a local centre outside the polygon is never returned as a MIC.
     ``extra['certified']``: "global", "local" or False; ``converged`` is True for either certificate."""
     name = "circle.max_inscribed"

@@ -78,7 +78,9 @@ def minimum_zone(points, *, active_size=16, max_rounds=50, max_ccp=30, ccp_tol=1
        contacts (so symmetric lobed profiles find their alternating set). This proves a LOCAL optimum.
     5. Global certificate (``global_search="always"``, the default): a branch and bound over the centre
        (:mod:`methods.circle._global`) proves that no centre gives a zone narrower by more than
-       1e-10 x width + 1e-13 x the data's RMS radius, over ALL of R^2 whenever the points are not nearly
+       1e-10 x width + 1e-13 x the data's RMS radius + the returned centre's float resolution (the best of the
+       7 x 7 floats about the optimum: far from the origin an ulp of the centre can exceed the rest; the message
+       states the sum in data units, docs/certificates.md), over ALL of R^2 whenever the points are not nearly
        straight (a far-field bound excludes every centre beyond a computed distance), else over a disc of
        10 data radii about the centroid (the message states it). A better centre found there restarts
        the local solver from it. Cost: the boxes use only the active points plus the few points that

@@ -499,7 +499,7 @@ def run_task(task: dict, row_timeout: float | None = None) -> dict:
 
 
 def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None) -> dict:
-    """Run a chunk of tasks in a worker; the rows come back as columns (:func:`to_columns`). ``progress``
+    """Run a chunk of tasks in a worker; the rows come back as the store's columns (:func:`encode_rows`). ``progress``
     (a shared array of two doubles) receives the start time and position of the running row, so that
     the parent can end a row stuck in compiled code."""
     rows = []
@@ -508,39 +508,13 @@ def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None
         if progress is not None:
             progress[0], progress[1] = time.monotonic(), pos
         rows.append(run_task(task, row_timeout))
-    return {"columns": to_columns(rows), "seconds": time.perf_counter() - t0}
+    return {"columns": encode_rows(rows), "seconds": time.perf_counter() - t0}
 
 
-def to_columns(rows: list[dict]) -> dict:
-    """Rows as columns: ``{"n", "names", "values": [list per name], "absent": {name: [positions]}}``
-    (a column missing from some rows lists them, so that the rows come back exactly)."""
-    names: dict = {}
-    for r in rows:
-        for k in r:
-            names.setdefault(k, None)
-    values, absent = [], {}
-    for name in names:
-        col, miss = [], []
-        for i, r in enumerate(rows):
-            if name in r:
-                col.append(r[name])
-            else:
-                col.append(None)
-                miss.append(i)
-        values.append(col)
-        if miss:
-            absent[name] = miss
-    return {"n": len(rows), "names": list(names), "values": values, "absent": absent}
-
-
-def from_columns(batch: dict) -> list[dict]:
-    """The rows of a :func:`to_columns` batch."""
-    rows = [dict(zip(batch["names"], vals)) for vals in zip(*batch["values"])] if batch["names"] else \
-        [{} for _ in range(batch["n"])]
-    for name, positions in batch["absent"].items():
-        for i in positions:
-            del rows[i][name]
-    return rows
+def encode_rows(rows: list[dict]) -> dict:
+    """A chunk's rows in the columns of the row store (``status``, ``row`` as JSON text), encoded by the
+    worker: the process that stores them only inserts (it serves every worker)."""
+    return {"status": [r.get("status") for r in rows], "row": [json.dumps(r) for r in rows]}
 
 
 def _plain(row: dict) -> dict:
@@ -596,7 +570,7 @@ class _Interner:
         row = json.loads(text)
         table = self.table
         for k, v in row.items():
-            if type(v) is str and len(v) < 256:
+            if type(v) is str and len(v) < 256 and k != "data_stream":  # data_stream: one per row
                 s = table.get(v)
                 if s is None:
                     if len(table) < self.limit:
@@ -648,6 +622,9 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     for block in _blocks(make(), 20000):
         stored = store.get_by_key([t["key"] for t in block], decode=decode)
         rows = [stored[t["key"]] for t in block if t["key"] in stored]
+        if len(rows) != len(block):
+            raise RuntimeError(f"{len(block) - len(rows)} rows of {desc} are missing from the row store after the run; "
+                               f"run the same command again (the stored rows are kept)")
         for r in rows:  # the order of the rows is the order of the tasks, whatever order they were stored in
             r.pop("task_index", None)
         if rows:

@@ -57,12 +57,12 @@ def _duration(seconds: float) -> str:
 
 class Chunks:
     """Tasks cut into chunks whose size follows the measured cost of a row: a chunk takes about
-    :attr:`target_s` seconds of a worker (between 1 and :attr:`max_rows` rows), so that microsecond
+    :attr:`target_s` seconds of a worker (one transaction of the store, one message each way) (between 1 and :attr:`max_rows` rows), so that microsecond
     fits travel in thousands and slow rows one by one; ``declared`` fixes the size. Rows of a chunk that
     failed as a whole (a worker died) come back one at a time first."""
 
-    target_s = 0.2
-    max_rows = 4000
+    target_s = 0.5
+    max_rows = 10000
 
     def __init__(self, tasks, declared: int | None = None, workers: int = 1):
         self.it = iter(tasks)
@@ -114,10 +114,8 @@ def execute(tasks, store: RowStore, *, work, jobs: int, executor: str, scheduler
 
 
 def _store(store: RowStore, batch: dict, tasks: list, bar) -> None:
-    from experiments.engine import from_columns
-    rows = from_columns(batch)
-    store.put_many([t["key"] for t in tasks], rows)
-    bar.update(len(rows))
+    store.put_encoded([t["key"] for t in tasks], batch["status"], batch["row"])
+    bar.update(len(tasks))
 
 
 def _run_here(work, chunks: Chunks, store: RowStore, bar) -> None:
@@ -274,10 +272,10 @@ class _Worker:
 def _lost_chunk(chunks: Chunks, store: RowStore, bar, chunk: list, pos: int, status: str, message: str) -> None:
     """A worker died (or was killed) at row ``pos`` of ``chunk``: that row gets ``status``; the rows before
     it (their results died with the worker) and after it run again, one per chunk."""
-    from experiments.engine import failed_row, to_columns
+    from experiments.engine import encode_rows, failed_row
     pos = min(max(int(pos), 0), len(chunk) - 1)
     bad = chunk[pos]
-    _store(store, to_columns([failed_row(bad, status, message)]), [bad], bar)
+    _store(store, encode_rows([failed_row(bad, status, message)]), [bad], bar)
     chunks.again(chunk[:pos] + chunk[pos + 1:])
 
 
@@ -289,20 +287,24 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
     from multiprocessing.connection import wait
     ctx = mp.get_context("spawn")
     workers: list[_Worker] = []
-    next_id = 0
+    next_id = startup_failures = 0
     with _one_blas_thread_per_worker():
         try:
             with _workers_ignore_ctrl_c():
                 workers = [_Worker(ctx) for _ in range(jobs)]
-            exhausted = False
             while True:
                 for w in workers:
-                    if w.chunk is None and not exhausted:
-                        chunk = chunks.next()
+                    if w.chunk is None:
+                        chunk = chunks.next()  # rows to run again (a worker died) come first
                         if chunk is None:
-                            exhausted = True
                             break
-                        w.send(next_id, chunk, row_timeout)
+                        try:
+                            w.send(next_id, chunk, row_timeout)
+                        except OSError:  # the idle worker was killed from outside: a new one takes the chunk
+                            w.stop(now=True)
+                            with _workers_ignore_ctrl_c():
+                                w = workers[workers.index(w)] = _Worker(ctx)
+                            w.send(next_id, chunk, row_timeout)
                         next_id += 1
                 busy = [w for w in workers if w.chunk is not None]
                 if not busy:
@@ -328,11 +330,21 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                             _store(store, out["columns"], chunk, bar)
                             continue
                     if died:
-                        pos = w.progress[1]
+                        pos, started = w.progress[1], w.progress[0]
                         w.proc.join(timeout=5)
                         code = w.proc.exitcode
-                        _lost_chunk(chunks, store, bar, w.chunk, pos, "crashed",
-                                    f"the worker process ended (exit code {code}) while running this row")
+                        if not started:  # it died before running a row: the worker, not a row
+                            startup_failures += 1
+                            if startup_failures >= 3:
+                                from methods import InvalidInputError
+                                raise InvalidInputError(
+                                    f"worker processes end before running a row (exit code {code}, 3 times); "
+                                    f"run with --jobs 1 to see why")
+                            chunks.again(w.chunk)
+                        else:
+                            startup_failures = 0
+                            _lost_chunk(chunks, store, bar, w.chunk, pos, "crashed",
+                                        f"the worker process ended (exit code {code}) while running this row")
                         w.stop(now=True)
                         with _workers_ignore_ctrl_c():
                             workers[workers.index(w)] = _Worker(ctx)
@@ -393,7 +405,7 @@ def _run_dask(work, chunks: Chunks, store: RowStore, jobs: int, scheduler, bar, 
     ``crashed``. Time limits act inside the worker's thread (:class:`experiments.engine.RowTimeout`)."""
     import dask
     from distributed import Client, LocalCluster, as_completed
-    from experiments.engine import failed_row, to_columns
+    from experiments.engine import encode_rows, failed_row
     cluster = None
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
         if scheduler is not None:
@@ -428,7 +440,7 @@ def _run_dask(work, chunks: Chunks, store: RowStore, jobs: int, scheduler, bar, 
                         chunks.again(chunk)
                     else:
                         msg = f"the worker process died while running this row ({type(exc).__name__})"
-                        _store(store, to_columns([failed_row(chunk[0], "crashed", msg)]), chunk, bar)
+                        _store(store, encode_rows([failed_row(chunk[0], "crashed", msg)]), chunk, bar)
                 else:
                     chunks.measured(len(chunk), out["seconds"])
                     _store(store, out["columns"], chunk, bar)

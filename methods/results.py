@@ -598,7 +598,7 @@ def check_result(result, data=None) -> str | None:
     n = None
     if isinstance(data, np.ndarray) and data.ndim == 2:
         n = data.shape[0]
-    for name, shape in type(result).SHAPES.items():
+    for name, shape in {**type(result).SHAPES, **(cls or type(result)).SHAPES}.items():
         problem = _shape_problem(name, getattr(result, name), shape, n)
         if problem:
             return problem
@@ -606,7 +606,8 @@ def check_result(result, data=None) -> str | None:
         values = {"form_error": result.form_error, **result.geometry()}
     except Exception as exc:  # a geometry the class cannot even read out
         return f"the geometry cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
-    declared = {c.name: c for c in type(result).COLUMNS}
+    rules = cls or type(result)  # the family's declarations win over a subclass's own
+    declared = {**{c.name: c for c in type(result).COLUMNS}, **{c.name: c for c in rules.COLUMNS}}
     problems = [_value_problem(name, v, declared[name].check if name in declared else "finite", converged)
                 for name, v in values.items()]
     if any(problems):
@@ -616,13 +617,14 @@ def check_result(result, data=None) -> str | None:
         return f"residuals must be a numeric array, got {_describe(residuals)}"
     if converged and residuals.size and not np.isfinite(residuals).all():
         return "residuals are not finite in a converged result"
-    if converged and isinstance(result, CircleFit) and n:
-        return _circle_consistency(result, data)
+    if converged and n:
+        return (cls or type(result)).consistency(result, data)
     return None
 
 
 def _circle_consistency(result: CircleFit, points: np.ndarray) -> str | None:
-    """A converged circle's form error and residuals are those of its points about its centre and radius."""
+    """A converged circle's form error and residuals are those of its points about its centre and radius
+    (``CircleFit.consistency``)."""
     with np.errstate(all="ignore"):
         r = np.hypot(points[:, 0] - result.center[0], points[:, 1] - result.center[1])
         span = float(r.max() - r.min())
@@ -634,3 +636,28 @@ def _circle_consistency(result: CircleFit, points: np.ndarray) -> str | None:
         if result.residuals.shape == r.shape and not np.all(np.abs(result.residuals - (r - result.radius)) <= tol):
             return "residuals are not the radial distances minus the radius about the returned centre"
     return None
+
+
+def _ellipse_consistency(result: EllipseFit, points: np.ndarray) -> str | None:
+    """A converged ellipse keeps its declared form: a >= b, angle in [0, pi), form error = the span of its
+    residuals (``EllipseFit.consistency``)."""
+    a, b = float(result.semi_axes[0]), float(result.semi_axes[1])
+    if not a >= b:
+        return f"semi_axes = ({a:.10g}, {b:.10g}): a must be >= b"
+    if not 0.0 <= float(result.angle) < math.pi:
+        return f"angle = {float(result.angle):.10g} rad must lie in [0, pi)"
+    d = result.residuals
+    if d.size:
+        span = float(d.max() - d.min())
+        if not abs(float(result.form_error) - span) <= 1e-9 * (a + span) + 1e-6 * span:
+            return f"form_error = {float(result.form_error):.10g} but its residuals span {span:.10g}"
+    return None
+
+
+def _no_consistency(result, data) -> None:
+    return None
+
+
+FitResult.consistency = staticmethod(_no_consistency)
+CircleFit.consistency = staticmethod(_circle_consistency)
+EllipseFit.consistency = staticmethod(_ellipse_consistency)

@@ -47,6 +47,36 @@ def test_each_lie_is_refused_with_its_reason(lie):
     assert problem is not None and reason in problem and "\n" not in problem, problem
 
 
+def test_the_family_s_declarations_win_over_a_subclass_s_own():
+    """A plugin's subclass that declares the radius unchecked and no consistency is still held to CircleFit's."""
+    from dataclasses import dataclass
+
+    @dataclass(kw_only=True)
+    class Lenient(results.CircleFit):
+        COLUMNS = (results.Column("radius", "length", None, ""),)
+        SHAPES = {}
+        consistency = staticmethod(lambda result, data: None)
+
+    res = Lenient(**{f: getattr(honest(), f) for f in ("center", "radius", "form_error", "residuals", "converged",
+                                                      "message", "method")})
+    res.radius = -1.0
+    assert "radius = -1 must be > 0" in results.check_result(res, CIRCLE)
+    res.radius, res.form_error = 299.0, 1e-9
+    assert "radial span" in results.check_result(res, CIRCLE)
+
+
+def test_an_ellipse_keeps_its_declared_form():
+    pts = CIRCLE * np.array([1.0, 0.5])
+    res = methods.fit("ellipse.halir_flusser", pts)
+    assert results.check_result(res, pts) is None
+    for change, reason in ((dict(semi_axes=res.semi_axes[::-1]), "a must be >= b"), (dict(angle=4.0), "[0, pi)"),
+                           (dict(form_error=res.form_error / 100), "residuals span")):
+        lie = methods.fit("ellipse.halir_flusser", pts)
+        for k, v in change.items():
+            setattr(lie, k, v)
+        assert reason in results.check_result(lie, pts)
+
+
 def test_the_family_contract_and_non_results():
     ellipse = results.EllipseFit(center=(0.0, 0.0), semi_axes=(2.0, 1.0), angle=0.0, conic=(0.0,) * 6,
                                  residuals=np.zeros(40), form_error=0.0, converged=True, method="circle.test")

@@ -388,3 +388,26 @@ def test_positioning_units_in_headers(tmp_path, layout):
     ok = cli("positioning", p, "--mpe", 0.002, "--json")
     assert ok.returncode == 0 and "warning" not in ok.stderr, ok.stderr
     assert json.loads(ok.stdout)["units"]["input_deviation_unit"] == "µm"
+
+
+def test_roundness_plot_labels_rings_and_visible_lobes_without_overlap(tmp_path):
+    from fitbench.plots import pyplot
+    from fitbench.plots.roundness import plot
+    t, d = shaft()
+    res = methods.fit("roundness.iso12181", np.c_[(R + d) * np.cos(t), (R + d) * np.sin(t)], cutoff_upr=50.0)
+    plt = pyplot()
+    fig = plt.figure()
+    try:
+        plot(res, None, into=fig)
+        polar, spectrum = fig.axes[0], fig.axes[1]
+        labels = [tl.get_text() for tl in polar.get_yticklabels()]
+        assert labels and all(lab.endswith("µm") for lab in labels)
+        k_min = np.degrees(res.angles[np.argmin(res.deviations)]) % 360
+        assert polar.get_rlabel_position() == pytest.approx(k_min)
+        lobes = sorted(float(a.xy[0]) for a in spectrum.texts)
+        assert lobes and all(b - a > 0.02 * 10 for a, b in zip(lobes, lobes[1:]))
+        top = max(x["amplitude"] for x in res.dominant_lobes)
+        shown = {int(x) for x in lobes}
+        assert all(x["amplitude"] >= 0.05 * top for x in res.dominant_lobes if x["upr"] in shown)
+    finally:
+        plt.close(fig)

@@ -40,8 +40,12 @@ def plot(res, path, title: str = "", *, save=None, into=None) -> None:
         lo_t, hi_t = math.floor(lo / step) * step, math.ceil(hi / step) * step
         ax.set_rorigin(lo_t - 0.6 * (hi_t - lo_t))
         ax.set_rlim(lo_t, hi_t)
-        ax.set_rticks(np.arange(lo_t, hi_t + step / 2, step))
-        ax.set_yticklabels([])
+        rings = np.arange(lo_t, hi_t + step / 2, step)
+        ax.set_rticks(rings)
+        # ring labels (µm about the raw LSCI radius) along the ray where the profile is innermost: there the
+        # profile and the reference circles lie below the labelled rings instead of across them
+        ax.set_yticklabels([f"{v:+g} µm" for v in rings], fontsize=6, color="0.35")
+        ax.set_rlabel_position(float(np.degrees(theta[int(np.argmin(dev_um))])) % 360)
         ax.plot(np.append(theta, theta[0]), np.append(dev_um, dev_um[0]), color="k", lw=0.8, label="filtered profile")
         colors = {"lsci": "tab:blue", "mzci": "tab:red", "mici": "tab:green", "mcci": "tab:purple"}
         for kind, c in curves.items():
@@ -67,9 +71,10 @@ def plot(res, path, title: str = "", *, save=None, into=None) -> None:
         kmax = int(min(k.max(), 3 * res.cutoff_upr if res.cutoff_upr else k.max()))
         sel &= k <= max(kmax, 10)
         bx.bar(k[sel], amp[sel], width=0.8 if sel.sum() < 200 else 1.0, color="tab:gray")
-        shown = []  # label a dominant lobe only where it does not overlap a label already placed
+        shown = []  # label a visible dominant lobe only where it does not overlap a label already placed
+        top = max((d["amplitude"] for d in res.dominant_lobes), default=0.0)
         for d in res.dominant_lobes[:5]:
-            if all(abs(d["upr"] - u) > 0.04 * max(kmax, 10) for u in shown):
+            if d["amplitude"] >= 0.05 * top and all(abs(d["upr"] - u) > 0.02 * max(kmax, 10) for u in shown):
                 bx.annotate(f"{d['upr']}", (d["upr"], d["amplitude"] * 1e3), fontsize=7, ha="center", va="bottom")
                 shown.append(d["upr"])
         bx.set_xlabel("undulations per revolution [UPR]")

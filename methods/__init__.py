@@ -11,6 +11,7 @@ from methods import results
 from methods.results import (CircleFit, EllipseFit, FitResult, MagnifyFit, MultilaterationFit, PositioningFit,
                              ZoneFit, check_result)
 from methods._validation import validate_points
+from methods._manifest import describe_methods
 
 
 def __getattr__(name: str):
@@ -25,4 +26,4 @@ def __getattr__(name: str):
 
 __all__ = ["InvalidInputError", "UnknownMethodError", "MethodSpec", "register", "get", "list_methods",
            "fit", "immutable", "load_plugins", "results", "check_result", "FitResult", "CircleFit", "ZoneFit", "EllipseFit",
-           "validate_points", "ENTRY_POINT_GROUP", "KINDS"]
+           "validate_points", "describe_methods", "ENTRY_POINT_GROUP", "KINDS"]

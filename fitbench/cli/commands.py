@@ -223,7 +223,7 @@ def _fmt(v) -> str:
 
 
 def cmd_list(args) -> int:
-    from methods._manifest import describe_methods  # the built-in methods without importing their families
+    from methods import describe_methods  # the built-in methods without importing their families
 
     specs = describe_methods(args.family)
     if args.json:

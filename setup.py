@@ -1,4 +1,4 @@
-"""Build of fitbench's compiled kernels (issue 20); everything else is declared in pyproject.toml.
+"""Build of fitbench's compiled kernels; everything else is declared in pyproject.toml.
 
 Each kernel is a small C99 extension over the CPython buffer protocol (no NumPy headers needed to build).
 They are compiled without -ffast-math and with floating-point contraction off, so every operation is the

@@ -331,7 +331,7 @@ def _diagnose(layout: Layout, idx, skip_rows: int):
     raise DataFileError(f"{name}: could not be parsed (unexpected format); use one row of numbers per line")
 
 
-#: files up to this size are parsed without pandas (whose import costs ~0.3 s, issue 20: fast start-up)
+#: files up to this size are parsed without pandas (whose import costs ~0.3 s: fast start-up)
 SMALL_FILE_BYTES = 1 << 16
 
 

@@ -1,4 +1,4 @@
-"""Access to the compiled kernels (issue 20), one rule for every family.
+"""Access to the compiled kernels, one rule for every family.
 
 A kernel module (``methods/<family>/_ckernels.c``, built by ``setup.py`` at install) computes the same
 quantities as the NumPy reference code beside it, in fewer sweeps and without temporaries. The environment

@@ -9,7 +9,7 @@ data are first scaled by a power of two (exact), so the frame of a circle of rad
 to the first :meth:`UnitFrame.of` call on the same array (checked by identity and by the array's
 sum), so validation and normalisation are one sweep over the data.
 
-Compiled path (issue 20; ``methods/_compiled.py``): :func:`kernel_frame` computes the shift, the scale and
+Compiled path (``methods/_compiled.py``): :func:`kernel_frame` computes the shift, the scale and
 the unit-frame second moments in ONE sweep (``methods/circle/_ckernels.c`` pass 1) without writing the
 unit-frame coordinates; validation offers that :class:`KernelFrame`, the circle fits read the points
 through the frame's shift and scale in their own kernel sweeps (each of which returns the data's

@@ -1,5 +1,5 @@
 """Modules imported on first use, so that ``import methods`` loads only what registration needs
-(issue 20: scipy.optimize, clarabel, pandas, shapely, nlopt cost about a second at start-up).
+(scipy.optimize, clarabel, pandas, shapely, nlopt cost about a second at start-up).
 
 >>> pd = lazy_module("pandas")      # nothing imported yet
 >>> pd.DataFrame                    # doctest: +SKIP  (pandas is imported here, once)

@@ -45,7 +45,7 @@ def nelder_mead(objective, x0, steps, *, backend: str, xatol: float, fatol: floa
         def callback(intermediate_result):
             history.append(float(intermediate_result.fun))
 
-        from scipy.optimize import minimize  # imported on first use (issue 20: light import)
+        from scipy.optimize import minimize  # imported on first use (light import)
 
         res = minimize(objective, x0, method="Nelder-Mead", callback=callback,
                        options={"initial_simplex": initial_simplex(x0, steps), "xatol": xatol, "fatol": fatol,

@@ -1,4 +1,4 @@
-/* Compiled kernels of the circle fits (issue 20): each function is ONE sweep over the (N, 2) points.
+/* Compiled kernels of the circle fits: each function is ONE sweep over the (N, 2) points.
  *
  * Which pass does what (a closed-form fit through methods.fit makes exactly three sweeps, the numbers
  * below; Gauss-Newton / Levenberg-Marquardt make the first, then one `geometric` sweep per iteration and
@@ -639,7 +639,7 @@ static PyMethodDef Methods[] = {
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_ckernels",
-                                    "Compiled kernels of the circle fits (issue 20); see the C source header.",
+                                    "Compiled kernels of the circle fits; see the C source header.",
                                     -1, Methods};
 
 PyMODINIT_FUNC PyInit__ckernels(void) { return PyModule_Create(&module); }

@@ -5,7 +5,7 @@ minimised under a normalisation constraint a^T N a = 1 (Chernov, *Circular and L
 Regression*, 2010, ch. 5-7). Pratt, Taubin and Hyper are generalised eigenproblems
 M a = eta N a with M = Z^T Z, Z = [z, x, y, 1].
 
-Speed and accuracy (issue 20): every fit reads the data once more after validation, for the 4x4 moment
+Speed and accuracy: every fit reads the data once more after validation, for the 4x4 moment
 matrix M / N of the centred, scaled (unit-frame) data, then solves a 3x3 or 4x4 problem; the residuals
 and form error are one more sweep. Through ``methods.fit`` that is three sweeps over the points in all
 (compiled path, ``methods/circle/_ckernels.c``; the NumPy reference path computes the same quantities):
@@ -29,7 +29,7 @@ from methods._registry import register
 from methods._result import circle_result
 from methods.circle._frame import Frame, compiled_frame, compiled_moment_means, kasa_moments, kasa_sums, moments
 
-# Compiled path (issue 20): the fits below read the compiled passes' sums as plain floats and map the unit-frame
+# Compiled path: the fits below read the compiled passes' sums as plain floats and map the unit-frame
 # circle to data units in plain floating point (the same IEEE operations as NumPy's on 2-element arrays, so the
 # same bits as the NumPy reference path's own arithmetic), without building matrices or frames in between.
 

@@ -58,7 +58,7 @@ def nelder_mead(points, *, backend="scipy", start=None, step=None, xatol=1e-15, 
 
     # Stopping tolerances at the objective's resolution (README, NIST): values of S_CG scatter by their
     # rounding noise once the simplex is small, so asking for a smaller simplex makes the stop a matter of
-    # the last bit (issue 17). Each run has at most RUN_BUDGET evaluations (a simplex that wanders in the
+    # the last bit. Each run has at most RUN_BUDGET evaluations (a simplex that wanders in the
     # noise stagnates there); the flag is then decided by the point, never by which rule ended the run:
     # converged = stationary (first-order optimum of S_CG, checked below). A run that ends at a point that
     # is not stationary (a far start, a collapsed simplex) is restarted there with a fresh simplex of the

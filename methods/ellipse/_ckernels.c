@@ -1,4 +1,4 @@
-/* Compiled kernels of the ellipse fits (issue 20): the orthogonal residuals in ONE sweep over the points, and
+/* Compiled kernels of the ellipse fits: the orthogonal residuals in ONE sweep over the points, and
  * the moments of the direct fits' 6 x 6 scatter in one more (scatter(), at the end of this file).
  *
  *   orthogonal(x, y, xc, yc, c, s, a, b, iterations, d_out[, phi_out])
@@ -741,7 +741,7 @@ static PyMethodDef Methods[] = {
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_ckernels",
-                                    "Compiled kernel of the ellipse fits (issue 20); see the C source header.",
+                                    "Compiled kernel of the ellipse fits; see the C source header.",
                                     -1, Methods};
 
 PyMODINIT_FUNC PyInit__ckernels(void) { return PyModule_Create(&module); }

@@ -44,7 +44,7 @@ def _nearest_on(geom, pts_geom):
 
 
 def _eta(eta, method_id) -> float:
-    """The magnification: a finite positive number (issue 16 item 18: nan, inf, 0, -5 and 'abc' refused)."""
+    """The magnification: a finite positive number (nan, inf, 0, -5 and 'abc' are refused)."""
     return float(check_positive("eta", eta, method_id))
 
 

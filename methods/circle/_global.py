@@ -508,9 +508,9 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
         pass
     local = valid and (alt is not None or bool(ok) or (zone and f <= 1e-11))
     what = "zone narrower" if zone else "empty circle larger"
-    cost = 0.0
+    cost, searched = 0.0, False
     if valid and shift is not None:
-        centre_data, c, cost = float_centre(x, y, c, f, r, shift, scale, zone, polygon)
+        centre_data, c, cost, searched = float_centre(x, y, c, f, r, shift, scale, zone, polygon)
         info["center_data"] = centre_data
     if valid and outcome is not None and outcome.certified:
         certified = "global"
@@ -522,8 +522,7 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
         eps = round_up(eps)
         info["bound"] = eps
         centre_note = (f"; of which {max(cost, 0.0) * scale:.2g} {unit} for the centre's float resolution (the best of "
-                       f"the {(2 * FLOAT_STEPS + 1) ** 2} float centres about the optimum)" if cost * scale > 1e-3 * eps
-                       else "")
+                       f"the {(2 * FLOAT_STEPS + 1) ** 2} float centres about the optimum)" if searched else "")
         if zone and f <= 1e-11:
             msg = (f"certified global optimum: the points lie on one circle (zone width {f * scale:.2g} {unit}, at "
                    f"rounding level; no zone is narrower than 0, none than this one's by more than {eps:.3g} {unit}"
@@ -550,6 +549,8 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
 
 #: float neighbours per coordinate either side of the rounded data centre searched by :func:`float_centre`
 FLOAT_STEPS = 3
+#: the search runs when the centre's rounding could cost more than this fraction of the certificate's resolution
+FLOAT_SEARCH_REL = 0.05
 #: the unit-frame coordinates of the points and of a centre are (p - shift) / scale rounded twice: each distance
 #: is off by at most 4 eps (|p| + |c|) <= 8 eps rho, a width (two distances) by 16 eps rho
 FRAME_ROUNDING = 16
@@ -565,12 +566,19 @@ def float_centre(x, y, c, f, r, shift, scale, zone: bool, polygon: ProfilePolygo
 
     Only the points whose radius about c is within the candidates' reach (2 x their largest distance from c) of the
     extreme radii can be extreme about a candidate, so the candidates are evaluated on those alone (exactly the
-    values over all points). Returns (centre in data units, its unit-frame image, cost) with cost = value(returned)
-    - f (zone: wider; MIC: smaller circle), which the certificate's bound adds."""
+    values over all points). Returns (centre in data units, its unit-frame image, cost, searched) with cost =
+    value(returned) - f (zone: wider; MIC: smaller circle), or its a-priori bound when not searched, which the
+    certificate's bound adds."""
     c = np.asarray(c, dtype=float)
     base = c * scale + shift
     if not np.isfinite(base).all():
-        return base, c, 0.0
+        return base, c, 0.0, False
+    # rounding c scale + shift moves the centre by at most half an ulp a coordinate plus eps |c scale|: the zone
+    # widens by at most twice that. Where this a-priori cost is below FLOAT_SEARCH_REL of the certificate's
+    # resolution (data within ~100 radii of the origin), the rounded centre is returned with it, unsearched.
+    apriori = float(np.hypot(*np.spacing(np.abs(base))) + 4 * np.finfo(float).eps * np.hypot(*(c * scale))) / scale
+    if apriori <= FLOAT_SEARCH_REL * resolution(f, float(r.max())):
+        return base, c, apriori, False
     grid_x = _float_steps(base[0], FLOAT_STEPS)
     grid_y = _float_steps(base[1], FLOAT_STEPS)
     X, Y = np.meshgrid(grid_x, grid_y)
@@ -587,8 +595,8 @@ def float_centre(x, y, c, f, r, shift, scale, zone: bool, polygon: ProfilePolygo
         if not np.isfinite(val[j]):
             break
         if zone or polygon.contains(U[j:j + 1])[0]:
-            return cand[j], U[j], float(val[j] - f) if zone else float(f + val[j])
-    return base, c, 0.0
+            return cand[j], U[j], float(val[j] - f) if zone else float(f + val[j]), True
+    return base, c, apriori, False
 
 
 def round_up(v: float, digits: int = 3) -> float:

@@ -405,14 +405,8 @@ def _abstract(entries, verdicts) -> str:
     if not done:
         return ""
     n_rows = sum(int(e[4].get("n_rows") or 0) for e in done if str(e[4].get("n_rows", "")).isdigit())
-    methods = set()
-    for e in done:
-        cfg_methods = (e[4].get("config") or {}).get("methods", []) if isinstance(e[4].get("config"), dict) else []
-        for m in cfg_methods if isinstance(cfg_methods, list) else []:
-            methods.add(m if isinstance(m, str) else str(m.get("id", "")) if isinstance(m, dict) else "")
-    methods.discard("")
-    parts = [f"{len(done)} {'study' if len(done) == 1 else 'studies'} ({n_rows:,} runs"
-             + (f", {len(methods)} method declarations" if methods else "") + ") compare the fitting methods."]
+    parts = [f"{len(done)} {'study' if len(done) == 1 else 'studies'} ({n_rows:,} runs) "
+             f"{'compares' if len(done) == 1 else 'compare'} the fitting methods."]
     for e in done:
         findings = str((e[5] or {}).get("findings") or "").strip()
         if findings:

@@ -65,6 +65,10 @@ def test_broken_studies_shown_with_reason_rest_built(built):
 def test_sections_tables_figures(built):
     md = (built / "report.md").read_text()
     assert md.startswith("# fitbench: comparison report")
+    abstract = md.split("**Abstract.** ")[1].split("\n")[0]      # generated from the studies' findings
+    manifest = json.loads((built.parent / "results" / "published" / "report.json").read_text())
+    first = re.split(r"(?<=[.;])\s", manifest["findings"], maxsplit=1)[0].rstrip(".;")
+    assert first.split()[0] in abstract and "studies (" in abstract
     for section in ("Roundness paper", "Circle/ellipse paper", "Positioning paper", "Magnification paper"):
         assert f"## {section}" in md
     assert "*Table 1:" in md and "| roundness_set2 | MIC | 1.7287 |" in md

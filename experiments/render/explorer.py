@@ -23,8 +23,8 @@ import numpy as np
 import pandas as pd
 from markupsafe import Markup
 
-MAX_PROBLEMS_WITH_FITS = 40   #: problems per ranking whose points and fits are embedded (the page stays small)
-MAX_POINTS = 400              #: points per problem drawn (evenly subsampled)
+MAX_PROBLEMS_WITH_FITS = 20   #: problems per ranking whose points and fits are embedded (the page stays small)
+MAX_POINTS = 200              #: points per problem drawn (evenly subsampled)
 
 
 def _r(v, sig: int = 7):
@@ -40,7 +40,7 @@ def _r(v, sig: int = 7):
 
 def _curve(row: pd.Series) -> tuple[list, list] | None:
     """The fitted circle or ellipse of a result row as a closed polyline (None when the row has no geometry)."""
-    t = np.linspace(0, 2 * np.pi, 121)
+    t = np.linspace(0, 2 * np.pi, 73)
     cx, cy = row.get("center_x"), row.get("center_y")
     a, b, th = row.get("semi_axis_a"), row.get("semi_axis_b"), row.get("angle")
     if _r(cx) is None or _r(cy) is None:
@@ -102,7 +102,11 @@ def ranking_data(name: str, r, folders: dict[str, Path], metas: dict[str, dict])
     table = r.table
     methods = [str(c) for c in table.columns]
     ratios = performance_ratios(table)
-    prof = profile(table)
+    finite = ratios.to_numpy(float)
+    finite = finite[np.isfinite(finite)]
+    top = max(float(finite.max()) if finite.size else 1.0, 1.0 + 1e-9)
+    taus = np.unique(np.concatenate([[1.0], np.geomspace(1.0, top * 1.01, 240)]))   # a grid, not every ratio
+    prof = profile(table, taus=taus)
     data = {"name": name, "metric": r.metric, "unit": r.unit, "methods": methods, "problems": list(map(str, table.index)),
             "cost": [[_r(v) for v in row] for row in table.to_numpy(float)],
             "ratio": [[_r(v, 4) for v in row] for row in ratios.to_numpy(float)],

@@ -151,11 +151,12 @@ def _exp_str(v: float, digits: int) -> str:
 
 
 def _format_chars(fmt: str) -> int:
-    """Printed width of a siunitx table-format in digit widths (an exponent prints as ×10^k: ~5 + k)."""
+    """Printed width of a siunitx table-format in digit widths (an exponent prints as ×10^k: ~6 + k, measured
+    on the scaling table's 2.248 × 10^-1 cells)."""
     mant, _, exp = fmt.partition("e")
     i, _, d = mant.lstrip("-").partition(".")
     n = int(i) + int(d or 0) + (1 if int(d or 0) else 0) + (1 if mant.startswith("-") else 0)
-    return n + (5 + int(exp.lstrip("-")) if exp else 0)
+    return n + (6 + int(exp.lstrip("-")) if exp else 0)
 
 
 def _table_format(strs: list[str]) -> str:

@@ -226,3 +226,21 @@ def test_every_run_ends_with_a_verdict_the_report_shows(tmp_path, capsys):
     assert "verify: vstudy: DIFFERS from the previous results" in capsys.readouterr().out
     section = (out / "paper" / "report.md").read_text(encoding="utf-8").split("(`vstudy`)")[1].split("### ")[0]
     assert "**Reproducibility: differs.**" in section and "radius" in section
+
+
+@pytest.mark.slow
+def test_a_quick_run_of_the_default_studies_reports_a_verdict_for_each(tmp_path):
+    """`python -m experiments.run --quick` from the repository compares every default study with the committed
+    results/quick and the report carries one verdict per default study (CI runs the same command)."""
+    import subprocess
+    import sys
+    out = tmp_path / "results"
+    proc = subprocess.run([sys.executable, "-m", "experiments.run", "--quick", "--jobs", "1", "--out", str(out)],
+                          cwd=REPO, capture_output=True, text=True, timeout=1800)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    defaults = [n for n in runner.configs.available() if runner.configs.load(n).get("default")]
+    md = (out / "paper" / "report.md").read_text(encoding="utf-8")
+    for name in defaults:
+        assert f"verify: {name}: " in proc.stdout, name
+        section = md.split(f"(`{name}`)")[1].split("### ")[0]
+        assert "**Reproducibility" in section and "the committed tables (results/quick/" in section, name

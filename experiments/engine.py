@@ -617,9 +617,9 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     execute(todo(), store, work=run_chunk, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc,
             total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log)
     counts["wall_s"] = time.perf_counter() - t0
-    frames = []
+    columns = _Columns()
     decode = _Interner()
-    for block in _blocks(make(), 20000):
+    for block in _blocks(make(), 5000):
         stored = store.get_by_key([t["key"] for t in block], decode=decode)
         rows = [stored[t["key"]] for t in block if t["key"] in stored]
         if len(rows) != len(block):
@@ -627,30 +627,58 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
                                f"run the same command again (the stored rows are kept)")
         for r in rows:  # the order of the rows is the order of the tasks, whatever order they were stored in
             r.pop("task_index", None)
-        if rows:
-            frames.append(pd.DataFrame(rows))
+        columns.add(rows)
         del rows, stored
-    df = _concat(frames)
+    df = columns.frame()
     counts["used"] = used
     return df, counts
 
 
-def _concat(frames):
-    """One frame from the blocks, with the column types one frame of all rows would have (a block whose
-    rows all failed has an object column of None where another has floats)."""
+class _Columns:
+    """The rows of a study gathered a block at a time as one array per column and block, then joined a
+    column at a time (each column's blocks freed as it is joined: the rows are never held twice). The
+    column types are those one ``DataFrame(rows)`` of all rows would have: a block where every row failed
+    holds None where others hold numbers (numbers, with NaN), a row without a column gets NaN."""
+
+    def __init__(self):
+        self.parts: dict = {}
+        self.n = 0
+
+    def add(self, rows: list[dict]) -> None:
+        import pandas as pd
+        if not rows:
+            return
+        names: dict = {}
+        for r in rows:
+            for k in r:
+                names.setdefault(k, None)
+        for name in self.parts:
+            names.setdefault(name, None)
+        nan = float("nan")
+        for name in names:
+            part = pd.Series([r.get(name, nan) for r in rows])
+            self.parts.setdefault(name, [pd.Series([nan] * self.n)] if self.n else []).append(part)
+        self.n += len(rows)
+
+    def frame(self):
+        import pandas as pd
+        if not self.parts:
+            return pd.DataFrame()
+        out = {}
+        for name in list(self.parts):
+            parts = self.parts.pop(name)
+            col = parts[0] if len(parts) == 1 else pd.concat(parts, ignore_index=True)
+            del parts
+            if col.dtype == object:
+                col = _numbers_if_numbers(col)
+            out[name] = col
+        return pd.DataFrame(out, copy=False)
+
+
+def _numbers_if_numbers(col):
+    """An object column of numbers and None/NaN, as DataFrame(rows) makes it: float64 (ints too)."""
     import pandas as pd
-    if not frames:
-        return pd.DataFrame()
-    if len(frames) == 1:
-        return frames[0]
-    df = pd.concat(frames, ignore_index=True, sort=False)
-    for col in df.columns[df.dtypes == object]:
-        kinds = {f[col].dtype.kind for f in frames if col in f}
-        if "O" in kinds and kinds - {"O"}:
-            s = df[col]
-            non_null = s.dropna()
-            if len(non_null) and non_null.map(type).isin([float, int]).all():
-                df[col] = pd.to_numeric(s)
-            elif len(non_null) and non_null.map(type).isin([bool]).all() and s.isna().sum() == 0:
-                df[col] = s.astype(bool)
-    return df
+    non_null = col.dropna()
+    if len(non_null) and len(non_null) < len(col) and non_null.map(type).isin([float, int]).all():
+        return pd.to_numeric(col)
+    return col

@@ -102,9 +102,13 @@ def test_frame_built_in_blocks_has_the_types_of_one_frame():
         failed = 20 <= i < 40
         rows.append({"status": "error" if failed else "ok", "radius": None if failed else float(rng.normal()),
                      "iterations": None if failed else int(i), "converged": None if failed else bool(i % 2),
-                     **({} if i < 50 else {"extra": 0.1 * i}), "label": str(i % 3)})
+                     **({} if i < 50 else {"extra": 0.1 * i}), **({"first": i} if i < 10 else {}),
+                     "label": str(i % 3), "flag": None if i % 7 == 0 else True})
     whole = pd.DataFrame(rows)
-    blocks = engine._concat([pd.DataFrame(rows[i:i + 20]) for i in range(0, 60, 20)])
+    columns = engine._Columns()
+    for i in range(0, 60, 20):
+        columns.add(rows[i:i + 20])
+    blocks = columns.frame()
     pd.testing.assert_frame_equal(whole, blocks)
     assert whole.to_csv(index=False, float_format="%.17g") == blocks.to_csv(index=False, float_format="%.17g")
 

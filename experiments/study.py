@@ -514,6 +514,7 @@ def save_figure(fig, path: Path, dpi: float = 110) -> None:
     half-written PNG)."""
     from fitbench.plots import save_atomic
     save_atomic(fig, path, dpi=dpi)
+    save_atomic(fig, Path(path).with_suffix(".pdf"))   # the vector form the report's LaTeX includes
 
 
 def save_csv(df: pd.DataFrame, path: Path, **kwargs) -> None:

@@ -77,6 +77,9 @@ def test_sections_tables_figures(built):
         assert "*Table " in section and "![" in section, name
     for png in built.glob("figures/figure-*.png"):
         assert png.with_suffix(".pdf").exists() and png.stat().st_size > 10_000
+    # the LaTeX report includes the vector PDF each study saved beside its PNG, not a picture of the PNG
+    vector = [p for p in built.glob("figures/figure-*.pdf") if b"/Subtype /Image" not in p.read_bytes()]
+    assert len(vector) >= 3, sorted(p.name for p in built.glob("figures/*.pdf"))
 
 
 def test_missing_and_failed_studies_are_shown(built):

@@ -190,32 +190,33 @@ def _run(spec: MethodSpec, points, params: dict):
 
 
 def is_immutable(a) -> bool:
-    """True for an array no one can write: read-only down to a buffer that is itself immutable (``bytes``);
-    a read-only array that owns its memory, or views a writeable one, can be made writeable again."""
+    """True for an array no one can write through: read-only down to a buffer that is itself read-only
+    (``bytes`` or a read-only ``memoryview``); a read-only array that owns its memory, or views a writeable
+    array, can be made writeable again."""
     while isinstance(a, np.ndarray):
         if a.flags.writeable:
             return False
         a = a.base
-    return isinstance(a, bytes)
+    return isinstance(a, bytes) or (isinstance(a, memoryview) and a.readonly)
 
 
 def immutable(a: np.ndarray) -> np.ndarray:
-    """A copy of ``a`` that no one can write (read-only over a ``bytes`` buffer: ``flags.writeable = True``
-    raises); an ndarray subclass (a masked array) gets a read-only copy of its own class. Pass data that many
-    fits read through this once: :func:`fit` then copies nothing (the benchmark's timed calls pay no copy)."""
+    """A read-only view of ``a`` that no one can make writeable: an array over a read-only ``memoryview`` of
+    ``a``'s memory (``flags.writeable = True`` raises), without a copy for a C-contiguous array (other layouts
+    are made contiguous first), so a fit's peak memory does not grow by the input; an ndarray subclass (a
+    masked array) gets a read-only copy of its own class. Data that many fits read pass through this once."""
     if is_immutable(a):
         return a
     if type(a) is not np.ndarray:
         out = a.copy()
         out.flags.writeable = False
         return out
-    c = np.ascontiguousarray(a)
-    return np.frombuffer(c.tobytes(), dtype=c.dtype).reshape(c.shape)
+    return np.asarray(memoryview(np.ascontiguousarray(a)).toreadonly())
 
 
 def _read_only(data, given):
-    """``data`` as the method may see it: arrays read-only and never the caller's own memory (``given``: what
-    the caller passed). Arrays inside a dataclass, dict, list or tuple are copied the same way."""
+    """``data`` as the method may see it: arrays as read-only views that cannot be made writeable (``given``:
+    what the caller passed). Arrays inside a dataclass, dict, list or tuple are viewed the same way."""
     if isinstance(data, np.ndarray):
         return immutable(data)
     if dataclasses.is_dataclass(data) and not isinstance(data, type):

@@ -172,7 +172,7 @@ def _previous_build(out: Path) -> list[str]:
         listed = json.loads((out / BUILD_MANIFEST).read_text(encoding="utf-8")).get("files", [])
     except (OSError, ValueError, AttributeError):
         return []
-    return [f for f in listed if isinstance(f, str) and re.fullmatch(r"(tables|figures)/[\w.-]+|report\.\w+", f)]
+    return [f for f in listed if isinstance(f, str) and re.fullmatch(r"(tables|figures)/[\w.-]+|report\.\w+|explorer\.html", f)]
 
 
 def _clear_previous_build(out: Path) -> None:

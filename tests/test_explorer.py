@@ -63,7 +63,8 @@ window.addEventListener('load', function () { setTimeout(function () {
     return document.getElementById(id).data.map(function (t) { return t.visible === undefined ? true : t.visible; });
   });
   var p = Object.keys(r.fits)[0], m = Object.keys(r.fits[p].methods)[0];
-  document.getElementById('map-1').emit('plotly_click', {points: [{x: m, y: p}]});
+  document.getElementById('map-1').emit('plotly_click', {points: [{pointNumber: [r.problems.indexOf(p),
+                                                                                r.methods.indexOf(m)]}]});
   var fit = document.getElementById('fit-1');
   out.fit = {problem: fit.getAttribute('data-problem'), method: fit.getAttribute('data-method'), asked: [p, m],
              traces: fit.data ? fit.data.map(function (t) { return t.x.length; }) : []};

@@ -187,6 +187,9 @@ def test_hostile_text_reads_no_file_and_stays_text(tmp_path, secrets):
     check_html(html, list(texts.values()), n_figures=1)
     figures = [a for t, a in parse(html).tags if t == "figure"]
     assert [f["id"] for f in figures] == ["figure-1"]
+    explorer = parse((out / "explorer.html").read_text(encoding="utf-8"))     # its tables: text, no markup
+    assert _norm(texts["caption"]) in _norm(" ".join(explorer.text))
+    assert not [t for t, _ in explorer.tags if t in ("img", "iframe", "object", "embed", "link", "base", "b", "i")]
 
 
 def test_declared_figure_that_is_a_fifo_is_reported_not_read(tmp_path):

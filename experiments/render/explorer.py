@@ -228,36 +228,39 @@ SCRIPT = r"""
 (function () {
   var DATA = JSON.parse(document.getElementById('explorer-data').textContent);
   var cfg = {displaylogo: false, responsive: true};
+  // Plotly reads a few HTML tags in its text (legends, titles, ticks): user text goes in with <, >, & escaped
+  function esc(s) { return String(s).replace(/&/g, '&amp;').replace(/</g, '&lt;').replace(/>/g, '&gt;'); }
   window.explorer = {data: DATA, figures: []};
   DATA.forEach(function (r, k) {
-    var n = k + 1, unit = r.unit ? ' [' + r.unit + ']' : '';
+    var n = k + 1, unit = r.unit ? ' [' + esc(r.unit) + ']' : '';
     var prof = r.methods.map(function (m) {
-      return {x: r.profile.tau, y: r.profile.rho[m], name: m, mode: 'lines', line: {shape: 'hv'}};
+      return {x: r.profile.tau, y: r.profile.rho[m], name: esc(m), mode: 'lines', line: {shape: 'hv'}};
     });
-    Plotly.newPlot('profile-' + n, prof, {title: {text: 'Performance profile: ' + r.metric},
+    Plotly.newPlot('profile-' + n, prof, {title: {text: 'Performance profile: ' + esc(r.metric)},
       xaxis: {title: {text: 'τ (cost / best cost)'}, type: 'log'}, yaxis: {title: {text: 'ρ(τ): share of problems'},
       range: [0, 1.02]}, legend: {font: {size: 9}}, margin: {t: 40}}, cfg);
     var figs = ['profile-' + n];
     if (r.time) {
       var rt = r.methods.map(function (m, j) {
         return {x: r.time.map(function (row) { return row[j]; }), y: r.cost.map(function (row) { return row[j]; }),
-                text: r.problems, name: m, mode: 'markers', type: 'scatter', marker: {size: 5}};
+                text: r.problems.map(esc), name: esc(m), mode: 'markers', type: 'scatter', marker: {size: 5}};
       });
-      Plotly.newPlot('runtime-' + n, rt, {title: {text: r.metric + ' against runtime'},
-        xaxis: {title: {text: 'median runtime [s]'}, type: 'log'}, yaxis: {title: {text: r.metric + unit}, type: 'log'},
+      Plotly.newPlot('runtime-' + n, rt, {title: {text: esc(r.metric) + ' against runtime'},
+        xaxis: {title: {text: 'median runtime [s]'}, type: 'log'}, yaxis: {title: {text: esc(r.metric) + unit}, type: 'log'},
         showlegend: false, margin: {t: 40}}, cfg);
       figs.push('runtime-' + n);
     } else {
       document.getElementById('runtime-' + n).textContent = 'The studies of this ranking did not time their fits.';
     }
     var z = r.ratio.map(function (row) { return row.map(function (v) { return v === null ? null : Math.log10(v); }); });
-    Plotly.newPlot('map-' + n, [{type: 'heatmap', z: z, x: r.methods, y: r.problems, colorscale: [[0, '#1a9850'], [0.25, '#d9ef8b'], [0.5, '#fee08b'], [1, '#d73027']],
+    Plotly.newPlot('map-' + n, [{type: 'heatmap', z: z, x: r.methods.map(esc), y: r.problems.map(esc), colorscale: [[0, '#1a9850'], [0.25, '#d9ef8b'], [0.5, '#fee08b'], [1, '#d73027']],
       zmin: 0, zmax: 1, colorbar: {title: {text: 'log₁₀ ratio<br>(blank: failed)'}},
-      customdata: r.cost, hovertemplate: '%{y}<br>%{x}<br>' + r.metric + ' %{customdata}' + unit + '<extra></extra>'}],
+      customdata: r.cost, hovertemplate: '%{y}<br>%{x}<br>' + esc(r.metric) + ' %{customdata}' + unit + '<extra></extra>'}],
       {title: {text: 'Ratio to the best method per problem'}, xaxis: {tickangle: 45, tickfont: {size: 8}},
        yaxis: {showticklabels: false, title: {text: 'problems'}}, margin: {t: 40, b: 110}}, cfg);
     document.getElementById('map-' + n).on('plotly_click', function (ev) {
-      var p = ev.points[0]; explorer.showFit(k, p.y, p.x);
+      var ij = ev.points[0].pointNumber;          // [problem row, method column]
+      explorer.showFit(k, r.problems[ij[0]], r.methods[ij[1]]);
     });
     explorer.figures.push(figs);
     document.querySelectorAll('#ranking-' + n + ' input[data-method]').forEach(function (box) {
@@ -278,9 +281,9 @@ SCRIPT = r"""
     var m = f.methods[method];
     Plotly.newPlot(el, [
       {x: f.x, y: f.y, mode: 'markers', name: 'points', marker: {size: 4, color: '#444'}, xaxis: 'x', yaxis: 'y'},
-      {x: m.x, y: m.y, mode: 'lines', name: method + ' (' + m.status + ')', xaxis: 'x', yaxis: 'y'},
+      {x: m.x, y: m.y, mode: 'lines', name: esc(method + ' (' + m.status + ')'), xaxis: 'x', yaxis: 'y'},
       {x: f.angle, y: m.residual, mode: 'markers', name: 'residual', marker: {size: 4}, xaxis: 'x2', yaxis: 'y2'}],
-      {title: {text: problem + '<br>' + method, font: {size: 11}}, showlegend: false,
+      {title: {text: esc(problem) + '<br>' + esc(method), font: {size: 11}}, showlegend: false,
        grid: {rows: 2, columns: 1, pattern: 'independent'},
        xaxis: {title: {text: 'x (units of the data)'}, scaleanchor: 'y'}, yaxis: {title: {text: 'y'}},
        xaxis2: {title: {text: 'angle about the centroid [°]'}},

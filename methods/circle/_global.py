@@ -192,19 +192,25 @@ class ProfilePolygon:
         return self._path
 
     def contains(self, C: np.ndarray) -> np.ndarray:
-        """Inside the polygon by the even-odd crossing rule (a ray towards +x; 256 centres at a time)."""
+        """Inside the polygon by the even-odd crossing rule (a ray towards +x), over blocks of centres x edges
+        of at most max(512, N/8) pairs: the temporaries stay a fraction of the points' memory at any N."""
         self._build()
         a, b = self._a, self._b
-        dy = b[:, 1] - a[:, 1]
-        slope = np.divide(b[:, 0] - a[:, 0], dy, out=np.zeros_like(dy), where=dy != 0)
-        out = np.empty(len(C), dtype=bool)
-        for s in range(0, len(C), 256):
-            P = C[s:s + 256]
-            py = P[:, None, 1]
-            straddles = (a[None, :, 1] > py) != (b[None, :, 1] > py)
-            x_cross = a[None, :, 0] + (py - a[None, :, 1]) * slope[None, :]
-            out[s:s + 256] = np.count_nonzero(straddles & (P[:, None, 0] < x_cross), axis=1) % 2 == 1
-        return out
+        C = np.asarray(C, dtype=float)
+        n = len(a)
+        budget = max(512, n // 8)
+        E = min(n, budget)
+        R = max(1, budget // E)
+        crossings = np.zeros(len(C), dtype=np.intp)
+        for s in range(0, len(C), R):
+            px, py = C[s:s + R, 0:1], C[s:s + R, 1:2]
+            for e in range(0, n, E):
+                ax, ay, bx, by = a[e:e + E, 0], a[e:e + E, 1], b[e:e + E, 0], b[e:e + E, 1]
+                dy = by - ay
+                slope = np.divide(bx - ax, dy, out=np.zeros_like(dy), where=dy != 0)
+                straddles = (ay > py) != (by > py)
+                crossings[s:s + R] += np.count_nonzero(straddles & (px < ax + (py - ay) * slope), axis=1)
+        return crossings % 2 == 1
 
     def boundary_distance(self, C: np.ndarray) -> np.ndarray:
         """Distance from each centre to the polygon's boundary (all edges; vectorised)."""

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from methods.circle._zone import radii
+from methods.circle._geometry import radii
 
 #: relative and absolute (unit-frame) resolution of the global certificate
 EPS_REL = 1e-10

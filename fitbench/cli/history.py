@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 
 from methods import InvalidInputError
+from fitbench.cli.options import check_plot_path, save_figure
 
 #: the columns of each test's trend: (JSON path, printed name, factor to the printed unit, unit)
 COLUMNS = {
@@ -124,7 +125,6 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from fitbench.cli.commands import check_plot_path, save_figure
     plot_path = check_plot_path(args.plot)
     history = collect(args.folder)
     if plot_path:

@@ -9,12 +9,14 @@ import numpy as np
 
 from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff
+from fitbench.cli.options import (add_reader_options, add_report_option, add_tolerance_option, check_plot_path,
+                                  parse_tolerances, read_profile_args, save_figure, verdict, verdict_lines,
+                                  verdict_title, write_report)
 
 
 def add_parser(subparsers):
     p = subparsers.add_parser("roundness", help="ISO 12181 roundness: filtered profile, RONt/p/v/q about the "
                                                 "reference circles, harmonic spectrum")
-    from fitbench.cli.commands import add_reader_options
     p.add_argument("file", metavar="FILE", help="a profile file (x, y, or angle + radial deviation as roundness "
                                                 "instruments export it) or a published data set name")
     p.add_argument("--cutoff", default="50", metavar="UPR",
@@ -28,9 +30,7 @@ def add_parser(subparsers):
     add_reader_options(p, polar=True)
     p.add_argument("--json", action="store_true", help="print one JSON object (lengths in mm)")
     p.add_argument("--plot", metavar="PNG", help="write the polar plot and the harmonic spectrum")
-    from fitbench.cli.commands import add_tolerance_option
     add_tolerance_option(p, "RONt, RONp, RONv, RONq: checked about each reference circle shown")
-    from fitbench.cli.commands import add_report_option
     add_report_option(p)
     p.set_defaults(func=run)
     return p
@@ -38,8 +38,6 @@ def add_parser(subparsers):
 
 def run(args) -> int:
     import methods
-    from fitbench.cli.commands import (check_plot_path, parse_tolerances, read_profile_args, save_figure, verdict,
-                                       verdict_lines, verdict_title, write_report)
     from fitbench.plots.roundness import plot
 
     cutoff = parse_cutoff(args.cutoff, "--cutoff")

@@ -1,0 +1,196 @@
+"""The helpers the ``fitbench`` subcommands share (:mod:`fitbench.cli.commands`, :mod:`fitbench.cli.roundness`,
+:mod:`fitbench.cli.history`): the reader, tolerance and report options, reading a profile, checking and writing
+output files, the PASS/FAIL verdict. Below the subcommand modules: it imports none of them.
+
+Bad input is an :class:`~methods.InvalidInputError` (one line on stderr, exit status 2, in
+:func:`fitbench.cli.commands.main`); lengths on the command line and in tolerances are in mm and µm.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from methods import InvalidInputError
+from methods.files import writable_target, write_atomic
+from methods.units import UNIT_CHOICES, canonical, warn_implausible
+
+
+def version() -> str:
+    from fitbench import __version__
+    return __version__
+
+
+def warn(message: str) -> None:
+    print(f"fitbench: warning: {message}", file=sys.stderr)
+
+
+def finite(name: str, value, *, positive: bool = False, allow_none: bool = True):
+    """A command-line number: finite (and > 0 with ``positive``), else a one-line error."""
+    if value is None and allow_none:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or (positive and v <= 0):
+        raise InvalidInputError(f"{name} must be a {'positive' if positive else 'finite'} number, got {value!r}")
+    return v
+
+
+def check_plot_path(path) -> Path | None:
+    """Refuse, before any computation, a plot file in a missing folder or with a format matplotlib cannot write."""
+    if path is None:
+        return None
+    path = Path(path)
+    import matplotlib
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+    formats = Figure().canvas.get_supported_filetypes()
+    ext = path.suffix.lower().lstrip(".")
+    if ext not in formats:
+        raise InvalidInputError(f"--plot {path}: unknown image format {path.suffix or '(none)'!r}; "
+                                f"use one of .{', .'.join(sorted(formats))}")
+    target = writable_target(path)  # a FIFO, a device or a folder: refused now, not after the computation
+    parent = target.parent if str(target.parent) else Path(".")
+    if not parent.is_dir():
+        raise InvalidInputError(f"--plot {path}: the folder {parent} does not exist; create it first")
+    return path
+
+
+def save_figure(fig, path, dpi=120) -> None:
+    """Write a matplotlib figure atomically (:func:`fitbench.plots.save_atomic`); a failed write is one line."""
+    from fitbench.plots import save_atomic
+    try:
+        save_atomic(fig, path, dpi=dpi)
+    except OSError as exc:
+        raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def write_text_atomic(path, text: str) -> None:
+    """Write a text output file (:func:`methods.files.write_atomic`) into an existing folder; one line on failure."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise InvalidInputError(f"{path}: the folder {parent} does not exist; create it first")
+    try:
+        write_atomic(path, text, make_parents=False, fsync=False)
+    except OSError as exc:
+        raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def add_reader_options(p, *, columns=True, polar=False):
+    """--unit, --skip-rows (and --columns / --plane; with ``polar`` --angle-unit): the options of every file reader."""
+    p.add_argument("--unit", default=None, choices=UNIT_CHOICES,
+                   help="length unit of the input file(s) (default: the header's unit, e.g. 'x [um]', else mm); "
+                        "results are printed in µm")
+    p.add_argument("--skip-rows", type=int, default=0, metavar="N",
+                   help="skip N lines at the top of each file (the instrument's preamble)")
+    if columns:
+        g = p.add_mutually_exclusive_group()
+        g.add_argument("--columns", nargs=2, metavar=("A", "B"),
+                       help="the two columns to read (header names, case and spaces ignored, or 0-based numbers): "
+                            "x y, or an angle and a radial deviation / radius (default: from the header)")
+        g.add_argument("--plane", choices=("xy", "yz", "zx"), help="the plane's two named columns (x,y / y,z / z,x)")
+    if polar:
+        p.add_argument("--angle-unit", choices=("deg", "rad"),
+                       help="angle column of an angle + radial-deviation file (default: the header's, e.g. 'angle [deg]')")
+
+
+def header_line(command: str, unit: str | None, extra: str = "", deviation_unit: str | None = None) -> str:
+    unit = unit or "mm"
+    units = canonical(unit) + (f", deviations {canonical(deviation_unit)}" if deviation_unit else "")
+    converted = canonical(unit) != "mm" or (deviation_unit and canonical(deviation_unit) != "mm")
+    return (f"fitbench {version()} {command}: input unit {units}{' (converted to mm)' if converted else ''}; "
+            f"lengths printed in µm{extra}")
+
+
+def add_tolerance_option(p, names: str):
+    p.add_argument("--tolerance", action="append", metavar="NAME=UM",
+                   help=f"a tolerance in µm for one of the standard's figures ({names}); repeatable: PASS/FAIL "
+                        "in the table, the JSON and the plot (the exit status does not change)")
+
+
+def parse_tolerances(items, allowed) -> dict:
+    """``--tolerance NAME=UM`` items as {figure name: tolerance in mm}; ``allowed``: the names (any case)."""
+    out = {}
+    by_lower = {a.lower(): a for a in allowed}
+    for item in items or []:
+        key, eq, text = str(item).partition("=")
+        name = by_lower.get(key.strip().lower())
+        if not eq or name is None:
+            raise InvalidInputError(f"--tolerance {item!r}: give NAME=UM with NAME one of {', '.join(allowed)}")
+        value = finite(f"--tolerance {name}", text, positive=True, allow_none=False)
+        out[name] = value * 1e-3
+    return out
+
+
+def verdict(values_mm: dict, tolerances_mm: dict) -> dict | None:
+    """PASS/FAIL of each figure against its tolerance (value <= tolerance passes), and the overall verdict;
+    None without tolerances."""
+    if not tolerances_mm:
+        return None
+    checks = [{"figure": name, "value_mm": float(values_mm[name]), "tolerance_mm": tol,
+               "result": "PASS" if float(values_mm[name]) <= tol else "FAIL"} for name, tol in tolerances_mm.items()]
+    return {"checks": checks, "overall": "PASS" if all(c["result"] == "PASS" for c in checks) else "FAIL"}
+
+
+def verdict_lines(v: dict | None) -> list[str]:
+    if not v:
+        return []
+    lines = [f"verdict      {v['overall']}"]
+    lines += [f"  {c['figure']:<12} {c['value_mm'] * 1e3:10.3f} µm  tolerance {c['tolerance_mm'] * 1e3:g} µm  "
+              f"{c['result']}" for c in v["checks"]]
+    return lines
+
+
+def add_report_option(p):
+    p.add_argument("--report", metavar="FILE.pdf",
+                   help="write a one-page test report: conditions, figures, verdict, diagnostics and the plot")
+
+
+def write_report(path, title: str, lines: list[str], draw, aspect: float) -> None:
+    """The one-page report (:func:`fitbench.plots.report_page.one_page`), written atomically; one line on failure."""
+    from fitbench.plots.report_page import one_page
+    one_page(path, title=title, lines=lines, draw=draw, aspect=aspect, save=save_figure)
+
+
+def verdict_title(v: dict | None) -> str:
+    return "" if not v else f"; verdict {v['overall']} (" + ", ".join(
+        f"{c['figure']} {c['value_mm'] * 1e3:.2f} µm / {c['tolerance_mm'] * 1e3:g} µm" for c in v["checks"]) + ")"
+
+
+#: a profile (fit, roundness) whose half extent exceeds this is implausible for its declared unit: a 10 m part
+PROFILE_LIMIT_MM = 5000.0
+
+
+def read_profile_args(args):
+    """(source, points in mm, length unit used, notes) of ``fit`` and ``roundness``: a file in any instrument
+    layout (x, y or angle + radial deviation, :func:`datasets.io.read_profile`) or a published data set's
+    name; sizes implausible for the unit are warned about, naming the likely unit."""
+    from datasets import points_from
+    from datasets.io import read_profile
+    nominal = finite("--nominal-radius", getattr(args, "nominal_radius", None), positive=True)
+    if Path(args.file).exists() or args.unit or args.columns or args.plane or args.skip_rows or nominal:
+        got = read_profile(args.file, columns=tuple(args.columns) if args.columns else None, plane=args.plane,
+                           unit=args.unit, skip_rows=args.skip_rows, angle_unit=args.angle_unit,
+                           nominal_radius=nominal)
+        source, points, unit, notes = str(args.file), got.runs[0][1], got.unit, list(got.notes)
+        polar_alone = got.kind == "polar" and nominal is None and any("without a nominal radius" in n for n in notes)
+    else:
+        (source, points), unit, notes, polar_alone = points_from(args.file), "mm", [], False
+        got = None
+    points = np.asarray(points, dtype=float)
+    if points.ndim == 2 and points.shape[0] and np.isfinite(points).all():
+        if polar_alone:
+            span = float(np.ptp(np.hypot(*(points - points.mean(axis=0)).T)))
+            warn_implausible("radial deviations spanning", span, 10.0, unit, typical_mm=0.01)
+        else:
+            half = float(np.max(np.ptp(points, axis=0))) / 2
+            warn_implausible("profile half-widths", half, PROFILE_LIMIT_MM, unit, typical_mm=25.0)
+            if got is not None and got.kind == "polar" and nominal:
+                dev = float(np.max(np.abs(np.hypot(*points.T) - nominal)))
+                warn_implausible("radial deviations", dev, 0.05 * nominal, unit, typical_mm=0.01)
+    return source, points, unit, notes

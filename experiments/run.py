@@ -23,6 +23,7 @@ import time
 from itertools import islice
 from pathlib import Path
 
+from experiments import compare  # the verdict on every run: fresh results against the committed ones
 from experiments import config as configs
 from experiments import engine
 from experiments import study as contract
@@ -321,17 +322,16 @@ def main(argv=None) -> int:
         lock_out(args.out)
         jobs = args.jobs if args.scheduler else usable_jobs(args.jobs)
         t0 = time.perf_counter()
-        from experiments import verify  # the verdict on every run: fresh results against the committed ones
         with tempfile.TemporaryDirectory(prefix="fitbench-reference-") as ref_dir:
             study_names = [configs.load(n, quick=args.quick)["name"] for n in names]
-            refs = verify.reference_snapshot(args.out, study_names, args.quick, Path(ref_dir))
+            refs = compare.reference_snapshot(args.out, study_names, args.quick, Path(ref_dir))
             for name in names:
                 run_study(name, args.out, quick=args.quick, jobs=jobs, executor=args.executor,
                           scheduler=args.scheduler, force=args.force, seed=args.seed, max_rows=args.max_rows,
                           row_timeout=args.row_timeout)
             print(f"done: {len(names)} studies in {time.perf_counter() - t0:.0f} s")
             if args.seed is None:  # another seed gives other numbers by design: nothing to compare
-                verify.verdict_after_run(args.out, study_names, refs)
+                compare.verdict_after_run(args.out, study_names, refs)
         if not args.no_report:
             from experiments.report import build
             paper = Path("paper") if args.out == DEFAULT_OUT else args.out / "paper"

@@ -1,0 +1,256 @@
+"""The comparison behind the reproducibility verdict: every non-timing column of each study's ``results.csv``
+against a reference run's, with the tolerances declared with the metrics (``experiments.metrics.TOLERANCES``:
+exact for ids, statuses and counts; relative + absolute per metric). Rows are matched by their identity
+(study, data set, data stream, repetition, seed, method, parameters). A row with the same status other than
+"ok" in both runs (an iteration that did not converge) is compared by its status and counts only: its values
+are where the iteration stopped, not a result.
+
+:func:`verify` serves ``python -m experiments.verify`` (:mod:`experiments.verify`), :func:`reference_snapshot`
+and :func:`verdict_after_run` the end of ``python -m experiments.run``; both commands import this module, which
+imports neither (so the two commands do not import each other). The verdict is written atomically to
+``RESULTS/verify.json`` (:mod:`experiments.verdict` reads it for the report).
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from experiments.metrics import CHAOTIC, tolerance
+from experiments.provenance import write_atomic
+from experiments.verdict import VERDICT_FILE, last_verdict, results_sha256
+from methods import InvalidInputError
+
+#: columns that identify a row (those present are used; data_* and param_* columns are added)
+IDENTITY = ("study", "dataset", "data_stream", "repetition", "seed", "method", "params")
+WORST_ROWS = 3
+
+
+def _read(folder: Path, study: str, which: str) -> pd.DataFrame:
+    path = folder / study / "results.csv"
+    if not path.is_file():
+        raise InvalidInputError(f"{which} {folder} has no {study}/results.csv; run python -m experiments.run {study}"
+                                f" --out {folder} first, or name the studies it has")
+    try:
+        df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError) as exc:
+        raise InvalidInputError(f"{path} cannot be read as a table ({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
+    if "status" not in df.columns or "method" not in df.columns:
+        raise InvalidInputError(f"{path} is not a results table of experiments.run (no status/method column)")
+    if df.empty:
+        raise InvalidInputError(f"{path} has a header but no rows; run python -m experiments.run {study} again "
+                                "(an interrupted or failed run leaves no rows)")
+    return df
+
+
+def identity_columns(df: pd.DataFrame) -> list[str]:
+    return [c for c in df.columns if c in IDENTITY or c.startswith(("data_", "param_"))]
+
+
+def _keyed(df: pd.DataFrame, ident: list[str]) -> pd.DataFrame:
+    df = df.copy()
+    shown = [c for c in ident if c != "study"]
+    key = (df[shown].astype(str).apply(lambda col: col.name + "=" + col).agg(", ".join, axis=1) if shown
+           else pd.Series([""] * len(df), index=df.index))
+    df["_occurrence"] = key.groupby(key).cumcount()  # rows with one identity: matched in order
+    df["_key"] = key + " #" + df["_occurrence"].astype(str)
+    return df.set_index("_key")
+
+
+def _number(values: pd.Series) -> np.ndarray | None:
+    """The column as floats ('' is NaN), or None when it is not numeric."""
+    v = values.replace({"": "nan", "True": "1", "False": "0"})
+    try:
+        return v.astype(float).to_numpy()
+    except (TypeError, ValueError):
+        return None
+
+
+def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> dict:
+    """Every column outside its tolerance, with its worst rows: {study, rows, columns, problems: [...]}."""
+    ident = identity_columns(committed)
+    a, b = _keyed(committed, ident), _keyed(fresh, [c for c in ident if c in fresh.columns])
+    problems = []
+    missing = a.index.difference(b.index)
+    extra = b.index.difference(a.index)
+    for label, keys in (("row missing in this run", missing), ("row not in the committed results", extra)):
+        if len(keys):
+            problems.append({"column": "(rows)", "n_rows": int(len(keys)), "problem": label,
+                             "worst": [{"row": k, "committed": "", "this_run": "", "difference": ""}
+                                       for k in list(keys)[:WORST_ROWS]]})
+    common = a.index.intersection(b.index)
+    a, b = a.loc[common], b.loc[common]
+    compared = 0
+    # A row that did not converge (the same status other than "ok" in both runs) carries no geometric result: its values
+    # are where the iteration stopped, which rounding moves; its status and counts are compared, its values are not.
+    if "status" in a and "status" in b:
+        st_a, st_b = a["status"].astype(str).to_numpy(), b["status"].astype(str).to_numpy()
+        stopped = np.asarray((st_a == st_b) & (st_a != "ok"), dtype=bool)
+    else:
+        stopped = np.zeros(len(a), dtype=bool)
+    not_compared = 0
+    # a column that one side lacks is a difference (a table that lost radius or every metric never agrees)
+    for col in [c for c in fresh.columns if c not in committed.columns and not c.startswith("_")]:
+        if tolerance(col, study) is not None:
+            problems.append({"column": col, "n_rows": int(len(b)), "problem": "column missing in the committed results",
+                             "worst": []})
+    for col in committed.columns:
+        if col.startswith("_") or (col in ident and col in fresh.columns):
+            continue
+        methods = a["method"] if "method" in a else pd.Series([""] * len(a), index=a.index)
+        if col not in b.columns:
+            if tolerance(col, study) is not None:
+                problems.append({"column": col, "n_rows": int(len(a)), "problem": "column missing in this run", "worst": []})
+            continue
+        tols = [tolerance(col, study, m) for m in methods]
+        keep = np.array([t is not None for t in tols], dtype=bool)
+        inexact = np.array([t is not None and (t.rtol, t.atol) != (0.0, 0.0) for t in tols], dtype=bool)
+        not_compared += int((keep & inexact & stopped).sum())
+        keep &= ~(inexact & stopped)
+        if not keep.any():
+            continue
+        compared += 1
+        old, new = a[col], b[col]
+        x, y = _number(old), _number(new)
+        if x is not None and y is not None:
+            rtol = np.array([t.rtol if t else 0.0 for t in tols])
+            atol = np.array([t.atol if t else 0.0 for t in tols])
+            both_nan = np.isnan(x) & np.isnan(y)
+            diff = np.abs(y - x)
+            ok = both_nan | (diff <= atol + rtol * np.abs(x))
+            excess = np.where(ok, 0.0, np.where(np.isnan(diff), np.inf, diff / np.maximum(atol + rtol * np.abs(x), 1e-300)))
+        else:
+            ok = (old.to_numpy() == new.to_numpy())
+            excess = np.where(ok, 0.0, np.inf)
+            diff = None
+        bad = ~ok & keep
+        if bad.any():
+            order = np.argsort(-excess[bad], kind="stable")[:WORST_ROWS]
+            idx = np.flatnonzero(bad)[order]
+            t = tols[idx[0]]
+            problems.append({
+                "column": col, "n_rows": int(bad.sum()),
+                "problem": "differs" if t.rtol == t.atol == 0 else f"outside rtol={t.rtol:g}, atol={t.atol:g}",
+                "worst": [{"row": a.index[i], "committed": old.iloc[i], "this_run": new.iloc[i],
+                           "difference": "" if diff is None else f"{diff[i]:.3g}"} for i in idx]})
+    return {"study": study, "rows": int(len(committed)), "columns": compared, "agree": not problems, "problems": problems,
+            "not_converged_values": not_compared}
+
+
+def _table(problems: list[tuple[str, dict]]) -> str:
+    head = ["study", "column", "rows outside", "problem", "worst row (identity)", "committed", "this run", "|difference|"]
+    lines = []
+    for study, p in problems:
+        worst = p["worst"] or [{"row": "", "committed": "", "this_run": "", "difference": ""}]
+        for k, w in enumerate(worst):
+            lines.append([study if k == 0 else "", p["column"] if k == 0 else "", str(p["n_rows"]) if k == 0 else "",
+                          p["problem"] if k == 0 else "", w["row"], str(w["committed"]), str(w["this_run"]), str(w["difference"])])
+    widths = [max(len(h), *(len(r[i]) for r in lines)) for i, h in enumerate(head)]
+    fmt = lambda r: "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip()  # noqa: E731
+    return "\n".join([fmt(head), fmt(["-" * w for w in widths])] + [fmt(r) for r in lines])
+
+
+def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
+    """Compare ``against`` with the committed ``results``; the verdict dict (also written to RESULTS/verify.json)."""
+    reports = []
+    date = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    for study in studies:
+        committed = _read(results, study, "--results")
+        fresh = _read(against, study, "--against")
+        reports.append({**compare_study(study, committed, fresh), "date": date,
+                        "results_sha256": results_sha256(results / study),   # what this verdict judged
+                        "against_sha256": results_sha256(against / study),
+                        "reference": f"the run in {against / study}"})
+    for r in reports:
+        n_bad = sum(p["n_rows"] for p in r["problems"])
+        skipped = (f"; {r['not_converged_values']} value(s) of rows that did not converge in both runs not compared "
+                   "(their status and counts are)") if r["not_converged_values"] else ""
+        log(f"{r['study']}: " + (f"agree ({r['rows']} rows, {r['columns']} columns within their tolerances{skipped})"
+                                  if r["agree"] else
+                                  f"DIFFER: {len(r['problems'])} column(s) outside tolerance, {n_bad} value(s){skipped}"))
+    bad = [(r["study"], p) for r in reports for p in r["problems"]]
+    if bad:
+        log("")
+        log(_table(bad))
+    if CHAOTIC:
+        by_reason: dict[str, list[str]] = {}
+        for (s, m, c), t in CHAOTIC.items():
+            by_reason.setdefault(t.why, []).append(f"{s}/{m}/{c} rtol={t.rtol:g} atol={t.atol:g}")
+        log("wider tolerances declared for methods chaotic by nature: " +
+            "; ".join(f"{', '.join(cols)} (why: {why})" for why, cols in by_reason.items()))
+    verdict = {"agree": not bad, "date": date, "results": str(results), "against": str(against), "studies": reports}
+    write_atomic(results / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
+    return verdict
+
+
+def _committed(path: Path) -> bool:
+    """Whether ``path`` is tracked by git and unchanged since the last commit."""
+    import subprocess
+    try:
+        tracked = subprocess.run(["git", "ls-files", "--error-unmatch", "--", path.name], cwd=path.parent,
+                                 capture_output=True, timeout=10)
+        same = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", path.name], cwd=path.parent,
+                              capture_output=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return tracked.returncode == 0 and same.returncode == 0
+
+
+def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path) -> dict[str, dict]:
+    """Before ``experiments.run`` writes into ``out``: for each study, a copy (under ``into``) of the results the
+    fresh run will be compared with, and how to name them. The reference is the study's results already in
+    ``out`` (a rerun), else the committed ones in ``results/`` (``results/quick/`` with ``--quick``) of the
+    current folder; only a run of the same grid (quick or full) is a reference."""
+    refs = {}
+    committed_root = Path("results/quick" if quick else "results")
+    for name in names:
+        for folder in (Path(out) / name, committed_root / name):
+            csv, meta_path = folder / "results.csv", folder / "meta.json"
+            if not csv.is_file() or not meta_path.is_file():
+                continue
+            try:
+                meta = json.loads(meta_path.read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                continue
+            if not isinstance(meta, dict) or bool(meta.get("quick")) != quick:
+                continue
+            (into / name).mkdir(parents=True, exist_ok=True)
+            (into / name / "results.csv").write_bytes(csv.read_bytes())
+            commit = str(meta.get("git_commit") or "?")[:10]
+            what = "the committed tables" if _committed(csv) else "the previous results"
+            refs[name] = {"folder": into, "reference": f"{what} ({folder}, commit {commit}, {meta.get('date', '?')})"}
+            break
+    return refs
+
+
+def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=print) -> dict:
+    """After ``experiments.run``: compare each fresh study in ``out`` with its reference (``reference_snapshot``)
+    and record the verdicts in ``out/verify.json`` (other studies' entries are kept; each names the SHA-256 of
+    the results it judged), with the run's date and studies (the report says which results are older)."""
+    date = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    old = last_verdict(out) or {}
+    entries = {s["study"]: s for s in old.get("studies", []) if isinstance(s, dict) and isinstance(s.get("study"), str)}
+    for name in names:
+        entries.pop(name, None)
+        ref = refs.get(name)
+        if ref is None:
+            log(f"verify: {name}: no committed results to compare with (results/{name} of the same grid)")
+            continue
+        try:
+            r = compare_study(name, _read(ref["folder"], name, "reference"), _read(Path(out), name, "--out"))
+        except InvalidInputError as exc:
+            log(f"verify: {name}: not compared ({exc})")
+            continue
+        entries[name] = {**r, "date": date, "results_sha256": results_sha256(Path(out) / name),
+                         "reference": ref["reference"]}
+        log(f"verify: {name}: " + ("reproduces " + ref["reference"] if r["agree"] else
+                                   f"DIFFERS from {ref['reference']} in: "
+                                   + ", ".join(p["column"] for p in r["problems"])))
+    studies = list(entries.values())
+    verdict = {"agree": all(s.get("agree") for s in studies), "date": date, "results": str(out),
+               "studies": studies, "run": {"date": date, "studies": list(names)}}
+    write_atomic(Path(out) / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
+    return verdict

@@ -323,6 +323,15 @@ def test_history_trends_the_injected_squareness_over_services(tmp_path):
     tests = json.loads(out.stdout)["circular-test"]["tests"]
     assert [t["date"][:10] for t in tests] == ["2026-01-10", "2026-05-03", "2026-09-01"]
     np.testing.assert_allclose([t["squareness"] for t in tests], [10.0, 20.0, 30.0], atol=1.0)   # µrad
+    # the servo mismatch without a feed is a length: mm in the JSON results, µm in the trend (never "ms")
+    trend = json.loads(out.stdout)["circular-test"]
+    assert trend["units"]["servo mismatch"] == "µm"
+    by_date = {json.loads(p.read_text())["details"]["conditions"]["date"]: json.loads(p.read_text())
+               for p in folder.glob("[abc].json")}
+    for t in tests:
+        servo = by_date[t["date"][:10]]["diagnostics"]["servo_mismatch"]
+        assert servo["unit"] == "mm" and t["servo mismatch"] == pytest.approx(servo["value"] * 1e3)
+        assert t["servo mismatch (time)"] is None
     assert (tmp_path / "trend.png").read_bytes().startswith(b"\x89PNG")
     text = cli("history", folder)
     assert "squareness [µrad]" in text.stdout and text.stdout.index("2026-01-10") < text.stdout.index("2026-09-01")

@@ -19,7 +19,8 @@ COLUMNS = {
                       (("diagnostics", "scale_mismatch", "value"), "scale mismatch", 1e6, "µm/m"),
                       (("diagnostics", "backlash_x", "value"), "backlash X", 1e3, "µm"),
                       (("diagnostics", "backlash_y", "value"), "backlash Y", 1e3, "µm"),
-                      (("diagnostics", "servo_mismatch", "value"), "servo mismatch", 1e3, "ms")],
+                      (("diagnostics", "servo_mismatch", "value@mm"), "servo mismatch", 1e3, "µm"),
+                      (("diagnostics", "servo_mismatch", "value@s"), "servo mismatch (time)", 1e3, "ms")],
     "positioning": [(("A",), "A", 1e3, "µm"), (("E",), "E", 1e3, "µm"), (("R",), "R", 1e3, "µm"),
                     (("B",), "B", 1e3, "µm"), (("M",), "M", 1e3, "µm")],
     "roundness": [(("references", "lsci", "RONt"), "RONt LSCI", 1e3, "µm"),
@@ -41,10 +42,17 @@ def kind_of(d: dict) -> str | None:
 
 
 def _get(d, path):
-    for key in path:
-        if not isinstance(d, dict) or key not in d:
+    """The number at ``path``; a last key ``value@UNIT`` takes the value only where the entry's JSON unit is
+    UNIT (the servo mismatch is a length without the feed and a time with it)."""
+    *head, last = path
+    key, _, unit = last.partition("@")
+    for k in head:
+        if not isinstance(d, dict) or k not in d:
             return None
-        d = d[key]
+        d = d[k]
+    if not isinstance(d, dict) or key not in d or (unit and d.get("unit") != unit):
+        return None
+    d = d[key]
     return d if isinstance(d, (int, float)) and not isinstance(d, bool) else None
 
 

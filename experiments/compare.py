@@ -153,6 +153,16 @@ def _table(problems: list[tuple[str, dict]]) -> str:
     return "\n".join([fmt(head), fmt(["-" * w for w in widths])] + [fmt(r) for r in lines])
 
 
+def _shown(path: Path) -> str:
+    """``path`` as the verdict records it: relative to the current folder when inside it, else its last two
+    parts (a verdict names the folders it compared without the layout of this machine)."""
+    p = Path(path).resolve()
+    try:
+        return p.relative_to(Path.cwd().resolve()).as_posix()
+    except ValueError:
+        return Path(*p.parts[-2:]).as_posix()
+
+
 def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
     """Compare ``against`` with the committed ``results``; the verdict dict (also written to RESULTS/verify.json)."""
     reports = []
@@ -163,7 +173,7 @@ def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
         reports.append({**compare_study(study, committed, fresh), "date": date,
                         "results_sha256": results_sha256(results / study),   # what this verdict judged
                         "against_sha256": results_sha256(against / study),
-                        "reference": f"the run in {against / study}"})
+                        "reference": f"the run in {_shown(against / study)}"})
     for r in reports:
         n_bad = sum(p["n_rows"] for p in r["problems"])
         skipped = (f"; {r['not_converged_values']} value(s) of rows that did not converge in both runs not compared "
@@ -181,7 +191,7 @@ def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
             by_reason.setdefault(t.why, []).append(f"{s}/{m}/{c} rtol={t.rtol:g} atol={t.atol:g}")
         log("wider tolerances declared for methods chaotic by nature: " +
             "; ".join(f"{', '.join(cols)} (why: {why})" for why, cols in by_reason.items()))
-    verdict = {"agree": not bad, "date": date, "results": str(results), "against": str(against), "studies": reports}
+    verdict = {"agree": not bad, "date": date, "results": _shown(results), "against": _shown(against), "studies": reports}
     write_atomic(results / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
     return verdict
 

@@ -120,6 +120,15 @@ def check_size(cfg: dict, max_rows: int) -> None:
         configs.check_rows(cfg, study.count_rows(cfg), max_rows)
 
 
+def check_ready(cfg: dict, max_rows: int) -> None:
+    """Everything a study needs before its first row, checked before any study of the run starts: its size
+    (:func:`check_size`) and its first task (a study whose data are not available here, such as a reference
+    folder named by an environment variable, says so now, not after the studies before it ran)."""
+    check_size(cfg, max_rows)
+    study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
+    next(iter(task_source(cfg, study, max_rows)()), None)
+
+
 def task_source(cfg: dict, study, max_rows: int):
     """A function returning a fresh iterable of the study's prepared tasks (index and cache key), lazily."""
     if hasattr(study, "tasks"):
@@ -314,9 +323,9 @@ def main(argv=None) -> int:
             raise InvalidInputError("--scheduler is empty; give an address such as tcp://host:8786, "
                                     "or leave it out for a local Dask cluster")
         names = args.names or default_studies()
-        for name in names:  # validate every config (and its size) before running any
+        for name in names:  # validate every config, its size and its data before running any
             cfg = configs.load(name, quick=args.quick, seed=args.seed)
-            check_size(cfg, args.max_rows)
+            check_ready(cfg, args.max_rows)
             confined(args.out, cfg["name"])
         check_out(args.out)
         lock_out(args.out)

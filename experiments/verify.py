@@ -21,6 +21,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from experiments import config as configs
 from experiments import run as runner
 from experiments.compare import (IDENTITY, WORST_ROWS, compare_study, identity_columns,  # noqa: F401  (the library's names)
                                  reference_snapshot, verdict_after_run, verify)
@@ -63,6 +64,18 @@ def main(argv=None) -> int:
         if args.against is not None:
             verdict = verify(studies, results, args.against)
         else:
+            ready = []
+            for s in studies:  # a study whose data are not available here: named -> an error, implied -> a note
+                try:
+                    runner.check_ready(configs.load(s, quick=args.quick), configs.MAX_ROWS)
+                    ready.append(s)
+                except InvalidInputError as exc:
+                    if args.studies:
+                        raise
+                    print(f"{s}: not checked here: {exc}")
+            if not ready:
+                raise InvalidInputError("no study of --results can run here (see above)")
+            studies = ready
             with tempfile.TemporaryDirectory(prefix="fitbench-verify-") as tmp:
                 for s in studies:
                     runner.run_study(s, Path(tmp), quick=args.quick, jobs=runner.usable_jobs(args.jobs))

@@ -244,3 +244,47 @@ def test_a_quick_run_of_the_default_studies_reports_a_verdict_for_each(tmp_path)
         assert f"verify: {name}: " in proc.stdout, name
         section = md.split(f"(`{name}`)")[1].split("### ")[0]
         assert "**Reproducibility" in section and "the committed tables (results/quick/" in section, name
+
+
+def _nist_results(tmp_path: Path) -> Path:
+    """A --results folder holding a (full-grid) nist_circle study, whose data need FITBENCH_NIST_DIR."""
+    results = tmp_path / "results"
+    (results / "nist_circle").mkdir(parents=True)
+    (results / "nist_circle" / "results.csv").write_text("dataset,method\n")
+    (results / "nist_circle" / "meta.json").write_text(json.dumps({"quick": False}))
+    return results
+
+
+def test_a_named_study_whose_data_are_missing_is_refused_before_anything_runs(tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv("FITBENCH_NIST_DIR", raising=False)
+    assert verify.main(["nist_circle", "--results", str(_nist_results(tmp_path))]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "FITBENCH_NIST_DIR" in err
+
+
+def test_an_implied_study_whose_data_are_missing_is_named_and_left_out(tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv("FITBENCH_NIST_DIR", raising=False)
+    assert verify.main(["--results", str(_nist_results(tmp_path))]) == 2
+    out, err = capsys.readouterr()
+    assert out.startswith("nist_circle: not checked here:") and "FITBENCH_NIST_DIR" in out
+    assert "no study of --results can run here" in err
+
+
+def test_run_checks_every_study_is_ready_before_the_first_row(tmp_path, monkeypatch, capsys):
+    """A run of two studies, the second needing data not available here: refused in one line before the first
+    study runs (it used to run the first study, then stop)."""
+    monkeypatch.delenv("FITBENCH_NIST_DIR", raising=False)
+    cfg = tmp_path / "vstudy.toml"
+    cfg.write_text(STUDY, encoding="utf-8")
+    out = tmp_path / "out"
+    assert runner.main([str(cfg), "nist_circle", "--jobs", "1", "--out", str(out), "--no-report"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "FITBENCH_NIST_DIR" in err
+    assert not (out / "vstudy").exists()
+
+
+def test_the_verdict_names_no_folder_of_this_machine(committed, tmp_path):
+    fresh = copy_run(committed, tmp_path)
+    verdict = verify.verify(["vstudy"], committed, fresh, log=lambda *a: None)
+    text = json.dumps(verdict)
+    assert str(tmp_path) not in text and verdict["against"].endswith("fresh")

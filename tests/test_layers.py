@@ -1,8 +1,9 @@
 """Layers run one way: fitbench (command line, exports) -> experiments -> fitbench.plots -> datasets -> methods.
 
 The import graph of the product packages is read with ``ast`` (every ``import`` statement, at module level and
-inside functions, resolved to the product module it names): no module imports a higher layer, the module-level
-graph has no cycle, and ``methods`` imports no argparse, matplotlib, datasets, experiments or fitbench.
+inside functions, resolved to the product module it names): no module imports a higher layer, the graph has no
+cycle, neither at module level nor through imports inside functions (which only postpone a cycle to the first
+call), and ``methods`` imports no argparse, matplotlib, datasets, experiments or fitbench.
 ``fitbench.plots`` (matplotlib figures of results) sits below ``experiments`` because the studies draw their
 example figures with it; it imports nothing above ``datasets``. The ``fitbench`` package module itself holds
 the one version number and imports nothing, so every layer may read ``fitbench.__version__``. A ``__main__`` module is a program (``python -m
@@ -96,13 +97,21 @@ def test_methods_imports_no_command_line_plotting_or_higher_package():
     assert bad == [], "\n".join(bad)
 
 
-def test_no_import_cycle_at_module_level():
+#: cycles the function-local check excuses, each with its reason (none at module level). The engine hands rows to
+#: its executors (experiments.engine imports experiments.executors) and the executors call back into the engine's
+#: row runner from inside their functions; breaking that pair is the engine's own work in progress. Delete the
+#: entry when the pair is gone (an excused cycle that no longer exists is not required to exist).
+EXCUSED_CYCLES = {frozenset({"experiments.engine", "experiments.executors"})}
+
+
+def import_cycles(module_level_only: bool) -> list[list[str]]:
+    """The cycles of the import graph (strongly connected components of more than one module, Tarjan), over the
+    module-level imports only or over every import statement, inside functions too."""
     mods, edges = graph()
     succ = {m: set() for m in mods}
     for m, n, _, top in edges:
-        if top and n in mods and n != m:
+        if (top or not module_level_only) and n in mods and n != m:
             succ[m].add(n)
-    # Tarjan's strongly connected components: a component of more than one module is a cycle
     index, low, stack, on, cycles, counter = {}, {}, [], set(), [], [0]
 
     def visit(v):
@@ -110,7 +119,7 @@ def test_no_import_cycle_at_module_level():
         counter[0] += 1
         stack.append(v)
         on.add(v)
-        for w in succ[v]:
+        for w in sorted(succ[v]):
             if w not in index:
                 visit(w)
                 low[v] = min(low[v], low[w])
@@ -130,11 +139,24 @@ def test_no_import_cycle_at_module_level():
     for v in sorted(mods):
         if v not in index:
             visit(v)
+    return sorted(cycles)
+
+
+def test_no_import_cycle_at_module_level():
+    cycles = import_cycles(module_level_only=True)
     assert cycles == [], cycles
 
 
-def test_the_checker_sees_an_upward_import_a_cycle_and_a_relative_import(tmp_path, monkeypatch):
-    """The walker itself: an upward import inside a function, a module-level cycle and a relative import."""
+def test_no_import_cycle_even_through_imports_inside_functions():
+    """A function-local import only postpones a cycle to the first call: the graph of every import statement
+    has no cycle either, but for the excused pair (``EXCUSED_CYCLES``)."""
+    cycles = [c for c in import_cycles(module_level_only=False) if frozenset(c) not in EXCUSED_CYCLES]
+    assert cycles == [], cycles
+
+
+def test_the_checker_sees_an_upward_import_cycles_and_a_relative_import(tmp_path, monkeypatch):
+    """The walker itself: an upward import inside a function, a module-level cycle, a cycle closed by an import
+    inside a function (only the second check sees it) and a relative import."""
     root = tmp_path
     for pkg in PACKAGES:
         (root / pkg).mkdir()
@@ -142,15 +164,22 @@ def test_the_checker_sees_an_upward_import_a_cycle_and_a_relative_import(tmp_pat
     (root / "methods" / "a.py").write_text("def f():\n    import matplotlib\n    from experiments import run\n")
     (root / "datasets" / "b.py").write_text("from . import c\n")
     (root / "datasets" / "c.py").write_text("from datasets import b\n")
+    (root / "datasets" / "d.py").write_text("def f():\n    from datasets import e\n")
+    (root / "datasets" / "e.py").write_text("import datasets.d\n")
     (root / "experiments" / "run.py").write_text("")
     monkeypatch.setattr(__import__(__name__), "REPO", root)
     mods, edges = graph()
     assert ("datasets.b", "datasets.c", 1, True) in edges
+    assert ("datasets.d", "datasets.e", 2, False) in edges
     upward = [(m, n) for m, n, _, _ in edges if n.split(".")[0] in PACKAGES and layer(n) > layer(m)]
     assert upward == [("methods.a", "experiments.run")]
-    try:
-        test_no_import_cycle_at_module_level()
-    except AssertionError as exc:
-        assert "datasets.b" in str(exc)
-    else:
-        raise AssertionError("the cycle datasets.b <-> datasets.c was not found")
+    assert import_cycles(module_level_only=True) == [["datasets.b", "datasets.c"]]
+    assert import_cycles(module_level_only=False) == [["datasets.b", "datasets.c"], ["datasets.d", "datasets.e"]]
+    for test in (test_no_import_cycle_at_module_level, test_no_import_cycle_even_through_imports_inside_functions):
+        try:
+            test()
+        except AssertionError as exc:
+            assert "datasets.b" in str(exc)
+            assert ("datasets.d" in str(exc)) == (test is test_no_import_cycle_even_through_imports_inside_functions)
+        else:
+            raise AssertionError(f"{test.__name__} did not fail on the cycle datasets.b <-> datasets.c")

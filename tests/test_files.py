@@ -177,3 +177,13 @@ def test_compensation_tables_onto_a_fifo_a_device_or_through_a_symlink(tmp_path)
     assert code == 0, err
     assert link.is_symlink() and "compensation" in real.read_text()
     assert stat.S_IMODE(os.stat(tmp_path / "new.txt").st_mode) == 0o644       # not 0600
+
+
+def test_a_folder_as_plot_file_is_named_a_folder(tmp_path):
+    data = tmp_path / "c.csv"
+    t = np.linspace(0, 2 * np.pi, 30, endpoint=False)
+    data.write_text("x,y\n" + "".join(f"{np.cos(a):.6f},{np.sin(a):.6f}\n" for a in t))
+    for folder in (tmp_path / "pdir", tmp_path / "d.png"):
+        folder.mkdir()
+        code, _, err = cli("fit", "circle.kasa", data, "--plot", folder)
+        assert code == 2 and err.count("\n") == 1 and "is a folder" in err, err

@@ -50,6 +50,8 @@ def check_plot_path(path) -> Path | None:
     from matplotlib.figure import Figure
     formats = Figure().canvas.get_supported_filetypes()
     ext = path.suffix.lower().lstrip(".")
+    if path.is_dir():
+        raise InvalidInputError(f"--plot {path}: is a folder; give a file name such as {path / 'plot.png'}")
     if ext not in formats:
         raise InvalidInputError(f"--plot {path}: unknown image format {path.suffix or '(none)'!r}; "
                                 f"use one of .{', .'.join(sorted(formats))}")

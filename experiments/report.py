@@ -424,6 +424,23 @@ def _abstract(entries, verdicts) -> str:
 RANKINGS_SECTION = "Rankings across data sets"
 
 
+def ranking_findings(rankings) -> list[str]:
+    """Per ranking, the method(s) best on the largest share of its problems; methods whose costs tie within
+    the profiles' tie tolerance are all best there, and a shared top share names every one of them."""
+    from experiments.render.profiles import TIE_RTOL, performance_ratios
+    words = []
+    for name, r in rankings.items():
+        if r.table is None or not len(r.table):
+            continue
+        best1 = (performance_ratios(r.table) == 1.0).mean(axis=0)
+        top = float(best1.max())
+        winners = [str(m) for m, share in best1.items() if share == top]
+        tied = f" (tied within {TIE_RTOL:g} relative)" if len(winners) > 1 else ""
+        words.append(f"{name}: {' and '.join(winners)} {'are' if len(winners) > 1 else 'is'} best{tied} on "
+                     f"{100 * top:.0f} % of {len(r.table)} problems")
+    return words
+
+
 def _rankings_section(rankings, problem, out, add_table, add_figure, doc):
     """Performance profiles of every declared ranking (one panel each) and, per ranking, the median cost of
     each method per data set coloured relative to the row's best."""
@@ -439,12 +456,7 @@ def _rankings_section(rankings, problem, out, add_table, add_figure, doc):
         doc.prose(f"**Broken ranking**: {md_escape(problem)}.")
         return [{"title": "Performance profiles", "findings": f"Broken ranking: {problem}.", "items": items}]
     doc.prose(md_escape(intro))
-    words = []
-    for name, r in rankings.items():
-        best1 = (r.table.values == r.table.min(axis=1).values[:, None]).mean(axis=0) if len(r.table) else []
-        if len(r.table):
-            k = int(np.argmax(best1))
-            words.append(f"{name}: {r.table.columns[k]} is best on {100 * best1[k]:.0f} % of {len(r.table)} problems")
+    words = ranking_findings(rankings)
     findings = ("; ".join(words) + ".") if words else "No problem is shared by the methods of a ranking."
     doc.prose(f"**Findings.** {md_escape(findings)}")
     import textwrap

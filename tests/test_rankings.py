@@ -50,3 +50,18 @@ def test_a_problem_no_method_solved_counts_for_nobody(tmp_path):
     assert best.tolist() == [1.0, 0.0]
     ratios = performance_ratios(r.table)
     assert ratios.loc["s | d | s0 | 0"].tolist() == [1.0, 2.0]
+
+
+def test_a_tie_names_every_best_method():
+    """Two methods with the same cost on every problem are both best on all of them: the finding names both
+    (it named the first column alone: 'circle.chebyshev_lp is best on 100 % of 8 problems')."""
+    from types import SimpleNamespace
+
+    from experiments.report import ranking_findings
+    table = pd.DataFrame({"circle.chebyshev_lp": [1.0, 2.0, 3.0], "circle.kasa": [1.5, 2.5, 3.0],
+                          "circle.minimum_zone": [1.0, 2.0 * (1 + 1e-9), 3.0]})
+    words = ranking_findings({"circularity": SimpleNamespace(table=table)})
+    assert words == ["circularity: circle.chebyshev_lp and circle.minimum_zone are best (tied within 1e-06 "
+                     "relative) on 100 % of 3 problems"]
+    alone = ranking_findings({"runtime": SimpleNamespace(table=table.assign(**{"circle.minimum_zone": [9.0] * 3}))})
+    assert alone == ["runtime: circle.chebyshev_lp is best on 100 % of 3 problems"]

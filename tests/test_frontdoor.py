@@ -397,7 +397,7 @@ def test_polar_plot_carries_scale_units_markers_and_panel(lola):
     assert ticks and all(t.endswith("µm") for t in ticks)
     assert [t.get_text() for t in ax.get_xticklabels()][:2] == ["0°", "45°"]
     panel = "\n".join(t.get_text() for t in fig.texts)
-    for needed in ("HBG 130", "2026-11-22", "radius       298.997 mm", "1000.0 mm/min", "µm/div", "µrad", "G(b)"):
+    for needed in ("HBG 130", "2026-11-22", "298.997 mm", "1000 mm/min", "µm/div", "µrad", "G(b)"):
         assert needed in panel
     # diagnostics ranked by contribution: squareness (about 20 µm) before scale mismatch (about 10 µm)
     assert panel.index("squareness") < panel.index("scale mismatch") < panel.index("backlash X")

@@ -122,3 +122,59 @@ def test_save_atomic_and_report_figure_alone(tmp_path):
         pyplot().close(fig)
     assert (tmp_path / "again.png").read_bytes().startswith(PNG_MAGIC)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["again.png", "plain.svg"]
+
+
+def test_every_text_of_the_polar_figure_is_legible_at_report_width_and_inside_the_figure(polar_inputs):
+    """Shown 800 px wide (the report's figure width) every text is >= 9 px high, lies inside the figure,
+    and no two texts outside the polar grid overlap (the table, legend, title, angle labels)."""
+    from matplotlib.text import Text
+    from methods.circular_test import diagnose
+    cw, ccw, ev = polar_inputs
+    cond, _ = lola_hbg130()
+    dg = diagnose(cw, ccw, cond.nominal_radius, cond.nominal_center, feed_mm_min=1000.0)
+    checked = []
+
+    def check(fig, path):
+        renderer = fig.canvas.get_renderer()
+        fig.draw(renderer)
+        width_in = fig.get_figwidth()
+        box = fig.bbox
+        texts = [t for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip()]
+        assert len(texts) >= 20                     # the panel, the legend, the ring and angle labels, the title
+        for t in texts:
+            px_at_800 = t.get_fontsize() * 800 / (72 * width_in)
+            assert px_at_800 >= 9, (t.get_text(), round(px_at_800, 1))
+            e = t.get_window_extent(renderer)
+            assert box.x0 - 1 <= e.x0 and e.x1 <= box.x1 + 1 and box.y0 - 1 <= e.y0 and e.y1 <= box.y1 + 1, t.get_text()
+        polar = fig.axes[0]
+        rings = set(polar.get_yticklabels())        # inside the grid, on a white ground, over the traces
+        outside = [t for t in texts if t not in rings]
+        extents = [t.get_window_extent(renderer) for t in outside]
+        for i in range(len(outside)):
+            for j in range(i + 1, len(outside)):
+                assert not extents[i].overlaps(extents[j]), (outside[i].get_text(), outside[j].get_text())
+        checked.append(len(texts))
+
+    polar_plot(cw, ccw, ev, "unused.png", diagnostics=dg, save=check,
+               title="verdict FAIL (G 25.66 µm / 20 µm, H 5.22 µm / 10 µm, G(b) 25.66 µm / 30 µm)")
+    assert checked
+
+
+def test_the_polar_figure_drawn_into_part_of_a_page_stays_in_its_part(polar_inputs):
+    """Drawn into a SubFigure (the one-page report's lower part) every text of the table lies in that part."""
+    from matplotlib.text import Text
+    cw, ccw, ev = polar_inputs
+    fig = pyplot().figure(figsize=(8.27, 11.69))
+    try:
+        top, bottom = fig.subfigures(2, 1)
+        polar_plot(cw, ccw, ev, None, into=bottom)
+        renderer = fig.canvas.get_renderer()
+        fig.draw(renderer)
+        box = bottom.bbox
+        texts = [t for t in bottom.findobj(Text) if t.get_visible() and t.get_text().strip()]
+        assert any(t.get_text() == "G(b)" for t in texts)
+        for t in texts:
+            e = t.get_window_extent(renderer)
+            assert box.y0 - 1 <= e.y0 and e.y1 <= box.y1 + 1, t.get_text()
+    finally:
+        pyplot().close(fig)

@@ -178,7 +178,7 @@ def _read_circular_runs(args):
 
 def cmd_circular_test(args) -> int:
     from methods.circular_test import diagnose, evaluate
-    from fitbench.plots.circular_test import diagnostics_json, polar_plot, text
+    from fitbench.plots.circular_test import FIGSIZE as POLAR_FIGSIZE, diagnostics_json, polar_plot, text
     from methods.circular_test.runs import check_nominal, check_pair, trim
 
     R = finite("--nominal-radius", args.nominal_radius, positive=True, allow_none=False)
@@ -247,7 +247,7 @@ def cmd_circular_test(args) -> int:
         write_report(report_path, f"ISO 230-4 circular test{': ' + args.machine if args.machine else ''}",
                      [f"files        {', '.join(str(f) for f in args.files)}", f"date         {args.date or '-'}",
                       *lines], lambda sub: polar_plot(runs["cw"], runs["ccw"], ev, None, diagnostics=dg,
-                                                      conditions=conditions, into=sub), aspect=7.2 / 11.5)
+                                                      conditions=conditions, into=sub), aspect=POLAR_FIGSIZE[1] / POLAR_FIGSIZE[0])
     if args.json:
         d = ev.to_dict(residuals=False)
         out = {k: d.pop(k) for k in (*ev.FIGURES, "center")}

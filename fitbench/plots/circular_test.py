@@ -4,6 +4,8 @@ scale in µm per division, the G band (minimum and maximum circles), start and d
 runs, a test-conditions panel and the diagnostics ranked by their contribution to the circular deviation."""
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 
 from fitbench.plots import report_figure
@@ -105,13 +107,94 @@ def _nice_division(span_um: float) -> float:
     return float(10 ** (exp + 1))
 
 
+#: the figure's size (inches): the report shows it about 800 px wide, where 8.5 pt text is about 10 px high
+FIGSIZE = (9.0, 6.4)
+#: smallest font (pt) of any text of the figure, and the table's font
+MIN_FONT_PT = 8.5
+
+
+def _num(v: float, u: float | None = None, signed: bool = False) -> str:
+    """``v`` to the decimal of the first significant digit of its uncertainty ``u`` (0 to 3 decimals);
+    without ``u`` one decimal (0.1 µm, the resolution a ballbar reports)."""
+    d = 1 if not u or not np.isfinite(u) else int(np.clip(-np.floor(np.log10(abs(u))), 0, 3))
+    v = round(float(v), d) + 0.0                               # + 0.0: no "-0.0"
+    return f"{v:+.{d}f}" if signed else f"{v:.{d}f}"
+
+
+def _table_rows(ev, cond: dict, R: float, div: float, diagnostics) -> list:
+    """The panel as rows: ('head', text) or ('row', label, value, extra) with a unit on every number."""
+    um = 1e3
+    arc = ev.arc_deg
+    centre = cond.get("nominal_center_mm") or cond.get("nominal_center")
+    feed = cond.get("feed_mm_min")
+    f = ev.figures
+    rows = [("head", "Test conditions", "", ""),
+            ("row", "machine", textwrap.shorten(str(cond.get("machine") or "-"), 36, placeholder=" ..."), ""),
+            ("row", "date", str(cond.get("date") or "-"), ""),
+            ("row", "plane", str(cond.get("plane") or "xy").upper(), ""),
+            ("row", "radius", f"{R:g} mm", ""),
+            ("row", "centre", "(" + ", ".join(f"{v:g}" for v in centre) + ") mm" if centre else "-", ""),
+            ("row", "feed", f"{feed:g} mm/min" if feed else "-", ""),
+            ("row", "arc CW / CCW", f"{arc.get('cw', 360):.0f}° / {arc.get('ccw', 360):.0f}°", ""),
+            ("row", "scale", f"{div:g} µm/div", ""),
+            ("head", "Results (ISO 230-4)", "", ""),
+            ("row", "G CW / CCW", f"{_num(f['G_cw'] * um)} / {_num(f['G_ccw'] * um)} µm", ""),
+            ("row", "G(b)", f"{_num(f['G_b'] * um)} µm", ""),
+            ("row", "H", f"{_num(f['H'] * um)} µm", ""),
+            ("row", "F max / min", f"{_num(f['F_max'] * um, signed=True)} / {_num(f['F_min'] * um, signed=True)} µm", "")]
+    if diagnostics:
+        rows.append(("head", "Diagnostics (ranked)", "value", "contribution"))
+        for label, item, contrib in ranked(diagnostics, R, feed, cond.get("plane")):
+            if item["value"] is None:
+                rows.append(("row", label, "n/a", ""))
+            else:
+                unit = HUMAN_UNIT.get(item["unit"], item["unit"])
+                rows.append(("row", label, f"{_num(item['value'], item.get('u'), signed=True)} {unit}",
+                             f"{contrib:.1f} µm"))
+    return rows
+
+
+def _draw_table(fig, rows: list, left: float, right: float, top: float, bottom: float) -> list:
+    """The rows as a three-column table in the figure's box [left, right] x [bottom, top] (figure
+    fractions): labels left-aligned, values and contributions right-aligned, a rule under each heading.
+    The font is MIN_FONT_PT + 0.5 unless the rows would not fit the box's height. Returns the texts."""
+    import matplotlib.transforms as mtrans
+    from matplotlib.lines import Line2D
+    height_pt = (top - bottom) * fig.bbox.height / fig.dpi * 72
+    n_gap = sum(1 for r in rows[1:] if r[0] == "head")
+    size = min(MIN_FONT_PT + 0.5, height_pt / (1.45 * (len(rows) + 0.6 * n_gap)))
+    step = 1.45 * size
+    x_value, x_extra = left + 0.72 * (right - left), right
+    out, y = [], 0.0
+    for i, (kind, label, value, extra) in enumerate(rows):
+        if kind == "head" and i:
+            y += 0.6 * step
+        tr = fig.transSubfigure + mtrans.ScaledTranslation(0, -y / 72, fig.dpi_scale_trans)
+        weight = "bold" if kind == "head" else "normal"
+        colour = "0.3" if kind == "head" else "k"
+        out.append(fig.text(left, top, label, transform=tr, fontsize=size, fontweight=weight, va="top", ha="left"))
+        if value:
+            out.append(fig.text(x_value if extra else right, top, value, transform=tr, fontsize=size, va="top",
+                                ha="right", color=colour if kind == "head" else "k"))
+        if extra:
+            out.append(fig.text(x_extra, top, extra, transform=tr, fontsize=size, va="top", ha="right",
+                                color=colour if kind == "head" else "k"))
+        if kind == "head":
+            rule = fig.transSubfigure + mtrans.ScaledTranslation(0, -(y + 1.2 * size) / 72, fig.dpi_scale_trans)
+            fig.add_artist(Line2D([left, right], [top, top], transform=rule, color="0.6", lw=0.6))
+        y += step
+    return out
+
+
 def polar_plot(cw, ccw, ev, path, title: str = "", *, diagnostics=None, conditions=None, save=None, into=None):
     """Both runs as radial deviation (µm) about the evaluation centre, drawn on a polar grid whose
     rings are a fixed number of µm apart (the scale is printed: µm per division); the nominal circle is
     the ring 0; the G band (min and max radius of both runs) shaded; start (o) and direction (arrow)
-    markers; a panel of test conditions and the ranked diagnostics. Returns the figure's scale dict
-    {'um_per_division', 'divisions'}."""
-    with report_figure(path, dpi=120, save=save, into=into, figsize=(11.5, 7.2)) as fig:
+    markers; beside it a table of the test conditions, the ISO 230-4 figures and the ranked diagnostics,
+    every number with its unit, and the legend below the plot. Every text is at least MIN_FONT_PT (about
+    10 px with the figure 800 px wide). Returns the figure's scale dict {'um_per_division', 'divisions',
+    'figure_text'}."""
+    with report_figure(path, dpi=120, save=save, into=into, figsize=FIGSIZE) as fig:
         c = ev.center
         R = ev.nominal_radius
         cond = dict(ev.conditions)
@@ -129,12 +212,12 @@ def polar_plot(cw, ccw, ev, path, title: str = "", *, diagnostics=None, conditio
         r0 = np.floor(lo / div) - 1
         n_div = int(np.ceil(hi / div) - r0 + 1)
         base = r0 * div                                        # the radius drawn at the plot centre (µm)
-        ax = fig.add_axes([0.04, 0.08, 0.56, 0.84], projection="polar")
+        ax = fig.add_axes([0.045, 0.235, 0.5, 0.6], projection="polar")
         ring = np.linspace(0, 2 * np.pi, 721)
         ax.fill_between(ring, lo - base, hi - base, color="0.88", alpha=0.5, lw=0)
         ax.plot(ring, np.full_like(ring, lo - base), color="0.55", lw=0.8)
         ax.plot(ring, np.full_like(ring, hi - base), color="0.55", lw=0.8,
-                label=f"G band, min/max circles: {hi - lo:.2f} µm")
+                label=f"G band, min/max circles: {_num(hi - lo)} µm")
         ax.plot(ring, np.full_like(ring, -base), color="0.2", lw=1.2, ls="--",
                 label=f"nominal circle R = {R:g} mm (0 µm)")
         outer = n_div * div
@@ -152,40 +235,19 @@ def polar_plot(cw, ccw, ev, path, title: str = "", *, diagnostics=None, conditio
                                         connectionstyle=f"arc3,rad={0.12 if a[k] > a[0] else -0.12}"))
         ticks = np.arange(1, n_div + 1) * div
         ax.set_rticks(ticks)
-        ax.set_yticklabels([f"{base + t:+.3g} µm" for t in ticks], fontsize=7)
+        # ring labels on a white ground so that a trace passing under them does not hide them
+        ax.set_yticklabels([f"{base + t:+g} µm" for t in ticks], fontsize=MIN_FONT_PT,
+                           bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.8))
         ax.set_rlim(0, outer)
         ax.set_rlabel_position(112.5)
-        ax.set_thetagrids(np.arange(0, 360, 45), labels=[f"{a}°" for a in range(0, 360, 45)])
-        ax.set_title((title + "\n" if title else "") + f"radial deviation about the {ev.center_kind} centre: "
-                     f"scale {div:g} µm/div", fontsize=10)
+        ax.set_thetagrids(np.arange(0, 360, 45), labels=[f"{a}°" for a in range(0, 360, 45)], fontsize=9.5)
+        head = "\n".join(textwrap.wrap(title, 60)) + "\n" if title else ""
+        ax.set_title(head + f"radial deviation about the {ev.center_kind} centre: scale {div:g} µm/div",
+                     fontsize=10, pad=14)
         handles, labels = ax.get_legend_handles_labels()
-        fig.legend(handles, labels, loc="lower left", fontsize=8, bbox_to_anchor=(0.64, 0.02), frameon=False)
-        # the panel: test conditions, results, diagnostics ranked
-        um = 1e3
-        arc = ev.arc_deg
-        centre = cond.get("nominal_center_mm") or cond.get("nominal_center")
-        lines = ["Test conditions",
-                 f"  machine      {cond.get('machine') or '-'}",
-                 f"  date         {cond.get('date') or '-'}",
-                 f"  plane        {str(cond.get('plane') or 'xy').upper()}",
-                 f"  radius       {R:g} mm",
-                 f"  centre       {'(' + ', '.join(f'{v:g}' for v in centre) + ') mm' if centre else '-'}",
-                 f"  feed         {str(cond.get('feed_mm_min')) + ' mm/min' if cond.get('feed_mm_min') else '-'}",
-                 f"  arc          CW {arc.get('cw', 360):.0f}°, CCW {arc.get('ccw', 360):.0f}°",
-                 f"  scale        {div:g} µm/div",
-                 "",
-                 "Results (ISO 230-4)",
-                 f"  G CW / CCW   {ev.figures['G_cw'] * um:.2f} / {ev.figures['G_ccw'] * um:.2f} µm",
-                 f"  G(b)         {ev.figures['G_b'] * um:.2f} µm",
-                 f"  H            {ev.figures['H'] * um:.2f} µm",
-                 f"  F max / min  {ev.figures['F_max'] * um:+.2f} / {ev.figures['F_min'] * um:+.2f} µm"]
-        if diagnostics:
-            lines += ["", "Diagnostics (ranked, contribution µm)"]
-            for label, item, contrib in ranked(diagnostics, R, cond.get("feed_mm_min"), cond.get("plane")):
-                if item["value"] is None:
-                    lines.append(f"  {label:<20} n/a")
-                else:
-                    unit = HUMAN_UNIT.get(item["unit"], item["unit"])
-                    lines.append(f"  {label:<20} {item['value']:+8.2f} {unit:<5} {contrib:6.2f}")
-        fig.text(0.64, 0.92, "\n".join(lines), va="top", ha="left", family="monospace", fontsize=8.5)
+        fig.legend(handles, labels, loc="upper center", fontsize=MIN_FONT_PT, ncol=2, frameon=False,
+                   bbox_to_anchor=(0.295, 0.15), columnspacing=1.2, handlelength=1.8)
+        rows = _table_rows(ev, cond, R, div, diagnostics)
+        _draw_table(fig, rows, 0.6, 0.975, 0.93, 0.03)
+        lines = [" ".join(x for x in r[1:] if x) for r in rows]
         return {"um_per_division": div, "divisions": n_div, "figure_text": lines}

@@ -238,6 +238,7 @@ def polar_plot(cw, ccw, ev, path, title: str = "", *, diagnostics=None, conditio
         # ring labels on a white ground so that a trace passing under them does not hide them
         ax.set_yticklabels([f"{base + t:+g} µm" for t in ticks], fontsize=MIN_FONT_PT,
                            bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.8))
+        ax.yaxis.set_zorder(4)                                 # the ring labels over the traces
         ax.set_rlim(0, outer)
         ax.set_rlabel_position(112.5)
         ax.set_thetagrids(np.arange(0, 360, 45), labels=[f"{a}°" for a in range(0, 360, 45)], fontsize=9.5)

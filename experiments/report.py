@@ -246,6 +246,12 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     verdicts = study_verdicts(results, [e[2] for e in entries if e[4] is not None],
                               {n: "not a default study" for n in present if not known.get(n, {}).get("default")})
 
+    # the command that fills a missing study into this folder: its --quick grid when the folder's studies are
+    # quick runs, and this folder as --out unless it is the default results/
+    folder_quick = any(e[4] and e[4].get("quick") for e in entries)
+    missing_args = (" --quick" if folder_quick else "") + \
+        ("" if results.resolve() == Path("results").resolve() else f" --out {_shown(results)}")
+
     doc = Document()
     doc.heading(1, "fitbench: comparison report")
     doc.prose(f"Built from `{md_escape(_shown(results))}` by `python -m experiments.report`; reproduce everything with "
@@ -315,9 +321,10 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
             tex_studies.append({"title": title, "findings": "", "items": items})
             if problem == "missing":
                 default = known.get(name, {}).get("default", False)
+                command = f"python -m experiments.run {name}{missing_args}"
                 doc.prose(f"**Missing**: no results in `{md_escape(_shown(results / name))}`. Run "
-                          f"`python -m experiments.run {md_escape(name)}`" + ("" if default else " (not a default study)") + ".")
-                tex_studies[-1]["findings"] = f"Missing: no results. Run python -m experiments.run {name}."
+                          f"`{md_escape(command)}`" + ("" if default else " (not a default study)") + ".")
+                tex_studies[-1]["findings"] = f"Missing: no results. Run {command}."
                 continue
             if problem:
                 doc.prose(f"**Broken**: {md_escape(problem)}.")

@@ -87,6 +87,9 @@ def test_missing_and_failed_studies_are_shown(built):
     assert "**Missing**: no results" in md and "python -m experiments.run noise" in md
     assert "(`broken_study`)" in md and "**failed rows: 2 of" in md
     assert "python -m experiments.run multilateration" in md  # its section exists; its results are missing here
+    # the suggested command fills this folder with the same grid: --quick, and this folder as --out
+    results = built.parent / "results"
+    assert f"python -m experiments.run noise --quick --out {results}" in md.replace("\\", "")
 
 
 def test_latex_fragments(built, tmp_path):

@@ -474,7 +474,9 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
                               f"(columns: {', '.join(df.columns)})")
     if t.get("columns"):
         out = data.pivot_table(index=rows, columns=t["columns"], values=value, aggfunc=AGGREGATES[how], sort=False)
-        out.columns = [f"{t['columns']}={c}" for c in out.columns]
+        key_unit = column_unit(t["columns"])  # a pivot column names its key with the key's own unit: 'data_arc_deg = 90 °'
+        out.columns = [f"{t['columns']} = {c:g}{' ' + key_unit if key_unit else ''}" if isinstance(c, (int, float))
+                       else f"{t['columns']} = {c}" for c in out.columns]
         out = out.reset_index()
     else:
         out = data.groupby(rows, sort=False, dropna=False)[value].agg(AGGREGATES[how]).reset_index()

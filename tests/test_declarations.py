@@ -128,7 +128,8 @@ def test_an_undeclared_toml_study_gets_a_table_and_a_figure_with_units(tmp_path)
     table = analysis.tables[0]
     assert table.unit == "mm" and "center_error" in table.caption
     # the degree column is a key named with its own unit: the table's mm never labels it
-    assert list(table.data.columns) == ["method", "data_arc_deg=360.0", "data_arc_deg=90.0", "data_arc_deg=22.5"]
+    # and a pivot's column names carry the key's unit, not the table's (read as 'arc 360 °', never 'arc [mm]')
+    assert list(table.data.columns) == ["method", "data_arc_deg = 360 °", "data_arc_deg = 90 °", "data_arc_deg = 22.5 °"]
     assert (tmp_path / analysis.figures[0].file).is_file()
 
 

@@ -1,4 +1,4 @@
-"""Issue 20: the closed-form circle fits from one sweep of unit-frame moments lose nothing against an
+"""The closed-form circle fits from one sweep of unit-frame moments lose nothing against an
 independent solution from the SVD of the full design matrix (no moments, no unit frame shared with the
 method): NIST Circle2d sets and ill-conditioned exact circles (short arcs, far centres, tiny circles)."""
 import json

@@ -136,7 +136,7 @@ def test_symmetric_lobes_find_alternating_contacts():
 
 
 def test_sparse_noisy_mic_is_global_or_refused_never_outside_the_data():
-    """Issue 15: MIC returned radius 4010 on radius-10 data. Sparse noisy sets: either the points lie in a
+    """MIC returned radius 4010 on radius-10 data. Sparse noisy sets: either the points lie in a
     half-plane through the start centre (refused, converged=False) or the MIC is the certified global one
     of the exhaustive enumeration, centred inside the data."""
     rng = np.random.default_rng(11)

@@ -67,7 +67,7 @@ def test_nelder_mead_at_a_non_stationary_point_says_so():
 @pytest.mark.parametrize("start, word", [((5, 5, 1), "radius collapsed"), ((3, 4, 1e-9), "radius collapsed"),
                                          ((1e300, 1e300, 1), "data sizes away")])
 def test_powell_hybrid_degenerate_stationary_points_are_not_converged(start, word):
-    """Issue 16 item 13: S_CA is stationary at R = 0 (dS/dR = -4 R sum e_i); a start far away runs off to
+    """S_CA is stationary at R = 0 (dS/dR = -4 R sum e_i); a start far away runs off to
     infinity. Both are reported as degenerate, never as converged, and without warnings."""
     pts = circle_points((3.0, 4.0), 2.0, 50, noise=0.01, rng=np.random.default_rng(0))
     with warnings.catch_warnings():
@@ -99,7 +99,7 @@ def _ulp_perturbed(pts, rng):
                                                ("circle.powell_hybrid", {}), ("circle.gauss_newton", {}),
                                                ("circle.levenberg_marquardt", {})])
 def test_status_does_not_flip_with_the_last_bit(method_id, params):
-    """Issue 17: the noise study's hard cells (arcs of 90 and 45 degrees, sigma 0.01 and 0.05 of R, N = 20
+    """The noise study's hard cells (arcs of 90 and 45 degrees, sigma 0.01 and 0.05 of R, N = 20
     and 100), each fitted as generated and with every coordinate moved by one ulp: same status, converged,
     and Nelder–Mead never near its evaluation budget. (Before: 16 of 96 NM statuses flipped.)"""
     rng = np.random.default_rng(1996)
@@ -127,7 +127,7 @@ CASES = [(m, *c) for m in ALL for c in SCALES] + [(m, *c) for m in LEAST_SQUARES
 
 @pytest.mark.parametrize("method_id, center, radius", CASES)
 def test_every_circle_method_at_any_float64_scale(method_id, center, radius):
-    """Issue 15: scikit-image's small-scale test (12 points, radius 3.45e-100), radii from 1e-150 to 1e150
+    """Scikit-image's small-scale test (12 points, radius 3.45e-100), radii from 1e-150 to 1e150
     (every method) and beyond, coordinates of 1e300: the exact circle, its form error at rounding level,
     no warning."""
     t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
@@ -163,7 +163,7 @@ def test_collinearity_test_is_scale_free(scale):
 
 
 def test_masked_points_are_dropped():
-    """Issue 16 item 16: a masked outlier is not fitted (masked rows are dropped)."""
+    """A masked outlier is not fitted (masked rows are dropped)."""
     pts = circle_points((10.0, -4.0), 3.0, 40)
     pts[7] = (100.0, 100.0)
     masked = np.ma.masked_array(pts, mask=np.zeros_like(pts, dtype=bool))

@@ -1,4 +1,4 @@
-"""Issue 20: the compiled circle kernels (methods/circle/_ckernels.c) against the NumPy reference path
+"""The compiled circle kernels (methods/circle/_ckernels.c) against the NumPy reference path
 (FITBENCH_KERNELS=numpy), on NIST-like, noisy and ill-conditioned data.
 
 Why the two paths may differ at all, and by how much (the tolerance of :func:`_tolerance`): they compute the

@@ -1,4 +1,4 @@
-"""Issue 20: peak memory of a circle fit <= 4x the input array, at the benchmarks' N = 3358 and at N = 200 000.
+"""Peak memory of a circle fit <= 4x the input array, at the benchmarks' N = 3358 and at N = 200 000.
 tracemalloc counts NumPy's allocations exactly, so this is a deterministic test, not a timing; each fit runs in a
 fresh interpreter (tracemalloc also counts what other threads of a long test session allocate), by the benchmark
 script's :func:`measure` (``python tests/benchmarks/peak_memory.py N`` prints the table)."""

@@ -1,4 +1,4 @@
-"""Issue 16 items 1-3: every config problem refused before a row runs, in one line naming file, key and problem."""
+"""Every config problem refused before a row runs, in one line naming file, key and problem."""
 from __future__ import annotations
 
 from pathlib import Path

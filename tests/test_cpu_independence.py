@@ -1,4 +1,4 @@
-"""Reproduction on another CPU (issue 17): the quick studies give the same statuses and counts, and values within
+"""Reproduction on another CPU: the quick studies give the same statuses and counts, and values within
 the tolerances declared in experiments/metrics.py, whichever BLAS kernel and SIMD instruction set the machine has.
 
 Two runs stand for two machines: an AVX2 machine (OpenBLAS's Haswell kernels, NumPy's loops limited to AVX2 + FMA)

@@ -1,4 +1,4 @@
-"""Issue 14 "scale out for real": a Dask scheduler and two workers as separate processes on 127.0.0.1, started in
+"""A Dask scheduler and two workers as separate processes on 127.0.0.1, started in
 another folder than the client's; the rows of a small study are identical (non-timing columns) to a local run."""
 from __future__ import annotations
 

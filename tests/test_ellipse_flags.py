@@ -175,7 +175,7 @@ def test_every_size_from_1e_150_to_1e150(method_id, size):
 
 @pytest.mark.parametrize("method_id", ALL)
 def test_coordinates_of_1e300(method_id):
-    """Issue 16 item 17: no traceback at coordinates of 1e300; an ellipse of size 1e299 there is found."""
+    """No traceback at coordinates of 1e300; an ellipse of size 1e299 there is found."""
     pts = ellipse_points((1e300, -1e300), (2e299, 1e299), 0.3, 40)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # the shared validation is scale-free: no overflow warning

@@ -1,4 +1,4 @@
-"""Issue 20: peak memory of an ellipse fit <= 4x the input array. tracemalloc counts NumPy's allocations exactly,
+"""Peak memory of an ellipse fit <= 4x the input array. tracemalloc counts NumPy's allocations exactly,
 so this is a deterministic test, not a timing; each fit runs in a fresh interpreter, since tracemalloc also counts
 what other threads of a long test session allocate (the benchmark script's :func:`measure`; the Nelder–Mead fits start
 from the paper's s1S, table 3)."""

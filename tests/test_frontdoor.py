@@ -1,4 +1,4 @@
-"""The metrologist's front door (issue 18) and the CLI/API input checks of issue 16 items 17-20:
+"""The metrologist's front door and the CLI/API input checks:
 units, instrument-style files, operator checks, partial arcs, plots with scale and units, compensation
 tables, the 21-error CSV, the ``fitbench`` command."""
 from __future__ import annotations
@@ -242,7 +242,7 @@ def test_unidirectional_wide_export_gives_the_unidirectional_figures(tmp_path):
 
 
 def test_decimal_commas_in_positioning_and_multilateration_readers(tmp_path):
-    """Issue 16 item 19."""
+    """Decimal commas (semicolon-separated files) are read by the positioning and multilateration readers."""
     from datasets.io import read_multilateration as read_ml
     from datasets.io import read_positioning as read_pos
     data, _ = axis_test(rng=np.random.default_rng(3))
@@ -441,7 +441,7 @@ def test_multilateration_21_errors_csv(tmp_path):
     assert e.loc[e.parameter == "C0Y", "unit"].item() == "rad"
 
 
-# ------------------------------------------------------------------------------------------ issue 16 items 17, 18
+# ----------------------------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def small(tmp_path_factory):
     d = tmp_path_factory.mktemp("small")
@@ -506,7 +506,7 @@ def test_plot_is_written_atomically_and_no_temporary_files_left(small, tmp_path)
 
 
 @pytest.mark.slow
-# ------------------------------------------------------------------------------------------ issue 16 item 20
+# -----------------------------------------------------------------------------------------------------------
 def test_reader_peak_memory_within_3x_the_array(tmp_path):
     """2e6 points (a 32 MB array): the reader's peak resident memory grows by less than 3x the array
     (measured in a fresh process after a warm-up read; 10^7 points in /work/notes/frontdoor.md)."""

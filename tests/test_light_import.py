@@ -1,4 +1,4 @@
-"""Light import (issue 20): ``import methods`` and the CLI's ``list`` / ``fit`` on a small file load only
+"""Light import: ``import methods`` and the CLI's ``list`` / ``fit`` on a small file load only
 what registration needs; solvers, pandas, shapely, nlopt, clarabel, cvxpy and matplotlib load when first
 used. A property of the import graph (checked in sys.modules of a fresh interpreter), not a timing."""
 import json

@@ -1,5 +1,5 @@
-"""MCC/MIC certification of filtered roundness profiles is not decided by the last bit of the data (issue 17),
-and every certified circle is the optimum (issue 15), checked against independent references:
+"""MCC/MIC certification of filtered roundness profiles is not decided by the last bit of the data,
+and every certified circle is the optimum, checked against independent references:
 * MCC: shapely's minimum_bounding_radius (GEOS), not our code;
 * MIC: the largest empty circle centred at a Voronoi vertex (scipy.spatial.Voronoi + cKDTree) inside the
   profile polygon (the MIC centre of a profile surrounding it is a Voronoi vertex).

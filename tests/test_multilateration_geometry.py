@@ -1,4 +1,4 @@
-"""Issue 16 item 14: degenerate station geometry is refused (InvalidInputError, CLI exit 2), and a solution
+"""Degenerate station geometry is refused (InvalidInputError, CLI exit 2), and a solution
 left undetermined by rounding is reported converged=False with the condition number, never 'converged'."""
 
 import numpy as np

@@ -129,7 +129,7 @@ def test_html_renders_in_headless_chromium(built, tmp_path):
 
 
 def test_report_module_names_no_study():
-    """The report renders what studies declare: its code contains no study's name (issue 14)."""
+    """The report renders what studies declare: its code contains no study's name."""
     from conftest import REPO
     source = (REPO / "experiments" / "report.py").read_text(encoding="utf-8")
     names = [p.stem for p in (REPO / "experiments" / "configs").glob("*.toml")]

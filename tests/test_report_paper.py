@@ -1,4 +1,4 @@
-"""The real report of a quick run, as a reviewer reads it (issue 21): every LaTeX fragment of the built
+"""The real report of a quick run, as a reviewer reads it: every LaTeX fragment of the built
 report compiles on A4 (2.5 cm margins) with no overfull box wider than 1 pt, ``report.tex`` compiles with its
 table of contents, and the HTML report in headless Chromium has numbered figure/table captions, a table of
 contents whose links all have targets, images that load, coloured method tables and the cross-study rankings.

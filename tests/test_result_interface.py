@@ -1,4 +1,4 @@
-"""One result interface across families (issue 14): the metrics and the CLI read every result through
+"""One result interface across families: the metrics and the CLI read every result through
 FitResult.geometry / truth_errors / report_lines, never by testing which attributes it has."""
 import ast
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""Issue 16 items 4-6, 8, 9 and the fault-injection test: kills, interrupts, a corrupt row store, history-
+"""Run faults and the fault-injection test: kills, interrupts, a corrupt row store, history-
 independent row order, --jobs and --out checks, a bad Dask scheduler. The runs are subprocesses started in
 another folder than the repository (PYTHONPATH points at this checkout)."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 17: experiments.verify compares a run with committed results column by column, with the tolerances
+"""Experiments.verify compares a run with committed results column by column, with the tolerances
 declared with the metrics (experiments.metrics.TOLERANCES)."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Zone methods at the ends of float64 (issue 15): radii 1e-300 ... 1e300 give the same circle as the
+"""Zone methods at the ends of float64: radii 1e-300 ... 1e300 give the same circle as the
 unit-size data scaled, and a certificate only where the result is right.
 
 Reference: the same point set at size 1 (every zone method is equivariant under scaling: the optimum

@@ -1,4 +1,4 @@
-"""Count the sweeps a circle fit makes over its input (issue 20: "<= 3 passes at N = 10^6"), measured, not
+"""Count the sweeps a circle fit makes over its input, measured, not
 asserted: memory lines read, simulated by valgrind's cachegrind with a 1 MiB last-level cache (so the
 16 MB input is read from memory at every sweep), in two runs that differ only by the fit.
 

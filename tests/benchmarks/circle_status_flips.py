@@ -1,4 +1,4 @@
-"""Issue 17: do the iterative circle methods' statuses flip when every coordinate moves by one ulp?
+"""Do the iterative circle methods' statuses flip when every coordinate moves by one ulp?
 The noise study's grid (arcs 360/180/90/45 deg, sigma 0.001/0.01/0.05, N 20/100) x REPS repetitions.
 Run from the repository root:  python tests/benchmarks/circle_status_flips.py 4
 """

@@ -1,4 +1,4 @@
-"""Issue 20: the study statuses that differ between the compiled and the NumPy path (convergence: Gauss-Newton from
+"""The study statuses that differ between the compiled and the NumPy path (convergence: Gauss-Newton from
 starts 2 radii away; roundness: MCCI certification of filtered profiles) are decided by the last bit of the input
 on EITHER path: each case is refitted with the start (convergence) or the data (roundness) moved by one ulp.
 

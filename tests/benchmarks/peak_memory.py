@@ -1,4 +1,4 @@
-"""Peak memory of every circle and ellipse fit as a multiple of its input array (issue 20: "<= 4x the input"),
+"""Peak memory of every circle and ellipse fit as a multiple of its input array,
 measured, printed, not asserted here (tests/test_circle_memory.py and tests/test_ellipse_memory.py assert it with
 :func:`measure`).
 

@@ -1,4 +1,4 @@
-"""Issue 20 targets for the circle least-squares fits, measured against their baselines in the same run:
+"""Speed targets for the circle least-squares fits, measured against their baselines in the same run:
 every closed-form fit <= 1.0x circle-fit's ``hyperLSQ`` and ``circle.gauss_newton`` <= 0.5x scikit-image's
 ``CircleModel`` at N = 3358, 10^5 and 10^6; peak memory of a fit <= 4x the input array (tracemalloc).
 

@@ -125,5 +125,5 @@ def test_peak_memory(benchmark, trace, method_id):
     ratio = float(out.stdout.strip().splitlines()[-1])
     benchmark.extra_info["peak_memory_over_input"] = round(ratio, 2)
     benchmark.pedantic(lambda: None, rounds=1, iterations=1)
-    # issue 20's target: <= 4x the input
+    # the target: <= 4x the input
     assert ratio <= 4.0, f"{method_id}: peak memory {ratio:.2f}x the input"

@@ -178,3 +178,42 @@ def test_the_polar_figure_drawn_into_part_of_a_page_stays_in_its_part(polar_inpu
             assert box.y0 - 1 <= e.y0 and e.y1 <= box.y1 + 1, t.get_text()
     finally:
         pyplot().close(fig)
+
+
+def roundness_inputs():
+    t = np.linspace(0, 2 * np.pi, 3600, endpoint=False)
+    r = 12.5 + 1.5e-3 * np.cos(3 * t) + 0.6e-3 * np.cos(2 * t + 1) + 0.3e-3 * np.cos(17 * t)
+    return methods.fit("roundness.iso12181", np.c_[r * np.cos(t), r * np.sin(t)], cutoff_upr=50.0)
+
+
+@pytest.mark.parametrize("which", ["positioning", "roundness"])
+def test_positioning_and_roundness_texts_are_legible_at_report_width_and_inside_the_figure(which, positioning_inputs):
+    """Shown 800 px wide every text of the positioning and the roundness figure is >= 9 px high and lies
+    inside the figure (the legends were 6 px, the roundness ring labels 5.6 px, its legend cut off)."""
+    from matplotlib.text import Text
+    from fitbench.plots.roundness import plot as roundness_plot
+    seen = []
+
+    def check(fig, path):
+        renderer = fig.canvas.get_renderer()
+        fig.draw(renderer)
+        undrawn = set()                               # tick labels outside the axes' view (matplotlib skips them)
+        for a in fig.axes:
+            for axis in (a.xaxis, a.yaxis):
+                lo, hi = sorted(axis.get_view_interval())
+                eps = 1e-9 * max(abs(lo), abs(hi), 1.0)
+                undrawn |= {lab for tick in axis.get_major_ticks() if not lo - eps <= tick.get_loc() <= hi + eps
+                            for lab in (tick.label1, tick.label2)}
+        texts = [t for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip() and t not in undrawn]
+        for t in texts:
+            px_at_800 = t.get_fontsize() * 800 / (72 * fig.get_figwidth())
+            assert px_at_800 >= 9, (t.get_text(), round(px_at_800, 1))
+            e, box = t.get_window_extent(renderer), fig.bbox
+            assert box.x0 - 1 <= e.x0 and e.x1 <= box.x1 + 1 and box.y0 - 1 <= e.y0 and e.y1 <= box.y1 + 1, t.get_text()
+        seen.append(len(texts))
+
+    if which == "positioning":
+        draw_positioning(positioning_inputs, "unused.png", save=check, title="synthetic axis, 5 runs")
+    else:
+        roundness_plot(roundness_inputs(), "unused.png", title="a turned shaft", save=check)
+    assert seen and seen[0] > 10

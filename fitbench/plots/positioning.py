@@ -4,12 +4,18 @@ curves, the ±k s bands, A/E/B/M/R annotated) beside the model with its expanded
 (the positioning paper's figures 2 and 3)."""
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 
 from fitbench.plots import report_figure, tight
 from methods.positioning.model import evaluate_band
 
 ARROW = {"up": "↑", "down": "↓"}
+#: the figure's size (inches) and its smallest font (pt): shown 800 px wide (the report's figure width)
+#: 8.5 pt is about 9.4 px high
+FIGSIZE = (10.0, 5.2)
+MIN_FONT_PT = 8.5
 TITLES = {"iso230-2:2014": "ISO 230-2:2014 (k = 2)", "iso230-2:1988": "ISO 230-2:1988 (k = 3)",
           "vdi3441": "VDI/DGQ 3441"}
 
@@ -70,7 +76,7 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
     """Left: every run (thin), the mean deviations of each direction, the mean bidirectional curve, the
     ±k s bands and the figures A, E, B, M, R annotated; right: the model with U(P). Returns the axes'
     labels (for tests)."""
-    with report_figure(path, dpi=110, save=save, into=into, figsize=(13, 5)) as fig:
+    with report_figure(path, dpi=120, save=save, into=into, figsize=FIGSIZE) as fig:
         per, figs = result.per_target, result.figures
         k = figs.get("k", 2.0)
         P = per["targets"]
@@ -97,7 +103,7 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
                      f"U = {figs['U'] * um:.2f} µm"]
         else:
             notes = [f"{key} = {figs[key] * um:.2f} µm" for key in ("A", "E", "B", "M", "R") if key in figs]
-        ax.text(0.02, 0.98, "\n".join(notes), transform=ax.transAxes, va="top", ha="left", fontsize=9,
+        ax.text(0.02, 0.98, "\n".join(notes), transform=ax.transAxes, va="top", ha="left", fontsize=9.5,
                 family="monospace", bbox=dict(boxstyle="round", fc="white", ec="0.6", alpha=0.9))
         ax.set_title(f"{TITLES.get(figs.get('standard'), figs.get('standard'))}: {figs['targets']} targets x "
                      f"{figs['runs']} runs", fontsize=10)
@@ -110,14 +116,17 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
                              label=f"degree-{result.polynomial[d]['degree']} fit {ARROW[d]}")
                 axes[1].fill_between(grid, (v - U) * um, (v + U) * um, color=colours[d], alpha=0.2,
                                      label=f"U(P), k = {result.polynomial[d]['k']:g}")
-        axes[1].set_title("model: fitted curve and expanded uncertainty anywhere on the travel", fontsize=10)
+        axes[1].set_title("model: fitted curve and expanded uncertainty\nanywhere on the travel", fontsize=10)
         for a in axes:
             a.set_xlabel("target position P [mm]")
             a.grid(alpha=0.3)
-            a.legend(fontsize=7, loc="lower right")
+            n = len(a.get_legend_handles_labels()[1])     # below the axes: inside, it hid the runs
+            a.legend(fontsize=MIN_FONT_PT, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=(n + 1) // 2,
+                     frameon=False, columnspacing=1.0, handlelength=1.6)
+            a.tick_params(labelsize=9)
         axes[0].set_ylabel("positional deviation [µm]")
         if title:
-            fig.suptitle(title, fontsize=10)
+            fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
         tight(fig)
         labels = {"x": axes[0].get_xlabel(), "y": axes[0].get_ylabel(), "notes": notes}
         return labels

@@ -9,6 +9,10 @@ import numpy as np
 from fitbench.plots import report_figure, tight
 from methods.roundness.filter import transmission
 
+#: the figure's size (inches) and its smallest font (pt): 8.5 pt is about 9.4 px high with the figure 800 px wide
+FIGSIZE = (10.0, 5.8)
+MIN_FONT_PT = 8.5
+
 
 def _nice_step(span_um: float) -> float:
     raw = span_um / 5
@@ -27,7 +31,7 @@ def _circle_deviation(center, radius, c0, r0, theta):
 def plot(res, path, title: str = "", *, save=None, into=None) -> None:
     """Polar plot of the filtered profile (deviation magnified, µm per division) with the reference circles,
     beside the bar plot of the harmonic spectrum (µm per UPR) with the filter's transmission."""
-    with report_figure(path, dpi=110, save=save, into=into, figsize=(12, 5.4)) as fig:
+    with report_figure(path, dpi=120, save=save, into=into, figsize=FIGSIZE) as fig:
         c0, r0 = res.raw_lsci["center"], res.raw_lsci["radius"]
         theta = res.angles
         dev_um = res.deviations * 1e3
@@ -44,8 +48,14 @@ def plot(res, path, title: str = "", *, save=None, into=None) -> None:
         ax.set_rticks(rings)
         # ring labels (µm about the raw LSCI radius) along the ray where the profile is innermost: there the
         # profile and the reference circles lie below the labelled rings instead of across them
-        ax.set_yticklabels([f"{v:+g} µm" for v in rings], fontsize=6, color="0.35")
-        ax.set_rlabel_position(float(np.degrees(theta[int(np.argmin(dev_um))])) % 360)
+        ax.set_yticklabels([f"{v:+g} µm" for v in rings], fontsize=MIN_FONT_PT, color="0.3",
+                           bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
+        ax.yaxis.set_zorder(4)                                 # the ring labels over the profile
+        ray = float(np.degrees(theta[int(np.argmin(dev_um))])) % 360
+        ax.set_rlabel_position(ray)
+        # the angle labels every 45°, but not the one the ring labels' ray would run into at the rim
+        angles = [a for a in range(0, 360, 45) if abs((a - ray + 180) % 360 - 180) > 15]
+        ax.set_thetagrids(angles, labels=[f"{a}°" for a in angles])
         ax.plot(np.append(theta, theta[0]), np.append(dev_um, dev_um[0]), color="k", lw=0.8, label="filtered profile")
         colors = {"lsci": "tab:blue", "mzci": "tab:red", "mici": "tab:green", "mcci": "tab:purple"}
         for kind, c in curves.items():
@@ -61,8 +71,10 @@ def plot(res, path, title: str = "", *, save=None, into=None) -> None:
                 ax.plot(t_fine, _circle_deviation(r["center"], r["outer_radius"], c0, r0, t_fine) * 1e3,
                         color=colors[kind], lw=0.6, ls=":")
         cut = "unfiltered" if res.cutoff_upr is None else f"Gaussian {res.cutoff_upr:g} UPR"
-        ax.set_title(f"{title}\n{cut}, {step:g} µm/div", fontsize=9)
-        ax.legend(loc="upper left", bbox_to_anchor=(-0.25, -0.08), fontsize=7, ncol=2)
+        ax.tick_params(axis="x", labelsize=9, pad=9)   # the angle labels clear of the ring labels at the rim
+        ax.set_title(f"{title}\n{cut}, {step:g} µm/div", fontsize=10)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), fontsize=MIN_FONT_PT, ncol=2, frameon=False,
+                  columnspacing=1.0, handlelength=1.8)
 
         bx = fig.add_subplot(1, 2, 2)
         k = np.asarray(res.spectrum["upr"])
@@ -75,15 +87,18 @@ def plot(res, path, title: str = "", *, save=None, into=None) -> None:
         top = max((d["amplitude"] for d in res.dominant_lobes), default=0.0)
         for d in res.dominant_lobes[:5]:
             if d["amplitude"] >= 0.05 * top and all(abs(d["upr"] - u) > 0.02 * max(kmax, 10) for u in shown):
-                bx.annotate(f"{d['upr']}", (d["upr"], d["amplitude"] * 1e3), fontsize=7, ha="center", va="bottom")
+                bx.annotate(f"{d['upr']}", (d["upr"], d["amplitude"] * 1e3), fontsize=MIN_FONT_PT, ha="center",
+                            va="bottom")
                 shown.append(d["upr"])
         bx.set_xlabel("undulations per revolution [UPR]")
         bx.set_ylabel("amplitude of the filtered deviation [µm]")
-        bx.set_title("harmonic spectrum (about the raw LSCI centre)", fontsize=9)
+        bx.set_title("harmonic spectrum (about the raw LSCI centre)", fontsize=10)
+        bx.tick_params(labelsize=9)
         if res.cutoff_upr:
             tx = bx.twinx()
             kk = np.linspace(0, max(kmax, 10), 400)
             tx.plot(kk, transmission(kk, res.cutoff_upr), color="tab:orange", lw=1)
             tx.set_ylabel("filter transmission a(k)", color="tab:orange")
             tx.set_ylim(0, 1.05)
+            tx.tick_params(labelsize=9)
         tight(fig)

@@ -293,8 +293,8 @@ def main(argv=None) -> int:
     parser.add_argument("--executor", choices=("local", "dask"), default="local",
                         help="local processes, or Dask distributed (a LocalCluster unless --scheduler)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT,
-                        help="output folder (default: results/ in the current folder)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="output folder (default: results/ in the current folder, results/quick/ with --quick)")
     parser.add_argument("--force", action="store_true", help="recompute rows that are already stored")
     parser.add_argument("--seed", type=int, help="override the studies' base seed")
     parser.add_argument("--max-rows", type=int, default=configs.MAX_ROWS,
@@ -304,6 +304,8 @@ def main(argv=None) -> int:
                              "(default: the study's row_timeout, else none)")
     parser.add_argument("--no-report", action="store_true", help="do not rebuild the report after the studies")
     args = parser.parse_args(argv)
+    if args.out is None:  # a quick grid never lands in the folder of the full results
+        args.out = DEFAULT_OUT / "quick" if args.quick else DEFAULT_OUT
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if threading.current_thread() is threading.main_thread() else None
     try:
         if args.list:

@@ -288,3 +288,12 @@ def test_the_verdict_names_no_folder_of_this_machine(committed, tmp_path):
     verdict = verify.verify(["vstudy"], committed, fresh, log=lambda *a: None)
     text = json.dumps(verdict)
     assert str(tmp_path) not in text and verdict["against"].endswith("fresh")
+
+
+def test_a_quick_run_without_out_writes_beside_the_full_results_never_into_them(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    cfg = tmp_path / "vstudy.toml"
+    cfg.write_text(STUDY, encoding="utf-8")
+    assert runner.main([str(cfg), "--quick", "--jobs", "1", "--no-report"]) == 0
+    assert (tmp_path / "results" / "quick" / "vstudy" / "results.csv").is_file()
+    assert not (tmp_path / "results" / "vstudy").exists()

@@ -296,11 +296,13 @@ def iter_grid_tasks(cfg: dict, where: str, *, keyed: bool = False):
                         "stream": [spec["entry"], spec["point"], r], "seed": cfg["seed"], "method": m,
                         "params": extra["params"], "timing": timing}
                 if keyed:
-                    ident = idents.get((si, mi))
-                    if ident is None:
-                        ident = idents[(si, mi)] = _ident(task)
+                    prefix = idents.get((si, mi))
+                    if prefix is None:  # the hash state after the pair's identity: a key hashes only its stream
+                        prefix = idents[(si, mi)] = hashlib.sha256(f"{_ident(task)}|".encode())
+                    h = prefix.copy()
+                    h.update(str(task["stream"]).encode())
                     task["index"] = index
-                    task["key"] = _key(ident, task["stream"])
+                    task["key"] = h.hexdigest()[:24]
                     index += 1
                 yield task
 

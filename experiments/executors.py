@@ -398,11 +398,15 @@ def connect_dask(scheduler: str):
             lg.setLevel(level)
 
 
+#: times a row runs alone on Dask before its worker's deaths label it ``crashed``
+DASK_ROW_ATTEMPTS = 2
+
+
 def _run_dask(work, chunks: Chunks, store: RowStore, jobs: int, scheduler, bar, row_timeout) -> None:
     """Chunks as Dask tasks (a LocalCluster of ``jobs`` single-threaded worker processes, or the cluster at
-    ``scheduler``), at most a few per worker in flight; rows are written by the client. A chunk whose
-    worker died (KilledWorker) runs again a row at a time; a row that kills its worker again is
-    ``crashed``. Time limits act inside the worker's thread (:class:`experiments.engine.RowTimeout`)."""
+    ``scheduler``), at most two per worker in flight; rows are written by the client. A chunk whose
+    worker died (KilledWorker) runs again a row at a time, one row in flight; a row whose worker dies
+    each of :data:`DASK_ROW_ATTEMPTS` times it runs alone is ``crashed``. Time limits act inside the worker's thread (:class:`experiments.engine.RowTimeout`)."""
     import dask
     from distributed import Client, LocalCluster, as_completed
     from experiments.engine import encode_rows, failed_row
@@ -413,7 +417,7 @@ def _run_dask(work, chunks: Chunks, store: RowStore, jobs: int, scheduler, bar, 
         else:
             with _one_blas_thread_per_worker():
                 cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
-                                       dashboard_address=None, silence_logs=40)
+                                       dashboard_address=None, silence_logs=50)
             client = Client(cluster)
         pending = {}
         try:
@@ -431,21 +435,30 @@ def _run_dask(work, chunks: Chunks, store: RowStore, jobs: int, scheduler, bar, 
             for _ in range(2 * n_workers):
                 if not submit():
                     break
+            failures: dict = {}
             for fut in ac:
                 _, chunk = pending.pop(fut.key)
                 try:
                     out = fut.result()
-                except Exception as exc:  # KilledWorker: the worker died running this chunk
+                except Exception as exc:  # KilledWorker: a worker died running this chunk, or one beside it
                     if len(chunk) > 1:
                         chunks.again(chunk)
                     else:
-                        msg = f"the worker process died while running this row ({type(exc).__name__})"
-                        _store(store, encode_rows([failed_row(chunk[0], "crashed", msg)]), chunk, bar)
+                        key = chunk[0]["key"]
+                        failures[key] = failures.get(key, 0) + 1
+                        if failures[key] < DASK_ROW_ATTEMPTS:  # it may have died with another row's worker
+                            chunks.again(chunk)
+                        else:
+                            msg = (f"the worker process died each of the {DASK_ROW_ATTEMPTS} times this row ran alone "
+                                   f"({type(exc).__name__})")
+                            _store(store, encode_rows([failed_row(chunk[0], "crashed", msg)]), chunk, bar)
                 else:
                     chunks.measured(len(chunk), out["seconds"])
                     _store(store, out["columns"], chunk, bar)
-                while len(pending) < 2 * n_workers and submit():
-                    pass
+                # rows run again after a death go one at a time, nothing beside them
+                limit = 1 if chunks.retry else 2 * n_workers
+                while len(pending) < limit and submit():
+                    limit = 1 if chunks.retry else 2 * n_workers
         except BaseException:
             with contextlib.suppress(Exception):
                 client.cancel([f for f, _ in pending.values()])

@@ -287,7 +287,7 @@ def hostile_site(tmp_path_factory):
                           {"fitbench.methods": {"hostile": "fitbench_hostile"}})
 
 
-def cli(args, cwd, site, timeout=300):
+def cli(args, cwd, site, timeout=600):
     return subprocess.run([sys.executable, "-m", "experiments.run", *map(str, args), "--no-report"], cwd=cwd,
                           capture_output=True, text=True, timeout=timeout,
                           env=subprocess_env(site, OPENBLAS_NUM_THREADS="1"))
@@ -302,12 +302,10 @@ def hostile_methods(*whats):
 def test_hangs_exits_and_interrupts_are_labelled_and_the_study_goes_on(tmp_path, hostile_site, jobs):
     """A method that hangs is ``timeout``; one that os._exit()s, raises SystemExit or KeyboardInterrupt is
     ``crashed``; the other rows are ok, results.csv is written, exit 0. A rerun recomputes exactly the
-    labelled rows (never served from the cache). On Dask a row runs in a worker's thread: the limit ends a
-    row running Python (``hang``), not one blocked in C with the alarm ignored (``hang_in_c``: local only)."""
-    hangs = ("hang",) if jobs == "dask" else ("hang", "hang_in_c")
-    study = write_study(tmp_path, reps=2, methods=hostile_methods(*hangs, "exit", "sysexit", "kbint"))
+    labelled rows (never served from the cache)."""
+    study = write_study(tmp_path, reps=2, methods=hostile_methods("hang", "hang_in_c", "exit", "sysexit", "kbint"))
     out = tmp_path / "out"
-    jobs = ["--jobs", "2", "--executor", "dask"] if jobs == "dask" else ["--jobs", jobs]
+    jobs = ["--jobs", jobs]
     res = cli([study, *jobs, "--row-timeout", "1", "--out", out], tmp_path, hostile_site)
     assert res.returncode == 0, res.stderr
     df = pd.read_csv(out / "eng" / "results.csv")
@@ -417,3 +415,20 @@ def test_workers_that_cannot_start_stop_the_run_in_one_line(tmp_path):
                          env=subprocess_env(OPENBLAS_NUM_THREADS="1"))
     assert res.returncode == 2
     assert "worker processes end before running a row" in res.stderr.strip().splitlines()[-1]
+
+
+@pytest.mark.slow
+def test_dask_labels_exits_and_python_hangs(tmp_path, hostile_site):
+    """On a Dask LocalCluster: os._exit (its worker dies) and SystemExit/KeyboardInterrupt are ``crashed``, a
+    row looping in Python past its limit is ``timeout`` (the limit is raised in the worker's thread), the
+    other rows are ok."""
+    for name, whats in (("dx", ("exit",)), ("dh", ("hang", "sysexit", "kbint"))):
+        study = write_study(tmp_path, name=name, reps=1, methods=hostile_methods(*whats))
+        res = cli([study, "--jobs", "2", "--executor", "dask", "--row-timeout", "1", "--out", tmp_path / "out"],
+                  tmp_path, hostile_site)
+        assert res.returncode == 0, res.stderr
+        df = pd.read_csv(tmp_path / "out" / name / "results.csv")
+        what = df["param_what"].fillna("")
+        assert set(df.loc[what == "", "status"]) == {"ok"}
+        assert set(df.loc[what == "hang", "status"]) <= {"timeout"}
+        assert set(df.loc[what.isin(["exit", "sysexit", "kbint"]), "status"]) == {"crashed"}

@@ -65,8 +65,8 @@ def install_plugin(workdir: Path, name: str, modules: dict, entry_points: dict, 
 
 def pytest_addoption(parser):
     parser.addoption("--system", action="store_true",
-                     help="also run the system tier (tests marked 'system': the quick studies on "
-                          "two simulated CPUs); .ci/run runs it as its own step")
+                     help="also run the system tier (tests marked 'system': end-to-end runs of whole installations and "
+                          "processes); .ci/run runs it as its own step")
 
 
 def pytest_collection_modifyitems(config, items):

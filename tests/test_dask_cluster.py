@@ -15,7 +15,7 @@ import pytest
 
 from conftest import subprocess_env
 
-pytestmark = pytest.mark.slow  # starts a Dask scheduler and workers
+pytestmark = pytest.mark.system  # starts a Dask scheduler and workers as separate processes
 
 DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
 

@@ -20,7 +20,7 @@ from tests.report_checks import chromium
 
 REPO = Path(__file__).resolve().parents[1]
 needs_chromium = pytest.mark.skipif(chromium() is None, reason="no chromium on PATH (.ci/run installs Debian's chromium)")
-pytestmark = pytest.mark.slow   # a quick run of two studies and three Chromium loads: about a minute
+pytestmark = pytest.mark.system   # a quick run of two studies and three Chromium loads: about a minute
 OFFLINE = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking", "--no-first-run",
            "--disable-component-update", "--disable-sync", "--host-resolver-rules=MAP * ~NOTFOUND",
            "--proxy-server=127.0.0.1:9", "--virtual-time-budget=15000"]

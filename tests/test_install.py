@@ -18,7 +18,7 @@ def _tree(root: Path) -> set:
     return {str(p.relative_to(root)) for p in root.rglob("*") if "__pycache__" not in p.parts}
 
 
-@pytest.mark.slow
+@pytest.mark.system  # builds a wheel and installs it: its own CI step
 def test_wheel_install_runs_from_another_directory(tmp_path):
     if shutil.which("git") is None:
         pytest.skip("git is needed to list the sources")  # pragma: no cover

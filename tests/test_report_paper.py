@@ -26,7 +26,7 @@ from experiments.render.rankings import collect
 from experiments.render.report_tables import html_table, latex_fragments
 from tests.report_checks import check_html_report, chromium
 
-pytestmark = pytest.mark.slow  # builds the report of a quick run, compiles it with TeX, renders it in Chromium
+pytestmark = pytest.mark.system  # builds the report of a quick run, compiles it with TeX, renders it in Chromium
 
 REPO = Path(__file__).resolve().parents[1]
 PDFLATEX = shutil.which("pdflatex")

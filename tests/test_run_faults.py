@@ -149,6 +149,7 @@ def test_sigkill_of_the_parent_ends_workers_and_resource_tracker(tmp_path):
     assert not no_survivors(kids, within=10), "processes outlived their SIGKILLed parent"
 
 
+@pytest.mark.system  # kills whole runs at random moments, repeatedly
 def test_fault_injection_sigkill_at_random_moments_then_rerun_reproduces(tmp_path):
     """SIGKILL at random moments during rows and during finalize (several seeds); each rerun gives the non-timing
     columns of an uninterrupted run exactly, and no process outlives its parent."""

@@ -228,7 +228,7 @@ def test_every_run_ends_with_a_verdict_the_report_shows(tmp_path, capsys):
     assert "**Reproducibility: differs.**" in section and "radius" in section
 
 
-@pytest.mark.slow
+@pytest.mark.system  # every default study's quick grid, as .ci/run's last step does
 def test_a_quick_run_of_the_default_studies_reports_a_verdict_for_each(tmp_path):
     """`python -m experiments.run --quick` from the repository compares every default study with the committed
     results/quick and the report carries one verdict per default study (CI runs the same command)."""

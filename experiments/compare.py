@@ -53,8 +53,9 @@ def identity_columns(df: pd.DataFrame) -> list[str]:
 def _keyed(df: pd.DataFrame, ident: list[str]) -> pd.DataFrame:
     df = df.copy()
     shown = [c for c in ident if c != "study"]
-    key = (df[shown].astype(str).apply(lambda col: col.name + "=" + col).agg(", ".join, axis=1) if shown
-           else pd.Series([""] * len(df), index=df.index))
+    key = pd.Series([""] * len(df), index=df.index)
+    for k, c in enumerate(shown):  # "a=1, b=2": column by column, not a Python join per row
+        key = key + (", " if k else "") + c + "=" + df[c].astype(str)
     df["_occurrence"] = key.groupby(key).cumcount()  # rows with one identity: matched in order
     df["_key"] = key + " #" + df["_occurrence"].astype(str)
     return df.set_index("_key")
@@ -105,9 +106,12 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
             if tolerance(col, study) is not None:
                 problems.append({"column": col, "n_rows": int(len(a)), "problem": "column missing in this run", "worst": []})
             continue
-        tols = [tolerance(col, study, m) for m in methods]
-        keep = np.array([t is not None for t in tols], dtype=bool)
-        inexact = np.array([t is not None and (t.rtol, t.atol) != (0.0, 0.0) for t in tols], dtype=bool)
+        # one tolerance per distinct method, spread to the rows (not one lookup per row and column)
+        kinds, row_kind = np.unique(methods.astype(str).to_numpy(), return_inverse=True)
+        tol_of = [tolerance(col, study, m) for m in kinds]
+        tols = [tol_of[k] for k in row_kind]
+        keep = np.array([t is not None for t in tol_of], dtype=bool)[row_kind]
+        inexact = np.array([t is not None and (t.rtol, t.atol) != (0.0, 0.0) for t in tol_of], dtype=bool)[row_kind]
         not_compared += int((keep & inexact & stopped).sum())
         keep &= ~(inexact & stopped)
         if not keep.any():
@@ -116,8 +120,8 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
         old, new = a[col], b[col]
         x, y = _number(old), _number(new)
         if x is not None and y is not None:
-            rtol = np.array([t.rtol if t else 0.0 for t in tols])
-            atol = np.array([t.atol if t else 0.0 for t in tols])
+            rtol = np.array([t.rtol if t else 0.0 for t in tol_of])[row_kind]
+            atol = np.array([t.atol if t else 0.0 for t in tol_of])[row_kind]
             both_nan = np.isnan(x) & np.isnan(y)
             diff = np.abs(y - x)
             ok = both_nan | (diff <= atol + rtol * np.abs(x))

@@ -185,7 +185,7 @@ def environment() -> dict:
     (``FITBENCH_KERNELS``: compiled or numpy), Python's version and those of :data:`NUMBER_PACKAGES`."""
     if not _ENV:
         from importlib import metadata
-        from methods._compiled import kernel_path
+        from methods import kernel_path
         versions = {"python": ".".join(map(str, sys.version_info[:3]))}
         for pkg in NUMBER_PACKAGES:
             try:

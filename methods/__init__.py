@@ -12,6 +12,7 @@ from methods.results import (CircleFit, EllipseFit, FitResult, MagnifyFit, Multi
                              ZoneFit, check_result)
 from methods._validation import validate_points
 from methods._manifest import describe_methods
+from methods._compiled import kernel_path
 
 
 def __getattr__(name: str):
@@ -26,4 +27,4 @@ def __getattr__(name: str):
 
 __all__ = ["InvalidInputError", "UnknownMethodError", "MethodSpec", "register", "get", "list_methods",
            "fit", "immutable", "load_plugins", "results", "check_result", "FitResult", "CircleFit", "ZoneFit", "EllipseFit",
-           "validate_points", "describe_methods", "ENTRY_POINT_GROUP", "KINDS"]
+           "validate_points", "describe_methods", "kernel_path", "ENTRY_POINT_GROUP", "KINDS"]

@@ -183,3 +183,24 @@ def test_the_checker_sees_an_upward_import_cycles_and_a_relative_import(tmp_path
             assert ("datasets.d" in str(exc)) == (test is test_no_import_cycle_even_through_imports_inside_functions)
         else:
             raise AssertionError(f"{test.__name__} did not fail on the cycle datasets.b <-> datasets.c")
+
+
+def test_no_package_imports_another_packages_private_names():
+    """What crosses a package boundary is public: no ``from methods._x import ...`` (or ``import methods._x``,
+    or a private name from a public module) outside ``methods``, and the same for every product package."""
+    bad = []
+    for mod, path in product_modules().items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and not node.level and node.module:
+                names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            else:
+                continue
+            for name in names:
+                parts = name.split(".")
+                if parts[0] in PACKAGES and parts[0] != mod.split(".")[0] \
+                        and any(p.startswith("_") and not p.startswith("__") for p in parts[1:]):
+                    bad.append(f"{mod}:{node.lineno} imports {name}")
+    assert bad == [], "\n".join(bad)

@@ -217,3 +217,10 @@ def test_positioning_and_roundness_texts_are_legible_at_report_width_and_inside_
     else:
         roundness_plot(roundness_inputs(), "unused.png", title="a turned shaft", save=check)
     assert seen and seen[0] > 10
+
+
+def test_a_signed_value_that_rounds_to_zero_prints_without_a_minus():
+    from fitbench.plots.circular_test import _signed
+    assert _signed(-0.001) == "+0.00" and _signed(-0.004999) == "+0.00"
+    assert _signed(-0.006) == "-0.01" and _signed(0.0) == "+0.00"
+    assert _signed(1.234) == "+1.23" and _signed(-1.234) == "-1.23"

@@ -66,6 +66,11 @@ def diagnostics_json(dg: dict) -> dict:
     return out
 
 
+def _signed(value: float, digits: int = 2) -> str:
+    """``value`` with its sign to ``digits`` decimals; a value that rounds to zero prints as +0.00, never -0.00."""
+    return f"{(value if round(value, digits) != 0 else 0.0):+.{digits}f}"
+
+
 def text(ev, dg: dict | None) -> str:
     """The evaluation ``ev`` (a CircularTestFit) and the diagnostics ``dg`` as a person reads them (µm)."""
     um = 1e3
@@ -79,7 +84,7 @@ def text(ev, dg: dict | None) -> str:
              f"  G(b)                    {ev.figures['G_b'] * um:.2f} µm",
              f"  H (1996)                {ev.figures['H'] * um:.2f} µm{' (over the common arc)' if partial else ''}",
              f"  F max / F min           {ev.figures['F_max'] * um:+.2f} / {ev.figures['F_min'] * um:+.2f} µm ({ev.F_about})",
-             f"  mean radial deviation   {ev.figures['mean_radial_deviation'] * um:+.2f} µm"]
+             f"  mean radial deviation   {_signed(ev.figures['mean_radial_deviation'] * um)} µm"]
     if dg:
         feed = ev.conditions.get("feed_mm_min")
         lines += ["diagnostics (least squares on the error signatures; value +- standard uncertainty), ranked by "

@@ -324,7 +324,11 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
                 command = f"python -m experiments.run {name}{missing_args}"
                 doc.prose(f"**Missing**: no results in `{md_escape(_shown(results / name))}`. Run "
                           f"`{md_escape(command)}`" + ("" if default else " (not a default study)") + ".")
-                tex_studies[-1]["findings"] = f"Missing: no results. Run {command}."
+                # the PDF names the folder in words: a long path is one unbreakable word on the page
+                tex_studies[-1]["findings"] = (f"Missing: no results. Run python -m experiments.run {name}"
+                                               f"{' --quick' if folder_quick else ''}"
+                                               + ("" if "--out" not in missing_args else " with this results folder as --out")
+                                               + ".")
                 continue
             if problem:
                 doc.prose(f"**Broken**: {md_escape(problem)}.")

@@ -50,11 +50,11 @@ TOLERANCES: dict[str, Tolerance | None] = {
     # the per-station deltas as a JSON list for the report, rounded to 1e-6 µm: their size is station_error_um
     "station_deltas_um": None,
     # ISO 230-4 diagnostics (µm, µrad, µm/m, ms) and their standard uncertainties u: a Gauss-Newton fit of every source
-    # on the exact geometry that stops when the residual sum of squares falls by less than 1e-12 of itself, which
-    # fixes each estimate only to about 1e-6 of its u (the weakly determined reversal spikes, whose decay angle is
-    # searched to 1e-4 in log). Between OpenBLAS's Haswell and Sandybridge kernels the estimates moved by up to
-    # 8e-7 u (1.9e-7 µm of a 4.3 µm spike with u 0.23 µm). Declared: 1e-6 relative and 1e-6 absolute in the
-    # column's unit (1 pm, 1 prad, 1 ns): below a millionth of every u in the committed results.
+    # on the exact geometry whose reversal-spike decay direction is nearly flat, so the last bits of the data (NumPy's
+    # SIMD sin/cos) and of BLAS move the estimates by up to 8.4e-7 u between OpenBLAS's Haswell and Sandybridge
+    # kernels (1.9e-7 µm of a 4.3 µm spike with u 0.23 µm); iterating on to a 1e-15 decrease moves them more (up to
+    # 8e-6 u: along the flat direction), so this is the estimator's resolution, not its stopping rule's. Declared:
+    # 1e-6 relative and 1e-6 absolute in the column's unit (1 pm, 1 prad, 1 ns): well below every u.
     **{f"diag_{s}{suffix}": Tolerance(1e-6, 1e-6, "an ISO 230-4 diagnostic fitted to a relative decrease of 1e-12 of "
                                                   "its residuals: resolved to ~1e-6 of its uncertainty")
        for s in ("squareness", "scale_mismatch", "servo_mismatch", "backlash_x", "backlash_y", "reversal_spike_x",

@@ -505,6 +505,16 @@ class CircularRuns:
     unit: str
     notes: list = field(default_factory=list)
     angle_unit: str | None = None
+    axes: tuple = ("x", "y")   # names of the two coordinates: the header's names of x, y columns, else x, y
+
+
+def _axes(layout: Layout, res: Resolved) -> tuple:
+    """Names of the two coordinates read: the header's keys of an x, y layout (``z``, ``x`` for a z-x plane),
+    else ``x``, ``y`` (angle + deviation files are placed in an x, y plane; header-less files have no names)."""
+    keys = [k for k, _ in layout.fields()]
+    if res.kind != "xy" or not keys:
+        return ("x", "y")
+    return tuple(keys[i] or f"column {i}" for i in res.idx)
 
 
 def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
@@ -545,8 +555,9 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         pts[:, 0], pts[:, 1] = cols[res.idx[0]], cols[res.idx[1]]
         if f != 1.0:
             pts *= f
+    axes = _axes(layout, res)
     if res.direction is None:
-        return CircularRuns([("file", pts)], name, res.kind, lu, notes, au)
+        return CircularRuns([("file", pts)], name, res.kind, lu, notes, au, axes)
     labels = pd.Series(cols[res.direction]).astype(str).str.strip()
     runs = []
     for lab in pd.unique(labels):
@@ -558,7 +569,7 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         raise DataFileError(f"{name}: {len(runs)} runs in the direction/run column ({', '.join(l for l, _ in runs)}); "
                             "a circular test has two (CW and CCW)")
     return CircularRuns(runs, name, res.kind, lu,
-                        notes + [f"{len(runs)} run(s) read from the column {layout.header[res.direction]!r}"], au)
+                        notes + [f"{len(runs)} run(s) read from the column {layout.header[res.direction]!r}"], au, axes)
 
 
 def read_profile(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,

@@ -559,6 +559,12 @@ def test_fit_reads_any_plane_and_unit_and_says_so(tmp_path):
     assert d["units"]["length"] == "mm" and d["units"]["input_unit"] == "µm"
     human = cli("fit", "circle.gauss_newton", p, "--plane", "yz", "--unit", "um")
     assert human.stdout.startswith("input unit µm (converted to mm)")
+    # the centre's lines name the file's coordinates, in the order read
+    assert re.search(r"^center y +5 mm$", human.stdout, re.M) and re.search(r"^center z +-1 mm$", human.stdout, re.M)
+    swapped = cli("fit", "circle.gauss_newton", p, "--columns", "z", "y", "--unit", "um").stdout
+    assert swapped.index("center z") < swapped.index("center y") and "center x" not in swapped
+    rnd = cli("roundness", p, "--plane", "yz", "--unit", "um")
+    assert rnd.returncode == 0 and "centre y [mm]" in rnd.stdout and "centre z [mm]" in rnd.stdout, rnd.stderr
     one_error_line(cli("fit", "circle.gauss_newton", p), "which two columns")
 
 

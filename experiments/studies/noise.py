@@ -54,6 +54,7 @@ def analyse(df, cfg, target, log):
     piv = worst.pivot_table(index="method", columns="arc_deg", values="radius_rmse_over_kcr", aggfunc="mean", sort=False)
     piv = piv[sorted(piv.columns, reverse=True)]
     log(f"  radius RMSE / KCR bound at sigma = {sigma:g} R, N = {n} (1.00 = the statistical limit):")
+    log("  " + f"{'method':<28}" + "".join(f"{f'{c:g}° arc':>11}" for c in piv.columns))
     for m, vals in piv.iterrows():
         log("  " + f"{m:<28}" + "".join(f"{v:11.2f}" for v in vals))
     # the least-squares estimators: methods whose rows are not zone results (plugins included)

@@ -101,6 +101,15 @@ def _jsonable(v):
     return j(v)
 
 
+def _axis_label(label: str, axes: tuple) -> str:
+    """A result's line label with the coordinates named as the file named them (``center x`` -> ``center z``
+    for a file read from its x and z columns)."""
+    head, _, last = label.rpartition(" ")
+    if head and last in ("x", "y"):
+        return f"{head} {axes[0] if last == 'x' else axes[1]}"
+    return label
+
+
 def cmd_fit(args) -> int:
     spec = methods.get(args.method)
     params = {}
@@ -114,7 +123,7 @@ def cmd_fit(args) -> int:
                                     f"{', '.join(spec.defaults) or 'none'}")
         params[key] = parse_value(key, text, spec.defaults[key], spec.id)
     plot_path = check_plot_path(args.plot)
-    source, points, unit, notes = read_profile_args(args)
+    source, points, unit, notes, axes = read_profile_args(args)
     result = spec(points, **params)
     if plot_path:
         if spec.family not in ("circle", "ellipse"):
@@ -136,7 +145,7 @@ def cmd_fit(args) -> int:
     for n in notes:
         print(f"note: {n}")
     rows = [("method", result.method), ("data", f"{source} ({len(points)} points)")]
-    rows += result.report_lines()
+    rows += [(_axis_label(k, axes), v) for k, v in result.report_lines()]
     rows += [("form error", f"{_fmt(result.form_error)} mm"),
              ("converged", f"{'yes' if result.converged else 'NO'} ({result.message})"),
              ("iterations", _fmt(result.iterations)), ("evaluations", _fmt(result.nfev)),

@@ -169,7 +169,7 @@ PROFILE_LIMIT_MM = 5000.0
 
 
 def read_profile_args(args):
-    """(source, points in mm, length unit used, notes) of ``fit`` and ``roundness``: a file in any instrument
+    """(source, points in mm, length unit used, notes, names of the two coordinates) of ``fit`` and ``roundness``: a file in any instrument
     layout (x, y or angle + radial deviation, :func:`datasets.io.read_profile`) or a published data set's
     name; sizes implausible for the unit are warned about, naming the likely unit."""
     from datasets import points_from
@@ -179,10 +179,10 @@ def read_profile_args(args):
         got = read_profile(args.file, columns=tuple(args.columns) if args.columns else None, plane=args.plane,
                            unit=args.unit, skip_rows=args.skip_rows, angle_unit=args.angle_unit,
                            nominal_radius=nominal)
-        source, points, unit, notes = str(args.file), got.runs[0][1], got.unit, list(got.notes)
+        source, points, unit, notes, axes = str(args.file), got.runs[0][1], got.unit, list(got.notes), got.axes
         polar_alone = got.kind == "polar" and nominal is None and any("without a nominal radius" in n for n in notes)
     else:
-        (source, points), unit, notes, polar_alone = points_from(args.file), "mm", [], False
+        (source, points), unit, notes, polar_alone, axes = points_from(args.file), "mm", [], False, ("x", "y")
         got = None
     points = np.asarray(points, dtype=float)
     if points.ndim == 2 and points.shape[0] and np.isfinite(points).all():
@@ -195,4 +195,4 @@ def read_profile_args(args):
             if got is not None and got.kind == "polar" and nominal:
                 dev = float(np.max(np.abs(np.hypot(*points.T) - nominal)))
                 warn_implausible("radial deviations", dev, 0.05 * nominal, unit, typical_mm=0.01)
-    return source, points, unit, notes
+    return source, points, unit, notes, axes

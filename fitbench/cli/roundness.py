@@ -44,7 +44,7 @@ def run(args) -> int:
     plot_path = check_plot_path(args.plot)
     report_path = check_plot_path(args.report)
     tolerances = parse_tolerances(args.tolerance, ("RONt", "RONp", "RONv", "RONq"))
-    source, points, unit, notes = read_profile_args(args)
+    source, points, unit, notes, axes = read_profile_args(args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UndersampledWarning)
         res = methods.fit("roundness.iso12181", points, cutoff_upr=cutoff, reference=args.reference)
@@ -55,7 +55,7 @@ def run(args) -> int:
                     {f"{name} {kind.upper()}": tol for kind in res.references for name, tol in tolerances.items()})
     if plot_path:
         plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))
-    lines = [f"note: {n}" for n in notes] + [report(res, source)] + verdict_lines(check)
+    lines = [f"note: {n}" for n in notes] + [report(res, source, axes)] + verdict_lines(check)
     if report_path:
         write_report(report_path, "ISO 12181 roundness", lines, lambda sub: plot(res, None, title=source, into=sub),
                      aspect=5.4 / 12)
@@ -74,15 +74,16 @@ def run(args) -> int:
     return 0 if res.converged else 1
 
 
-def report(res, source: str) -> str:
-    """The instrument-style table: one row per reference circle, lengths in µm (centre and radius in mm)."""
+def report(res, source: str, axes: tuple = ("x", "y")) -> str:
+    """The instrument-style table: one row per reference circle, lengths in µm (centre and radius in mm);
+    ``axes`` names the two coordinates as the file named them."""
     cut = "none (unfiltered)" if res.cutoff_upr is None else f"{res.cutoff_upr:g} UPR Gaussian (ISO 16610-21)"
     lines = [f"data          {source} ({res.n_points} points)",
              f"filter        {cut}" + ("" if res.cutoff_upr is None else f"; {res.filter_path}"),
              f"raw LSCI      centre ({res.raw_lsci['center'][0]:.6f}, {res.raw_lsci['center'][1]:.6f}) mm, "
              f"radius {res.raw_lsci['radius']:.6f} mm (deviations filtered about it)", ""]
     head = (f"{'reference':<38} {'RONt [µm]':>10} {'RONp [µm]':>10} {'RONv [µm]':>10} {'RONq [µm]':>10} "
-            f"{'centre x [mm]':>14} {'centre y [mm]':>14} {'radius [mm]':>12}  status")
+            f"{f'centre {axes[0]} [mm]':>14} {f'centre {axes[1]} [mm]':>14} {'radius [mm]':>12}  status")
     lines += [head, "-" * len(head)]
     for kind, r in res.references.items():
         lines.append(f"{REFERENCE_NAMES[kind]:<38} {r['RONt'] * 1e3:10.4f} {r['RONp'] * 1e3:10.4f} "

@@ -509,7 +509,7 @@ def test_plot_is_written_atomically_and_no_temporary_files_left(small, tmp_path)
 # -----------------------------------------------------------------------------------------------------------
 def test_reader_peak_memory_within_3x_the_array(tmp_path):
     """2e6 points (a 32 MB array): the reader's peak resident memory grows by less than 3x the array
-    (measured in a fresh process after a warm-up read; 10^7 points in /work/notes/frontdoor.md)."""
+    (measured in a fresh process after a warm-up read)."""
     n = 2_000_000
     p = tmp_path / "big.csv"
     rng = np.random.default_rng(0)

@@ -9,8 +9,8 @@ user would reach for, measured in the same run:
 * ``highs_all_points``: the algebraic Chebyshev LP with every point in HiGHS — N <= 10^5 (at 10^6
   the 2 x 10^6-row LP is not generated).
 
-* the ratios to today's (pre-certificate) code are measured from main's worktree in a separate process:
-  ``cd /tmp && python zone_time.py /work/main; python zone_time.py /work/wt-zone`` (see /work/notes/zone.md).
+* ratios to another version of the code are measured in separate processes with ``zone_time_vs_main.py``
+  (one run per checkout, same script and data).
 
 Run:  python -m pytest tests/benchmarks/test_bench_zone.py --benchmark-enable --benchmark-group-by=group
 """

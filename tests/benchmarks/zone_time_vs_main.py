@@ -1,8 +1,8 @@
 """Time circle.minimum_zone (N = 3358, 10^6) and circle.max_inscribed (N = 3358) from a given worktree,
-so that today's code (main's worktree) and this branch are measured by the same script on the same data:
+so that today's code (a checkout of the baseline) and this branch are measured by the same script on the same data:
 
-    cd /tmp && python /work/wt-zone/tests/benchmarks/zone_time_vs_main.py /work/main
-    cd /tmp && python /work/wt-zone/tests/benchmarks/zone_time_vs_main.py /work/wt-zone
+    cd /tmp && python CHECKOUT/tests/benchmarks/zone_time_vs_main.py BASELINE_CHECKOUT
+    cd /tmp && python CHECKOUT/tests/benchmarks/zone_time_vs_main.py CHECKOUT
 
 Prints min and median wall time of repeated calls (the min is the robust figure on a shared machine)."""
 import sys

@@ -24,24 +24,20 @@ runs it, so all non-timing columns are deterministic for a config and seed.
 from __future__ import annotations
 
 import hashlib
-import importlib
-import inspect
 import itertools
 import json
-import math
-import signal
 import sys
-import threading
 import time
 from pathlib import Path
-
-import numpy as np
 
 import datasets
 import methods
 from datasets import sources
-from experiments.metrics import metrics
-from experiments.timing import time_call
+from experiments.executors import execute
+from experiments.rows import RERUN_STATUSES, source_of, run_chunk
+# the row API of studies with their own ``execute`` and of the command (engine.base_row, engine.fit_row, ...)
+from experiments.rows import ENVIRONMENT_STATUSES, base_row, fit_row, load_data, note_signal  # noqa: F401
+from experiments.store import RowStore
 from methods import InvalidInputError
 
 ENGINE_VERSION = 2
@@ -60,15 +56,6 @@ def _grid(fixed: dict, grid: dict, where: str) -> list[dict]:
             raise ConfigError(f"{where}: grid.{k} must be a non-empty list of values, got {v!r}")
     keys = list(grid)
     return [{**fixed, **dict(zip(keys, combo))} for combo in itertools.product(*(grid[k] for k in keys))] or [dict(fixed)]
-
-
-def _source_of(spec: dict) -> str:
-    """The registered data source of an expanded data set spec."""
-    if "published" in spec:
-        return "published"
-    if "file" in spec:
-        return "file"
-    return spec.get("source") or spec["generator"]
 
 
 def expand_datasets(cfg: dict, where: str) -> list[dict]:
@@ -208,7 +195,8 @@ def reset_caches() -> None:
 
 def task_code(task: dict) -> dict:
     """Hashes of all code (and data files) a task's row depends on (see ``experiments.codehash``): the
-    method's module and its imports, the data source, the metrics and the study's own module. Computed once
+    method's module and its imports, the data source, the metrics, the row runner (``experiments.rows``: the generic
+    fit row, the data from the seed stream) and the study's own module. Computed once
     per (method, study kind, data set) in a run: the files are hashed once, not per row."""
     spec = task["dataset"]
     memo = (task["method"], task["kind"], json.dumps(spec, sort_keys=True, default=str))
@@ -220,6 +208,7 @@ def task_code(task: dict) -> dict:
         code = {"method": codehash.code_hash(method) if method else None,
                 "source": source_hash(spec) if _has_source(spec) else None,
                 "metrics": codehash.code_hash("experiments.metrics", "experiments.timing"),
+                "rows": codehash.code_hash("experiments.rows"),
                 "study": codehash.code_hash(study)}
         _CODE[memo] = code
     return code
@@ -228,14 +217,14 @@ def task_code(task: dict) -> dict:
 def _source_name(spec) -> str | None:
     """The registered source a data set spec names, if any."""
     if isinstance(spec, dict) and any(k in spec for k in ("published", "file", "source", "generator")):
-        return _source_of(spec)
+        return source_of(spec)
     return None
 
 
 def _has_source(spec: dict) -> bool:
     """Specs built by a study's own ``tasks`` may carry no registered source (its code is the study's)."""
     try:
-        sources.get_source(_source_of(spec))
+        sources.get_source(source_of(spec))
     except KeyError:
         return False
     return True
@@ -312,23 +301,10 @@ def grid_tasks(cfg: dict, where: str) -> list[dict]:
     return list(iter_grid_tasks(cfg, where))
 
 
-# ---------------------------------------------------------------- running one task (in a worker)
-
-def load_data(spec: dict, seed: int, stream: list[int]):
-    """Data and truth of a data set spec, from its registered source (random sources draw from the
-    spec's own seed stream)."""
-    if "published" in spec:
-        return sources.get_source("published").load(None, name=spec["published"], variant=spec.get("variant"))
-    if "file" in spec:
-        return sources.get_source("file").load(None, path=spec["file"], truth=spec.get("truth"))
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=tuple(stream)))
-    return sources.get_source(_source_of(spec)).load(rng, **spec["params"])
-
-
 def source_hash(spec: dict) -> str:
     """Hash of a data set's source code (with its imports) and of the data files it reads."""
     from experiments import codehash
-    source = sources.get_source(_source_of(spec))
+    source = sources.get_source(source_of(spec))
     parts = [codehash.code_hash(source.module)]
     if source.files is not None:
         if "published" in spec:
@@ -341,200 +317,7 @@ def source_hash(spec: dict) -> str:
     return ":".join(parts)
 
 
-_COLUMNS_OF: dict = {}
-
-
-def _columns_of(spec_params: dict, params: dict) -> dict:
-    """The parameter columns of a (data set, method) pair. Tasks of one pair share these dicts (also after
-    pickling to a worker), so the columns are built once per pair; the cache holds the dicts themselves,
-    so an id is never reused while cached."""
-    memo = (id(spec_params), id(params))
-    hit = _COLUMNS_OF.get(memo)
-    if hit is not None and hit[0] is spec_params and hit[1] is params:
-        return hit[2]
-    cols = {"params": json.dumps(params, sort_keys=True)}
-    for k, v in spec_params.items():
-        cols[f"data_{k}"] = v if np.isscalar(v) else json.dumps(v)
-    for k, v in params.items():
-        cols[f"param_{k}"] = v if np.isscalar(v) or v is None else json.dumps(v)
-    if len(_COLUMNS_OF) > 4096:
-        _COLUMNS_OF.clear()
-    _COLUMNS_OF[memo] = (spec_params, params, cols)
-    return cols
-
-
-_NO_PARAMS: dict = {}
-
-
-def base_row(task: dict) -> dict:
-    spec = task["dataset"]
-    cols = _columns_of(spec.get("params", _NO_PARAMS), task["params"])
-    row = {"study": task["study"], "dataset": spec["label"], "repetition": task["repetition"], "seed": task["seed"],
-           "data_stream": ".".join(map(str, task["stream"])), "method": task["method"], "params": cols["params"]}
-    row.update(cols)  # "params" first, then the data_ and param_ columns, as they always came
-    return row
-
-
-#: columns a generic row may have besides those of base_row: the engine's own and every column a result class
-#: declares (``methods.results.row_columns``)
 RESULT_COLUMNS = ("status", "message", "converged", "iterations", "nfev", *methods.results.row_columns(), "task_index")
-
-
-def fit_row(task: dict, points, truth) -> dict:
-    """Fit, measure, time: the generic row of a task (exceptions become status 'error')."""
-    row = base_row(task)
-    try:
-        res = methods.fit(task["method"], points, **task["params"])
-    except InvalidInputError as exc:
-        return {**row, "status": "skipped", "message": str(exc)}
-    except Exception as exc:  # a method's bug: recorded, retried on the next run
-        return {**row, "status": "error", "message": f"{type(exc).__name__}: {exc}"}
-    problem = methods.check_result(res, points)  # the gate: a result that breaks its family's contract is no row
-    if problem:
-        return {**row, "status": "invalid", "message": f"invalid result: {problem}"}
-    row.update(status="ok" if res.converged else "not converged", message=res.message, converged=res.converged,
-               iterations=res.iterations, nfev=res.nfev, **metrics(res, truth))
-    if task.get("timing"):
-        t = task["timing"]
-        row.update(time_call(lambda: methods.fit(task["method"], points, **task["params"]),
-                             min_time_s=t.get("min_time_s", 0.02), rounds=t.get("rounds", 5)))
-    return row
-
-
-#: statuses the environment causes (not the method): never served from the cache, recomputed on the next run
-ENVIRONMENT_STATUSES = ("timeout", "crashed", "unavailable")
-#: statuses recomputed on the next run (a method's error may be a bug fixed since)
-RERUN_STATUSES = ("error",) + ENVIRONMENT_STATUSES
-#: the prefix of the message of a compiled kernel that was not built (methods._compiled)
-_NOT_BUILT = "fitbench's compiled kernel"
-
-
-class RowTimeout(BaseException):
-    """Raised inside a row that ran longer than its time limit (a BaseException: a method's ``except
-    Exception`` does not swallow it)."""
-
-
-#: set when the run itself received SIGINT/SIGTERM: a KeyboardInterrupt is then the user's, not a method's
-_SIGNALLED = threading.Event()
-
-
-def note_signal() -> None:
-    """Record that the run received an interrupt (a signal handler calls this before raising)."""
-    _SIGNALLED.set()
-
-
-class _time_limit:
-    """A row's time limit: SIGALRM in a process's main thread (it also interrupts a sleep), else a timer
-    that raises :class:`RowTimeout` asynchronously in the row's thread (Dask workers run rows in threads)."""
-
-    def __init__(self, seconds):
-        self.seconds = seconds
-
-    def __enter__(self):
-        if not self.seconds:
-            return self
-        self.main = threading.current_thread() is threading.main_thread() and hasattr(signal, "setitimer")
-        if self.main:
-            def fire(signum, frame):
-                raise RowTimeout()
-            self.old = signal.signal(signal.SIGALRM, fire)
-            signal.setitimer(signal.ITIMER_REAL, self.seconds)
-        else:
-            import ctypes
-            tid, self.lock, self.active = threading.get_ident(), threading.Lock(), True
-
-            def fire():
-                with self.lock:
-                    if self.active:
-                        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(tid), ctypes.py_object(RowTimeout))
-            self.timer = threading.Timer(self.seconds, fire)
-            self.timer.daemon = True
-            self.timer.start()
-        return self
-
-    def __exit__(self, *exc):
-        if not self.seconds:
-            return False
-        if self.main:
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, self.old)
-        else:
-            with self.lock:
-                self.active = False
-            self.timer.cancel()
-        return False
-
-
-def failed_row(task: dict, status: str, message: str) -> dict:
-    """The row of a task that produced no result (time-out, crash, ...), with its identity columns."""
-    return {**base_row(task), "status": status, "message": message, "task_index": task.get("index")}
-
-
-def run_task(task: dict, row_timeout: float | None = None) -> dict:
-    """Worker entry point: the study module's ``execute`` if it has one, else the generic fit. A row that
-    runs longer than ``row_timeout`` seconds is ``timeout``; one that raises SystemExit or
-    KeyboardInterrupt (not the run's own interrupt) is ``crashed``; a kernel or module that cannot be
-    loaded makes it ``unavailable``."""
-    try:
-        with _time_limit(row_timeout):
-            study = importlib.import_module(f"experiments.studies.{task['kind']}")
-            try:
-                if hasattr(study, "execute"):
-                    row = study.execute(task)
-                else:
-                    points, truth = load_data(task["dataset"], task["seed"], task["stream"])
-                    row = fit_row(task, points, truth)
-            except ImportError as exc:
-                row = {**base_row(task), "status": "unavailable", "message": f"{type(exc).__name__}: {exc}"}
-            except Exception as exc:
-                row = {**base_row(task), "status": "error", "message": f"{type(exc).__name__}: {exc}"}
-    except RowTimeout:
-        row = failed_row(task, "timeout", f"the row ran longer than its limit of {row_timeout:g} s")
-    except (KeyboardInterrupt, SystemExit, GeneratorExit) as exc:
-        if isinstance(exc, KeyboardInterrupt) and _SIGNALLED.is_set():
-            raise  # the run was interrupted: stop
-        row = failed_row(task, "crashed", f"the row raised {type(exc).__name__}({', '.join(map(repr, exc.args))})")
-    if row.get("status") == "skipped" and str(row.get("message", "")).startswith(_NOT_BUILT):
-        row["status"] = "unavailable"
-    row["task_index"] = task.get("index")
-    return _plain(row)
-
-
-def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None) -> dict:
-    """Run a chunk of tasks in a worker; the rows come back as the store's columns (:func:`encode_rows`). ``progress``
-    (a shared array of two doubles) receives the start time and position of the running row, so that
-    the parent can end a row stuck in compiled code."""
-    rows = []
-    t0 = time.perf_counter()
-    for pos, task in enumerate(tasks):
-        if progress is not None:
-            progress[0], progress[1] = time.monotonic(), pos
-        rows.append(run_task(task, row_timeout))
-    return {"columns": encode_rows(rows), "seconds": time.perf_counter() - t0}
-
-
-def encode_rows(rows: list[dict]) -> dict:
-    """A chunk's rows in the columns of the row store (``status``, ``row`` as JSON text), encoded by the
-    worker: the process that stores them only inserts (it serves every worker)."""
-    return {"status": [r.get("status") for r in rows], "row": [json.dumps(r) for r in rows]}
-
-
-def _plain(row: dict) -> dict:
-    out = {}
-    for k, v in row.items():
-        t = type(v)
-        if t is not str and t is not int and t is not bool and v is not None:
-            if isinstance(v, np.generic):
-                v = v.item()
-            if isinstance(v, float) and not math.isfinite(v):
-                v = None
-        out[k] = v
-    return out
-
-
-# Row store and executors live in their own modules (re-exported here).
-from experiments.store import RowStore  # noqa: E402,F401
-from experiments.executors import BLAS_THREAD_VARS, _one_blas_thread_per_worker, execute  # noqa: E402,F401
 
 
 def prepare(tasks: list[dict]) -> list[dict]:
@@ -590,7 +373,6 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     ``tasks`` is a list of prepared tasks or a function returning a fresh iterable of them (it is called
     once to run, once to collect the rows): the tasks of a large study are never all in memory, rows go
     to the store as their chunk finishes, and the frame is built a block at a time."""
-    import pandas as pd
     make = tasks if callable(tasks) else (lambda: tasks)
     counts = {"tasks": 0, "stored": 0, "to_run": 0, "retried_errors": 0}
     used = set()

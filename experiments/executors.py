@@ -9,6 +9,7 @@ import sys
 import threading
 import time
 
+from experiments.rows import encode_rows, failed_row, note_signal, run_chunk
 from experiments.store import RowStore
 
 
@@ -119,7 +120,6 @@ def _store(store: RowStore, batch: dict, tasks: list, bar) -> None:
 
 
 def _run_here(work, chunks: Chunks, store: RowStore, bar) -> None:
-    from experiments.engine import note_signal
     previous = None
     if threading.current_thread() is threading.main_thread():
         handler = signal.getsignal(signal.SIGINT)
@@ -222,7 +222,6 @@ KILL_GRACE_S = 2.0
 def _worker_main(conn, parent_pid: int, progress) -> None:
     """A local worker: receive chunks, send back their rows as columns, until told to stop."""
     _die_with_parent(parent_pid)
-    from experiments.engine import run_chunk
     while True:
         try:
             msg = conn.recv()
@@ -272,7 +271,6 @@ class _Worker:
 def _lost_chunk(chunks: Chunks, store: RowStore, bar, chunk: list, pos: int, status: str, message: str) -> None:
     """A worker died (or was killed) at row ``pos`` of ``chunk``: that row gets ``status``; the rows before
     it (their results died with the worker) and after it run again, one per chunk."""
-    from experiments.engine import encode_rows, failed_row
     pos = min(max(int(pos), 0), len(chunk) - 1)
     bad = chunk[pos]
     _store(store, encode_rows([failed_row(bad, status, message)]), [bad], bar)
@@ -406,10 +404,9 @@ def _run_dask(work, chunks: Chunks, store: RowStore, jobs: int, scheduler, bar, 
     """Chunks as Dask tasks (a LocalCluster of ``jobs`` single-threaded worker processes, or the cluster at
     ``scheduler``), at most two per worker in flight; rows are written by the client. A chunk whose
     worker died (KilledWorker) runs again a row at a time, one row in flight; a row whose worker dies
-    each of :data:`DASK_ROW_ATTEMPTS` times it runs alone is ``crashed``. Time limits act inside the worker's thread (:class:`experiments.engine.RowTimeout`)."""
+    each of :data:`DASK_ROW_ATTEMPTS` times it runs alone is ``crashed``. Time limits act inside the worker's thread (:class:`experiments.rows.RowTimeout`)."""
     import dask
     from distributed import Client, LocalCluster, as_completed
-    from experiments.engine import encode_rows, failed_row
     cluster = None
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
         if scheduler is not None:

@@ -136,7 +136,7 @@ class RowStore:
         self._guard(write)
 
     def put_encoded(self, keys: list[str], statuses: list, texts: list[str]) -> None:
-        """Store rows already encoded as JSON (:func:`experiments.engine.encode_rows`) in one transaction."""
+        """Store rows already encoded as JSON (:func:`experiments.rows.encode_rows`) in one transaction."""
         data = list(zip(keys, statuses, texts))
 
         def write():

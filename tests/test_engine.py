@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 
 from conftest import install_plugin, subprocess_env
-from experiments import codehash, engine, executors, run
+from experiments import codehash, engine, executors, rows as row_code, run
 from experiments.store import RowStore, StoreIOError
 
 STUDY = '''name = "{name}"
@@ -62,7 +62,7 @@ def test_code_is_hashed_once_per_pair_not_per_row(tmp_path, monkeypatch):
     monkeypatch.setattr(codehash, "code_hash", counting)
     tasks = list(engine.iter_grid_tasks(cfg, cfg["_where"], keyed=True))
     assert len(tasks) == 2 * 200 * 2
-    assert 0 < len(calls) <= 4 * 4  # 4 pairs x (method, source, metrics, study) at most, whatever the rows
+    assert 0 < len(calls) <= 4 * 5  # 4 pairs x (method, source, metrics, rows, study) at most, whatever the rows
     # the fast keys are the keys of the general rule
     assert all(t["key"] == engine.task_key(t) for t in tasks[:50])
     assert len({t["key"] for t in tasks}) == len(tasks)
@@ -85,7 +85,7 @@ def test_kernel_backend_and_versions_are_in_the_key(tmp_path, monkeypatch):
 
 def test_rows_come_back_encoded_for_the_store(tmp_path):
     rows = [{"a": 1, "status": "ok", "c": None}, {"a": 2.5, "d": True, "status": "error"}]
-    batch = engine.encode_rows(rows)
+    batch = row_code.encode_rows(rows)
     assert batch["status"] == ["ok", "error"]
     store = RowStore(tmp_path / "rows.sqlite", log=lambda *a: None)
     store.put_encoded(["k1", "k2"], batch["status"], batch["row"])

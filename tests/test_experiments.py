@@ -266,7 +266,7 @@ def test_quick_default_studies_run(tmp_path, name):
 
 
 def test_workers_get_one_blas_thread_and_the_environment_is_restored(monkeypatch):
-    from experiments.engine import BLAS_THREAD_VARS, _one_blas_thread_per_worker
+    from experiments.executors import BLAS_THREAD_VARS, _one_blas_thread_per_worker
     monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
     monkeypatch.setenv("OMP_NUM_THREADS", "3")                 # a user's choice is kept
     with _one_blas_thread_per_worker():

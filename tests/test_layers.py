@@ -97,13 +97,6 @@ def test_methods_imports_no_command_line_plotting_or_higher_package():
     assert bad == [], "\n".join(bad)
 
 
-#: cycles the function-local check excuses, each with its reason (none at module level). The engine hands rows to
-#: its executors (experiments.engine imports experiments.executors) and the executors call back into the engine's
-#: row runner from inside their functions; breaking that pair is the engine's own work in progress. Delete the
-#: entry when the pair is gone (an excused cycle that no longer exists is not required to exist).
-EXCUSED_CYCLES = {frozenset({"experiments.engine", "experiments.executors"})}
-
-
 def import_cycles(module_level_only: bool) -> list[list[str]]:
     """The cycles of the import graph (strongly connected components of more than one module, Tarjan), over the
     module-level imports only or over every import statement, inside functions too."""
@@ -149,8 +142,8 @@ def test_no_import_cycle_at_module_level():
 
 def test_no_import_cycle_even_through_imports_inside_functions():
     """A function-local import only postpones a cycle to the first call: the graph of every import statement
-    has no cycle either, but for the excused pair (``EXCUSED_CYCLES``)."""
-    cycles = [c for c in import_cycles(module_level_only=False) if frozenset(c) not in EXCUSED_CYCLES]
+    has no cycle either."""
+    cycles = import_cycles(module_level_only=False)
     assert cycles == [], cycles
 
 

@@ -3,7 +3,8 @@ the studies' output in ``results/`` (default ``results/`` -> ``paper/``).
 
 Writes ``report.md``, a self-contained ``report.html`` (images embedded, numbered captions, nav#toc, coloured
 method tables), ``report.tex`` (compiles on A4) with the LaTeX table fragments ``tables/*.tex`` (siunitx,
-split when too wide; ``experiments.render``) and every figure as PNG and PDF under ``figures/``, and the section
+split when too wide; ``experiments.render``) and every figure as PNG, with the vector PDF its study saved, under
+``figures/``, and the section
 "Rankings across data sets" (performance profiles of every ranking the studies declare, ``[[rankings]]``). A study
 that is missing or whose rows failed is shown as such, never dropped; each study shows its current
 reproducibility verdict (``experiments.verdict``). Also run at the end of ``python -m experiments.run``.
@@ -18,7 +19,6 @@ import argparse
 import hashlib
 import json
 import re
-import shutil
 import sys
 from pathlib import Path
 
@@ -45,29 +45,17 @@ def md_table(df: pd.DataFrame, floatfmt: str = ".7g") -> str:
 # ---------------------------------------------------------------- figures
 
 def export_figure(png: Path, out_dir: Path, stem: str) -> tuple[Path, Path]:
-    """Copy the PNG and its PDF: the vector PDF the study saved next to it (``experiments.render.style.save``)
-    when there is one, else a PDF of the PNG (for authors' own documents and the LaTeX report)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.image as mpimg
-    import matplotlib.pyplot as plt
-    out_dir.mkdir(parents=True, exist_ok=True)
+    """Copy the PNG and, when the study saved one beside it (``experiments.render.style.save``), its vector
+    PDF; return (PNG, the file the LaTeX report includes: the vector PDF, else the PNG)."""
     dst_png = out_dir / f"{stem}.png"
-    shutil.copyfile(png, dst_png)
-    dst_pdf = out_dir / f"{stem}.pdf"
+    write_atomic(dst_png, png.read_bytes())
     vector = png.with_suffix(".pdf")
     if vector.is_file() and not vector.is_symlink():
-        with open(vector, "rb") as fh:
-            if fh.read(5) == b"%PDF-":
-                shutil.copyfile(vector, dst_pdf)
-                return dst_png, dst_pdf
-    img = mpimg.imread(png)
-    h, w = img.shape[:2]
-    fig = plt.figure(figsize=(w / 100, h / 100), dpi=100)
-    fig.figimage(img, 0, 0)
-    fig.savefig(dst_pdf, dpi=100)
-    plt.close(fig)
-    return dst_png, dst_pdf
+        data = vector.read_bytes()
+        if data.startswith(b"%PDF-"):
+            write_atomic(out_dir / f"{stem}.pdf", data)
+            return dst_png, out_dir / f"{stem}.pdf"
+    return dst_png, dst_png
 
 
 # ---------------------------------------------------------------- assembly
@@ -305,10 +293,10 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     def add_figure(png, caption):
         nonlocal n_figure
         n_figure += 1
-        dst_png, dst_pdf = export_figure(png, out / "figures", f"figure-{n_figure}")
-        written.extend([f"figures/{dst_png.name}", f"figures/{dst_pdf.name}"])
+        dst_png, included = export_figure(png, out / "figures", f"figure-{n_figure}")
+        written.extend(sorted({f"figures/{dst_png.name}", f"figures/{included.name}"}))
         doc.figure(dst_png, n_figure, caption, f"figures/{dst_png.name}")
-        return [{"kind": "figure", "file": f"figures/{dst_pdf.name}", "caption": caption, "label": f"figure-{n_figure}"}]
+        return [{"kind": "figure", "file": f"figures/{included.name}", "caption": caption, "label": f"figure-{n_figure}"}]
 
     for sec in section_order:
         doc.heading(2, sec, _anchor(sec))

@@ -52,13 +52,28 @@ def test_problem_table_from_rows():
         problem_table(rows, metric="nope")
 
 
+def cell_colours(html: str) -> dict[tuple[int, int], str]:
+    """{(row, column): background colour} of a Styler table, read from its <style> block."""
+    import re
+    out = {}
+    for selectors, colour in re.findall(r"([^{}]+)\{\s*background-color:\s*(#[0-9a-f]{6})", html):
+        for r, c in re.findall(r"_row(\d+)_col(\d+)", selectors):
+            out[int(r), int(c)] = colour
+    return out
+
+
 def test_coloured_table():
+    from experiments.render.html_tables import BANDS, FAIL_COLOUR
     html = coloured_table(_table(), unit="µm", caption="Table 1: errors")
     assert html.count("<tr>") == 4 and "failed" in html and "Cell colour" in html
     assert ratio_colour(1.0) != ratio_colour(3.0) != ratio_colour(np.inf)
-    assert 'data-ratio="4.0"' in html and 'data-ratio="inf"' in html
-    from experiments.render.html_tables import format_number
-    assert [format_number(v) for v in (2080.0, 0.0123, 4.07e8, -1.5e-5)] == ["2080", "0.0123", "4.07×10⁸", "-1.50×10⁻⁵"]
+    colours = cell_colours(html)
+    assert len(colours) == 9
+    assert colours[1, 2] == dict(BANDS)[5.0] and ">8.00<br><small>4×</small>" in html       # p2: 8 = 4 x the best
+    assert colours[0, 0] == colours[0, 2] == dict(BANDS)[1.0]                            # p1: a tie for the best
+    assert colours[2, 0] == FAIL_COLOUR                                                   # p3: kasa failed
+    big = coloured_table(pd.DataFrame({"a": [4.07e8, 2.5], "b": [1.5e-5, 1e-4]}), digits=3)
+    assert "4.07×10⁸" in big and "1.50×10⁻⁵" in big       # one format per column (experiments.render.numbers)
     with pytest.raises(ValueError):
         coloured_table(pd.DataFrame({"a": [-1.0]}))
 

@@ -75,11 +75,15 @@ def test_sections_tables_figures(built):
     for name in ("published", "magnification", "ellipse_angle"):  # a table and a figure per study
         section = md.split(f"(`{name}`)")[1].split("### ")[0]
         assert "*Table " in section and "![" in section, name
-    for png in built.glob("figures/figure-*.png"):
-        assert png.with_suffix(".pdf").exists() and png.stat().st_size > 10_000
-    # the LaTeX report includes the vector PDF each study saved beside its PNG, not a picture of the PNG
+    pngs = sorted(built.glob("figures/figure-*.png"))
+    assert pngs and all(png.stat().st_size > 10_000 for png in pngs)
+    # the LaTeX report includes the vector PDF each study saved beside its PNG (never a PDF wrapping a picture)
+    tex = (built / "report.tex").read_text(encoding="utf-8")
+    included = re.findall(r"\\includegraphics\[[^]]*\]\{(figures/[^}]+)\}", tex)
+    assert sorted(included) == sorted(f"figures/{p.with_suffix('.pdf').name if p.with_suffix('.pdf').exists() else p.name}"
+                                      for p in pngs)
     vector = [p for p in built.glob("figures/figure-*.pdf") if b"/Subtype /Image" not in p.read_bytes()]
-    assert len(vector) >= 3, sorted(p.name for p in built.glob("figures/*.pdf"))
+    assert len(vector) >= 3 and len(vector) == len(list(built.glob("figures/*.pdf"))), sorted(built.glob("figures/*"))
 
 
 def test_missing_and_failed_studies_are_shown(built):

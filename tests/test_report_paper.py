@@ -74,7 +74,7 @@ def test_report_tex_compiles_with_contents(built):
     tex = (built / "report.tex").read_text(encoding="utf-8")
     inputs = re.findall(r"\\input\{(tables/[^}]+)\}", tex)
     assert sorted(inputs) == sorted(f"tables/{p.name}" for p in (built / "tables").glob("*.tex"))
-    assert len(re.findall(r"\\includegraphics", tex)) == len(list((built / "figures").glob("*.pdf")))
+    assert len(re.findall(r"\\includegraphics", tex)) == len(list((built / "figures").glob("*.png")))
     result = compile_pdf(tex, built, name="report_check", runs=2)
     assert result["ok"], result["errors"] or result["log"][-2000:]
     assert not _overfull(result), _overfull(result)[:5]
@@ -88,7 +88,7 @@ def test_html_report_in_chromium(built):
     assert problems == [], problems
     page = (built / "report.html").read_text(encoding="utf-8")
     assert 'id="rankings-across-data-sets"' in page and "Performance profiles of the methods" in page
-    assert "data-ratio=" in page          # a coloured method table
+    assert 'class="ranked"' in page and "background-color" in page     # a coloured method table
     assert page.count("<strong>Findings.</strong>") >= 2
 
 
@@ -127,9 +127,10 @@ def test_wide_table_is_split_never_overflowing(tmp_path):
 def test_html_table_colours_only_declared_comparisons():
     df = pd.DataFrame({"data set": ["p", "q"], "m1": [1.0, 4.0], "m2": [2.0, 2.0]})
     coloured = html_table(df, caption="Table 1: x", unit="um", colour="lower_is_better")
-    assert 'data-ratio="2.0"' in coloured and "<caption" in coloured and "µm" in coloured
+    assert "2<br><small>2×</small>" in coloured and "<caption>Table 1: x</caption>" in coloured and "µm" in coloured
+    assert "background-color" in coloured
     plain = html_table(df, caption="Table 1: x", unit="um")
-    assert "data-ratio" not in plain and "<caption>Table 1: x</caption>" in plain
+    assert "background-color" not in plain and "<small>" not in plain and "<caption>Table 1: x</caption>" in plain
 
 
 def test_schema_knows_colour_and_rankings():

@@ -106,11 +106,17 @@ def check_html(html: str, user: list[str], n_figures: int) -> None:
     assert len(imgs) == n_figures and all(a["src"].startswith("data:image/png;base64,") for a in imgs)
     for tag, attrs in page.tags:
         assert tag not in ("iframe", "object", "embed", "link", "base", "form", "input"), tag
-        assert set(attrs) <= ALLOWED_ATTRS, (tag, attrs)
+        assert set(attrs) <= ALLOWED_ATTRS | ({"type"} if tag == "style" else set()), (tag, attrs)
+        assert attrs.get("type", "text/css") == "text/css", (tag, attrs)
         if "href" in attrs:
             assert re.fullmatch(r"#[a-z0-9-]+|explorer\.html", attrs["href"]), attrs
-        if "id" in attrs:
-            assert re.fullmatch(r"[a-z0-9-]+", attrs["id"]), attrs
+        if "id" in attrs:     # the builder's anchors, and pandas Styler's ids of a table (T_table-N) and its cells
+            assert re.fullmatch(r"[a-z0-9-]+|T_table-\d+(_row\d+_col\d+)?", attrs["id"]), attrs
+    # a table's own <style> (pandas Styler) holds only the colours of its cells, selected by their ids
+    cell = r"#T_table-\d+_row\d+_col\d+"
+    for css in re.findall(r"<style type=\"text/css\">(.*?)</style>", html, flags=re.S):
+        assert re.fullmatch(rf"(\s*{cell}(,\s*{cell})*\s*\{{\s*background-color:\s*#[0-9a-f]{{6}};\s*"
+                            rf"color:\s*#[0-9a-f]{{3}};\s*\}})*\s*", css), css[:300]
     assert sum(t == "script" for t, _ in page.tags) == 1        # the page's own load check, nothing from user text
 
 

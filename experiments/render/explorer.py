@@ -157,7 +157,8 @@ def ranking_data(name: str, r, folders: dict[str, Path], metas: dict[str, dict])
 
 
 def table_blocks(tables: list[dict]) -> list[dict]:
-    """The declared tables as HTML (coloured where declared), each with its caption."""
+    """The declared tables as HTML (coloured where declared), each with its caption; the table element's id is
+    ``T_`` + the block's id (pandas Styler's)."""
     from experiments.render.report_tables import html_table
     out = []
     for k, t in enumerate(tables, start=1):
@@ -188,7 +189,8 @@ PAGE = """<!DOCTYPE html>
 <style>
 body{font-family:sans-serif;max-width:1200px;margin:1.5em auto;padding:0 1em;color:#222;line-height:1.4}
 .table-box{overflow-x:auto;max-width:100%}caption{text-align:left;max-width:calc(min(100vw, 1200px) - 4em)}table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0}
-th,td{border:1px solid #bbb;padding:3px 6px}th{background:#eee;cursor:pointer}td.num{text-align:right}
+th,td{border:1px solid #bbb;padding:3px 6px}th{background:#eee;cursor:pointer}tbody th{text-align:left;min-width:9em}
+td.num{text-align:right;white-space:nowrap}
 th.sorted-asc::after{content:" ▲"}th.sorted-desc::after{content:" ▼"}
 .methods label{margin-right:1em;white-space:nowrap;font-size:0.9em}.plots{display:flex;flex-wrap:wrap;gap:1em}
 .plot{width:560px;height:420px}.fit{width:560px;height:420px}.filter{margin:0.3em 0}
@@ -215,7 +217,7 @@ keep matching rows.</p>
 {% if not data %}<p>No study declares a ranking ([[rankings]]): no profiles to explore.</p>{% endif %}
 <h2>Tables</h2>
 {% for t in tables %}
-<div class="explorer-table"><input class="filter" type="search" placeholder="filter rows" aria-label="filter rows of {{ t.id }}" data-table="{{ t.id }}">
+<div class="explorer-table"><input class="filter" type="search" placeholder="filter rows" aria-label="filter rows of {{ t.id }}" data-table="T_{{ t.id }}">
 {{ t.html }}</div>
 {% endfor %}
 <script type="application/json" id="explorer-data">{{ data|tojson }}</script>
@@ -292,10 +294,8 @@ SCRIPT = r"""
     el.setAttribute('data-method', method);
     return true;
   };
-  function cellValue(td) {
-    var given = td.getAttribute('data-value');
-    if (given !== null) { var g = parseFloat(given); return isNaN(g) ? Infinity : g; }
-    var t = td.textContent.trim().split('\n')[0].replace('×10', 'e').replace(/[⁻⁰¹²³⁴⁵⁶⁷⁸⁹]/g, function (c) {
+  function cellValue(td) {         // the number as shown (4.07×10⁻⁵), without a coloured cell's ratio line
+    var t = (td.firstChild ? td.firstChild.textContent : '').trim().replace('×10', 'e').replace(/[⁻⁰¹²³⁴⁵⁶⁷⁸⁹]/g, function (c) {
       return '-0123456789'['⁻⁰¹²³⁴⁵⁶⁷⁸⁹'.indexOf(c)];
     });
     var v = parseFloat(t);

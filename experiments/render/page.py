@@ -113,7 +113,7 @@ STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0
          "td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}"
          "caption{caption-side:top;text-align:left;font-size:0.95em;padding-bottom:4px;"
          "max-width:calc(min(100vw, 1100px) - 4em)}"   # a wide table scrolls in its box; its caption stays in view
-         "th{background:#eee}img{max-width:100%;height:auto}figure{margin:1.5em 0}"
+         "th{background:#eee;overflow-wrap:normal}tbody th{text-align:left;min-width:9em}img{max-width:100%;height:auto}figure{margin:1.5em 0}"
          "figcaption{font-size:0.9em;color:#333}"
          "nav#toc{background:#f6f6f6;padding:0.5em 1em;border:1px solid #ddd}nav#toc ul{margin:0.2em 0}"
          ".verdict{border-left:4px solid #1a9850;padding:0.2em 0.8em;background:#f3faf5}"

@@ -7,12 +7,10 @@ even with one number column becomes a note pointing to its CSV.
 """
 from __future__ import annotations
 
-import html
-
 import numpy as np
 import pandas as pd
 
-from experiments.render.html_tables import coloured_table
+from experiments.render.html_tables import coloured_table, plain_table
 from experiments.render.numbers import header_unit, human_header, human_unit_text, is_count, table_formats
 from experiments.render.latex import Column, TableTooWide, latex_table
 from experiments.render.text import human_unit, tex
@@ -127,45 +125,22 @@ def latex_fragments(df: pd.DataFrame, *, caption: str, label: str, unit: str = "
 
 
 def html_table(df: pd.DataFrame, *, caption: str, unit: str = "", digits: int = 4, colour: str = "",
-               table_id: str | None = None) -> str:
-    """The table as self-contained HTML with ``<caption>``; ``colour='lower_is_better'``: the number columns
-    are methods (or other competitors), each cell coloured by its ratio to the row's lowest value."""
+               table_id: str = "table") -> str:
+    """The table as self-contained HTML with ``<caption>`` (``html_tables``, pandas' Styler);
+    ``colour='lower_is_better'``: the number columns are methods (or other competitors), each cell coloured by
+    its ratio to the row's lowest value."""
     df = _humanised(df)
     keys, values = split_columns(df)
-    shown_digits = max(1, min(int(digits or 3), MAX_DIGITS))
     if colour == "lower_is_better" and values and keys:
         t = df.set_index(keys)[values]
         t.index = [" | ".join(map(str, k)) if isinstance(k, tuple) else str(k) for k in t.index]
         t.index.name = " | ".join(keys)
         numbers = t.to_numpy(float)
         if np.all(np.isnan(numbers) | (numbers >= 0)):
-            return coloured_table(t, unit=human_unit(unit), caption=html.escape(caption), digits=shown_digits,
-                                  table_id=table_id, formats=[_formats(t, list(t.columns), unit, digits)[c] for c in t.columns])
-
-    formats = _formats(df, values, unit, digits)
-
-    def cell(v, c):
-        if v is None or (isinstance(v, float) and np.isnan(v)):
-            return "–"
-        if c in formats and not isinstance(v, (bool, np.bool_)):
-            return formats[c].text(float(v))
-        return html.escape(str(v))
-
-    def unit_h(c):
-        u = column_unit(c, df[c], unit)
-        return f" [{html.escape(human_unit(u))}]" if u else ""
-
-    head = "".join(f"<th>{html.escape(human_header(c))}{unit_h(c) if c in values else ''}</th>" for c in df.columns)
-    def attrs(v, c):
-        if c not in values:
-            return ""
-        try:
-            return f' class=num data-value="{float(v):.15g}"'
-        except (TypeError, ValueError):
-            return " class=num"
-
-    rows = "".join("<tr>" + "".join(f"<td{attrs(v, c)}>{cell(v, c)}</td>"
-                                    for c, v in zip(df.columns, r)) + "</tr>" for r in df.itertuples(index=False))
-    ident = f' id="{html.escape(table_id)}"' if table_id else ""
-    return (f'<div class="table-box"><table{ident}><caption>{html.escape(caption)}</caption>'
-            f"<thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table></div>")
+            formats = _formats(t, list(t.columns), unit, digits)
+            return coloured_table(t, unit=human_unit(unit), caption=caption, table_id=table_id,
+                                  formats=[formats[c] for c in t.columns])
+    headers = {c: human_header(c) + (f" [{human_unit(u)}]" if c in values and (u := column_unit(c, df[c], unit)) else "")
+               for c in df.columns}
+    return plain_table(df, caption=caption, headers=headers, formats=_formats(df, values, unit, digits),
+                       table_id=table_id)

@@ -29,19 +29,6 @@ from experiments import config as configs
 from experiments.provenance import REPO, write_atomic
 from methods import InvalidInputError
 
-# ---------------------------------------------------------------- tables
-
-def md_table(df: pd.DataFrame, floatfmt: str = ".7g") -> str:
-    """A GitHub Markdown table; text cells and headers escaped (``page.md_escape``)."""
-    from experiments.render.page import md_escape
-
-    def fmt(v):
-        return ("" if v != v else format(v, floatfmt)) if isinstance(v, float) else md_escape(v)
-    out = ["| " + " | ".join(md_escape(c) for c in df.columns) + " |", "|" + "---|" * len(df.columns)]
-    out += ["| " + " | ".join(fmt(v) for v in row) + " |" for row in df.itertuples(index=False)]
-    return "\n".join(out)
-
-
 # ---------------------------------------------------------------- figures
 
 def export_figure(png: Path, out_dir: Path, stem: str) -> tuple[Path, Path]:
@@ -179,7 +166,7 @@ def _write_build_manifest(out: Path, files: list[str]) -> None:
                                                   indent=1) + "\n")
 
 
-def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, render_md=md_table) -> Path:
+def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, render_md=None) -> Path:
     """Build the report from every study folder in ``results`` and every default study (missing ones
     are shown as missing). ``render_latex(table, caption, label, unit, digits) -> [fragment]`` and
     ``render_md(table, fmt)`` render one table (swap in another renderer).
@@ -189,10 +176,11 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     wrote (the next build deletes only those files). User text is text: see ``experiments.render.page``."""
     from markupsafe import Markup
     from experiments.render.document import write_report_tex
-    from experiments.render.page import STYLE, Document, md_escape
+    from experiments.render.page import STYLE, Document, markdown_table, md_escape
     from experiments.render.report_tables import html_table
     from experiments.verdict import study_verdicts
 
+    render_md = render_md or markdown_table
     out.mkdir(parents=True, exist_ok=True)
     _clear_previous_build(out)
     (out / "tables").mkdir(exist_ok=True)

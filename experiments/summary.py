@@ -42,11 +42,6 @@ def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
 
 
 def to_markdown(df: pd.DataFrame, floatfmt: str = ".4g") -> str:
-    """A GitHub Markdown table (no extra dependency)."""
-    def fmt(v):
-        if isinstance(v, (float, np.floating)):
-            return "" if not np.isfinite(v) else format(v, floatfmt)
-        return str(v)
-    lines = ["| " + " | ".join(map(str, df.columns)) + " |", "|" + "---|" * len(df.columns)]
-    lines += ["| " + " | ".join(fmt(v) for v in row) + " |" for row in df.itertuples(index=False)]
-    return "\n".join(lines) + "\n"
+    """A GitHub Markdown table (``experiments.render.page.markdown_table``)."""
+    from experiments.render.page import markdown_table
+    return markdown_table(df, floatfmt, escape=False) + "\n"

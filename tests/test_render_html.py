@@ -137,3 +137,16 @@ def test_declared_unit_is_not_doubled_nor_put_on_counts():
     tex = "".join(latex_fragments(df, caption="c", label="t", unit="mm"))
     assert tex.count(r"\si{\milli\metre}") == 1 and r"radius \\ {}[\si{\milli\metre}]" in tex
     assert "& 27 &" in tex
+
+
+def test_markdown_table_keeps_every_value_in_its_cell():
+    """report.md and summary.md tables (pandas' to_markdown): a user's '|' or '<b>' stays text in its cell,
+    floats in the given format, NaN empty, numbers right-aligned."""
+    from markdown_it import MarkdownIt
+    from experiments.render.page import markdown_table
+    df = pd.DataFrame({"set | name": ["p|q", "<b>x</b>"], "error": [1.23456789, np.nan], "runs": [3, 4]})
+    md = markdown_table(df, ".4g")
+    html = MarkdownIt("commonmark").enable("table").render(md)
+    assert html.count("<td ") == 6 and html.count("<th ") == 3 and "<b>" not in html
+    assert ">p|q</td>" in html and ">1.235</td>" in html and 'style="text-align:right">4</td>' in html
+    assert html.count('style="text-align:right"></td>') == 1            # NaN: an empty cell

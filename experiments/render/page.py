@@ -30,6 +30,25 @@ def md_escape(text) -> str:
     return _MD_SPECIAL.sub(lambda m: "\\" + m.group(0), re.sub(r"\s+", " ", str(text))).strip()
 
 
+def markdown_table(df, floatfmt: str = ".7g", *, escape: bool = True) -> str:
+    """``df`` as a GitHub (pipe) Markdown table by pandas' ``DataFrame.to_markdown`` (tabulate): floats in
+    ``floatfmt`` (NaN empty), every other cell and the headers as text, ``md_escape``d unless ``escape`` is
+    false (a table of the builder's own words); number columns right-aligned."""
+    import numpy as np
+    import pandas as pd
+    text = md_escape if escape else str
+
+    def cell(v) -> str:
+        if isinstance(v, (float, np.floating)):
+            return "" if v != v else format(v, floatfmt)
+        return text(v)
+    shown = pd.DataFrame([[cell(v) for v in row] for row in df.itertuples(index=False)], columns=range(df.shape[1]))
+    align = ["right" if pd.api.types.is_numeric_dtype(t) and not pd.api.types.is_bool_dtype(t) else "left"
+             for t in df.dtypes]
+    return shown.to_markdown(index=False, headers=[text(c) for c in df.columns], tablefmt="pipe",
+                             disable_numparse=True, colalign=align)
+
+
 def _markdown() -> MarkdownIt:
     md = MarkdownIt("commonmark", {"html": False, "linkify": False, "typographer": False})
     md.disable("image")          # the prose never shows an image: figures are parts of their own

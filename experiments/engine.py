@@ -317,7 +317,9 @@ def source_hash(spec: dict) -> str:
     return ":".join(parts)
 
 
-RESULT_COLUMNS = ("status", "message", "converged", "iterations", "nfev", *methods.results.row_columns(), "task_index")
+#: columns a generic row may have besides those of base_row: the engine's own and every column a family's result class
+#: declares (``methods.result_base.row_columns``)
+RESULT_COLUMNS = ("status", "message", "converged", "iterations", "nfev", *methods.result_base.row_columns(), "task_index")
 
 
 def prepare(tasks: list[dict]) -> list[dict]:

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from methods import results
-from methods.results import ERRORS as _ERRORS, EXACT, GEOMETRY as _GEOMETRY, Tolerance  # noqa: F401
+from methods import result_base
+from methods.result_base import EXACT, Tolerance
 
 
 def metrics(result, truth: dict | None) -> dict:
@@ -20,11 +20,12 @@ def metrics(result, truth: dict | None) -> dict:
 
 # ---------------------------------------------------------------- tolerances of the verify command
 
-#: The row columns' tolerances are declared by the result classes (``methods.results``: each class's ``COLUMNS``);
-#: this table adds the engine's own columns and the columns of studies that compute their own rows.
+#: The row columns' tolerances are declared by the families' result classes (each class's ``COLUMNS``, read through
+#: ``methods.result_base.tolerances``); this table adds the engine's own columns and the columns of studies that
+#: compute their own rows.
 TOLERANCES: dict[str, Tolerance | None] = {
     "status": EXACT, "converged": EXACT, "iterations": EXACT, "nfev": EXACT,
-    **results.tolerances(),
+    **result_base.tolerances(),
     "message": None,
     # multilateration (lengths in µm of a 1000-mm machine): least-squares adjustments with condition numbers 1e4-1e8 (4-6
     # stations) and up to 9e11 (4 stations within 1.3 mm of a plane, the paper's bad case). Between OpenBLAS's
@@ -77,5 +78,5 @@ def tolerance(column: str, study: str = "", method: str = "") -> Tolerance | Non
         return None  # timing: measured, never reproducible
     if column in TOLERANCES:
         return TOLERANCES[column]
-    declared = results.row_columns().get(column)  # a result class defined after this import (a plugin's)
+    declared = result_base.row_columns().get(column)  # a result class defined after this import (a plugin's)
     return declared.tolerance if declared is not None else DEFAULT_TOLERANCE

@@ -4,10 +4,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from methods import results
+from methods import result_base
 
-#: the errors against the truth the result classes declare (``methods.results.Column.truth_error``)
-ERROR_COLUMNS = results.truth_error_columns()
+#: the errors against the truth the families' result classes declare (``Column.truth_error``: read through
+#: ``methods.result_base.truth_error_columns``)
+ERROR_COLUMNS = result_base.truth_error_columns()
 
 
 def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
@@ -22,7 +23,7 @@ def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
         row["ok_share"] = len(ok) / len(g) if len(g) else np.nan
         if "form_error" in g:
             row["form_error_median"] = ok["form_error"].median()
-        for col in results.truth_error_columns():
+        for col in result_base.truth_error_columns():
             if col in g and ok[col].notna().any():
                 v = ok[col].astype(float)
                 if col == "center_error":

@@ -7,17 +7,24 @@
 from methods._errors import InvalidInputError, UnknownMethodError
 from methods._registry import (ENTRY_POINT_GROUP, KINDS, MethodSpec, fit, get, immutable, list_methods,
                                load_plugins, register)
-from methods import results
-from methods.results import (CircleFit, EllipseFit, FitResult, MagnifyFit, MultilaterationFit, PositioningFit,
-                             ZoneFit, check_result)
+from methods.result_base import FitResult, check_result
 from methods._validation import validate_points
 from methods._manifest import describe_methods
 from methods._compiled import kernel_path
 
 
+#: the families' result classes, defined in their packages (``methods.results`` re-exports them)
+_RESULT_CLASSES = ("CircleFit", "ZoneFit", "EllipseFit", "MagnifyFit", "MultilaterationFit", "PositioningFit")
+
+
 def __getattr__(name: str):
-    """The family subpackages (``methods.circle``, ...) import on first use (PEP 562): ``import methods``
-    stays light; the registry imports them all on its first lookup (:func:`methods._registry.load_builtins`)."""
+    """The family subpackages (``methods.circle``, ...) and :mod:`methods.results`, which imports them all, load on
+    first use (PEP 562): ``import methods`` stays light; the registry imports the families on its first lookup
+    (:func:`methods._registry.load_builtins`). They are imported by name: they import this package."""
+    import importlib
+    if name == "results" or name in _RESULT_CLASSES:
+        results = importlib.import_module("methods.results")
+        return results if name == "results" else getattr(results, name)
     from methods._registry import BUILTIN_FAMILIES, load_builtins
     if name not in BUILTIN_FAMILIES:
         raise AttributeError(f"module 'methods' has no attribute {name!r}")

@@ -20,7 +20,7 @@ import numpy as np
 from methods._errors import InvalidInputError, UnknownMethodError
 from methods.plugins import add_entry, load_entry_points
 from methods._validation import validate_points
-from methods.results import FitResult
+from methods.result_base import FitResult
 
 ENTRY_POINT_GROUP = "fitbench.methods"
 KINDS = ("closed form", "iterative", "convex program")

@@ -91,7 +91,7 @@ def test_compiled_path_agrees_with_numpy_path(monkeypatch, method_id, name, pts,
 @pytest.mark.parametrize("name, pts, arc, radius", SETS, ids=[s[0] for s in SETS])
 def test_residual_sweep_gives_the_same_bits(monkeypatch, name, pts, arc, radius):
     """For the same circle the compiled residual sweep does NumPy's operations: identical results."""
-    from methods._result import circle_result
+    from methods.circle.results import circle_result
 
     center, r = (float(pts[:, 0].mean()), float(pts[:, 1].mean())), radius
     monkeypatch.setenv("FITBENCH_KERNELS", "numpy")

@@ -251,10 +251,7 @@ import signal
 import time
 
 from methods import register
-try:
-    from methods.results import circle_result
-except ImportError:
-    from methods._result import circle_result
+from methods.results import circle_result
 
 
 @register("circle.hostile", kind="closed form", summary="misbehaves on purpose", reference="fitbench tests")

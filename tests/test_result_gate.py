@@ -53,7 +53,7 @@ def test_the_family_s_declarations_win_over_a_subclass_s_own():
 
     @dataclass(kw_only=True)
     class Lenient(results.CircleFit):
-        COLUMNS = (results.Column("radius", "length", None, ""),)
+        COLUMNS = (results.Column("radius", "length", results.GEOMETRY, ""),)
         SHAPES = {}
         consistency = staticmethod(lambda result, data: None)
 

@@ -8,7 +8,7 @@ import pytest
 
 import methods
 from experiments.metrics import metrics
-from methods._result import FitResult
+from methods.results import FitResult
 
 REPO = Path(__file__).resolve().parents[1]
 RNG = np.random.default_rng(14)
@@ -66,7 +66,7 @@ def test_circular_test_evaluation_is_a_fit_result():
     """ISO 230-4: the evaluation is a FitResult (form_error = G(b), residuals = radial deviations F about the
     stated centre), its figures checked against an independent least-squares centre and a direct F."""
     from datasets.circular_test import MachineErrors, TestConditions, circular_test
-    from methods._result import CircularTestFit
+    from methods.results import CircularTestFit
     from methods.circular_test import evaluate
 
     cond = TestConditions(nominal_radius=150.0, nominal_center=(300.0, 200.0), feed_mm_min=1000.0)

@@ -97,7 +97,7 @@ def cmd_list(args) -> int:
 
 
 def _jsonable(v):
-    from methods.results import jsonable as j
+    from methods.result_base import jsonable as j
     return j(v)
 
 

@@ -300,7 +300,7 @@ static PyObject *radial(PyObject *self, PyObject *args) {
             LOAD_PAIR(X, Y, p, i);
             dx = X - vcx;
             dy = Y - vcy;
-            r = vsqrt(dx * dx + dy * dy);  /* as methods/_result.py::radial_distances: same bits */
+            r = vsqrt(dx * dx + dy * dy);  /* as methods/result_base.py::radial_distances: same bits */
             d = r - vR;
             o[i] = d[0];
             o[i + 1] = d[1];

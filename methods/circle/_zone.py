@@ -17,6 +17,7 @@ from methods._frame import dot
 from methods._lazy import lazy_module
 from methods.circle import _global
 from methods.circle._geometry import hulls_meet, radii
+from methods.circle.results import zone_result
 
 clarabel = lazy_module("clarabel")
 sp = lazy_module("scipy.sparse")
@@ -366,8 +367,6 @@ def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max
     "zone" or "inscribed" (non-convex: the local certificate is followed, unless
     ``global_search == "never"``, by the branch and bound of :mod:`methods.circle._global`).
     ``extra["certified"]`` is "global", "local" or False and the message says which and why."""
-    from methods._result import zone_result  # local import: _result does not depend on this module
-
     x, y = frame.x, frame.y
 
     def run(s):

@@ -12,7 +12,7 @@ and form error are one more sweep. Through ``methods.fit`` that is three sweeps 
 
 1. validation + frame: ``frame_stats`` (finite, centroid, scale, collinearity; ``methods._validation``);
 2. the moments of the centred, scaled data: ``moments`` (:func:`methods.circle._frame.compiled_moment_means`);
-3. residuals r_i - R, form error max r - min r: ``radial`` (:func:`methods._result.circle_result`).
+3. residuals r_i - R, form error max r - min r: ``radial`` (:func:`methods.circle.results.circle_result`).
 Between the sweeps the compiled path stays in plain floats (the sums, the 3x3 or 4x4 problem solved by
 ``solve3`` / ``eigen_fit`` in C, the circle mapped to data units): about 7 µs of Python per fit at N = 3358.
 In the unit frame M is as well conditioned as the circle's shape allows (no offset, no unit), so the
@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from methods._registry import register
-from methods._result import circle_result
+from methods.circle.results import circle_result
 from methods.circle._frame import Frame, compiled_frame, compiled_moment_means, kasa_moments, kasa_sums, moments
 
 # Compiled path: the fits below read the compiled passes' sums as plain floats and map the unit-frame

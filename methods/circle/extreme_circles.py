@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from methods._registry import register
-from methods._result import radial_distances, zone_result
+from methods.circle.results import zone_result
+from methods.result_base import radial_distances
 from methods._validation import check_choice, check_positive
 from methods.circle import _zone as z
 from methods.circle._frame import Frame

@@ -8,7 +8,7 @@ from methods._frame import dot
 from methods import _simplex as simplex
 from methods._errors import InvalidInputError
 from methods._registry import register
-from methods._result import circle_result
+from methods.circle.results import circle_result
 from methods._validation import check_choice, check_positive, check_vector
 from methods.circle import _stationarity as stationarity
 from methods.circle._frame import Frame, algebraic_start

@@ -6,7 +6,7 @@ import numpy as np
 from methods._frame import dot
 
 from methods._registry import register
-from methods._result import circle_result
+from methods.circle.results import circle_result
 from methods._validation import check_positive, check_vector
 from methods.circle import _stationarity as stationarity
 from methods.circle._frame import Frame

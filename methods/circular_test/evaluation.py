@@ -29,7 +29,7 @@ import numpy as np
 
 import methods
 from methods._errors import InvalidInputError
-from methods._result import CircularTestFit
+from methods.circular_test.results import CircularTestFit
 from methods._validation import validate_points
 
 RADIUS_TOLERANCE = 0.05     # the data's mean radius may differ from the nominal radius by 5 % at most
@@ -139,7 +139,7 @@ def hysteresis(cw, ccw, center, partial=False):
 def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = "lsq",
              conditions=None) -> CircularTestFit:
     """ISO 230-4 figures of a bidirectional test (see the module docstring) as a
-    :class:`~methods._result.CircularTestFit`; lengths in data units."""
+    :class:`~methods.circular_test.results.CircularTestFit`; lengths in data units."""
     if center not in ("lsq", "mz"):
         raise InvalidInputError(f"center must be 'lsq' or 'mz', got {center!r}")
     if not (np.isfinite(nominal_radius) and nominal_radius > 0):

@@ -16,7 +16,7 @@ from methods._registry import register
 from methods._compiled import kernels
 from methods._frame import dot, solve3_columns
 from methods.ellipse._geometry import Frame, conic_to_params, normalise_conic
-from methods.ellipse._result import ellipse_result, failed, residuals_from_unit
+from methods.ellipse.results import ellipse_result, failed, residuals_from_unit
 from methods.ellipse._validation import check_distinct_points
 from methods._lazy import lazy_module
 

@@ -25,7 +25,7 @@ from methods._validation import check_choice, check_positive, check_vector
 from methods.circle._frame import kasa_xy
 from methods.ellipse._checks import degenerate_reason, stationarity_probe, sum_of_squares_noise, triangular_by_blocks
 from methods.ellipse._geometry import Frame, orthogonal_residuals, to_local
-from methods.ellipse._result import ellipse_result, failed, history_to_data, residuals_from_unit
+from methods.ellipse.results import ellipse_result, failed, history_to_data, residuals_from_unit
 from methods.ellipse._validation import check_distinct_points
 from methods.ellipse.orthogonal import distance_jacobian
 

@@ -11,7 +11,7 @@ from methods._registry import register
 from methods._validation import check_positive, check_vector
 from methods.ellipse._checks import degenerate_reason, stationarity_probe, sum_of_squares_noise
 from methods.ellipse._geometry import Frame, canonical, orthogonal_residuals
-from methods.ellipse._result import ellipse_result, failed, history_to_data
+from methods.ellipse.results import ellipse_result, failed, history_to_data
 from methods.ellipse._validation import check_distinct_points
 from methods.ellipse.direct import halir_flusser_unit
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from methods._errors import InvalidInputError
 from methods._registry import register
-from methods._result import MagnifyFit
+from methods.magnify.results import MagnifyFit
 from methods._validation import check_choice, check_positive
 from methods.magnify.data import MagnifyInput, continuity, self_intersections, validate
 from methods._lazy import lazy_module

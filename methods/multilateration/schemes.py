@@ -7,7 +7,7 @@ import numpy as np
 
 from methods._errors import InvalidInputError
 from methods._registry import register
-from methods._result import MultilaterationFit
+from methods.multilateration.results import MultilaterationFit
 from methods.multilateration import solvers
 from methods.multilateration.data import MultilaterationData, validate
 

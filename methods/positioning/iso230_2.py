@@ -6,7 +6,7 @@ import numpy as np
 
 from methods._errors import InvalidInputError
 from methods._registry import register
-from methods._result import PositioningFit
+from methods.positioning.results import PositioningFit
 from methods._validation import check_choice
 from methods.positioning.data import PositioningData, validate
 

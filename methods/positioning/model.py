@@ -8,7 +8,7 @@ from numpy.polynomial import polynomial as npoly
 
 from methods._errors import InvalidInputError
 from methods._registry import register
-from methods._result import PositioningFit
+from methods.positioning.results import PositioningFit
 from methods._validation import check_positive
 from methods.positioning.data import PositioningData, validate
 from methods.positioning.iso230_2 import figures

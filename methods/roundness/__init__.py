@@ -5,7 +5,7 @@ from methods.roundness import iso12181  # noqa: F401  (registers the method)
 from methods.roundness.evaluation import REFERENCES, evaluate, filtered_profile, ron_parameters
 from methods.roundness.filter import (ALPHA, STANDARD_CUTOFFS_UPR, UndersampledWarning, dominant_lobes, fft_filter,
                                       gaussian_filter, harmonic_spectrum, parse_cutoff, transmission)
-from methods.roundness.iso12181 import RoundnessFit
+from methods.roundness.results import RoundnessFit
 
 __all__ = ["evaluate", "filtered_profile", "ron_parameters", "REFERENCES", "ALPHA", "STANDARD_CUTOFFS_UPR",
            "UndersampledWarning", "transmission", "fft_filter", "gaussian_filter", "harmonic_spectrum",

@@ -29,7 +29,7 @@ import numpy as np
 
 import methods
 from methods._errors import InvalidInputError
-from methods._result import radial_distances
+from methods.result_base import radial_distances
 from methods._validation import check_choice
 from methods.roundness import filter as rfilter
 

@@ -1,0 +1,141 @@
+"""Circle results: :class:`CircleFit` (a fitted circle) and :class:`ZoneFit` (a circle with the zone of its
+points: minimum zone, MIC, MCC, Chebyshev), their builders and the row columns they declare (centre, radius, zone
+radii, errors against the true centre and radius; :mod:`methods.result_base`)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from methods._frame import is_point_array, point_kernels
+from methods.result_base import (CENTER_COLUMNS, CENTER_ERROR_COLUMNS, FitResult, center_errors, error_columns,
+                                 geometry_columns, number_text, radial_distances)
+
+__all__ = ["CircleFit", "ZoneFit", "circle_result", "zone_result"]
+
+
+@dataclass(kw_only=True)
+class CircleFit(FitResult):
+    """A fitted circle. ``residuals`` are signed radial deviations r_i - R; ``form_error`` is
+    max(r_i) - min(r_i) about ``center`` (the circularity about that centre)."""
+
+    center: tuple
+    radius: float
+
+    FAMILY = "circle"
+    COLUMNS = (*FitResult.COLUMNS, *CENTER_COLUMNS, *geometry_columns("radius", check="positive"),
+               *CENTER_ERROR_COLUMNS, *error_columns("radius_error"))
+    SHAPES = {"center": (2,), "residuals": ("n",)}
+
+    def geometry(self) -> dict:
+        return {"center_x": self.center[0], "center_y": self.center[1], "radius": self.radius}
+
+    def truth_errors(self, truth: dict) -> dict:
+        out = center_errors(self.center, truth)
+        if "radius" in truth:
+            out["radius_error"] = self.radius - truth["radius"]
+        return out
+
+    def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
+        return [("center x", f"{number_text(self.center[0])} {unit}"),
+                ("center y", f"{number_text(self.center[1])} {unit}"),
+                ("radius", f"{number_text(self.radius)} {unit}")]
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        # Put the geometry first: it is what a reader looks for.
+        head = {k: d.pop(k) for k in ("method", "center", "radius", "form_error")}
+        return {**head, **d}
+
+    @staticmethod
+    def consistency(result: "CircleFit", points: np.ndarray) -> str | None:
+        """A converged circle's form error and residuals are those of its points about its centre and radius."""
+        with np.errstate(all="ignore"):
+            r = np.hypot(points[:, 0] - result.center[0], points[:, 1] - result.center[1])
+            span = float(r.max() - r.min())
+            scale = float(r.max()) + abs(float(result.radius))
+            tol = 1e-9 * scale + 1e-6 * span
+            if not abs(float(result.form_error) - span) <= tol:
+                return (f"form_error = {float(result.form_error):.10g} but the points' radial span about the "
+                        f"returned centre is {span:.10g}")
+            if result.residuals.shape == r.shape and not np.all(np.abs(result.residuals - (r - result.radius)) <= tol):
+                return "residuals are not the radial distances minus the radius about the returned centre"
+        return None
+
+
+def _compiled_residuals(points, center, radius: float):
+    """(r_i - R, max r - min r) by one compiled sweep (``methods/circle/_ckernels.c`` ``radial``): the same
+    operations as :func:`radial_distances` then ``r - radius``, hence the same bits; None on the NumPy
+    path, for input the kernel does not take, or when a distance leaves (1e-145, 1e150) (np.hypot then)."""
+    ck = point_kernels()
+    if ck is None or not is_point_array(points):
+        return None
+    out = np.empty(points.shape[0])
+    r_min, r_max, _, outside = ck.radial(points, center[0], center[1], radius, out)
+    if outside or not out.size:
+        return None
+    return out, r_max - r_min
+
+
+def circle_result(points: np.ndarray, center, radius: float, *, converged: bool, message: str,
+                  iterations=None, nfev=None, history=None, extra=None) -> CircleFit:
+    """Build a :class:`CircleFit`, computing residuals and form error from the data in data units."""
+    xc, yc, radius = float(center[0]), float(center[1]), float(radius)
+    center = (xc, yc)
+    ok_geometry = math.isfinite(xc) and math.isfinite(yc) and math.isfinite(radius)
+    residuals = _compiled_residuals(points, center, radius) if ok_geometry else None
+    if residuals is not None:
+        residuals, form_error = residuals
+    else:
+        with np.errstate(over="ignore", invalid="ignore"):  # a degenerate circle far away: NaN/inf, no warning
+            r = radial_distances(points, center)
+        with np.errstate(over="ignore", invalid="ignore"):
+            form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
+        residuals = r - radius
+    return CircleFit(center=center, radius=radius, form_error=form_error, residuals=residuals,
+                     converged=bool(converged and ok_geometry), iterations=iterations, nfev=nfev,
+                     history=list(history) if history else [], message=message,
+                     extra=dict(extra) if extra else {})
+
+
+@dataclass(kw_only=True)
+class ZoneFit(CircleFit):
+    """A circle with the zone of the points about its centre (minimum zone, MIC, MCC, Chebyshev).
+
+    ``inner_radius``/``outer_radius`` are the smallest/largest radial distance about ``center``;
+    ``form_error`` = outer - inner; ``contacts`` = {"outer": [...], "inner": [...]} are the indices
+    of the points on the circles that determine (and certify) the solution."""
+
+    inner_radius: float
+    outer_radius: float
+    contacts: dict
+
+    COLUMNS = (*CircleFit.COLUMNS, *geometry_columns("inner_radius", "outer_radius", check="nonnegative"))
+
+    def geometry(self) -> dict:
+        return {**super().geometry(), "inner_radius": self.inner_radius, "outer_radius": self.outer_radius}
+
+    def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
+        return [*super().report_lines(unit), ("inner radius", f"{number_text(self.inner_radius)} {unit}"),
+                ("outer radius", f"{number_text(self.outer_radius)} {unit}"),
+                ("contacts", f"outer {self.contacts['outer']}, inner {self.contacts['inner']} (point indices)")]
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        head = {k: d.pop(k) for k in ("method", "center", "radius", "inner_radius", "outer_radius",
+                                      "form_error", "contacts")}
+        return {**head, **d}
+
+
+def zone_result(points: np.ndarray, center, radius: float, contacts: dict, *, converged: bool, message: str,
+                iterations=None, nfev=None, history=None, extra=None) -> ZoneFit:
+    """Build a :class:`ZoneFit`; the zone radii come from all points about ``center`` (the final check)."""
+    base = circle_result(points, center, radius, converged=converged, message=message, iterations=iterations,
+                         nfev=nfev, history=history, extra=extra)
+    r = base.residuals + base.radius
+    ok = np.isfinite(r).all()
+    return ZoneFit(**{f.name: getattr(base, f.name) for f in fields(base)},
+                   inner_radius=float(r.min()) if ok else float("nan"),
+                   outer_radius=float(r.max()) if ok else float("nan"),
+                   contacts={k: [int(i) for i in v] for k, v in contacts.items()})

@@ -1,0 +1,132 @@
+"""Ellipse results: :class:`EllipseFit`, its builder (residuals, form error, conic and the paper's angle
+solutions from (xc, yc, a, b, theta)) and the row columns it declares (centre, semi-axes, angle and their errors
+against the truth; :mod:`methods.result_base`)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from methods.ellipse._geometry import canonical, orthogonal_residuals, paper_gamma_solutions, params_to_conic
+from methods.result_base import (CENTER_COLUMNS, CENTER_ERROR_COLUMNS, FitResult, center_errors, error_columns,
+                                 geometry_columns, number_text)
+
+__all__ = ["EllipseFit", "ellipse_result"]
+
+
+@dataclass(kw_only=True)
+class EllipseFit(FitResult):
+    """A fitted ellipse. ``semi_axes`` = (a, b) with a >= b; ``angle`` = direction of the a axis in
+    radians, in [0, pi); ``conic`` = (A, B, C, D, E, F) of A x^2 + B xy + C y^2 + D x + E y + F = 0,
+    normalised to 4AC - B^2 = 1 with A + C > 0; ``residuals`` = signed orthogonal distances
+    (positive outside); ``form_error`` = max - min of them."""
+
+    center: tuple
+    semi_axes: tuple
+    angle: float
+    conic: tuple
+
+    FAMILY = "ellipse"
+    COLUMNS = (*FitResult.COLUMNS, *CENTER_COLUMNS, *geometry_columns("semi_axis_a", "semi_axis_b", check="positive"),
+               *geometry_columns("angle", quantity="angle"), *CENTER_ERROR_COLUMNS,
+               *error_columns("semi_axis_a_error", "semi_axis_b_error"),
+               *error_columns("angle_error", quantity="angle"))
+    SHAPES = {"center": (2,), "semi_axes": (2,), "conic": (6,), "residuals": ("n",)}
+
+    def geometry(self) -> dict:
+        return {"center_x": self.center[0], "center_y": self.center[1], "semi_axis_a": self.semi_axes[0],
+                "semi_axis_b": self.semi_axes[1], "angle": self.angle}
+
+    def truth_errors(self, truth: dict) -> dict:
+        out = center_errors(self.center, truth)
+        if "semi_axes" in truth:
+            out["semi_axis_a_error"] = self.semi_axes[0] - truth["semi_axes"][0]
+            out["semi_axis_b_error"] = self.semi_axes[1] - truth["semi_axes"][1]
+            out["angle_error"] = float((self.angle - truth["angle"] + np.pi / 2) % np.pi - np.pi / 2)
+        return out
+
+    def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
+        a, b = number_text(self.semi_axes[0]), number_text(self.semi_axes[1])
+        return [("center x", f"{number_text(self.center[0])} {unit}"),
+                ("center y", f"{number_text(self.center[1])} {unit}"),
+                ("semi-axes", f"a = {a} {unit}, b = {b} {unit}"),
+                ("angle", f"{number_text(self.angle)} rad ({number_text(math.degrees(self.angle))}°, direction of a)")]
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        d = super().to_dict(residuals)
+        head = {k: d.pop(k) for k in ("method", "center", "semi_axes", "angle", "conic", "form_error")}
+        return {**head, **d}
+
+    @staticmethod
+    def consistency(result: "EllipseFit", points: np.ndarray) -> str | None:
+        """A converged ellipse keeps its declared form: a >= b, angle in [0, pi), form error = the span of its
+        residuals."""
+        a, b = float(result.semi_axes[0]), float(result.semi_axes[1])
+        if not a >= b:
+            return f"semi_axes = ({a:.10g}, {b:.10g}): a must be >= b"
+        if not 0.0 <= float(result.angle) < math.pi:
+            return f"angle = {float(result.angle):.10g} rad must lie in [0, pi)"
+        d = result.residuals
+        if d.size:
+            span = float(d.max() - d.min())
+            if not abs(float(result.form_error) - span) <= 1e-9 * (a + span) + 1e-6 * span:
+                return f"form_error = {float(result.form_error):.10g} but its residuals span {span:.10g}"
+        return None
+
+
+def _conic(p):
+    """The data-unit conic and the paper's eq. 23-25 values, or NaN with the reason when the coefficients are
+    not representable in float64 (e.g. 1/a^2 underflows for semi-axes near 1e150 and beyond)."""
+    with np.errstate(all="ignore"):
+        try:
+            conic = params_to_conic(p)
+        except ValueError:
+            conic = None
+        if conic is not None and np.isfinite(conic).all():
+            return conic, {"paper_gamma_solutions": paper_gamma_solutions(conic)}
+    return np.full(6, np.nan), {"conic": "not representable in float64 at this scale (coefficients over- or underflow); "
+                                         "use center, semi_axes and angle"}
+
+
+def ellipse_result(points, params, *, converged: bool, message: str, iterations=None, nfev=None,
+                   history=None, extra=None, residuals=None) -> EllipseFit:
+    """An :class:`EllipseFit` from (xc, yc, a, b, theta) in data units; residuals are the signed
+    orthogonal distances of every point (closest points solved in the ellipse's frame), or ``residuals``
+    when the method already has them for this ellipse."""
+    p = canonical(params)
+    if not (np.isfinite(p).all() and p[3] > 0):
+        return failed(points, f"no valid ellipse: parameters {p.tolist()}", iterations=iterations, nfev=nfev)
+    if residuals is None:
+        residuals, _ = orthogonal_residuals(points[:, 0], points[:, 1], p, with_phi=False)
+    d = residuals
+    conic, conic_extra = _conic(p)
+    extra = {**(extra or {}), **conic_extra}
+    return EllipseFit(center=(float(p[0]), float(p[1])), semi_axes=(float(p[2]), float(p[3])), angle=float(p[4]),
+                      conic=tuple(float(c) for c in conic), form_error=float(d.max() - d.min()), residuals=d,
+                      converged=bool(converged), iterations=iterations, nfev=nfev, history=list(history or []),
+                      message=message, extra=extra)
+
+
+def residuals_from_unit(frame, p_unit) -> np.ndarray:
+    """Signed orthogonal distances in data units, solved once in the unit frame (no overflow or underflow
+    at any scale; the unit-frame coordinates carry no more rounding than the data's)."""
+    d, _ = orthogonal_residuals(frame.x, frame.y, p_unit, with_phi=False)
+    d *= frame.scale
+    return d
+
+
+def history_to_data(history, scale: float, power: int):
+    """Objective values (unit frame) in data units (length^power), or None when scale^power over- or
+    underflows (the history then stays in the unit frame and the result says so)."""
+    with np.errstate(over="ignore", under="ignore"):
+        factor = np.float64(scale) ** power
+    if not (np.isfinite(factor) and factor > 0):
+        return None
+    return [float(h * factor) for h in history]
+
+
+def failed(points, message: str, **kw) -> EllipseFit:
+    nan = float("nan")
+    return EllipseFit(center=(nan, nan), semi_axes=(nan, nan), angle=nan, conic=(nan,) * 6, form_error=nan,
+                      residuals=np.full(len(points), nan), converged=False, message=message, **kw)

@@ -1,0 +1,429 @@
+"""The result contract every family builds on: the base result class, the declaration of a row column (unit,
+tolerance, check, error against the truth), the registry of the families' result classes and the gate every result
+passes before it becomes a row of the benchmark (:func:`check_result`).
+
+A family owns its result classes in its own package (``methods/<family>/results.py``): each class declares
+
+* ``FAMILY``  -- the method family whose contract it is (``"circle"``: every circle method returns a
+  ``CircleFit`` or a subclass);
+* ``COLUMNS`` -- the :class:`Column` s its rows have (name, quantity and unit, what a converged result
+  must satisfy, the tolerance ``python -m experiments.verify`` allows on another CPU, whether it is an error
+  against the truth);
+* ``SHAPES``  -- the shapes of its array-like fields (``"n"``: one entry per data point);
+* ``consistency(result, data)`` -- what a converged result must agree with in its data (None: it does).
+
+The engine, the summary and verify read these declarations here (:func:`row_columns`, :func:`tolerances`,
+:func:`truth_error_columns`), which finds the built-in families by their folders (:func:`load_families`) and a
+plugin's classes as subclasses of :class:`FitResult`; this module names no family. Methods and plugins import the
+result classes and builders from :mod:`methods.results`, which re-exports this module and every family's.
+"""
+from __future__ import annotations
+
+import importlib
+import json
+import math
+import pkgutil
+from dataclasses import dataclass, field, fields
+from functools import lru_cache
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+
+def jsonable(value):
+    """numpy scalars/arrays and non-finite floats as plain JSON values (NaN/inf -> None), for a result's
+    ``to_dict``."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    return value
+
+
+def number_text(v) -> str:
+    """A number as a person reads it in a result's ``report_lines``: 10 significant digits, "nan" for a
+    non-finite value, "-" for None."""
+    if v is None:
+        return "-"
+    v = float(v)
+    return f"{v:.10g}" if math.isfinite(v) else "nan"
+
+
+def center_errors(center, truth: dict) -> dict:
+    """Signed components and distance of a fitted centre from the true one (none without a true centre): the
+    ``truth_errors`` of every family with a planar centre."""
+    if "center" not in truth:
+        return {}
+    dx, dy = center[0] - truth["center"][0], center[1] - truth["center"][1]
+    return {"center_error_x": dx, "center_error_y": dy, "center_error": float(np.hypot(dx, dy))}
+
+
+def radial_distances(points: np.ndarray, center) -> np.ndarray:
+    """Distances r_i of the points from ``center`` (vectorised; the circle results and the roundness evaluation
+    measure with it); exact to rounding at any float64 scale (np.hypot, free of under/overflow, is used when a
+    squared distance would leave the normal range)."""
+    dx = points[:, 0] - center[0]
+    dy = points[:, 1] - center[1]
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        r = dx * dx
+        r += dy * dy
+        np.sqrt(r, out=r)
+    if r.size and not (1e-145 < r.min() and r.max() < 1e150):
+        r = np.hypot(dx, dy)
+    return r
+
+
+# ---------------------------------------------------------------- column declarations
+
+
+class Tolerance(NamedTuple):
+    """How far a re-computed value may lie from the committed one: |new - old| <= atol + rtol * |old|
+    (rtol = atol = 0: exact). ``why`` is the one-line justification from the method's resolution."""
+
+    rtol: float
+    atol: float
+    why: str
+
+
+EXACT = Tolerance(0.0, 0.0, "an identity, a status or a count of a deterministic method: must be identical")
+#: Geometric fits stop at a step of <= 1e-12 (Gauss-Newton, LM, Powell hybrid; unit-frame coordinates) or are
+#: closed forms / convex programs solved to 1e-9 relative gap; a different CPU changes the last bits of the BLAS
+#: reductions (about 1e-16 relative per operation, amplified by the condition number, below 1e3 for the data sets
+#: here), so 1e-9 relative leaves a margin of three decades over the observed differences.
+GEOMETRY = Tolerance(1e-9, 1e-12, "fits converge to ~1e-12 relative in the unit frame; 1e-9 covers CPU rounding")
+#: Errors against the truth are differences of two numbers of the data's size: their absolute resolution is that
+#: of the fitted geometry (1e-9 relative of lengths of order 1 to 1e3 data units -> 1e-9 absolute for unit-sized
+#: data, 1e-6 for the 1000-mm machine-tool data: atol 1e-9 with rtol 1e-6 on the error itself).
+ERRORS = Tolerance(1e-6, 1e-9, "a difference of two fitted lengths: absolute resolution of the fit (1e-9 data units)")
+
+#: quantity -> the unit a person reads: lengths are in the data's unit (mm for the machine-tool data)
+UNITS = {"length": "mm", "angle": "rad", "count": "", "ratio": "", "time": "s"}
+
+
+class Column(NamedTuple):
+    """One row column a result class declares.
+
+    ``quantity``: ``"length"`` (data units, mm for the machine-tool data), ``"angle"`` (rad), ``"count"``,
+    ``"ratio"``; ``check``: what a converged result's value must be (``"finite"``, ``"positive"``,
+    ``"nonnegative"``; ``""``: may be NaN, e.g. a figure a family does not define); ``truth_error``: an error
+    against the truth whose bias and RMSE the summary reports."""
+
+    name: str
+    quantity: str
+    tolerance: Tolerance | None
+    check: str = "finite"
+    truth_error: bool = False
+
+    @property
+    def unit(self) -> str:
+        return UNITS.get(self.quantity, "")
+
+
+def geometry_columns(*names, check="finite", quantity="length") -> tuple[Column, ...]:
+    """Columns of fitted geometry (lengths unless ``quantity`` says otherwise), verified to :data:`GEOMETRY`."""
+    return tuple(Column(n, quantity, GEOMETRY, check) for n in names)
+
+
+def error_columns(*names, quantity="length", summary=True) -> tuple[Column, ...]:
+    """Errors against the truth, verified to :data:`ERRORS`; ``summary``: the summary reports their bias and RMSE."""
+    return tuple(Column(n, quantity, ERRORS, "", truth_error=summary) for n in names)
+
+
+#: the columns of a fitted planar centre and of its errors against the truth (circles, ellipses, circular tests)
+CENTER_COLUMNS = geometry_columns("center_x", "center_y")
+CENTER_ERROR_COLUMNS = (*error_columns("center_error_x", "center_error_y", summary=False),
+                        *error_columns("center_error"))
+
+
+class DeclarationError(ValueError):
+    """A result class that declares a column another class declares already, with another quantity (unit),
+    tolerance or summary role: a row column has one declaration."""
+
+
+@dataclass(kw_only=True)
+class FitResult:
+    """Fields shared by every method's result (cf. scipy's ``OptimizeResult``), and the one interface the
+    engine, the metrics and the CLI read a result through (no family is recognised by its attributes):
+
+    * :meth:`geometry` -- the fitted geometry as named row columns (lengths in data units, angles in rad);
+    * :meth:`truth_errors` -- the errors of that geometry against a known truth;
+    * :meth:`report_lines` -- (label, text with unit) lines the CLI prints for that geometry.
+
+    ``form_error`` (in data units) and ``residuals`` have one meaning per family: each family's class says which.
+    ``history`` holds the objective per iteration of iterative methods in data units; ``extra`` holds
+    method-specific diagnostics.
+    """
+
+    method: str = ""
+    form_error: float = float("nan")
+    residuals: np.ndarray = field(default_factory=lambda: np.empty(0))
+    converged: bool
+    iterations: int | None = None
+    nfev: int | None = None
+    history: list = field(default_factory=list)
+    message: str = ""
+    runtime_s: float = float("nan")
+    params: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+
+    #: the family whose contract this class is (None: a base class)
+    FAMILY = None
+    #: the row columns of a fit of this class (its geometry, errors against the truth, and these two)
+    COLUMNS = (Column("form_error", "length", GEOMETRY, "nonnegative"),
+               Column("residual_rms", "length", GEOMETRY, "nonnegative"))
+    #: array-like fields and their shapes ("n": one entry per data point); checked by :func:`check_result`
+    SHAPES = {}
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        _check_declarations(cls)
+
+    def geometry(self) -> dict:
+        """The fitted geometry as row columns (none for a family without a fitted curve)."""
+        return {}
+
+    def truth_errors(self, truth: dict) -> dict:
+        """Errors of :meth:`geometry` against ``truth`` (keys the family knows; others are ignored)."""
+        return {}
+
+    def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
+        """(label, text) lines of the fitted geometry for a person to read, every length in ``unit`` (the
+        data's unit: the CLI converts every input to mm), angles in rad."""
+        return []
+
+    def to_dict(self, residuals: bool = True) -> dict:
+        """The JSON-ready dict the CLI prints (``residuals=False`` leaves the per-point array out)."""
+        out = {}
+        for f in fields(self):
+            if f.name == "residuals" and not residuals:
+                continue
+            out[f.name] = jsonable(getattr(self, f.name))
+        return out
+
+    @staticmethod
+    def consistency(result, data) -> str | None:
+        """What a converged result must agree with in its data (None: it does); checked by :func:`check_result`
+        with the declarations of the result's family."""
+        return None
+
+
+# ------------------------------------------------------- the registry: what the engine, summary and verify read
+
+#: the module of a built-in family's result classes: ``methods/<family>/results.py``
+RESULTS_MODULE = "results"
+_families_loaded = False
+
+
+@lru_cache(maxsize=None)
+def family_modules() -> tuple[str, ...]:
+    """The result modules of the built-in families: every package of ``methods`` holding a ``results`` module,
+    in the order of their names (a new family folder with a ``results.py`` is found with no other edit)."""
+    root = Path(__file__).resolve().parent
+    return tuple(f"{__package__}.{p.name}.{RESULTS_MODULE}"
+                 for p in sorted(pkgutil.iter_modules([str(root)]), key=lambda p: p.name)
+                 if p.ispkg and not p.name.startswith("_") and (root / p.name / f"{RESULTS_MODULE}.py").is_file())
+
+
+def load_families() -> None:
+    """Import the result modules of the built-in families once (by name: they import this module), so that
+    the registry knows every family before a column, a tolerance or a contract is read."""
+    global _families_loaded
+    if _families_loaded:
+        return
+    _families_loaded = True
+    try:
+        for name in family_modules():
+            importlib.import_module(name)
+        for cls in _classes_so_far():  # a plugin's class defined before the families were loaded
+            if cls.__module__ not in family_modules():
+                _check_declarations(cls)
+    except BaseException:
+        _families_loaded = False
+        raise
+
+
+def result_classes() -> list[type]:
+    """:class:`FitResult` and every subclass defined so far: the built-in families' (in the order of
+    :func:`family_modules`, parents before children), then those of loaded plugins in definition order."""
+    load_families()
+    return _classes_so_far()
+
+
+def _classes_so_far() -> list[type]:
+    out, todo = [], [FitResult]
+    while todo:
+        cls = todo.pop(0)
+        if cls not in out:
+            out.append(cls)
+            todo.extend(cls.__subclasses__())
+    order = {name: i for i, name in enumerate(family_modules())}
+    rank = {cls: (0 if cls is FitResult else 1 + order.get(cls.__module__, len(order)), i) for i, cls in enumerate(out)}
+    return sorted(out, key=rank.__getitem__)
+
+
+def contract(family: str) -> type | None:
+    """The result class a method of ``family`` must return (the most general class declaring that
+    ``FAMILY``; a built-in family's before a plugin's), or None for a family that declares none (any
+    :class:`FitResult` then)."""
+    for cls in result_classes():
+        if cls.__dict__.get("FAMILY") == family:
+            return cls
+    return None
+
+
+def row_columns() -> dict[str, Column]:
+    """Every row column a result class declares, by name (first declaration wins: a built-in family's over a
+    plugin's)."""
+    out: dict[str, Column] = {}
+    for cls in result_classes():
+        for col in cls.COLUMNS:
+            out.setdefault(col.name, col)
+    return out
+
+
+def _declared_as(col: Column) -> str:
+    tol = "not compared" if col.tolerance is None else f"rtol {col.tolerance.rtol:g}, atol {col.tolerance.atol:g}"
+    return f"{col.quantity} ({tol}{', an error against the truth' if col.truth_error else ''})"
+
+
+def _check_declarations(cls: type) -> None:
+    """Refuse a class whose ``COLUMNS`` redeclare a column of another class with another quantity, tolerance or
+    summary role (its ``check`` may differ: the gate applies the family's). Run when the class is defined (against
+    the classes defined so far; a plugin's class defined before the built-in families is checked again when they
+    are loaded): the declaration that counts is the first in :func:`result_classes`' order (a built-in family's
+    before a plugin's)."""
+    classes = _classes_so_far()
+    earlier = classes[:classes.index(cls)] if cls in classes else classes
+    for col in cls.__dict__.get("COLUMNS", ()):
+        owner = next((c for c in earlier if any(d.name == col.name for d in c.COLUMNS)), None)
+        if owner is None:
+            continue
+        first = next(d for d in owner.COLUMNS if d.name == col.name)
+        same_tolerance = (first.tolerance is None) == (col.tolerance is None) and (
+            first.tolerance is None or first.tolerance[:2] == col.tolerance[:2])
+        if not (first.quantity == col.quantity and first.truth_error == col.truth_error and same_tolerance):
+            raise DeclarationError(
+                f"{cls.__module__}.{cls.__qualname__} declares the column {col.name!r} as {_declared_as(col)}, but "
+                f"{owner.__module__}.{owner.__qualname__} declares it as {_declared_as(first)}: a row column has one "
+                f"declaration; reuse it or give the new column another name")
+
+
+def truth_error_columns() -> tuple[str, ...]:
+    """The errors against the truth whose bias and RMSE the summary reports, in declaration order."""
+    return tuple(name for name, col in row_columns().items() if col.truth_error)
+
+
+def tolerances() -> dict[str, Tolerance | None]:
+    """The verification tolerance of every declared row column."""
+    return {name: col.tolerance for name, col in row_columns().items()}
+
+
+# ---------------------------------------------------------------- the gate before a result becomes a row
+
+
+def _is_real(v) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_))
+
+
+def _describe(v) -> str:
+    if isinstance(v, np.ndarray):
+        return f"an array of shape {v.shape}"
+    text = repr(v)
+    return f"{type(v).__name__} {text[:40] + '...' if len(text) > 40 else text}"
+
+
+def _value_problem(name: str, v, check: str, converged: bool) -> str | None:
+    if not _is_real(v):
+        return f"{name} must be a number, got {_describe(v)}"
+    v = float(v)
+    if not converged or not check:
+        return None
+    if not math.isfinite(v):
+        return f"{name} = {v} is not finite in a converged result"
+    if check == "positive" and not v > 0:
+        return f"{name} = {v:.10g} must be > 0"
+    if check == "nonnegative" and not v >= 0:
+        return f"{name} = {v:.10g} must be >= 0"
+    return None
+
+
+def _shape_problem(name: str, value, shape: tuple, n: int | None) -> str | None:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return f"{name} must be numbers of shape {shape}, got {_describe(value)}"
+    want = tuple(n if s == "n" else s for s in shape)
+    if any(s is None for s in want):
+        want = tuple(a if w is None else w for a, w in zip(arr.shape, want)) if arr.ndim == len(want) else want
+    if arr.shape != want:
+        return f"{name} must have shape {want}, got {arr.shape}"
+    return None
+
+
+def check_result(result, data=None) -> str | None:
+    """The gate every result passes before it becomes a row (None: it passes; else the reason, one line).
+
+    Checks the contract of the result's family (:func:`contract` of the family of ``result.method``):
+    the class; ``converged`` a bool, ``iterations``/``nfev`` None or counts, ``message`` a string; every
+    declared column a number, and in a converged result finite and of the declared sign (radius > 0, form
+    error >= 0); every declared shape (``"n"``: one per point of ``data``); ``extra`` JSON-serialisable;
+    for circles, the form error and residuals recomputed from ``data`` about the returned centre (a method
+    cannot claim a form error its points do not have)."""
+    if not isinstance(result, FitResult):
+        return f"the method returned {_describe(result)}, not a methods.results.FitResult"
+    if not isinstance(result.method, str):
+        return f"method must be the method id, got {_describe(result.method)}"
+    family = str(result.method).partition(".")[0]
+    cls = contract(family)
+    if cls is not None and not isinstance(result, cls):
+        return f"a {family} method must return a {cls.__name__}, got a {type(result).__name__}"
+    if not isinstance(result.converged, (bool, np.bool_)):
+        return f"converged must be True or False, got {_describe(result.converged)}"
+    converged = bool(result.converged)
+    for name in ("iterations", "nfev"):
+        v = getattr(result, name)
+        if v is not None and not (isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_)) and v >= 0):
+            return f"{name} must be None or a count >= 0, got {_describe(v)}"
+    if not isinstance(result.message, str):
+        return f"message must be a string, got {_describe(result.message)}"
+    if not isinstance(result.extra, dict) or not isinstance(result.params, dict):
+        return "extra and params must be dicts"
+    try:
+        json.dumps(jsonable(result.extra), allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        return f"extra is not JSON-serialisable ({type(exc).__name__}: {str(exc)[:80]})"
+    n = None
+    if isinstance(data, np.ndarray) and data.ndim == 2:
+        n = data.shape[0]
+    for name, shape in {**type(result).SHAPES, **(cls or type(result)).SHAPES}.items():
+        problem = _shape_problem(name, getattr(result, name), shape, n)
+        if problem:
+            return problem
+    try:
+        values = {"form_error": result.form_error, **result.geometry()}
+    except Exception as exc:  # a geometry the class cannot even read out
+        return f"the geometry cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
+    rules = cls or type(result)  # the family's declarations win over a subclass's own
+    declared = {**{c.name: c for c in type(result).COLUMNS}, **{c.name: c for c in rules.COLUMNS}}
+    problems = [_value_problem(name, v, declared[name].check if name in declared else "finite", converged)
+                for name, v in values.items()]
+    if any(problems):
+        return "; ".join(p for p in problems if p)
+    residuals = result.residuals
+    if not isinstance(residuals, np.ndarray) or residuals.dtype.kind not in "fiu":
+        return f"residuals must be a numeric array, got {_describe(residuals)}"
+    if converged and residuals.size and not np.isfinite(residuals).all():
+        return "residuals are not finite in a converged result"
+    if converged and n:
+        return (cls or type(result)).consistency(result, data)
+    return None

@@ -223,14 +223,16 @@ def test_report_tex_refuses_missing_files_and_captionless_figures(tmp_path):
             {"kind": "figure", "file": "f.png"}]}]}])
 
 
-@needs_pdflatex
-def test_multirow_grouping_compiles(tmp_path):
-    df = pd.DataFrame({"scenario": ["six stations, noise"] * 3 + ["four stations"] * 2,
+def test_group_values_are_heading_rows():
+    """The values of group columns are an italic heading row above each group, not a column."""
+    df = pd.DataFrame({"scenario": ["six", "six", "six", "four", "four"], "stations": ["1", "1", "2", "2", "2"],
                        "method": ["a", "b", "c", "a", "b"], "error": [1.5, 2.25, 30.0, 0.001, 4e-6]})
-    frag = latex_table(df, [C("scenario", group=True, width="3cm"), C("method"), C("error", unit="µm")],
-                       caption="grouped with multirow", label="mr", group_style="multirow")
-    assert frag.count(r"\multirow") == 2
-    _assert_compiles_within_page([frag], tmp_path, "mr")
+    frag = latex_table(df, [C("scenario", group=True), C("stations", group=True), C("method"), C("error", unit="µm")],
+                       caption="grouped", label="g")
+    body = frag.split("\\midrule\n")[1].split("\\bottomrule")[0].splitlines()
+    headings = [r.split("\\itshape ")[1].split("}")[0] for r in body if "\\itshape" in r]
+    assert headings == ["six; 1", "six; 2", "four; 2"] and body.count("\\addlinespace") == 2
+    assert [r.split(" & ")[0] for r in body if " & " in r] == ["a", "b", "c", "a", "b"]
 
 
 def _grouped(n_groups=17, per_group=2):
@@ -239,11 +241,11 @@ def _grouped(n_groups=17, per_group=2):
                          "error": np.linspace(0.1, 2.0, n_groups * per_group)})
 
 
-def test_group_heading_rows_count_towards_a_long_table():
-    """34 data rows under 17 group headings print 51 rows: too tall for a float, so a longtable."""
+def test_long_table_repeats_its_head_with_the_words_of_the_report():
     frag = latex_table(_grouped(), [C("scenario", group=True), C("method"), C("error", unit="mm")],
-                       caption="grouped", label="g")
-    assert "\\begin{longtable}" in frag
+                       caption="grouped", label="g", long=True)
+    assert "\\begin{longtable}" in frag and "Table \\thetable{} (continued)" in frag
+    assert "continued on the next page" in frag and frag.count("\\caption") == 1
 
 
 @needs_pdflatex

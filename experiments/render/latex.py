@@ -1,11 +1,11 @@
 """LaTeX table fragments that compile and fit a one-column A4 page (2.5 cm margins, 16 cm text width).
 
-``latex_table(df, columns, caption=..., label=...)`` returns a ``table`` (or ``longtable``) fragment using
-booktabs rules, siunitx ``S`` columns for numbers (``table-format`` measured from the formatted data, exponents
-as ``4.07e8`` which siunitx prints as 4.07 × 10⁸), ``p{}`` columns for long text, units in the headers as
-``\\si{}``, and repeated leading keys either as group heading rows or ``\\multirow``. Captions and headers may
-contain ``$...$`` maths. The preamble the fragments need is ``PREAMBLE`` (the ``paper/report.tex`` template
-includes it).
+``latex_table(df, columns, caption=..., label=...)`` returns a ``table`` (or ``longtable``) fragment written by
+pandas' ``Styler.to_latex``: booktabs rules, siunitx ``S`` columns for numbers (``table-format`` measured here
+from the formatted data, exponents as ``4.07e8`` which siunitx prints as 4.07 × 10⁸), ``p{}`` columns for long
+text (widths and font size chosen here so that the table fits), units in the headers as ``\\si{}``, repeated
+leading keys as group heading rows. Captions and headers may contain ``$...$`` maths. The preamble the
+fragments need is ``PREAMBLE`` (the ``paper/report.tex`` template includes it).
 """
 from __future__ import annotations
 
@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+
+from pandas.io.formats.style import Styler
 
 from experiments.render.text import escape_text, human_unit, si_unit, tex
 
@@ -52,8 +54,9 @@ class Column:
     """How one DataFrame column is shown. ``digits``: significant digits of numbers (default 3);
     ``decimals`` fixes the decimals instead; ``exponent`` forces (True) or forbids (False) 4.07e8 form
     (default: chosen from the data's range); ``exact``: each number as given (0.029807 stays 0.029807,
-    without padding zeros that would claim digits the source does not have); ``width``: a ``p{}`` width for text (e.g. '4cm'); ``group``:
-    repeated consecutive values shown once; ``missing``: what an empty cell shows (explain it in ``notes``)."""
+    without padding zeros that would claim digits the source does not have); ``width``: a ``p{}`` width for text
+    (e.g. '4cm'); ``group``: the column's values as heading rows above each run of equal values, not as a column;
+    ``missing``: what an empty cell shows (explain it in ``notes``)."""
     name: str
     header: str | None = None
     unit: str | None = None
@@ -185,7 +188,7 @@ def _format_column(df: pd.DataFrame, col: Column) -> _Formatted:
         cells = [f"{{{tex(col.missing)}}}" if v is None else v for v in strs]
         chars = max(_format_chars(fmt), len(col.missing))
         header, hchars = _header(col, stacked=True)
-        return _Formatted(cells, f"S[table-format={fmt}]", f"{{{header}}}", max(chars, hchars), numeric=True)
+        return _Formatted(cells, f"S[table-format={fmt}]", header, max(chars, hchars), numeric=True)   # braced by Styler
     texts = ["" if (v is None or (isinstance(v, float) and math.isnan(v))) else str(v) for v in s]
     cells = [tex(t) if t else tex(col.missing) for t in texts]
     chars = max([len(t) for t in texts] + [1])
@@ -235,32 +238,28 @@ def _fit_text_widths(df, columns, size_pt):
 
 def latex_table(df: pd.DataFrame, columns: list[Column] | None = None, *, caption: str, label: str,
                 notes: list[str] | None = None, size: str | None = None, long: bool | None = None,
-                max_rows: int = 35, group_style: str = "rows") -> str:
-    """A booktabs table fragment for ``df``.
+                max_rows: int = 35) -> str:
+    """A booktabs table fragment for ``df``, serialised by pandas' ``Styler.to_latex`` (``siunitx=True``,
+    ``hrules=True``) from the cells and column format this module chooses.
 
-    ``columns``: the ``Column`` of each shown column, in order (default: every column, kinds from dtypes).
+    ``columns``: the ``Column`` of each shown column, in order (default: every column, kinds from dtypes); the
+    values of the ``group`` columns are not a column but an italic heading row above each group of rows.
     ``size``: 'small', 'footnotesize' or 'scriptsize' (default: the largest whose estimated width fits).
-    ``long``: a ``longtable`` split over pages (default: when more than ``max_rows`` printed rows, group
-    heading rows included).
-    ``group_style``: repeated values of ``group`` columns as heading rows spanning the table ('rows', the
-    column disappears) or as ``\\multirow`` cells ('multirow'). ``notes``: lines under the table (e.g. what
-    an empty cell means).
+    ``long``: a ``longtable`` split over pages (default: when more than ``max_rows`` printed rows, heading
+    rows included).
+    ``notes``: lines under the table (e.g. what an empty cell means).
     """
     if columns is None:
         columns = [Column(str(c)) for c in df.columns]
     missing = [c.name for c in columns if c.name not in df.columns]
     if missing:
         raise ValueError(f"latex_table {label!r}: no column(s) {missing} in the table (it has {list(df.columns)})")
-    if group_style not in ("rows", "multirow"):
-        raise ValueError(f"group_style must be 'rows' or 'multirow', got {group_style!r}")
     df = df.reset_index(drop=True)
-    groups = [c for c in columns if c.group]
-    shown = [c for c in columns if not (c.group and group_style == "rows")]
     sizes = [s for s in _SIZES if size is None or s[0] == size]
     if not sizes:
         raise ValueError(f"size must be one of {[s for s, _ in _SIZES]}, got {size!r}")
     for size_name, size_pt in sizes:
-        fitted = _fit_text_widths(df, shown, size_pt)
+        fitted = _fit_text_widths(df, [c for c in columns if not c.group], size_pt)
         fmts = [_format_column(df, c) for c in fitted]
         if estimated_width_pt([f.est_chars for f in fmts], size_pt) <= FIT_BUDGET_PT:
             break
@@ -268,62 +267,64 @@ def latex_table(df: pd.DataFrame, columns: list[Column] | None = None, *, captio
         raise TableTooWide(f"table {label!r} is about {estimated_width_pt([f.est_chars for f in fmts], size_pt):.0f} pt "
                            f"wide at \\{size_name} (the page has {TEXT_WIDTH_PT:.0f} pt): split its columns into two "
                            "tables, shorten its headers or draw it as a figure")
+    groups = [c.name for c in columns if c.group]
+    keys = [tuple(k) for k in df[groups].itertuples(index=False)] if groups else []
+    starts = {i: k for i, k in enumerate(keys) if i == 0 or k != keys[i - 1]}   # rows that open a group
+    long = len(df) + len(starts) > max_rows if long is None else long
+    cells = pd.DataFrame({j: f.cells for j, f in enumerate(fmts)})
+    styler = Styler(cells).hide(axis="index").format_index(lambda j: fmts[j].header, axis=1)
     spec = "@{}" + "".join(f.spec for f in fmts) + "@{}"
-    table_pt = min(estimated_width_pt([f.est_chars for f in fmts], size_pt), FIT_BUDGET_PT) - 12.0
-    head = " & ".join(f.header for f in fmts) + r" \\"
-    ncol = len(fmts)
-
-    body: list[str] = []
-    prev_key = None
-    for i in range(len(df)):
-        if groups and group_style == "rows":
-            key = tuple(df.at[i, g.name] for g in groups)
-            if key != prev_key:
-                if prev_key is not None:
-                    body.append(r"\addlinespace")
-                text = "; ".join(tex(k) for k in key)
-                body.append(f"\\multicolumn{{{ncol}}}{{@{{}}>{{\\raggedright\\arraybackslash}}p{{{table_pt:.0f}pt}}@{{}}}}"
-                            f"{{\\itshape {text}}} \\\\")
-                prev_key = key
-        cells = []
-        for f, c in zip(fmts, fitted):
-            cell = f.cells[i]
-            if c.group and group_style == "multirow":
-                if i > 0 and df.at[i, c.name] == df.at[i - 1, c.name]:
-                    cell = ""
-                else:
-                    run = 1
-                    while i + run < len(df) and df.at[i + run, c.name] == df.at[i, c.name]:
-                        run += 1
-                    width = c.width and "=" or "*"
-                    cell = f"\\multirow[t]{{{run}}}{{{width}}}{{{cell}}}" if run > 1 else cell
-            cells.append(cell)
-        body.append(" & ".join(cells) + r" \\")
-    # a longtable when the printed rows (data rows and group heading rows) would not fit a page as a float
-    long = sum(1 for b in body if b != r"\addlinespace") > max_rows if long is None else long
-    note_text = ""
-    if notes:
-        note_text = "\n".join(tex(n) for n in notes)
-
-    cap = f"\\caption{{{tex(caption)}}}\\label{{tab:{label}}}"
+    width_pt = min(estimated_width_pt([f.est_chars for f in fmts], size_pt), FIT_BUDGET_PT) - 12.0
+    note_text = "\n".join(tex(n) for n in notes or [])
     if long:
-        lines = [f"\\begingroup\\{size_name}", f"\\begin{{longtable}}{{{spec}}}", cap + r" \\", r"\toprule", head,
-                 r"\midrule", r"\endfirsthead",
-                 f"\\multicolumn{{{ncol}}}{{@{{}}l}}{{\\itshape Table \\thetable{{}} (continued)}} \\\\", r"\toprule",
-                 head, r"\midrule", r"\endhead", r"\midrule",
-                 f"\\multicolumn{{{ncol}}}{{@{{}}r}}{{\\itshape continued on the next page}} \\\\", r"\endfoot",
-                 r"\bottomrule", r"\endlastfoot", *body, r"\end{longtable}"]
+        body = styler.to_latex(column_format=spec, hrules=True, siunitx=True, environment="longtable",
+                               caption=tex(caption), label=f"tab:{label}")
+        body = _group_rows(_continued(body, tex(caption), len(fmts)), r"\endlastfoot", starts, len(fmts), width_pt)
+        lines = [f"\\begingroup\\{size_name}", body.rstrip()]
         if note_text:
             lines += [r"\vspace{-0.5\baselineskip}", r"\noindent\begin{minipage}{\linewidth}\footnotesize", note_text,
                       r"\end{minipage}\par\medskip"]
-        lines += [r"\endgroup", ""]
-        return "\n".join(lines)
-    lines = [r"\begin{table}[htbp]", r"\centering", f"\\{size_name}", cap, f"\\begin{{tabular}}{{{spec}}}",
-             r"\toprule", head, r"\midrule", *body, r"\bottomrule", r"\end{tabular}"]
+        return "\n".join(lines + [r"\endgroup", ""])
+    body = styler.to_latex(column_format=spec, hrules=True, siunitx=True)
+    lines = [r"\begin{table}[htbp]", r"\centering", f"\\{size_name}",
+             f"\\caption{{{tex(caption)}}}\\label{{tab:{label}}}",
+             _group_rows(body, r"\midrule", starts, len(fmts), width_pt).rstrip()]
     if note_text:
         lines += [r"\par\smallskip", r"\noindent\begin{minipage}{\linewidth}\footnotesize", note_text, r"\end{minipage}"]
-    lines += [r"\end{table}", ""]
-    return "\n".join(lines)
+    return "\n".join(lines + [r"\end{table}", ""])
+
+
+def _group_rows(latex: str, head_end: str, starts: dict, ncol: int, width_pt: float) -> str:
+    """Styler's table with a heading row (the group columns' values, italic, across the table) above each row
+    that opens a group, and a little space between groups: what ``Styler`` cannot write. Styler writes one
+    line per body row, after the line ``head_end``."""
+    if not starts:
+        return latex
+    lines = latex.split("\n")
+    first = lines.index(head_end) + 1
+    out = lines[:first]
+    for i, line in enumerate(lines[first:], start=0):
+        if i in starts:
+            if not line.endswith(" \\\\"):
+                raise RuntimeError(f"pandas' Styler wrote row {i} over more than one line: {line!r}")
+            out += ([r"\addlinespace"] if i else []) + [
+                f"\\multicolumn{{{ncol}}}{{@{{}}>{{\\raggedright\\arraybackslash}}p{{{width_pt:.0f}pt}}@{{}}}}"
+                f"{{\\itshape {'; '.join(tex(k) for k in starts[i])}}} \\\\"]
+        out.append(line)
+    return "\n".join(out)
+
+
+def _continued(longtable: str, caption: str, ncol: int) -> str:
+    """Styler's longtable with this report's continuation lines: "Table N (continued)" above the repeated head
+    (Styler repeats the whole caption) and "continued on the next page" below a broken page."""
+    marks = {f"\\caption[]{{{caption}}} \\\\\n": f"\\multicolumn{{{ncol}}}{{@{{}}l}}{{\\itshape Table \\thetable{{}} (continued)}} \\\\\n",
+             f"\\multicolumn{{{ncol}}}{{r}}{{Continued on next page}} \\\\\n":
+             f"\\multicolumn{{{ncol}}}{{@{{}}r}}{{\\itshape continued on the next page}} \\\\\n"}
+    for old, new in marks.items():
+        if longtable.count(old) != 1:
+            raise RuntimeError(f"pandas' Styler longtable has changed: no line {old.strip()!r} to replace")
+        longtable = longtable.replace(old, new)
+    return longtable
 
 
 def standalone_document(fragments: list[str], *, title: str | None = None) -> str:
@@ -336,14 +337,7 @@ def standalone_document(fragments: list[str], *, title: str | None = None) -> st
     return "\n".join(parts) + "\n"
 
 
-def columns_from_units(df: pd.DataFrame, units: dict[str, str] | None = None, **common) -> list[Column]:
-    """Columns for every column of ``df``, with units from ``units`` (a convenience for declared tables)."""
-    units = units or {}
-    return [Column(str(c), unit=units.get(c), **common) for c in df.columns]
-
-
-__all__ = ["Column", "TableTooWide", "compile_pdf", "PREAMBLE", "TEXT_WIDTH_PT", "latex_table", "standalone_document", "columns_from_units",
-           "human_unit"]
+__all__ = ["Column", "TableTooWide", "compile_pdf", "PREAMBLE", "TEXT_WIDTH_PT", "latex_table", "standalone_document", "human_unit"]
 
 
 def compile_pdf(tex_source: str, workdir, *, name: str = "doc", pdflatex: str = "pdflatex",

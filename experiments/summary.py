@@ -1,6 +1,8 @@
 """Per-study summary tables (CSV and Markdown) from the long results table."""
 from __future__ import annotations
 
+from functools import reduce
+
 import numpy as np
 import pandas as pd
 
@@ -13,8 +15,9 @@ ERROR_COLUMNS = result_base.truth_error_columns()
 
 def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
     """One row per group: runs, share converged, median form error, bias and RMSE of the errors
-    against the truth, median iterations and time."""
+    against the truth (the columns the result classes declare as ``truth_error``), median iterations and time."""
     by = [c for c in by if c in df.columns]
+    declared = result_base.row_columns()
     groups = []
     for key, g in df.groupby(by, sort=False, dropna=False):
         ok = g[g["status"] == "ok"] if "status" in g else g
@@ -26,12 +29,13 @@ def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
         for col in result_base.truth_error_columns():
             if col in g and ok[col].notna().any():
                 v = ok[col].astype(float)
-                if col == "center_error":
-                    row["center_rmse"] = float(np.sqrt(np.mean(v ** 2)))
-                    if "center_error_x" in ok:
-                        row["center_bias"] = float(np.hypot(ok["center_error_x"].mean(), ok["center_error_y"].mean()))
+                name = col.replace("_error", "")
+                parts = declared[col].components
+                if parts:  # the length of an error vector: its bias is the length of the mean vector
+                    row[f"{name}_rmse"] = float(np.sqrt(np.mean(v ** 2)))
+                    if all(p in ok for p in parts):
+                        row[f"{name}_bias"] = float(reduce(np.hypot, [ok[p].mean() for p in parts]))
                 else:
-                    name = col.replace("_error", "")
                     row[f"{name}_bias"] = float(v.mean())
                     row[f"{name}_rmse"] = float(np.sqrt(np.mean(v ** 2)))
         if "iterations" in g and ok["iterations"].notna().any():

@@ -116,13 +116,15 @@ class Column(NamedTuple):
     ``quantity``: ``"length"`` (data units, mm for the machine-tool data), ``"angle"`` (rad), ``"count"``,
     ``"ratio"``; ``check``: what a converged result's value must be (``"finite"``, ``"positive"``,
     ``"nonnegative"``; ``""``: may be NaN, e.g. a figure a family does not define); ``truth_error``: an error
-    against the truth whose bias and RMSE the summary reports."""
+    against the truth whose bias and RMSE the summary reports; ``components``: the columns of an error vector
+    whose length this column is (the summary's bias is then the length of their mean, not the mean length)."""
 
     name: str
     quantity: str
     tolerance: Tolerance | None
     check: str = "finite"
     truth_error: bool = False
+    components: tuple[str, ...] = ()
 
     @property
     def unit(self) -> str:
@@ -142,7 +144,8 @@ def error_columns(*names, quantity="length", summary=True) -> tuple[Column, ...]
 #: the columns of a fitted planar centre and of its errors against the truth (circles, ellipses, circular tests)
 CENTER_COLUMNS = geometry_columns("center_x", "center_y")
 CENTER_ERROR_COLUMNS = (*error_columns("center_error_x", "center_error_y", summary=False),
-                        *error_columns("center_error"))
+                        Column("center_error", "length", ERRORS, "", truth_error=True,
+                               components=("center_error_x", "center_error_y")))
 
 
 class DeclarationError(ValueError):
@@ -311,7 +314,8 @@ def _check_declarations(cls: type) -> None:
         first = next(d for d in owner.COLUMNS if d.name == col.name)
         same_tolerance = (first.tolerance is None) == (col.tolerance is None) and (
             first.tolerance is None or first.tolerance[:2] == col.tolerance[:2])
-        if not (first.quantity == col.quantity and first.truth_error == col.truth_error and same_tolerance):
+        if not (first.quantity == col.quantity and first.truth_error == col.truth_error and same_tolerance
+                and first.components == col.components):
             raise DeclarationError(
                 f"{cls.__module__}.{cls.__qualname__} declares the column {col.name!r} as {_declared_as(col)}, but "
                 f"{owner.__module__}.{owner.__qualname__} declares it as {_declared_as(first)}: a row column has one "

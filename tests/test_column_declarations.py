@@ -35,7 +35,8 @@ def current_table() -> dict:
     families = sorted({c.__dict__["FAMILY"] for c in _builtin_classes() if c.__dict__.get("FAMILY")})
     return {
         "family_columns": {name: {"quantity": col.quantity, "unit": col.unit, "check": col.check,
-                                  "truth_error": col.truth_error, "tolerance": _tolerance(col.tolerance)}
+                                  "truth_error": col.truth_error, "tolerance": _tolerance(col.tolerance),
+                                  **({"components": list(col.components)} if col.components else {})}
                            for name, col in ((n, columns[n]) for n in builtin_columns)},
         "truth_error_columns": [c for c in results.truth_error_columns() if c in builtin_columns],
         "summary_error_columns": [c for c in summary.ERROR_COLUMNS if c in builtin_columns],

@@ -22,7 +22,6 @@ import re
 import sys
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from experiments import config as configs
@@ -176,7 +175,7 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     wrote (the next build deletes only those files). User text is text: see ``experiments.render.page``."""
     from markupsafe import Markup
     from experiments.render.document import write_report_tex
-    from experiments.render.page import STYLE, Document, markdown_table, md_escape
+    from experiments.render.page import Document, markdown_table, md_escape
     from experiments.render.report_tables import html_table
     from experiments.verdict import study_verdicts
 
@@ -378,7 +377,7 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
                    {e[2]: e[4] for e in entries if e[4] is not None})
     written.append("explorer.html")
     write_atomic(out / "report.md", doc.markdown())
-    write_atomic(out / "report.html", doc.html("fitbench comparison report", STYLE))
+    write_atomic(out / "report.html", doc.html("fitbench comparison report"))
     write_report_tex(out, tex_sections, provenance=provenance_text, abstract=abstract)
     written += ["report.md", "report.html", "report.tex"]
     _write_build_manifest(out, written)

@@ -5,8 +5,8 @@ knows its Markdown and its HTML. Nothing is ever parsed back out of Markdown: a 
 the builder added it with the path of a file it wrote itself, so user text (titles, captions, findings, data-set
 labels) can never name a file to read. User text goes into prose through :func:`md_escape` (every Markdown
 special backslash-escaped, line breaks folded) and the prose becomes HTML through markdown-it-py with raw HTML
-and images disabled; the page itself is a jinja2 template with autoescaping, so every user string is text in
-the HTML, attributes included.
+and images disabled; the page itself is the jinja2 template ``templates/report.html.j2`` with autoescaping,
+so every user string is text in the HTML, attributes included.
 """
 from __future__ import annotations
 
@@ -56,6 +56,15 @@ def _markdown() -> MarkdownIt:
 
 
 _MD = _markdown()
+TEMPLATES = Path(__file__).with_name("templates")
+
+
+def html_template(name: str) -> jinja2.Template:
+    """An HTML page template of ``templates/``, autoescaping every value (user text is text, attributes
+    included); a missing value is an error, not an empty string."""
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)), autoescape=True,
+                             undefined=jinja2.StrictUndefined)
+    return env.get_template(name)
 
 
 def prose_html(markdown: str) -> Markup:
@@ -108,36 +117,9 @@ class Document:
     def markdown(self) -> str:
         return "\n\n".join(p.md for p in self.parts) + "\n"
 
-    def html(self, title: str, style: str = "") -> str:
-        env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
-        return env.from_string(PAGE).render(title=title, style=Markup(style), parts=self.parts)
-
-
-PAGE = """<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
-<title>{{ title }}</title>
-<style>{{ style }}</style>
-<script>window.addEventListener('load',function(){var im=document.images,ok=0;
-for(var i=0;i<im.length;i++){if(im[i].complete&&im[i].naturalWidth>0)ok++;}
-document.body.setAttribute('data-images',ok+'/'+im.length);});</script>
-</head><body>
-{% for part in parts %}{{ part.html }}
-{% endfor %}</body></html>
-"""
-
-STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222;line-height:1.4;"
-         "overflow-wrap:anywhere}"
-         ".table-box{overflow-x:auto;max-width:100%}"
-         "table{border-collapse:collapse;margin:1em 0;font-size:0.85em}th,td{border:1px solid #bbb;padding:3px 6px}"
-         "td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}"
-         "caption{caption-side:top;text-align:left;font-size:0.95em;padding-bottom:4px;"
-         "max-width:calc(min(100vw, 1100px) - 4em)}"   # a wide table scrolls in its box; its caption stays in view
-         "th{background:#eee;overflow-wrap:normal}tbody th{text-align:left;min-width:9em}img{max-width:100%;height:auto}figure{margin:1.5em 0}"
-         "figcaption{font-size:0.9em;color:#333}"
-         "nav#toc{background:#f6f6f6;padding:0.5em 1em;border:1px solid #ddd}nav#toc ul{margin:0.2em 0}"
-         ".verdict{border-left:4px solid #1a9850;padding:0.2em 0.8em;background:#f3faf5}"
-         ".verdict.differ{border-left-color:#d73027;background:#fdf3f2}"
-         ".older{border-left:4px solid #fc8d59;padding:0.2em 0.8em;background:#fff8f0}")
+    def html(self, title: str) -> str:
+        """The page (``templates/report.html.j2``, style sheet included)."""
+        return html_template("report.html.j2").render(title=title, parts=self.parts)
 
 
 def escape_html(text) -> Markup:

@@ -25,8 +25,9 @@ from pathlib import Path
 import pandas as pd
 
 from experiments import config as configs
-from experiments.provenance import REPO, write_atomic
+from experiments.provenance import REPO
 from methods import InvalidInputError
+from methods.files import write_atomic
 
 # ---------------------------------------------------------------- figures
 

@@ -144,3 +144,27 @@ def test_report_module_names_no_study():
     found = [n for n in names if ("_" in n and re.search(rf"\b{re.escape(n)}\b", source))
              or re.search(rf"['\"`]{re.escape(n)}['\"`]|\b{re.escape(n)}\s*[=(.\[]", source)]
     assert not found, f"experiments/report.py names the studies {found}"
+
+
+def test_the_report_writes_files_only_through_the_one_atomic_writer():
+    """experiments/report.py and experiments/render/ write every file with methods.files (write_atomic, or a
+    figure with fitbench.plots.save_atomic, which uses methods.files.atomic_path): no direct write_text,
+    write_bytes, savefig, shutil copy or open() for writing."""
+    import ast
+    from conftest import REPO
+    import methods.files
+    from experiments import report
+    assert report.write_atomic is methods.files.write_atomic
+    direct = {"write_text", "write_bytes", "savefig"}
+    found = []
+    for path in [REPO / "experiments" / "report.py", *sorted((REPO / "experiments" / "render").glob("*.py"))]:
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.Call):
+                continue
+            name = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
+            mode = [a.value for a in node.args[1:2] + [k.value for k in node.keywords if k.arg == "mode"]
+                    if isinstance(a, ast.Constant)]
+            shutil = isinstance(node.func, ast.Attribute) and getattr(node.func.value, "id", "") == "shutil"
+            if name in direct or shutil or (name == "open" and any(set(str(m)) & set("wax+") for m in mode)):
+                found.append(f"{path.name}:{node.lineno} {name}")
+    assert not found, found

@@ -177,7 +177,7 @@ def write_explorer(out: Path, rankings: dict, tables: list[dict], folders: dict[
     page = html_template("explorer.html.j2").render(
         title=title, plotly=Markup(get_plotlyjs()), data=data, tables=table_blocks(tables),
         script=Markup((TEMPLATES / "explorer.js").read_text(encoding="utf-8")))
-    from experiments.provenance import write_atomic
+    from methods.files import write_atomic
     path = out / "explorer.html"
     write_atomic(path, page)
     return path

@@ -352,7 +352,8 @@ def compile_pdf(tex_source: str, workdir, *, name: str = "doc", pdflatex: str = 
     from pathlib import Path
     workdir = Path(workdir)
     workdir.mkdir(parents=True, exist_ok=True)
-    (workdir / f"{name}.tex").write_text(tex_source, encoding="utf-8")
+    from methods.files import write_atomic
+    write_atomic(workdir / f"{name}.tex", tex_source, fsync=False)
     proc = None
     for _ in range(runs):
         proc = subprocess.run([pdflatex, "-no-shell-escape", "-recorder", "-interaction=nonstopmode", "-halt-on-error",

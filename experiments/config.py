@@ -1,7 +1,6 @@
 """Study configs: one TOML file per study in ``experiments/configs/`` (or any path), validated on load."""
 from __future__ import annotations
 
-import importlib
 import tomllib
 from pathlib import Path
 
@@ -34,20 +33,17 @@ def _read(path: Path, where: str) -> dict:
         raise ConfigError(f"{where}: not valid TOML ({exc})") from None
 
 
-def _study_module(cfg: dict, where: str):
-    """The module of the config's study kind (None while ``kind`` is missing or not a string: the structure
-    check then says so); it declares the study's own config keys (``CONFIG_SCHEMA``)."""
-    kind = cfg.get("kind")
+def _study(cfg: dict, where: str):
+    """The :class:`experiments.study.Study` of the config's kind (None while ``kind`` is not a string: the
+    structure check then says so); it declares the study's own config keys (``config_schema``)."""
+    from experiments.study import study_of
+    kind = cfg.get("kind", "grid")
     if not isinstance(kind, str):
         return None
-    if not kind.isidentifier():
-        raise ConfigError(f"{where}: kind: unknown kind {kind!r} (a module in experiments/studies/)")
     try:
-        return importlib.import_module(f"experiments.studies.{kind}")
-    except ModuleNotFoundError as exc:
-        if exc.name != f"experiments.studies.{kind}":
-            raise
-        raise ConfigError(f"{where}: kind: unknown kind {kind!r} (a module in experiments/studies/)") from None
+        return study_of(kind)
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
 
 
 def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
@@ -66,8 +62,9 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
         path, stem = configs[name], name
     where = path.name
     cfg = _read(path, where)
-    study = _study_module(cfg, where)
-    schema.check_structure(cfg, where, getattr(study, "CONFIG_SCHEMA", None) if study else None)
+    study = _study(cfg, where)
+    schema.check_structure(cfg, where, study.config_schema if study else None)
+    cfg.setdefault("kind", "grid")  # no kind: the generic benchmark (the base Study)
     if cfg["name"] != stem:
         raise ConfigError(f"{where}: name = {cfg['name']!r} must match the file name {stem!r}")
     quick_table = cfg.pop("quick", {})
@@ -79,17 +76,12 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
         cfg["seed"] = seed
     cfg.setdefault("seed", 0)
     schema.check_values(cfg, where)
-    if not hasattr(study, "tasks"):  # the generic grid: data sets x methods
-        for key in ("datasets", "methods"):
-            if not cfg.get(key):
-                raise ConfigError(f"{where}: {key}: missing; the study kind {cfg['kind']!r} needs at least one [[{key}]] table")
     cfg["_where"] = where
     cfg["_dir"] = str(path.resolve().parent)
     cfg["_quick"] = quick
+    study.validate(cfg, where)
     from experiments.study import validate as validate_declarations
     validate_declarations(cfg, where)
-    if hasattr(study, "validate"):
-        study.validate(cfg, where)
     return cfg
 
 

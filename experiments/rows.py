@@ -7,7 +7,6 @@ engine. Its code is part of every row's cache key (``experiments.engine.task_cod
 """
 from __future__ import annotations
 
-import importlib
 import json
 import math
 import signal
@@ -19,6 +18,7 @@ import numpy as np
 import methods
 from datasets import sources
 from experiments.metrics import metrics
+from experiments.studies import study_of
 from experiments.timing import time_call
 from methods import InvalidInputError
 
@@ -171,19 +171,15 @@ def failed_row(task: dict, status: str, message: str) -> dict:
 
 
 def run_task(task: dict, row_timeout: float | None = None) -> dict:
-    """Worker entry point: the study module's ``execute`` if it has one, else the generic fit. A row that
+    """Worker entry point: the row of the task's study (``Study.execute``: the generic fit by default). A row that
     runs longer than ``row_timeout`` seconds is ``timeout``; one that raises SystemExit or
     KeyboardInterrupt (not the run's own interrupt) is ``crashed``; a kernel or module that cannot be
     loaded makes it ``unavailable``."""
     try:
         with _time_limit(row_timeout):
-            study = importlib.import_module(f"experiments.studies.{task['kind']}")
+            study = study_of(task["kind"])
             try:
-                if hasattr(study, "execute"):
-                    row = study.execute(task)
-                else:
-                    points, truth = load_data(task["dataset"], task["seed"], task["stream"])
-                    row = fit_row(task, points, truth)
+                row = study.execute(task)  # the generic fit unless the study kind has its own rows
             except ImportError as exc:
                 row = {**base_row(task), "status": "unavailable", "message": f"{type(exc).__name__}: {exc}"}
             except Exception as exc:

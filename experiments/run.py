@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import hashlib
-import importlib
 import io
 import json
 import os
@@ -59,13 +58,12 @@ def check_summary_by(cfg: dict, study, tasks: list[dict]) -> None:
     by = cfg.get("summary_by")
     if not by:
         return
-    known = set(engine.RESULT_COLUMNS)
+    own = study.row_columns(cfg)
+    if own is None:
+        return  # its columns are known only after it ran: checked then (finish)
+    known = set(engine.RESULT_COLUMNS) | set(own)
     for t in tasks[:10000]:
         known |= set(engine.base_row(t))
-    if hasattr(study, "execute"):
-        if not hasattr(study, "ROW_COLUMNS"):
-            return  # its columns are known only after it ran: checked then (finish)
-        known |= set(study.ROW_COLUMNS)
     unknown = [c for c in by if c not in known]
     if unknown:
         raise configs.ConfigError(f"{cfg['_where']}: summary_by: no row will have the column(s) {', '.join(unknown)}; "
@@ -113,11 +111,9 @@ def _limited(tasks, cfg: dict, max_rows: int):
 
 def check_size(cfg: dict, max_rows: int) -> None:
     """Refuse a study above ``max_rows`` from its grid sizes alone, before anything is expanded (a study
-    that multiplies its rows declares ``count_rows(cfg)``; its task list is also counted while it is made)."""
+    that multiplies its rows says so in ``Study.count_rows``; its task list is also counted while it is made)."""
     configs.check_rows(cfg, configs.count_rows(cfg), max_rows)
-    study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
-    if hasattr(study, "count_rows"):
-        configs.check_rows(cfg, study.count_rows(cfg), max_rows)
+    configs.check_rows(cfg, contract.study_of(cfg["kind"]).count_rows(cfg), max_rows)
 
 
 def check_ready(cfg: dict, max_rows: int) -> None:
@@ -125,15 +121,12 @@ def check_ready(cfg: dict, max_rows: int) -> None:
     (:func:`check_size`) and its first task (a study whose data are not available here, such as a reference
     folder named by an environment variable, says so now, not after the studies before it ran)."""
     check_size(cfg, max_rows)
-    study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
-    next(iter(task_source(cfg, study, max_rows)()), None)
+    next(iter(task_source(cfg, contract.study_of(cfg["kind"]), max_rows)()), None)
 
 
 def task_source(cfg: dict, study, max_rows: int):
     """A function returning a fresh iterable of the study's prepared tasks (index and cache key), lazily."""
-    if hasattr(study, "tasks"):
-        return lambda: engine.iter_prepared(_limited(study.tasks(cfg), cfg, max_rows))
-    return lambda: _limited(engine.iter_grid_tasks(cfg, cfg["_where"], keyed=True), cfg, max_rows)
+    return lambda: _limited(study.prepared_tasks(cfg), cfg, max_rows)
 
 
 def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
@@ -169,7 +162,7 @@ def write_results(df, path: Path, block: int = 20000) -> str:
 def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", scheduler=None, force=False,
               seed=None, log=print, max_rows=configs.MAX_ROWS, row_timeout=None) -> Path:
     cfg = configs.load(name, quick=quick, seed=seed)
-    study = importlib.import_module(f"experiments.studies.{cfg['kind']}")
+    study = contract.study_of(cfg["kind"])
     target = confined(out, cfg["name"])
     log(f"== {cfg['name']}: {cfg['title']}" + (" [quick]" if quick else ""))
     check_size(cfg, max_rows)

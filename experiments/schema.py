@@ -4,7 +4,7 @@ ONE PLACE TO EXTEND:
 * a new top-level key of every study (e.g. ``report``, ``tables``, ``figures``): add it to
   :data:`TOP_LEVEL`;
 * a key only one kind of study uses (``rounding``, ``scenarios``, ...) is declared by that study's module as
-  ``CONFIG_SCHEMA`` = {key: JSON Schema}, merged here when a config of that kind is checked: adding a study
+  ``Study.config_schema`` = {key: JSON Schema}, merged here when a config of that kind is checked: adding a study
   needs no edit of this file (its ``validate`` checks the values the schema cannot express);
 * a new kind of data source in ``[[datasets]]`` (e.g. ``file = "trace.csv"``, a plugin source): add its
   key to :data:`DATASET_SOURCES` with the schema of the entry's own keys, and register the check of its
@@ -101,7 +101,7 @@ TOP_LEVEL: dict[str, dict] = {
                        "args": {"type": "object"}, "width": {"type": "number", "exclusiveMinimum": 0},
                        "height": {"type": "number", "exclusiveMinimum": 0}, "where": {"type": "object"}}}},
 }
-REQUIRED = ("name", "title", "kind")
+REQUIRED = ("name", "title")
 NOT_IN_QUICK = ("name", "kind", "default", "quick")
 
 
@@ -114,10 +114,10 @@ def _dataset_schema() -> dict:
 
 def config_schema(study_keys: dict | None = None) -> dict:
     """The JSON Schema of a whole config file (its ``[quick]`` table: the same keys, none required), with the
-    keys its study kind declares (``study_keys``: the study module's ``CONFIG_SCHEMA``)."""
+    keys its study kind declares (``study_keys``: its ``Study.config_schema``)."""
     clash = set(study_keys or {}) & set(TOP_LEVEL)
     if clash:
-        raise ValueError(f"CONFIG_SCHEMA redefines the common key(s) {', '.join(sorted(clash))}")
+        raise ValueError(f"config_schema redefines the common key(s) {', '.join(sorted(clash))}")
     props = {k: dict(v) for k, v in {**TOP_LEVEL, **(study_keys or {})}.items()}
     props["datasets"] = {**props["datasets"], "items": _dataset_schema()}
     quick = {k: v for k, v in props.items() if k not in NOT_IN_QUICK}
@@ -181,7 +181,7 @@ _Validator = jsonschema.validators.extend(
 
 def check_structure(cfg: dict, where: str, study_keys: dict | None = None) -> None:
     """Raise ConfigError for the first structural problem (unknown key, wrong type, missing table);
-    ``study_keys``: the keys the config's study kind declares (its module's ``CONFIG_SCHEMA``)."""
+    ``study_keys``: the keys the config's study kind declares (its ``Study.config_schema``)."""
     from experiments.engine import ConfigError
     validator = _Validator(config_schema(study_keys))
     errors = sorted(validator.iter_errors(cfg), key=lambda e: (list(map(str, e.absolute_path)), e.validator))

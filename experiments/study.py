@@ -5,7 +5,7 @@ A study is one TOML file (``experiments/configs/NAME.toml``, or any path)::
 
     name = "my_study"                    # = the file name
     title = "Kasa against Gauss-Newton on a short arc"
-    kind = "grid"                        # the generic engine; or a module experiments/studies/KIND.py
+    kind = "grid"                        # the generic engine (also without kind); or experiments/studies/KIND.py
     seed = 7
     repetitions = 20
     summary_by = ["dataset", "data_arc_deg", "method", "params"]   # never data_stream / repetition
@@ -47,11 +47,19 @@ A study is one TOML file (``experiments/configs/NAME.toml``, or any path)::
     file = "noise_kcr.png"
     caption = "..."
 
-Python is needed only for analysis a config cannot express: the study module defines
-``analyse(df, cfg, target, log) -> Analysis`` (tables, figures it saved under ``target``, named values
-and a findings text built from those values); the values also land in ``meta.json['findings']``. A study
-whose numbers need more computation than its rows declares it as tasks (``tasks(cfg)`` + ``execute(task)``),
-so that the engine caches, resumes and parallelises it; ``analyse`` only aggregates rows.
+Python is needed only for what a config cannot express: the module ``experiments/studies/KIND.py`` defines
+one subclass of :class:`Study`, overriding only what differs from the generic benchmark, e.g.::
+
+    class MyStudy(Study):
+        values = ("best_method",)                      # the values its findings may name
+
+        def analyse(self, rows, cfg, target, log):    # tables, figures it saved under target, values, findings
+            best = rows.groupby("method")["radius_error"].apply(lambda s: (s ** 2).mean()).idxmin()
+            return Analysis(values={"best_method": best}, findings=f"{best} has the smallest radius RMSE.")
+
+The values also land in ``meta.json['findings']``. A study whose numbers need more computation than its rows
+declares it as tasks (``tasks(cfg)`` + ``execute(task)``), so that the engine caches, resumes and
+parallelises it; ``analyse`` only aggregates rows.
 
 ``run.py`` writes ``report.json`` (the manifest: sections, numbered later by the report) and one CSV
 per table under ``target/tables/``; everything atomically.
@@ -71,6 +79,7 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
+from experiments import engine
 from experiments.engine import ConfigError
 from experiments.provenance import write_atomic
 from methods.files import atomic_path  # noqa: F401  (the one atomic writer, for writers that take a file name)
@@ -112,6 +121,133 @@ class Analysis:
     figures: list[Figure] = field(default_factory=list)
     values: dict = field(default_factory=dict)
     findings: str = ""
+
+
+# ---------------------------------------------------------------- the study class
+
+class Study:
+    """A kind of study (benchopt's ``Benchmark``/``Objective`` split): what its rows are, how one row is computed,
+    and what the report shows of them. Each module ``experiments/studies/KIND.py`` defines one subclass; a TOML
+    with ``kind = "KIND"`` runs it (no kind, or ``kind = "grid"``: this class as it is, the generic benchmark).
+    Every method has a default, so a subclass overrides only what its study does differently:
+
+    * :attr:`config_schema` -- the config keys only this kind uses ({key: JSON Schema}, merged into the schema);
+    * :meth:`validate` -- the rules the schema cannot express; :meth:`count_rows` -- the rows from the config alone;
+    * :meth:`tasks` -- the tasks (default: data sets x repetitions x methods); :meth:`execute` -- one task's row
+      (default: the generic fit, in a worker);
+    * :meth:`row_columns` -- the columns of its rows, known before the run (declarations are checked against them);
+    * :meth:`analyse` -- tables, figures, named values and findings (default: none of its own; the TOML's
+      ``[[tables]]``/``[[figures]]`` are added to what it returns, or chosen from the metrics when undeclared);
+    * :attr:`values` -- the names of the values its analysis adds (its findings template may use them; None:
+      known only after the run).
+    """
+
+    #: the study kind (the module's name), set by :func:`study_of`
+    kind: str = "grid"
+    #: the config keys only this kind uses: {key: JSON Schema}
+    config_schema: dict = {}
+    #: the names of the named values :meth:`analyse` adds (besides ``n_rows``, ``n_ok``); None: not known before
+    values: tuple[str, ...] | None = ()
+
+    # -- config
+
+    def validate(self, cfg: dict, where: str) -> None:
+        """Raise ConfigError (``FILE: KEY: PROBLEM``) for what the schema cannot check. Default: the generic grid
+        needs data sets and methods."""
+        if not self.own_tasks:
+            for key in ("datasets", "methods"):
+                if not cfg.get(key):
+                    raise ConfigError(f"{where}: {key}: missing; the study kind {cfg['kind']!r} needs at least one "
+                                      f"[[{key}]] table")
+
+    def count_rows(self, cfg: dict) -> int:
+        """An upper bound of the rows from the config alone (nothing expanded). Default: the generic grid's."""
+        from experiments.config import count_rows
+        return count_rows(cfg)
+
+    # -- rows
+
+    @property
+    def own_tasks(self) -> bool:
+        """Whether this kind defines its own :meth:`tasks`."""
+        return type(self).tasks is not Study.tasks
+
+    @property
+    def own_rows(self) -> bool:
+        """Whether this kind builds its own rows (its own :meth:`tasks` or :meth:`execute`)."""
+        return self.own_tasks or type(self).execute is not Study.execute
+
+    def tasks(self, cfg: dict):
+        """The tasks (plain picklable dicts, one row each; see ``experiments.engine``), an iterable read lazily.
+        Default: data sets x repetitions x methods (x their grids)."""
+        return engine.iter_grid_tasks(cfg, cfg["_where"])
+
+    def prepared_tasks(self, cfg: dict):
+        """The tasks with their index and cache key, lazily (what the engine runs)."""
+        if not self.own_tasks:  # the generic grid keys its tasks as it expands them (one identity per pair)
+            return engine.iter_grid_tasks(cfg, cfg["_where"], keyed=True)
+        return engine.iter_prepared(self.tasks(cfg))
+
+    def execute(self, task: dict) -> dict:
+        """One task's row (in a worker). Default: the generic fit of the task's method on its data set."""
+        points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
+        return engine.fit_row(task, points, truth)
+
+    def row_columns(self, cfg: dict) -> dict[str, str] | None:
+        """{column: "number" | "bool" | "text"} its rows will have besides the identity and status columns,
+        from the config alone; None when known only after the run. Default: the generic fit's columns (a kind
+        with its own rows declares its own or None)."""
+        return None if self.own_rows else _generic_columns(cfg)
+
+    # -- analysis
+
+    def analyse(self, rows: pd.DataFrame, cfg: dict, target: Path, log) -> Analysis:
+        """Tables, figures (files it saved under ``target``), named values and findings built from them. Default:
+        the table and the figure chosen from the metrics for what the TOML does not declare."""
+        table, figure = default_declarations(cfg, rows) if not (cfg.get("tables") and cfg.get("figures")) else (None, None)
+        out = Analysis()
+        if table and not cfg.get("tables"):
+            out.tables.append(declared_table(rows, table))
+        if figure and not cfg.get("figures"):
+            out.figures.append(declared_figure(rows, figure, target, 1))
+        return out
+
+
+#: study kind -> (its module, its instance)
+_STUDIES: dict[str, tuple] = {}
+
+
+def study_of(kind: str) -> Study:
+    """The study of ``kind``: the :class:`Study` subclass its module ``experiments.studies.KIND`` defines
+    (found by importing the module; the framework knows no study by name). Raises ConfigError for an unknown
+    kind or a module without exactly one subclass."""
+    import importlib
+    import sys
+    hit = _STUDIES.get(kind)
+    if hit is not None and sys.modules.get(f"experiments.studies.{kind}") is hit[0]:
+        return hit[1]
+    if not isinstance(kind, str) or not kind.isidentifier():
+        raise ConfigError(f"kind: unknown kind {kind!r} (a module in experiments/studies/)")
+    name = f"experiments.studies.{kind}"
+    try:
+        module = importlib.import_module(name)
+    except ModuleNotFoundError as exc:
+        if exc.name != name:
+            raise
+        raise ConfigError(f"kind: unknown kind {kind!r} (a module in experiments/studies/)") from None
+    classes = [c for c in vars(module).values()
+               if isinstance(c, type) and issubclass(c, Study) and c.__module__ == name]
+    if len(classes) != 1:
+        old = [f for f in ("analyse", "tasks", "execute", "validate", "count_rows", "CONFIG_SCHEMA") if f in vars(module)]
+        why = (f"it has module-level {', '.join(old)}: a study is now a class, class {kind.title().replace('_', '')}"
+               f"(experiments.study.Study) with these as methods (docs/experiments.md)" if old and not classes
+               else f"it defines {len(classes)} (one module, one study)")
+        raise ConfigError(f"kind: experiments/studies/{kind}.py must define one subclass of experiments.study.Study; "
+                          f"{why}")
+    study = classes[0]()
+    study.kind = kind
+    _STUDIES[kind] = (module, study)
+    return study
 
 
 # ---------------------------------------------------------------- plot registry
@@ -326,24 +462,26 @@ def _kind(values) -> str:
 
 def declared_columns(cfg: dict) -> dict[str, str] | None:
     """{column: "number" | "bool" | "text"} of the rows a study will write, from its config alone (nothing is
-    expanded): the identity and parameter columns of its tasks, the engine's status columns, the columns
-    the result classes of its methods declare and the timing columns. None for a study that builds its own
-    rows (its module's ``execute``) without declaring them in ``ROW_COLUMNS``."""
-    import importlib
-
-    import methods
+    expanded): the identity and status columns every row has and the columns of its kind
+    (:meth:`Study.row_columns`); None when its kind knows its columns only after the run."""
     try:
-        study = importlib.import_module(f"experiments.studies.{cfg.get('kind')}")
-    except ImportError:
+        study = study_of(cfg.get("kind"))
+    except ConfigError:
+        return None
+    own = study.row_columns(cfg)
+    if own is None:
         return None
     out = {c: "text" for c in ("study", "dataset", "data_stream", "method", "params", "status", "message")}
     out.update(repetition="number", seed="number", converged="bool", iterations="number", nfev="number")
-    if hasattr(study, "execute") or hasattr(study, "tasks"):
-        if not hasattr(study, "ROW_COLUMNS"):
-            return None
-        declared = study.ROW_COLUMNS
-        out.update(declared if isinstance(declared, dict) else dict.fromkeys(declared, "number"))
-        return out
+    out.update(own)
+    return out
+
+
+def _generic_columns(cfg: dict) -> dict[str, str]:
+    """The columns of the generic fit's rows: the data and method parameters, the columns the result classes of
+    its methods declare and the timing columns."""
+    import methods
+    out: dict[str, str] = {}
     values: dict[str, list] = {}
     for entry in cfg.get("datasets", []):
         for k, v in {**entry.get("params", {}), **{k: vs for k, vs in entry.get("grid", {}).items()}}.items():
@@ -372,14 +510,13 @@ def _family_columns(family: str) -> list[str]:
 
 
 def _values_known(cfg: dict) -> set[str] | None:
-    """The named values a findings template may use, when known before the run (a study without its own
-    ``analyse``: the counts every study has); None when its analysis adds values."""
-    import importlib
+    """The named values a findings template may use, when known before the run: the counts every study has and
+    those its kind declares (:attr:`Study.values`); None when its analysis adds values known only after the run."""
     try:
-        study = importlib.import_module(f"experiments.studies.{cfg.get('kind')}")
-    except ImportError:
+        study = study_of(cfg.get("kind"))
+    except ConfigError:
         return None
-    return None if hasattr(study, "analyse") else set(BASE_VALUES)
+    return None if study.values is None else {*BASE_VALUES, *study.values}
 
 
 # ---------------------------------------------------------------- findings: a sandboxed template
@@ -571,19 +708,14 @@ def _plain(v):
     return str(v)
 
 
-def analyse(study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tuple[dict, Analysis]:
-    """Run a study's analysis (its module's ``analyse``, if any) and the TOML's declared tables and figures;
-    return (the named values for meta.json, Analysis)."""
-    analysis = study.analyse(df, cfg, target, log) if hasattr(study, "analyse") else Analysis()
+def analyse(study: Study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tuple[dict, Analysis]:
+    """Run a study's analysis (:meth:`Study.analyse`) and add the TOML's declared tables and figures; return
+    (the named values for meta.json, Analysis)."""
+    analysis = study.analyse(df, cfg, target, log)
     analysis.values = {"n_rows": len(df), "n_ok": int((df["status"] == "ok").sum()), **analysis.values}
     findings = json.loads(json.dumps(analysis.values, default=_plain))  # what meta.json holds
-    tables, figures = list(cfg.get("tables", [])), list(cfg.get("figures", []))
-    if not hasattr(study, "analyse") and not (tables and figures):  # a TOML-only study: defaults for what it omits
-        table, figure = default_declarations(cfg, df)
-        tables = tables or ([table] if table else [])
-        figures = figures or ([figure] if figure else [])
-    analysis.tables += [declared_table(df, t) for t in tables]
-    for f in figures:
+    analysis.tables += [declared_table(df, t) for t in cfg.get("tables", [])]
+    for f in cfg.get("figures", []):
         analysis.figures.append(declared_figure(df, f, target, len(analysis.figures) + 1))
     return findings, analysis
 

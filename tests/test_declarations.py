@@ -120,9 +120,8 @@ def rows_of_a_toml_only_study() -> pd.DataFrame:
 
 
 def test_an_undeclared_toml_study_gets_a_table_and_a_figure_with_units(tmp_path):
-    import importlib
     cfg = configs.load(str(write(tmp_path, "")))
-    study = importlib.import_module("experiments.studies.grid")
+    study = contract.study_of("grid")
     _, analysis = contract.analyse(study, rows_of_a_toml_only_study(), cfg, tmp_path, log=lambda *a: None)
     assert len(analysis.tables) == 1 and len(analysis.figures) == 1
     table = analysis.tables[0]

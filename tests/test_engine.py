@@ -144,7 +144,7 @@ def test_progress_reports_rows_per_second_and_eta(monkeypatch):
 def test_generic_chunks_give_the_rows_of_single_rows(tmp_path):
     """In-process chunks of any size give the same rows as one row at a time."""
     cfg = run.configs.load(str(write_study(tmp_path, reps=5)))
-    make = run.task_source(cfg, run.importlib.import_module("experiments.studies.grid"), 10**6)
+    make = run.task_source(cfg, run.contract.study_of("grid"), 10**6)
     frames = []
     for size, folder in ((1, "a"), (7, "b")):
         store = RowStore(tmp_path / folder / "rows.sqlite", log=lambda *a: None)

@@ -27,7 +27,7 @@ def _study_points(label):
     from experiments import config as C
     from experiments.studies import roundness as rs
     cfg = C.load("roundness", quick=True)
-    for task in rs.tasks(cfg):
+    for task in rs.RoundnessStudy().tasks(cfg):
         if task["dataset"]["label"] == label:
             return rs.load(task["dataset"], task["seed"], task["stream"])
     pytest.fail(f"no roundness quick task labelled {label!r}")

@@ -166,18 +166,17 @@ def test_plugin_method_and_data_source_reach_a_study_and_the_report(tmp_path):
 def test_every_default_study_declares_tables_with_captions_and_findings():
     """Static part of the contract (the quick runs in test_experiments check the rendered manifest): every default
     study either has an ``analyse`` (tables, figures, values, findings) or declares tables with captions and a
-    findings template in its TOML; no study module keeps the removed ``finalize``/``report_tables`` hooks."""
-    import importlib
-
+    findings template in its TOML; no study keeps the removed ``finalize``/``report_tables`` hooks."""
     from experiments import config as configs
     from experiments.run import default_studies
+    from experiments.study import Study, study_of
     names = default_studies()
     assert len(names) >= 9
     for name in names:
         cfg = configs.load(name)
-        module = importlib.import_module(f"experiments.studies.{cfg['kind']}")
-        assert not hasattr(module, "finalize") and not hasattr(module, "report_tables"), name
-        if hasattr(module, "analyse"):
+        study = study_of(cfg["kind"])
+        assert not hasattr(study, "finalize") and not hasattr(study, "report_tables"), name
+        if type(study).analyse is not Study.analyse:
             continue
         assert cfg.get("tables") and all(t.get("caption") for t in cfg["tables"]), name
         assert cfg.get("report", {}).get("findings"), name

@@ -13,51 +13,7 @@ import pandas as pd
 import methods
 from experiments import engine
 from experiments.engine import ConfigError
-from experiments.study import Analysis, Figure, Table, save_csv
-
-#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
-CONFIG_SCHEMA = {
-    "start_distances": {"type": "array", "minItems": 1, "items": {"type": "number", "minimum": 0}},
-    "reference_optimum": {"type": "object", "required": ["default"], "additionalProperties": {"type": "string"}},
-    "start_directions": {"type": "integer", "minimum": 1},
-}
-
-
-def validate(cfg, where):
-    d = cfg.get("start_distances")
-    if not isinstance(d, list) or not d or not all(isinstance(v, (int, float)) and v >= 0 for v in d):
-        raise ConfigError(f"{where}: start_distances must be a list of non-negative numbers, got {d!r}")
-    refs = cfg.get("reference_optimum")
-    if not isinstance(refs, dict) or "default" not in refs:
-        raise ConfigError(f"{where}: reference_optimum must be a table method id -> the method giving the known "
-                          f"optimum of its objective, with a 'default' entry")
-    for r in refs.values():
-        try:
-            methods.get(r)
-        except methods.UnknownMethodError as exc:
-            raise ConfigError(f"{where}: reference_optimum: {exc}") from None
-    k = cfg.get("start_directions")
-    if not isinstance(k, int) or k < 1:
-        raise ConfigError(f"{where}: start_directions must be a positive integer, got {k!r}")
-    for m, _ in engine.expand_methods(cfg, where):
-        if "start" not in methods.get(m).defaults:
-            raise ConfigError(f"{where}: {m} has no 'start' parameter, so it cannot be started far away")
-
-
-def count_rows(cfg):
-    """The rows of the study from its grid sizes (nothing expanded): each run of the grid x distances x
-    directions."""
-    from experiments import config
-    return config.count_rows({**cfg, "repetitions": 1}) * len(cfg["start_distances"]) * cfg["start_directions"]
-
-
-def tasks(cfg):
-    """The tasks, lazily (a generator: the engine counts and expands them a block at a time)."""
-    for t in engine.iter_grid_tasks({**cfg, "repetitions": 1}, cfg["_where"]):
-        for d in cfg["start_distances"]:
-            for k in range(cfg["start_directions"]):
-                yield {**t, "x_start_distance": float(d), "x_start_direction": k,
-                       "x_directions": cfg["start_directions"], "x_reference_optimum": cfg["reference_optimum"]}
+from experiments.study import Analysis, Figure, Study, Table, save_csv
 
 
 def reference_method(cfg_or_task: dict, method_id: str) -> str:
@@ -65,36 +21,6 @@ def reference_method(cfg_or_task: dict, method_id: str) -> str:
     a table method id -> reference id, with a ``default``)."""
     refs = cfg_or_task["x_reference_optimum"] if "x_reference_optimum" in cfg_or_task else cfg_or_task["reference_optimum"]
     return refs.get(method_id, refs["default"])
-
-
-def execute(task):
-    """Fit from the distant start; compare with the known optimum (the reference method of the TOML). The
-    objective values are the method's own: the first ``history`` entry of a restart at each circle."""
-    points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
-    R = truth["radius"]
-    phi = 2 * np.pi * task["x_start_direction"] / task["x_directions"]
-    start = (truth["center"][0] + task["x_start_distance"] * R * np.cos(phi),
-             truth["center"][1] + task["x_start_distance"] * R * np.sin(phi), R)
-    fit_task = {**task, "params": {**task["params"], "start": list(start)}}
-    row = engine.fit_row(fit_task, points, truth)
-    row["params"] = engine.base_row(task)["params"]  # the method's own parameters; the start has its columns
-    row.pop("param_start", None)
-    row["start_x"], row["start_y"], row["start_radius"] = start
-    row["start_distance"] = task["x_start_distance"]
-    row["start_direction_deg"] = float(np.degrees(phi))
-    ref = methods.fit(reference_method(task, task["method"]), points)
-    if row.get("status") in ("ok", "not converged") and "center_x" in row:
-        dist = max(np.hypot(row["center_x"] - ref.center[0], row["center_y"] - ref.center[1]),
-                   abs(row["radius"] - ref.radius))
-        row["distance_to_optimum"] = float(dist)
-        row["success"] = bool(row["status"] == "ok" and dist <= 1e-6 * R)
-        f = _objective_at(task, points, (row["center_x"], row["center_y"], row["radius"]))
-        f_opt = _objective_at(task, points, (*ref.center, ref.radius))
-        if f is not None and f_opt is not None:
-            row["objective_excess"] = f - f_opt
-    else:
-        row["success"] = False
-    return row
 
 
 def _objective_at(task, points, circle) -> float | None:
@@ -119,41 +45,116 @@ def _label(m, p):
     return m + ("" if p == "{}" else " " + p.replace('"', "").replace("{", "").replace("}", ""))
 
 
-def analyse(df, cfg, target, log):
-    """Success tables per arc (success.csv), the redrawn success figure, and which methods always converge."""
-    from experiments.render import figures
+class ConvergenceStudy(Study):
+    """The ``convergence`` study (see the module's docstring)."""
 
-    table = success_table(df)
-    save_csv(table, target / "success.csv", index=False, float_format="%.4g")
-    figures.convergence_success(table, target / "convergence.png")
-    tables = []
-    n_dirs = cfg["start_directions"]
-    data = cfg["datasets"][0].get("params", {})
-    for arc, ta in table.groupby("arc_deg", sort=False):
-        piv = ta.pivot_table(index=["method", "params"], columns="start_distance", values="success_rate", sort=False)
-        log(f"  {arc:.0f}° arc " + " " * 28 + "".join(f"{c:>7g}" for c in piv.columns))
-        for (m, p), vals in piv.iterrows():
-            log(f"    {_label(m, p):<40}" + "".join(f"{v:7.2f}" for v in vals))
-        shown = (piv * 100).round(1)
-        shown.columns = [f"{c:g} R" for c in piv.columns]
-        shown.index = [_label(m, p) for m, p in piv.index]
-        shown = shown.rename_axis("method").reset_index()
-        tables.append(Table(caption=f"Share of runs reaching the optimum of the method's own objective (within 1e-6 R) "
-                                    f"from starts d radii from the true centre, {n_dirs} directions each; synthetic "
-                                    f"circle, {arc:.0f}° arc, N = {data.get('n')}, sigma = {data.get('noise')} R",
-                            data=shown, unit="%"))
-    lab = table.assign(label=[_label(m, p) for m, p in zip(table["method"], table["params"])])
-    worst = lab.groupby("label", sort=False)["success_rate"].min()
-    always = [m for m, v in worst.items() if v == 1.0]
-    far = table["start_distance"].max()
-    values = {"always_converged": always, "largest_start_distance": float(far),
-              "lowest_success_rate": {m: float(v) for m, v in worst.items()}}
-    findings = (f"{len(always)} of {len(worst)} method variants reach their optimum from every start up to {far:g} "
-                f"radii on every arc ({', '.join(always) or 'none'}).")
-    others = [m for m in worst.index if m not in always]
-    if others:
-        findings += " Lowest success rate of the others: " + "; ".join(f"{m} {100 * worst[m]:.0f} %" for m in others) + "."
-    fig = Figure(caption="Share of runs from distant starts that reach the optimum of the method's own objective, "
-                         "against the start distance [radii], synthetic circles (full circle and arc); iterative "
-                         "methods only", file="convergence.png")
-    return Analysis(tables=tables, figures=[fig], values=values, findings=findings)
+    values = None  # its analysis names its values
+
+    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
+    config_schema = {
+        "start_distances": {"type": "array", "minItems": 1, "items": {"type": "number", "minimum": 0}},
+        "reference_optimum": {"type": "object", "required": ["default"], "additionalProperties": {"type": "string"}},
+        "start_directions": {"type": "integer", "minimum": 1},
+    }
+
+    def validate(self, cfg, where):
+        d = cfg.get("start_distances")
+        if not isinstance(d, list) or not d or not all(isinstance(v, (int, float)) and v >= 0 for v in d):
+            raise ConfigError(f"{where}: start_distances must be a list of non-negative numbers, got {d!r}")
+        refs = cfg.get("reference_optimum")
+        if not isinstance(refs, dict) or "default" not in refs:
+            raise ConfigError(f"{where}: reference_optimum must be a table method id -> the method giving the known "
+                              f"optimum of its objective, with a 'default' entry")
+        for r in refs.values():
+            try:
+                methods.get(r)
+            except methods.UnknownMethodError as exc:
+                raise ConfigError(f"{where}: reference_optimum: {exc}") from None
+        k = cfg.get("start_directions")
+        if not isinstance(k, int) or k < 1:
+            raise ConfigError(f"{where}: start_directions must be a positive integer, got {k!r}")
+        for m, _ in engine.expand_methods(cfg, where):
+            if "start" not in methods.get(m).defaults:
+                raise ConfigError(f"{where}: {m} has no 'start' parameter, so it cannot be started far away")
+
+    def count_rows(self, cfg):
+        """The rows of the study from its grid sizes (nothing expanded): each run of the grid x distances x
+        directions."""
+        from experiments import config
+        return config.count_rows({**cfg, "repetitions": 1}) * len(cfg["start_distances"]) * cfg["start_directions"]
+
+    def tasks(self, cfg):
+        """The tasks, lazily (a generator: the engine counts and expands them a block at a time)."""
+        for t in engine.iter_grid_tasks({**cfg, "repetitions": 1}, cfg["_where"]):
+            for d in cfg["start_distances"]:
+                for k in range(cfg["start_directions"]):
+                    yield {**t, "x_start_distance": float(d), "x_start_direction": k,
+                           "x_directions": cfg["start_directions"], "x_reference_optimum": cfg["reference_optimum"]}
+
+    def execute(self, task):
+        """Fit from the distant start; compare with the known optimum (the reference method of the TOML). The
+        objective values are the method's own: the first ``history`` entry of a restart at each circle."""
+        points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
+        R = truth["radius"]
+        phi = 2 * np.pi * task["x_start_direction"] / task["x_directions"]
+        start = (truth["center"][0] + task["x_start_distance"] * R * np.cos(phi),
+                 truth["center"][1] + task["x_start_distance"] * R * np.sin(phi), R)
+        fit_task = {**task, "params": {**task["params"], "start": list(start)}}
+        row = engine.fit_row(fit_task, points, truth)
+        row["params"] = engine.base_row(task)["params"]  # the method's own parameters; the start has its columns
+        row.pop("param_start", None)
+        row["start_x"], row["start_y"], row["start_radius"] = start
+        row["start_distance"] = task["x_start_distance"]
+        row["start_direction_deg"] = float(np.degrees(phi))
+        ref = methods.fit(reference_method(task, task["method"]), points)
+        if row.get("status") in ("ok", "not converged") and "center_x" in row:
+            dist = max(np.hypot(row["center_x"] - ref.center[0], row["center_y"] - ref.center[1]),
+                       abs(row["radius"] - ref.radius))
+            row["distance_to_optimum"] = float(dist)
+            row["success"] = bool(row["status"] == "ok" and dist <= 1e-6 * R)
+            f = _objective_at(task, points, (row["center_x"], row["center_y"], row["radius"]))
+            f_opt = _objective_at(task, points, (*ref.center, ref.radius))
+            if f is not None and f_opt is not None:
+                row["objective_excess"] = f - f_opt
+        else:
+            row["success"] = False
+        return row
+
+    def analyse(self, df, cfg, target, log):
+        """Success tables per arc (success.csv), the redrawn success figure, and which methods always converge."""
+        from experiments.render import figures
+
+        table = success_table(df)
+        save_csv(table, target / "success.csv", index=False, float_format="%.4g")
+        figures.convergence_success(table, target / "convergence.png")
+        tables = []
+        n_dirs = cfg["start_directions"]
+        data = cfg["datasets"][0].get("params", {})
+        for arc, ta in table.groupby("arc_deg", sort=False):
+            piv = ta.pivot_table(index=["method", "params"], columns="start_distance", values="success_rate", sort=False)
+            log(f"  {arc:.0f}° arc " + " " * 28 + "".join(f"{c:>7g}" for c in piv.columns))
+            for (m, p), vals in piv.iterrows():
+                log(f"    {_label(m, p):<40}" + "".join(f"{v:7.2f}" for v in vals))
+            shown = (piv * 100).round(1)
+            shown.columns = [f"{c:g} R" for c in piv.columns]
+            shown.index = [_label(m, p) for m, p in piv.index]
+            shown = shown.rename_axis("method").reset_index()
+            tables.append(Table(caption=f"Share of runs reaching the optimum of the method's own objective (within 1e-6 R) "
+                                        f"from starts d radii from the true centre, {n_dirs} directions each; synthetic "
+                                        f"circle, {arc:.0f}° arc, N = {data.get('n')}, sigma = {data.get('noise')} R",
+                                data=shown, unit="%"))
+        lab = table.assign(label=[_label(m, p) for m, p in zip(table["method"], table["params"])])
+        worst = lab.groupby("label", sort=False)["success_rate"].min()
+        always = [m for m, v in worst.items() if v == 1.0]
+        far = table["start_distance"].max()
+        values = {"always_converged": always, "largest_start_distance": float(far),
+                  "lowest_success_rate": {m: float(v) for m, v in worst.items()}}
+        findings = (f"{len(always)} of {len(worst)} method variants reach their optimum from every start up to {far:g} "
+                    f"radii on every arc ({', '.join(always) or 'none'}).")
+        others = [m for m in worst.index if m not in always]
+        if others:
+            findings += " Lowest success rate of the others: " + "; ".join(f"{m} {100 * worst[m]:.0f} %" for m in others) + "."
+        fig = Figure(caption="Share of runs from distant starts that reach the optimum of the method's own objective, "
+                             "against the start distance [radii], synthetic circles (full circle and arc); iterative "
+                             "methods only", file="convergence.png")
+        return Analysis(tables=tables, figures=[fig], values=values, findings=findings)

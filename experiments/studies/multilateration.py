@@ -21,42 +21,11 @@ from experiments import engine
 from experiments.engine import ConfigError
 from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_matrix, identify
 from methods.multilateration.solvers import kabsch
-from experiments.study import Analysis, Figure, Table, save_csv
+from experiments.study import Analysis, Figure, Study, Table, save_csv
 
-#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
-CONFIG_SCHEMA = {
-    "conditioning_check": {"type": "object", "required": ["published", "same_estimator", "reference", "stations"],
-                           "additionalProperties": False,
-                           "properties": {"published": {"type": "string"}, "same_estimator": {"type": "string"},
-                                          "reference": {"type": "string"}, "stations": {"type": "array", "minItems": 1}}},
-    "axis_figure": {"type": "array", "items": {"type": "string"}},
-    "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
-}
 
 SCENARIO_KEYS = {"stations", "noise", "errors", "grid"}
 MODES = ("located", "known")
-
-
-def validate(cfg, where):
-    sc = cfg.get("scenarios")
-    if not isinstance(sc, list) or not sc:
-        raise ConfigError(f"{where}: needs [[scenarios]] tables with a label and params")
-    for i, s in enumerate(sc):
-        bad = set(s.get("params", {})) - SCENARIO_KEYS
-        if bad or "label" not in s:
-            raise ConfigError(f"{where} scenarios[{i}]: needs a label; unknown params {sorted(bad)} "
-                              f"(allowed: {sorted(SCENARIO_KEYS)})")
-    for m in cfg.get("methods", []):
-        methods.get(f"multilateration.{m}")
-    named = [*cfg.get("axis_figure", [])]
-    if cfg.get("conditioning_check"):
-        c = cfg["conditioning_check"]
-        named += [c["published"], c["same_estimator"], c["reference"]]
-    for m in named:
-        try:
-            methods.get(m)
-        except methods.UnknownMethodError as exc:
-            raise ConfigError(f"{where}: {exc}") from None
 
 
 def _scenario(params):
@@ -70,41 +39,9 @@ def _scenario(params):
     return p
 
 
-def tasks(cfg):
-    out = []
-    for i, s in enumerate(cfg["scenarios"]):
-        reps = s.get("repetitions", cfg["repetitions"])
-        for r in range(reps):
-            for mode in MODES:
-                for m in cfg["methods"]:
-                    out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": {"entry": i, "label": s["label"],
-                                                                                      "params": s["params"]},
-                                "repetition": r, "stream": [i, 0, r], "seed": cfg["seed"],
-                                "method": f"multilateration.{m}", "params": {}, "timing": None,
-                                "x_mode": mode})
-    return out + conditioning_tasks(cfg)
-
-
 def simulate(task):
     rng = np.random.default_rng(np.random.SeedSequence(task["seed"], spawn_key=tuple(task["stream"])))
     return sim.simulate(rng=rng, **_scenario(task["dataset"]["params"]))
-
-
-def execute(task):
-    if "x_conditioning" in task:
-        return conditioning_row(task)
-    data, truth = simulate(task)
-    mode = task["x_mode"]
-    if mode == "known":
-        data = data.with_stations(truth["stations"])
-    row = {**engine.base_row(task), "stations": mode, "n_points": len(data.points), "n_stations": len(data.stations)}
-    t0 = time.perf_counter()
-    res = methods.fit(task["method"], data)
-    row["time_single_s"] = time.perf_counter() - t0  # one call: a timing column (time_ prefix)
-    row.update(status="ok" if res.converged else "not converged", message="" if res.converged else res.message,
-               converged=res.converged)
-    row.update(metrics(res, data, truth, mode))
-    return row
 
 
 def _in_result_frame(res, data, truth, mode):
@@ -237,77 +174,6 @@ def winner(acc):
     return pd.DataFrame(out)
 
 
-def analyse(df, cfg, target, log):
-    """Accuracy and conditioning per scenario, stations table, winners, the exact-length conditioning check,
-    the redrawn conditioning figure and the x-axis figure; findings from the winners."""
-    from experiments.render import figures
-
-    is_check = df["dataset"].str.startswith("exact lengths, stations ") if "published_vs_centred_um" in df else \
-        pd.Series(False, index=df.index)
-    check, df = df[is_check], df[~is_check]
-    ok = df[df["status"] == "ok"].copy()
-    ok["method"] = ok["method"].str.replace("multilateration.", "", regex=False)
-    cols = ["station_error_um", "dead_path_error_um", "volumetric_error_rms_um", "volumetric_error_max_um",
-            "aligned_error_rms_um", "model_error_rms_um", "identified_max_relative_error", "identified_within_2u",
-            "kappa_stations", "kappa_stations_theorem1", "kappa_points", "kappa_points_theorem1", "time_single_s"]
-    cols = [c for c in cols if c in ok.columns]
-    acc = ok.groupby(["dataset", "stations", "method"], sort=False)[cols].median().reset_index()
-    acc.insert(3, "runs", ok.groupby(["dataset", "stations", "method"], sort=False).size().to_numpy())
-    save_csv(acc, target / "accuracy.csv", index=False, float_format="%.6g")
-    for r in acc.itertuples():
-        log(f"  {r.dataset[:62]:<62} {r.stations:<8} {r.method:<16} vol RMS {r.volumetric_error_rms_um:10.3f} µm "
-            f"aligned {r.aligned_error_rms_um:8.3f} µm")
-    scen_label, st = stations_table(df, cfg)
-    save_csv(st, target / "stations_table.csv", index=False, float_format="%.6f")
-    win = winner(acc)
-    figures.multilateration_conditioning(acc, target / "multilateration.png")
-    figure_axis_line(cfg, target)
-    runs = int(acc["runs"].max())
-    tables = []
-    if len(st):
-        tables.append(Table(caption=f"Stations located by each scheme in one simulated campaign ({scen_label}): "
-                                    "difference from the true station and dead path (the paper's tables 5-9; the "
-                                    "joint adjustment in its gauge)", data=st.round(3), unit="µm"))
-    keep = ["dataset", "stations", "method", "runs", "station_error_um", "volumetric_error_rms_um",
-            "aligned_error_rms_um", "model_error_rms_um"]
-    tables.append(Table(caption=f"Median over {runs} simulated LaserTRACER campaigns of the MCV 754 per scenario: largest "
-                                "station error, RMS error of the volumetric errors (raw, and after the best rigid "
-                                "alignment), RMS error of the map from the 21 identified errors",
-                        data=acc[[c for c in keep if c in acc.columns]].rename(columns={
-                            "dataset": "scenario", "stations": "stations are", "station_error_um": "station [µm]",
-                            "volumetric_error_rms_um": "vol. RMS [µm]", "aligned_error_rms_um": "aligned RMS [µm]",
-                            "model_error_rms_um": "21-error map RMS [µm]"}), unit="µm", digits=3))
-    kap = [c for c in ("kappa_stations", "kappa_stations_theorem1", "kappa_points", "kappa_points_theorem1") if c in acc]
-    tables.append(Table(caption=f"Median condition numbers (2-norm by SVD, and Theorem 1's lower estimate) of step 1 "
-                                f"(stations) and step 2 (points) over {runs} simulated campaigns per scenario "
-                                "(dimensionless)", data=acc[["dataset", "stations", "method"] + kap], digits=3))
-    tables.append(Table(caption=f"Most accurate scheme per scenario and mode: median RMS volumetric-error error after "
-                                f"alignment over {runs} simulated campaigns", data=win.round(3), unit="µm"))
-    if len(check):
-        chk = check[["dataset", "stations", "published_vs_centred_um", "kappa_points_published", "kappa_points_centred",
-                     "case_b_vs_truth_um", "case_a_vs_truth_um"]]
-        tables.append(Table(caption="Exact lengths (simulated, no noise): what the published Case B's conditioning costs "
-                                    "in double precision (its points against the centred solution of the same "
-                                    "equations) and its error against the truth [µm]; condition numbers dimensionless",
-                            data=chk, unit="µm", digits=3))
-    counts = win.groupby("best").size().sort_values(ascending=False)
-    values = {"winners": win.to_dict(orient="records"), "best_counts": counts.to_dict(),
-              "accuracy": acc.to_dict(orient="records")}
-    findings = (f"Over {len(win)} scenario/mode combinations ({runs} simulated campaigns each), the most accurate scheme "
-                "(median volumetric-error RMS after alignment) is " + "; ".join(f"{m} in {n}" for m, n in counts.items())
-                + ".")
-    if len(check):
-        findings += (f" On exact lengths the published Case B departs from the centred solution of the same equations "
-                     f"by up to {check['published_vs_centred_um'].max():.3g} µm (condition number up to "
-                     f"{check['kappa_points_published'].max():.3g} against {check['kappa_points_centred'].max():.3g}).")
-    figs = [Figure(caption="Condition numbers of both steps (median κ₂ and Theorem 1's estimate) and the median "
-                           f"volumetric-error RMS after alignment [µm] per scheme; first scenario, {runs} simulated "
-                           "campaigns, stations located", file="multilateration.png"),
-            Figure(caption="One simulated campaign: volumetric errors along the x axis [µm] against x [mm], truth and "
-                           "three schemes with self-located stations (the paper's figures 5-6)", file="x_axis.png")]
-    return Analysis(tables=tables, figures=figs, values=values, findings=findings)
-
-
 def figure_axis_line(cfg, target):
     """Figures 5-6 of the paper: volumetric errors along the x axis (y = 0, z = 0, no tool offset), truth
     against the schemes of the TOML's ``axis_figure`` list, stations located."""
@@ -341,3 +207,140 @@ def figure_axis_line(cfg, target):
         style.legend_outside(fig, ncol=4)
         style.save(fig, target / "x_axis.png")
         plt.close(fig)
+
+
+class MultilaterationStudy(Study):
+    """The ``multilateration`` study (see the module's docstring)."""
+
+    values = None  # its analysis names its values
+
+    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
+    config_schema = {
+        "conditioning_check": {"type": "object", "required": ["published", "same_estimator", "reference", "stations"],
+                               "additionalProperties": False,
+                               "properties": {"published": {"type": "string"}, "same_estimator": {"type": "string"},
+                                              "reference": {"type": "string"}, "stations": {"type": "array", "minItems": 1}}},
+        "axis_figure": {"type": "array", "items": {"type": "string"}},
+        "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
+    }
+
+    def validate(self, cfg, where):
+        sc = cfg.get("scenarios")
+        if not isinstance(sc, list) or not sc:
+            raise ConfigError(f"{where}: needs [[scenarios]] tables with a label and params")
+        for i, s in enumerate(sc):
+            bad = set(s.get("params", {})) - SCENARIO_KEYS
+            if bad or "label" not in s:
+                raise ConfigError(f"{where} scenarios[{i}]: needs a label; unknown params {sorted(bad)} "
+                                  f"(allowed: {sorted(SCENARIO_KEYS)})")
+        for m in cfg.get("methods", []):
+            methods.get(f"multilateration.{m}")
+        named = [*cfg.get("axis_figure", [])]
+        if cfg.get("conditioning_check"):
+            c = cfg["conditioning_check"]
+            named += [c["published"], c["same_estimator"], c["reference"]]
+        for m in named:
+            try:
+                methods.get(m)
+            except methods.UnknownMethodError as exc:
+                raise ConfigError(f"{where}: {exc}") from None
+
+    def tasks(self, cfg):
+        out = []
+        for i, s in enumerate(cfg["scenarios"]):
+            reps = s.get("repetitions", cfg["repetitions"])
+            for r in range(reps):
+                for mode in MODES:
+                    for m in cfg["methods"]:
+                        out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": {"entry": i, "label": s["label"],
+                                                                                          "params": s["params"]},
+                                    "repetition": r, "stream": [i, 0, r], "seed": cfg["seed"],
+                                    "method": f"multilateration.{m}", "params": {}, "timing": None,
+                                    "x_mode": mode})
+        return out + conditioning_tasks(cfg)
+
+    def execute(self, task):
+        if "x_conditioning" in task:
+            return conditioning_row(task)
+        data, truth = simulate(task)
+        mode = task["x_mode"]
+        if mode == "known":
+            data = data.with_stations(truth["stations"])
+        row = {**engine.base_row(task), "stations": mode, "n_points": len(data.points), "n_stations": len(data.stations)}
+        t0 = time.perf_counter()
+        res = methods.fit(task["method"], data)
+        row["time_single_s"] = time.perf_counter() - t0  # one call: a timing column (time_ prefix)
+        row.update(status="ok" if res.converged else "not converged", message="" if res.converged else res.message,
+                   converged=res.converged)
+        row.update(metrics(res, data, truth, mode))
+        return row
+
+    def analyse(self, df, cfg, target, log):
+        """Accuracy and conditioning per scenario, stations table, winners, the exact-length conditioning check,
+        the redrawn conditioning figure and the x-axis figure; findings from the winners."""
+        from experiments.render import figures
+
+        is_check = df["dataset"].str.startswith("exact lengths, stations ") if "published_vs_centred_um" in df else \
+            pd.Series(False, index=df.index)
+        check, df = df[is_check], df[~is_check]
+        ok = df[df["status"] == "ok"].copy()
+        ok["method"] = ok["method"].str.replace("multilateration.", "", regex=False)
+        cols = ["station_error_um", "dead_path_error_um", "volumetric_error_rms_um", "volumetric_error_max_um",
+                "aligned_error_rms_um", "model_error_rms_um", "identified_max_relative_error", "identified_within_2u",
+                "kappa_stations", "kappa_stations_theorem1", "kappa_points", "kappa_points_theorem1", "time_single_s"]
+        cols = [c for c in cols if c in ok.columns]
+        acc = ok.groupby(["dataset", "stations", "method"], sort=False)[cols].median().reset_index()
+        acc.insert(3, "runs", ok.groupby(["dataset", "stations", "method"], sort=False).size().to_numpy())
+        save_csv(acc, target / "accuracy.csv", index=False, float_format="%.6g")
+        for r in acc.itertuples():
+            log(f"  {r.dataset[:62]:<62} {r.stations:<8} {r.method:<16} vol RMS {r.volumetric_error_rms_um:10.3f} µm "
+                f"aligned {r.aligned_error_rms_um:8.3f} µm")
+        scen_label, st = stations_table(df, cfg)
+        save_csv(st, target / "stations_table.csv", index=False, float_format="%.6f")
+        win = winner(acc)
+        figures.multilateration_conditioning(acc, target / "multilateration.png")
+        figure_axis_line(cfg, target)
+        runs = int(acc["runs"].max())
+        tables = []
+        if len(st):
+            tables.append(Table(caption=f"Stations located by each scheme in one simulated campaign ({scen_label}): "
+                                        "difference from the true station and dead path (the paper's tables 5-9; the "
+                                        "joint adjustment in its gauge)", data=st.round(3), unit="µm"))
+        keep = ["dataset", "stations", "method", "runs", "station_error_um", "volumetric_error_rms_um",
+                "aligned_error_rms_um", "model_error_rms_um"]
+        tables.append(Table(caption=f"Median over {runs} simulated LaserTRACER campaigns of the MCV 754 per scenario: largest "
+                                    "station error, RMS error of the volumetric errors (raw, and after the best rigid "
+                                    "alignment), RMS error of the map from the 21 identified errors",
+                            data=acc[[c for c in keep if c in acc.columns]].rename(columns={
+                                "dataset": "scenario", "stations": "stations are", "station_error_um": "station [µm]",
+                                "volumetric_error_rms_um": "vol. RMS [µm]", "aligned_error_rms_um": "aligned RMS [µm]",
+                                "model_error_rms_um": "21-error map RMS [µm]"}), unit="µm", digits=3))
+        kap = [c for c in ("kappa_stations", "kappa_stations_theorem1", "kappa_points", "kappa_points_theorem1") if c in acc]
+        tables.append(Table(caption=f"Median condition numbers (2-norm by SVD, and Theorem 1's lower estimate) of step 1 "
+                                    f"(stations) and step 2 (points) over {runs} simulated campaigns per scenario "
+                                    "(dimensionless)", data=acc[["dataset", "stations", "method"] + kap], digits=3))
+        tables.append(Table(caption=f"Most accurate scheme per scenario and mode: median RMS volumetric-error error after "
+                                    f"alignment over {runs} simulated campaigns", data=win.round(3), unit="µm"))
+        if len(check):
+            chk = check[["dataset", "stations", "published_vs_centred_um", "kappa_points_published", "kappa_points_centred",
+                         "case_b_vs_truth_um", "case_a_vs_truth_um"]]
+            tables.append(Table(caption="Exact lengths (simulated, no noise): what the published Case B's conditioning costs "
+                                        "in double precision (its points against the centred solution of the same "
+                                        "equations) and its error against the truth [µm]; condition numbers dimensionless",
+                                data=chk, unit="µm", digits=3))
+        counts = win.groupby("best").size().sort_values(ascending=False)
+        values = {"winners": win.to_dict(orient="records"), "best_counts": counts.to_dict(),
+                  "accuracy": acc.to_dict(orient="records")}
+        findings = (f"Over {len(win)} scenario/mode combinations ({runs} simulated campaigns each), the most accurate scheme "
+                    "(median volumetric-error RMS after alignment) is " + "; ".join(f"{m} in {n}" for m, n in counts.items())
+                    + ".")
+        if len(check):
+            findings += (f" On exact lengths the published Case B departs from the centred solution of the same equations "
+                         f"by up to {check['published_vs_centred_um'].max():.3g} µm (condition number up to "
+                         f"{check['kappa_points_published'].max():.3g} against {check['kappa_points_centred'].max():.3g}).")
+        figs = [Figure(caption="Condition numbers of both steps (median κ₂ and Theorem 1's estimate) and the median "
+                               f"volumetric-error RMS after alignment [µm] per scheme; first scenario, {runs} simulated "
+                               "campaigns, stations located", file="multilateration.png"),
+                Figure(caption="One simulated campaign: volumetric errors along the x axis [µm] against x [mm], truth and "
+                               "three schemes with self-located stations (the paper's figures 5-6)", file="x_axis.png")]
+        return Analysis(tables=tables, figures=figs, values=values, findings=findings)

@@ -16,7 +16,7 @@ import pandas as pd
 
 from experiments import engine
 from experiments.engine import ConfigError
-from experiments.study import Analysis, Figure, Table
+from experiments.study import Analysis, Figure, Study, Table
 
 
 def _folder() -> Path:
@@ -25,26 +25,6 @@ def _folder() -> Path:
         raise ConfigError("nist_circle needs FITBENCH_NIST_DIR set to the folder of nist_cir2d_*.csv/.json "
                           f"(got {value!r})")
     return Path(value)
-
-
-def validate(cfg, where):
-    engine.expand_methods(cfg, where)
-
-
-def tasks(cfg):
-    folder = _folder()
-    out = []
-    for i, meta_path in enumerate(sorted(folder.glob("nist_cir2d_*.json"))):
-        meta = json.loads(meta_path.read_text())
-        ref = meta["reference_least_squares"]
-        truth = {"family": "circle", "center": [float(Decimal(v)) for v in ref["center"]],
-                 "radius": float(Decimal(ref["diameter"])) / 2}
-        spec = {"entry": i, "point": 0, "file": str(meta_path.with_suffix(".csv")), "truth": truth,
-                "label": meta["name"]}
-        for m, extra in engine.expand_methods(cfg, cfg["_where"]):
-            out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
-                        "stream": [i, 0, 0], "seed": cfg["seed"], "method": m, "params": extra["params"], "timing": None})
-    return out
 
 
 def error_table(df):
@@ -60,28 +40,6 @@ def error_table(df):
                      "median_error": float(np.nanmedian(errs)), "sets_over_1e-9": int((errs > 1e-9).sum()),
                      "not_converged": int((g["status"] != "ok").sum()), "sets": len(g)})
     return pd.DataFrame(rows)
-
-
-def analyse(df, cfg, target, log):
-    """Error table, bar chart, findings: which methods match NIST's certified values to 1e-9 mm on every set."""
-    table = error_table(df)
-    log(table.to_string(index=False))
-    figure(table, target)
-    exact = [m for m, n, nc in zip(table["method"], table["sets_over_1e-9"], table["not_converged"]) if n == 0 and nc == 0]
-    n_sets = int(table["sets"].max()) if len(table) else 0
-    values = {"within_1e-9_on_every_set": exact, "sets": n_sets,
-              "max_error_mm": dict(zip(table["method"], table["max_error"]))}
-    findings = (f"{len(exact)} of {len(table)} method variants match NIST's reference least-squares circle within "
-                f"1e-9 mm on all {n_sets} Circle2d sets ({', '.join(exact) or 'none'}); the others minimise other "
-                "objectives or stop earlier (their error is their distance from the least-squares circle).")
-    shown = table.rename(columns={"max_error": "largest error [mm]", "median_error": "median error [mm]",
-                                  "sets_over_1e-9": "sets > 1e-9 mm", "not_converged": "not converged"})
-    caption = (f"Error of each circle method against NIST's certified least-squares circles (Circle2d, {n_sets} sets): "
-               "largest absolute difference of the centre coordinates and the radius [mm]")
-    fig = Figure(caption=f"Largest and median error [mm] against NIST's reference circles ({n_sets} Circle2d sets), "
-                         "log scale, with the 1e-9 mm line", file="nist_errors.png")
-    return Analysis(tables=[Table(caption=caption, data=shown, unit="mm", digits=3)], figures=[fig], values=values,
-                    findings=findings)
 
 
 def figure(table, target):
@@ -104,3 +62,48 @@ def figure(table, target):
         style.legend_outside(fig, ncol=3)
         style.save(fig, target / "nist_errors.png")
         plt.close(fig)
+
+
+class NistCircleStudy(Study):
+    """The ``nist_circle`` study (see the module's docstring)."""
+
+    values = None  # its analysis names its values
+
+    def validate(self, cfg, where):
+        engine.expand_methods(cfg, where)
+
+    def tasks(self, cfg):
+        folder = _folder()
+        out = []
+        for i, meta_path in enumerate(sorted(folder.glob("nist_cir2d_*.json"))):
+            meta = json.loads(meta_path.read_text())
+            ref = meta["reference_least_squares"]
+            truth = {"family": "circle", "center": [float(Decimal(v)) for v in ref["center"]],
+                     "radius": float(Decimal(ref["diameter"])) / 2}
+            spec = {"entry": i, "point": 0, "file": str(meta_path.with_suffix(".csv")), "truth": truth,
+                    "label": meta["name"]}
+            for m, extra in engine.expand_methods(cfg, cfg["_where"]):
+                out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
+                            "stream": [i, 0, 0], "seed": cfg["seed"], "method": m, "params": extra["params"], "timing": None})
+        return out
+
+    def analyse(self, df, cfg, target, log):
+        """Error table, bar chart, findings: which methods match NIST's certified values to 1e-9 mm on every set."""
+        table = error_table(df)
+        log(table.to_string(index=False))
+        figure(table, target)
+        exact = [m for m, n, nc in zip(table["method"], table["sets_over_1e-9"], table["not_converged"]) if n == 0 and nc == 0]
+        n_sets = int(table["sets"].max()) if len(table) else 0
+        values = {"within_1e-9_on_every_set": exact, "sets": n_sets,
+                  "max_error_mm": dict(zip(table["method"], table["max_error"]))}
+        findings = (f"{len(exact)} of {len(table)} method variants match NIST's reference least-squares circle within "
+                    f"1e-9 mm on all {n_sets} Circle2d sets ({', '.join(exact) or 'none'}); the others minimise other "
+                    "objectives or stop earlier (their error is their distance from the least-squares circle).")
+        shown = table.rename(columns={"max_error": "largest error [mm]", "median_error": "median error [mm]",
+                                      "sets_over_1e-9": "sets > 1e-9 mm", "not_converged": "not converged"})
+        caption = (f"Error of each circle method against NIST's certified least-squares circles (Circle2d, {n_sets} sets): "
+                   "largest absolute difference of the centre coordinates and the radius [mm]")
+        fig = Figure(caption=f"Largest and median error [mm] against NIST's reference circles ({n_sets} Circle2d sets), "
+                             "log scale, with the 1e-9 mm line", file="nist_errors.png")
+        return Analysis(tables=[Table(caption=caption, data=shown, unit="mm", digits=3)], figures=[fig], values=values,
+                        findings=findings)

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from datasets.synthetic import circle_points
-from experiments.study import Analysis, Figure, Table, save_csv
+from experiments.study import Analysis, Figure, Study, Table, save_csv
 
 
 def kcr_bound(arc_deg: float, n: int, sigma: float, radius: float = 1.0) -> tuple[float, float]:
@@ -42,41 +42,46 @@ def kcr_table(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def analyse(df, cfg, target, log):
-    """The KCR table (kcr.csv), the redrawn KCR figure, and which least-squares estimators reach the bound."""
-    from experiments.render import figures
+class NoiseStudy(Study):
+    """The ``noise`` study (see the module's docstring)."""
 
-    table = kcr_table(df)
-    save_csv(table, target / "kcr.csv", index=False, float_format="%.6g")
-    figures.noise_kcr(table, target / "noise_kcr.png")
-    sigma, n = table["noise"].max(), int(table["n"].max())
-    worst = table[(table["noise"] == sigma) & (table["n"] == n)]
-    piv = worst.pivot_table(index="method", columns="arc_deg", values="radius_rmse_over_kcr", aggfunc="mean", sort=False)
-    piv = piv[sorted(piv.columns, reverse=True)]
-    log(f"  radius RMSE / KCR bound at sigma = {sigma:g} R, N = {n} (1.00 = the statistical limit):")
-    log("  " + f"{'method':<28}" + "".join(f"{f'{c:g}° arc':>11}" for c in piv.columns))
-    for m, vals in piv.iterrows():
-        log("  " + f"{m:<28}" + "".join(f"{v:11.2f}" for v in vals))
-    # the least-squares estimators: methods whose rows are not zone results (plugins included)
-    zone = set(df.loc[df["inner_radius"].notna(), "method"]) if "inner_radius" in df else set()
-    lsq = piv[~piv.index.isin(zone)]
-    worst_ratio = lsq.max(axis=1)
-    within = sorted(m for m, v in worst_ratio.items() if v <= 1.1)
-    values = {"sigma": float(sigma), "n": n, "arcs_deg": [float(a) for a in piv.columns],
-              "within_10_percent": within, "worst_ratio": {m: float(v) for m, v in worst_ratio.items()},
-              "radius_rmse_over_kcr": {m: {f"{c:g}": float(v) for c, v in vals.items()} for m, vals in piv.iterrows()}}
-    findings = (f"At σ = {sigma:g} R and N = {n}, {len(within)} of {len(lsq)} least-squares estimators reach the KCR "
-                f"bound on the radius within 10 % on every arc ({', '.join(within) or 'none'}).")
-    if len(lsq):
-        far = worst_ratio.idxmax()
-        arc = lsq.loc[far].idxmax()
-        findings += f" The farthest from it is {far}: {worst_ratio[far]:.2f} × the bound on the {arc:g}° arc."
-    shown = piv.reset_index()
-    shown.columns = ["method"] + [f"{c:.0f}° arc" for c in piv.columns]
-    caption = (f"Radius RMSE divided by the KCR lower bound (dimensionless, 1 = the statistical limit), every circle "
-               f"method on synthetic unit circles and arcs, sigma = {sigma:g} R isotropic noise, N = {n}, "
-               f"{int(worst['runs'].max())} repetitions")
-    fig_caption = ("Radius RMSE / KCR bound (top) and radius bias / σ (bottom) of the least-squares estimators "
-                   "against the noise σ / R on synthetic unit circles and arcs; dashed: closed-form (algebraic) fits")
-    return Analysis(tables=[Table(caption=caption, data=shown.round(3), unit="")],
-                    figures=[Figure(caption=fig_caption, file="noise_kcr.png")], values=values, findings=findings)
+    values = None  # its analysis names its values
+
+    def analyse(self, df, cfg, target, log):
+        """The KCR table (kcr.csv), the redrawn KCR figure, and which least-squares estimators reach the bound."""
+        from experiments.render import figures
+
+        table = kcr_table(df)
+        save_csv(table, target / "kcr.csv", index=False, float_format="%.6g")
+        figures.noise_kcr(table, target / "noise_kcr.png")
+        sigma, n = table["noise"].max(), int(table["n"].max())
+        worst = table[(table["noise"] == sigma) & (table["n"] == n)]
+        piv = worst.pivot_table(index="method", columns="arc_deg", values="radius_rmse_over_kcr", aggfunc="mean", sort=False)
+        piv = piv[sorted(piv.columns, reverse=True)]
+        log(f"  radius RMSE / KCR bound at sigma = {sigma:g} R, N = {n} (1.00 = the statistical limit):")
+        log("  " + f"{'method':<28}" + "".join(f"{f'{c:g}° arc':>11}" for c in piv.columns))
+        for m, vals in piv.iterrows():
+            log("  " + f"{m:<28}" + "".join(f"{v:11.2f}" for v in vals))
+        # the least-squares estimators: methods whose rows are not zone results (plugins included)
+        zone = set(df.loc[df["inner_radius"].notna(), "method"]) if "inner_radius" in df else set()
+        lsq = piv[~piv.index.isin(zone)]
+        worst_ratio = lsq.max(axis=1)
+        within = sorted(m for m, v in worst_ratio.items() if v <= 1.1)
+        values = {"sigma": float(sigma), "n": n, "arcs_deg": [float(a) for a in piv.columns],
+                  "within_10_percent": within, "worst_ratio": {m: float(v) for m, v in worst_ratio.items()},
+                  "radius_rmse_over_kcr": {m: {f"{c:g}": float(v) for c, v in vals.items()} for m, vals in piv.iterrows()}}
+        findings = (f"At σ = {sigma:g} R and N = {n}, {len(within)} of {len(lsq)} least-squares estimators reach the KCR "
+                    f"bound on the radius within 10 % on every arc ({', '.join(within) or 'none'}).")
+        if len(lsq):
+            far = worst_ratio.idxmax()
+            arc = lsq.loc[far].idxmax()
+            findings += f" The farthest from it is {far}: {worst_ratio[far]:.2f} × the bound on the {arc:g}° arc."
+        shown = piv.reset_index()
+        shown.columns = ["method"] + [f"{c:.0f}° arc" for c in piv.columns]
+        caption = (f"Radius RMSE divided by the KCR lower bound (dimensionless, 1 = the statistical limit), every circle "
+                   f"method on synthetic unit circles and arcs, sigma = {sigma:g} R isotropic noise, N = {n}, "
+                   f"{int(worst['runs'].max())} repetitions")
+        fig_caption = ("Radius RMSE / KCR bound (top) and radius bias / σ (bottom) of the least-squares estimators "
+                       "against the noise σ / R on synthetic unit circles and arcs; dashed: closed-form (algebraic) fits")
+        return Analysis(tables=[Table(caption=caption, data=shown.round(3), unit="")],
+                        figures=[Figure(caption=fig_caption, file="noise_kcr.png")], values=values, findings=findings)

@@ -11,118 +11,7 @@ from datasets.positioning import axis_test
 from experiments import engine
 from experiments.engine import ConfigError
 from methods.positioning.model import evaluate_band
-from experiments.study import Analysis, Figure, Table, atomic_path, save_csv
-
-#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
-CONFIG_SCHEMA = {
-    "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
-    "positions_per_test": {"type": "integer", "minimum": 1},
-    # the bands compared: a label (the rows' method column), the positioning method that gives the band, and
-    # the scenario keys passed to it as parameters (e.g. the instrument's uncertainty for the GLS model)
-    "bands": {"type": "array", "minItems": 1, "items": {
-        "type": "object", "required": ["label", "method"], "additionalProperties": False,
-        "properties": {"label": {"type": "string", "minLength": 1}, "method": {"type": "string", "minLength": 1},
-                       "scenario_params": {"type": "array", "items": {"type": "string"}}}}},
-    # the band whose model the example figure draws (the paper's figures 2 and 3), on the last scenario
-    "example_band": {"type": "string", "minLength": 1},
-}
-
-
-
-def validate(cfg, where):
-    if not cfg.get("bands"):
-        raise ConfigError(f"{where}: needs [[bands]] tables (label, method)")
-    for j, b in enumerate(cfg["bands"]):
-        try:
-            spec = methods.get(b["method"])
-        except methods.UnknownMethodError as exc:
-            raise ConfigError(f"{where} bands[{j}]: {exc}") from None
-        unknown = set(b.get("scenario_params", [])) - set(spec.defaults)
-        if unknown:
-            raise ConfigError(f"{where} bands[{j}]: {spec.id} has no parameter(s) {', '.join(sorted(unknown))}")
-    labels = [b["label"] for b in cfg["bands"]]
-    if cfg.get("example_band") is not None and cfg["example_band"] not in labels:
-        raise ConfigError(f"{where}: example_band must be one of the [[bands]] labels {labels}, got {cfg['example_band']!r}")
-    sc = cfg.get("scenarios")
-    if not isinstance(sc, list) or not sc:
-        raise ConfigError(f"{where}: needs [[scenarios]] tables")
-    allowed = {"runs", "instrument_sd", "repeatability", "mpe", "periodic_amplitude", "periodic_period", "targets",
-               "reversal"}
-    for i, s in enumerate(sc):
-        bad = set(s.get("params", {})) - allowed
-        if bad or "label" not in s:
-            raise ConfigError(f"{where} scenarios[{i}]: needs a label; unknown params {sorted(bad)}")
-
-
-def tasks(cfg):
-    out = []
-    for i, s in enumerate(cfg["scenarios"]):
-        spec = {"entry": i, "point": 0, "scenario": s, "label": s["label"]}
-        for r in range(cfg["repetitions"]):
-            for band in cfg["bands"]:
-                out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": r,
-                            "stream": [i, 0, r], "seed": cfg["seed"], "method": band["label"], "params": {},
-                            "timing": None, "band": band, "x_positions": cfg.get("positions_per_test", 50)})
-    return out
-
-
-def execute(task):
-    s = task["dataset"]["scenario"]
-    rng = np.random.default_rng(np.random.SeedSequence(task["seed"], spawn_key=tuple(task["stream"])))
-    data, truth = axis_test(rng=rng, **s["params"])
-    P = rng.uniform(data.targets.min(), data.targets.max(), task["x_positions"])
-    band = task["band"]
-    res = methods.fit(band["method"], data, **{k: s.get(k) for k in band.get("scenario_params", [])})
-    if res.polynomial:  # a model: its value and expanded uncertainty U(P) = 2 sqrt(x^T Cov x)
-        v, U = evaluate_band(res.polynomial["up"], P)
-    else:  # the standard's point-wise evaluation: mean +- 2 s at the targets, linear in between
-        per = res.per_target
-        v = np.interp(P, data.targets, per["mean_up"])
-        U = np.interp(P, data.targets, 2 * per["s_up"])
-    err = v - truth["up"](P)
-    return {**engine.base_row(task), "status": "ok", "message": "", "coverage": float(np.mean(np.abs(err) <= U)),
-            "band_halfwidth_mean": float(np.mean(U)), "error_rms": float(np.sqrt(np.mean(err ** 2)))}
-
-
-def analyse(df, cfg, target, log):
-    """Coverage table (coverage.csv), the redrawn coverage figure, the example axis; findings: which band
-    reaches the nominal 95 % in every scenario."""
-    from experiments.render import figures
-
-    table = df.groupby(["dataset", "method"], sort=False).agg(coverage=("coverage", "mean"),
-                                                              halfwidth_um=("band_halfwidth_mean", "mean"),
-                                                              error_rms_um=("error_rms", "mean")).reset_index()
-    table["halfwidth_um"] *= 1e3
-    table["error_rms_um"] *= 1e3
-    save_csv(table, target / "coverage.csv", index=False, float_format="%.4g")
-    for r in table.itertuples():
-        log(f"  {r.dataset:<55} {r.method:<34} {r.coverage:8.3f} {r.halfwidth_um:8.2f} um {r.error_rms_um:7.2f} um")
-    figures.positioning_coverage(table, target / "positioning.png")
-    if cfg.get("example_band"):
-        example(cfg, target)
-    worst = table.groupby("method", sort=False)["coverage"].min()
-    reaching = [b for b, v in worst.items() if v >= 0.95]
-    values = {"lowest_coverage": {b: float(v) for b, v in worst.items()}, "bands_at_nominal": reaching,
-              "mean_halfwidth_um": table.groupby("method", sort=False)["halfwidth_um"].mean().to_dict()}
-    findings = (f"Over {df['dataset'].nunique()} scenarios, {len(reaching)} of {len(worst)} bands cover the true deviation "
-                f"curve at the nominal 95 % or more in every scenario ({', '.join(reaching) or 'none'}); lowest coverage: "
-                + "; ".join(f"{b} {100 * v:.1f} %" for b, v in worst.items()) + ".")
-    reps = int(df.groupby(["dataset", "method"]).size().max())
-    shown = table.rename(columns={"dataset": "scenario", "method": "band", "halfwidth_um": "mean half-width [µm]",
-                                  "error_rms_um": "RMS error [µm]"}).round(3)
-    shown["coverage"] = (shown["coverage"] * 100).round(1)
-    shown = shown.rename(columns={"coverage": "coverage [%]"})
-    caption = (f"Coverage of the true deviation curve (approach +) by each band at {cfg.get('positions_per_test', 50)} "
-               f"random positions per test, mean band half-width and RMS error of the band's centre line; "
-               f"{reps} simulated ISO 230-2 axis tests per scenario")
-    figs = [Figure(caption=f"Coverage of the true deviation curve by each band per scenario ({reps} simulated ISO 230-2 "
-                           "axis tests each), with the nominal 95 %", file="positioning.png")]
-    if cfg.get("example_band"):
-        figs.append(Figure(caption=f"One simulated axis ({cfg['scenarios'][-1]['label']}): measured deviations [µm] "
-                                   f"against the target position [mm], with the ISO 230-2 band and that of "
-                                   f"{cfg['example_band']}", file="example.png"))
-    return Analysis(tables=[Table(caption=caption, data=shown, unit="%, µm")], figures=figs, values=values,
-                    findings=findings)
+from experiments.study import Analysis, Figure, Study, Table, atomic_path, save_csv
 
 
 def example(cfg, target):
@@ -134,3 +23,115 @@ def example(cfg, target):
     res = methods.fit(band["method"], data, **{k: s.get(k) for k in band.get("scenario_params", [])})
     with atomic_path(target / "example.png") as tmp:
         plot(res, tmp, title=f"synthetic axis: {s['label']}")
+
+
+class PositioningStudy(Study):
+    """The ``positioning`` study (see the module's docstring)."""
+
+    values = None  # its analysis names its values
+
+    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
+    config_schema = {
+        "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
+        "positions_per_test": {"type": "integer", "minimum": 1},
+        # the bands compared: a label (the rows' method column), the positioning method that gives the band, and
+        # the scenario keys passed to it as parameters (e.g. the instrument's uncertainty for the GLS model)
+        "bands": {"type": "array", "minItems": 1, "items": {
+            "type": "object", "required": ["label", "method"], "additionalProperties": False,
+            "properties": {"label": {"type": "string", "minLength": 1}, "method": {"type": "string", "minLength": 1},
+                           "scenario_params": {"type": "array", "items": {"type": "string"}}}}},
+        # the band whose model the example figure draws (the paper's figures 2 and 3), on the last scenario
+        "example_band": {"type": "string", "minLength": 1},
+    }
+
+    def validate(self, cfg, where):
+        if not cfg.get("bands"):
+            raise ConfigError(f"{where}: needs [[bands]] tables (label, method)")
+        for j, b in enumerate(cfg["bands"]):
+            try:
+                spec = methods.get(b["method"])
+            except methods.UnknownMethodError as exc:
+                raise ConfigError(f"{where} bands[{j}]: {exc}") from None
+            unknown = set(b.get("scenario_params", [])) - set(spec.defaults)
+            if unknown:
+                raise ConfigError(f"{where} bands[{j}]: {spec.id} has no parameter(s) {', '.join(sorted(unknown))}")
+        labels = [b["label"] for b in cfg["bands"]]
+        if cfg.get("example_band") is not None and cfg["example_band"] not in labels:
+            raise ConfigError(f"{where}: example_band must be one of the [[bands]] labels {labels}, got {cfg['example_band']!r}")
+        sc = cfg.get("scenarios")
+        if not isinstance(sc, list) or not sc:
+            raise ConfigError(f"{where}: needs [[scenarios]] tables")
+        allowed = {"runs", "instrument_sd", "repeatability", "mpe", "periodic_amplitude", "periodic_period", "targets",
+                   "reversal"}
+        for i, s in enumerate(sc):
+            bad = set(s.get("params", {})) - allowed
+            if bad or "label" not in s:
+                raise ConfigError(f"{where} scenarios[{i}]: needs a label; unknown params {sorted(bad)}")
+
+    def tasks(self, cfg):
+        out = []
+        for i, s in enumerate(cfg["scenarios"]):
+            spec = {"entry": i, "point": 0, "scenario": s, "label": s["label"]}
+            for r in range(cfg["repetitions"]):
+                for band in cfg["bands"]:
+                    out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": r,
+                                "stream": [i, 0, r], "seed": cfg["seed"], "method": band["label"], "params": {},
+                                "timing": None, "band": band, "x_positions": cfg.get("positions_per_test", 50)})
+        return out
+
+    def execute(self, task):
+        s = task["dataset"]["scenario"]
+        rng = np.random.default_rng(np.random.SeedSequence(task["seed"], spawn_key=tuple(task["stream"])))
+        data, truth = axis_test(rng=rng, **s["params"])
+        P = rng.uniform(data.targets.min(), data.targets.max(), task["x_positions"])
+        band = task["band"]
+        res = methods.fit(band["method"], data, **{k: s.get(k) for k in band.get("scenario_params", [])})
+        if res.polynomial:  # a model: its value and expanded uncertainty U(P) = 2 sqrt(x^T Cov x)
+            v, U = evaluate_band(res.polynomial["up"], P)
+        else:  # the standard's point-wise evaluation: mean +- 2 s at the targets, linear in between
+            per = res.per_target
+            v = np.interp(P, data.targets, per["mean_up"])
+            U = np.interp(P, data.targets, 2 * per["s_up"])
+        err = v - truth["up"](P)
+        return {**engine.base_row(task), "status": "ok", "message": "", "coverage": float(np.mean(np.abs(err) <= U)),
+                "band_halfwidth_mean": float(np.mean(U)), "error_rms": float(np.sqrt(np.mean(err ** 2)))}
+
+    def analyse(self, df, cfg, target, log):
+        """Coverage table (coverage.csv), the redrawn coverage figure, the example axis; findings: which band
+        reaches the nominal 95 % in every scenario."""
+        from experiments.render import figures
+
+        table = df.groupby(["dataset", "method"], sort=False).agg(coverage=("coverage", "mean"),
+                                                                  halfwidth_um=("band_halfwidth_mean", "mean"),
+                                                                  error_rms_um=("error_rms", "mean")).reset_index()
+        table["halfwidth_um"] *= 1e3
+        table["error_rms_um"] *= 1e3
+        save_csv(table, target / "coverage.csv", index=False, float_format="%.4g")
+        for r in table.itertuples():
+            log(f"  {r.dataset:<55} {r.method:<34} {r.coverage:8.3f} {r.halfwidth_um:8.2f} um {r.error_rms_um:7.2f} um")
+        figures.positioning_coverage(table, target / "positioning.png")
+        if cfg.get("example_band"):
+            example(cfg, target)
+        worst = table.groupby("method", sort=False)["coverage"].min()
+        reaching = [b for b, v in worst.items() if v >= 0.95]
+        values = {"lowest_coverage": {b: float(v) for b, v in worst.items()}, "bands_at_nominal": reaching,
+                  "mean_halfwidth_um": table.groupby("method", sort=False)["halfwidth_um"].mean().to_dict()}
+        findings = (f"Over {df['dataset'].nunique()} scenarios, {len(reaching)} of {len(worst)} bands cover the true deviation "
+                    f"curve at the nominal 95 % or more in every scenario ({', '.join(reaching) or 'none'}); lowest coverage: "
+                    + "; ".join(f"{b} {100 * v:.1f} %" for b, v in worst.items()) + ".")
+        reps = int(df.groupby(["dataset", "method"]).size().max())
+        shown = table.rename(columns={"dataset": "scenario", "method": "band", "halfwidth_um": "mean half-width [µm]",
+                                      "error_rms_um": "RMS error [µm]"}).round(3)
+        shown["coverage"] = (shown["coverage"] * 100).round(1)
+        shown = shown.rename(columns={"coverage": "coverage [%]"})
+        caption = (f"Coverage of the true deviation curve (approach +) by each band at {cfg.get('positions_per_test', 50)} "
+                   f"random positions per test, mean band half-width and RMS error of the band's centre line; "
+                   f"{reps} simulated ISO 230-2 axis tests per scenario")
+        figs = [Figure(caption=f"Coverage of the true deviation curve by each band per scenario ({reps} simulated ISO 230-2 "
+                               "axis tests each), with the nominal 95 %", file="positioning.png")]
+        if cfg.get("example_band"):
+            figs.append(Figure(caption=f"One simulated axis ({cfg['scenarios'][-1]['label']}): measured deviations [µm] "
+                                       f"against the target position [mm], with the ISO 230-2 band and that of "
+                                       f"{cfg['example_band']}", file="example.png"))
+        return Analysis(tables=[Table(caption=caption, data=shown, unit="%, µm")], figures=figs, values=values,
+                        findings=findings)

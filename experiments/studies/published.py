@@ -12,48 +12,11 @@ import datasets
 import methods
 from experiments import engine
 from experiments.render.text import percentile_phrase
-from experiments.study import Analysis, Figure, Table
-
-#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
-CONFIG_SCHEMA = {
-    "rounding": {"type": "object", "properties": {"samples": {"type": "integer", "minimum": 1}}},
-    # the published table's columns (as the data sets' ``published`` keys) and the method that reproduces each
-    "published_columns": {"type": "object", "minProperties": 1, "additionalProperties": {"type": "string"}},
-}
+from experiments.study import Analysis, Figure, Study, Table
 
 
-def validate(cfg, where):
-    columns = cfg.get("published_columns")
-    if not columns:
-        raise engine.ConfigError(f"{where}: needs [published_columns] (table column label = method id)")
-    for column, method_id in columns.items():
-        try:
-            methods.get(method_id)
-        except methods.UnknownMethodError as exc:
-            raise engine.ConfigError(f"{where} published_columns.{column!r}: {exc}") from None
-    engine.expand_methods(cfg, where)
 #: the data set label of the rounding Monte Carlo rows (one row per data set and table column)
 ROUNDING = " (rounding Monte Carlo)"
-
-
-def tasks(cfg):
-    """The fits of every method on every published set, and one rounding Monte Carlo task per published
-    figure of table 1 (its own seed stream: (seed, 99, data set entry, column))."""
-    out = engine.grid_tasks(cfg, cfg["_where"])
-    samples = int(cfg.get("rounding", {}).get("samples", 1000))
-    for spec in engine.expand_datasets(cfg, cfg["_where"]):
-        variant = spec.get("variant")
-        ds = datasets.load(spec["published"], drop_repeated_closing_point=variant == "drop_repeated_closing_point")
-        for c, (column, method_id) in enumerate(cfg["published_columns"].items()):
-            pub = ds.published.get(column)
-            if pub is None:
-                continue
-            out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": {**spec, "label": spec["label"] + ROUNDING},
-                        "repetition": 0, "stream": [99, spec["entry"], c], "seed": cfg["seed"], "method": method_id,
-                        "params": {}, "timing": None,
-                        "x_rounding": {"column": column, "published": pub, "samples": samples,
-                                       "decimals": int(ds.meta.get("decimals_printed", 6))}})
-    return out
 
 
 def rounding_spread(points: np.ndarray, decimals: int, *, samples: int, rng, method: str) -> np.ndarray:
@@ -65,24 +28,6 @@ def rounding_spread(points: np.ndarray, decimals: int, *, samples: int, rng, met
         if res.converged:
             widths[k] = res.form_error
     return widths[np.isfinite(widths)]
-
-
-def execute(task):
-    """A generic fit row, or a rounding Monte Carlo row (percentiles of the circularity)."""
-    points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
-    if "x_rounding" not in task:
-        return engine.fit_row(task, points, truth)
-    r = task["x_rounding"]
-    rng = np.random.default_rng(np.random.SeedSequence(task["seed"], spawn_key=tuple(task["stream"])))
-    widths = rounding_spread(points, r["decimals"], samples=r["samples"], rng=rng, method=task["method"])
-    row = {**engine.base_row(task), "table_column": r["column"], "published": r["published"],
-           "decimals_printed": r["decimals"], "rounding_samples": len(widths)}
-    if not len(widths):
-        return {**row, "status": "not converged", "message": "no fit of the rounded data converged"}
-    lo, med, hi = np.percentile(widths, [0.5, 50, 99.5])
-    return {**row, "status": "ok", "message": f"{len(widths)} of {r['samples']} fits converged",
-            "rounding_p0_5": lo, "rounding_median": med, "rounding_p99_5": hi, "rounding_min": float(widths.min()),
-            "rounding_max": float(widths.max()), "published_percentile": float(np.mean(widths <= r["published"]) * 100)}
 
 
 def comparison(df: pd.DataFrame) -> pd.DataFrame:
@@ -117,33 +62,92 @@ def _explanation(r) -> str:
     return "NOT explained by the rounding of the printed data"
 
 
-def analyse(df, cfg, target, log):
-    """Table 1 published against reproduced, the redrawn comparison figure; findings: how many figures are
-    reproduced, how many the rounding of the printed data explains."""
-    from experiments.render import figures
+class PublishedStudy(Study):
+    """The ``published`` study (see the module's docstring)."""
 
-    comp = comparison(df)
-    for r in comp.to_dict(orient="records"):
-        log(f"  {r['dataset']} {r['variant']:<28} {r['column']:<27} published {r['published']}: "
-            f"{r['reproduced_value']:.7f} ({_explanation(r)})")
-    figures.published_circularity(comp, target / "published.png")
-    n, rep = len(comp), int(comp["reproduced"].sum())
-    explained = int((~comp["reproduced"] & comp["explained_by_rounding"]).sum())
-    values = {"published_figures": n, "reproduced": rep, "explained_by_rounding": explained,
-              "not_explained": n - rep - explained, "rounding_samples": int(comp["samples"].min()) if n else 0,
-              "published_vs_reproduced": comp.to_dict(orient="records")}
-    findings = (f"Of the {n} circularity figures of the paper's table 1, {rep} are reproduced from the printed "
-                f"coordinates to the printed digits; {explained} more lie inside the range that coordinates "
-                f"consistent with the printed digits give ({values['rounding_samples']} Monte Carlo fits each), and "
-                f"{n - rep - explained} are not explained.")
-    shown = pd.DataFrame({"set": comp["dataset"] + comp["variant"].map(lambda v: "" if v == "as published" else f" ({v})"),
-                          "column": comp["column"], "published": comp["published"],
-                          "reproduced": comp["reproduced_value"].round(7), "difference": comp["difference"].round(7),
-                          "explanation": [_explanation(r) for r in comp.to_dict(orient="records")]})
-    caption = ("Circularity of the roundness paper's published profiles (table 1, roundness sets 1-3): published "
-               "against reproduced from the printed coordinates, and where not reproduced the 99 % range that "
-               f"coordinates consistent with the printed digits give ({values['rounding_samples']} fits each) [mm]")
-    fig = Figure(caption="Published profiles of the roundness paper: reproduced circularity and the 99 % range the "
-                         "printed digits allow, relative to the published value [µm]", file="published.png")
-    return Analysis(tables=[Table(caption=caption, data=shown, unit="mm")], figures=[fig], values=values,
-                    findings=findings)
+    values = None  # its analysis names its values
+
+    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
+    config_schema = {
+        "rounding": {"type": "object", "properties": {"samples": {"type": "integer", "minimum": 1}}},
+        # the published table's columns (as the data sets' ``published`` keys) and the method that reproduces each
+        "published_columns": {"type": "object", "minProperties": 1, "additionalProperties": {"type": "string"}},
+    }
+
+    def validate(self, cfg, where):
+        columns = cfg.get("published_columns")
+        if not columns:
+            raise engine.ConfigError(f"{where}: needs [published_columns] (table column label = method id)")
+        for column, method_id in columns.items():
+            try:
+                methods.get(method_id)
+            except methods.UnknownMethodError as exc:
+                raise engine.ConfigError(f"{where} published_columns.{column!r}: {exc}") from None
+        engine.expand_methods(cfg, where)
+
+    def tasks(self, cfg):
+        """The fits of every method on every published set, and one rounding Monte Carlo task per published
+        figure of table 1 (its own seed stream: (seed, 99, data set entry, column))."""
+        out = engine.grid_tasks(cfg, cfg["_where"])
+        samples = int(cfg.get("rounding", {}).get("samples", 1000))
+        for spec in engine.expand_datasets(cfg, cfg["_where"]):
+            variant = spec.get("variant")
+            ds = datasets.load(spec["published"], drop_repeated_closing_point=variant == "drop_repeated_closing_point")
+            for c, (column, method_id) in enumerate(cfg["published_columns"].items()):
+                pub = ds.published.get(column)
+                if pub is None:
+                    continue
+                out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": {**spec, "label": spec["label"] + ROUNDING},
+                            "repetition": 0, "stream": [99, spec["entry"], c], "seed": cfg["seed"], "method": method_id,
+                            "params": {}, "timing": None,
+                            "x_rounding": {"column": column, "published": pub, "samples": samples,
+                                           "decimals": int(ds.meta.get("decimals_printed", 6))}})
+        return out
+
+    def execute(self, task):
+        """A generic fit row, or a rounding Monte Carlo row (percentiles of the circularity)."""
+        points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
+        if "x_rounding" not in task:
+            return engine.fit_row(task, points, truth)
+        r = task["x_rounding"]
+        rng = np.random.default_rng(np.random.SeedSequence(task["seed"], spawn_key=tuple(task["stream"])))
+        widths = rounding_spread(points, r["decimals"], samples=r["samples"], rng=rng, method=task["method"])
+        row = {**engine.base_row(task), "table_column": r["column"], "published": r["published"],
+               "decimals_printed": r["decimals"], "rounding_samples": len(widths)}
+        if not len(widths):
+            return {**row, "status": "not converged", "message": "no fit of the rounded data converged"}
+        lo, med, hi = np.percentile(widths, [0.5, 50, 99.5])
+        return {**row, "status": "ok", "message": f"{len(widths)} of {r['samples']} fits converged",
+                "rounding_p0_5": lo, "rounding_median": med, "rounding_p99_5": hi, "rounding_min": float(widths.min()),
+                "rounding_max": float(widths.max()), "published_percentile": float(np.mean(widths <= r["published"]) * 100)}
+
+    def analyse(self, df, cfg, target, log):
+        """Table 1 published against reproduced, the redrawn comparison figure; findings: how many figures are
+        reproduced, how many the rounding of the printed data explains."""
+        from experiments.render import figures
+
+        comp = comparison(df)
+        for r in comp.to_dict(orient="records"):
+            log(f"  {r['dataset']} {r['variant']:<28} {r['column']:<27} published {r['published']}: "
+                f"{r['reproduced_value']:.7f} ({_explanation(r)})")
+        figures.published_circularity(comp, target / "published.png")
+        n, rep = len(comp), int(comp["reproduced"].sum())
+        explained = int((~comp["reproduced"] & comp["explained_by_rounding"]).sum())
+        values = {"published_figures": n, "reproduced": rep, "explained_by_rounding": explained,
+                  "not_explained": n - rep - explained, "rounding_samples": int(comp["samples"].min()) if n else 0,
+                  "published_vs_reproduced": comp.to_dict(orient="records")}
+        findings = (f"Of the {n} circularity figures of the paper's table 1, {rep} are reproduced from the printed "
+                    f"coordinates to the printed digits; {explained} more lie inside the range that coordinates "
+                    f"consistent with the printed digits give ({values['rounding_samples']} Monte Carlo fits each), and "
+                    f"{n - rep - explained} are not explained.")
+        shown = pd.DataFrame({"set": comp["dataset"] + comp["variant"].map(lambda v: "" if v == "as published" else f" ({v})"),
+                              "column": comp["column"], "published": comp["published"],
+                              "reproduced": comp["reproduced_value"].round(7), "difference": comp["difference"].round(7),
+                              "explanation": [_explanation(r) for r in comp.to_dict(orient="records")]})
+        caption = ("Circularity of the roundness paper's published profiles (table 1, roundness sets 1-3): published "
+                   "against reproduced from the printed coordinates, and where not reproduced the 99 % range that "
+                   f"coordinates consistent with the printed digits give ({values['rounding_samples']} fits each) [mm]")
+        fig = Figure(caption="Published profiles of the roundness paper: reproduced circularity and the 99 % range the "
+                             "printed digits allow, relative to the published value [µm]", file="published.png")
+        return Analysis(tables=[Table(caption=caption, data=shown, unit="mm")], figures=[fig], values=values,
+                        findings=findings)

@@ -13,32 +13,11 @@ import datasets
 import methods
 from experiments import engine
 from experiments.engine import ConfigError
-from experiments.study import Analysis, Figure, Table, save_csv
+from experiments.study import Analysis, Figure, Study, Table, save_csv
 from methods.roundness.filter import POINTS_PER_CUTOFF, parse_cutoff
 
-#: this study's own config keys (JSON Schema, merged by experiments/schema.py; validate() checks the values)
-CONFIG_SCHEMA = {
-    "cutoffs": {"type": "array", "minItems": 1, "items": {"anyOf": [{"type": "number", "exclusiveMinimum": 0},
-                                                                   {"const": "none"}]}},
-    "published": {"type": "array", "minItems": 1, "items": {"type": "string"}},
-    "synthetic": {"type": "array", "minItems": 1, "items": {"type": "object"}},
-}
 
 REFS = ("lsci", "mzci", "mici", "mcci")
-
-
-def validate(cfg, where):
-    if not isinstance(cfg.get("cutoffs"), list) or not cfg["cutoffs"]:
-        raise ConfigError(f"{where}: cutoffs must be a non-empty list of UPR values or 'none'")
-    for c in cfg["cutoffs"]:
-        parse_cutoff(c, f"{where} cutoffs")
-    for name in cfg.get("published", []):
-        if name not in datasets.list():
-            raise ConfigError(f"{where}: unknown published data set {name!r}; known: {', '.join(datasets.list())}")
-    for i, s in enumerate(cfg.get("synthetic", [])):
-        missing = {"label", "n", "radius", "lobes"} - set(s)
-        if missing:
-            raise ConfigError(f"{where} synthetic[{i}]: missing {', '.join(sorted(missing))}")
 
 
 def synthetic_profile(spec: dict, rng) -> np.ndarray:
@@ -52,45 +31,10 @@ def synthetic_profile(spec: dict, rng) -> np.ndarray:
     return np.column_stack([r * np.cos(t), r * np.sin(t)])
 
 
-def tasks(cfg):
-    out = []
-    profiles = [{"entry": i, "point": 0, "published": p, "label": p} for i, p in enumerate(cfg.get("published", []))]
-    base = len(profiles)
-    profiles += [{"entry": base + i, "point": 0, "synthetic": s, "label": s["label"]}
-                 for i, s in enumerate(cfg.get("synthetic", []))]
-    for spec in profiles:
-        reps = 1 if "published" in spec else cfg["repetitions"]
-        for r in range(reps):
-            for c in cfg["cutoffs"]:
-                cut = parse_cutoff(c)
-                out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": r,
-                            "stream": [spec["entry"], 0, r], "seed": cfg["seed"], "method": "roundness.iso12181",
-                            "params": {"cutoff_upr": cut, "reference": "all"}, "timing": None})
-    return out
-
-
 def load(spec, seed, stream):
     if "published" in spec:
         return datasets.load(spec["published"], drop_repeated_closing_point=True).points
     return synthetic_profile(spec["synthetic"], np.random.default_rng(np.random.SeedSequence(seed, spawn_key=tuple(stream))))
-
-
-def execute(task):
-    spec = task["dataset"]
-    pts = load(spec, task["seed"], task["stream"])
-    cut = task["params"]["cutoff_upr"]
-    row = {**engine.base_row(task), "cutoff_upr": "none" if cut is None else cut, "n_points": int(pts.shape[0])}
-    if cut is not None and pts.shape[0] < POINTS_PER_CUTOFF * cut:
-        return {**row, "status": "skipped", "message": f"{pts.shape[0]} points cannot carry a {cut:g} UPR cut-off "
-                                                       f"(ISO 12181-2: >= {POINTS_PER_CUTOFF} x cut-off points)"}
-    res = methods.fit(task["method"], pts, **task["params"])
-    row.update(status="ok" if res.converged else "not converged", message=res.message, converged=res.converged)
-    for k, ref in res.references.items():
-        row[f"RONt_{k}_um"] = ref["RONt"] * 1e3
-        row[f"RONq_{k}_um"] = ref["RONq"] * 1e3
-        row[f"certified_{k}"] = ref["converged"]
-    row["dominant_upr"] = res.dominant_lobes[0]["upr"] if res.dominant_lobes else None
-    return row
 
 
 def cutoff_table(df: pd.DataFrame) -> pd.DataFrame:
@@ -117,47 +61,6 @@ def rank_table(df: pd.DataFrame) -> pd.DataFrame:
                     "mean_excess_over_mzci_pct": float(np.mean((vals[:, j] - vals[:, 1]) / vals[:, 1]) * 100)
                     if len(ok) else float("nan")})
     return pd.DataFrame(out)
-
-
-def analyse(df, cfg, target, log):
-    """RONt by cut-off (certified fits) and the ranking of the four reference circles; figure; findings."""
-    table = cutoff_table(df)
-    ranks = rank_table(df)
-    save_csv(table, target / "ront_by_cutoff.csv", index=False, float_format="%.5g")
-    save_csv(ranks, target / "ranking.csv", index=False, float_format="%.5g")
-    for r in table.itertuples(index=False):
-        d = r._asdict()
-        log(f"  {d['dataset']:<42} {d['cutoff_upr']:>7} " + " ".join(f"{d[f'RONt_{k}_um']:8.3f} µm" for k in REFS)
-            + "  " + "/".join(f"{d[f'certified_{k}']:.0%}" for k in REFS))
-    skipped = df[df["status"] == "skipped"]
-    figure(table, target / "roundness.png")
-    reps = int(df.groupby(["dataset", "cutoff_upr"]).size().max()) if len(df) else 0
-    r = ranks.set_index("reference")
-    values = {"ranking": ranks.to_dict(orient="records"), "skipped_undersampled": int(len(skipped)),
-              "rows_all_certified": int(r["rows"].iloc[0]) if len(r) else 0,
-              "mzci_smallest": int(r.loc["mzci", "smallest"]) if "mzci" in r.index else 0}
-    findings = (f"Where all four reference circles are certified ({values['rows_all_certified']} rows), MZCI gives the "
-                f"smallest RONt in {values['mzci_smallest']}; on average RONt exceeds MZCI's by "
-                + ", ".join(f"{k.upper()} {r.loc[k, 'mean_excess_over_mzci_pct']:.1f} %" for k in REFS if k != "mzci")
-                + f". {len(skipped)} (profile, cut-off) rows are skipped: fewer than 7 points per cut-off wavelength "
-                "(ISO 12181-2).")
-    shown = table.copy()
-    for k in REFS:
-        shown[f"certified_{k}"] = (100 * shown[f"certified_{k}"]).round(0)
-    shown = shown.rename(columns={"dataset": "profile", "cutoff_upr": "cut-off [UPR]",
-                                  **{f"RONt_{k}_um": f"RONt {k.upper()} [µm]" for k in REFS},
-                                  **{f"certified_{k}": f"{k.upper()} certified [%]" for k in REFS}})
-    tables = [Table(caption=f"RONt (mean of certified fits) of each ISO 12181 reference circle against the ISO 16610-21 "
-                            f"Gaussian cut-off, on the published roundness profiles and synthetic lobed profiles "
-                            f"({reps} repetition(s) of the noisy ones), with the share of certified fits", data=shown,
-                    unit="µm, %", digits=4),
-              Table(caption="How often each reference circle gives the smallest and the largest RONt, and its mean "
-                            "excess over the minimum-zone RONt, over the rows where all four circles are certified",
-                    data=ranks.rename(columns={"mean_excess_over_mzci_pct": "mean excess over MZCI [%]"}), unit="%",
-                    digits=3)]
-    fig = Figure(caption="RONt [µm] of the four reference circles against the Gaussian cut-off [UPR] per profile "
-                         "(certified fits; none = unfiltered)", file="roundness.png")
-    return Analysis(tables=tables, figures=[fig], values=values, findings=findings)
 
 
 def figure(table: pd.DataFrame, path):
@@ -188,3 +91,103 @@ def figure(table: pd.DataFrame, path):
         style.legend_outside(fig, axes=[axes[0, 0]], ncol=4)
         style.save(fig, path)
         plt.close(fig)
+
+
+class RoundnessStudy(Study):
+    """The ``roundness`` study (see the module's docstring)."""
+
+    values = None  # its analysis names its values
+
+    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
+    config_schema = {
+        "cutoffs": {"type": "array", "minItems": 1, "items": {"anyOf": [{"type": "number", "exclusiveMinimum": 0},
+                                                                       {"const": "none"}]}},
+        "published": {"type": "array", "minItems": 1, "items": {"type": "string"}},
+        "synthetic": {"type": "array", "minItems": 1, "items": {"type": "object"}},
+    }
+
+    def validate(self, cfg, where):
+        if not isinstance(cfg.get("cutoffs"), list) or not cfg["cutoffs"]:
+            raise ConfigError(f"{where}: cutoffs must be a non-empty list of UPR values or 'none'")
+        for c in cfg["cutoffs"]:
+            parse_cutoff(c, f"{where} cutoffs")
+        for name in cfg.get("published", []):
+            if name not in datasets.list():
+                raise ConfigError(f"{where}: unknown published data set {name!r}; known: {', '.join(datasets.list())}")
+        for i, s in enumerate(cfg.get("synthetic", [])):
+            missing = {"label", "n", "radius", "lobes"} - set(s)
+            if missing:
+                raise ConfigError(f"{where} synthetic[{i}]: missing {', '.join(sorted(missing))}")
+
+    def tasks(self, cfg):
+        out = []
+        profiles = [{"entry": i, "point": 0, "published": p, "label": p} for i, p in enumerate(cfg.get("published", []))]
+        base = len(profiles)
+        profiles += [{"entry": base + i, "point": 0, "synthetic": s, "label": s["label"]}
+                     for i, s in enumerate(cfg.get("synthetic", []))]
+        for spec in profiles:
+            reps = 1 if "published" in spec else cfg["repetitions"]
+            for r in range(reps):
+                for c in cfg["cutoffs"]:
+                    cut = parse_cutoff(c)
+                    out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": r,
+                                "stream": [spec["entry"], 0, r], "seed": cfg["seed"], "method": "roundness.iso12181",
+                                "params": {"cutoff_upr": cut, "reference": "all"}, "timing": None})
+        return out
+
+    def execute(self, task):
+        spec = task["dataset"]
+        pts = load(spec, task["seed"], task["stream"])
+        cut = task["params"]["cutoff_upr"]
+        row = {**engine.base_row(task), "cutoff_upr": "none" if cut is None else cut, "n_points": int(pts.shape[0])}
+        if cut is not None and pts.shape[0] < POINTS_PER_CUTOFF * cut:
+            return {**row, "status": "skipped", "message": f"{pts.shape[0]} points cannot carry a {cut:g} UPR cut-off "
+                                                           f"(ISO 12181-2: >= {POINTS_PER_CUTOFF} x cut-off points)"}
+        res = methods.fit(task["method"], pts, **task["params"])
+        row.update(status="ok" if res.converged else "not converged", message=res.message, converged=res.converged)
+        for k, ref in res.references.items():
+            row[f"RONt_{k}_um"] = ref["RONt"] * 1e3
+            row[f"RONq_{k}_um"] = ref["RONq"] * 1e3
+            row[f"certified_{k}"] = ref["converged"]
+        row["dominant_upr"] = res.dominant_lobes[0]["upr"] if res.dominant_lobes else None
+        return row
+
+    def analyse(self, df, cfg, target, log):
+        """RONt by cut-off (certified fits) and the ranking of the four reference circles; figure; findings."""
+        table = cutoff_table(df)
+        ranks = rank_table(df)
+        save_csv(table, target / "ront_by_cutoff.csv", index=False, float_format="%.5g")
+        save_csv(ranks, target / "ranking.csv", index=False, float_format="%.5g")
+        for r in table.itertuples(index=False):
+            d = r._asdict()
+            log(f"  {d['dataset']:<42} {d['cutoff_upr']:>7} " + " ".join(f"{d[f'RONt_{k}_um']:8.3f} µm" for k in REFS)
+                + "  " + "/".join(f"{d[f'certified_{k}']:.0%}" for k in REFS))
+        skipped = df[df["status"] == "skipped"]
+        figure(table, target / "roundness.png")
+        reps = int(df.groupby(["dataset", "cutoff_upr"]).size().max()) if len(df) else 0
+        r = ranks.set_index("reference")
+        values = {"ranking": ranks.to_dict(orient="records"), "skipped_undersampled": int(len(skipped)),
+                  "rows_all_certified": int(r["rows"].iloc[0]) if len(r) else 0,
+                  "mzci_smallest": int(r.loc["mzci", "smallest"]) if "mzci" in r.index else 0}
+        findings = (f"Where all four reference circles are certified ({values['rows_all_certified']} rows), MZCI gives the "
+                    f"smallest RONt in {values['mzci_smallest']}; on average RONt exceeds MZCI's by "
+                    + ", ".join(f"{k.upper()} {r.loc[k, 'mean_excess_over_mzci_pct']:.1f} %" for k in REFS if k != "mzci")
+                    + f". {len(skipped)} (profile, cut-off) rows are skipped: fewer than 7 points per cut-off wavelength "
+                    "(ISO 12181-2).")
+        shown = table.copy()
+        for k in REFS:
+            shown[f"certified_{k}"] = (100 * shown[f"certified_{k}"]).round(0)
+        shown = shown.rename(columns={"dataset": "profile", "cutoff_upr": "cut-off [UPR]",
+                                      **{f"RONt_{k}_um": f"RONt {k.upper()} [µm]" for k in REFS},
+                                      **{f"certified_{k}": f"{k.upper()} certified [%]" for k in REFS}})
+        tables = [Table(caption=f"RONt (mean of certified fits) of each ISO 12181 reference circle against the ISO 16610-21 "
+                                f"Gaussian cut-off, on the published roundness profiles and synthetic lobed profiles "
+                                f"({reps} repetition(s) of the noisy ones), with the share of certified fits", data=shown,
+                        unit="µm, %", digits=4),
+                  Table(caption="How often each reference circle gives the smallest and the largest RONt, and its mean "
+                                "excess over the minimum-zone RONt, over the rows where all four circles are certified",
+                        data=ranks.rename(columns={"mean_excess_over_mzci_pct": "mean excess over MZCI [%]"}), unit="%",
+                        digits=3)]
+        fig = Figure(caption="RONt [µm] of the four reference circles against the Gaussian cut-off [UPR] per profile "
+                             "(certified fits; none = unfiltered)", file="roundness.png")
+        return Analysis(tables=tables, figures=[fig], values=values, findings=findings)

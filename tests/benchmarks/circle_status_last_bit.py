@@ -18,7 +18,7 @@ from experiments.studies import roundness as rs  # noqa: E402
 
 cfg = C.load("convergence", quick=True)
 eps = np.finfo(float).eps
-for task in conv.tasks(cfg):
+for task in conv.ConvergenceStudy().tasks(cfg):
     if task["method"] not in ("circle.gauss_newton", "circle.levenberg_marquardt") or task["x_start_distance"] < 1:
         continue
     points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
@@ -36,7 +36,7 @@ for task in conv.tasks(cfg):
 print("-- roundness: MCCI certification and RONt (um), data moved by one ulp (random signs)")
 cfg = C.load("roundness", quick=True)
 eps = np.finfo(float).eps
-for task in rs.tasks(cfg):
+for task in rs.RoundnessStudy().tasks(cfg):
     if task["dataset"]["label"] not in ("turned shaft, D 25 mm, 3600 points", "centreless ground, D 10 mm, 7200 points"):
         continue
     if task["params"]["cutoff_upr"] not in (50.0, 3.0):

@@ -1,0 +1,115 @@
+"""A study kind is a class: each module of experiments/studies/ defines one subclass of experiments.study.Study,
+every hook has a default, a TOML without ``kind`` runs the base, and an old-style module (functions, no class)
+is refused in one line that says what to write instead."""
+from __future__ import annotations
+
+import ast
+import sys
+import types
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from experiments import config as configs
+from experiments.engine import ConfigError
+from experiments.run import run_study
+from experiments.study import Analysis, Study, study_of
+
+REPO = Path(__file__).resolve().parents[1]
+TOML = '''name = "{name}"
+title = "a small study"
+{kind}seed = 3
+repetitions = 2
+
+[[datasets]]
+source = "circle"
+params = {{ center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }}
+
+[[methods]]
+id = "circle.kasa"
+'''
+
+
+def write(tmp_path, name="study", kind=""):
+    path = tmp_path / f"{name}.toml"
+    path.write_text(TOML.format(name=name, kind=kind), encoding="utf-8")
+    return path
+
+
+def _module(monkeypatch, kind: str, **attrs) -> types.ModuleType:
+    module = types.ModuleType(f"experiments.studies.{kind}")
+    for k, v in attrs.items():
+        if isinstance(v, type):
+            v.__module__ = module.__name__
+        setattr(module, k, v)
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    return module
+
+
+def test_every_study_module_defines_one_study_class():
+    for path in sorted((REPO / "experiments" / "studies").glob("*.py")):
+        if path.stem == "__init__":
+            continue
+        study = study_of(path.stem)
+        assert isinstance(study, Study) and study.kind == path.stem
+        assert type(study).__module__ == f"experiments.studies.{path.stem}"
+
+
+def test_a_toml_without_kind_runs_the_base_study(tmp_path):
+    cfg = configs.load(str(write(tmp_path)))
+    assert cfg["kind"] == "grid" and type(study_of(cfg["kind"])).__mro__[1] is Study
+    target = run_study(str(write(tmp_path)), tmp_path / "out", jobs=1, log=lambda *a: None)
+    df = pd.read_csv(target / "results.csv")
+    assert len(df) == 2 and set(df["status"]) == {"ok"}
+    assert (target / "figure_1_bars.png").is_file()  # the default figure of a study that declares none
+
+
+def test_a_subclass_overrides_only_what_differs(tmp_path, monkeypatch):
+    """A class that overrides analyse alone keeps the generic tasks and rows; one with its own rows says its
+    columns are known only after the run (declarations naming its columns are then checked after the run)."""
+    class OnlyAnalysis(Study):
+        values = ("mean_radius",)
+
+        def analyse(self, rows, cfg, target, log):
+            return Analysis(values={"mean_radius": float(rows["radius"].mean())})
+
+    class OwnRows(Study):
+        def execute(self, task):
+            return {"status": "ok", "message": "", "answer": 42}
+
+    _module(monkeypatch, "only_analysis", OnlyAnalysis=OnlyAnalysis)
+    _module(monkeypatch, "own_rows", OwnRows=OwnRows)
+    path = write(tmp_path, kind='kind = "only_analysis"\n')
+    path.write_text(path.read_text() + '[report]\nfindings = "mean radius {mean_radius:.3f} mm"\n')
+    cfg = configs.load(str(path))
+    study = study_of("only_analysis")
+    assert not study.own_rows and "radius" in study.row_columns(cfg)
+    assert len(list(study.prepared_tasks(cfg))) == 2
+    with pytest.raises(ConfigError, match=r"study\.toml: report\.findings: unknown value\(s\) mean_radiu "):
+        path.write_text(path.read_text().replace("{mean_radius:", "{mean_radiu:"))
+        configs.load(str(path))
+    assert study_of("own_rows").own_rows and study_of("own_rows").row_columns(cfg) is None
+
+
+def test_an_old_style_study_module_is_refused_in_one_line(tmp_path, monkeypatch):
+    def analyse(df, cfg, target, log):
+        return Analysis()
+    _module(monkeypatch, "old_style", analyse=analyse, CONFIG_SCHEMA={})
+    with pytest.raises(ConfigError) as err:
+        configs.load(str(write(tmp_path, kind='kind = "old_style"\n')))
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith("study.toml: kind: experiments/studies/old_style.py must define one "
+                                              "subclass of experiments.study.Study")
+    assert "module-level analyse, CONFIG_SCHEMA" in msg and "docs/experiments.md" in msg
+
+
+def test_the_framework_probes_no_study_module():
+    """The runner, the config loader, the engine and the contract call the study's methods; none asks a study
+    module what it has (hasattr/getattr on a module)."""
+    for name in ("run", "config", "engine", "study", "schema"):
+        tree = ast.parse((REPO / "experiments" / f"{name}.py").read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", None) in ("hasattr", "getattr"):
+                target = ast.unparse(node.args[0])
+                assert "study" not in target and "module" not in target, f"experiments/{name}.py: {ast.unparse(node)}"

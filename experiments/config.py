@@ -6,6 +6,7 @@ from pathlib import Path
 
 from experiments import schema
 from experiments.engine import ConfigError
+from experiments.study import count_rows, study_of, validate as validate_declarations  # noqa: F401  (count_rows: API)
 
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
 
@@ -36,7 +37,6 @@ def _read(path: Path, where: str) -> dict:
 def _study(cfg: dict, where: str):
     """The :class:`experiments.study.Study` of the config's kind (None while ``kind`` is not a string: the
     structure check then says so); it declares the study's own config keys (``config_schema``)."""
-    from experiments.study import study_of
     kind = cfg.get("kind", "grid")
     if not isinstance(kind, str):
         return None
@@ -80,35 +80,8 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
     cfg["_dir"] = str(path.resolve().parent)
     cfg["_quick"] = quick
     study.validate(cfg, where)
-    from experiments.study import validate as validate_declarations
     validate_declarations(cfg, where)
     return cfg
-
-
-def _grid_size(entry) -> int:
-    size = 1
-    for values in (entry.get("grid", {}) if isinstance(entry, dict) else {}).values():
-        size *= len(values)
-    return size
-
-
-def count_rows(cfg: dict) -> int:
-    """An upper bound of the rows of the generic grid, from the config alone (nothing expanded):
-    data-set grid points x repetitions x method grid points. A study that multiplies its rows further
-    (its own ``tasks``) is checked again on the expanded task list."""
-    import methods
-    reps = cfg.get("repetitions", 1)
-    n_data = 0
-    for entry in cfg.get("datasets", []):
-        n_data += _grid_size(entry) * (1 if "published" in entry else reps)
-    if not cfg.get("datasets"):
-        n_data = max(len(cfg.get("scenarios", [])), 1) * reps
-    n_methods = 0
-    for entry in cfg.get("methods", []):
-        mid = entry if isinstance(entry, str) else entry["id"]
-        ids = len(methods.list_methods(mid[:-2])) if mid.endswith(".*") else 1
-        n_methods += ids * _grid_size(entry)
-    return n_data * max(n_methods, 1)
 
 
 def check_rows(cfg: dict, n_rows: int, max_rows: int) -> None:

@@ -79,7 +79,7 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from experiments import engine
+from experiments import engine, studies
 from experiments.engine import ConfigError
 from experiments.provenance import write_atomic
 from methods.files import atomic_path  # noqa: F401  (the one atomic writer, for writers that take a file name)
@@ -123,6 +123,32 @@ class Analysis:
     findings: str = ""
 
 
+def _grid_size(entry) -> int:
+    size = 1
+    for values in (entry.get("grid", {}) if isinstance(entry, dict) else {}).values():
+        size *= len(values)
+    return size
+
+
+def count_rows(cfg: dict) -> int:
+    """An upper bound of the rows of the generic grid, from the config alone (nothing expanded):
+    data-set grid points x repetitions x method grid points. A study that multiplies its rows further
+    (its own ``tasks``) is checked again on the expanded task list."""
+    import methods
+    reps = cfg.get("repetitions", 1)
+    n_data = 0
+    for entry in cfg.get("datasets", []):
+        n_data += _grid_size(entry) * (1 if "published" in entry else reps)
+    if not cfg.get("datasets"):
+        n_data = max(len(cfg.get("scenarios", [])), 1) * reps
+    n_methods = 0
+    for entry in cfg.get("methods", []):
+        mid = entry if isinstance(entry, str) else entry["id"]
+        ids = len(methods.list_methods(mid[:-2])) if mid.endswith(".*") else 1
+        n_methods += ids * _grid_size(entry)
+    return n_data * max(n_methods, 1)
+
+
 # ---------------------------------------------------------------- the study class
 
 class Study:
@@ -144,6 +170,10 @@ class Study:
 
     #: the study kind (the module's name), set by :func:`study_of`
     kind: str = "grid"
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        studies.CLASSES.add(cls)
     #: the config keys only this kind uses: {key: JSON Schema}
     config_schema: dict = {}
     #: the names of the named values :meth:`analyse` adds (besides ``n_rows``, ``n_ok``); None: not known before
@@ -162,7 +192,6 @@ class Study:
 
     def count_rows(self, cfg: dict) -> int:
         """An upper bound of the rows from the config alone (nothing expanded). Default: the generic grid's."""
-        from experiments.config import count_rows
         return count_rows(cfg)
 
     # -- rows
@@ -213,41 +242,14 @@ class Study:
         return out
 
 
-#: study kind -> (its module, its instance)
-_STUDIES: dict[str, tuple] = {}
-
-
 def study_of(kind: str) -> Study:
-    """The study of ``kind``: the :class:`Study` subclass its module ``experiments.studies.KIND`` defines
-    (found by importing the module; the framework knows no study by name). Raises ConfigError for an unknown
-    kind or a module without exactly one subclass."""
-    import importlib
-    import sys
-    hit = _STUDIES.get(kind)
-    if hit is not None and sys.modules.get(f"experiments.studies.{kind}") is hit[0]:
-        return hit[1]
-    if not isinstance(kind, str) or not kind.isidentifier():
-        raise ConfigError(f"kind: unknown kind {kind!r} (a module in experiments/studies/)")
-    name = f"experiments.studies.{kind}"
+    """The study of ``kind``: the :class:`Study` subclass its module ``experiments.studies.KIND`` defines (found
+    by importing the module; the framework knows no study by name). ConfigError for an unknown kind or a module
+    without exactly one subclass."""
     try:
-        module = importlib.import_module(name)
-    except ModuleNotFoundError as exc:
-        if exc.name != name:
-            raise
-        raise ConfigError(f"kind: unknown kind {kind!r} (a module in experiments/studies/)") from None
-    classes = [c for c in vars(module).values()
-               if isinstance(c, type) and issubclass(c, Study) and c.__module__ == name]
-    if len(classes) != 1:
-        old = [f for f in ("analyse", "tasks", "execute", "validate", "count_rows", "CONFIG_SCHEMA") if f in vars(module)]
-        why = (f"it has module-level {', '.join(old)}: a study is now a class, class {kind.title().replace('_', '')}"
-               f"(experiments.study.Study) with these as methods (docs/experiments.md)" if old and not classes
-               else f"it defines {len(classes)} (one module, one study)")
-        raise ConfigError(f"kind: experiments/studies/{kind}.py must define one subclass of experiments.study.Study; "
-                          f"{why}")
-    study = classes[0]()
-    study.kind = kind
-    _STUDIES[kind] = (module, study)
-    return study
+        return studies.study_of(kind)
+    except studies.StudyKindError as exc:
+        raise ConfigError(str(exc)) from None
 
 
 # ---------------------------------------------------------------- plot registry

@@ -80,8 +80,7 @@ class ConvergenceStudy(Study):
     def count_rows(self, cfg):
         """The rows of the study from its grid sizes (nothing expanded): each run of the grid x distances x
         directions."""
-        from experiments import config
-        return config.count_rows({**cfg, "repetitions": 1}) * len(cfg["start_distances"]) * cfg["start_directions"]
+        return super().count_rows({**cfg, "repetitions": 1}) * len(cfg["start_distances"]) * cfg["start_directions"]
 
     def tasks(self, cfg):
         """The tasks, lazily (a generator: the engine counts and expands them a block at a time)."""

@@ -17,7 +17,7 @@ from experiments import engine
 from experiments.engine import ConfigError
 import pandas as pd
 
-from experiments.study import Analysis, Figure, Study, Table, atomic_path
+from experiments.study import Analysis, Figure, Study, Table, save_figure
 from methods.results import CircularTestFit
 from experiments.provenance import write_atomic
 
@@ -177,8 +177,8 @@ class CircularTestStudy(Study):
                      ", ".join(f"{k} {v:g}" for k, v in injected.items()))
         for line in lines:
             log(line)
-        with atomic_path(target / "polar.png") as tmp:
-            polar_plot(cw, ccw, ev, tmp, title="LOLA HBG 130 (synthetic scenario)")
+        polar_plot(cw, ccw, ev, target / "polar.png", title="LOLA HBG 130 (synthetic scenario)",
+                   save=lambda fig, path: save_figure(fig, path, dpi=120))      # PNG and the vector PDF
         write_atomic(target / "tables.txt", "\n".join(lines) + "\n")
         iso_rows = pd.DataFrame([{"figure": k, "synthetic scenario": round(v * 1e3, 2), "published": PAPER_ISO.get(k, np.nan)}
                                  for k, v in iso.items()])

@@ -11,7 +11,7 @@ from datasets.positioning import axis_test
 from experiments import engine
 from experiments.engine import ConfigError
 from methods.positioning.model import evaluate_band
-from experiments.study import Analysis, Figure, Study, Table, atomic_path, save_csv
+from experiments.study import Analysis, Figure, Study, Table, save_csv, save_figure
 
 
 def example(cfg, target):
@@ -21,8 +21,8 @@ def example(cfg, target):
     data, _ = axis_test(rng=np.random.default_rng(cfg["seed"]), **s["params"])
     band = next(b for b in cfg["bands"] if b["label"] == cfg["example_band"])
     res = methods.fit(band["method"], data, **{k: s.get(k) for k in band.get("scenario_params", [])})
-    with atomic_path(target / "example.png") as tmp:
-        plot(res, tmp, title=f"synthetic axis: {s['label']}")
+    plot(res, target / "example.png", title=f"synthetic axis: {s['label']}",
+         save=lambda fig, path: save_figure(fig, path, dpi=120))      # PNG and the vector PDF
 
 
 class PositioningStudy(Study):

@@ -1,4 +1,4 @@
-"""The magnified-trajectory figure (experiments.render.figures.magnification_trajectories): a panel with a
+"""The magnified-trajectory figure (experiments.studies.magnification.trajectories_figure): a panel with a
 zoom box shows exactly that box at equal x/y scales, without matplotlib's "Ignoring fixed x/y limits to
 fulfill fixed data aspect" warnings (the cause: equal aspect with adjustable data limits over fixed limits)."""
 import logging
@@ -6,7 +6,7 @@ import logging
 import pytest
 
 from experiments import config as configs
-from experiments.render import figures, style
+from experiments.render import style
 from experiments.studies import magnification
 
 
@@ -20,7 +20,7 @@ def drawn(monkeypatch, tmp_path, caplog):
     cfg["examples"] = {name: 200.0 for name in cfg["examples"]}
     panels = magnification._panels(cfg)
     with caplog.at_level(logging.WARNING, logger="matplotlib"):
-        figures.magnification_trajectories(panels, tmp_path / "magnification.png")
+        magnification.trajectories_figure(panels, tmp_path / "magnification.png")
     assert (tmp_path / "magnification.png").stat().st_size > 10_000
     return panels, kept[0], caplog.records
 

@@ -1,4 +1,4 @@
-"""The redrawn figures: drawn from the committed results tables, fonts >= 8 pt at the printed size, legends
+"""The studies' figures (each beside its study in experiments/studies/): drawn from the committed results tables, fonts >= 8 pt at the printed size, legends
 outside every axes, plain-number log ticks, a method keeps its colour across figures."""
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import matplotlib
 import pandas as pd
 import pytest
 
-from experiments.render import figures as F
 from experiments.render import style
+from experiments.studies import convergence, magnification, multilateration, noise, positioning, published
 
 matplotlib.use("Agg")
 RESULTS = Path(__file__).resolve().parents[1] / "results"
@@ -31,13 +31,13 @@ def _published_rows():
 
 
 CASES = {
-    "noise": lambda p: F.noise_kcr(_csv("noise", "kcr.csv"), p),
-    "positioning": lambda p: F.positioning_coverage(_csv("positioning", "coverage.csv"), p),
-    "convergence": lambda p: F.convergence_success(_csv("convergence", "success.csv"), p),
-    "magnification": lambda p: F.magnification_continuity(_csv("magnification", "results.csv"), p),
-    "multilateration": lambda p: F.multilateration_conditioning(_csv("multilateration", "accuracy.csv"), p),
-    "published": lambda p: F.published_circularity(_published_rows(), p),
-    "trajectories": lambda p: F.magnification_trajectories(
+    "noise": lambda p: noise.kcr_figure(_csv("noise", "kcr.csv"), p),
+    "positioning": lambda p: positioning.coverage_figure(_csv("positioning", "coverage.csv"), p),
+    "convergence": lambda p: convergence.success_figure(_csv("convergence", "success.csv"), p),
+    "magnification": lambda p: magnification.continuity_figure(_csv("magnification", "results.csv"), p),
+    "multilateration": lambda p: multilateration.conditioning_figure(_csv("multilateration", "accuracy.csv"), p),
+    "published": lambda p: published.circularity_figure(_published_rows(), p),
+    "trajectories": lambda p: magnification.trajectories_figure(
         [{"example": "corner_inside_convex", "eta": 200, "method": "magnify.nearest", "title": "nearest"}], p),
 }
 

@@ -185,14 +185,14 @@ def test_ordinal():
 def test_report_tex_includes_fragments_and_figures_and_compiles(tmp_path):
     """paper/report.tex from the jinja2 template: sections, findings text with maths, \\input tables,
     figures with captions; compiles (twice, for the table of contents) without an overfull box > 1 pt."""
-    from experiments.render import figures as F
+    from experiments.studies.noise import kcr_figure
     from experiments.render.document import write_report_tex
     (tmp_path / "tables").mkdir()
     frags = {"ml-errors": multilateration_tables()[0], "published": published_table(),
              "magnification": magnification_table()}
     for name, frag in frags.items():
         (tmp_path / "tables" / f"{name}.tex").write_text(frag, encoding="utf-8")
-    F.noise_kcr(_csv("noise", "kcr.csv"), tmp_path / "figures" / "noise.png")
+    kcr_figure(_csv("noise", "kcr.csv"), tmp_path / "figures" / "noise.png")
     sections = [{"title": "Roundness paper (Pınar & Güllü)", "label": "roundness", "studies": [
         {"title": "Published data", "findings": "Sample findings text (not a result): Kåsa, 45°, "
                                                 "maths $\\sigma = 0.05\\,R$ and 2 %.",

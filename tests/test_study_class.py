@@ -113,3 +113,14 @@ def test_the_framework_probes_no_study_module():
             if isinstance(node, ast.Call) and getattr(node.func, "id", None) in ("hasattr", "getattr"):
                 target = ast.unparse(node.args[0])
                 assert "study" not in target and "module" not in target, f"experiments/{name}.py: {ast.unparse(node)}"
+
+
+def test_no_study_figure_in_render():
+    """A study's figures live beside it (experiments/studies/KIND.py); experiments/render/ holds only what every
+    study shares (style, generic plots): no function there is named after a study kind or reads its results."""
+    kinds = [p.stem for p in (REPO / "experiments" / "studies").glob("*.py") if p.stem not in ("__init__", "grid")]
+    for path in sorted((REPO / "experiments" / "render").glob("*.py")):
+        tree = ast.parse(path.read_text())
+        names = [n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)]
+        assert not [n for n in names if any(n.startswith(k) for k in kinds)], path.name
+        assert "experiments.studies" not in path.read_text(), path.name

@@ -7,6 +7,8 @@ A run succeeds when it reports convergence and lands within 1e-6 R of that optim
 """
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 
@@ -121,11 +123,9 @@ class ConvergenceStudy(Study):
 
     def analyse(self, df, cfg, target, log):
         """Success tables per arc (success.csv), the redrawn success figure, and which methods always converge."""
-        from experiments.render import figures
-
         table = success_table(df)
         save_csv(table, target / "success.csv", index=False, float_format="%.4g")
-        figures.convergence_success(table, target / "convergence.png")
+        success_figure(table, target / "convergence.png")
         tables = []
         n_dirs = cfg["start_directions"]
         data = cfg["datasets"][0].get("params", {})
@@ -157,3 +157,40 @@ class ConvergenceStudy(Study):
                              "against the start distance [radii], synthetic circles (full circle and arc); iterative "
                              "methods only", file="convergence.png")
         return Analysis(tables=tables, figures=[fig], values=values, findings=findings)
+
+
+# ---------------------------------------------------------------- figures (drawn in experiments.render.style)
+def _params_label(p) -> str:
+    if p is None or (isinstance(p, float) and np.isnan(p)) or p in ("{}", ""):
+        return ""
+    return " " + ",".join(f"{k}={v}" for k, v in json.loads(p).items())
+
+
+def success_figure(success: pd.DataFrame, path):
+    """Success rate against start distance [radii], one panel per arc. Coinciding curves are not shifted:
+    each method has its own marker size and line style, so curves that overlap stay visible and every point
+    is drawn at its true value (0..1). ``success``: results/convergence/success.csv."""
+    from experiments.render import style
+    import matplotlib.pyplot as plt
+    arcs = list(success["arc_deg"].unique())
+    with style.figure_style():
+        fig, axes = plt.subplots(1, len(arcs), figsize=style.size(1.0, 0.42), sharey=True, squeeze=False)
+        groups = list(success.groupby(["method", "params"], sort=True).groups)
+        for j, arc in enumerate(arcs):
+            ax = axes[0, j]
+            for k, (m, p) in enumerate(groups):
+                g = success[(success["arc_deg"] == arc) & (success["method"] == m) & (success["params"] == p)]
+                g = g.sort_values("start_distance")
+                kw = style.method_style(m + _params_label(p))
+                ax.plot(g["start_distance"], g["success_rate"], color=kw["color"], marker=kw["marker"],
+                        linestyle=style.LINESTYLES[k % len(style.LINESTYLES)], ms=3.5 + 1.4 * (len(groups) - 1 - k),
+                        mfc="none", mew=1.1, label=style.short_label(m) + _params_label(p))
+            ax.set_xscale("log")
+            style.plain_log_ticks(ax, "x")
+            ax.set_ylim(-0.03, 1.03)
+            ax.set_yticks(np.linspace(0, 1, 6), [f"{100 * v:.0f} %" for v in np.linspace(0, 1, 6)])
+            ax.set_title(f"{arc:.0f}° arc")
+            ax.set_xlabel("start distance from the true centre [radii]")
+        axes[0, 0].set_ylabel("runs reaching the optimum")
+        style.legend_outside(fig, axes=[axes[0, 0]], ncol=3)
+        return style.save(fig, path)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 import methods
 from datasets.contouring import EXAMPLES
@@ -21,7 +22,7 @@ def variant_params(variant: dict, eta: float) -> dict:
 
 
 def _panels(cfg):
-    """The declared [[trajectories]] as panels of figures.magnification_trajectories."""
+    """The declared [[trajectories]] as panels of :func:`trajectories_figure`."""
     variants = {v["label"]: v for v in cfg["variants"]}
     return [{"example": t["example"], "eta": cfg["examples"][t["example"]], "method": variants[lab]["method"],
              "params": {k: v for k, v in variant_params(variants[lab], cfg["examples"][t["example"]]).items()
@@ -103,8 +104,6 @@ class MagnificationStudy(Study):
     def analyse(self, df, cfg, target, log):
         """Continuity / loops table from the rows, the redrawn continuity chart and trajectories; findings:
         which algorithm variants stay continuous and loop-free on every example they apply to."""
-        from experiments.render import figures
-
         table = df.pivot_table(index="dataset", columns="method", values=["continuity", "loops"], sort=False)
         save_csv(table, target / "metrics.csv", float_format="%.4g")
         cells = df.assign(cell=[("skipped" if st != "ok" else f"{c:.2f} / {int(lo)}")
@@ -113,10 +112,10 @@ class MagnificationStudy(Study):
         labels = [v["label"] for v in cfg["variants"]]
         piv = piv[[v for v in labels if v in piv.columns]].rename_axis("example").reset_index()
         log(piv.to_string(index=False))
-        figures.magnification_continuity(df, target / "magnification_continuity.png")
+        continuity_figure(df, target / "magnification_continuity.png")
         panels = _panels(cfg)
         if panels:
-            figures.magnification_trajectories(panels, target / "magnification.png")
+            trajectories_figure(panels, target / "magnification.png")
         ok = df[df["status"] == "ok"]
         clean = {}
         for label, g in ok.groupby("method", sort=False):
@@ -137,3 +136,87 @@ class MagnificationStudy(Study):
             figs.append(Figure(caption="Magnified trajectories (positions in mm, errors magnified by η) by the conventional "
                                        "nearest-point rule and by offset-algorithm variants", file="magnification.png"))
         return Analysis(tables=[Table(caption=caption, data=piv)], figures=figs, values=values, findings=findings)
+
+
+# ---------------------------------------------------------------- figures (drawn in experiments.render.style)
+def continuity_figure(results: pd.DataFrame, path, *, threshold: float = 1.0):
+    """Continuity (largest magnified step / (η × largest measured step); about 1 or less: continuous, left
+    panel) and loops of the magnified trajectory (right panel) per example and algorithm as dot charts;
+    a run the algorithm does not apply to is marked 'skipped'.
+    ``results``: results/magnification/results.csv (dataset, method, status, continuity, loops)."""
+    from experiments.render import style
+    import matplotlib.pyplot as plt
+    examples = list(dict.fromkeys(results["dataset"]))
+    algos = list(dict.fromkeys(results["method"]))
+    colours = style.category_styles(algos)
+    with style.figure_style():
+        fig, (ax, axl) = plt.subplots(1, 2, figsize=style.size(1.0, 0.62), sharey=True,
+                                      gridspec_kw={"width_ratios": (3, 2)})
+        y = np.arange(len(examples))[::-1]
+        dy = 0.8 / len(algos)
+        for a, algo in enumerate(algos):
+            kw = colours[algo]
+            label = algo.replace("delta", "δ").replace(" eta ", " η ")
+            rows = results[results["method"] == algo].set_index("dataset")
+            yy = y + (len(algos) / 2 - a - 0.5) * dy
+            ok = np.array([ex in rows.index and rows.at[ex, "status"] == "ok" for ex in examples])
+            cont = np.array([rows.at[ex, "continuity"] if o else np.nan for ex, o in zip(examples, ok)], float)
+            loops = np.array([rows.at[ex, "loops"] if o else np.nan for ex, o in zip(examples, ok)], float)
+            ax.plot(cont, yy, kw["marker"], color=kw["color"], ms=5, ls="none", label=label)
+            axl.plot(loops, yy, kw["marker"], color=kw["color"], ms=5, ls="none")
+            if (~ok).any():
+                for axis in (ax, axl):
+                    axis.plot(np.full((~ok).sum(), np.nan), yy[~ok], "x")   # keeps the limits
+                ax.plot(np.full((~ok).sum(), threshold), yy[~ok], "x", color=kw["color"], ms=5, mew=1.2,
+                        label="_skipped")
+        ax.plot([], [], "x", color="0.3", label="skipped (not applicable)")
+        ax.axvline(threshold, color="0.2", lw=0.9, ls="--", label="continuous (≤ 1)")
+        ax.set_xscale("log")
+        style.plain_log_ticks(ax, "x")
+        axl.set_xscale("symlog", linthresh=1.0)
+        axl.set_xticks([0, 1, 3, 10, 30], ["0", "1", "3", "10", "30"])
+        axl.set_xlim(-0.3, 1.6 * max(1.0, float(np.nanmax(pd.to_numeric(results["loops"], errors="coerce")))))
+        ax.set_yticks(y, [e.replace("_", " ") for e in examples])
+        for axis in (ax, axl):
+            axis.grid(axis="y", visible=False)
+        ax.set_xlabel("continuity = largest magnified step /\n(η × largest measured step)")
+        axl.set_xlabel("loops (self-intersections)")
+        style.legend_outside(fig, axes=[ax], ncol=2)
+        return style.save(fig, path)
+
+
+def trajectories_figure(panels: list[dict], path):
+    """Magnified trajectories side by side. Each panel: {'example': name in datasets.contouring.EXAMPLES,
+    'eta': magnification, 'method': a magnify method id, 'params': its other parameters, 'title': str,
+    'box': (x0, x1, y0, y1) in mm or None}. Axes in mm, reference and magnified path in the legend."""
+    from experiments.render import style
+    import matplotlib.pyplot as plt
+    import methods
+    from datasets.contouring import EXAMPLES
+    from methods.magnify import MagnifyInput
+    ncol = min(3, len(panels))
+    nrow = int(np.ceil(len(panels) / ncol))
+    with style.figure_style():
+        fig, axes = plt.subplots(nrow, ncol, figsize=style.size(1.0, 0.36 * nrow), squeeze=False)
+        for ax, pnl in zip(axes.ravel(), panels):
+            ref, meas = EXAMPLES[pnl["example"]]()
+            data = MagnifyInput(ref, meas)
+            eta = float(pnl["eta"])
+            res = methods.fit(pnl["method"], data, eta=eta, **pnl.get("params", {}))
+            ax.plot(*data.reference.T, color="0.55", lw=1.0, label="reference path")
+            ax.plot(*res.points.T, color=style.PALETTE[0], lw=0.9, label="magnified path (error × η)")
+            if pnl.get("box"):
+                x0, x1, y0, y1 = pnl["box"]
+                ax.set_xlim(x0, x1)
+                ax.set_ylim(y0, y1)
+            # equal scales in x and y: a zoom box is shown exactly (the axes box takes the box's shape);
+            # without one, matplotlib widens the free data limits to fill the panel
+            ax.set_aspect("equal", adjustable="box" if pnl.get("box") else "datalim")
+            ax.set_title(f"{pnl.get('title', pnl['method'])}\nη = {eta:g}: continuity {res.extra['continuity']:.2f}, "
+                         f"loops {res.extra['self_intersections']}", fontsize=8)
+            ax.set_xlabel("x [mm]")
+            ax.set_ylabel("y [mm]")
+        for ax in axes.ravel()[len(panels):]:
+            ax.set_visible(False)
+        style.legend_outside(fig, axes=[axes[0, 0]])
+        return style.save(fig, path)

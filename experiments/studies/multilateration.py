@@ -10,6 +10,7 @@ of the 21 geometric errors identified from the volumetric errors, runtime.
 from __future__ import annotations
 
 import json
+import textwrap
 import time
 
 import numpy as np
@@ -278,8 +279,6 @@ class MultilaterationStudy(Study):
     def analyse(self, df, cfg, target, log):
         """Accuracy and conditioning per scenario, stations table, winners, the exact-length conditioning check,
         the redrawn conditioning figure and the x-axis figure; findings from the winners."""
-        from experiments.render import figures
-
         is_check = df["dataset"].str.startswith("exact lengths, stations ") if "published_vs_centred_um" in df else \
             pd.Series(False, index=df.index)
         check, df = df[is_check], df[~is_check]
@@ -298,7 +297,7 @@ class MultilaterationStudy(Study):
         scen_label, st = stations_table(df, cfg)
         save_csv(st, target / "stations_table.csv", index=False, float_format="%.6f")
         win = winner(acc)
-        figures.multilateration_conditioning(acc, target / "multilateration.png")
+        conditioning_figure(acc, target / "multilateration.png")
         figure_axis_line(cfg, target)
         runs = int(acc["runs"].max())
         tables = []
@@ -344,3 +343,40 @@ class MultilaterationStudy(Study):
                 Figure(caption="One simulated campaign: volumetric errors along the x axis [µm] against x [mm], truth and "
                                "three schemes with self-located stations (the paper's figures 5-6)", file="x_axis.png")]
         return Analysis(tables=tables, figures=figs, values=values, findings=findings)
+
+
+# ---------------------------------------------------------------- figures (drawn in experiments.render.style)
+def conditioning_figure(accuracy: pd.DataFrame, path, *, scenario: str | None = None,
+                                 stations: str = "located"):
+    """Condition numbers of both steps per scheme (categorical x: dots, no joining line) and the volumetric
+    error RMS after alignment in a panel of its own. ``accuracy``: results/multilateration/accuracy.csv."""
+    from experiments.render import style
+    import matplotlib.pyplot as plt
+    sub = accuracy[accuracy["stations"] == stations]
+    scenario = scenario or sub["dataset"].iloc[0]
+    g = sub[sub["dataset"] == scenario].reset_index(drop=True)
+    xs = np.arange(len(g))
+    names = [m.replace("_", " ") for m in g["method"]]
+    with style.figure_style():
+        fig, axes = plt.subplots(1, 3, figsize=style.size(1.0, 0.45))
+        for ax, step, title in ((axes[0], "stations", "step 1: stations"), (axes[1], "points", "step 2: points")):
+            if f"kappa_{step}" not in g or g[f"kappa_{step}"].isna().all():
+                ax.set_visible(False)
+                continue
+            ax.plot(xs, g[f"kappa_{step}"], "o", color=style.PALETTE[0], label="κ₂ (SVD), median")
+            ax.plot(xs, g[f"kappa_{step}_theorem1"], "v", color=style.PALETTE[1], label="Theorem 1 lower estimate")
+            ax.axhline(100, color="0.2", ls="--", lw=0.8, label="100: the paper's 'satisfactory'")
+            ax.set_yscale("log")
+            style.plain_log_ticks(ax, "y")
+            ax.set_title(title)
+            ax.set_ylabel("condition number")
+        axes[2].plot(xs, g["aligned_error_rms_um"], "s", color=style.PALETTE[2], label="volumetric error RMS")
+        axes[2].set_ylabel("volumetric error RMS\nafter alignment [µm]")
+        axes[2].set_ylim(0, None)
+        axes[2].set_title("accuracy")
+        for ax in axes:
+            ax.set_xticks(xs, names, rotation=35, ha="right")
+            ax.set_xlim(-0.5, len(xs) - 0.5)
+            ax.grid(axis="x", visible=False)
+        style.legend_outside(fig, ncol=2, title="; ".join(textwrap.wrap(scenario, 90)) + f" (stations {stations})")
+        return style.save(fig, path)

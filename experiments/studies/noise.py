@@ -49,11 +49,9 @@ class NoiseStudy(Study):
 
     def analyse(self, df, cfg, target, log):
         """The KCR table (kcr.csv), the redrawn KCR figure, and which least-squares estimators reach the bound."""
-        from experiments.render import figures
-
         table = kcr_table(df)
         save_csv(table, target / "kcr.csv", index=False, float_format="%.6g")
-        figures.noise_kcr(table, target / "noise_kcr.png")
+        kcr_figure(table, target / "noise_kcr.png")
         sigma, n = table["noise"].max(), int(table["n"].max())
         worst = table[(table["noise"] == sigma) & (table["n"] == n)]
         piv = worst.pivot_table(index="method", columns="arc_deg", values="radius_rmse_over_kcr", aggfunc="mean", sort=False)
@@ -85,3 +83,58 @@ class NoiseStudy(Study):
                        "against the noise σ / R on synthetic unit circles and arcs; dashed: closed-form (algebraic) fits")
         return Analysis(tables=[Table(caption=caption, data=shown.round(3), unit="")],
                         figures=[Figure(caption=fig_caption, file="noise_kcr.png")], values=values, findings=findings)
+
+
+# ---------------------------------------------------------------- figures (drawn in experiments.render.style)
+
+#: least-squares circle estimators (the KCR bound applies to them); the others estimate other circles
+_ALGEBRAIC_KINDS = ("closed form",)
+
+
+def _kind(method_id: str) -> str | None:
+    try:
+        import methods
+        return methods.get(method_id).kind
+    except Exception:
+        return None
+
+
+def kcr_figure(kcr: pd.DataFrame, path, *, methods: list[str] | None = None, n: int | None = None):
+    """Radius RMSE / KCR bound (top) and radius bias / σ (bottom) against σ / R, one column per arc.
+
+    ``kcr``: results/noise/kcr.csv (arc_deg, noise, n, method, params, radius_rmse_over_kcr,
+    radius_bias_over_sigma). ``methods``: which to draw (default: every method whose registry kind is not
+    'convex program': the least-squares estimators the KCR bound is about; the zone fits estimate other
+    circles and stay in the table)."""
+    from experiments.render import style
+    import matplotlib.pyplot as plt
+    n = int(kcr["n"].max()) if n is None else n
+    t = kcr[(kcr["n"] == n) & (kcr["params"].fillna("{}") == "{}")].copy()
+    if methods is None:
+        methods = sorted(m for m in t["method"].unique() if _kind(m) != "convex program")
+    t = t[t["method"].isin(methods)]
+    arcs = sorted(t["arc_deg"].unique(), reverse=True)
+    with style.figure_style():
+        fig, axes = plt.subplots(2, len(arcs), figsize=style.size(1.0, 0.62), sharex=True, sharey="row",
+                                 squeeze=False)
+        for j, arc in enumerate(arcs):
+            for m, g in t[t["arc_deg"] == arc].groupby("method"):
+                g = g.sort_values("noise")
+                kw = style.method_style(m)
+                if _kind(m) in _ALGEBRAIC_KINDS:
+                    kw["linestyle"] = "--"
+                axes[0, j].plot(g["noise"], g["radius_rmse_over_kcr"], **kw)
+                axes[1, j].plot(g["noise"], g["radius_bias_over_sigma"], **kw)
+            axes[0, j].axhline(1.0, color="0.2", lw=0.8)
+            axes[1, j].axhline(0.0, color="0.2", lw=0.8)
+            axes[0, j].set_title(f"{arc:.0f}° arc")
+            axes[1, j].set_xlabel("σ / R")
+            for i in (0, 1):
+                axes[i, j].set_xscale("log")
+            axes[0, j].set_yscale("log")
+        axes[0, 0].set_ylabel("radius RMSE /\nKCR bound")
+        axes[1, 0].set_ylabel("radius bias / σ")
+        for ax in axes.ravel():
+            style.plain_log_ticks(ax)
+        style.legend_outside(fig, axes=[axes[0, 0]], title=f"N = {n} points; dashed: closed-form (algebraic) fits")
+        return style.save(fig, path)

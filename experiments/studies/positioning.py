@@ -4,7 +4,10 @@ positioning paper's figure 2), an ordinary least-squares cubic, and the paper's 
 U(P) = 2 sqrt(x^T Cov x) (its figure 3). Positions are drawn uniformly along the travel."""
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
+import pandas as pd
 
 import methods
 from datasets.positioning import axis_test
@@ -99,8 +102,6 @@ class PositioningStudy(Study):
     def analyse(self, df, cfg, target, log):
         """Coverage table (coverage.csv), the redrawn coverage figure, the example axis; findings: which band
         reaches the nominal 95 % in every scenario."""
-        from experiments.render import figures
-
         table = df.groupby(["dataset", "method"], sort=False).agg(coverage=("coverage", "mean"),
                                                                   halfwidth_um=("band_halfwidth_mean", "mean"),
                                                                   error_rms_um=("error_rms", "mean")).reset_index()
@@ -109,7 +110,7 @@ class PositioningStudy(Study):
         save_csv(table, target / "coverage.csv", index=False, float_format="%.4g")
         for r in table.itertuples():
             log(f"  {r.dataset:<55} {r.method:<34} {r.coverage:8.3f} {r.halfwidth_um:8.2f} um {r.error_rms_um:7.2f} um")
-        figures.positioning_coverage(table, target / "positioning.png")
+        coverage_figure(table, target / "positioning.png")
         if cfg.get("example_band"):
             example(cfg, target)
         worst = table.groupby("method", sort=False)["coverage"].min()
@@ -135,3 +136,32 @@ class PositioningStudy(Study):
                                        f"{cfg['example_band']}", file="example.png"))
         return Analysis(tables=[Table(caption=caption, data=shown, unit="%, µm")], figures=figs, values=values,
                         findings=findings)
+
+
+# ---------------------------------------------------------------- figures (drawn in experiments.render.style)
+def coverage_figure(coverage: pd.DataFrame, path, *, nominal: float = 0.95):
+    """Coverage of the true deviation curve by each band, per scenario: horizontal grouped bars (scenario
+    names readable on the y axis), the nominal coverage as a line, the legend below the axes.
+    ``coverage``: results/positioning/coverage.csv (dataset, method, coverage)."""
+    from experiments.render import style
+    import matplotlib.pyplot as plt
+    scen = list(dict.fromkeys(coverage["dataset"]))
+    bands = list(dict.fromkeys(coverage["method"]))
+    with style.figure_style():
+        fig, ax = plt.subplots(figsize=style.size(1.0, 0.12 * len(scen) * len(bands) / 3 + 0.25))
+        h = 0.8 / len(bands)
+        y = np.arange(len(scen))[::-1]
+        colours = style.category_styles(bands)
+        for b, band in enumerate(bands):
+            vals = [coverage[(coverage["dataset"] == s) & (coverage["method"] == band)]["coverage"].mean() for s in scen]
+            kw = colours[band]
+            bars = ax.barh(y + (len(bands) / 2 - b - 0.5) * h, vals, h, color=kw["color"], label=band.replace("+-", "±"))
+            ax.bar_label(bars, labels=[f"{100 * v:.0f} %" for v in vals], padding=2, fontsize=8)
+        ax.axvline(nominal, color="0.2", lw=0.9, ls="--", label=f"nominal {100 * nominal:.0f} %")
+        ax.set_yticks(y, ["\n".join(textwrap.wrap(s.replace(" um", " µm"), 32)) for s in scen])
+        ax.set_xlim(0, 1.12)
+        ax.set_xticks(np.linspace(0, 1, 6), [f"{100 * v:.0f} %" for v in np.linspace(0, 1, 6)])
+        ax.set_xlabel("share of positions where the band covers the true deviation curve")
+        ax.grid(axis="y", visible=False)
+        style.legend_outside(fig, ncol=2)
+        return style.save(fig, path)

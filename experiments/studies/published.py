@@ -124,13 +124,11 @@ class PublishedStudy(Study):
     def analyse(self, df, cfg, target, log):
         """Table 1 published against reproduced, the redrawn comparison figure; findings: how many figures are
         reproduced, how many the rounding of the printed data explains."""
-        from experiments.render import figures
-
         comp = comparison(df)
         for r in comp.to_dict(orient="records"):
             log(f"  {r['dataset']} {r['variant']:<28} {r['column']:<27} published {r['published']}: "
                 f"{r['reproduced_value']:.7f} ({_explanation(r)})")
-        figures.published_circularity(comp, target / "published.png")
+        circularity_figure(comp, target / "published.png")
         n, rep = len(comp), int(comp["reproduced"].sum())
         explained = int((~comp["reproduced"] & comp["explained_by_rounding"]).sum())
         values = {"published_figures": n, "reproduced": rep, "explained_by_rounding": explained,
@@ -151,3 +149,36 @@ class PublishedStudy(Study):
                              "printed digits allow, relative to the published value [µm]", file="published.png")
         return Analysis(tables=[Table(caption=caption, data=shown, unit="mm")], figures=[fig], values=values,
                         findings=findings)
+
+
+# ---------------------------------------------------------------- figures (drawn in experiments.render.style)
+def circularity_figure(rows: pd.DataFrame, path):
+    """Published against reproduced circularity per data set and column of the roundness paper's table 1,
+    with the 99 % range that the printed digits allow. ``rows``: the published study's comparison rows
+    (dataset, variant, column, published, reproduced_value, rounding_p0_5, rounding_median, rounding_p99_5),
+    values in mm; drawn in µm relative to the published value so that every panel shares one axis."""
+    from experiments.render import style
+    import matplotlib.pyplot as plt
+    r = rows.reset_index(drop=True)
+    labels = [f"{d.replace('roundness_', '')}{'*' if v != 'as published' else ''}\n{c.split(' ')[0]}"
+              for d, v, c in zip(r["dataset"], r["variant"], r["column"])]
+    x = np.arange(len(r))
+    to_um = lambda col: (r[col] - r["published"]) * 1e3     # noqa: E731
+    with style.figure_style():
+        fig, ax = plt.subplots(figsize=style.size(1.0, 0.45))
+        lo, med, hi = to_um("rounding_p0_5"), to_um("rounding_median"), to_um("rounding_p99_5")
+        ax.errorbar(x, med, yerr=[med - lo, hi - med], fmt="none", ecolor="0.55", elinewidth=2.5, capsize=4,
+                    label="99 % range allowed by the printed digits")
+        ax.plot(x, to_um("reproduced_value"), "o", color=style.PALETTE[0], label="reproduced from the printed data")
+        ax.axhline(0.0, color=style.PALETTE[1], lw=1.0, label="published value")
+        ax.set_xticks(x, labels)
+        ax.set_xlim(-0.6, len(x) - 0.4)
+        ax.set_ylabel("circularity − published [µm]")
+        ax.grid(axis="x", visible=False)
+        ax.set_yscale("symlog", linthresh=1.0)
+        top = float(np.nanmax(np.abs(np.concatenate([lo, hi]))))
+        ticks = [t for t in (1, 3, 10, 30, 100, 300, 1000) if t <= top * 1.2]
+        ax.set_yticks([-t for t in ticks[::-1]] + [0] + ticks)
+        style.plain_log_ticks(ax, "y")
+        style.legend_outside(fig, ncol=2, title="*: repeated closing point dropped")
+        return style.save(fig, path)

@@ -129,10 +129,11 @@ def test_declared_unit_is_not_doubled_nor_put_on_counts():
     import pandas as pd
     from experiments.render.report_tables import html_table, latex_fragments
     df = pd.DataFrame({"method": ["a", "b"], "largest error [mm]": [0.46, 1.1e-13], "sets > 1e-9 mm": [27.0, 0.0],
-                       "radius": [1.5, 2.25]})
+                       "not_converged": [0, 2], "radius": [1.5, 2.25]})
     out = html_table(df, caption="c", unit="mm")
     assert "largest error [mm]</th>" in out and "[mm] [mm]" not in out
     assert "sets &gt; 1e-9 mm</th>" in out and ">27<" in out and "27.0" not in out
+    assert ">not_converged</th>" in out            # a count of fits: no unit
     assert "radius [mm]</th>" in out
     tex = "".join(latex_fragments(df, caption="c", label="t", unit="mm"))
     assert tex.count(r"\si{\milli\metre}") == 1 and r"radius \\ {}[\si{\milli\metre}]" in tex

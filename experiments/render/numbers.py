@@ -21,7 +21,7 @@ import numpy as np
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 #: header words that make a column a count or a dimensionless number (shown without the table's unit)
 _COUNT = re.compile(r"(?:^|[\s_])(n|runs?|rows?|counts?|iterations?|evaluations?|nfev|nit|points?|repetitions?|"
-                    r"sets?|problems?|starts?|slopes?|ratios?|exponents?)(?:$|[\s_])", re.I)
+                    r"sets?|problems?|starts?|slopes?|ratios?|exponents?|not[\s_]converged)(?:$|[\s_])", re.I)
 MAX_EXTRA_DECIMALS = 6
 
 

@@ -7,7 +7,6 @@ measured with a cross grid encoder (about 60 um and 3 um at a square corner)."""
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import lsim
 
 
 def arc(center, radius, start, end, step_deg=0.5):
@@ -27,6 +26,7 @@ def resample(poly: np.ndarray, spacing: float) -> np.ndarray:
 
 def servo(commanded: np.ndarray, dt: float, wn: float = 60.0, zeta: float = 0.7) -> np.ndarray:
     """Each axis through a second-order system wn^2 / (s^2 + 2 zeta wn s + wn^2), starting at rest on the path."""
+    from scipy.signal import lsim  # scipy.signal takes ~1 s to import: loaded when a contouring example is made
     t = np.arange(len(commanded)) * dt
     out = np.empty_like(commanded)
     for j in range(2):

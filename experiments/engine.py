@@ -36,7 +36,7 @@ from datasets import sources
 from experiments.executors import execute
 from experiments.rows import RERUN_STATUSES, source_of, run_chunk
 # the row API of studies with their own ``execute`` and of the command (engine.base_row, engine.fit_row, ...)
-from experiments.rows import ENVIRONMENT_STATUSES, base_row, fit_row, load_data, note_signal  # noqa: F401
+from experiments.rows import ENVIRONMENT_STATUSES, base_row, fit_row, load_data, note_signal, task_data  # noqa: F401
 from experiments.store import RowStore
 from methods import InvalidInputError
 
@@ -367,21 +367,92 @@ class _Interner:
         return row
 
 
+# ---------------------------------------------------------------- a study whose outputs are up to date
+
+def outputs_code(cfg: dict) -> str:
+    """Hash of what a study's outputs depend on besides its rows: its config, the code that analyses the rows and
+    writes the outputs (``experiments.run`` with everything it imports, the study's module, ``fitbench.plots``), the
+    environment of the keys and the versions of the packages that compute, draw and format the outputs."""
+    from importlib import metadata
+
+    from experiments import codehash
+    from experiments.provenance import PACKAGES
+    versions = {}
+    for pkg in PACKAGES:
+        try:
+            versions[pkg] = metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            versions[pkg] = None
+    ident = {"config": {k: v for k, v in cfg.items() if not k.startswith("_")}, "quick": bool(cfg.get("_quick")),
+             "code": codehash.code_hash("experiments.run", "fitbench.plots", f"experiments.studies.{cfg['kind']}"),
+             "engine": ENGINE_VERSION, "env": environment(), "versions": versions}
+    return hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def fingerprint(outputs: str, keys) -> str:
+    """A study's outputs (:func:`outputs_code`) and the cache keys of all its rows, in order: equal fingerprints mean
+    the same rows (each key covers all code its row depends on) analysed by the same code."""
+    h = hashlib.sha256(outputs.encode())
+    for key in keys:
+        h.update(key.encode())
+        h.update(b"\n")
+    return h.hexdigest()[:32]
+
+
+#: the outputs of a study besides the files its report.json names
+OUTPUT_FILES = ("results.csv", "summary.csv", "summary.md", "report.json", "meta.json")
+
+
+def up_to_date(cfg: dict, tasks, target: Path) -> int | None:
+    """The number of rows of a study whose outputs in ``target`` are those a run would write now, else None: its
+    ``meta.json`` names the same :func:`fingerprint` (the same row keys, output code, environment and versions), no
+    row is to be run again (:data:`RERUN_STATUSES`), ``results.csv`` is the file the run wrote (its SHA-256), every
+    output and every table and figure of ``report.json`` is there, and the row store says it holds all the rows of
+    that fingerprint (a change of the store since, by any program, clears that record). ``tasks``: a function
+    returning a fresh iterable of the prepared tasks."""
+    from experiments.verdict import results_sha256
+    target = Path(target)
+    try:
+        meta = json.loads((target / "meta.json").read_text(encoding="utf-8"))
+        manifest = json.loads((target / "report.json").read_text(encoding="utf-8"))
+        named = [e["file"] for e in manifest.get("tables", []) + manifest.get("figures", [])]
+    except (OSError, ValueError, TypeError, KeyError, AttributeError):
+        return None
+    old = meta.get("fingerprint") if isinstance(meta, dict) else None
+    if not old or set(meta.get("status_counts") or {}) & set(RERUN_STATUSES) or not (target / "rows.sqlite").is_file():
+        return None
+    if not all((target / f).is_file() for f in (*OUTPUT_FILES, *named)):
+        return None
+    if fingerprint(outputs_code(cfg), (t["key"] for t in tasks())) != old:
+        return None
+    if results_sha256(target) != meta.get("results_sha256"):
+        return None
+    return RowStore.holds_complete(target / "rows.sqlite", old)
+
+
+# ---------------------------------------------------------------- the run
+
 def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, scheduler: str | None,
-        desc: str, log=print, row_timeout: float | None = None, chunk_rows: int | None = None):
+        desc: str, log=print, row_timeout: float | None = None, chunk_rows: int | None = None,
+        outputs: str | None = None):
     """Run what is not stored yet (and rows whose status is in :data:`RERUN_STATUSES`); return the rows
     as one DataFrame in task order, and the counts.
 
     ``tasks`` is a list of prepared tasks or a function returning a fresh iterable of them (it is called
     once to run, once to collect the rows): the tasks of a large study are never all in memory, rows go
-    to the store as their chunk finishes, and the frame is built a block at a time."""
+    to the store as their chunk finishes, and the frame is built a block at a time. With ``outputs``
+    (:func:`outputs_code`) the counts hold the study's :func:`fingerprint`, and the store records that it holds
+    every row of it when none is to be run again."""
     make = tasks if callable(tasks) else (lambda: tasks)
     counts = {"tasks": 0, "stored": 0, "to_run": 0, "retried_errors": 0}
     used = set()
+    keys = hashlib.sha256((outputs or "").encode())
     for block in _blocks(make(), 2000):
         status = {} if force else store.done([t["key"] for t in block])
         counts["tasks"] += len(block)
         for t in block:
+            keys.update(t["key"].encode())
+            keys.update(b"\n")
             used.add((t["method"], _source_name(t["dataset"])))
             s = status.get(t["key"])
             if s is None or s in RERUN_STATUSES:
@@ -417,6 +488,10 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
         del rows, stored
     df = columns.frame()
     counts["used"] = used
+    if outputs is not None:
+        counts["fingerprint"] = keys.hexdigest()[:32]
+        if len(df) and not df["status"].isin(RERUN_STATUSES).any():
+            store.mark_complete(counts["fingerprint"], len(df))
     return df, counts
 
 

@@ -170,6 +170,25 @@ def failed_row(task: dict, status: str, message: str) -> dict:
     return {**base_row(task), "status": status, "message": message, "task_index": task.get("index")}
 
 
+#: the data of the last generic row: (its data set spec, seed, stream, (points, truth))
+_LAST_DATA: list = [None, None, None, None]
+
+
+def task_data(task: dict):
+    """:func:`load_data` of a task for the generic fit, shared with the row before it when that row had the same data set,
+    seed and stream (the methods of one repetition follow each other in a chunk: their data are made once). Methods
+    see the points read-only (``methods.fit``) and the fit row only reads the truth, so a row cannot change the data
+    of the next."""
+    spec, seed, stream = task["dataset"], task["seed"], task["stream"]
+    last = _LAST_DATA
+    if last[0] is spec and last[1] == seed and last[2] == stream:
+        return last[3]
+    last[0] = None
+    data = load_data(spec, seed, stream)
+    last[:] = [spec, seed, list(stream), data]
+    return data
+
+
 def run_task(task: dict, row_timeout: float | None = None) -> dict:
     """Worker entry point: the row of the task's study (``Study.execute``: the generic fit by default). A row that
     runs longer than ``row_timeout`` seconds is ``timeout``; one that raises SystemExit or

@@ -144,13 +144,14 @@ def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
 def write_results(df, path: Path, block: int = 20000) -> str:
     """``df`` as CSV, streamed a block of rows at a time into a temporary file that replaces ``path`` at the
     end (atomic); return the SHA-256 of the bytes written."""
+    from experiments.csvtext import write_csv
     from methods.files import atomic_path
     digest = hashlib.sha256()
     with atomic_path(path, make_parents=True) as tmp:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
             for i in range(0, max(len(df), 1), block):
                 buf = io.StringIO()
-                df.iloc[i:i + block].to_csv(buf, index=False, header=(i == 0), float_format="%.17g")
+                write_csv(df.iloc[i:i + block], buf, header=(i == 0))  # df.to_csv(..., float_format="%.17g")
                 text = buf.getvalue()
                 digest.update(text.encode("utf-8"))
                 fh.write(text)
@@ -171,11 +172,16 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
         check_summary_by(cfg, study, list(islice(make(), 10000)))
     jobs = min(jobs, cfg.get("max_jobs", jobs))
     row_timeout = row_timeout if row_timeout is not None else cfg.get("row_timeout")
+    n_rows = None if force else engine.up_to_date(cfg, make, target)
+    if n_rows is not None:  # the same rows analysed by the same code: the outputs there are this run's
+        log(f"   {n_rows} rows: {n_rows} already stored, 0 to run; results.csv, tables and figures up to date")
+        return target
     store = engine.RowStore(target / "rows.sqlite", log=log)
     _CURRENT["store"] = target / "rows.sqlite"
     try:
         df, counts = engine.run(make, store, force=force, jobs=jobs, executor=executor, scheduler=scheduler,
-                                desc=cfg["name"], log=log, row_timeout=row_timeout, chunk_rows=cfg.get("chunk_rows"))
+                                desc=cfg["name"], log=log, row_timeout=row_timeout, chunk_rows=cfg.get("chunk_rows"),
+                                outputs=engine.outputs_code(cfg))
     finally:
         store.close()
     failure = environment_failure(cfg, df)
@@ -197,7 +203,8 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     meta = {**collect(public_cfg), "study": cfg["name"], "quick": quick, "executor": executor, "jobs": jobs,
             "row_timeout_s": row_timeout, "environment": engine.environment(),
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
-            "plugins": plugin_distributions(used), "results_sha256": results_sha256, "findings": findings}
+            "plugins": plugin_distributions(used), "results_sha256": results_sha256, "findings": findings,
+            "fingerprint": counts.pop("fingerprint")}
     contract.write_manifest(target, cfg, analysis, summary)
     buf = io.StringIO()
     summary.to_csv(buf, index=False, float_format="%.10g")

@@ -219,7 +219,7 @@ class Study:
 
     def execute(self, task: dict) -> dict:
         """One task's row (in a worker). Default: the generic fit of the task's method on its data set."""
-        points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
+        points, truth = engine.task_data(task)  # load_data, made once for the methods that follow on the same data
         return engine.fit_row(task, points, truth)
 
     def row_columns(self, cfg: dict) -> dict[str, str] | None:

@@ -156,6 +156,113 @@ def test_generic_chunks_give_the_rows_of_single_rows(tmp_path):
     pd.testing.assert_frame_equal(frames[0], frames[1])
 
 
+# ---------------------------------------------------------------- a re-run of a study that is up to date
+
+def _stamps(folder: Path) -> dict:
+    return {p.name: p.stat().st_mtime_ns for p in folder.rglob("*") if p.is_file() and "rows.sqlite" not in p.name}
+
+
+def test_a_rerun_of_an_unchanged_study_rewrites_nothing_and_any_change_runs_it_again(tmp_path):
+    """All rows stored under the same keys and the outputs those of the same code: the re-run rewrites nothing. A
+    missing table, a row another program changed in the store, --force: the study is analysed again."""
+    study = str(write_study(tmp_path, reps=3))
+    out = tmp_path / "out"
+    target = out / "eng"
+    logs: list[str] = []
+    run.run_study(study, out, log=logs.append)
+    assert "up to date" not in "\n".join(logs)
+    first = _stamps(target)
+    logs.clear()
+    run.run_study(study, out, log=logs.append)
+    assert any("12 rows: 12 already stored, 0 to run; results.csv, tables and figures up to date" in line
+               for line in logs), logs
+    assert _stamps(target) == first  # nothing rewritten
+    (target / "summary.md").unlink()
+    logs.clear()
+    run.run_study(study, out, log=logs.append)
+    assert not any("up to date" in line for line in logs) and (target / "summary.md").is_file()
+    assert engine.up_to_date(run.configs.load(study), run.task_source(run.configs.load(study),
+                             run.contract.study_of("grid"), 10**6), target) == 12
+    with sqlite3.connect(target / "rows.sqlite") as con:  # another program adds a row to the store
+        con.execute("INSERT INTO rows VALUES ('other', 'ok', '{}')")
+    logs.clear()
+    run.run_study(study, out, log=logs.append)
+    assert any("12 rows: 12 already stored, 0 to run" in line and "up to date" not in line for line in logs), logs
+    logs.clear()
+    run.run_study(study, out, log=logs.append)
+    assert any("up to date" in line for line in logs), logs
+    logs.clear()
+    run.run_study(study, out, force=True, log=logs.append)
+    assert any("12 rows: 0 already stored, 12 to run" in line for line in logs), logs
+    (target / "rows.sqlite").write_bytes(b"not a database")  # a store that is not one: moved aside, said, recomputed
+    for extra in ("-wal", "-shm"):
+        (target / f"rows.sqlite{extra}").unlink(missing_ok=True)
+    logs.clear()
+    run.run_study(study, out, log=logs.append)
+    assert any("not a readable row store" in line for line in logs) and any("0 already stored" in line for line in logs)
+
+
+def test_a_study_with_rows_to_run_again_or_another_config_is_not_up_to_date(tmp_path):
+    study = write_study(tmp_path, reps=2)
+    out = tmp_path / "out"
+    run.run_study(str(study), out, log=lambda *a: None)
+    cfg = run.configs.load(str(study))
+    make = run.task_source(cfg, run.contract.study_of("grid"), 10**6)
+    assert engine.up_to_date(cfg, make, out / "eng") == 8
+    meta = json.loads((out / "eng" / "meta.json").read_text())
+    (out / "eng" / "meta.json").write_text(json.dumps({**meta, "status_counts": {"ok": 7, "error": 1}}))
+    assert engine.up_to_date(cfg, make, out / "eng") is None  # an error row is retried on every run
+    (out / "eng" / "meta.json").write_text(json.dumps(meta))
+    assert engine.up_to_date(cfg, make, out / "eng") == 8
+    study.write_text(study.read_text().replace('title = "engine test study"', 'title = "another title"'))
+    cfg = run.configs.load(str(study))
+    assert engine.up_to_date(cfg, make, out / "eng") is None  # the same rows, but outputs of another config
+
+
+def test_the_row_store_forgets_a_complete_study_when_any_program_changes_its_rows(tmp_path):
+    store = RowStore(tmp_path / "rows.sqlite", log=lambda *a: None)
+    store.put_encoded(["a", "b"], ["ok", "ok"], ["{}", "{}"])
+    changes = ["INSERT INTO rows VALUES ('c', 'ok', '{}')", "INSERT OR REPLACE INTO rows VALUES ('a', 'ok', '{}')",
+               "UPDATE rows SET status = 'error' WHERE key = 'b'", "DELETE FROM rows WHERE key = 'a'"]
+    for sql in changes:
+        store.mark_complete("fp", 2)
+        assert store.complete("fp") == 2 and store.complete("other") is None
+        with sqlite3.connect(tmp_path / "rows.sqlite") as con:
+            con.execute(sql)
+        assert store.complete("fp") is None, sql
+    store.mark_complete("fp", 2)
+    store.put_encoded(["d"], ["ok"], ["{}"])
+    assert store.complete("fp") is None
+    store.close()
+
+
+def test_the_import_scan_cache_gives_the_closure_of_a_fresh_parse(tmp_path, monkeypatch):
+    """The code hashes' import closure from cached scans (by the module's name and bytes) is that of parsing every
+    file; a cached run parses nothing; a file whose bytes changed is parsed again."""
+    monkeypatch.setattr(codehash, "SCAN_CACHE", tmp_path / "cache" / "import-scan.json")
+
+    def fresh():
+        codehash._SCANNED.clear()
+        codehash._SCAN_STATE.update(loaded=False, new=0)
+        codehash.module_closure.cache_clear()
+        codehash.code_hash.cache_clear()
+    fresh()
+    parsed = codehash.files_of("experiments.run"), codehash.code_hash("experiments.run")
+    assert (tmp_path / "cache" / "import-scan.json").is_file()
+    fresh()
+    calls = []
+    real_parse = codehash.ast.parse
+    monkeypatch.setattr(codehash.ast, "parse", lambda *a, **k: calls.append(a) or real_parse(*a, **k))
+    assert (codehash.files_of("experiments.run"), codehash.code_hash("experiments.run")) == parsed
+    assert calls == []
+    module = tmp_path / "scanned_mod.py"
+    module.write_text("import json\n")
+    assert codehash._scan(module, "scanned_mod")[0] == ["json"]
+    module.write_text("import csv\n")
+    assert codehash._scan(module, "scanned_mod")[0] == ["csv"] and len(calls) == 2
+    fresh()
+
+
 # ---------------------------------------------------------------- limits before expansion, --out
 
 def test_a_huge_study_is_refused_before_it_is_expanded(tmp_path, capsys):
@@ -429,3 +536,26 @@ def test_dask_labels_exits_and_python_hangs(tmp_path, hostile_site):
         assert set(df.loc[what == "", "status"]) == {"ok"}
         assert set(df.loc[what == "hang", "status"]) <= {"timeout"}
         assert set(df.loc[what.isin(["exit", "sysexit", "kbint"]), "status"]) == {"crashed"}
+
+
+def test_results_csv_text_is_pandas_to_csv_byte_for_byte():
+    """The column-by-column CSV writer gives the bytes of DataFrame.to_csv(index=False, float_format='%.17g'): floats
+    of every magnitude, NaN, infinities, -0.0, ints, bools, text needing quotes, missing text, object columns mixing
+    types, and a dtype it leaves to pandas."""
+    import io
+
+    from experiments.csvtext import write_csv
+    rng = np.random.default_rng(0)
+    n = 3000
+    df = pd.DataFrame({
+        "f": np.where(rng.random(n) < 0.1, np.nan, rng.normal(size=n) * 10.0 ** rng.integers(-300, 300, n)),
+        "special": np.resize([0.0, -0.0, np.inf, -np.inf, 5e-324, 1.7976931348623157e308, 0.1], n),
+        "i": rng.integers(-10**12, 10**12, n), "b": rng.random(n) < 0.5,
+        "s": pd.Series(rng.choice(["a,b", 'q"uote', "new\nline", None, "", " sp ", "plain", "é ü"], n), dtype="str"),
+        "o": pd.Series(rng.choice(np.array([0.1, "x", None, True, 3, np.nan, 1e-320, "y,z"], dtype=object), n),
+                       dtype=object)})
+    for frame in (df, df.iloc[:0], df[["s"]], df.assign(cat=pd.Categorical(rng.choice(["u", "v"], n)))):
+        for header in (True, False):
+            ours = io.StringIO()
+            write_csv(frame, ours, header=header)
+            assert ours.getvalue() == frame.to_csv(index=False, header=header, float_format="%.17g")

@@ -11,6 +11,33 @@ from experiments.study import count_rows, study_of, validate as validate_declara
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
 
 
+class StudyConfig(dict):
+    """A study's config, checked once when loaded (:func:`load`): the TOML's keys as a mapping (what ``meta.json``
+    records and the study reads), and where it came from as typed attributes, never as keys of the mapping.
+
+    ``where``: the file name that errors name; ``folder``: the TOML's folder (``file = ...`` data sets are
+    relative to it); ``quick``: whether its ``[quick]`` table was applied."""
+
+    where: str
+    folder: Path
+    quick: bool
+
+    def __init__(self, values: dict, *, where: str, folder: Path, quick: bool = False):
+        super().__init__(values)
+        self.where, self.folder, self.quick = str(where), Path(folder), bool(quick)
+
+    def replace(self, **changes) -> "StudyConfig":
+        """A copy with some keys changed (the same origin)."""
+        return StudyConfig({**self, **changes}, where=self.where, folder=self.folder, quick=self.quick)
+
+    def __reduce__(self):  # pickled with its attributes (a plain dict's pickle would drop them)
+        return (_study_config, (dict(self), self.where, str(self.folder), self.quick))
+
+
+def _study_config(values, where, folder, quick):
+    return StudyConfig(values, where=where, folder=Path(folder), quick=quick)
+
+
 def available() -> dict[str, Path]:
     return {p.stem: p for p in sorted(CONFIG_DIR.glob("*.toml"))}
 
@@ -46,7 +73,7 @@ def _study(cfg: dict, where: str):
         raise ConfigError(f"{where}: {exc}") from None
 
 
-def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
+def load(name: str, *, quick: bool = False, seed: int | None = None) -> StudyConfig:
     """The config of study ``name`` (or of a .toml path), with its ``[quick]`` table applied when
     ``quick`` and ``seed`` overriding its seed. Everything is checked before a row runs: the structure
     (experiments/schema.py), the values of data-source and method parameters, the study's own rules.
@@ -76,15 +103,13 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> dict:
         cfg["seed"] = seed
     cfg.setdefault("seed", 0)
     schema.check_values(cfg, where)
-    cfg["_where"] = where
-    cfg["_dir"] = str(path.resolve().parent)
-    cfg["_quick"] = quick
+    cfg = StudyConfig(cfg, where=where, folder=path.resolve().parent, quick=quick)
     study.validate(cfg, where)
     validate_declarations(cfg, where)
     return cfg
 
 
-def check_rows(cfg: dict, n_rows: int, max_rows: int) -> None:
+def check_rows(cfg: StudyConfig, n_rows: int, max_rows: int) -> None:
     if n_rows > max_rows:
-        raise ConfigError(f"{cfg['_where']}: the grid has {n_rows:,} rows, more than the limit of {max_rows:,}; "
+        raise ConfigError(f"{cfg.where}: the grid has {n_rows:,} rows, more than the limit of {max_rows:,}; "
                           f"shrink the grid or pass --max-rows {n_rows}")

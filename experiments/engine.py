@@ -65,7 +65,7 @@ def expand_datasets(cfg: dict, where: str) -> list[dict]:
     ``datasets.sources``), ``generator = "circle"`` (the same, kept for old configs), ``published = "set"``
     (with optional ``variant``) or ``file = "path"`` (relative to the TOML; optional ``truth`` table)."""
     sources.load_plugins()
-    base_dir = Path(cfg.get("_dir", "."))
+    base_dir = Path(getattr(cfg, "folder", "."))  # a loaded config (experiments.config.StudyConfig) knows its folder
     out = []
     for i, entry in enumerate(cfg.get("datasets", [])):
         here = f"{where} datasets[{i}]"

@@ -66,7 +66,7 @@ def check_summary_by(cfg: dict, study, tasks: list[dict]) -> None:
         known |= set(engine.base_row(t))
     unknown = [c for c in by if c not in known]
     if unknown:
-        raise configs.ConfigError(f"{cfg['_where']}: summary_by: no row will have the column(s) {', '.join(unknown)}; "
+        raise configs.ConfigError(f"{cfg.where}: summary_by: no row will have the column(s) {', '.join(unknown)}; "
                                   f"the rows have: {', '.join(sorted(known))}")
 
 
@@ -104,7 +104,7 @@ def _limited(tasks, cfg: dict, max_rows: int):
     list is counted while it is expanded, never built whole first)."""
     for n, t in enumerate(tasks, 1):
         if n > max_rows:
-            raise configs.ConfigError(f"{cfg['_where']}: the study has more than {max_rows:,} rows, more than the "
+            raise configs.ConfigError(f"{cfg.where}: the study has more than {max_rows:,} rows, more than the "
                                       f"limit; shrink the grid or pass a larger --max-rows")
         yield t
 
@@ -136,7 +136,7 @@ def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
     reasons = df.groupby(["status", "message"], sort=False, dropna=False).size().sort_values(ascending=False)
     (status, message), n = reasons.index[0], int(reasons.iloc[0])
     more = f" ({len(reasons) - 1} other reasons for the other rows)" if len(reasons) > 1 else ""
-    return EnvironmentFailure(f"{cfg['_where']}: all {len(df)} rows failed for a reason of the environment, not "
+    return EnvironmentFailure(f"{cfg.where}: all {len(df)} rows failed for a reason of the environment, not "
                               f"of the methods: {status}: {message} ({n} rows){more}; nothing of it is cached as a "
                               f"result: fix it and run the same command again")
 
@@ -195,11 +195,11 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     findings, analysis = contract.analyse(study, df, cfg, target, log)
     log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
     if cfg.get("summary_by") and set(cfg["summary_by"]) - set(df.columns):
-        raise configs.ConfigError(f"{cfg['_where']}: summary_by: no row has the column(s) "
+        raise configs.ConfigError(f"{cfg.where}: summary_by: no row has the column(s) "
                                   f"{', '.join(sorted(set(cfg['summary_by']) - set(df.columns)))}; "
                                   f"the rows have: {', '.join(df.columns)}")
     summary = summarise(df, summary_columns(cfg, df))
-    public_cfg = {k: v for k, v in cfg.items() if not k.startswith("_")}
+    public_cfg = dict(cfg)
     meta = {**collect(public_cfg), "study": cfg["name"], "quick": quick, "executor": executor, "jobs": jobs,
             "row_timeout_s": row_timeout, "environment": engine.environment(),
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),

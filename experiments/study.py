@@ -209,12 +209,12 @@ class Study:
     def tasks(self, cfg: dict):
         """The tasks (plain picklable dicts, one row each; see ``experiments.engine``), an iterable read lazily.
         Default: data sets x repetitions x methods (x their grids)."""
-        return engine.iter_grid_tasks(cfg, cfg["_where"])
+        return engine.iter_grid_tasks(cfg, cfg.where)
 
     def prepared_tasks(self, cfg: dict):
         """The tasks with their index and cache key, lazily (what the engine runs)."""
         if not self.own_tasks:  # the generic grid keys its tasks as it expands them (one identity per pair)
-            return engine.iter_grid_tasks(cfg, cfg["_where"], keyed=True)
+            return engine.iter_grid_tasks(cfg, cfg.where, keyed=True)
         return engine.iter_prepared(self.tasks(cfg))
 
     def execute(self, task: dict) -> dict:
@@ -696,9 +696,9 @@ def write_manifest(target: Path, cfg: dict, analysis: Analysis, summary: pd.Data
         try:
             findings = render_findings(rep["findings"], analysis.values)
         except ValueError as exc:
-            findings = f"(findings template not filled: {cfg.get('_where', cfg['name'])}: report.findings: {exc})"
+            findings = f"(findings template not filled: {cfg.where}: report.findings: {exc})"
     manifest = {"title": cfg["title"], "section": rep.get("section", DEFAULT_SECTION), "order": rep.get("order", 1000),
-                "quick": bool(cfg.get("_quick")), "tables": entries,
+                "quick": cfg.quick, "tables": entries,
                 "figures": [{"caption": f.caption, "file": f.file} for f in analysis.figures],
                 "values": analysis.values, "findings": findings}
     write_atomic(target / "report.json", json.dumps(manifest, indent=1, default=_plain) + "\n")

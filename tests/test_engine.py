@@ -60,7 +60,7 @@ def test_code_is_hashed_once_per_pair_not_per_row(tmp_path, monkeypatch):
         calls.append(modules)
         return original(*modules)
     monkeypatch.setattr(codehash, "code_hash", counting)
-    tasks = list(engine.iter_grid_tasks(cfg, cfg["_where"], keyed=True))
+    tasks = list(engine.iter_grid_tasks(cfg, cfg.where, keyed=True))
     assert len(tasks) == 2 * 200 * 2
     assert 0 < len(calls) <= 4 * 5  # 4 pairs x (method, source, metrics, rows, study) at most, whatever the rows
     # the fast keys are the keys of the general rule
@@ -70,7 +70,7 @@ def test_code_is_hashed_once_per_pair_not_per_row(tmp_path, monkeypatch):
 
 def test_kernel_backend_and_versions_are_in_the_key(tmp_path, monkeypatch):
     cfg = run.configs.load(str(write_study(tmp_path, reps=1)))
-    task = next(engine.iter_grid_tasks(cfg, cfg["_where"]))
+    task = next(engine.iter_grid_tasks(cfg, cfg.where))
     engine.reset_caches()
     compiled = engine.task_key(task)
     assert engine.environment()["kernels"] == "compiled" and engine.environment()["versions"]["numpy"]
@@ -280,7 +280,7 @@ def test_a_huge_study_is_refused_before_it_is_expanded(tmp_path, capsys):
 
 
 def test_lazy_task_lists_are_counted_while_made(tmp_path):
-    cfg = {"_where": "x.toml"}
+    cfg = run.configs.StudyConfig({}, where="x.toml", folder=tmp_path)
     with pytest.raises(run.configs.ConfigError, match="more than 5"):
         list(run._limited(iter(range(10**12)), cfg, 5))
 

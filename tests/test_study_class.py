@@ -4,6 +4,7 @@ is refused in one line that says what to write instead."""
 from __future__ import annotations
 
 import ast
+import pickle
 import sys
 import types
 from pathlib import Path
@@ -124,3 +125,14 @@ def test_no_study_figure_in_render():
         names = [n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)]
         assert not [n for n in names if any(n.startswith(k) for k in kinds)], path.name
         assert "experiments.studies" not in path.read_text(), path.name
+
+
+def test_a_loaded_config_keeps_its_origin_as_typed_attributes(tmp_path):
+    """Where a config came from is typed attributes of the loaded config, not keys of its mapping (meta.json
+    records the mapping); a changed copy and a pickled one keep them."""
+    cfg = configs.load(str(write(tmp_path)), quick=True)
+    assert not [k for k in cfg if k.startswith("_")]
+    assert cfg.where == "study.toml" and cfg.folder == tmp_path.resolve() and cfg.quick is True
+    again = pickle.loads(pickle.dumps(cfg.replace(repetitions=1)))
+    assert again["repetitions"] == 1 and cfg["repetitions"] == 2
+    assert (again.where, again.folder, again.quick) == (cfg.where, cfg.folder, cfg.quick)

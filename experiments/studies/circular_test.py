@@ -103,7 +103,7 @@ class CircularTestStudy(Study):
         out = []
         for j, path in enumerate(cfg["paths"]):
             spec = {"entry": 0, "point": j, "scenario": "lola_hbg130", "path": path, "label": f"lola_hbg130:{path}"}
-            for m, extra in engine.expand_methods(cfg, cfg["_where"]):
+            for m, extra in engine.expand_methods(cfg, cfg.where):
                 out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
                             "stream": [0, 0, 0], "seed": cfg["seed"], "method": m, "params": extra["params"], "timing": None})
         # the ISO 230-4 evaluation and the error-source diagnosis of both runs: one cached task (its row holds the numbers)

@@ -82,11 +82,11 @@ class ConvergenceStudy(Study):
     def count_rows(self, cfg):
         """The rows of the study from its grid sizes (nothing expanded): each run of the grid x distances x
         directions."""
-        return super().count_rows({**cfg, "repetitions": 1}) * len(cfg["start_distances"]) * cfg["start_directions"]
+        return super().count_rows(cfg.replace(repetitions=1)) * len(cfg["start_distances"]) * cfg["start_directions"]
 
     def tasks(self, cfg):
         """The tasks, lazily (a generator: the engine counts and expands them a block at a time)."""
-        for t in engine.iter_grid_tasks({**cfg, "repetitions": 1}, cfg["_where"]):
+        for t in engine.iter_grid_tasks(cfg.replace(repetitions=1), cfg.where):
             for d in cfg["start_distances"]:
                 for k in range(cfg["start_directions"]):
                     yield {**t, "x_start_distance": float(d), "x_start_direction": k,

@@ -82,7 +82,7 @@ class NistCircleStudy(Study):
                      "radius": float(Decimal(ref["diameter"])) / 2}
             spec = {"entry": i, "point": 0, "file": str(meta_path.with_suffix(".csv")), "truth": truth,
                     "label": meta["name"]}
-            for m, extra in engine.expand_methods(cfg, cfg["_where"]):
+            for m, extra in engine.expand_methods(cfg, cfg.where):
                 out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
                             "stream": [i, 0, 0], "seed": cfg["seed"], "method": m, "params": extra["params"], "timing": None})
         return out

@@ -88,9 +88,9 @@ class PublishedStudy(Study):
     def tasks(self, cfg):
         """The fits of every method on every published set, and one rounding Monte Carlo task per published
         figure of table 1 (its own seed stream: (seed, 99, data set entry, column))."""
-        out = engine.grid_tasks(cfg, cfg["_where"])
+        out = engine.grid_tasks(cfg, cfg.where)
         samples = int(cfg.get("rounding", {}).get("samples", 1000))
-        for spec in engine.expand_datasets(cfg, cfg["_where"]):
+        for spec in engine.expand_datasets(cfg, cfg.where):
             variant = spec.get("variant")
             ds = datasets.load(spec["published"], drop_repeated_closing_point=variant == "drop_repeated_closing_point")
             for c, (column, method_id) in enumerate(cfg["published_columns"].items()):

@@ -383,7 +383,7 @@ def outputs_code(cfg: dict) -> str:
             versions[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
             versions[pkg] = None
-    ident = {"config": {k: v for k, v in cfg.items() if not k.startswith("_")}, "quick": bool(cfg.get("_quick")),
+    ident = {"config": dict(cfg), "quick": bool(getattr(cfg, "quick", False)),  # a loaded config's [quick] flag
              "code": codehash.code_hash("experiments.run", "fitbench.plots", f"experiments.studies.{cfg['kind']}"),
              "engine": ENGINE_VERSION, "env": environment(), "versions": versions}
     return hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode()).hexdigest()

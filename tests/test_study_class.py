@@ -136,3 +136,13 @@ def test_a_loaded_config_keeps_its_origin_as_typed_attributes(tmp_path):
     again = pickle.loads(pickle.dumps(cfg.replace(repetitions=1)))
     assert again["repetitions"] == 1 and cfg["repetitions"] == 2
     assert (again.where, again.folder, again.quick) == (cfg.where, cfg.folder, cfg.quick)
+
+
+def test_the_outputs_fingerprint_tells_a_quick_config_from_a_full_one(tmp_path):
+    """The same keys loaded with and without --quick: the outputs' fingerprint reads the config's quick attribute
+    (it read a private key that a loaded config no longer has, so both hashed alike)."""
+    from experiments import engine
+    cfg = configs.load(str(write(tmp_path)))
+    quick = configs.StudyConfig(dict(cfg), where=cfg.where, folder=cfg.folder, quick=True)
+    assert engine.outputs_code(cfg) != engine.outputs_code(quick)
+    assert engine.outputs_code(cfg) == engine.outputs_code(cfg.replace())

@@ -56,10 +56,12 @@ _UNICODE = {"µ": r"\textmu{}", "μ": r"\textmu{}", "°": r"\textdegree{}", "±"
             "τ": r"$\tau$", "α": r"$\alpha$", "β": r"$\beta$", "γ": r"$\gamma$", "ε": r"$\varepsilon$",
             "λ": r"$\lambda$", "π": r"$\pi$", "θ": r"$\theta$", "φ": r"$\varphi$", "ω": r"$\omega$",
             "Σ": r"$\Sigma$", "Ω": r"$\Omega$", "∞": r"$\infty$", "≠": r"$\neq$", "·": r"$\cdot$",
-            "²": r"\textsuperscript{2}", "³": r"\textsuperscript{3}", "₂": r"$_2$", "√": r"$\surd$", "…": r"\dots{}",
+            "₂": r"$_2$", "√": r"$\surd$", "…": r"\dots{}",
             "’": "'", "‘": "`", "“": "``", "”": "''", "⌀": r"$\varnothing$", "∅": r"$\varnothing$",
             "✓": r"$\checkmark$", "✔": r"$\checkmark$", "✗": r"$\times$", "•": r"\textbullet{}",
             "\u00a0": "~", "€": r"\texteuro{}", "«": r"\guillemotleft{}", "»": r"\guillemotright{}"}
+_UNICODE.update({ch: f"\\textsuperscript{{{d}}}" for ch, d in zip("⁰¹²³⁴⁵⁶⁷⁸⁹", "0123456789")})  # 10⁶, mm²
+_UNICODE["⁻"] = r"\textsuperscript{--}"
 #: what pdflatex sets with T1 + utf8 beyond ASCII: U+00A0-U+017F (Latin-1 and Latin Extended-A) except the nine
 #: letters T1 has no glyph for (found by compiling each; tests/test_report_security.py compiles all of them);
 #: anything else is mapped above or written as [U+XXXX]

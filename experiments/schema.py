@@ -1,13 +1,15 @@
-"""The schema of a study config (JSON Schema, checked with ``jsonschema``) and the checks it cannot express.
+"""The schema of a study config and the checks it cannot express. The config is typed (the pydantic models
+below); the JSON Schema generated from them is checked with ``jsonschema`` once, when the config is loaded
+(``experiments.config.load``), so that every error is one line naming the key.
 
 ONE PLACE TO EXTEND:
-* a new top-level key of every study (e.g. ``report``, ``tables``, ``figures``): add it to
-  :data:`TOP_LEVEL`;
+* a new top-level key of every study (e.g. ``report``, ``tables``, ``figures``): add a field to
+  :class:`StudyConfigModel` (:data:`TOP_LEVEL` is generated from it);
 * a key only one kind of study uses (``rounding``, ``scenarios``, ...) is declared by that study's module as
   ``Study.config_schema`` = {key: JSON Schema}, merged here when a config of that kind is checked: adding a study
   needs no edit of this file (its ``validate`` checks the values the schema cannot express);
 * a new kind of data source in ``[[datasets]]`` (e.g. ``file = "trace.csv"``, a plugin source): add its
-  key to :data:`DATASET_SOURCES` with the schema of the entry's own keys, and register the check of its
+  key to :data:`DATASET_SOURCES` with the schema of the entry's own keys (:func:`properties` of its model), and register the check of its
   parameter values with :func:`register_source_check` (the source validates its parameters, not this
   schema).
 Structure errors come from the schema; value errors of generator and method parameters from the
@@ -16,92 +18,208 @@ line: ``FILE: KEY: PROBLEM``.
 """
 from __future__ import annotations
 
+import copy
 import math
-from typing import Callable
+from typing import Annotated, Any, Callable, Literal, Union
 
 import jsonschema
+from pydantic import BaseModel, ConfigDict, Field
 
-_POSITIVE_INT = {"type": "integer", "minimum": 1}
-_GRID = {"type": "object", "additionalProperties": {"type": "array", "minItems": 1},
-         "description": "parameter -> non-empty list of values (the cartesian product is taken)"}
-_PARAMS = {"type": "object", "description": "parameter -> value"}
+# ---------------------------------------------------------------- the typed config (pydantic models)
+# A study config is these models; the JSON Schema checked below is generated from them (``model_json_schema``,
+# normalised to plain JSON Schema: references inlined, optional keys as the key's own schema, no titles).
+# Keys every study has are fields of :class:`StudyConfigModel`; a ``[[datasets]]`` entry is one of the entry
+# models; the keys of one kind of study are its ``Study.config_schema``.
+
+PositiveInt = Annotated[int, Field(ge=1)]
+Grid = Annotated[dict[str, Annotated[list[Any], Field(min_length=1)]],
+                 Field(description="parameter -> non-empty list of values (the cartesian product is taken)")]
+Params = Annotated[dict[str, Any], Field(description="parameter -> value")]
+Columns = Annotated[Union[str, list[str]], Field(description="a column name or a list of them")]
+
+
+class _Table(BaseModel):
+    """A TOML table: no key beyond its fields (optional fields default to None: absent)."""
+    model_config = ConfigDict(extra="forbid")
+
+
+class GeneratorEntry(_Table):
+    """A synthetic data set of a generator (the older spelling of ``source``)."""
+    generator: str
+    params: Params = None
+    grid: Grid = None
+    label: str = None
+
+
+class PublishedEntry(_Table):
+    """A published data set (``datasets.list()``)."""
+    published: str
+    variant: Literal["drop_repeated_closing_point"] = None
+    label: str = None
+
+
+class SourceEntry(_Table):
+    """A data set of a registered data source (``datasets.sources``)."""
+    source: str
+    params: Params = None
+    grid: Grid = None
+    label: str = None
+
+
+class FileEntry(_Table):
+    """A points file, with its truth when known."""
+    file: Annotated[str, Field(min_length=1, description="a points file, relative to the TOML")]
+    truth: dict[str, Any] = None
+    label: str = None
+
+
+class MethodEntry(_Table):
+    """A method with fixed parameters, a grid of them, a size limit and the data sets it runs on."""
+    id: Annotated[str, Field(min_length=1)]
+    params: Params = None
+    grid: Grid = None
+    max_n: PositiveInt = None
+    on: list[str] = None
+
+
+class Timing(_Table):
+    min_time_s: Annotated[float, Field(gt=0)] = None
+    rounds: PositiveInt = None
+
+
+class Report(_Table):
+    section: Annotated[str, Field(min_length=1)] = None
+    order: int = None
+    findings: str = None
+
+
+class TableDeclaration(_Table):
+    caption: Annotated[str, Field(min_length=1)]
+    rows: Columns
+    values: Columns
+    columns: str = None
+    aggregate: Literal["mean", "median", "max", "min", "std", "count", "rmse", "ok_share"] = None
+    unit: str = None
+    digits: Annotated[int, Field(ge=0)] = None
+    where: dict[str, Any] = None
+    colour: Annotated[Literal["lower_is_better"], Field(description="a method comparison: HTML cells coloured by their "
+                                                                    "ratio to the row's best (lowest) value")] = None
+
+
+class Ranking(_Table):
+    profile: Annotated[str, Field(min_length=1)]
+    metric: Annotated[str, Field(min_length=1)]
+    unit: str = None
+    methods: Annotated[str, Field(min_length=1)] = None
+    problem: Annotated[list[str], Field(min_length=1)] = None
+    floor: Annotated[float, Field(ge=0)] = None
+    where: dict[str, Any] = None
+
+
+class FigureDeclaration(_Table):
+    caption: Annotated[str, Field(min_length=1)]
+    plot: str = None
+    file: str = None
+    x: str = None
+    y: str = None
+    by: str = None
+    aggregate: str = None
+    logx: bool = None
+    logy: bool = None
+    xlabel: str = None
+    ylabel: str = None
+    args: dict[str, Any] = None
+    width: Annotated[float, Field(gt=0)] = None
+    height: Annotated[float, Field(gt=0)] = None
+    where: dict[str, Any] = None
+
+
+class StudyConfigModel(_Table):
+    name: Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_-]*$",
+                               description="the file name without .toml (letters, digits, _ and -)")]
+    title: Annotated[str, Field(min_length=1)]
+    kind: Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")] = "grid"
+    default: bool = False
+    seed: Annotated[int, Field(ge=0)] = 0
+    repetitions: PositiveInt = 1
+    max_jobs: PositiveInt = None
+    row_timeout: Annotated[float, Field(gt=0, description="seconds a row may run (engine)")] = None
+    chunk_rows: PositiveInt = None
+    summary_by: Annotated[list[str], Field(min_length=1)] = None
+    datasets: Annotated[list[Union[GeneratorEntry, PublishedEntry, SourceEntry, FileEntry]], Field(min_length=1)] = None
+    methods: Annotated[list[Annotated[Union[Annotated[str, Field(min_length=1)], MethodEntry],
+                                      Field(description="a method id, or a table with id, params, grid, max_n, on")]],
+                       Field(min_length=1)] = None
+    timing: Timing = None
+    quick: dict[str, Any] = None
+    report: Report = None
+    tables: list[TableDeclaration] = None
+    rankings: list[Ranking] = None
+    figures: list[FigureDeclaration] = None
+
+
+def _inline(schema: dict) -> dict:
+    """``schema`` with its ``$ref``s replaced by the definitions (jsonschema's error paths then name the key)."""
+    defs = schema.get("$defs", {})
+    def walk(node):
+        if isinstance(node, dict):
+            if "$ref" in node:
+                target = copy.deepcopy(defs[node["$ref"].split("/")[-1]])
+                rest = {k: v for k, v in node.items() if k != "$ref"}
+                target.update(rest)
+                return walk(target)
+            return {k: walk(v) for k, v in node.items() if k != "$defs"}
+        if isinstance(node, list):
+            return [walk(v) for v in node]
+        return node
+    return walk(schema)
+
+
+def _plain(node):
+    """Pydantic's schema as the plain JSON Schema the messages read: an optional key is its own schema (not
+    ``anyOf`` with null), no titles, defaults or model docstrings, an enum without a redundant type."""
+    if isinstance(node, list):
+        return [_plain(v) for v in node]
+    if not isinstance(node, dict):
+        return node
+    node = {k: ({p: _plain(s) for p, s in v.items()} if k == "properties" else _plain(v))
+            for k, v in node.items() if k not in ("title", "default")}
+    if node.get("type") == "object" and "properties" in node:
+        node.pop("description", None)  # a model's docstring
+    if "anyOf" in node:
+        alts = [a for a in node["anyOf"] if a != {"type": "null"}]
+        if len(alts) == 1:
+            rest = {k: v for k, v in node.items() if k != "anyOf"}
+            node = {**alts[0], **rest}
+        else:
+            node["anyOf"] = alts
+    if node.get("additionalProperties") is True:
+        del node["additionalProperties"]
+    if node.get("items") == {}:
+        del node["items"]
+    if "enum" in node or "const" in node:
+        node.pop("type", None)
+    if "const" in node and "enum" not in node:
+        node = {**{k: v for k, v in node.items() if k != "const"}, "enum": [node["const"]]}
+    if node.get("type") == "object" and "properties" in node and not node.get("required"):
+        node.pop("required", None)
+    return node
+
+
+def properties(model: type[BaseModel]) -> dict[str, dict]:
+    """{key: JSON Schema} of a model's fields, as :func:`config_schema` merges them."""
+    return _plain(_inline(model.model_json_schema()))["properties"]
+
 
 #: The keys of one ``[[datasets]]`` entry, per data source (the source key names the source).
-DATASET_SOURCES: dict[str, dict] = {
-    "generator": {"generator": {"type": "string"}, "params": _PARAMS, "grid": _GRID, "label": {"type": "string"}},
-    "published": {"published": {"type": "string"},
-                  "variant": {"enum": ["drop_repeated_closing_point"]}, "label": {"type": "string"}},
-    "source": {"source": {"type": "string"}, "params": _PARAMS, "grid": _GRID, "label": {"type": "string"}},
-    "file": {"file": {"type": "string", "minLength": 1, "description": "a points file, relative to the TOML"},
-             "truth": {"type": "object"}, "label": {"type": "string"}},
-}
+DATASET_SOURCES: dict[str, dict] = {"generator": properties(GeneratorEntry), "published": properties(PublishedEntry),
+                                    "source": properties(SourceEntry), "file": properties(FileEntry)}
 
-_METHOD_ENTRY = {
-    "anyOf": [
-        {"type": "string", "minLength": 1},
-        {"type": "object", "required": ["id"], "additionalProperties": False,
-         "properties": {"id": {"type": "string", "minLength": 1}, "params": _PARAMS, "grid": _GRID,
-                        "max_n": _POSITIVE_INT, "on": {"type": "array", "items": {"type": "string"}}}},
-    ],
-    "description": "a method id, or a table with id, params, grid, max_n, on",
-}
-
-#: Every top-level key a study config may have. Keys overridable by ``[quick]`` are all but
-#: :data:`NOT_IN_QUICK`.
-TOP_LEVEL: dict[str, dict] = {
-    "name": {"type": "string", "pattern": r"^[A-Za-z0-9_][A-Za-z0-9_-]*$",
-             "description": "the file name without .toml (letters, digits, _ and -)"},
-    "title": {"type": "string", "minLength": 1},
-    "kind": {"type": "string", "pattern": r"^[A-Za-z_][A-Za-z0-9_]*$"},
-    "default": {"type": "boolean"},
-    "seed": {"type": "integer", "minimum": 0},
-    "repetitions": _POSITIVE_INT,
-    "max_jobs": _POSITIVE_INT,
-    "row_timeout": {"type": "number", "exclusiveMinimum": 0, "description": "seconds a row may run (engine)"},
-    "chunk_rows": _POSITIVE_INT,  # rows sent to a worker at a time (default: from the measured cost of a row)
-    "summary_by": {"type": "array", "items": {"type": "string"}, "minItems": 1},
-    "datasets": {"type": "array", "minItems": 1, "items": {"type": "object"}},  # entries: _dataset_schema()
-    "methods": {"type": "array", "minItems": 1, "items": _METHOD_ENTRY},
-    "timing": {"type": "object", "additionalProperties": False,
-               "properties": {"min_time_s": {"type": "number", "exclusiveMinimum": 0},
-                              "rounds": _POSITIVE_INT}},
-    "quick": {"type": "object"},  # checked as overrides: see config_schema()
-    # the report contract (experiments/study.py): the section, the declared tables and figures
-    "report": {"type": "object", "additionalProperties": False,
-               "properties": {"section": {"type": "string", "minLength": 1}, "order": {"type": "integer"},
-                              "findings": {"type": "string"}}},
-    "tables": {"type": "array", "items": {
-        "type": "object", "required": ["caption", "rows", "values"], "additionalProperties": False,
-        "properties": {"caption": {"type": "string", "minLength": 1},
-                       "rows": {"anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}],
-                                "description": "a column name or a list of them"},
-                       "values": {"anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}],
-                                  "description": "a column name or a list of them"},
-                       "columns": {"type": "string"},
-                       "aggregate": {"enum": ["mean", "median", "max", "min", "std", "count", "rmse", "ok_share"]},
-                       "unit": {"type": "string"}, "digits": {"type": "integer", "minimum": 0},
-                       "where": {"type": "object"},
-                       "colour": {"enum": ["lower_is_better"],
-                                  "description": "a method comparison: HTML cells coloured by their ratio to "
-                                                 "the row's best (lowest) value"}}}},
-    # cross-study rankings (experiments/report.py): Dolan-More performance profiles pooled over every study
-    # that declares the same profile name
-    "rankings": {"type": "array", "items": {
-        "type": "object", "required": ["profile", "metric"], "additionalProperties": False,
-        "properties": {"profile": {"type": "string", "minLength": 1}, "metric": {"type": "string", "minLength": 1},
-                       "unit": {"type": "string"}, "methods": {"type": "string", "minLength": 1},
-                       "problem": {"type": "array", "items": {"type": "string"}, "minItems": 1},
-                       "floor": {"type": "number", "minimum": 0}, "where": {"type": "object"}}}},
-    "figures": {"type": "array", "items": {
-        "type": "object", "required": ["caption"], "additionalProperties": False,
-        "properties": {"caption": {"type": "string", "minLength": 1}, "plot": {"type": "string"},
-                       "file": {"type": "string"}, "x": {"type": "string"}, "y": {"type": "string"},
-                       "by": {"type": "string"}, "aggregate": {"type": "string"}, "logx": {"type": "boolean"},
-                       "logy": {"type": "boolean"}, "xlabel": {"type": "string"}, "ylabel": {"type": "string"},
-                       "args": {"type": "object"}, "width": {"type": "number", "exclusiveMinimum": 0},
-                       "height": {"type": "number", "exclusiveMinimum": 0}, "where": {"type": "object"}}}},
-}
-REQUIRED = ("name", "title")
+#: Every top-level key a study config may have (generated from :class:`StudyConfigModel`; ``[[datasets]]`` entries
+#: are checked against :data:`DATASET_SOURCES`). Keys overridable by ``[quick]`` are all but :data:`NOT_IN_QUICK`.
+TOP_LEVEL: dict[str, dict] = {**properties(StudyConfigModel),
+                              "datasets": {"type": "array", "minItems": 1, "items": {"type": "object"}}}
+REQUIRED = tuple(StudyConfigModel.model_json_schema()["required"])
 NOT_IN_QUICK = ("name", "kind", "default", "quick")
 
 

@@ -146,3 +146,38 @@ def test_the_outputs_fingerprint_tells_a_quick_config_from_a_full_one(tmp_path):
     quick = configs.StudyConfig(dict(cfg), where=cfg.where, folder=cfg.folder, quick=True)
     assert engine.outputs_code(cfg) != engine.outputs_code(quick)
     assert engine.outputs_code(cfg) == engine.outputs_code(cfg.replace())
+
+
+def test_the_config_schema_is_generated_from_the_typed_config():
+    """The JSON Schema every config is checked against is generated from the pydantic models (plain JSON Schema:
+    no reference, no null alternative, so each error names its key); every shipped config is an instance of the
+    typed config (its keys common to all studies), and a key the models lack is refused by the schema."""
+    import json
+
+    from experiments import schema
+    text = json.dumps(schema.config_schema())
+    assert "$ref" not in text and '"null"' not in text
+    assert set(schema.TOP_LEVEL) == set(schema.StudyConfigModel.model_fields)
+    assert set(schema.DATASET_SOURCES["file"]) == set(schema.FileEntry.model_fields)
+    for name in configs.available():
+        cfg = configs.load(name)
+        common = {k: v for k, v in cfg.items() if k in schema.StudyConfigModel.model_fields}
+        typed = schema.StudyConfigModel.model_validate(common)
+        assert typed.name == name and typed.kind == cfg["kind"] and typed.seed == cfg["seed"]
+
+
+def test_a_new_common_key_is_a_field_of_the_typed_config(monkeypatch, tmp_path):
+    from pydantic import Field
+    from typing import Annotated
+
+    from experiments import schema
+
+    class WithOwner(schema.StudyConfigModel):
+        owner: Annotated[str, Field(min_length=1)] = None
+    monkeypatch.setattr(schema, "TOP_LEVEL", {**schema.TOP_LEVEL, "owner": schema.properties(WithOwner)["owner"]})
+    path = write(tmp_path)
+    path.write_text(path.read_text().replace("seed = 3", 'seed = 3\nowner = "lab 2"'))
+    assert configs.load(str(path))["owner"] == "lab 2"
+    path.write_text(path.read_text().replace('owner = "lab 2"', 'owner = ""'))
+    with pytest.raises(ConfigError, match=r"^study\.toml: owner: "):
+        configs.load(str(path))

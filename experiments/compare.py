@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.metrics import CHAOTIC, tolerance
+from experiments.metrics import CHAOTIC, tolerance as declared_tolerance
 from experiments.provenance import write_atomic
 from experiments.verdict import VERDICT_FILE, last_verdict, results_sha256
 from methods import InvalidInputError
@@ -27,6 +27,13 @@ from methods import InvalidInputError
 #: columns that identify a row (those present are used; data_* and param_* columns are added)
 IDENTITY = ("study", "dataset", "data_stream", "repetition", "seed", "method", "params")
 WORST_ROWS = 3
+
+
+def tolerance(column: str, study: str = "", method: str = ""):
+    """The declared tolerance of ``column`` (``experiments.metrics.tolerance``), the study kinds' own columns
+    included (``Study.tolerances``)."""
+    from experiments import studies
+    return declared_tolerance(column, study, method, own=studies.tolerances())
 
 
 def _read(folder: Path, study: str, which: str) -> pd.DataFrame:

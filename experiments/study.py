@@ -165,7 +165,7 @@ class Study:
     * :meth:`analyse` -- tables, figures, named values and findings (default: none of its own; the TOML's
       ``[[tables]]``/``[[figures]]`` are added to what it returns, or chosen from the metrics when undeclared);
     * :attr:`values` -- the names of the values its analysis adds (its findings template may use them; None:
-      known only after the run).
+      known only after the run); :attr:`tolerances` -- verify's tolerances of the columns its own rows add.
     """
 
     #: the study kind (the module's name), set by :func:`study_of`
@@ -178,6 +178,9 @@ class Study:
     config_schema: dict = {}
     #: the names of the named values :meth:`analyse` adds (besides ``n_rows``, ``n_ok``); None: not known before
     values: tuple[str, ...] | None = ()
+    #: ``python -m experiments.verify``'s tolerances of the columns its own rows add ({column: Tolerance, or None:
+    #: not compared}); the generic columns' are declared with the families' results and the metrics
+    tolerances: dict = {}
 
     # -- config
 

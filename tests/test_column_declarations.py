@@ -25,7 +25,7 @@ def _builtin_classes():
 
 def current_table() -> dict:
     """The declarations of the built-in families and of verify, as plain JSON values."""
-    from experiments import engine, metrics, summary
+    from experiments import engine, metrics, studies, summary
     from methods import results
     builtin_columns = {}
     for cls in _builtin_classes():
@@ -42,7 +42,8 @@ def current_table() -> dict:
         "summary_error_columns": [c for c in summary.ERROR_COLUMNS if c in builtin_columns],
         "engine_result_columns": sorted(c for c in engine.RESULT_COLUMNS
                                         if c in builtin_columns or c not in columns),
-        "verify_tolerances": {name: _tolerance(t) for name, t in sorted(metrics.TOLERANCES.items())
+        "verify_tolerances": {name: _tolerance(t) for name, t in sorted({**metrics.TOLERANCES,
+                                                                         **studies.tolerances()}.items())
                               if name in builtin_columns or name not in columns},
         "verify_default_tolerance": _tolerance(metrics.DEFAULT_TOLERANCE),
         "family_contracts": {f: results.contract(f).__name__ for f in families},

@@ -181,3 +181,16 @@ def test_a_new_common_key_is_a_field_of_the_typed_config(monkeypatch, tmp_path):
     path.write_text(path.read_text().replace('owner = "lab 2"', 'owner = ""'))
     with pytest.raises(ConfigError, match=r"^study\.toml: owner: "):
         configs.load(str(path))
+
+
+def test_a_study_declares_the_tolerances_of_its_own_columns():
+    """verify reads the tolerance of a column a study computes itself from the study's class, not from a list in
+    experiments/metrics.py."""
+    from experiments import compare, metrics
+    from experiments.studies.circular_test import CircularTestStudy
+    from experiments.studies.roundness import RoundnessStudy
+    assert compare.tolerance("RONt_mzci_um", "roundness") == RoundnessStudy.tolerances["RONt_mzci_um"]
+    assert compare.tolerance("diag_squareness_u", "circular_test") == CircularTestStudy.tolerances["diag_squareness_u"]
+    assert compare.tolerance("station_deltas_um", "multilateration") is None  # declared: not compared
+    own = {c for kind in ("roundness", "circular_test", "multilateration") for c in study_of(kind).tolerances}
+    assert own and not own & set(metrics.TOLERANCES)

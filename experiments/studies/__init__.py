@@ -4,7 +4,9 @@ study by name). This package imports nothing of the framework, so the engine's w
 from __future__ import annotations
 
 import importlib
+import pkgutil
 import sys
+from pathlib import Path
 
 from methods import InvalidInputError
 
@@ -45,3 +47,25 @@ def study_of(kind: str):
     study.kind = kind
     _STUDIES[kind] = (module, study)
     return study
+
+
+def kinds() -> list[str]:
+    """Every study kind of this package (a module each)."""
+    return sorted(m.name for m in pkgutil.iter_modules([str(Path(__file__).parent)]) if not m.name.startswith("_"))
+
+
+_TOLERANCES: dict = {}
+
+
+def tolerances() -> dict:
+    """{column: Tolerance} of the columns the study kinds' own rows add (each class's ``tolerances``), for
+    ``python -m experiments.verify``; a column two kinds declare differently is an error."""
+    if not _TOLERANCES:
+        merged: dict = {}
+        for kind in kinds():
+            for column, tol in study_of(kind).tolerances.items():
+                if column in merged and merged[column] != tol:
+                    raise ValueError(f"the studies declare the column {column!r} with two tolerances")
+                merged[column] = tol
+        _TOLERANCES.update(merged)
+    return _TOLERANCES

@@ -22,6 +22,7 @@ from experiments import engine
 from experiments.engine import ConfigError
 from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_matrix, identify
 from methods.multilateration.solvers import kabsch
+from methods.results import Tolerance
 from experiments.study import Analysis, Figure, Study, Table, save_csv
 
 
@@ -212,6 +213,28 @@ def figure_axis_line(cfg, target):
 
 class MultilaterationStudy(Study):
     """The ``multilateration`` study (see the module's docstring)."""
+
+    #: verify's tolerances of this study's own columns
+    tolerances = {
+        # multilateration (lengths in µm of a 1000-mm machine): least-squares adjustments with condition numbers 1e4-1e8 (4-6
+        # stations) and up to 9e11 (4 stations within 1.3 mm of a plane, the paper's bad case). Between OpenBLAS's
+        # Haswell and Sandybridge kernels (tests/test_cpu_independence.py) the near-planar case's values moved by up to
+        # 1e-5 relative (1.1e-3 µm of 116 µm), the identified coefficients' relative error by 1e-4 of itself, the others
+        # by 3e-8 relative or 1.2e-4 µm; the exact-length check measures the published scheme's own rounding (~1e-4 µm).
+        # Declared: 1e-4 relative and 1e-2 µm (10 nm), a margin of 10.
+        **dict.fromkeys(("station_error_um", "dead_path_error_um", "volumetric_error_rms_um", "volumetric_error_max_um",
+                         "aligned_error_rms_um", "model_error_rms_um", "published_vs_centred_um", "case_a_vs_truth_um",
+                         "case_b_vs_truth_um"),
+                        Tolerance(1e-4, 1e-2, "a µm length of an adjustment with condition numbers up to 9e11: CPU rounding")),
+        "identified_max_relative_error": Tolerance(1e-3, 1e-7, "relative error of 21 identified coefficients: moved 1e-4 "
+                                                               "of itself between BLAS kernels (near-planar stations)"),
+        # condition numbers by SVD: sigma_min carries an absolute error of eps sigma_max (seen: 2e-7 relative)
+        **dict.fromkeys(("kappa_stations", "kappa_stations_max", "kappa_points", "kappa_points_max",
+                         "kappa_stations_theorem1", "kappa_points_theorem1"),
+                        Tolerance(1e-5, 0.0, "a condition number sigma_max / sigma_min: sigma_min is known to eps sigma_max")),
+        # the per-station deltas as a JSON list for the report, rounded to 1e-6 µm: their size is station_error_um
+        "station_deltas_um": None,
+    }
 
     values = None  # its analysis names its values
 

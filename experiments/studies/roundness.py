@@ -13,6 +13,7 @@ import datasets
 import methods
 from experiments import engine
 from experiments.engine import ConfigError
+from methods.results import Tolerance
 from experiments.study import Analysis, Figure, Study, Table, save_csv
 from methods.roundness.filter import POINTS_PER_CUTOFF, parse_cutoff
 
@@ -95,6 +96,15 @@ def figure(table: pd.DataFrame, path):
 
 class RoundnessStudy(Study):
     """The ``roundness`` study (see the module's docstring)."""
+
+    #: verify's tolerances of this study's own columns
+    tolerances = {
+        # roundness (ISO 12181): RONt/RONq in µm of profiles up to D 25 mm (2.5e4 µm) after the ISO 16610-21 filter; at a
+        # cut-off of 1 UPR the filtered profile of a near-perfect part is ~1e-4 µm, rounding itself, and its MCC/MZ moved
+        # by up to 1.5e-7 µm between BLAS kernels: 1e-9 relative and 1e-5 µm (10 pm) absolute
+        **{f"RON{q}_{k}_um": Tolerance(1e-9, 1e-5, "a µm roundness of a filtered profile: absolute resolution 1e-5 µm")
+           for q in ("t", "q") for k in ("lsci", "mzci", "mici", "mcci")},
+    }
 
     values = None  # its analysis names its values
 

@@ -471,8 +471,11 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
                 if force or s is None or s in RERUN_STATUSES:
                     yield t
     t0 = time.perf_counter()
-    execute(todo(), store, work=run_chunk, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc,
-            total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log)
+    run_rows = execute
+    if executor == "dask":  # the Dask executor sits above the local ones (it reuses their chunks and worker loop)
+        from experiments.dask_executor import execute as run_rows
+    run_rows(todo(), store, work=run_chunk, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc,
+             total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log)
     counts["wall_s"] = time.perf_counter() - t0
     columns = _Columns()
     decode = _Interner()

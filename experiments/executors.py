@@ -104,9 +104,9 @@ def execute(tasks, store: RowStore, *, work, jobs: int, executor: str, scheduler
     bar = Progress(total if total is not None else 0, desc, log)
     chunks = Chunks(tasks, chunk_rows, jobs)
     try:
-        if executor == "dask":
-            _run_dask(work, chunks, store, jobs, scheduler, bar, row_timeout)
-        elif jobs <= 1 and not row_timeout:
+        if executor != "local":
+            raise ValueError(f"executor {executor!r}: this module runs rows locally (Dask: experiments.dask_executor)")
+        if jobs <= 1 and not row_timeout:
             _run_here(work, chunks, store, bar)
         else:
             _run_processes(work, chunks, store, max(jobs, 1), bar, row_timeout)
@@ -361,106 +361,3 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
             raise
         for w in workers:
             w.stop()
-
-
-#: how long a connection to a Dask scheduler may take before the run gives up (seconds)
-DASK_CONNECT_TIMEOUT_S = 5
-
-
-def connect_dask(scheduler: str):
-    """A Client of the scheduler at ``scheduler`` (``tcp://host:port``...), or InvalidInputError in one line
-    within :data:`DASK_CONNECT_TIMEOUT_S` seconds."""
-    from distributed import Client
-    from distributed.comm import parse_address
-    from methods import InvalidInputError
-    address = scheduler.strip()
-    try:
-        scheme, loc = parse_address(address, strict=True)
-        host, _, port = loc.rpartition(":")
-        if scheme in ("tcp", "tls") and (not host or not port.isdigit()):
-            raise ValueError("needs host:port")
-    except (ValueError, TypeError) as exc:
-        raise InvalidInputError(f"--scheduler {scheduler!r} is not a scheduler address such as tcp://host:8786 ({exc})") from None
-    import logging
-    quiet = [logging.getLogger(n) for n in ("distributed", "distributed.client", "distributed.core", "distributed.comm")]
-    levels = [lg.level for lg in quiet]
-    for lg in quiet:
-        lg.setLevel(logging.CRITICAL)
-    try:
-        return Client(address, timeout=DASK_CONNECT_TIMEOUT_S)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise InvalidInputError(f"no Dask scheduler answered at {address} within {DASK_CONNECT_TIMEOUT_S} s "
-                                f"({type(exc).__name__}); start one (dask scheduler) or check the address") from None
-    finally:
-        for lg, level in zip(quiet, levels):
-            lg.setLevel(level)
-
-
-#: times a row runs alone on Dask before its worker's deaths label it ``crashed``
-DASK_ROW_ATTEMPTS = 2
-
-
-def _run_dask(work, chunks: Chunks, store: RowStore, jobs: int, scheduler, bar, row_timeout) -> None:
-    """Chunks as Dask tasks (a LocalCluster of ``jobs`` single-threaded worker processes, or the cluster at
-    ``scheduler``), at most two per worker in flight; rows are written by the client. A chunk whose
-    worker died (KilledWorker) runs again a row at a time, one row in flight; a row whose worker dies
-    each of :data:`DASK_ROW_ATTEMPTS` times it runs alone is ``crashed``. Time limits act inside the worker's thread (:class:`experiments.rows.RowTimeout`)."""
-    import dask
-    from distributed import Client, LocalCluster, as_completed
-    cluster = None
-    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
-        if scheduler is not None:
-            client = connect_dask(scheduler)
-        else:
-            with _one_blas_thread_per_worker():
-                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
-                                       dashboard_address=None, silence_logs=50)
-            client = Client(cluster)
-        pending = {}
-        try:
-            n_workers = max(len(client.scheduler_info().get("workers", {})), jobs, 1)
-            ac = as_completed()
-
-            def submit():
-                chunk = chunks.next()
-                if chunk is None:
-                    return False
-                fut = client.submit(work, chunk, row_timeout, pure=False)
-                pending[fut.key] = (fut, chunk)
-                ac.add(fut)
-                return True
-            for _ in range(2 * n_workers):
-                if not submit():
-                    break
-            failures: dict = {}
-            for fut in ac:
-                _, chunk = pending.pop(fut.key)
-                try:
-                    out = fut.result()
-                except Exception as exc:  # KilledWorker: a worker died running this chunk, or one beside it
-                    if len(chunk) > 1:
-                        chunks.again(chunk)
-                    else:
-                        key = chunk[0]["key"]
-                        failures[key] = failures.get(key, 0) + 1
-                        if failures[key] < DASK_ROW_ATTEMPTS:  # it may have died with another row's worker
-                            chunks.again(chunk)
-                        else:
-                            msg = (f"the worker process died each of the {DASK_ROW_ATTEMPTS} times this row ran alone "
-                                   f"({type(exc).__name__})")
-                            _store(store, encode_rows([failed_row(chunk[0], "crashed", msg)]), chunk, bar)
-                else:
-                    chunks.measured(len(chunk), out["seconds"])
-                    _store(store, out["columns"], chunk, bar)
-                # rows run again after a death go one at a time, nothing beside them
-                limit = 1 if chunks.retry else 2 * n_workers
-                while len(pending) < limit and submit():
-                    limit = 1 if chunks.retry else 2 * n_workers
-        except BaseException:
-            with contextlib.suppress(Exception):
-                client.cancel([f for f, _ in pending.values()])
-            raise
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()

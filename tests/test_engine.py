@@ -355,6 +355,7 @@ HOSTILE = '''
 """Methods that misbehave on purpose (engine isolation tests)."""
 import os
 import signal
+import threading
 import time
 
 from methods import register
@@ -367,8 +368,9 @@ def hostile(points, *, what="ok"):
     if what == "hang":
         while True:
             time.sleep(0.01)
-    if what == "hang_in_c":  # a row that the worker's own alarm cannot end
-        signal.signal(signal.SIGALRM, signal.SIG_IGN)
+    if what == "hang_in_c":  # a row that neither the alarm nor an exception raised in its thread can end
+        if threading.current_thread() is threading.main_thread():  # a Dask worker runs rows in a thread
+            signal.signal(signal.SIGALRM, signal.SIG_IGN)
         time.sleep(600)
     if what == "exit":
         os._exit(3)
@@ -461,11 +463,13 @@ def test_all_rows_failing_for_the_environment_stop_in_one_line_and_are_not_cache
 
 @pytest.mark.slow
 def test_jobs_1_jobs_2_and_dask_give_identical_rows(tmp_path):
-    """The same non-timing rows whatever the executor, the number of jobs and the chunking."""
+    """The same non-timing rows whatever the executor (local processes, a Dask LocalCluster of 2 worker processes,
+    with rows in the workers' threads or in their row processes), the number of jobs and the chunking."""
     study = write_study(tmp_path, reps=30)
     frames = {}
     for name, extra in (("j1", ["--jobs", "1"]), ("j2", ["--jobs", "2"]),
-                        ("dask", ["--jobs", "2", "--executor", "dask"])):
+                        ("dask", ["--jobs", "2", "--executor", "dask"]),
+                        ("dask_rows_in_processes", ["--jobs", "2", "--executor", "dask", "--row-timeout", "600"])):
         res = subprocess.run([sys.executable, "-m", "experiments.run", str(study), "--out", str(tmp_path / name),
                               "--no-report", *extra], cwd=tmp_path, capture_output=True, text=True, timeout=600,
                              env=subprocess_env(OPENBLAS_NUM_THREADS="1"))
@@ -474,6 +478,7 @@ def test_jobs_1_jobs_2_and_dask_give_identical_rows(tmp_path):
     assert len(frames["j1"]) == 120
     pd.testing.assert_frame_equal(frames["j1"], frames["j2"])
     pd.testing.assert_frame_equal(frames["j1"], frames["dask"])
+    pd.testing.assert_frame_equal(frames["j1"], frames["dask_rows_in_processes"])
 
 
 @pytest.mark.slow
@@ -519,23 +524,6 @@ def test_workers_that_cannot_start_stop_the_run_in_one_line(tmp_path):
                          env=subprocess_env(OPENBLAS_NUM_THREADS="1"))
     assert res.returncode == 2
     assert "worker processes end before running a row" in res.stderr.strip().splitlines()[-1]
-
-
-@pytest.mark.slow
-def test_dask_labels_exits_and_python_hangs(tmp_path, hostile_site):
-    """On a Dask LocalCluster: os._exit (its worker dies) and SystemExit/KeyboardInterrupt are ``crashed``, a
-    row looping in Python past its limit is ``timeout`` (the limit is raised in the worker's thread), the
-    other rows are ok."""
-    for name, whats in (("dx", ("exit",)), ("dh", ("hang", "sysexit", "kbint"))):
-        study = write_study(tmp_path, name=name, reps=1, methods=hostile_methods(*whats))
-        res = cli([study, "--jobs", "2", "--executor", "dask", "--row-timeout", "1", "--out", tmp_path / "out"],
-                  tmp_path, hostile_site)
-        assert res.returncode == 0, res.stderr
-        df = pd.read_csv(tmp_path / "out" / name / "results.csv")
-        what = df["param_what"].fillna("")
-        assert set(df.loc[what == "", "status"]) == {"ok"}
-        assert set(df.loc[what == "hang", "status"]) <= {"timeout"}
-        assert set(df.loc[what.isin(["exit", "sysexit", "kbint"]), "status"]) == {"crashed"}
 
 
 def test_results_csv_text_is_pandas_to_csv_byte_for_byte():

@@ -1,0 +1,417 @@
+"""The Dask executor: chunks of rows as Dask tasks, on a LocalCluster or the cluster at ``--scheduler``.
+
+The client submits chunks (at most two per worker thread in flight) and stores the rows they return; it
+never waits without looking: every second it checks that the cluster still has workers, and a cluster
+with none for :func:`no_worker_limit_s` seconds stops the run with one line (the finished rows are kept).
+
+Isolation, as the local executor gives it (``experiments.executors``):
+
+* With a time limit (``--row-timeout``) a Dask task does not run its rows in the worker's thread, where
+  an exception raised asynchronously cannot end a row blocked in compiled code: it hands them to a *row
+  process*, a child of the worker (kept for the next chunk), and watches it. A row past its limit ends
+  by the child's own alarm (SIGALRM), or, if that cannot reach it, by the parent killing the child
+  :data:`experiments.executors.KILL_GRACE_S` later; a child that dies labels its row ``crashed``; either
+  way the other rows of the chunk run again in a new child and the task returns every row. The Dask
+  worker itself never dies of a row.
+* Without a time limit the rows run in the worker's thread, and a row that ends its process
+  (``os._exit``, a segfault) kills the worker; its nanny starts a new one. The chunk comes back as
+  ``KilledWorker`` (``allowed-failures`` is 0: no blind retries) and is bisected: its halves run again
+  *alone* (nothing else in flight, so a death is theirs), down to single rows; a row whose worker died
+  :data:`DASK_ROW_ATTEMPTS` times, the last time alone, is ``crashed``. The innocent rows of the chunk are
+  computed as usual.
+
+References: Dask distributed's ``KilledWorker`` and ``distributed.scheduler.allowed-failures``
+(https://distributed.dask.org/en/stable/killed.html); the Linux parent-death signal, prctl(2)
+``PR_SET_PDEATHSIG``.
+"""
+from __future__ import annotations
+
+import collections
+import contextlib
+import json
+import mmap
+import os
+import queue
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from concurrent.futures import CancelledError
+
+from experiments.executors import KILL_GRACE_S, Chunks, Progress, _one_blas_thread_per_worker, _store
+from methods import InvalidInputError
+
+#: how long a connection to a Dask scheduler may take before the run gives up (seconds)
+DASK_CONNECT_TIMEOUT_S = 5
+#: deaths of its worker after which a row is ``crashed`` (the last one with the row running alone)
+DASK_ROW_ATTEMPTS = 2
+#: seconds a cluster may have no worker before the run stops (``FITBENCH_DASK_NO_WORKER_S`` overrides)
+NO_WORKER_S = 120.0
+#: seconds between two looks at the cluster's workers while no chunk finishes
+CHECK_EVERY_S = 1.0
+#: chunks cancelled by the scheduler in a row (no chunk finishing between) before the run stops
+MAX_CANCELLED = 20
+#: times in a row a row process may die before running a row before the task gives up
+CHILD_START_ATTEMPTS = 3
+
+
+class RowProcessError(RuntimeError):
+    """A Dask worker cannot start a row process (it dies before running a row): the run stops."""
+
+
+def no_worker_limit_s() -> float:
+    """:data:`NO_WORKER_S`, or the seconds in ``FITBENCH_DASK_NO_WORKER_S`` (a cluster whose workers queue
+    for a batch system may need longer)."""
+    value = os.environ.get("FITBENCH_DASK_NO_WORKER_S")
+    if value is None:
+        return NO_WORKER_S
+    try:
+        seconds = float(value)
+    except ValueError:
+        seconds = float("nan")
+    if not seconds > 0:
+        raise InvalidInputError(f"FITBENCH_DASK_NO_WORKER_S must be a positive number of seconds, got {value!r}")
+    return seconds
+
+
+def connect_dask(scheduler: str):
+    """A Client of the scheduler at ``scheduler`` (``tcp://host:port``...), or InvalidInputError in one line
+    within :data:`DASK_CONNECT_TIMEOUT_S` seconds."""
+    from distributed import Client
+    from distributed.comm import parse_address
+    address = scheduler.strip()
+    try:
+        scheme, loc = parse_address(address, strict=True)
+        host, _, port = loc.rpartition(":")
+        if scheme in ("tcp", "tls") and (not host or not port.isdigit()):
+            raise ValueError("needs host:port")
+    except (ValueError, TypeError) as exc:
+        raise InvalidInputError(f"--scheduler {scheduler!r} is not a scheduler address such as tcp://host:8786 "
+                                f"({exc})") from None
+    import logging
+    quiet = [logging.getLogger(n)
+             for n in ("distributed", "distributed.client", "distributed.core", "distributed.comm")]
+    levels = [lg.level for lg in quiet]
+    for lg in quiet:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        return Client(address, timeout=DASK_CONNECT_TIMEOUT_S)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InvalidInputError(f"no Dask scheduler answered at {address} within {DASK_CONNECT_TIMEOUT_S} s "
+                                f"({type(exc).__name__}); start one (dask scheduler) or check the address") from None
+    finally:
+        for lg, level in zip(quiet, levels):
+            lg.setLevel(level)
+
+
+# ---------------------------------------------------------------- in a Dask worker: rows in a row process
+
+_IDLE: list = []  # row processes of this worker waiting for a chunk
+_IDLE_LOCK = threading.Lock()
+_SPAWNER = None  # one long-lived thread starts every row process (the parent-death signal follows that thread)
+
+
+def _spawn(args, fds):
+    global _SPAWNER
+    with _IDLE_LOCK:
+        if _SPAWNER is None:
+            from concurrent.futures import ThreadPoolExecutor
+            _SPAWNER = ThreadPoolExecutor(1, thread_name_prefix="fitbench-row-process-spawner")
+    return _SPAWNER.submit(subprocess.Popen, args, pass_fds=fds, stdin=subprocess.DEVNULL).result()
+
+
+def _child_main(conn_fd: int, progress_fd: int, parent_pid: int) -> None:
+    """A row process: the local executor's worker loop (``experiments.executors``), talking to its Dask
+    worker over an inherited socket and publishing the running row in an inherited shared page."""
+    from multiprocessing.connection import Connection
+    from experiments.executors import _worker_main
+    progress = memoryview(mmap.mmap(progress_fd, 16)).cast("d")
+    _worker_main(Connection(conn_fd), parent_pid, progress)
+
+
+class _RowProcess:
+    """A child of this Dask worker that runs chunks; ``progress`` = (start time of the running row, or 0;
+    its position in the chunk), shared memory both processes see."""
+
+    def __init__(self):
+        from multiprocessing.connection import Connection
+        mine, theirs = socket.socketpair()
+        self.conn = Connection(mine.detach())
+        self.page = tempfile.TemporaryFile()
+        self.page.truncate(16)
+        self.progress = memoryview(mmap.mmap(self.page.fileno(), 16)).cast("d")
+        code = ("import sys, json; sys.path[:0] = json.loads(sys.argv[1]); "
+                "from experiments.dask_executor import _child_main; _child_main(*map(int, sys.argv[2:]))")
+        try:
+            self.proc = _spawn([sys.executable, "-c", code, json.dumps(sys.path), str(theirs.fileno()),
+                                str(self.page.fileno()), str(os.getpid())], [theirs.fileno(), self.page.fileno()])
+        finally:
+            theirs.close()
+
+    def send(self, tasks: list, row_timeout) -> None:
+        self.progress[0] = self.progress[1] = 0.0
+        self.conn.send((0, tasks, row_timeout))
+
+    def wait(self, row_timeout):
+        """``("done", out)``, ``("died", pos, started, exit code)`` or ``("timeout", pos)``."""
+        while True:
+            if self.conn.poll(0.2):
+                try:
+                    _, out = self.conn.recv()
+                    return ("done", out)
+                except (EOFError, OSError):
+                    pass
+                return self._died()
+            if self.proc.poll() is not None and not self.conn.poll(0):
+                return self._died()
+            started = self.progress[0]
+            if started and time.monotonic() - started > row_timeout + KILL_GRACE_S:
+                pos = int(self.progress[1])
+                self.stop(now=True)
+                return ("timeout", pos)
+
+    def _died(self):
+        pos, started = int(self.progress[1]), self.progress[0]
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self.proc.wait(timeout=5)
+        self.stop(now=True)
+        return ("died", pos, started, self.proc.returncode)
+
+    def stop(self, now: bool = False) -> None:
+        with contextlib.suppress(Exception):
+            if now:
+                self.proc.kill()
+            else:
+                self.conn.send(None)
+        try:
+            self.proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.proc.wait(timeout=5)
+        with contextlib.suppress(Exception):
+            self.conn.close()
+        with contextlib.suppress(Exception):
+            self.page.close()
+
+
+def run_isolated(tasks: list, row_timeout: float) -> dict:
+    """A Dask task: run a chunk in a row process of this worker (see the module's docstring) and return its
+    rows in the store's columns, every row labelled, in the order of ``tasks``."""
+    from experiments.rows import encode_rows, failed_row
+    n = len(tasks)
+    status: list = [None] * n
+    rows: list = [None] * n
+    seconds = 0.0
+    todo = collections.deque([list(range(n))])
+    with _IDLE_LOCK:
+        child = _IDLE.pop() if _IDLE else None
+    start_failures = 0
+
+    def label(i, what, message):
+        enc = encode_rows([failed_row(tasks[i], what, message)])
+        status[i], rows[i] = enc["status"][0], enc["row"][0]
+    try:
+        while todo:
+            idx = todo.popleft()
+            if child is None:
+                child = _RowProcess()
+            t0 = time.perf_counter()
+            child.send([tasks[i] for i in idx], row_timeout)
+            what, *info = child.wait(row_timeout)
+            if what == "done":
+                out = info[0]
+                if "failed" in out:  # the engine itself failed: the rows alone, then an error row
+                    if len(idx) > 1:
+                        todo.extendleft([i] for i in reversed(idx))
+                    else:
+                        label(idx[0], "error", out["failed"])
+                    continue
+                seconds += out["seconds"]
+                for i, s, r in zip(idx, out["columns"]["status"], out["columns"]["row"]):
+                    status[i], rows[i] = s, r
+                start_failures = 0
+                continue
+            child = None
+            seconds += time.perf_counter() - t0
+            if what == "timeout":
+                pos = info[0]
+                label(idx[pos], "timeout",
+                      f"the row ran longer than its limit of {row_timeout:g} s (its row process was ended)")
+            else:
+                pos, started, code = info
+                if not started:  # it died before running a row: the process, not a row
+                    start_failures += 1
+                    if start_failures >= CHILD_START_ATTEMPTS:
+                        raise RowProcessError(f"row processes of the Dask worker on {socket.gethostname()} end before "
+                                              f"running a row (exit code {code}, {start_failures} times)")
+                    todo.appendleft(idx)
+                    continue
+                label(idx[pos], "crashed", f"the row process ended (exit code {code}) while running this row")
+            rest = idx[:pos] + idx[pos + 1:]  # the rows before it died with the process: they run again
+            if rest:
+                todo.appendleft(rest)
+    except BaseException:
+        if child is not None:
+            child.stop(now=True)
+        raise
+    if child is not None:
+        with _IDLE_LOCK:
+            _IDLE.append(child)
+    return {"columns": {"status": status, "row": rows}, "seconds": seconds}
+
+
+# ---------------------------------------------------------------- in the client
+
+def execute(tasks, store, *, work, jobs: int, scheduler: str | None, desc: str, total: int | None = None,
+            row_timeout: float | None = None, chunk_rows: int | None = None, log=print, executor: str = "dask"):
+    """``experiments.executors.execute`` on Dask: the tasks in chunks (sized as there), each chunk's rows
+    stored as it returns (:func:`run_dask`)."""
+    if total == 0:
+        return
+    bar = Progress(total if total is not None else 0, desc, log)
+    try:
+        run_dask(work, Chunks(tasks, chunk_rows, jobs), store, jobs, scheduler, bar, row_timeout)
+    finally:
+        bar.close()
+
+
+def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> None:
+    """Run ``chunks`` (an ``experiments.executors.Chunks``) as Dask tasks of ``work`` (or
+    :func:`run_isolated` with a time limit) on a LocalCluster of ``jobs`` single-threaded worker processes,
+    or on the cluster at ``scheduler``; store each chunk's rows as it returns (see the module's docstring)."""
+    import dask
+    from distributed import Client, KilledWorker, LocalCluster
+    from experiments.rows import encode_rows, failed_row
+    limit_s = no_worker_limit_s()
+    settings = {"distributed.scheduler.allowed-failures": 0}
+    if scheduler is None:
+        # A LocalCluster closes a nanny whose worker has not registered again within this timeout after a
+        # death; with workers dying one after another the timeout fell on a restart, every nanny was closed
+        # and the run waited for ever. Our nannies restart their workers themselves.
+        settings["distributed.deploy.lost-worker-timeout"] = "100000 s"
+    cluster = None
+    with dask.config.set(settings):
+        if scheduler is not None:
+            client = connect_dask(scheduler)
+            where = f"the Dask cluster at {scheduler.strip()}"
+        else:
+            with _one_blas_thread_per_worker():
+                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
+                                       dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
+                                       silence_logs=50)  # its HTTP server on a free local port, no dashboard
+            client = Client(cluster)
+            where = "the local Dask cluster"
+        fn = run_isolated if row_timeout else work
+        pending: dict = {}  # key -> (future, chunk, ran alone)
+        retry: collections.deque = collections.deque()  # chunks whose worker died: each runs alone
+        deaths: collections.Counter = collections.Counter()  # row key -> deaths of the worker running it
+        finished: queue.Queue = queue.Queue()
+        try:
+            threads = _threads(client)
+
+            def submit(chunk, alone):
+                fut = client.submit(fn, chunk, row_timeout, pure=False)
+                pending[fut.key] = (fut, chunk, alone)
+                fut.add_done_callback(finished.put)
+
+            def fill():
+                while True:
+                    if retry:
+                        if not pending:
+                            submit(retry.popleft(), True)
+                        return
+                    if len(pending) >= 2 * max(threads, 1):
+                        return
+                    chunk = chunks.next()
+                    if chunk is None:
+                        return
+                    submit(chunk, False)
+
+            def died(chunk, alone, why):
+                for t in chunk:
+                    deaths[t["key"]] += 1
+                if len(chunk) > 1:
+                    half = len(chunk) // 2
+                    retry.extendleft([chunk[half:], chunk[:half]])
+                elif alone and deaths[chunk[0]["key"]] >= DASK_ROW_ATTEMPTS:
+                    msg = (f"its Dask worker died each of the {deaths[chunk[0]['key']]} times it ran this row, the last "
+                           f"time with nothing else running ({why})")
+                    _store(store, encode_rows([failed_row(chunk[0], "crashed", msg)]), chunk, bar)
+                else:
+                    retry.appendleft(chunk)
+
+            fill()
+            cancelled = 0
+            seen = checked = time.monotonic()
+            while pending:
+                try:
+                    fut = finished.get(timeout=CHECK_EVERY_S)
+                except queue.Empty:
+                    fut = None
+                if fut is not None and fut.key in pending:
+                    _, chunk, alone = pending[fut.key]
+                    try:
+                        out = fut.result(timeout=10)
+                    except KilledWorker as exc:
+                        del pending[fut.key]
+                        died(chunk, alone, type(exc).__name__)
+                    except RowProcessError as exc:
+                        raise InvalidInputError(f"{exc}; run with --jobs 1 on that machine to see why") from None
+                    except TimeoutError:  # its result was lost with a worker before it was fetched
+                        if not fut.done():
+                            fut.add_done_callback(finished.put)  # computed again: wait for it
+                        else:
+                            del pending[fut.key]
+                            retry.appendleft(chunk)
+                    except CancelledError as exc:  # the scheduler lost it (restarted), or the connection is gone
+                        del pending[fut.key]
+                        cancelled += 1
+                        if client.status not in ("running", "connecting") or cancelled > MAX_CANCELLED:
+                            raise InvalidInputError(f"the connection to {where} was lost ({type(exc).__name__}); "
+                                                    f"the finished rows are kept, run the same command again") from None
+                        retry.appendleft(chunk)
+                    except Exception as exc:  # the engine itself failed: the rows alone, then an error row
+                        del pending[fut.key]
+                        if len(chunk) > 1:
+                            retry.extendleft([t] for t in reversed(chunk))
+                        else:
+                            _store(store, encode_rows([failed_row(chunk[0], "error", f"{type(exc).__name__}: {exc}")]),
+                                   chunk, bar)
+                    else:
+                        del pending[fut.key]
+                        cancelled = 0
+                        chunks.measured(len(chunk), out["seconds"])
+                        _store(store, out["columns"], chunk, bar)
+                now = time.monotonic()
+                if now - checked >= CHECK_EVERY_S:
+                    checked = now
+                    threads = _threads(client)
+                    if threads:
+                        seen = now
+                    elif now - seen > limit_s:
+                        raise InvalidInputError(
+                            f"{where} has had no worker for {limit_s:g} s ({len(pending)} chunks waiting); "
+                            f"the finished rows are kept: start workers (dask worker ADDRESS) and run the same command "
+                            f"again, or give workers longer to come with FITBENCH_DASK_NO_WORKER_S=SECONDS")
+                fill()
+        except BaseException:
+            with contextlib.suppress(Exception):
+                client.cancel([f for f, _, _ in pending.values()])
+            raise
+        finally:
+            with contextlib.suppress(Exception):
+                client.close()
+            if cluster is not None:
+                with contextlib.suppress(Exception):
+                    cluster.close()
+
+
+def _threads(client) -> int:
+    """Threads of the cluster's live workers (0 if the scheduler does not answer)."""
+    try:
+        return sum(client.nthreads().values())
+    except Exception:
+        return 0

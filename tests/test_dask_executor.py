@@ -1,0 +1,183 @@
+"""Dask runs with hostile methods: a row blocked in compiled code past its limit is ``timeout``, rows that end
+their process are ``crashed`` while the innocent rows of their chunk are computed, a cluster that keeps losing
+workers never hangs the run, a cluster left without workers stops it in one line, and no process of a run
+outlives it (every process it started carries a marker in its environment, looked for in /proc).
+
+The hostile methods are the plugin of :mod:`test_engine` (built offline, found by the Dask workers through
+PYTHONPATH)."""
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import uuid
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from conftest import subprocess_env
+from test_engine import hostile_methods, hostile_site, write_study  # noqa: F401 (hostile_site: a fixture)
+
+pytestmark = pytest.mark.skipif(not Path("/proc/self/environ").exists(), reason="looks for processes in /proc")
+
+
+def start(args, cwd, site, marker, **variables):
+    return subprocess.Popen([sys.executable, "-m", "experiments.run", *map(str, args), "--no-report"], cwd=cwd,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=subprocess_env(site, OPENBLAS_NUM_THREADS="1", FITBENCH_TEST_RUN=marker, **variables))
+
+
+def run(args, cwd, site, timeout=300, **variables):
+    """The run's exit code, stdout and stderr, and the processes it left behind (none, once it ended)."""
+    marker = uuid.uuid4().hex
+    proc = start(args, cwd, site, marker, **variables)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    finally:
+        if proc.poll() is None:  # hung: end it and everything it started, so the test fails without leftovers
+            proc.kill()
+            proc.communicate()
+            for pid in survivors(marker, wait_s=0):
+                os.kill(pid, signal.SIGKILL)
+    return proc.returncode, out, err, survivors(marker)
+
+
+def survivors(marker: str, wait_s: float = 10.0, running: str = "") -> list[int]:
+    """Processes whose environment carries ``marker`` (and whose command line contains ``running``), after
+    waiting up to ``wait_s`` for them to end."""
+    needle = f"FITBENCH_TEST_RUN={marker}".encode()
+    deadline = time.monotonic() + wait_s
+    while True:
+        found = []
+        for entry in Path("/proc").iterdir():
+            if entry.name.isdigit():
+                try:
+                    if needle in (entry / "environ").read_bytes().split(b"\0"):
+                        status = (entry / "status").read_text()
+                        if "\nState:\tZ" not in status and running.encode() in (entry / "cmdline").read_bytes():
+                            found.append(int(entry.name))  # (a zombie has ended; its parent has not reaped it yet)
+                except OSError:
+                    continue
+        if not found or time.monotonic() > deadline:
+            return found
+        time.sleep(0.25)
+
+
+def statuses(results: Path) -> pd.DataFrame:
+    df = pd.read_csv(results)
+    df["what"] = df["param_what"].fillna("") if "param_what" in df else ""
+    return df
+
+
+@pytest.mark.slow
+def test_rows_blocked_in_c_end_as_timeout_on_dask(tmp_path, hostile_site):
+    """--row-timeout on a Dask LocalCluster: a row sleeping in C with the alarm ignored (it ran for ever in the
+    worker's thread: an exception raised in a thread cannot interrupt a C call) is ``timeout``, a Python loop
+    too; os._exit, SystemExit and KeyboardInterrupt are ``crashed``; the other rows are ok; nothing outlives the run."""
+    study = write_study(tmp_path, name="dc", reps=1,
+                        methods=hostile_methods("hang_in_c", "hang", "exit", "sysexit", "kbint"))
+    code, out, err, left = run([study, "--jobs", "2", "--executor", "dask", "--row-timeout", "1",
+                                "--out", tmp_path / "out"], tmp_path, hostile_site)
+    assert code == 0, err
+    df = statuses(tmp_path / "out" / "dc" / "results.csv")
+    assert len(df) == 2 * 7
+    assert set(df.loc[df["what"] == "", "status"]) == {"ok"}
+    assert set(df.loc[df["what"].isin(["hang_in_c", "hang"]), "status"]) == {"timeout"}
+    assert set(df.loc[df["what"].isin(["exit", "sysexit", "kbint"]), "status"]) == {"crashed"}
+    assert df.loc[df["what"] == "exit", "message"].str.contains("exit code 3").all()
+    assert not left, f"processes of the run still alive after it ended: {left}"
+
+
+@pytest.mark.slow
+def test_workers_dying_again_and_again_never_hang_the_run(tmp_path, hostile_site):
+    """No time limit: each os._exit kills a Dask worker. With LocalCluster's lost-worker timeout short (it closed
+    a nanny whose restarted worker had not registered yet: after a few deaths no worker was left and the run
+    waited for ever) the run completes; the chunk holding a killer is bisected, so the rows beside it are
+    computed and only the killer is ``crashed``; nothing outlives the run."""
+    study = write_study(tmp_path, name="dd", reps=2, methods=hostile_methods("exit"), extra="chunk_rows = 6\n")
+    code, out, err, left = run([study, "--jobs", "2", "--executor", "dask", "--out", tmp_path / "out"], tmp_path,
+                               hostile_site, timeout=400, DASK_DISTRIBUTED__DEPLOY__LOST_WORKER_TIMEOUT="0.2s")
+    assert code == 0, err
+    df = statuses(tmp_path / "out" / "dd" / "results.csv")
+    assert len(df) == 2 * 2 * 3
+    assert set(df.loc[df["what"] == "", "status"]) == {"ok"}
+    assert set(df.loc[df["what"] == "exit", "status"]) == {"crashed"}
+    assert df.loc[df["what"] == "exit", "message"].str.contains("KilledWorker").all()
+    assert not left, f"processes of the run still alive after it ended: {left}"
+
+
+@pytest.mark.slow
+def test_a_killed_run_leaves_no_dask_worker_nor_row_process(tmp_path, hostile_site):
+    """SIGKILL of the run while its Dask workers' row processes sleep in C: every process it started ends."""
+    study = write_study(tmp_path, name="dk", reps=20, methods=hostile_methods("hang_in_c"))
+    marker = uuid.uuid4().hex
+    proc = start([study, "--jobs", "2", "--executor", "dask", "--row-timeout", "100", "--out", tmp_path / "out"],
+                 tmp_path, hostile_site, marker)
+    try:
+        deadline = time.monotonic() + 120
+        while (len(survivors(marker, wait_s=0, running="_child_main")) < 2 and time.monotonic() < deadline
+               and proc.poll() is None):  # both workers' row processes are running rows
+            time.sleep(0.5)
+        assert proc.poll() is None, proc.communicate()[1]
+        assert len(survivors(marker, wait_s=0, running="_child_main")) == 2
+        assert len(survivors(marker, wait_s=0)) >= 5  # the run, 2 workers, 2 row processes
+        time.sleep(2)  # the rows are sleeping in C
+    finally:
+        proc.kill()
+        proc.communicate()
+    left = survivors(marker, wait_s=15)
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"processes of a killed run still alive: {left}"
+
+
+DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.system
+@pytest.mark.skipif(DASK is None, reason="the dask command line (package distributed) is not installed")
+def test_a_cluster_without_workers_stops_the_run_in_one_line(tmp_path, hostile_site):
+    """A scheduler whose only worker has no nanny: the first os._exit leaves the cluster without workers. The
+    run waited for ever; it stops after FITBENCH_DASK_NO_WORKER_S with one line and exit 2, the rows finished
+    before are kept."""
+    env = subprocess_env(hostile_site, OPENBLAS_NUM_THREADS="1")
+    port = free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    procs = [subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                              cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        time.sleep(2)
+        procs.append(subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
+                                       "--local-directory", str(tmp_path / "w")], cwd=tmp_path, env=env,
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        from distributed import Client
+        with Client(address, timeout=30) as c:
+            c.wait_for_workers(1, timeout=120)
+        study = write_study(tmp_path, name="dn", reps=3, methods=hostile_methods("exit"))
+        t0 = time.monotonic()
+        code, out, err, left = run([study, "--executor", "dask", "--scheduler", address, "--out", tmp_path / "out"],
+                                   tmp_path, hostile_site, timeout=300, FITBENCH_DASK_NO_WORKER_S="5")
+        assert code == 2, err
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and "has had no worker for 5 s" in lines[0] and "run the same command again" in lines[0]
+        assert time.monotonic() - t0 < 120
+        assert not left
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()

@@ -141,7 +141,7 @@ def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
                               f"result: fix it and run the same command again")
 
 
-def write_results(df, path: Path, block: int = 20000) -> str:
+def write_results(df, path: Path, block: int = 5000) -> str:
     """``df`` as CSV, streamed a block of rows at a time into a temporary file that replaces ``path`` at the
     end (atomic); return the SHA-256 of the bytes written."""
     from experiments.csvtext import write_csv

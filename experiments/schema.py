@@ -38,9 +38,13 @@ Params = Annotated[dict[str, Any], Field(description="parameter -> value")]
 Columns = Annotated[Union[str, list[str]], Field(description="a column name or a list of them")]
 
 
-class _Table(BaseModel):
-    """A TOML table: no key beyond its fields (optional fields default to None: absent)."""
+class ConfigTable(BaseModel):
+    """A TOML table: no key beyond its fields (optional fields default to None: absent). A study kind's own keys
+    are such a model (its ``Study.config_schema``)."""
     model_config = ConfigDict(extra="forbid")
+
+
+_Table = ConfigTable
 
 
 class GeneratorEntry(_Table):
@@ -230,9 +234,12 @@ def _dataset_schema() -> dict:
     return {"oneOf": alternatives}
 
 
-def config_schema(study_keys: dict | None = None) -> dict:
+def config_schema(study_keys: dict | type[BaseModel] | None = None) -> dict:
     """The JSON Schema of a whole config file (its ``[quick]`` table: the same keys, none required), with the
-    keys its study kind declares (``study_keys``: its ``Study.config_schema``)."""
+    keys its study kind declares (``study_keys``: its ``Study.config_schema``, a model of them or their JSON
+    Schema)."""
+    if isinstance(study_keys, type) and issubclass(study_keys, BaseModel):
+        study_keys = properties(study_keys)
     clash = set(study_keys or {}) & set(TOP_LEVEL)
     if clash:
         raise ValueError(f"config_schema redefines the common key(s) {', '.join(sorted(clash))}")

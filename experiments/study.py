@@ -157,7 +157,8 @@ class Study:
     with ``kind = "KIND"`` runs it (no kind, or ``kind = "grid"``: this class as it is, the generic benchmark).
     Every method has a default, so a subclass overrides only what its study does differently:
 
-    * :attr:`config_schema` -- the config keys only this kind uses ({key: JSON Schema}, merged into the schema);
+    * :attr:`config_schema` -- the config keys only this kind uses: a model (``experiments.schema.ConfigTable``)
+      or {key: JSON Schema}, merged into the schema;
     * :meth:`validate` -- the rules the schema cannot express; :meth:`count_rows` -- the rows from the config alone;
     * :meth:`tasks` -- the tasks (default: data sets x repetitions x methods); :meth:`execute` -- one task's row
       (default: the generic fit, in a worker);
@@ -171,16 +172,17 @@ class Study:
     #: the study kind (the module's name), set by :func:`study_of`
     kind: str = "grid"
 
-    def __init_subclass__(cls, **kwargs):
-        super().__init_subclass__(**kwargs)
-        studies.CLASSES.add(cls)
-    #: the config keys only this kind uses: {key: JSON Schema}
-    config_schema: dict = {}
+    #: the config keys only this kind uses: a model of them (``experiments.schema.ConfigTable``) or {key: JSON Schema}
+    config_schema: dict | type = {}
     #: the names of the named values :meth:`analyse` adds (besides ``n_rows``, ``n_ok``); None: not known before
     values: tuple[str, ...] | None = ()
     #: ``python -m experiments.verify``'s tolerances of the columns its own rows add ({column: Tolerance, or None:
     #: not compared}); the generic columns' are declared with the families' results and the metrics
     tolerances: dict = {}
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        studies.CLASSES.add(cls)  # the registry study_of finds a module's class in
 
     # -- config
 

@@ -194,3 +194,21 @@ def test_a_study_declares_the_tolerances_of_its_own_columns():
     assert compare.tolerance("station_deltas_um", "multilateration") is None  # declared: not compared
     own = {c for kind in ("roundness", "circular_test", "multilateration") for c in study_of(kind).tolerances}
     assert own and not own & set(metrics.TOLERANCES)
+
+
+def test_a_study_declares_its_own_keys_as_a_typed_model():
+    """A study kind's own config keys are a pydantic model (experiments.schema.ConfigTable) the schema is generated
+    from; every shipped config's own keys are an instance of its kind's model."""
+    from experiments import schema
+    checked = 0
+    for name in configs.available():
+        cfg = configs.load(name)
+        model = study_of(cfg["kind"]).config_schema
+        if not model:
+            continue
+        assert isinstance(model, type) and issubclass(model, schema.ConfigTable), cfg["kind"]
+        own = {k: cfg[k] for k in model.model_fields if k in cfg}
+        assert own and model.model_validate(own) is not None
+        assert set(schema.config_schema(model)["properties"]) >= set(model.model_fields)
+        checked += 1
+    assert checked >= 7

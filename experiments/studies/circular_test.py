@@ -8,6 +8,7 @@ injected linear errors produce), and the published value for orientation.
 from __future__ import annotations
 
 import json
+from typing import Annotated, Literal
 
 import numpy as np
 
@@ -16,8 +17,10 @@ from datasets.circular_test import circular_test, lola_hbg130
 from experiments import engine
 from experiments.engine import ConfigError
 import pandas as pd
+from pydantic import Field
 
 from methods.results import Tolerance
+from experiments.schema import ConfigTable
 from experiments.study import Analysis, Figure, Study, Table, save_figure
 from methods.results import CircularTestFit
 from experiments.provenance import write_atomic
@@ -84,6 +87,11 @@ def _num(v):
     return None if v is None or v != v else float(v)
 
 
+class CircularTestConfig(ConfigTable):
+    """The keys of the circular_test study."""
+    paths: Annotated[list[Literal["both", "cw", "ccw"]], Field(min_length=1)] = None  # the runs fitted
+
+
 class CircularTestStudy(Study):
     """The ``circular_test`` study (see the module's docstring)."""
 
@@ -103,10 +111,8 @@ class CircularTestStudy(Study):
 
     values = None  # its analysis names its values
 
-    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
-    config_schema = {
-        "paths": {"type": "array", "items": {"enum": ["both", "cw", "ccw"]}, "minItems": 1},
-    }
+    #: this study's own config keys (typed; the schema is generated from the model)
+    config_schema = CircularTestConfig
 
     def validate(self, cfg, where):
         paths = cfg.get("paths", ["both"])

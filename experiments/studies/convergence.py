@@ -8,13 +8,16 @@ A run succeeds when it reports convergence and lands within 1e-6 R of that optim
 from __future__ import annotations
 
 import json
+from typing import Annotated
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
 import methods
 from experiments import engine
 from experiments.engine import ConfigError
+from experiments.schema import ConfigTable
 from experiments.study import Analysis, Figure, Study, Table, save_csv
 
 
@@ -47,17 +50,21 @@ def _label(m, p):
     return m + ("" if p == "{}" else " " + p.replace('"', "").replace("{", "").replace("}", ""))
 
 
+class ConvergenceConfig(ConfigTable):
+    """The keys of the convergence study (values checked by ``validate``)."""
+    start_distances: Annotated[list[Annotated[float, Field(ge=0)]], Field(min_length=1)] = None  # radii
+    # method id -> the method giving the known optimum of its objective, with a 'default' entry
+    reference_optimum: Annotated[dict[str, str], Field(json_schema_extra={"required": ["default"]})] = None
+    start_directions: Annotated[int, Field(ge=1)] = None
+
+
 class ConvergenceStudy(Study):
     """The ``convergence`` study (see the module's docstring)."""
 
     values = None  # its analysis names its values
 
-    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
-    config_schema = {
-        "start_distances": {"type": "array", "minItems": 1, "items": {"type": "number", "minimum": 0}},
-        "reference_optimum": {"type": "object", "required": ["default"], "additionalProperties": {"type": "string"}},
-        "start_directions": {"type": "integer", "minimum": 1},
-    }
+    #: this study's own config keys (typed; the schema is generated from the model)
+    config_schema = ConvergenceConfig
 
     def validate(self, cfg, where):
         d = cfg.get("start_distances")

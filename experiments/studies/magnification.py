@@ -2,14 +2,18 @@
 (self-intersections) of the magnified trajectory, per example and algorithm, with side-by-side figures."""
 from __future__ import annotations
 
+from typing import Annotated, Any
+
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
 import methods
 from datasets.contouring import EXAMPLES
 from experiments import engine
 from experiments.engine import ConfigError
 from methods.magnify import MagnifyInput
+from experiments.schema import ConfigTable
 from experiments.study import Analysis, Figure, Study, Table, save_csv
 
 
@@ -31,27 +35,36 @@ def _panels(cfg):
             for t in cfg.get("trajectories", []) for lab in t["variants"]]
 
 
+class Variant(ConfigTable):
+    """An algorithm variant compared: a label (the rows' method column), a magnify method and its parameters;
+    ``times_eta`` names parameters multiplied by the example's eta (e.g. delta_emax = 1.2 -> 1.2 eta e_max)."""
+    label: Annotated[str, Field(min_length=1)]
+    method: Annotated[str, Field(min_length=1)]
+    params: dict[str, Any] = None
+    times_eta: list[str] = None
+
+
+class Trajectory(ConfigTable):
+    """Trajectories drawn side by side: an example, the variants (labels) and a zoom box [x0, x1, y0, y1] in mm."""
+    example: str
+    variants: Annotated[list[str], Field(min_length=1)]
+    box: Annotated[list[float], Field(min_length=4, max_length=4)] = None
+
+
+class MagnificationConfig(ConfigTable):
+    """The keys of the magnification study."""
+    examples: Annotated[dict[str, Any], Field(min_length=1)] = None  # example name -> eta
+    variants: Annotated[list[Variant], Field(min_length=1)] = None
+    trajectories: list[Trajectory] = None
+
+
 class MagnificationStudy(Study):
     """The ``magnification`` study (see the module's docstring)."""
 
     values = None  # its analysis names its values
 
-    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
-    config_schema = {
-        "examples": {"type": "object", "minProperties": 1},
-        # the algorithm variants compared: a label (the rows' method column), a magnify method and its parameters;
-        # ``times_eta`` names parameters multiplied by the example's eta (e.g. delta_emax = 1.2 -> 1.2 eta e_max)
-        "variants": {"type": "array", "minItems": 1, "items": {
-            "type": "object", "required": ["label", "method"], "additionalProperties": False,
-            "properties": {"label": {"type": "string", "minLength": 1}, "method": {"type": "string", "minLength": 1},
-                           "params": {"type": "object"}, "times_eta": {"type": "array", "items": {"type": "string"}}}}},
-        # the trajectories drawn side by side: an example, the variants (labels) and a zoom box [x0, x1, y0, y1] in mm
-        "trajectories": {"type": "array", "items": {
-            "type": "object", "required": ["example", "variants"], "additionalProperties": False,
-            "properties": {"example": {"type": "string"}, "variants": {"type": "array", "minItems": 1,
-                                                                       "items": {"type": "string"}},
-                           "box": {"type": "array", "items": {"type": "number"}, "minItems": 4, "maxItems": 4}}}},
-    }
+    #: this study's own config keys (typed; the schema is generated from the model)
+    config_schema = MagnificationConfig
 
     def validate(self, cfg, where):
         bad = set(cfg.get("examples", {})) - set(EXAMPLES)

@@ -12,9 +12,11 @@ from __future__ import annotations
 import json
 import textwrap
 import time
+from typing import Annotated, Any
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
 import methods
 from datasets import multilateration as sim
@@ -23,6 +25,7 @@ from experiments.engine import ConfigError
 from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_matrix, identify
 from methods.multilateration.solvers import kabsch
 from methods.results import Tolerance
+from experiments.schema import ConfigTable
 from experiments.study import Analysis, Figure, Study, Table, save_csv
 
 
@@ -211,6 +214,21 @@ def figure_axis_line(cfg, target):
         plt.close(fig)
 
 
+class ConditioningCheck(ConfigTable):
+    """The exact-length check: the published scheme, the same estimator well conditioned, a reference scheme."""
+    published: str
+    same_estimator: str
+    reference: str
+    stations: Annotated[list[Any], Field(min_length=1)]
+
+
+class MultilaterationConfig(ConfigTable):
+    """The keys of the multilateration study."""
+    conditioning_check: ConditioningCheck = None
+    axis_figure: list[str] = None
+    scenarios: Annotated[list[dict[str, Any]], Field(min_length=1)] = None
+
+
 class MultilaterationStudy(Study):
     """The ``multilateration`` study (see the module's docstring)."""
 
@@ -238,15 +256,8 @@ class MultilaterationStudy(Study):
 
     values = None  # its analysis names its values
 
-    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
-    config_schema = {
-        "conditioning_check": {"type": "object", "required": ["published", "same_estimator", "reference", "stations"],
-                               "additionalProperties": False,
-                               "properties": {"published": {"type": "string"}, "same_estimator": {"type": "string"},
-                                              "reference": {"type": "string"}, "stations": {"type": "array", "minItems": 1}}},
-        "axis_figure": {"type": "array", "items": {"type": "string"}},
-        "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
-    }
+    #: this study's own config keys (typed; the schema is generated from the model)
+    config_schema = MultilaterationConfig
 
     def validate(self, cfg, where):
         sc = cfg.get("scenarios")

@@ -5,15 +5,18 @@ U(P) = 2 sqrt(x^T Cov x) (its figure 3). Positions are drawn uniformly along the
 from __future__ import annotations
 
 import textwrap
+from typing import Annotated, Any
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
 import methods
 from datasets.positioning import axis_test
 from experiments import engine
 from experiments.engine import ConfigError
 from methods.positioning.model import evaluate_band
+from experiments.schema import ConfigTable
 from experiments.study import Analysis, Figure, Study, Table, save_csv, save_figure
 
 
@@ -28,24 +31,30 @@ def example(cfg, target):
          save=lambda fig, path: save_figure(fig, path, dpi=120))      # PNG and the vector PDF
 
 
+class Band(ConfigTable):
+    """A band compared: a label (the rows' method column), the positioning method that gives the band, and the
+    scenario keys passed to it as parameters (e.g. the instrument's uncertainty for the GLS model)."""
+    label: Annotated[str, Field(min_length=1)]
+    method: Annotated[str, Field(min_length=1)]
+    scenario_params: list[str] = None
+
+
+class PositioningConfig(ConfigTable):
+    """The keys of the positioning study."""
+    scenarios: Annotated[list[dict[str, Any]], Field(min_length=1)] = None
+    positions_per_test: Annotated[int, Field(ge=1)] = None
+    bands: Annotated[list[Band], Field(min_length=1)] = None
+    # the band whose model the example figure draws (the paper's figures 2 and 3), on the last scenario
+    example_band: Annotated[str, Field(min_length=1)] = None
+
+
 class PositioningStudy(Study):
     """The ``positioning`` study (see the module's docstring)."""
 
     values = None  # its analysis names its values
 
-    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
-    config_schema = {
-        "scenarios": {"type": "array", "minItems": 1, "items": {"type": "object"}},
-        "positions_per_test": {"type": "integer", "minimum": 1},
-        # the bands compared: a label (the rows' method column), the positioning method that gives the band, and
-        # the scenario keys passed to it as parameters (e.g. the instrument's uncertainty for the GLS model)
-        "bands": {"type": "array", "minItems": 1, "items": {
-            "type": "object", "required": ["label", "method"], "additionalProperties": False,
-            "properties": {"label": {"type": "string", "minLength": 1}, "method": {"type": "string", "minLength": 1},
-                           "scenario_params": {"type": "array", "items": {"type": "string"}}}}},
-        # the band whose model the example figure draws (the paper's figures 2 and 3), on the last scenario
-        "example_band": {"type": "string", "minLength": 1},
-    }
+    #: this study's own config keys (typed; the schema is generated from the model)
+    config_schema = PositioningConfig
 
     def validate(self, cfg, where):
         if not cfg.get("bands"):

@@ -5,13 +5,17 @@ printed decimal) are refitted to measure the spread that the rounding alone allo
 per (data set, table column), so the Monte Carlo is cached, resumable and parallel like every row."""
 from __future__ import annotations
 
+from typing import Annotated
+
 import numpy as np
 import pandas as pd
+from pydantic import BaseModel, Field
 
 import datasets
 import methods
 from experiments import engine
 from experiments.render.text import percentile_phrase
+from experiments.schema import ConfigTable
 from experiments.study import Analysis, Figure, Study, Table
 
 
@@ -62,17 +66,25 @@ def _explanation(r) -> str:
     return "NOT explained by the rounding of the printed data"
 
 
+class Rounding(BaseModel):
+    """The rounding Monte Carlo: fits per published figure."""
+    samples: Annotated[int, Field(ge=1)] = None
+
+
+class PublishedConfig(ConfigTable):
+    """The keys of the published study."""
+    rounding: Rounding = None
+    # the published table's columns (as the data sets' ``published`` keys) and the method that reproduces each
+    published_columns: Annotated[dict[str, str], Field(min_length=1)] = None
+
+
 class PublishedStudy(Study):
     """The ``published`` study (see the module's docstring)."""
 
     values = None  # its analysis names its values
 
-    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
-    config_schema = {
-        "rounding": {"type": "object", "properties": {"samples": {"type": "integer", "minimum": 1}}},
-        # the published table's columns (as the data sets' ``published`` keys) and the method that reproduces each
-        "published_columns": {"type": "object", "minProperties": 1, "additionalProperties": {"type": "string"}},
-    }
+    #: this study's own config keys (typed; the schema is generated from the model)
+    config_schema = PublishedConfig
 
     def validate(self, cfg, where):
         columns = cfg.get("published_columns")

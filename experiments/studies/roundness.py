@@ -5,15 +5,18 @@ The analysis (``rank_table``, ``cutoff_table``) is pure functions of the rows.""
 from __future__ import annotations
 
 import textwrap
+from typing import Annotated, Any, Literal, Union
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
 import datasets
 import methods
 from experiments import engine
 from experiments.engine import ConfigError
 from methods.results import Tolerance
+from experiments.schema import ConfigTable
 from experiments.study import Analysis, Figure, Study, Table, save_csv
 from methods.roundness.filter import POINTS_PER_CUTOFF, parse_cutoff
 
@@ -94,6 +97,13 @@ def figure(table: pd.DataFrame, path):
         plt.close(fig)
 
 
+class RoundnessConfig(ConfigTable):
+    """The keys of the roundness study."""
+    cutoffs: Annotated[list[Union[Annotated[float, Field(gt=0)], Literal["none"]]], Field(min_length=1)] = None  # UPR
+    published: Annotated[list[str], Field(min_length=1)] = None
+    synthetic: Annotated[list[dict[str, Any]], Field(min_length=1)] = None
+
+
 class RoundnessStudy(Study):
     """The ``roundness`` study (see the module's docstring)."""
 
@@ -108,13 +118,8 @@ class RoundnessStudy(Study):
 
     values = None  # its analysis names its values
 
-    #: this study's own config keys (JSON Schema, merged into the schema; validate() checks the values)
-    config_schema = {
-        "cutoffs": {"type": "array", "minItems": 1, "items": {"anyOf": [{"type": "number", "exclusiveMinimum": 0},
-                                                                       {"const": "none"}]}},
-        "published": {"type": "array", "minItems": 1, "items": {"type": "string"}},
-        "synthetic": {"type": "array", "minItems": 1, "items": {"type": "object"}},
-    }
+    #: this study's own config keys (typed; the schema is generated from the model)
+    config_schema = RoundnessConfig
 
     def validate(self, cfg, where):
         if not isinstance(cfg.get("cutoffs"), list) or not cfg["cutoffs"]:

@@ -238,7 +238,9 @@ def config_schema(study_keys: dict | type[BaseModel] | None = None) -> dict:
     """The JSON Schema of a whole config file (its ``[quick]`` table: the same keys, none required), with the
     keys its study kind declares (``study_keys``: its ``Study.config_schema``, a model of them or their JSON
     Schema)."""
+    required = list(REQUIRED)
     if isinstance(study_keys, type) and issubclass(study_keys, BaseModel):
+        required += study_keys.model_json_schema().get("required", [])  # the kind's keys without a default
         study_keys = properties(study_keys)
     clash = set(study_keys or {}) & set(TOP_LEVEL)
     if clash:
@@ -247,7 +249,7 @@ def config_schema(study_keys: dict | type[BaseModel] | None = None) -> dict:
     props["datasets"] = {**props["datasets"], "items": _dataset_schema()}
     quick = {k: v for k, v in props.items() if k not in NOT_IN_QUICK}
     props["quick"] = {"type": "object", "properties": quick, "additionalProperties": False}
-    return {"type": "object", "required": list(REQUIRED), "properties": props, "additionalProperties": False}
+    return {"type": "object", "required": required, "properties": props, "additionalProperties": False}
 
 
 def _path(error) -> str:

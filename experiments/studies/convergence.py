@@ -52,10 +52,10 @@ def _label(m, p):
 
 class ConvergenceConfig(ConfigTable):
     """The keys of the convergence study (values checked by ``validate``)."""
-    start_distances: Annotated[list[Annotated[float, Field(ge=0)]], Field(min_length=1)] = None  # radii
+    start_distances: Annotated[list[Annotated[float, Field(ge=0)]], Field(min_length=1)]  # radii
     # method id -> the method giving the known optimum of its objective, with a 'default' entry
-    reference_optimum: Annotated[dict[str, str], Field(json_schema_extra={"required": ["default"]})] = None
-    start_directions: Annotated[int, Field(ge=1)] = None
+    reference_optimum: Annotated[dict[str, str], Field(json_schema_extra={"required": ["default"]})]
+    start_directions: Annotated[int, Field(ge=1)]
 
 
 class ConvergenceStudy(Study):
@@ -67,21 +67,11 @@ class ConvergenceStudy(Study):
     config_schema = ConvergenceConfig
 
     def validate(self, cfg, where):
-        d = cfg.get("start_distances")
-        if not isinstance(d, list) or not d or not all(isinstance(v, (int, float)) and v >= 0 for v in d):
-            raise ConfigError(f"{where}: start_distances must be a list of non-negative numbers, got {d!r}")
-        refs = cfg.get("reference_optimum")
-        if not isinstance(refs, dict) or "default" not in refs:
-            raise ConfigError(f"{where}: reference_optimum must be a table method id -> the method giving the known "
-                              f"optimum of its objective, with a 'default' entry")
-        for r in refs.values():
+        for r in cfg["reference_optimum"].values():  # types and presence: the schema (ConvergenceConfig)
             try:
                 methods.get(r)
             except methods.UnknownMethodError as exc:
                 raise ConfigError(f"{where}: reference_optimum: {exc}") from None
-        k = cfg.get("start_directions")
-        if not isinstance(k, int) or k < 1:
-            raise ConfigError(f"{where}: start_directions must be a positive integer, got {k!r}")
         for m, _ in engine.expand_methods(cfg, where):
             if "start" not in methods.get(m).defaults:
                 raise ConfigError(f"{where}: {m} has no 'start' parameter, so it cannot be started far away")

@@ -53,8 +53,8 @@ class Trajectory(ConfigTable):
 
 class MagnificationConfig(ConfigTable):
     """The keys of the magnification study."""
-    examples: Annotated[dict[str, Any], Field(min_length=1)] = None  # example name -> eta
-    variants: Annotated[list[Variant], Field(min_length=1)] = None
+    examples: Annotated[dict[str, Any], Field(min_length=1)]  # example name -> eta
+    variants: Annotated[list[Variant], Field(min_length=1)]
     trajectories: list[Trajectory] = None
 
 
@@ -67,11 +67,9 @@ class MagnificationStudy(Study):
     config_schema = MagnificationConfig
 
     def validate(self, cfg, where):
-        bad = set(cfg.get("examples", {})) - set(EXAMPLES)
-        if bad or not cfg.get("examples"):
-            raise ConfigError(f"{where}: examples must name some of {', '.join(EXAMPLES)} (got {sorted(bad) or 'none'})")
-        if not cfg.get("variants"):
-            raise ConfigError(f"{where}: needs [[variants]] tables (label, method, params)")
+        bad = set(cfg["examples"]) - set(EXAMPLES)  # types and presence: the schema (MagnificationConfig)
+        if bad:
+            raise ConfigError(f"{where}: examples must name some of {', '.join(EXAMPLES)} (got {sorted(bad)})")
         labels = [v["label"] for v in cfg["variants"]]
         if len(set(labels)) != len(labels):
             raise ConfigError(f"{where}: variant labels must be unique, got {labels}")

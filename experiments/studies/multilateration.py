@@ -226,7 +226,7 @@ class MultilaterationConfig(ConfigTable):
     """The keys of the multilateration study."""
     conditioning_check: ConditioningCheck = None
     axis_figure: list[str] = None
-    scenarios: Annotated[list[dict[str, Any]], Field(min_length=1)] = None
+    scenarios: Annotated[list[dict[str, Any]], Field(min_length=1)]
 
 
 class MultilaterationStudy(Study):
@@ -260,10 +260,7 @@ class MultilaterationStudy(Study):
     config_schema = MultilaterationConfig
 
     def validate(self, cfg, where):
-        sc = cfg.get("scenarios")
-        if not isinstance(sc, list) or not sc:
-            raise ConfigError(f"{where}: needs [[scenarios]] tables with a label and params")
-        for i, s in enumerate(sc):
+        for i, s in enumerate(cfg["scenarios"]):  # a non-empty list of tables: the schema (MultilaterationConfig)
             bad = set(s.get("params", {})) - SCENARIO_KEYS
             if bad or "label" not in s:
                 raise ConfigError(f"{where} scenarios[{i}]: needs a label; unknown params {sorted(bad)} "

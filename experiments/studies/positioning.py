@@ -41,9 +41,9 @@ class Band(ConfigTable):
 
 class PositioningConfig(ConfigTable):
     """The keys of the positioning study."""
-    scenarios: Annotated[list[dict[str, Any]], Field(min_length=1)] = None
+    scenarios: Annotated[list[dict[str, Any]], Field(min_length=1)]
     positions_per_test: Annotated[int, Field(ge=1)] = None
-    bands: Annotated[list[Band], Field(min_length=1)] = None
+    bands: Annotated[list[Band], Field(min_length=1)]
     # the band whose model the example figure draws (the paper's figures 2 and 3), on the last scenario
     example_band: Annotated[str, Field(min_length=1)] = None
 
@@ -57,9 +57,7 @@ class PositioningStudy(Study):
     config_schema = PositioningConfig
 
     def validate(self, cfg, where):
-        if not cfg.get("bands"):
-            raise ConfigError(f"{where}: needs [[bands]] tables (label, method)")
-        for j, b in enumerate(cfg["bands"]):
+        for j, b in enumerate(cfg["bands"]):  # types and presence: the schema (PositioningConfig)
             try:
                 spec = methods.get(b["method"])
             except methods.UnknownMethodError as exc:
@@ -70,9 +68,7 @@ class PositioningStudy(Study):
         labels = [b["label"] for b in cfg["bands"]]
         if cfg.get("example_band") is not None and cfg["example_band"] not in labels:
             raise ConfigError(f"{where}: example_band must be one of the [[bands]] labels {labels}, got {cfg['example_band']!r}")
-        sc = cfg.get("scenarios")
-        if not isinstance(sc, list) or not sc:
-            raise ConfigError(f"{where}: needs [[scenarios]] tables")
+        sc = cfg["scenarios"]
         allowed = {"runs", "instrument_sd", "repeatability", "mpe", "periodic_amplitude", "periodic_period", "targets",
                    "reversal"}
         for i, s in enumerate(sc):

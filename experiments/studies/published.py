@@ -75,7 +75,7 @@ class PublishedConfig(ConfigTable):
     """The keys of the published study."""
     rounding: Rounding = None
     # the published table's columns (as the data sets' ``published`` keys) and the method that reproduces each
-    published_columns: Annotated[dict[str, str], Field(min_length=1)] = None
+    published_columns: Annotated[dict[str, str], Field(min_length=1)]
 
 
 class PublishedStudy(Study):
@@ -87,10 +87,7 @@ class PublishedStudy(Study):
     config_schema = PublishedConfig
 
     def validate(self, cfg, where):
-        columns = cfg.get("published_columns")
-        if not columns:
-            raise engine.ConfigError(f"{where}: needs [published_columns] (table column label = method id)")
-        for column, method_id in columns.items():
+        for column, method_id in cfg["published_columns"].items():  # presence and types: the schema
             try:
                 methods.get(method_id)
             except methods.UnknownMethodError as exc:

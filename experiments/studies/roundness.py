@@ -99,7 +99,7 @@ def figure(table: pd.DataFrame, path):
 
 class RoundnessConfig(ConfigTable):
     """The keys of the roundness study."""
-    cutoffs: Annotated[list[Union[Annotated[float, Field(gt=0)], Literal["none"]]], Field(min_length=1)] = None  # UPR
+    cutoffs: Annotated[list[Union[Annotated[float, Field(gt=0)], Literal["none"]]], Field(min_length=1)]  # UPR
     published: Annotated[list[str], Field(min_length=1)] = None
     synthetic: Annotated[list[dict[str, Any]], Field(min_length=1)] = None
 
@@ -122,9 +122,7 @@ class RoundnessStudy(Study):
     config_schema = RoundnessConfig
 
     def validate(self, cfg, where):
-        if not isinstance(cfg.get("cutoffs"), list) or not cfg["cutoffs"]:
-            raise ConfigError(f"{where}: cutoffs must be a non-empty list of UPR values or 'none'")
-        for c in cfg["cutoffs"]:
+        for c in cfg["cutoffs"]:  # a non-empty list of positive numbers or 'none': the schema (RoundnessConfig)
             parse_cutoff(c, f"{where} cutoffs")
         for name in cfg.get("published", []):
             if name not in datasets.list():

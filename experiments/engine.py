@@ -371,8 +371,9 @@ class _Interner:
 
 def outputs_code(cfg: dict) -> str:
     """Hash of what a study's outputs depend on besides its rows: its config, the code that analyses the rows and
-    writes the outputs (``experiments.run`` with everything it imports, the study's module, ``fitbench.plots``), the
-    environment of the keys and the versions of the packages that compute, draw and format the outputs."""
+    writes the outputs (``experiments.run`` with everything it imports, the study's module, ``fitbench.plots``, the
+    installed plugins' modules with their distributions), the environment of the keys and the versions of the
+    packages that compute, draw and format the outputs."""
     from importlib import metadata
 
     from experiments import codehash
@@ -383,8 +384,12 @@ def outputs_code(cfg: dict) -> str:
             versions[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
             versions[pkg] = None
+    # plugins register plots (and columns) when they load: their code, with their whole distribution, is part of it
+    plugins = sorted({ep.module for group in ("fitbench.methods", "fitbench.datasets")
+                      for ep in metadata.entry_points(group=group)})
     ident = {"config": dict(cfg), "quick": bool(getattr(cfg, "quick", False)),  # a loaded config's [quick] flag
              "code": codehash.code_hash("experiments.run", "fitbench.plots", f"experiments.studies.{cfg['kind']}"),
+             "plugins": codehash.code_hash(*plugins) if plugins else None,
              "engine": ENGINE_VERSION, "env": environment(), "versions": versions}
     return hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode()).hexdigest()
 
@@ -521,7 +526,10 @@ class _Columns:
         nan = float("nan")
         for name in names:
             part = pd.Series([r.get(name, nan) for r in rows])
-            self.parts.setdefault(name, [pd.Series([nan] * self.n)] if self.n else []).append(part)
+            parts = self.parts.get(name)
+            if parts is None:  # a column new in this block: NaN in the rows before (built only then: it has self.n rows)
+                parts = self.parts[name] = [pd.Series([nan] * self.n)] if self.n else []
+            parts.append(part)
         self.n += len(rows)
 
     def frame(self):

@@ -7,7 +7,6 @@ injected linear errors produce), and the published value for orientation.
 """
 from __future__ import annotations
 
-import json
 from typing import Annotated, Literal
 
 import numpy as np

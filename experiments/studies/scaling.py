@@ -76,8 +76,8 @@ class ScalingStudy(Study):
             findings = (f"For N >= 1000, {near_linear} of {len(slopes)} methods scale about linearly (log-log slope "
                         f"0.8 to 1.2); the smallest slope is {lo}'s ({slopes[lo]:.2f}), the largest {hi}'s "
                         f"({slopes[hi]:.2f}).")
-        caption = (f"Median runtime per fit [ms] of every method on synthetic circles (R = 299 mm) and ellipses "
-                   f"against N, and the log-log slope for N >= 1000")
+        caption = ("Median runtime per fit [ms] of every method on synthetic circles (R = 299 mm) and ellipses "
+                   "against N, and the log-log slope for N >= 1000")
         fig = Figure(caption="Median runtime per fit [ms] against the number of points N, per method family (log-log), "
                              "synthetic circles and ellipses; the log-log slope for N >= 1000 in the legend", file="scaling.png")
         return Analysis(tables=[Table(caption=caption, data=shown.round(3), unit="ms")], figures=[fig], values=values,

@@ -477,9 +477,10 @@ DEVIATION_ALONE_RADIUS_FACTOR = 1e6
 
 
 def polar_to_points(angles_rad, values_mm, polar_value: str, nominal_radius: float | None,
-                    nominal_center=(0.0, 0.0)) -> tuple[np.ndarray, str | None]:
+                    nominal_center=(0.0, 0.0), name: str = "data") -> tuple[np.ndarray, str | None]:
     """Angle + radial deviation (about ``nominal_radius``) or radius, as x, y about ``nominal_center`` (mm),
-    and a note when the deviations had no nominal radius."""
+    and a note when the deviations had no nominal radius. A radius (nominal + deviation) <= 0 is refused: the
+    point would be placed on the opposite side of the centre and every form figure would be wrong."""
     note = None
     if polar_value == "radius":
         r = values_mm
@@ -491,6 +492,14 @@ def polar_to_points(angles_rad, values_mm, polar_value: str, nominal_radius: flo
                     f"({DEVIATION_ALONE_RADIUS_FACTOR:g} x their span; form parameters as an instrument's limaçon "
                     "evaluation; centre and radius are not the part's)")
         r = float(nominal_radius) + values_mm
+    bad = np.flatnonzero(~(r > 0))
+    if bad.size:
+        k = int(np.argmin(r))
+        if polar_value == "radius":
+            raise DataFileError(f"{name}: a radius of {r[k]:.6g} mm (point {k + 1}); radii must be > 0")
+        raise DataFileError(f"{name}: the nominal radius {float(nominal_radius):g} mm + the radial deviation "
+                            f"{values_mm[k] * 1e3:.6g} µm (point {k + 1}) is {r[k]:.6g} mm <= 0; give the part's "
+                            "nominal radius in mm (--nominal-radius)")
     cx, cy = (float(v) for v in nominal_center)
     return np.column_stack([cx + r * np.cos(angles_rad), cy + r * np.sin(angles_rad)]), note
 
@@ -547,7 +556,8 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
     f = to_mm(1.0, lu)
     if res.kind == "polar":
         ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
-        pts, note = polar_to_points(ang, cols[res.idx[1]] * f, res.polar_value, nominal_radius, nominal_center)
+        pts, note = polar_to_points(ang, cols[res.idx[1]] * f, res.polar_value, nominal_radius, nominal_center,
+                                    name=name)
         if note:
             notes.append(note)
     else:

@@ -89,7 +89,10 @@ def test_positioning_in_micrometres_gives_the_same_figures_and_a_warning_when_de
         assert got[key] == pytest.approx(ref[key], rel=1e-9)
     assert got["units"]["length"] == "mm" and got["units"]["input_deviation_unit"] == "µm"
     wrong = cli("positioning", tmp_path / "um.csv")          # µm read as mm: warned, naming the likely unit
-    assert wrong.returncode == 0 and "implausible" in wrong.stderr and "--unit um" in wrong.stderr
+    # the hint names the option that rescales the deviations alone (--unit would rescale the travel too)
+    assert wrong.returncode == 0 and "implausible" in wrong.stderr and "(--deviation-unit um)" in wrong.stderr
+    followed = json.loads(cli("positioning", tmp_path / "um.csv", "--deviation-unit", "um", "--json").stdout)
+    assert followed["A"] == pytest.approx(ref["A"], rel=1e-9)
     assert wrong.stdout.startswith("fitbench ") and "input unit mm" in wrong.stdout.splitlines()[0]
 
 

@@ -420,3 +420,18 @@ def test_roundness_plot_labels_rings_and_visible_lobes_without_overlap(tmp_path)
         assert all(x["amplitude"] >= 0.05 * top for x in res.dominant_lobes if x["upr"] in shown)
     finally:
         plt.close(fig)
+
+
+@pytest.mark.parametrize("cmd", [("roundness", "--cutoff", "none"), ("fit", "circle.gauss_newton")])
+def test_a_nominal_radius_that_puts_points_at_negative_radius_is_one_line(tmp_path, cmd):
+    """A nominal radius of 0.001 mm with deviations down to -4.6 µm placed points across the centre and
+    reported a wrong RONt with exit 0; any nominal radius + deviation <= 0 is refused."""
+    t, d = shaft(n=720)
+    p = write_polar(tmp_path / "p.csv", t, d)
+    assert d.min() < -1e-3                                            # some deviation below -1 µm
+    out = cli(*cmd, p, "--nominal-radius", 0.001)
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1 and "<= 0" in out.stderr and "--nominal-radius" in out.stderr
+    assert cli(*cmd, p, "--nominal-radius", R).returncode == 0
+    with pytest.raises(DataFileError, match="<= 0"):
+        read_profile(p, nominal_radius=-abs(d.min()) / 2)

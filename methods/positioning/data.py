@@ -93,12 +93,15 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
                                 f"(larger than {MAX_ABS_DEVIATION_MM:g} mm); check the file and --unit")
     travel = float(np.ptp(numeric["target"])) if len(dev) else 0.0
     peak = float(np.max(np.abs(dev))) if len(dev) else 0.0
+    # deviations read from their own column have their own unit (--deviation-unit); the targets' unit (--unit)
+    # would also rescale the travel
+    option = "--deviation-unit" if "deviation" in numeric else "--unit"
     if travel > 0 and not warn_implausible("positioning deviations", peak, max(1e-3 * travel, 0.1), dev_unit,
-                                           typical_mm=1e-5 * travel):
+                                           typical_mm=1e-5 * travel, option=option):
         if 0 < peak < 1e-5:
             import warnings
             warnings.warn(f"positioning deviations of at most {peak * 1e6:.3g} nm (read as {canonical(dev_unit)}) are "
-                          "implausibly small; is the file in mm? (--unit mm)", UserWarning, stacklevel=2)
+                          f"implausibly small; are they in mm? ({option} mm)", UserWarning, stacklevel=2)
     dirs = [_direction(v, lines[k], name) for k, v in enumerate(df[cols["direction"]])]
     table = pd.DataFrame({"target": numeric["target"], "direction": dirs, "run": numeric["run"], "dev": dev})
     dup = table.duplicated(["target", "direction", "run"])

@@ -236,7 +236,10 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     abstract_at = len(doc.parts)
     from experiments.verdict import verdict_markdown
     doc.prose(" ".join(verdict_markdown(results)))
-    if any(e[4] and e[4].get("quick") for e in entries):
+    quick_note = None
+    if folder_quick:
+        quick_note = ("studies marked quick run ran the reduced --quick grid; their numbers are not the "
+                      "published comparison.")
         doc.prose("**Note:** studies marked *quick run* ran the reduced `--quick` grid; their numbers are not the "
                   "published comparison.")
     toc_md, toc_html = ["## Contents", ""], [Markup('<nav id="toc"><h2>Contents</h2><ul>')]
@@ -326,6 +329,8 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
                                 f"{meta.get('config_hash')}"
                                 + (f"; plugins: {', '.join(f'{k} {v}' for k, v in plugins.items())}" if plugins else "")
                                 + "."))
+            if meta.get("quick"):
+                tex_studies[-1].setdefault("notes", []).append(f"Quick run (reduced grid): {meta.get('n_rows')} rows.")
             for label, sentence in verdicts.get(name, []):
                 doc.prose(f"**{md_escape(label)}.** {md_escape(sentence)}")
                 tex_studies[-1].setdefault("notes", []).append(f"{label}. {sentence}")
@@ -379,7 +384,8 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     written.append("explorer.html")
     write_atomic(out / "report.md", doc.markdown())
     write_atomic(out / "report.html", doc.html("fitbench comparison report"))
-    write_report_tex(out, tex_sections, provenance=provenance_text, abstract=abstract)
+    write_report_tex(out, tex_sections, provenance=provenance_text, abstract=abstract, note=quick_note,
+                     title="fitbench: comparison report" + (" (quick run, reduced grid)" if folder_quick else ""))
     written += ["report.md", "report.html", "report.tex"]
     _write_build_manifest(out, written)
     log(f"report: {out / 'report.md'}, {out / 'report.html'}, {out / 'report.tex'}, {n_table} tables, {n_figure} figures")

@@ -168,3 +168,14 @@ def test_the_report_writes_files_only_through_the_one_atomic_writer():
             if name in direct or shutil or (name == "open" and any(set(str(m)) & set("wax+") for m in mode)):
                 found.append(f"{path.name}:{node.lineno} {name}")
     assert not found, found
+
+
+def test_quick_run_is_marked_in_the_pdf_source(built):
+    """The studies of ``built`` ran --quick: the TeX says so in its title, beside the abstract and per study,
+    as the HTML and Markdown do."""
+    tex = (built / "report.tex").read_text(encoding="utf-8")
+    head = tex.split(r"\tableofcontents")[0]
+    assert r"\title{fitbench: comparison report (quick run, reduced grid)}" in head
+    assert "reduced --quick grid; their numbers are not the published comparison" in head.replace(r"-{}-", "--")
+    published = tex.split(r"\subsection{")[1:]
+    assert any("Quick run (reduced grid)" in s for s in published)

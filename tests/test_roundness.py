@@ -359,3 +359,19 @@ def test_cli_undersampled_warns_on_stderr(capsys):
     main(["roundness", "roundness_set1", "--cutoff", "15"])
     cap = capsys.readouterr()
     assert "fitbench: warning: 25 points per revolution" in cap.err
+
+
+def test_ranking_table_counts_are_integer_counts_not_percentages():
+    """The report's ranking table of the reference circles: the counts of rows carry no '%' and print as
+    integers; only the mean excess is in %."""
+    import pandas as pd
+
+    from experiments.render.report_tables import html_table, latex_fragments
+    from experiments.studies.roundness import ranking_shown
+    ranks = pd.DataFrame({"reference": ["lsci", "mzci"], "rows": [12, 12], "smallest": [0, 12],
+                          "largest": [12, 0], "mean_excess_over_mzci_pct": [6.5, 0.0]})
+    shown = ranking_shown(ranks)
+    tex = "".join(latex_fragments(shown, caption="c", label="t", unit="", digits=3))
+    html = html_table(shown, caption="c", unit="", digits=3)
+    assert tex.count(r"{[}\%{]}") == 1 and html.count("[%]") == 1        # the mean excess only
+    assert "& 12 & 0 & 12 &" in tex.replace("  ", " ") and "12.0" not in tex and ">12.0<" not in html

@@ -67,6 +67,16 @@ def rank_table(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def ranking_shown(ranks: pd.DataFrame) -> pd.DataFrame:
+    """``rank_table`` as the report shows it: each column with its own unit (the counts are counts of rows,
+    integers without a unit; the mean excess in %)."""
+    shown = ranks.rename(columns={"smallest": "rows with smallest RONt", "largest": "rows with largest RONt",
+                                  "mean_excess_over_mzci_pct": "mean excess over MZCI [%]"})
+    for c in ("rows", "rows with smallest RONt", "rows with largest RONt"):
+        shown[c] = shown[c].astype("int64")
+    return shown
+
+
 def figure(table: pd.DataFrame, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -197,10 +207,9 @@ class RoundnessStudy(Study):
                                 f"Gaussian cut-off, on the published roundness profiles and synthetic lobed profiles "
                                 f"({reps} repetition(s) of the noisy ones), with the share of certified fits", data=shown,
                         unit="µm, %", digits=4),
-                  Table(caption="How often each reference circle gives the smallest and the largest RONt, and its mean "
-                                "excess over the minimum-zone RONt, over the rows where all four circles are certified",
-                        data=ranks.rename(columns={"mean_excess_over_mzci_pct": "mean excess over MZCI [%]"}), unit="%",
-                        digits=3)]
+                  Table(caption="How often each reference circle gives the smallest and the largest RONt (counts of "
+                                "rows), and its mean excess over the minimum-zone RONt [%], over the rows where all four "
+                                "circles are certified", data=ranking_shown(ranks), unit="", digits=3)]
         fig = Figure(caption="RONt [µm] of the four reference circles against the Gaussian cut-off [UPR] per profile "
                              "(certified fits; none = unfiltered)", file="roundness.png")
         return Analysis(tables=tables, figures=[fig], values=values, findings=findings)

@@ -349,6 +349,15 @@ def test_lead_in_and_lead_out_removed_by_option(tmp_path):
     assert json.loads(out.stdout)["G_cw"] == pytest.approx(ref.figures["G_cw"], abs=0.2e-3)
 
 
+@pytest.mark.parametrize("leads", [("--lead-in", 400), ("--lead-in", 200, "--lead-out", 200)])
+def test_leads_as_long_as_the_run_are_refused_not_called_the_same_file(lola, leads):
+    """A lead-in longer than the arc trimmed both runs to nothing, then reported 'the same file twice'."""
+    d, cond, _, _ = lola
+    out = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", cond.nominal_radius, *leads)
+    one_error_line(out, "trimming would leave nothing")
+    assert "same" not in out.stderr
+
+
 # ------------------------------------------------------------------------------------------ partial arcs
 def arc_runs(arc_deg, start_deg, err, R=150.0, center=(0.0, 0.0), seed=1):
     c1 = TestConditions(nominal_radius=R, nominal_center=center, feed_mm_min=1000.0, sampling_hz=50.0,

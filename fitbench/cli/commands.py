@@ -215,6 +215,9 @@ def cmd_circular_test(args) -> int:
     for name in ("cw", "ccw"):
         runs[name], rep = trim(runs[name], center0, arc_deg=arc, lead_in_deg=args.lead_in, lead_out_deg=args.lead_out)
         trimmed[name] = rep
+        if len(runs[name]) < 10:
+            raise InvalidInputError(f"circular test ({name.upper()} run): {len(runs[name])} point(s) left after removing "
+                                    f"the lead-in/out and the overrun beyond {arc:g}°; at least 10 are needed")
         if rep["overrun_trimmed_points"] or rep["lead_removed_points"]:
             notes.append(f"{name.upper()} run: recorded {rep['recorded_arc_deg']:.1f}°, "
                          f"{rep['lead_removed_points']} lead-in/out point(s) removed, "

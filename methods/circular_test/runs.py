@@ -42,7 +42,7 @@ def trim(points, center, *, arc_deg: float | None = 360.0, lead_in_deg: float = 
     """Drop ``lead_in_deg`` of arc at the start and ``lead_out_deg`` at the end (along the point order),
     then anything beyond ``arc_deg`` of swept arc (overrun; a partial arc keeps a point at exactly
     ``arc_deg`` within ``arc_tolerance_deg``, a full circle drops the one back at 360 deg within roundoff;
-    the leads are cut within roundoff). Returns (points, report dict)."""
+    the leads are cut within roundoff; leads as long as the recorded arc are refused). Returns (points, report dict)."""
     for v, n in ((lead_in_deg, "--lead-in"), (lead_out_deg, "--lead-out")):
         if not (np.isfinite(v) and v >= 0):
             raise InvalidInputError(f"{n} must be a non-negative angle in degrees, got {v!r}")
@@ -54,6 +54,9 @@ def trim(points, center, *, arc_deg: float | None = 360.0, lead_in_deg: float = 
     swept = np.degrees(np.abs(a - a[0]))        # monotone for a clean run; max-accumulate for noise
     swept = np.maximum.accumulate(swept)
     total = float(swept[-1])
+    if lead_in_deg + lead_out_deg >= total - eps:
+        raise InvalidInputError(f"--lead-in {lead_in_deg:g}° + --lead-out {lead_out_deg:g}° is not shorter than the run's "
+                                f"recorded arc of {total:.1f}°: trimming would leave nothing; give shorter leads")
     keep = (swept >= lead_in_deg - eps) & (swept <= total - lead_out_deg + eps)
     n_lead = int(len(points) - keep.sum())
     pts = points[keep]

@@ -18,6 +18,7 @@ from typing import Callable
 import numpy as np
 
 from methods._errors import InvalidInputError, UnknownMethodError
+from methods._families import import_method_modules
 from methods.plugins import add_entry, load_entry_points
 from methods._validation import validate_points
 from methods.result_base import FitResult
@@ -29,6 +30,10 @@ FAMILY_MIN_POINTS = {"circle": 3, "ellipse": 5}
 
 #: the subpackages of ``methods`` holding the built-in methods (see :func:`load_builtins`)
 BUILTIN_FAMILIES = ("circle", "ellipse", "magnify", "multilateration", "positioning", "roundness")
+#: the families of one public module per method: :func:`load_builtins` imports every such module (adding a
+#: method is adding a file); their package ``__init__`` imports none, so a method module may import
+#: :mod:`methods.results` (which imports the families' ``results`` modules) without an import circle
+ONE_MODULE_PER_METHOD = ("circle", "ellipse")
 
 _REGISTRY: dict[str, "MethodSpec"] = {}
 _builtins_loaded = False
@@ -235,14 +240,17 @@ def load_builtins() -> None:
     :func:`get`, :func:`list_methods` or :func:`fit` (and by a plugin's :func:`register`), not by ``import
     methods``, so that ``python -m methods list`` can read the manifest instead (:mod:`methods._manifest`).
     The families import this module (``register``): importing them by name here keeps the import graph
-    free of circles."""
+    free of circles. The method modules of :data:`ONE_MODULE_PER_METHOD` families are imported here, not by
+    their package."""
     global _builtins_loaded
     if _builtins_loaded:
         return
     _builtins_loaded = True
     try:
         for family in BUILTIN_FAMILIES:
-            importlib.import_module(f"methods.{family}")
+            package = importlib.import_module(f"methods.{family}")
+            if family in ONE_MODULE_PER_METHOD:
+                import_method_modules(package.__name__, package.__path__)
     except BaseException:
         _builtins_loaded = False
         raise

@@ -79,3 +79,20 @@ def test_a_ragged_point_list_is_the_projects_input_error(method):
     pts = [[0.0, 1.0], [1.0, 0.0], [0.0, -1.0], [-1.0, 0.0, 5.0], [0.7, 0.7]]
     with pytest.raises(InvalidInputError, match="ragged"):
         methods.fit(method, pts)
+
+
+@pytest.mark.parametrize("token", ["nan", "NaN", "inf", "-inf"])
+def test_a_non_finite_value_gets_the_same_message_in_points_and_positioning(tmp_path, token):
+    """pandas' NA parsing turned 'nan' in a positioning file into 'missing field(s)'; every reader now says the
+    value is not a finite number."""
+    pts = tmp_path / "pts.csv"
+    pts.write_text("x,y\n1,2\n3," + token + "\n4,5\n")
+    pos = tmp_path / "pos.csv"
+    pos.write_text("target,direction,run,deviation\n0,+,1,0.001\n0,+,2," + token + "\n")
+    wanted = f"line 3: .*{token!r} is not a finite number; remove or repair the point"
+    for read, path in ((read_points, pts), (read_positioning, pos)):
+        with pytest.raises(DataFileError, match=wanted):
+            read(path)
+    pos.write_text("target,direction,run,deviation\n0,+,1,0.001\n0,+,2,\n")
+    with pytest.raises(DataFileError, match="line 3: missing field"):
+        read_positioning(pos)

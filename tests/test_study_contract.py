@@ -193,4 +193,5 @@ def test_analyse_tables_have_captions_units_and_generated_findings(tmp_path):
     assert manifest["tables"] and all("synthetic" in t["caption"] for t in manifest["tables"])
     v = manifest["values"]
     assert f"σ = {v['sigma']:g} R" in manifest["findings"]
-    assert f"{len(v['within_10_percent'])} of" in manifest["findings"]
+    for arc, ok in v["within_10_percent_by_arc"].items():      # per arc: how many reach the bound, or none
+        assert (f"{len(ok)} of" if ok else "none on the") in manifest["findings"] and arc in manifest["findings"]

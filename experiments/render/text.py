@@ -183,3 +183,31 @@ def tex(s: str) -> str:
     parts = re.split(r"(\$[^$\n]+\$)", str(s))
     return "".join(p if len(p) > 2 and p.startswith("$") and p.endswith("$") and safe_math(p[1:-1])
                    else escape_text(p) for p in parts)
+
+
+def joined(words) -> str:
+    """'a', 'a and b', 'a, b and c'."""
+    words = [str(w) for w in words]
+    return " and ".join(words) if len(words) < 3 else ", ".join(words[:-1]) + " and " + words[-1]
+
+
+def counts_by_group(passing: dict, total: int, noun: str, *, names: bool = True) -> str:
+    """Per group (an arc, a scenario ...) how many of ``total`` pass, consecutive groups with the same passing
+    set merged: ``counts_by_group({"360° arc": ["a", "b"], "180° arc": ["a", "b"], "45° arc": []}, 8, "arc")``
+    -> '2 of 8 on the 360° and 180° arcs (a, b), none on the 45° arc'. ``noun``: the group's noun, pluralised
+    with an s when groups merge. No semicolon: the abstract cuts a finding at its first '.' or ';'."""
+    runs: list[tuple[list, list]] = []
+    for group, ok in passing.items():
+        ok = list(ok)
+        if runs and runs[-1][1] == ok:
+            runs[-1][0].append(group)
+        else:
+            runs.append(([group], ok))
+    parts = []
+    for groups, ok in runs:
+        where = f"on the {joined(groups)} {noun}{'s' if len(groups) > 1 else ''}"
+        if not ok:
+            parts.append(f"none {where}")
+        else:
+            parts.append(f"{len(ok)} of {total} {where}" + (f" ({', '.join(map(str, ok))})" if names else ""))
+    return ", ".join(parts)

@@ -18,6 +18,7 @@ import methods
 from experiments import engine
 from experiments.engine import ConfigError
 from experiments.schema import ConfigTable
+from experiments.render.text import counts_by_group, joined
 from experiments.study import Analysis, Figure, Study, Table, save_csv
 
 
@@ -145,11 +146,19 @@ class ConvergenceStudy(Study):
         far = table["start_distance"].max()
         values = {"always_converged": always, "largest_start_distance": float(far),
                   "lowest_success_rate": {m: float(v) for m, v in worst.items()}}
-        findings = (f"{len(always)} of {len(worst)} method variants reach their optimum from every start up to {far:g} "
-                    f"radii on every arc ({', '.join(always) or 'none'}).")
-        others = [m for m in worst.index if m not in always]
-        if others:
-            findings += " Lowest success rate of the others: " + "; ".join(f"{m} {100 * worst[m]:.0f} %" for m in others) + "."
+        by_arc = {f"{a:g}°": [m for m, v in g.groupby("label", sort=False)["success_rate"].min().items() if v == 1.0]
+                  for a, g in lab.groupby("arc_deg", sort=False)}
+        values["always_converged_by_arc"] = by_arc
+        findings = (f"Method variants reaching their optimum from every start up to {far:g} radii: "
+                    f"{counts_by_group(by_arc, len(worst), 'arc')}.")
+        others = worst[[m for m in worst.index if m not in always]]
+        if len(others):
+            low = others.min()
+            lowest = [m for m, v in others.items() if v == low]
+            where = lab[lab["label"].isin(lowest) & (lab["success_rate"] == low)]
+            findings += (f" Lowest success rate: {100 * low:.0f} % ({joined(lowest)}, on the "
+                         f"{joined(f'{a:g}°' for a in dict.fromkeys(where['arc_deg']))} "
+                         f"arc{'s' if where['arc_deg'].nunique() > 1 else ''}).")
         fig = Figure(caption="Share of runs from distant starts that reach the optimum of the method's own objective, "
                              "against the start distance [radii], synthetic circles (full circle and arc); iterative "
                              "methods only", file="convergence.png")

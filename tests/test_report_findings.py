@@ -1,0 +1,60 @@
+"""The findings the abstract quotes say per arc / scenario what holds, name the lowest method(s) only, and
+count distinct published figures: re-analysed from the committed full results (results/<study>/results.csv)."""
+import re
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from experiments import config as configs
+from experiments import study as contract
+
+RESULTS = Path(__file__).resolve().parents[1] / "results"
+
+
+def analysed(name, tmp_path):
+    cfg = configs.load(name)
+    df = pd.read_csv(RESULTS / name / "results.csv", low_memory=False)
+    return contract.study_of(cfg["kind"]).analyse(df, cfg, tmp_path, lambda *a: None)
+
+
+def first_sentence(findings):          # what the abstract quotes (experiments.report._abstract)
+    return re.split(r"(?<=[.;])\s", findings, maxsplit=1)[0]
+
+
+def test_noise_findings_per_arc(tmp_path):
+    a = analysed("noise", tmp_path)
+    head = first_sentence(a.findings)
+    by_arc = a.values["within_10_percent_by_arc"]
+    assert by_arc["360°"] and "circle.gauss_newton" in by_arc["90°"] and not by_arc["45°"]
+    assert f"{len(by_arc['360°'])} of 8 on the 360°" in head and "none on the 45° arc" in head
+    assert "every arc (none)" not in a.findings
+
+
+def test_convergence_findings_per_arc_and_the_lowest_only(tmp_path):
+    a = analysed("convergence", tmp_path)
+    worst = a.values["lowest_success_rate"]
+    low = min(worst.values())
+    lowest = [m for m, v in worst.items() if v == low]
+    tail = a.findings.split("Lowest success rate: ")[1]
+    assert all(m in tail for m in lowest) and not any(m in tail for m in worst if m not in lowest)
+    assert "every arc (none)" not in a.findings and " arc" in first_sentence(a.findings)
+
+
+def test_positioning_findings_per_band_and_the_lowest_only(tmp_path):
+    a = analysed("positioning", tmp_path)
+    worst = a.values["lowest_coverage"]
+    tail = a.findings.split("lowest coverage: ")[1]
+    low = min(worst.values())
+    assert f"{100 * low:.1f} %" in tail and sum(b in tail for b in worst) == 1
+    assert "in every scenario (none)" not in a.findings
+
+
+def test_published_counts_distinct_figures(tmp_path):
+    a = analysed("published", tmp_path)
+    comp = pd.DataFrame(a.values["published_vs_reproduced"])
+    distinct = len(comp.drop_duplicates(["dataset", "column"]))
+    assert distinct < len(comp)                  # set 3's LSQ is compared twice
+    assert a.values["published_figures"] == distinct
+    assert first_sentence(a.findings).startswith(f"Of the {distinct} circularity figures")
+    assert a.values["reproduced"] + a.values["explained_by_rounding"] + a.values["not_explained"] == distinct

@@ -603,3 +603,17 @@ def test_fitbench_run_and_report_default_folders_are_relative_to_the_cwd(monkeyp
     assert fc.main(["run", "published"]) == 0 and seen.pop("argv") == ["published", "--out", "results"]
     assert fc.main(["run", "published", "--out=X"]) == 0 and seen.pop("argv") == ["published", "--out=X"]
     assert fc.main(["report"]) == 0 and seen.pop("argv") == ["--results", "results", "--out", "paper"]
+
+
+def test_fit_help_docs_and_output_agree_on_the_printed_unit(lola, capsys, tmp_path):
+    """fit --help said 'results are printed in µm' while fit prints mm (whatever the input unit)."""
+    d, cond, cw, _ = lola
+    with pytest.raises(SystemExit):
+        main(["fit", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "printed in mm" in text and "printed in µm" not in text
+    p = save_xy(tmp_path / "um.csv", cw * 1e3, fmt="%.6f")
+    out = cli("fit", "circle.gauss_newton", p, "--unit", "um")
+    assert out.returncode == 0 and "lengths below in mm" in out.stdout
+    radius = next(ln for ln in out.stdout.splitlines() if ln.startswith("radius"))
+    assert radius.endswith(" mm") and float(radius.split()[1]) == pytest.approx(cond.nominal_radius, abs=0.1)

@@ -435,3 +435,23 @@ def test_a_nominal_radius_that_puts_points_at_negative_radius_is_one_line(tmp_pa
     assert cli(*cmd, p, "--nominal-radius", R).returncode == 0
     with pytest.raises(DataFileError, match="<= 0"):
         read_profile(p, nominal_radius=-abs(d.min()) / 2)
+
+
+def test_roundness_table_columns_never_touch_without_a_nominal_radius(tmp_path):
+    """Without a nominal radius the deviations sit on a circle of 1e6 x their span (a 12-digit radius): the
+    radius ran into the centre column ('-0.000170 12592.599899'). Every entry is now at least two spaces from
+    its neighbour and right-aligned under its header."""
+    t, d = shaft(n=720)
+    p = write_polar(tmp_path / "p.csv", t, d * 3)
+    out = cli("roundness", p, "--cutoff", "none")
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("reference"))
+    head, rows = lines[k], lines[k + 2:k + 6]
+    assert float(rows[0].split()[-2]) > 1e4                          # the wide radius is there
+    ends = [m.end() for m in __import__("re").finditer(r"\S+(?: \S+)*", head)][1:-1]   # right edges of numeric headers
+    for row in rows:
+        fields = __import__("re").split(r"\s{2,}", row.strip())
+        assert len(fields) == 9, row                                  # name, 7 numbers, status: all apart
+        for e in ends:
+            assert row[e - 1] != " " and row[e] == " ", (row, e)      # right-aligned under the header

@@ -596,7 +596,7 @@ def add_fit(sub):
     pf.add_argument("--nominal-radius", type=float, metavar="R_MM",
                     help="angle + radial-deviation files: the radius the deviations are about (mm; default: the "
                          "deviations alone)")
-    add_reader_options(pf, polar=True)
+    add_reader_options(pf, polar=True, printed="mm")
     pf.add_argument("--json", action="store_true", help="print the result as one JSON object")
     pf.add_argument("--no-residuals", action="store_true", help="leave the per-point residuals out of --json")
     pf.add_argument("--plot", metavar="FILE", help="write a quick look: points, fitted curve, residuals (.png, .pdf, .svg)")

@@ -83,11 +83,12 @@ def write_text_atomic(path, text: str) -> None:
         raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
-def add_reader_options(p, *, columns=True, polar=False):
-    """--unit, --skip-rows (and --columns / --plane; with ``polar`` --angle-unit): the options of every file reader."""
+def add_reader_options(p, *, columns=True, polar=False, printed: str = "µm"):
+    """--unit, --skip-rows (and --columns / --plane; with ``polar`` --angle-unit): the options of every file reader;
+    ``printed``: the unit the command prints lengths in (whatever the input's)."""
     p.add_argument("--unit", default=None, choices=UNIT_CHOICES,
                    help="length unit of the input file(s) (default: the header's unit, e.g. 'x [um]', else mm); "
-                        "results are printed in µm")
+                        f"the input is converted to mm and lengths are printed in {printed}")
     p.add_argument("--skip-rows", type=int, default=0, metavar="N",
                    help="skip N lines at the top of each file (the instrument's preamble)")
     if columns:

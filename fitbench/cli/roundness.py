@@ -82,13 +82,18 @@ def report(res, source: str, axes: tuple = ("x", "y")) -> str:
              f"filter        {cut}" + ("" if res.cutoff_upr is None else f"; {res.filter_path}"),
              f"raw LSCI      centre ({res.raw_lsci['center'][0]:.6f}, {res.raw_lsci['center'][1]:.6f}) mm, "
              f"radius {res.raw_lsci['radius']:.6f} mm (deviations filtered about it)", ""]
-    head = (f"{'reference':<38} {'RONt [µm]':>10} {'RONp [µm]':>10} {'RONv [µm]':>10} {'RONq [µm]':>10} "
-            f"{f'centre {axes[0]} [mm]':>14} {f'centre {axes[1]} [mm]':>14} {'radius [mm]':>12}  status")
+    names = ["RONt [µm]", "RONp [µm]", "RONv [µm]", "RONq [µm]", f"centre {axes[0]} [mm]", f"centre {axes[1]} [mm]",
+             "radius [mm]"]
+    rows = [[f"{r[p] * 1e3:.4f}" for p in ("RONt", "RONp", "RONv", "RONq")]
+            + [f"{r['center'][0]:.6f}", f"{r['center'][1]:.6f}", f"{r['radius']:.6f}"] for r in res.references.values()]
+    # each column as wide as its widest entry, two spaces between columns: numbers never touch (a radius
+    # about 1e6 x the deviations' span without a nominal radius is 12+ digits wide)
+    widths = [max(len(n), *(len(row[j]) for row in rows)) for j, n in enumerate(names)]
+    label = max(38, *(len(REFERENCE_NAMES[k]) for k in res.references))
+    head = f"{'reference':<{label}}  " + "  ".join(f"{n:>{w}}" for n, w in zip(names, widths)) + "  status"
     lines += [head, "-" * len(head)]
-    for kind, r in res.references.items():
-        lines.append(f"{REFERENCE_NAMES[kind]:<38} {r['RONt'] * 1e3:10.4f} {r['RONp'] * 1e3:10.4f} "
-                     f"{r['RONv'] * 1e3:10.4f} {r['RONq'] * 1e3:10.4f} {r['center'][0]:14.6f} "
-                     f"{r['center'][1]:14.6f} {r['radius']:12.6f}  "
+    for (kind, r), row in zip(res.references.items(), rows):
+        lines.append(f"{REFERENCE_NAMES[kind]:<{label}}  " + "  ".join(f"{v:>{w}}" for v, w in zip(row, widths)) + "  "
                      + ("ok" if r["converged"] else f"NOT CERTIFIED ({r['message']})"))
     lobes = ", ".join(f"{d['upr']} UPR {d['amplitude'] * 1e3:.4f} µm" for d in res.dominant_lobes)
     lines += ["", f"dominant lobes (amplitude of the filtered deviation): {lobes or '-'}"]

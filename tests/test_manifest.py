@@ -89,6 +89,42 @@ def test_the_first_listing_fills_the_cache_and_the_next_one_reads_it(tmp_path):
 METHOD_COPY = "gauss_newton_copy"
 
 
+def readme_recipe():
+    """(module code, its fitbench imports) of the README's "Add a method" recipe, as written there."""
+    section = (REPO / "README.md").read_text(encoding="utf-8").split("\n## Add a method\n", 1)[1].split("\n## ", 1)[0]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    imports = "".join(line + "\n" for line in code.splitlines() if re.match(r"from methods[.\w]* import ", line))
+    return code, imports
+
+
+def readme_recipe_imports() -> str:
+    code, imports = readme_recipe()
+    assert "from methods.results import circle_result\n" in imports, imports
+    return imports
+
+
+def test_a_builtin_module_written_to_the_readme_recipe_loads(tmp_path):
+    """The README's "Add a method" module, saved as written into the circle family of a copy of the package:
+    ``import methods.results`` works first thing (no import circle through the family package), and ``list``
+    shows the new method beside the built-ins."""
+    code, _ = readme_recipe()
+    readme_recipe_imports()
+    copy = tmp_path / "repo"
+    for part in ("methods", "fitbench"):
+        shutil.copytree(REPO / part, copy / part, ignore=shutil.ignore_patterns("__pycache__", ".hypothesis"))
+    (copy / "methods" / "circle" / "my_fit.py").write_text(code, encoding="utf-8")
+    method_id = re.search(r'@register\("([\w.]+)"', code).group(1)
+    env = {"FITBENCH_CACHE_DIR": str(tmp_path / "cache")}
+    for first in ("import methods.results", "import methods.circle.my_fit", "import methods.circle.results"):
+        out = run_python("-c", f"{first}; import methods; print(methods.get({method_id!r}).module)",
+                         cwd=copy, repo=copy, **env)
+        assert out.returncode == 0 and out.stdout.split() == ["methods.circle.my_fit"], (first, out.stderr)
+    listing = run_python("-m", "methods", "list", "--json", cwd=copy, repo=copy, **env)
+    assert listing.returncode == 0, listing.stderr
+    ids = {m["id"] for m in json.loads(listing.stdout)}
+    assert method_id in ids and {"circle.kasa", "ellipse.fitzgibbon", "roundness.iso12181"} <= ids
+
+
 @pytest.mark.slow
 def test_a_new_method_is_one_new_file(tmp_path):
     """Copy a circle method's module under a new name (its id renamed) into a copy of the repository: with no
@@ -100,9 +136,17 @@ def test_a_new_method_is_one_new_file(tmp_path):
     shutil.copy(REPO / "pyproject.toml", copy)
     source = (REPO / "methods" / "circle" / "gauss_newton.py").read_text(encoding="utf-8")
     assert source.count('@register("circle.gauss_newton"') == 1
+    # the copy imports as the README's "Add a method" recipe says, exactly as written there
+    imports = readme_recipe_imports()
+    for private in ("from methods._registry import register\n", "from methods.circle.results import circle_result\n"):
+        assert source.count(private) == 1
+        source = source.replace(private, "")
+    source = source.replace("from methods._frame import dot\n", "from methods._frame import dot\n" + imports, 1)
     (copy / "methods" / "circle" / f"{METHOD_COPY}.py").write_text(
         source.replace('"circle.gauss_newton"', f'"circle.{METHOD_COPY}"'), encoding="utf-8")
     env = {"FITBENCH_CACHE_DIR": str(tmp_path / "cache")}
+    results = run_python("-c", "import methods.results", cwd=copy, repo=copy, **env)
+    assert results.returncode == 0, results.stderr
     listing = run_python("-m", "methods", "list", "--json", "--family", "circle", cwd=copy, repo=copy, **env)
     assert listing.returncode == 0, listing.stderr
     assert f"circle.{METHOD_COPY}" in {m["id"] for m in json.loads(listing.stdout)}

@@ -451,7 +451,43 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
     if len(others) == 2:
         return Resolved("xy", others, None, d_col)
     raise DataFileError(f"{name}: which two columns? the header has {', '.join(layout.header)}; "
-                        "give --columns NAME NAME or --plane xy|yz|zx")
+                        f"give --columns NAME NAME or --plane xy|yz|zx{skip_rows_hint(layout)}")
+
+
+def _numeric_fields(line: str) -> tuple[str | None, int] | None:
+    """(separator, number of fields) when ``line`` is a row of at least two numbers under some separator."""
+    for sep in (";", "\t", ",", None):
+        toks = _split(line, sep)
+        if len(toks) >= 2 and all(_is_number(t.replace(",", ".") if sep != "," else t) for t in toks):
+            return sep, len(toks)
+    return None
+
+
+def skip_rows_hint(layout: Layout) -> str:
+    """'; or, if ... is a preamble, give --skip-rows N' naming the first row of numbers (and keeping the header
+    line just above it when it has as many fields), or '' when no such row is in the first lines."""
+    previous = None
+    try:
+        with _open_text(layout.name) as fh:
+            for lineno, raw in iter_lines(fh, layout.name):
+                ln = raw.strip()
+                if lineno < layout.header_line or not ln or ln.startswith(COMMENT_PREFIXES):
+                    continue
+                got = _numeric_fields(ln)
+                if got is not None:
+                    n = lineno - 1
+                    if previous is not None and previous[0] == lineno - 1 and len(_split(previous[1], got[0])) == got[1]:
+                        n = lineno - 2                                  # keep the header line above the numbers
+                    if n < layout.header_line:
+                        return ""
+                    return (f"; if lines 1-{n} are an instrument's preamble, give --skip-rows {n} (the first row "
+                            f"of numbers is line {lineno})")
+                previous = (lineno, ln)
+                if lineno > SNIFF_LINES + layout.header_line:
+                    return ""
+    except (DataFileError, UnicodeDecodeError, OSError):
+        return ""
+    return ""
 
 
 def angle_unit_of(layout: Layout, k: int, angle_unit: str | None) -> str:
@@ -682,6 +718,9 @@ def _numeric_column(col, what: str, name, lines) -> np.ndarray:
     bad = np.flatnonzero(~np.isfinite(values))
     if bad.size:
         k = int(bad[0])
+        tok = str(col.iloc[k]).strip()
+        if tok.lower() in _NON_FINITE:
+            raise DataFileError(f"{name} line {lines[k]}: {what} {tok!r} is not a finite number; remove or repair the point")
         raise DataFileError(f"{name} line {lines[k]}: {what} {col.iloc[k]!r} is not a finite number")
     return values
 
@@ -747,9 +786,11 @@ def read_positioning(path, *, unit: str | None = None, deviation_unit: str | Non
     targets' unit); a header unit contradicting them is an error. ``with_units``: also return the two units."""
     from methods.positioning import from_frame
 
-    df, lines = read_table(path, skip_rows=skip_rows)
-    if df.isna().any().any():
-        k = int(np.flatnonzero(df.isna().any(axis=1).to_numpy())[0])
+    # 'nan' and 'inf' stay text here and are refused as not finite by _numeric_column, like every reader
+    df, lines = read_table(path, skip_rows=skip_rows, keep_default_na=False)
+    empty = (df.isna() | df.apply(lambda c: c.astype(str).str.strip() == "")).any(axis=1).to_numpy()
+    if empty.any():
+        k = int(np.flatnonzero(empty)[0])
         raise DataFileError(f"{path} line {lines[k]}: missing field(s)")
     lines = np.array(lines)
     target_keys = {parse_name(n)[0] for n in TARGET_NAMES}

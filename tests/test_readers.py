@@ -96,3 +96,16 @@ def test_a_non_finite_value_gets_the_same_message_in_points_and_positioning(tmp_
     pos.write_text("target,direction,run,deviation\n0,+,1,0.001\n0,+,2,\n")
     with pytest.raises(DataFileError, match="line 3: missing field"):
         read_positioning(pos)
+
+
+@pytest.mark.parametrize("header, skip", [(True, 4), (False, 2)])
+def test_a_preamble_without_skip_rows_is_answered_with_the_skip_rows_to_give(tmp_path, header, skip):
+    """'which two columns? the header has Taylor, Hobson, Talyrond, 365' left the user guessing: the message
+    now names --skip-rows N (keeping a header line just above the first row of numbers)."""
+    pre = ["Taylor, Hobson, Talyrond, 365", "Operator: A", "Date: 2025-01-01" if header else None, "" if header else None]
+    lines = [ln for ln in pre if ln is not None] + (["x,y"] if header else []) + circle_lines(12)
+    path = tmp_path / "pre.csv"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.raises(DataFileError, match=f"give --skip-rows {skip} "):
+        read_points(path)
+    np.testing.assert_allclose(np.hypot(*read_points(path, skip_rows=skip).T), 20.0, atol=1e-5)

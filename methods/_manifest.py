@@ -60,11 +60,21 @@ def info_of(spec: MethodInfo) -> MethodInfo:
     return MethodInfo(**{f.name: getattr(spec, f.name) for f in fields(MethodInfo)})
 
 
+class IncompleteRegistryError(RuntimeError):
+    """The registry lacks built-in methods it had (taken out after loading): it is never stored as the manifest."""
+
+
 def build() -> dict:
-    """The manifest of the registry's built-in methods (imports the families)."""
+    """The manifest of the registry's built-in methods (imports the families); plugins are never in it. Raises
+    :class:`IncompleteRegistryError` when a built-in method registered by :func:`methods._registry.load_builtins`
+    is no longer in the registry."""
     _registry.load_builtins()
+    missing = sorted(_registry.BUILTIN_IDS - set(_registry._REGISTRY))
+    if missing:
+        raise IncompleteRegistryError(f"the registry lacks the built-in methods {', '.join(missing)}; "
+                                      f"the manifest is not stored")
     infos = [asdict(info_of(s)) for k, s in sorted(_registry._REGISTRY.items())
-             if s.module.startswith("methods.")]
+             if k in _registry.BUILTIN_IDS]
     return {"generated_by": "methods._manifest", "source_digest": source_digest(), "methods": infos}
 
 
@@ -99,8 +109,9 @@ def describe_methods(family: str | None = None) -> list[MethodInfo]:
         stored = []
         try:
             write()
-        except OSError:
-            pass  # a read-only cache folder: the next call imports the families again (documented above)
+        except (OSError, IncompleteRegistryError):
+            pass  # a read-only cache folder (the next call imports the families again, documented above), or a
+            # registry a plugin took built-ins out of: never stored as the manifest; the listing shows the registry
     infos = {m.id: m for m in stored}
     infos.update((k, info_of(s)) for k, s in _registry._REGISTRY.items())
     return [m for k, m in sorted(infos.items()) if family is None or m.family == family]

@@ -19,7 +19,7 @@ import numpy as np
 
 from methods._errors import InvalidInputError, UnknownMethodError
 from methods._families import import_method_modules
-from methods.plugins import add_entry, load_entry_points
+from methods.plugins import add_entry, load_entry_points, own_entries
 from methods._validation import validate_points
 from methods.result_base import FitResult
 
@@ -37,6 +37,8 @@ ONE_MODULE_PER_METHOD = ("circle", "ellipse")
 
 _REGISTRY: dict[str, "MethodSpec"] = {}
 _builtins_loaded = False
+#: the ids :func:`load_builtins` registered (what the manifest of the built-ins must hold, :mod:`methods._manifest`)
+BUILTIN_IDS: set[str] = set()
 
 
 @dataclass(frozen=True)
@@ -247,10 +249,12 @@ def load_builtins() -> None:
         return
     _builtins_loaded = True
     try:
-        for family in BUILTIN_FAMILIES:
-            package = importlib.import_module(f"methods.{family}")
-            if family in ONE_MODULE_PER_METHOD:
-                import_method_modules(package.__name__, package.__path__)
+        with own_entries():  # loaded by a plugin's first register or not, they are no plugin's entries
+            for family in BUILTIN_FAMILIES:
+                package = importlib.import_module(f"methods.{family}")
+                if family in ONE_MODULE_PER_METHOD:
+                    import_method_modules(package.__name__, package.__path__)
+        BUILTIN_IDS.update(k for k, s in _REGISTRY.items() if s.module.startswith("methods."))
     except BaseException:
         _builtins_loaded = False
         raise
@@ -262,8 +266,8 @@ def builtins_loaded() -> bool:
 
 def load_plugins() -> None:
     """Import every entry point of the ``fitbench.methods`` group once (a broken plugin warns, see
-    :func:`methods.plugins.load_entry_points`)."""
-    load_entry_points(ENTRY_POINT_GROUP, "method")
+    :func:`methods.plugins.load_entry_points`), after the built-ins when there is any."""
+    load_entry_points(ENTRY_POINT_GROUP, "method", before=load_builtins)
 
 
 def get(method_id: str) -> MethodSpec:

@@ -11,6 +11,7 @@ This module imports nothing of fitbench, so any registry can use it without an i
 from __future__ import annotations
 
 import warnings
+from contextlib import contextmanager
 from importlib import metadata
 
 #: the top-level packages of fitbench itself: never a plugin, wherever the environment lives
@@ -29,12 +30,32 @@ _JOURNAL: list[tuple[dict, object, object]] = []
 _MODULE_DIST: dict[str, tuple[str, str]] = {}
 
 
+#: > 0 while fitbench registers its own entries (:func:`own_entries`): those are journaled to no plugin
+_OWN_DEPTH = 0
+
+
 def add_entry(registry: dict, key, entry) -> None:
     """``registry[key] = entry``, journaled: an entry point that fails while loading has its additions taken out
     of every registry (methods, data sources, ...), and what a successful one added is attributed to its
-    distribution (``entry.module``)."""
-    _JOURNAL.append((registry, key, registry.get(key, _MISSING)))
+    distribution (``entry.module``). Entries added inside :func:`own_entries`, or defined in fitbench's own
+    modules (a built-in module a plugin imported first), are not journaled: they are no plugin's."""
+    module = getattr(entry, "module", None)
+    if not _OWN_DEPTH and not (isinstance(module, str) and module.split(".")[0] in OWN_PACKAGES):
+        _JOURNAL.append((registry, key, registry.get(key, _MISSING)))
     registry[key] = entry
+
+
+@contextmanager
+def own_entries():
+    """Registration of fitbench's own entries (the built-in methods, loaded by a plugin's first ``register``
+    when no one loaded them before): what is added inside belongs to no plugin, so a plugin that fails later
+    does not take it out, and a plugin that loads is not named as its distribution."""
+    global _OWN_DEPTH
+    _OWN_DEPTH += 1
+    try:
+        yield
+    finally:
+        _OWN_DEPTH -= 1
 
 
 def _one_line(exc: BaseException) -> str:
@@ -43,9 +64,11 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
 
 
-def load_entry_points(group: str, what: str) -> None:
+def load_entry_points(group: str, what: str, before=None) -> None:
     """Import every entry point of ``group`` once per process; ``what`` names what its plugins add
-    (e.g. ``"method"``, ``"data source"``) for the warning.
+    (e.g. ``"method"``, ``"data source"``) for the warning; ``before()``, when given, runs once before the
+    first entry point is imported, and only if the group has any (the method registry loads its built-ins
+    there, so plugins always load after them).
 
     A broken plugin does not take the built-ins down: it is skipped with one :class:`PluginLoadWarning`
     of one line saying which entry point of which distribution failed, why, and what to do; whatever it
@@ -54,7 +77,14 @@ def load_entry_points(group: str, what: str) -> None:
     if group in _loaded_groups:
         return
     _loaded_groups.add(group)
-    for ep in metadata.entry_points(group=group):
+    entry_points = metadata.entry_points(group=group)
+    if before is not None and len(entry_points):
+        try:
+            before()
+        except BaseException:
+            _loaded_groups.discard(group)
+            raise
+    for ep in entry_points:
         mark = len(_JOURNAL)
         dist = getattr(ep, "dist", None)
         try:
@@ -96,4 +126,4 @@ def distributions_of(modules) -> dict[str, str]:
     return out
 
 
-__all__ = ["PluginLoadWarning", "load_entry_points", "add_entry", "distributions_of", "OWN_PACKAGES"]
+__all__ = ["PluginLoadWarning", "load_entry_points", "add_entry", "own_entries", "distributions_of", "OWN_PACKAGES"]

@@ -156,3 +156,15 @@ def test_a_new_method_is_one_new_file(tmp_path):
     assert contract.returncode == 0, contract.stdout[-3000:] + contract.stderr[-2000:]
     passed = int(re.search(r"(\d+) passed", contract.stdout).group(1))
     assert passed >= 5 and "failed" not in contract.stdout, contract.stdout[-2000:]
+
+
+def test_a_registry_lacking_a_built_in_is_never_stored(tmp_path, monkeypatch):
+    """Whatever took a built-in method out of the registry (a plugin), the manifest cache is not written from it."""
+    from methods import _registry
+    methods.list_methods()
+    monkeypatch.setenv("FITBENCH_CACHE_DIR", str(tmp_path))
+    monkeypatch.delitem(_registry._REGISTRY, "circle.kasa")
+    with pytest.raises(_manifest.IncompleteRegistryError, match="circle.kasa"):
+        _manifest.write()
+    assert "circle.kasa" not in {m.id for m in _manifest.describe_methods()}
+    assert not list(tmp_path.iterdir())

@@ -141,3 +141,68 @@ def test_provenance_names_a_plugin_installed_inside_the_checkout(tmp_path):
         shutil.rmtree(inside, ignore_errors=True)
         if inside.parent.is_dir() and not any(inside.parent.iterdir()):
             inside.parent.rmdir()
+
+
+REGISTERS_THEN_FAILS = '''
+"""Registers a method (which loads the built-ins, the first plugin register does), then fails."""
+from methods import register
+from methods.results import circle_result
+
+
+@register("circle.bad", kind="closed form", summary="registers then fails", reference="fitbench test")
+def bad(points):
+    return circle_result(points, points[0], 1.0, converged=True, message="closed form")
+
+
+raise RuntimeError("boom: failed after registering")
+'''
+
+
+@pytest.fixture(scope="module")
+def fails_after_register_site(tmp_path_factory):
+    return install_plugin(tmp_path_factory.mktemp("after"), "fitbench-after-plugin", {"fitbench_after": REGISTERS_THEN_FAILS},
+                          {"fitbench.methods": {"after": "fitbench_after"}}, version="0.1")
+
+
+def listed_ids(out) -> list[str]:
+    assert out.returncode == 0, out.stderr
+    return [line.split()[0] for line in out.stdout.splitlines() if line.strip()]
+
+
+def test_a_plugin_failing_after_register_takes_out_only_its_own_method(fails_after_register_site, tmp_path):
+    """'list' with a plugin that registers then raises: every built-in method is still listed (the failing
+    plugin's rollback takes out only what it added), and the manifest cached by that listing is whole: a later
+    listing without the plugin, from the same cache, shows every built-in too."""
+    builtins = listed_ids(run_python("-m", "methods", "list", FITBENCH_CACHE_DIR=str(tmp_path / "clean")))
+    assert len(builtins) > 20 and "circle.kasa" in builtins and "roundness.iso12181" in builtins
+    cache = str(tmp_path / "cache")
+    with_plugin = run_python("-m", "methods", "list", path_first=[fails_after_register_site], FITBENCH_CACHE_DIR=cache)
+    assert listed_ids(with_plugin) == builtins
+    assert "failed to load and is skipped: RuntimeError: boom: failed after registering" in with_plugin.stderr
+    assert listed_ids(run_python("-m", "methods", "list", FITBENCH_CACHE_DIR=cache)) == builtins
+    # a current manifest already cached: the plugin's failure does not take the built-ins out either
+    again = run_python("-m", "methods", "list", path_first=[fails_after_register_site], FITBENCH_CACHE_DIR=cache)
+    assert listed_ids(again) == builtins
+
+
+def test_built_ins_registered_while_a_plugin_loads_are_not_the_plugin_s(fails_after_register_site):
+    """Built-ins loaded by a plugin's first register belong to no plugin: a failing data-source plugin that
+    registered a method does not take them out, and a loaded plugin's distribution is not named for them."""
+    code = ("from datasets import sources; sources.list_sources()\n"
+            "import methods; from methods.plugins import distributions_of\n"
+            "ids = [s.id for s in methods.list_methods()]\n"
+            "print('circle.kasa' in ids, 'roundness.iso12181' in ids, 'circle.half_method' in ids,\n"
+            "      distributions_of(['methods.circle.algebraic', 'methods.roundness.iso12181']))\n")
+    site = install_plugin(fails_after_register_site.parent / "ds", "fitbench-ds-plugin", {"fitbench_ds": HALF},
+                          {"fitbench.datasets": {"half_ds": "fitbench_ds"}}, version="0.3")
+    out = run_python("-c", code, path_first=[site])
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["True", "True", "False", "{}"], out.stdout + out.stderr
+    good = install_plugin(fails_after_register_site.parent / "good", "fitbench-good-plugin", {"fitbench_good2": GOOD},
+                          {"fitbench.methods": {"good": "fitbench_good2"}}, version="0.4")
+    code = ("from methods import _manifest; _manifest.describe_methods()\n"
+            "from methods.plugins import distributions_of\n"
+            "print(distributions_of(['fitbench_good2', 'methods.circle.algebraic', 'methods.roundness.iso12181']))\n")
+    out = run_python("-c", code, path_first=[good], FITBENCH_CACHE_DIR=str(fails_after_register_site.parent / "c"))
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "{'fitbench-good-plugin': '0.4'}"

@@ -455,3 +455,41 @@ def test_roundness_table_columns_never_touch_without_a_nominal_radius(tmp_path):
         assert len(fields) == 9, row                                  # name, 7 numbers, status: all apart
         for e in ends:
             assert row[e - 1] != " " and row[e] == " ", (row, e)      # right-aligned under the header
+
+
+def _history_axes(history):
+    """The date axes of the history plot as drawn (limits as dates, visible tick labels per panel)."""
+    import matplotlib.dates as mdates
+    from fitbench.cli.history import plot
+    seen = {}
+
+    def save(fig, path):
+        fig.canvas.draw()
+        axes = [ax for ax in fig.axes if ax.get_title()]
+        seen["limits"] = [tuple(mdates.num2date(v).replace(tzinfo=None) for v in ax.get_xlim()) for ax in axes]
+        seen["labels"] = [[t.get_text() for t in ax.get_xticklabels() if t.get_visible() and t.get_text()]
+                          for ax in axes]
+    plot(history, None, save)
+    return seen
+
+
+def test_history_plot_shares_its_dates_and_labels_every_panel():
+    """The panels were unshared and fig.autofmt_xdate() hid the upper panels' date labels; a panel with one
+    test spanned +-2 years. Now one date axis for all panels, labelled on each, a single date shown over days."""
+    import datetime as dt
+    row = {"G(b)": 5.0, "squareness": 10.0}
+    days = [dt.datetime(2026, 1, 10), dt.datetime(2026, 5, 3), dt.datetime(2026, 9, 1)]
+    history = {"circular-test": [(d, f"{k}.json", {**dict.fromkeys(
+                   n for _, n, _, _ in __import__("fitbench.cli.history", fromlist=["COLUMNS"]).COLUMNS["circular-test"]),
+                   **row}) for k, d in enumerate(days)],
+               "roundness": [(dt.datetime(2026, 5, 3), "r.json", {"RONt LSCI": 1.0, "RONt MZCI": 0.9,
+                                                                   "RONt MICI": 1.2, "RONt MCCI": 1.1})]}
+    seen = _history_axes(history)
+    assert len(seen["limits"]) == 2 and seen["limits"][0] == seen["limits"][1]     # one date axis
+    lo, hi = seen["limits"][0]
+    assert lo < days[0] and hi > days[-1] and (hi - lo) < (days[-1] - days[0]) * 1.2
+    assert all(len(labels) >= 2 for labels in seen["labels"]), seen["labels"]      # every panel labelled
+    single = _history_axes({"roundness": history["roundness"]})
+    lo, hi = single["limits"][0]
+    assert lo < dt.datetime(2026, 5, 3) < hi and hi - lo <= dt.timedelta(days=7)
+    assert len(single["labels"][0]) >= 2

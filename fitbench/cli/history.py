@@ -106,21 +106,9 @@ def table(history: dict) -> str:
 
 
 def plot(history: dict, path, save) -> None:
-    from fitbench.plots import report_figure
-    with report_figure(path, dpi=120, save=save, figsize=(10, 3.4 * len(history))) as fig:
-        axes = fig.subplots(len(history), 1, squeeze=False)[:, 0]
-        for ax, (kind, rows) in zip(axes, history.items()):
-            dates = [r[0] for r in rows]
-            for _, name, _, unit in COLUMNS[kind]:
-                vals = [r[2][name] for r in rows]
-                if any(v is not None for v in vals):
-                    ax.plot(dates, [float("nan") if v is None else v for v in vals], "o-", ms=3, lw=1,
-                            label=f"{name} [{unit}]")
-            ax.set_title(f"{kind}: trend over {len(rows)} test(s)", fontsize=9)
-            ax.legend(fontsize=7, ncol=2)
-            ax.grid(alpha=0.3)
-        fig.autofmt_xdate()
-        fig.tight_layout()
+    """The trend plot (:func:`fitbench.plots.history.plot`)."""
+    from fitbench.plots.history import plot as draw
+    draw(history, COLUMNS, path, save)
 
 
 def add_parser(sub):

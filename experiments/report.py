@@ -131,8 +131,12 @@ def latex_fragments(table: pd.DataFrame, caption: str, label: str, unit: str = "
 
 
 def _with_unit(caption: str, unit: str) -> str:
+    """The caption with 'Unit: U.' unless it already names every unit of ``unit`` in brackets ('... [mm]')."""
     from experiments.render.text import human_unit
     caption = caption.rstrip()
+    units = [u.strip() for u in unit.split(",") if u.strip()]
+    if units and all(f"[{u}]" in caption or f"[{human_unit(u)}]" in caption for u in units):
+        return caption
     if unit:
         caption += ("" if caption.endswith(".") else ".") + f" Unit: {human_unit(unit)}."
     return caption
@@ -177,7 +181,7 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     from markupsafe import Markup
     from experiments.render.document import write_report_tex
     from experiments.render.page import Document, markdown_table, md_escape
-    from experiments.render.report_tables import html_table
+    from experiments.render.report_tables import html_table, text_frame
     from experiments.verdict import study_verdicts
 
     render_md = render_md or markdown_table
@@ -278,7 +282,8 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
         fmt = f".{int(digits or 7)}g"
         doc.block(Markup(html_table(table, caption=f"Table {n_table}: {caption}", unit=unit, digits=digits,
                                     colour=colour, table_id=label)),
-                  f"*Table {n_table}: {md_escape(caption)}*\n\n" + render_md(table, fmt))
+                  f"*Table {n_table}: {md_escape(caption)}*\n\n"
+                  + render_md(text_frame(table, unit=unit, digits=digits), fmt))
         return [{"kind": "table", "file": f} for f in files]
 
     def add_figure(png, caption):

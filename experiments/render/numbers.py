@@ -4,9 +4,11 @@ HTML, Markdown and LaTeX renderings.
 
 ``column_format(values, digits)``: whole numbers as integers; otherwise ``digits`` significant digits of the
 column's largest magnitude, with more decimals (up to 6 more) while two values that differ by more than a
-relative ``MATTERS`` (1e-6) of that magnitude would print alike; scientific notation (one exponent per cell, one
-mantissa width per column) when the largest magnitude is >= 1e5 or below 1e-3, or when the smallest
-value would keep fewer than two significant digits. ``table_formats`` chooses the
+relative ``MATTERS`` (1e-6) of that magnitude would print alike, and at least as many as keep two significant
+digits of the smallest value (16.6470 and 0.0080 in one column); scientific notation (one exponent per cell, one
+mantissa width per column) when the largest magnitude is >= 1e5 or below 1e-3, or when the smallest value would
+need more than ``MAX_FIXED_DECIMALS`` decimals. Never ×10⁰: a mantissa whose exponent is 0 prints alone (as
+siunitx prints ``2.229e0`` in the PDF), which only a column spanning more than about six decades can show. ``table_formats`` chooses the
 format jointly for the columns that share a unit (semi-axes a and b of 299.024 and 299.002 mm stay apart even
 though each column alone has no spread) and gives every one of them that format.
 """
@@ -23,6 +25,7 @@ _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 _COUNT = re.compile(r"(?:^|[\s_])(n|runs?|rows?|counts?|iterations?|evaluations?|nfev|nit|points?|repetitions?|"
                     r"sets?|problems?|starts?|slopes?|ratios?|exponents?|not[\s_]converged)(?:$|[\s_])", re.I)
 MAX_EXTRA_DECIMALS = 6
+MAX_FIXED_DECIMALS = 5   #: a column whose smallest value needs more decimals than this is printed in scientific notation
 
 
 @dataclass(frozen=True)
@@ -42,6 +45,8 @@ class NumberFormat:
         if v == 0:
             return "0"
         m, e = f"{v:.{self.decimals}e}".split("e")
+        if int(e) == 0:             # never ×10⁰ (as siunitx prints 2.229e0 in the PDF: 2.229)
+            return m
         return f"{m}×10{str(int(e)).translate(_SUPERSCRIPT)}"
 
 
@@ -70,13 +75,16 @@ def column_format(values, digits: int = 3) -> NumberFormat:
     need = _distinct(v, top)
     low = float(np.min(np.abs(v[v != 0]))) if np.any(v != 0) else top
     fixed = max(0, digits - 1 - math.floor(math.log10(top)))
-    if top >= 1e5 or top < 1e-3 or fixed < 1 - math.floor(math.log10(low)):
-        # huge, tiny, or so spread that the smallest value would keep fewer than two digits: 4.07×10⁸
+    two_digits = 1 - math.floor(math.log10(low))      # decimals that keep two significant digits of the smallest
+    if top >= 1e5 or top < 1e-3 or two_digits > MAX_FIXED_DECIMALS:
+        # huge, tiny, or so spread that plain decimals would not keep two digits of the smallest: 4.07×10⁸
         d = digits - 1
         while d < digits - 1 + MAX_EXTRA_DECIMALS and len({f"{x:.{d}e}" for x in v}) < need:
             d += 1
         return NumberFormat("exponent", d)
-    d = max(0, digits - 1 - math.floor(math.log10(top)))
+    # plain decimals for the whole column, as many as keep two digits of its smallest value (16.647 and 0.0080
+    # in one column, not 1.665×10¹ beside 8.000×10⁻³, nor scientific beside plain)
+    d = max(fixed, two_digits)
     base = d
     while d < base + MAX_EXTRA_DECIMALS and len(np.unique(np.round(v, d))) < need:
         d += 1

@@ -144,3 +144,17 @@ def html_table(df: pd.DataFrame, *, caption: str, unit: str = "", digits: int = 
                for c in df.columns}
     return plain_table(df, caption=caption, headers=headers, formats=_formats(df, values, unit, digits),
                        table_id=table_id)
+
+
+def text_frame(df: pd.DataFrame, *, unit: str = "", digits: int = 4) -> pd.DataFrame:
+    """The table as the HTML shows it, every cell text: number columns in their one format per column
+    (``_formats``), headers with their unit; for the Markdown rendering, which must not choose its own."""
+    df = _humanised(df)
+    keys, values = split_columns(df)
+    formats = _formats(df, values, unit, digits)
+    out = pd.DataFrame({c: (df[c].map(lambda v, f=formats[c]: f.text(float(v)) if v == v else "–") if c in values
+                            else df[c].map(lambda v: "" if v != v else str(v)))
+                        for c in df.columns})
+    out.columns = [human_header(c) + (f" [{human_unit(u)}]" if c in values and (u := column_unit(c, df[c], unit))
+                                      else "") for c in df.columns]
+    return out

@@ -45,7 +45,8 @@ def cutoff_table(df: pd.DataFrame) -> pd.DataFrame:
     """Mean RONt (µm) of the certified fits per profile and cut-off for each reference circle, with the share
     of certified fits (NaN: none certified)."""
     ok = df[df["status"].isin(["ok", "not converged"])].copy()
-    ok["cutoff_upr"] = ok["cutoff_upr"].astype(str)
+    # a cut-off as a person writes it: 50, not 50.0 (a CSV column mixing numbers and 'none' reads as text)
+    ok["cutoff_upr"] = ok["cutoff_upr"].map(lambda c: c if str(c) == "none" else f"{float(c):g}")
     for k in REFS:  # an uncertified circle's RONt is not averaged in (its solver claimed no optimum)
         ok[f"RONt_{k}_um"] = ok[f"RONt_{k}_um"].where(ok[f"certified_{k}"].astype(bool))
     agg = {f"RONt_{k}_um": "mean" for k in REFS}

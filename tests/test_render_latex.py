@@ -7,6 +7,7 @@ in its headers. They are built from the committed results/ (skipped with the rea
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -254,3 +255,26 @@ def test_grouped_table_never_makes_a_float_too_large(tmp_path):
                        caption="grouped", label="g")
     result = compile_pdf(standalone_document([frag]), tmp_path)
     assert result["ok"] and not [w for w in result["warnings"] if "Float too large" in w], result["warnings"]
+
+
+def _bookmarks(out_file) -> list[str]:
+    """The PDF bookmarks hyperref wrote to its .out file (UTF-16 strings: octal escapes and literal bytes)."""
+    marks = []
+    for m in re.finditer(r"\\BOOKMARK \[\d\]\[-\]\{[^}]*\}\{(.*)\}\{[^}]*\}%", out_file.read_text(encoding="latin-1")):
+        raw = bytes(int(t[1:], 8) if t.startswith("\\") else ord(t) for t in re.findall(r"\\[0-7]{3}|.", m.group(1)))
+        marks.append(raw[2:].decode("utf-16-be") if raw.startswith(b"\xfe\xff") else raw.decode("latin-1"))
+    return marks
+
+
+@needs_pdflatex
+def test_headings_with_superscripts_make_clean_pdf_bookmarks(tmp_path):
+    """A heading with 10⁶ (set as \\textsuperscript) and TeX specials compiles without hyperref's 'Token not
+    allowed in a PDF string' and its bookmark reads as written, not '10 to 106'."""
+    from experiments.render.document import render_report_tex
+    title = "Scaling: runtime against N (10 to 10⁶) & 5 µm_b, σ = 0.05 R, 100 %"
+    src = render_report_tex([{"title": "Speed: 10⁶ points", "label": "s",
+                              "studies": [{"title": title, "findings": "x", "items": []}]}])
+    result = compile_pdf(src, tmp_path, name="report", runs=1)
+    assert result["ok"], result["errors"]
+    assert "Token not allowed" not in result["log"]
+    assert _bookmarks(tmp_path / "report.out") == ["Speed: 10⁶ points", title]

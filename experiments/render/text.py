@@ -211,3 +211,27 @@ def counts_by_group(passing: dict, total: int, noun: str, *, names: bool = True)
         else:
             parts.append(f"{len(ok)} of {total} {where}" + (f" ({', '.join(map(str, ok))})" if names else ""))
     return ", ".join(parts)
+
+
+_PDF_SPECIALS = {"\\": "/", "{": "(", "}": ")", "$": r"\$", "&": r"\&", "%": r"\%", "#": r"\#", "_": r"\_",
+                 "~": "-", "^": "-"}
+
+
+def pdf_text(s: str) -> str:
+    """``s`` as plain text for a PDF bookmark (the second argument of ``\\texorpdfstring``): the characters TeX
+    would read as commands or groups replaced or escaped, ``$`` maths delimiters dropped, every other
+    character (10⁶, µm, σ) kept as Unicode, which hyperref writes into the bookmark as it is."""
+    s = re.sub(r"\s+", " ", unicodedata.normalize("NFC", str(s)))
+    s = re.sub(r"\$([^$\n]+)\$", lambda m: m.group(1) if safe_math(m.group(1)) else m.group(0), s)
+    return "".join(_PDF_SPECIALS.get(ch, ch if (ch >= " " and unicodedata.category(ch)[0] not in "CZ") or ch == " "
+                                     else "") for ch in s)
+
+
+def heading_tex(s: str) -> str:
+    """A heading (section, subsection, title) for LaTeX: the typeset text (``tex``) and, for hyperref's PDF
+    bookmarks, the plain Unicode text (``pdf_text``): ``\\texorpdfstring{TeX}{text}``, so that a
+    \\textsuperscript in '10⁶' neither warns 'Token not allowed in a PDF string' nor reads '106'."""
+    typeset = tex(s)
+    if typeset == s:
+        return typeset
+    return f"\\texorpdfstring{{{typeset}}}{{{pdf_text(s)}}}"

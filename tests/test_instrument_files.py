@@ -493,3 +493,29 @@ def test_history_plot_shares_its_dates_and_labels_every_panel():
     lo, hi = single["limits"][0]
     assert lo < dt.datetime(2026, 5, 3) < hi and hi - lo <= dt.timedelta(days=7)
     assert len(single["labels"][0]) >= 2
+
+
+def test_positioning_and_roundness_take_date_and_machine_for_history(tmp_path):
+    """positioning and roundness had no --date: history dated them by the files' modification time. Both now
+    record --date and --machine where circular-test does (details.conditions) and history uses the date."""
+    import os
+    from datasets.positioning import axis_test, to_frame
+    data, _ = axis_test(rng=np.random.default_rng(2), mpe=0.002)
+    pos = tmp_path / "pos.csv"
+    to_frame(data, actual=False).to_csv(pos, index=False)
+    t, d = shaft(n=720)
+    xy = write_xy(tmp_path / "xy.csv", t, d)
+    folder = tmp_path / "machine"
+    folder.mkdir()
+    for cmd, date in ((("positioning", pos), "2026-03-04"), (("roundness", xy), "2026-02-01"),
+                      (("positioning", pos), "2025-12-24")):
+        out = cli(*cmd, "--date", date, "--machine", "HBG 130", "--json")
+        assert out.returncode == 0, out.stderr
+        j = json.loads(out.stdout)
+        assert j["details"]["conditions"]["date"] == date and j["details"]["conditions"]["machine"] == "HBG 130"
+        f = folder / f"{cmd[0]}-{date}.json"
+        f.write_text(out.stdout)
+        os.utime(f, (0, 0))                                   # the file time says 1970: the --date must win
+    trend = json.loads(cli("history", folder, "--json").stdout)
+    assert [t["date"][:10] for t in trend["positioning"]["tests"]] == ["2025-12-24", "2026-03-04"]
+    assert [t["date"][:10] for t in trend["roundness"]["tests"]] == ["2026-02-01"]

@@ -22,10 +22,10 @@ import numpy as np
 import methods
 from methods import InvalidInputError
 from methods.units import JSON_UNITS, UNIT_CHOICES, canonical, warn_implausible
-from fitbench.cli.options import (PROFILE_LIMIT_MM, add_reader_options, add_report_option,
+from fitbench.cli.options import (PROFILE_LIMIT_MM, add_reader_options, add_report_option, add_test_identity_options,
                                   add_tolerance_option, check_plot_path, finite, header_line,
                                   parse_tolerances, read_profile_args, save_figure, verdict,
-                                  verdict_lines, verdict_title, version, warn, write_report,
+                                  verdict_lines, verdict_title, version, warn, write_report, test_conditions,
                                   write_text_atomic)
 
 EXIT_BAD_INPUT = 2
@@ -300,8 +300,7 @@ def add_circular_test(sub):
     pc.add_argument("--angle-unit", choices=("deg", "rad"), help="angle column of an angle + radial-deviation file")
     add_tolerance_option(pc, "G (the larger of CW and CCW), G_cw, G_ccw, G_b, H")
     add_report_option(pc)
-    pc.add_argument("--machine", default="", help="machine name for the plot's test-conditions panel")
-    pc.add_argument("--date", default="", help="test date for the plot's test-conditions panel")
+    add_test_identity_options(pc)
     add_reader_options(pc)
     pc.add_argument("--json", action="store_true", help="print one JSON object (mm, rad; see its 'units')")
     pc.add_argument("--plot", metavar="FILE", help="write the polar plot (.png, .pdf, .svg)")
@@ -364,7 +363,8 @@ def cmd_positioning(args) -> int:
     lines = [header_line("positioning", args.unit, deviation_unit=args.deviation_unit)]
     lines += ([thermal_text] if thermal else []) + [text(res, degree=args.degree)] + verdict_lines(check)
     if report_path:
-        write_report(report_path, "ISO 230-2 positioning test", [f"file         {args.file}", *lines],
+        write_report(report_path, f"ISO 230-2 positioning test{': ' + args.machine if args.machine else ''}",
+                     [f"file         {args.file}", f"date         {args.date or '-'}", *lines],
                      lambda sub: plot(res, None, title=str(args.file), data=data, into=sub), aspect=5 / 13)
     if args.json:
         out = dict(res.figures)
@@ -380,6 +380,7 @@ def cmd_positioning(args) -> int:
                                  "degree": p["degree"], "U_at_targets": p["U_at_targets"], "k": p["k"]}
                              for d, p in res.polynomial.items()}
         out["u_delta"] = res.extra["u_delta"]
+        out["details"] = {"conditions": test_conditions(args, files=[str(args.file)])}
         print(json.dumps(_jsonable(out)))
         return 0
     print("\n".join(lines))
@@ -402,6 +403,7 @@ def add_positioning(sub):
     pp.add_argument("--standard", choices=("iso230-2:2014", "iso230-2:1988", "vdi3441"), default="iso230-2:2014")
     add_tolerance_option(pp, "A, E, R, B, M, A_up, ...")
     add_report_option(pp)
+    add_test_identity_options(pp)
     pp.add_argument("--material-temperature", type=float, metavar="DEG_C",
                     help="temperature of the axis scale / workpiece during the test (°C): the deviations are "
                          "corrected to 20 °C by the nominal differential expansion (needs --expansion-coefficient)")

@@ -149,6 +149,19 @@ def verdict_lines(v: dict | None) -> list[str]:
     return lines
 
 
+def add_test_identity_options(p):
+    """--machine and --date of a machine-tool test (circular-test, positioning, roundness): printed in the report
+    and recorded in the JSON result's ``details.conditions``, where ``fitbench history`` dates the test."""
+    p.add_argument("--machine", default="", help="machine name (the report's title, the JSON result's conditions)")
+    p.add_argument("--date", default="", help="test date, YYYY-MM-DD (the report, the JSON result's conditions; "
+                                                "'fitbench history' dates the test by it, else by the file's time)")
+
+
+def test_conditions(args, **more) -> dict:
+    """The JSON ``details.conditions`` of a test: its machine and date as given, and ``more``."""
+    return {"machine": args.machine, "date": args.date, **more}
+
+
 def add_report_option(p):
     p.add_argument("--report", metavar="FILE.pdf",
                    help="write a one-page test report: conditions, figures, verdict, diagnostics and the plot")

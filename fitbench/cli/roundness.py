@@ -9,8 +9,8 @@ import numpy as np
 
 from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff
-from fitbench.cli.options import (add_reader_options, add_report_option, add_tolerance_option, check_plot_path,
-                                  parse_tolerances, read_profile_args, save_figure, verdict, verdict_lines,
+from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
+                                  add_tolerance_option, check_plot_path, parse_tolerances, test_conditions, read_profile_args, save_figure, verdict, verdict_lines,
                                   verdict_title, write_report)
 
 
@@ -32,6 +32,7 @@ def add_parser(subparsers):
     p.add_argument("--plot", metavar="PNG", help="write the polar plot and the harmonic spectrum")
     add_tolerance_option(p, "RONt, RONp, RONv, RONq: checked about each reference circle shown")
     add_report_option(p)
+    add_test_identity_options(p)
     p.set_defaults(func=run)
     return p
 
@@ -57,7 +58,8 @@ def run(args) -> int:
         plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))
     lines = [f"note: {n}" for n in notes] + [report(res, source, axes)] + verdict_lines(check)
     if report_path:
-        write_report(report_path, "ISO 12181 roundness", lines, lambda sub: plot(res, None, title=source, into=sub),
+        write_report(report_path, f"ISO 12181 roundness{': ' + args.machine if args.machine else ''}",
+                     [f"date         {args.date or '-'}", *lines], lambda sub: plot(res, None, title=source, into=sub),
                      aspect=5.4 / 12)
     if args.json:
         d = res.to_dict(residuals=False)
@@ -68,6 +70,7 @@ def run(args) -> int:
                  units={"lengths": "mm", "angles": "rad", "cutoff_upr": "undulations per revolution",
                         "spectrum.amplitude": "mm", "spectrum.phase": "rad"})
         d.pop("extra", None)
+        d["details"] = {"conditions": test_conditions(args, files=[source])}
         print(json.dumps(d))
         return 0 if res.converged else 1
     print("\n".join(lines))

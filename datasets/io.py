@@ -17,9 +17,12 @@ refused with the file name and line number (a :class:`DataFileError`, one kind o
 """
 from __future__ import annotations
 
+import codecs
+import csv
 import importlib
 import os
 import re
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -65,11 +68,73 @@ def _number(token: str) -> float:
     return float(token)
 
 
-def _open_text(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'"):
-    """``path`` opened as UTF-8 text (BOM skipped), refusing a FIFO or a device; errors are one line."""
+#: the encoding decided per file (path, size, modification time): :func:`file_encoding`
+_ENCODINGS: dict = {}
+
+
+class EncodingNote(UserWarning):
+    """A file that is not UTF-8, read as Windows-1252 (or Latin-1): its non-ASCII characters may be wrong."""
+
+
+def file_encoding(path) -> str:
+    """The text encoding of ``path``: UTF-16 when it starts with a UTF-16 byte-order mark, UTF-8 (a BOM
+    skipped) when its bytes are UTF-8, else Windows-1252 (``cp1252``, the Windows exports' ANSI code page, a
+    superset of Latin-1's printable characters), or Latin-1 for bytes cp1252 leaves undefined. The UTF-8
+    check streams the file in 4 MiB blocks (ASCII blocks are checked without decoding)."""
     name = os.fspath(path)
     try:
-        return open_regular(name)
+        st = os.stat(name)
+        key = (os.path.abspath(name), st.st_size, st.st_mtime_ns)
+    except OSError:
+        return "utf-8-sig"
+    if key in _ENCODINGS:
+        return _ENCODINGS[key]
+    try:
+        with open_regular(name, encoding=None) as fh:
+            head = fh.read(2)
+            if head in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
+                enc = "utf-16"
+            else:
+                fh.seek(0)
+                enc, dec = "utf-8-sig", codecs.getincrementaldecoder("utf-8")()
+                while True:
+                    block = fh.read(1 << 22)
+                    try:
+                        if not block:
+                            dec.decode(b"", final=True)
+                            break
+                        if not block.isascii():
+                            dec.decode(block)
+                    except UnicodeDecodeError:
+                        enc = "cp1252"
+                        break
+                if enc == "cp1252":
+                    fh.seek(0)
+                    try:
+                        codecs.decode(fh.read(), "cp1252")
+                    except UnicodeDecodeError:
+                        enc = "latin-1"
+    except (OSError, InvalidInputError):
+        return "utf-8-sig"   # the open below reports it in one line
+    _ENCODINGS[key] = enc
+    return enc
+
+
+def note_encoding(path) -> None:
+    """Warn (:class:`EncodingNote`) when ``path`` is read as Windows-1252 or Latin-1 rather than UTF-8."""
+    enc = file_encoding(path)
+    if enc in ("cp1252", "latin-1"):
+        warnings.warn(f"{os.fspath(path)}: not UTF-8; read as {'Windows-1252 (cp1252)' if enc == 'cp1252' else 'Latin-1'}"
+                      ", the usual Windows export encoding (check its header's °, µ; save as UTF-8 to silence this)",
+                      EncodingNote, stacklevel=3)
+
+
+def _open_text(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'"):
+    """``path`` opened as text in its encoding (:func:`file_encoding`: UTF-8 with or without BOM, UTF-16 with
+    BOM, else Windows-1252), refusing a FIFO or a device; errors are one line."""
+    name = os.fspath(path)
+    try:
+        return open_regular(name, encoding=file_encoding(name))
     except FileNotFoundError:
         raise DataFileError(f"{name}: no such file{f' ({missing_hint})' if missing_hint else ''}") from None
     except NotRegularFileError as exc:
@@ -110,6 +175,7 @@ def check_line_lengths(path) -> None:
     """Refuse a file holding a line longer than :data:`MAX_LINE_CHARS` bytes (vectorised over 4 MiB blocks),
     before a parser that reads a whole line into memory sees it."""
     name = os.fspath(path)
+    limit = (MAX_LINE_CHARS + 1) * (2 if file_encoding(name) == "utf-16" else 1)   # bytes; + 1: a CR before the LF
     with _open_text(name) as text:
         fh = text.buffer
         lineno, run = 1, 0
@@ -121,17 +187,17 @@ def check_line_lengths(path) -> None:
             nl = np.flatnonzero(a == 10)
             if nl.size == 0:
                 run += a.size
-                if run > MAX_LINE_CHARS + 1:
+                if run > limit:
                     raise _too_long(name, lineno)
                 continue
             lengths = np.diff(nl, prepend=-1) - 1
             lengths[0] += run
-            long = np.flatnonzero(lengths > MAX_LINE_CHARS + 1)  # + 1: a CR before the LF
+            long = np.flatnonzero(lengths > limit)
             if long.size:
                 raise _too_long(name, lineno + int(long[0]))
             lineno += nl.size
             run = a.size - 1 - int(nl[-1])
-            if run > MAX_LINE_CHARS + 1:
+            if run > limit:
                 raise _too_long(name, lineno)
 
 
@@ -139,6 +205,8 @@ def _separator(lines: list[str]) -> tuple[str | None, bool]:
     """(separator, decimal comma) of a table from its first data lines: semicolon, tab, comma or whitespace
     (None). A comma between digits inside tab- or whitespace-separated fields is a decimal comma, so a
     header-less ``1,5<TAB>2,25`` is two numbers, not three fields."""
+    quoted = [ln for ln in lines[:50] if '"' in ln]
+    lines = [_unquoted(ln) for ln in lines]
     first = lines[0]
     dec = re.compile(r"[+-]?[0-9]*,[0-9]+(?:[eE][+-]?[0-9]+)?")
     if ";" in first:
@@ -158,11 +226,24 @@ def _separator(lines: list[str]) -> tuple[str | None, bool]:
     if sep == "\t" and any(" " in ln.replace("\t", "") and "\t" not in ln for ln in lines[1:]):
         sep = None  # tabs and spaces mixed: whitespace
     decimal_comma = sep in (";", "\t", None) and any(re.search(r"[0-9],[0-9]", ln) for ln in lines[:50])
+    if sep == "," and any(re.search(r'"\s*[+-]?[0-9]*,[0-9]+(?:[eE][+-]?[0-9]+)?\s*"', ln) for ln in quoted):
+        decimal_comma = True   # "0,000","5,5035": quoted decimal commas in a comma-separated file
     return sep, decimal_comma
 
 
 def _split(line: str, sep: str | None) -> list[str]:
-    return [t.strip() for t in (line.split(sep) if sep else line.split())]
+    """The fields of ``line``; a field in double quotes (``"1,5"``, as spreadsheets export) is read without its
+    quotes and may hold the separator."""
+    if '"' not in line:
+        return [t.strip() for t in (line.split(sep) if sep else line.split())]
+    if sep is None:
+        return [t.strip().strip('"').strip() for t in line.split()]
+    return [t.strip() for t in next(csv.reader([line], delimiter=sep, skipinitialspace=True))]
+
+
+def _unquoted(line: str) -> str:
+    """``line`` with each double-quoted field's content replaced by ``0``: the separators it shows are real."""
+    return re.sub(r'"[^"]*"', "0", line)
 
 
 #: units a header may carry, to their canonical names
@@ -280,6 +361,7 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     if skip_rows < 0:
         raise DataFileError(f"{name}: --skip-rows must be >= 0, got {skip_rows}")
     fh = _open_text(name)
+    note_encoding(name)
     body, preamble, comment = [], [], "#"
     try:
         with fh:
@@ -381,7 +463,7 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
                             usecols=None if len(usecols) == layout.ncol else usecols,
                             decimal="," if layout.decimal_comma else ".", comment=layout.comment,
                             skip_blank_lines=True, engine="c",
-                            encoding="utf-8-sig", keep_default_na=True)
+                            encoding=file_encoding(layout.name), keep_default_na=True)
         cols = {k: frame[k].to_numpy() for k in usecols}
         del frame
         ok = all(np.isfinite(cols[k]).all() for k in idx)
@@ -689,7 +771,9 @@ def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, sk
     if skip_rows < 0:
         raise DataFileError(f"--skip-rows must be >= 0, got {skip_rows}")
     kept, lines = [], []
-    for k, line in enumerate(read_lines(path, ""), start=1):
+    all_lines = read_lines(path, "")
+    note_encoding(path)
+    for k, line in enumerate(all_lines, start=1):
         if k > skip_rows and line.strip() and not line.lstrip().startswith(COMMENT_PREFIXES):
             kept.append(line)
             lines.append(k)

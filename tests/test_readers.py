@@ -109,3 +109,53 @@ def test_a_preamble_without_skip_rows_is_answered_with_the_skip_rows_to_give(tmp
     with pytest.raises(DataFileError, match=f"give --skip-rows {skip} "):
         read_points(path)
     np.testing.assert_allclose(np.hypot(*read_points(path, skip_rows=skip).T), 20.0, atol=1e-5)
+
+
+@pytest.mark.parametrize("decimal_comma", [False, True])
+def test_quoted_numeric_fields_are_read_below_and_above_the_small_file_size(tmp_path, decimal_comma):
+    """'"1","0"' was refused below 64 KiB ('"1"' is not a number) and read above; quoted decimal commas
+    ('"0,000","5,5035"') gave '4 fields where the first line has 2'. Both are read, whatever the size."""
+    for n in (40, 4000):
+        rows = circle_lines(n)
+        if decimal_comma:
+            rows = [",".join(f'"{v.replace(".", ",")}"' for v in r.split(",")) for r in rows]
+        else:
+            rows = [",".join(f'"{v}"' for v in r.split(",")) for r in rows]
+        path = tmp_path / f"q{n}{decimal_comma}.csv"
+        path.write_text('"x","y"\n' + "\n".join(rows) + "\n", encoding="utf-8")
+        assert (path.stat().st_size > SMALL_FILE_BYTES) == (n == 4000)
+        got = read_points(path)
+        assert got.shape == (n, 2)
+        np.testing.assert_allclose(np.hypot(*got.T), 20.0, atol=1e-5)
+        headerless = tmp_path / f"h{n}{decimal_comma}.csv"
+        headerless.write_text("\n".join(rows) + "\n", encoding="utf-8")
+        np.testing.assert_array_equal(read_points(headerless), got)
+
+
+def test_quoted_positioning_export_with_decimal_commas(tmp_path):
+    plain = tmp_path / "plain.csv"
+    plain.write_text("target,direction,run,deviation\n0,+,1,0.001\n0,+,2,0.002\n100,+,1,0.004\n100,+,2,0.003\n")
+    quoted = tmp_path / "quoted.csv"
+    quoted.write_text('"target","direction","run","deviation"\n"0","+","1","0,001"\n"0","+","2","0,002"\n'
+                      '"100","+","1","0,004"\n"100","+","2","0,003"\n')
+    np.testing.assert_array_equal(read_positioning(quoted).up, read_positioning(plain).up)
+
+
+@pytest.mark.parametrize("encoding, noted", [("utf-8-sig", False), ("utf-16", False), ("cp1252", True),
+                                             ("latin-1", True)])
+def test_windows_exports_in_utf16_and_cp1252_are_read(tmp_path, encoding, noted):
+    """A header with ° and µ in cp1252/Latin-1 or UTF-16 (with BOM) was refused ("cannot be read as text
+    ('utf-8' codec ...)"); they are read, and a file that is not UTF-8 is said to be read as Windows-1252."""
+    import warnings
+    from datasets.io import read_profile
+    t = np.linspace(0, 2 * np.pi, 90, endpoint=False)
+    rows = [f"{np.degrees(a):.4f};{3.0 * np.cos(2 * a):.4f}".replace(".", ",") for a in t]
+    path = tmp_path / f"talyrond-{encoding}.txt"
+    path.write_text("Winkel (°);Abweichung (µm)\n" + "\n".join(rows) + "\n", encoding=encoding)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = read_profile(path, nominal_radius=20.0)
+    assert got.unit == "µm" and got.angle_unit == "deg"
+    np.testing.assert_allclose(np.hypot(*got.runs[0][1].T) - 20.0, 3e-3 * np.cos(2 * t), atol=2e-7)   # 4 decimals written
+    notes = [str(w.message) for w in caught if "Windows-1252" in str(w.message)]
+    assert bool(notes) == noted, [str(w.message) for w in caught]

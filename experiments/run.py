@@ -10,6 +10,7 @@ into an ``--out`` folder (a lock; a second run says so in one line). At the end 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import hashlib
 import io
 import json
@@ -282,7 +283,47 @@ def _on_sigterm(signum, frame):
     raise Terminated()
 
 
+@contextlib.contextmanager
+def plugin_warnings_once():
+    """A plugin that fails to load (``methods.plugins.PluginLoadWarning``) is reported in one line
+    ``fitbench: warning: ...``, once: not in ``warnings``' format (file, line, source), and the spawned worker
+    processes, which load the plugins again, are told through PYTHONWARNINGS to ignore what this process
+    already printed (a warning's filter matches the start of its message; fields end at ':' and ',')."""
+    import re
+    import warnings
+
+    from methods.plugins import PluginLoadWarning
+    shown, original, env = set(), warnings.showwarning, os.environ.get("PYTHONWARNINGS")
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not issubclass(category, PluginLoadWarning):
+            return original(message, category, filename, lineno, file, line)
+        text = " ".join(str(message).split())
+        if text in shown:
+            return None
+        shown.add(text)
+        print(f"fitbench: warning: {text}", file=sys.stderr)
+        prefix = re.split(r"[:,]", text)[0].strip()
+        os.environ["PYTHONWARNINGS"] = ",".join(filter(None, [os.environ.get("PYTHONWARNINGS"),
+                                                              f"ignore:{prefix}:Warning"]))
+        return None
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = original
+        if env is None:
+            os.environ.pop("PYTHONWARNINGS", None)
+        else:
+            os.environ["PYTHONWARNINGS"] = env
+
+
 def main(argv=None) -> int:
+    with plugin_warnings_once():
+        return _main(argv)
+
+
+def _main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.run", description="Run fitbench studies.")
     parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
     parser.add_argument("names", nargs="*", metavar="NAME", help="studies (names or .toml paths); default: the default studies")

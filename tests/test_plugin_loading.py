@@ -206,3 +206,16 @@ def test_built_ins_registered_while_a_plugin_loads_are_not_the_plugin_s(fails_af
     out = run_python("-c", code, path_first=[good], FITBENCH_CACHE_DIR=str(fails_after_register_site.parent / "c"))
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "{'fitbench-good-plugin': '0.4'}"
+
+
+@pytest.mark.slow
+def test_experiments_run_reports_a_broken_plugin_once_in_one_line(broken_site, tmp_path):
+    """``experiments.run`` with worker processes (spawned: each loads the plugins again) prints the plugin's
+    warning once, as 'fitbench: warning: ...', not in ``warnings``' format with a file path and source line."""
+    out = run_python("-m", "experiments.run", "ellipse_angle", "--quick", "--jobs", "2", "--no-report",
+                     "--out", tmp_path / "results", path_first=[broken_site])
+    assert out.returncode == 0, out.stderr
+    lines = plugin_lines(out.stderr)
+    assert len(lines) == 2, out.stderr          # the method group and the data-source group, once each
+    assert all(line.startswith("fitbench: warning: ") for line in lines), out.stderr
+    assert "PluginLoadWarning" not in out.stderr and "load_plugins()" not in out.stderr

@@ -403,11 +403,13 @@ def _diagnose(layout: Layout, idx, skip_rows: int):
             continue
         toks = _split(ln, layout.sep)
         if len(toks) != layout.ncol:
-            raise DataFileError(f"{name} line {lineno}: {len(toks)} fields where the first line has {layout.ncol}: {ln!r}")
+            raise DataFileError(f"{name} line {lineno}: {len(toks)} fields where the first line has {layout.ncol}: {ln!r}"
+                                f"{skip_rows_hint(layout, before=lineno)}")
         for j in idx:
             tok = toks[j].replace(",", ".") if layout.decimal_comma else toks[j]
             if not _is_number(tok):
-                raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a number")
+                raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a number"
+                                    f"{skip_rows_hint(layout, before=lineno)}")
             if not np.isfinite(_number(tok)):
                 raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a finite number; remove or repair the point")
     raise DataFileError(f"{name}: could not be parsed (unexpected format); use one row of numbers per line")
@@ -528,7 +530,8 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
                             f"column was found (columns: {', '.join(layout.header)}); name it e.g. 'radial deviation "
                             "(um)' or give --columns ANGLE DEVIATION")
     if len(layout.header) < 2:
-        raise DataFileError(f"{name} line {layout.header_line}: header has fewer than two columns")
+        raise DataFileError(f"{name} line {layout.header_line}: header has fewer than two columns"
+                            f"{skip_rows_hint(layout)}")
     others = [k for k in range(layout.ncol) if k != d_col]
     if len(others) == 2:
         return Resolved("xy", others, None, d_col)
@@ -545,7 +548,7 @@ def _numeric_fields(line: str) -> tuple[str | None, int] | None:
     return None
 
 
-def skip_rows_hint(layout: Layout) -> str:
+def skip_rows_hint(layout: Layout, before: int | None = None) -> str:
     """'; or, if ... is a preamble, give --skip-rows N' naming the first row of numbers (and keeping the header
     line just above it when it has as many fields), or '' when no such row is in the first lines."""
     previous = None
@@ -560,10 +563,10 @@ def skip_rows_hint(layout: Layout) -> str:
                     n = lineno - 1
                     if previous is not None and previous[0] == lineno - 1 and len(_split(previous[1], got[0])) == got[1]:
                         n = lineno - 2                                  # keep the header line above the numbers
-                    if n < layout.header_line:
+                    if n < layout.header_line or (before is not None and lineno <= before):
                         return ""
-                    return (f"; if lines 1-{n} are an instrument's preamble, give --skip-rows {n} (the first row "
-                            f"of numbers is line {lineno})")
+                    return (f"; if {'line 1 is' if n == 1 else f'lines 1-{n} are'} an instrument's preamble, give "
+                            f"--skip-rows {n} (the first row of numbers is line {lineno})")
                 previous = (lineno, ln)
                 if lineno > SNIFF_LINES + layout.header_line:
                     return ""

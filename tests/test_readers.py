@@ -111,6 +111,18 @@ def test_a_preamble_without_skip_rows_is_answered_with_the_skip_rows_to_give(tmp
     np.testing.assert_allclose(np.hypot(*read_points(path, skip_rows=skip).T), 20.0, atol=1e-5)
 
 
+@pytest.mark.parametrize("preamble, skip", [(["Roundness trace", "Part: shaft"], 2), (["Talyrond"], 1)])
+def test_other_preamble_errors_name_the_skip_rows_too(tmp_path, preamble, skip):
+    path = tmp_path / "pre.csv"
+    path.write_text("\n".join(preamble + ["x,y"] + circle_lines(12)) + "\n", encoding="utf-8")
+    with pytest.raises(DataFileError, match=f"give --skip-rows {skip} "):
+        read_points(path)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("x,y\n1,2\n3,abc\n5,7\n")                   # a bad value below the first numbers: no hint
+    with pytest.raises(DataFileError, match=r"line 3: 'abc' is not a number$"):
+        read_points(bad)
+
+
 @pytest.mark.parametrize("decimal_comma", [False, True])
 def test_quoted_numeric_fields_are_read_below_and_above_the_small_file_size(tmp_path, decimal_comma):
     """'"1","0"' was refused below 64 KiB ('"1"' is not a number) and read above; quoted decimal commas

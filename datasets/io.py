@@ -2,7 +2,8 @@
 circular-test runs (x, y or angle + radial deviation, one or both directions in one file), ISO 230-2
 positioning tables (long or wide laser exports, :func:`read_positioning`) and multilateration lengths
 (:func:`read_multilateration`). Header optional; comma, semicolon, tab or whitespace separated (tab and
-whitespace files may use decimal commas, header or not); ``#`` and ``%`` comment lines; ``skip_rows``
+whitespace files may use decimal commas, header or not; fields may be double-quoted, quoted decimal commas
+too); UTF-8, UTF-16 with BOM, else Windows-1252 (:func:`file_encoding`); ``#`` and ``%`` comment lines; ``skip_rows``
 drops a preamble (instrument software writes test conditions above the table). Every reader takes the
 file's length unit (``unit``, default mm) and returns millimetres.
 

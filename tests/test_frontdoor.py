@@ -617,3 +617,22 @@ def test_fit_help_docs_and_output_agree_on_the_printed_unit(lola, capsys, tmp_pa
     assert out.returncode == 0 and "lengths below in mm" in out.stdout
     radius = next(ln for ln in out.stdout.splitlines() if ln.startswith("radius"))
     assert radius.endswith(" mm") and float(radius.split()[1]) == pytest.approx(cond.nominal_radius, abs=0.1)
+
+
+def test_wide_laser_export_without_units_is_told_the_deviation_unit(tmp_path):
+    """A laser export with no units in its header (targets mm, errors µm): the warning recommended --unit um,
+    which made the travel 0-1 mm (and a compensation table over 0..1 mm). It names --deviation-unit um, and
+    following it gives the figures of the file read with the right units, over the whole travel."""
+    data, _ = axis_test(rng=np.random.default_rng(5), mpe=0.002)
+    p = wide_laser_export(tmp_path / "wide.csv", data)
+    p.write_text(p.read_text(encoding="utf-8").replace("Target [mm]", "Target"), encoding="utf-8")
+    wrong = cli("positioning", p, "--skip-rows", 3)
+    assert "implausible" in wrong.stderr and "(--deviation-unit um)" in wrong.stderr and "(--unit um)" not in wrong.stderr
+    ok = cli("positioning", p, "--skip-rows", 3, "--deviation-unit", "um", "--compensation", "csv",
+             tmp_path / "comp.csv", "--json")
+    assert ok.returncode == 0 and "warning" not in ok.stderr, ok.stderr
+    ref = methods.fit("positioning.iso230_2", data).figures
+    assert json.loads(ok.stdout)["E"] == pytest.approx(ref["E"], abs=2e-7)
+    table = pd.read_csv(tmp_path / "comp.csv", comment="#")
+    position = table.iloc[:, 0].to_numpy(dtype=float)
+    assert position.min() == pytest.approx(data.targets.min()) and position.max() == pytest.approx(data.targets.max())

@@ -179,3 +179,20 @@ def test_quick_run_is_marked_in_the_pdf_source(built):
     assert "reduced --quick grid; their numbers are not the published comparison" in head.replace(r"-{}-", "--")
     published = tex.split(r"\subsection{")[1:]
     assert any("Quick run (reduced grid)" in s for s in published)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("pdflatex") is None, reason="pdflatex is not installed (apt-get install "
+                    "texlive-latex-extra texlive-science)")
+def test_docs_say_how_to_get_the_pdf_and_the_command_works(built):
+    """docs/report.md gives the command that compiles report.tex to report.pdf; run in the built folder, it
+    makes the PDF."""
+    from pathlib import Path
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "report.md").read_text(encoding="utf-8")
+    command = next(line for line in docs.splitlines() if line.startswith("cd paper && pdflatex"))
+    assert "report.tex" in command and "-no-shell-escape" in command
+    (built / "report.pdf").unlink(missing_ok=True)
+    done = subprocess.run(command.replace("cd paper && ", "", 1), shell=True, cwd=built, capture_output=True,
+                          text=True, timeout=600, stdin=subprocess.DEVNULL)
+    assert done.returncode == 0, done.stdout[-2000:]
+    assert (built / "report.pdf").stat().st_size > 10_000

@@ -480,10 +480,12 @@ def _rankings_section(rankings, problem, out, add_table, add_figure, doc):
     for name, r in rankings.items():
         if r.by_dataset is None or r.by_dataset.empty:
             continue
+        units = r.unit_words()
         tex_items = add_table(r.by_dataset.reset_index(),
                                      f"Median {name} per data set and method over the data set's problems (failed, "
                                      "or -- in the LaTeX table: failed on at least half of them); colour in the HTML "
-                                     "report: ratio to the best method of the row",
+                                     "report: ratio to the best method of the row"
+                                     + (f". Units by study (the data set's prefix): {units}" if units else ""),
                                      r.unit, 3, "lower_is_better")
         items += tex_items
     return [{"title": "Performance profiles", "findings": intro + " Findings: " + findings, "items": items}]

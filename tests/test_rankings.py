@@ -65,3 +65,46 @@ def test_a_tie_names_every_best_method():
                      "relative) on 100 % of 3 problems"]
     alone = ranking_findings({"runtime": SimpleNamespace(table=table.assign(**{"circle.minimum_zone": [9.0] * 3}))})
     assert alone == ["runtime: circle.chebyshev_lp is best on 100 % of 3 problems"]
+
+
+def test_ranking_units_per_study_from_the_metric_declarations(tmp_path):
+    """A ranking without a declared unit takes the metric's declared unit (form_error: mm); a study on unit
+    circles declares 'R'; the table of mixed rows says which study is in which unit, one in a single unit
+    carries it."""
+    import pytest
+
+    published = study(tmp_path, "published", {"circle.kasa": [1.0], "circle.taubin": [2.0]})
+    unit_circle = study(tmp_path, "noise", {"circle.kasa": [0.1], "circle.taubin": [0.2]})
+    unit_circle[2]["config"]["rankings"] = [{**DECL, "unit": "R"}]
+    alone = collect([published])["circularity"]
+    assert alone.unit == "mm" and alone.unit_words() == ""
+    mixed = collect([published, unit_circle])["circularity"]
+    assert mixed.unit == "" and mixed.units == {"published": "mm", "noise": "R"}
+    assert mixed.unit_words() == "mm: published; R (relative to the radius R of the data's circle): noise"
+    wrong = study(tmp_path, "wrong", {"circle.kasa": [1.0]})
+    wrong[2]["config"]["rankings"] = [{**DECL, "unit": "s"}]
+    with pytest.raises(ValueError, match="declares unit 's' for metric 'form_error'.*a length"):
+        collect([wrong])
+
+
+def test_the_report_ranking_table_states_units(tmp_path):
+    """The report's median table of a ranking: a unit in the caption, per study when the rows mix units."""
+    from experiments.report import _rankings_section
+
+    published = study(tmp_path, "published", {"circle.kasa": [1.0], "circle.taubin": [2.0]})
+    unit_circle = study(tmp_path, "noise", {"circle.kasa": [0.1], "circle.taubin": [0.2]})
+    unit_circle[2]["config"]["rankings"] = [{**DECL, "unit": "R"}]
+    captions = []
+
+    class Doc:
+        def heading(self, *a, **k): pass
+        def prose(self, *a, **k): pass
+
+    def add_table(table, caption, unit, digits, colour=""):
+        captions.append((caption, unit))
+        return []
+    for studies, want in (([published], ("", "mm")), ([published, unit_circle], ("mm: published; R", ""))):
+        captions.clear()
+        _rankings_section(collect(studies), None, tmp_path, add_table, lambda *a: [], Doc())
+        (caption, unit), = captions
+        assert want[0] in caption and unit == want[1]

@@ -7,6 +7,8 @@ A study opts in with ``[[rankings]]`` entries in its TOML (kept in its ``meta.js
     metric = "center_error"                             # a column of the rows; lower is better
     methods = "circle.*"                                # fnmatch pattern on the method id (default: all)
     unit = "mm"                                         # optional; problem = ["dataset", "data_stream", "repetition"]
+                                                        # default: the metric's declared unit (methods' result
+                                                        # columns: lengths in mm); "R" for data on a unit circle
     floor = 1e-12                                       # costs below it are equal (default 1e-12; 0 for runtimes)
 
 The report names no study: it reads the declarations of whichever study folders exist. A problem is one
@@ -43,6 +45,40 @@ class Ranking:
     runs: dict = field(default_factory=dict)   #: method -> number of problems it ran on (of the table's)
     table: pd.DataFrame | None = field(default=None, repr=False)
     by_dataset: pd.DataFrame | None = field(default=None, repr=False)
+    units: dict = field(default_factory=dict)   #: study -> the unit of its costs
+
+    def unit_words(self) -> str:
+        """Which rows are in which unit ('' when all share ``unit``): 'mm: published, scaling; R (relative to the
+        radius R of the data's circle): noise'."""
+        if len(set(self.units.values())) <= 1:
+            return ""
+        by_unit: dict = {}
+        for study, u in self.units.items():
+            by_unit.setdefault(u, []).append(study)
+        return "; ".join(f"{UNIT_WORDS.get(u, u)}: {', '.join(st)}" for u, st in by_unit.items())
+
+
+#: units a ranking may declare beyond the metric's own, per dimension of the metric's declared unit
+_LENGTHS = {"mm", "µm", "um", "nm", "m", "cm", "R"}
+_TIMES = {"s", "ms", "µs", "us", "ns"}
+UNIT_WORDS = {"R": "R (relative to the radius R of the data's circle)"}
+
+
+def ranking_unit(study: str, decl: dict) -> str:
+    """The unit of a declared ranking's costs: its ``unit``, checked against the dimension of the metric's
+    declared unit (``experiments.study.column_unit``: the result classes' declarations, timings in s), else that
+    declared unit. ValueError when they disagree (a length ranked in s)."""
+    from experiments.study import column_unit
+    metric, unit = decl["metric"], decl.get("unit")
+    own = column_unit(metric)
+    if unit is None or unit == "":
+        return own
+    for group, what in ((_LENGTHS, "a length"), (_TIMES, "a time")):
+        if (own in group) != (unit in group) and own:
+            raise ValueError(f"rankings: study {study!r} declares unit {unit!r} for metric {metric!r}, which is "
+                             f"{'not ' if own not in group else ''}{what} ({own}); declare "
+                             f"{'one of ' + ', '.join(sorted(group)) if own in group else repr(own)}")
+    return unit
 
 
 def collect(studies: list[tuple[str, Path, dict]]) -> dict[str, Ranking]:
@@ -70,7 +106,11 @@ def collect(studies: list[tuple[str, Path, dict]]) -> dict[str, Ranking]:
                                  "method": sel["method"], "params": sel.get("params", pd.Series("", index=sel.index)),
                                  "status": sel["status"], "cost": pd.to_numeric(sel[metric], errors="coerce"),
                                  "floor": float(d.get("floor", 0.0 if d.get("unit") == "s" else 1e-12))})
-            r = out.setdefault(d["profile"], Ranking(d["profile"], metric, d.get("unit", "")))
+            unit = ranking_unit(name, d)
+            r = out.setdefault(d["profile"], Ranking(d["profile"], metric, unit))
+            r.units[name] = unit
+            if r.unit != unit:          # rows in different units: the table says which (Ranking.unit_words)
+                r.unit = ""
             r.studies.append(name)
             r.rows.append(part)
     for r in out.values():

@@ -417,6 +417,23 @@ def column_unit(name: str) -> str:
     return next((u for suffix, u in SUFFIX_UNITS.items() if name.endswith(suffix)), "")
 
 
+def readable(name: str) -> str:
+    """A row column as a person reads it in a table or on an axis: without the ``data_`` prefix of a data
+    parameter and without a unit suffix the unit is shown for, underscores as spaces ('data_arc_deg' -> 'arc',
+    'radius_error' -> 'radius error')."""
+    shown = name[5:] if name.startswith("data_") and len(name) > 5 else name
+    for suffix, unit in SUFFIX_UNITS.items():
+        if shown.endswith(suffix) and len(shown) > len(suffix) and column_unit(name) == unit:
+            shown = shown[:-len(suffix)]
+            break
+    return shown.replace("_", " ")
+
+
+def _aggregate_words(how: str, column: str) -> str:
+    """'RMSE of radius error', 'mean of arc'."""
+    return f"{'RMSE' if how == 'rmse' else how} of {readable(column)}"
+
+
 def _unit_problem(column: str, unit: str, how: str) -> str | None:
     """A table unit of another dimension than its values' (a degree column is never labelled mm)."""
     if not unit or how in ("count", "ok_share"):
@@ -591,14 +608,15 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
     if t.get("columns"):
         out = data.pivot_table(index=rows, columns=t["columns"], values=value, aggfunc=AGGREGATES[how], sort=False)
         key_unit = column_unit(t["columns"])  # a pivot column names its key with the key's own unit: 'data_arc_deg = 90 °'
-        out.columns = [f"{t['columns']} = {c:g}{' ' + key_unit if key_unit else ''}" if isinstance(c, (int, float))
-                       else f"{t['columns']} = {c}" for c in out.columns]
+        key = readable(t["columns"])
+        out.columns = [f"{key} = {c:g}{' ' + key_unit if key_unit else ''}" if isinstance(c, (int, float))
+                       else f"{key} = {c}" for c in out.columns]
         out = out.reset_index()
     else:
         out = data.groupby(rows, sort=False, dropna=False)[value].agg(AGGREGATES[how]).reset_index()
-        out = out.rename(columns={value: f"{how} of {t['values']}"})
+        out = out.rename(columns={value: _aggregate_words(how, t["values"])})
     # a numeric key column carries its own unit in its name, so the table's unit never labels it
-    out = out.rename(columns={c: f"{c} [{column_unit(c)}]" for c in rows
+    out = out.rename(columns={c: f"{readable(c)} [{column_unit(c)}]" for c in rows
                               if column_unit(c) and pd.api.types.is_numeric_dtype(out[c])})
     return Table(caption=t["caption"], data=out, unit=t.get("unit", ""), digits=t.get("digits", 4),  # significant digits
                  colour=t.get("colour", ""))  # significant digits
@@ -615,7 +633,7 @@ def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Fig
     for axis, label in (("x", "xlabel"), ("y", "ylabel")):  # axes name their column and its unit
         if isinstance(args.get(axis), str) and label in accepted and label not in args:
             unit = column_unit(args[axis])
-            what = args[axis] if axis == "x" else f"{args.get('aggregate', 'mean')} of {args[axis]}"
+            what = readable(args[axis]) if axis == "x" else _aggregate_words(args.get("aggregate", "mean"), args[axis])
             args[label] = f"{what} [{unit}]" if unit else what
     fig, ax = plt.subplots(figsize=(f.get("width", 6.4), f.get("height", 4.2)))
     PLOTS[f["plot"]](_where(df[df["status"] == "ok"], f.get("where")), ax, **args)
@@ -715,7 +733,7 @@ def default_declarations(cfg: dict, df: pd.DataFrame) -> tuple[dict | None, dict
                and pd.api.types.is_numeric_dtype(df[c]) and df[c].nunique() > 1]
     across = varying[0] if varying else ("dataset" if df["dataset"].nunique() > 1 else None)
     rows = ["method"] + (["params"] if "params" in df and df["params"].nunique() > 1 else [])
-    what = f"{'RMSE' if how == 'rmse' else 'median'} of {metric}"
+    what = _aggregate_words(how, metric)
     shown = f"{what} [{unit}]" if unit else what
     table = {"caption": f"{what} per method{f' and {across}' if across else ''} over {len(df)} rows of "
                         f"{cfg['name']} (the default table of a study that declares none)",
@@ -723,7 +741,7 @@ def default_declarations(cfg: dict, df: pd.DataFrame) -> tuple[dict | None, dict
              **({"columns": across} if across else {})}
     if varying:
         figure = {"plot": "lines", "x": varying[0], "y": metric, "by": "method", "aggregate": how,
-                  "caption": f"{shown} against {varying[0]}, one line per method"}
+                  "caption": f"{shown} against {readable(varying[0])}, one line per method"}
     else:
         figure = {"plot": "bars", "x": "method", "y": metric, "aggregate": how,
                   "caption": f"{shown} per method over all data sets"}

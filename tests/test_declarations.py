@@ -125,17 +125,17 @@ def test_an_undeclared_toml_study_gets_a_table_and_a_figure_with_units(tmp_path)
     _, analysis = contract.analyse(study, rows_of_a_toml_only_study(), cfg, tmp_path, log=lambda *a: None)
     assert len(analysis.tables) == 1 and len(analysis.figures) == 1
     table = analysis.tables[0]
-    assert table.unit == "mm" and "center_error" in table.caption
+    assert table.unit == "mm" and "center error" in table.caption and "center_error" not in table.caption
     # the degree column is a key named with its own unit: the table's mm never labels it
     # and a pivot's column names carry the key's unit, not the table's (read as 'arc 360 °', never 'arc [mm]')
-    assert list(table.data.columns) == ["method", "data_arc_deg = 360 °", "data_arc_deg = 90 °", "data_arc_deg = 22.5 °"]
+    assert list(table.data.columns) == ["method", "arc = 360 °", "arc = 90 °", "arc = 22.5 °"]
     assert (tmp_path / analysis.figures[0].file).is_file()
 
 
 def test_a_declared_table_names_the_unit_of_its_numeric_key(tmp_path):
     table = contract.declared_table(rows_of_a_toml_only_study(), {"caption": "c", "rows": ["data_arc_deg", "method"],
                                                                   "values": "radius_error", "unit": "mm"})
-    assert list(table.data.columns) == ["data_arc_deg [°]", "method", "mean of radius_error"]
+    assert list(table.data.columns) == ["arc [°]", "method", "mean of radius error"]
 
 
 def test_figure_axes_carry_units(tmp_path, monkeypatch):
@@ -143,4 +143,4 @@ def test_figure_axes_carry_units(tmp_path, monkeypatch):
     monkeypatch.setitem(contract.PLOTS, "probe", lambda df, ax, *, x, y, by=None, aggregate="mean", xlabel=None,
                         ylabel=None: seen.update(xlabel=xlabel, ylabel=ylabel))
     contract.declared_figure(rows_of_a_toml_only_study(), {"plot": "probe", "x": "data_arc_deg", "y": "center_error", "aggregate": "rmse", "caption": "c"}, tmp_path, 1)
-    assert seen == {"xlabel": "data_arc_deg [°]", "ylabel": "rmse of center_error [mm]"}
+    assert seen == {"xlabel": "arc [°]", "ylabel": "RMSE of center error [mm]"}

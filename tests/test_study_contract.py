@@ -88,7 +88,7 @@ def test_toml_only_study_from_the_command_line(tmp_path):
     table = pd.read_csv(out / "toml_only" / manifest["tables"][0]["file"])
     ok = df[(df["dataset"] == "circle") & (df["data_arc_deg"] == 90.0) & (df["method"] == "circle.kasa")]
     expected = float(np.sqrt(np.mean(ok["radius_error"] ** 2)))
-    got = table.set_index("method").loc["circle.kasa", "data_arc_deg = 90 °"]
+    got = table.set_index("method").loc["circle.kasa", "arc = 90 °"]
     assert got == pytest.approx(expected, rel=1e-9)
     report = (out / "paper" / "report.md").read_text()
     assert "## User studies" in report and "*Table 1: Radius RMSE by arc" in report and "Unit: mm" in report

@@ -17,11 +17,11 @@ from typing import Callable
 
 import numpy as np
 
-from methods._errors import InvalidInputError, UnknownMethodError
+from methods._errors import InvalidInputError, ResultContractError, UnknownMethodError
 from methods._families import import_method_modules
 from methods.plugins import add_entry, load_entry_points, own_entries
 from methods._validation import validate_points
-from methods.result_base import FitResult
+from methods.result_base import FitResult, check_result
 
 ENTRY_POINT_GROUP = "fitbench.methods"
 KINDS = ("closed form", "iterative", "convex program")
@@ -77,6 +77,13 @@ class MethodSpec(MethodInfo):
                 raise InvalidInputError(f"{self.id}: parameter {name}={value!r} {problem}")
 
     def __call__(self, points, **params):
+        """The method's result, through the gate: one that breaks its family's contract raises
+        :class:`ResultContractError` (:func:`methods.check_result`)."""
+        return _run(self, points, params, gate=True)
+
+    def unchecked(self, points, **params):
+        """The method's result without the gate, for a caller that applies :func:`methods.check_result` itself
+        (the benchmark engine: such a result becomes an ``invalid`` row, and the timing measures the fit alone)."""
         return _run(self, points, params)
 
 
@@ -165,7 +172,9 @@ def register(method_id: str, *, summary: str, reference: str, kind: str, min_poi
     return decorate
 
 
-def _run(spec: MethodSpec, points, params: dict):
+def _run(spec: MethodSpec, points, params: dict, gate: bool = False):
+    """Validate, fit, time; with ``gate``, a result breaking its family's contract (:func:`check_result`
+    against the validated data the method was given) raises :class:`ResultContractError`."""
     if params:
         unknown = sorted(set(params) - set(spec.defaults))
         if unknown:
@@ -193,6 +202,10 @@ def _run(spec: MethodSpec, points, params: dict):
         result.runtime_s = runtime
         result.method = spec.id
         result.params = merged
+    if gate:
+        problem = check_result(result, pts)
+        if problem:
+            raise ResultContractError(spec.id, problem)
     return result
 
 
@@ -293,5 +306,9 @@ def list_methods(family: str | None = None) -> list[MethodSpec]:
 
 
 def fit(method_id: str, points, **params):
-    """Fit ``points`` with the registered method ``method_id`` and return its result object."""
-    return _run(get(method_id), points, params)
+    """Fit ``points`` with the registered method ``method_id`` and return its result object; a result that
+    breaks its family's contract (:func:`methods.check_result`, the gate of the benchmark's rows) raises
+    :class:`ResultContractError`."""
+    return get(method_id)(points, **params)
+
+

@@ -186,6 +186,9 @@ class FitResult:
                Column("residual_rms", "length", GEOMETRY, "nonnegative"))
     #: array-like fields and their shapes ("n": one entry per data point); checked by :func:`check_result`
     SHAPES = {}
+    #: NaN residuals mark data that was not measured (multilateration's missing lengths): allowed in a converged
+    #: result (infinite ones never are); checked by :func:`check_result`
+    MISSING_RESIDUALS = False
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -426,7 +429,8 @@ def check_result(result, data=None) -> str | None:
     residuals = result.residuals
     if not isinstance(residuals, np.ndarray) or residuals.dtype.kind not in "fiu":
         return f"residuals must be a numeric array, got {_describe(residuals)}"
-    if converged and residuals.size and not np.isfinite(residuals).all():
+    measured = residuals[~np.isnan(residuals)] if rules.MISSING_RESIDUALS and residuals.dtype.kind == "f" else residuals
+    if converged and measured.size and not np.isfinite(measured).all():
         return "residuals are not finite in a converged result"
     if converged and n:
         return (cls or type(result)).consistency(result, data)

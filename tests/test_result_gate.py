@@ -128,3 +128,40 @@ def test_immutable_data_is_not_copied_again():
     from datasets import sources
     data, _ = sources.get_source("circle").load(np.random.default_rng(0), n=10)
     assert methods.immutable(data) is data     # what a data source gives the engine: no copy per timed call
+
+
+@pytest.fixture(scope="module")
+def recipe_site(tmp_path_factory):
+    """The README's "Add a method" module, as written, installed as a plugin distribution (offline)."""
+    from conftest import install_plugin
+    from test_readme_plugin import recipe
+    path, code, _ = recipe()
+    return install_plugin(tmp_path_factory.mktemp("recipe"), "fitbench-gate-recipe", {"gate_recipe": code},
+                          {"fitbench.methods": {"my_fit": "gate_recipe"}})
+
+
+def test_fit_and_the_cli_refuse_a_result_that_breaks_its_contract(recipe_site, tmp_path):
+    """The README's method with shrink=0 returns a converged circle of radius 0: methods.fit raises
+    ResultContractError (an InvalidInputError) naming the broken rule, and the CLI's fit prints one line, exit
+    non-zero, no 'converged yes'; with the default shrink both work. The engine's gate gives the same reason."""
+    from conftest import run_python
+    path = tmp_path / "circle.csv"
+    np.savetxt(path, CIRCLE, delimiter=",", header="x,y", comments="")
+    code = ("import numpy as np, methods\n"
+            f"pts = np.loadtxt({str(path)!r}, delimiter=',', skiprows=1)\n"
+            "print(round(methods.fit('circle.my_fit', pts).radius, 3))\n"
+            "try:\n    methods.fit('circle.my_fit', pts, shrink=0.0)\n"
+            "except methods.ResultContractError as exc:\n"
+            "    print(isinstance(exc, methods.InvalidInputError), exc.problem)\n"
+            "r = methods.get('circle.my_fit').unchecked(pts, shrink=0.0)\n"
+            "print(methods.check_result(r, pts))\n")
+    out = run_python("-c", code, path_first=[recipe_site])
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[0] == "299.0" and lines[1] == "True radius = 0 must be > 0" and lines[2] == "radius = 0 must be > 0"
+    good = run_python("-m", "methods", "fit", "circle.my_fit", path, path_first=[recipe_site])
+    assert good.returncode == 0 and "converged" in good.stdout, good.stderr
+    bad = run_python("-m", "methods", "fit", "circle.my_fit", path, "--param", "shrink=0", path_first=[recipe_site])
+    assert bad.returncode != 0 and "converged" not in bad.stdout, bad.stdout
+    assert "Traceback" not in bad.stderr and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
+    assert "circle.my_fit returned a result that breaks its family's contract: radius = 0 must be > 0" in bad.stderr

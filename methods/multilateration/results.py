@@ -29,6 +29,7 @@ class MultilaterationFit(FitResult):
     frame: str = "measurement"
 
     FAMILY = "multilateration"
+    MISSING_RESIDUALS = True  # NaN: a length not measured (see above)
 
     def to_dict(self, residuals: bool = True) -> dict:
         d = super().to_dict(residuals)

@@ -197,3 +197,16 @@ def test_no_package_imports_another_packages_private_names():
                         and any(p.startswith("_") and not p.startswith("__") for p in parts[1:]):
                     bad.append(f"{mod}:{node.lineno} imports {name}")
     assert bad == [], "\n".join(bad)
+
+
+def test_every_private_module_is_imported_by_the_product():
+    """A private module (``_name``) no product module imports, nor names as a string (``importlib`` by name), is
+    dead code: a left-over shim. Its public counterpart is the one to use."""
+    mods, edges = graph()
+    imported = {name for _, name, _, _ in edges}
+    imported |= {p for name in imported for p in [name.rsplit(".", k)[0] for k in range(name.count(".") + 1)]}
+    named = {node.value for path in mods.values() for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+             if isinstance(node, ast.Constant) and isinstance(node.value, str)}
+    dead = sorted(m for m in mods if m.rpartition(".")[2].startswith("_") and not m.rpartition(".")[2].startswith("__")
+                  and m not in imported and not any(m in s for s in named))
+    assert not dead, f"private modules nothing imports: {dead}"

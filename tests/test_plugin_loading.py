@@ -1,4 +1,4 @@
-"""One loader for every plugin group (methods._plugins.load_entry_points): a broken plugin of the
+"""One loader for every plugin group (methods.plugins.load_entry_points): a broken plugin of the
 ``fitbench.methods`` or ``fitbench.datasets`` group is skipped with one warning of one line (which entry
 point, which distribution, why, what to do), the built-ins keep working, and each group loads once."""
 import pytest

@@ -23,6 +23,7 @@ import importlib
 import json
 import math
 import pkgutil
+import weakref
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
 from pathlib import Path
@@ -192,6 +193,7 @@ class FitResult:
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
+        _CONTRACTS.clear()  # a new class may be a family's contract
         _check_declarations(cls)
 
     def geometry(self) -> dict:
@@ -277,14 +279,31 @@ def _classes_so_far() -> list[type]:
     return sorted(out, key=rank.__getitem__)
 
 
+#: family -> (weak reference to its contract class or None, that class's FAMILY): what :func:`contract` found,
+#: emptied whenever a result class is defined; an entry whose class was collected or whose FAMILY changed is
+#: looked up again (the gate asks for every row: walking and sorting the classes cost most of its time)
+_CONTRACTS: dict = {}
+
+
 def contract(family: str) -> type | None:
     """The result class a method of ``family`` must return (the most general class declaring that
     ``FAMILY``; a built-in family's before a plugin's), or None for a family that declares none (any
     :class:`FitResult` then)."""
+    hit = _CONTRACTS.get(family)
+    if hit is not None and _families_loaded:
+        ref, declared = hit
+        if ref is None:
+            return None
+        cls = ref()
+        if cls is not None and cls.__dict__.get("FAMILY") == declared:
+            return cls
+    found = None
     for cls in result_classes():
         if cls.__dict__.get("FAMILY") == family:
-            return cls
-    return None
+            found = cls
+            break
+    _CONTRACTS[family] = (None, None) if found is None else (weakref.ref(found), family)
+    return found
 
 
 def row_columns() -> dict[str, Column]:
@@ -377,6 +396,42 @@ def _shape_problem(name: str, value, shape: tuple, n: int | None) -> str | None:
     return None
 
 
+#: the scalar types :func:`jsonable` turns into a JSON value json.dumps writes (a non-finite float into None)
+_PLAIN_SCALARS = frozenset({str, int, float, bool, type(None), np.float64, np.float32, np.int64, np.int32,
+                            np.bool_})
+
+
+def _plain_extra(extra: dict) -> bool:
+    """True when ``extra`` holds only str keys and plain scalars or flat lists/tuples of them (what methods
+    put there): JSON-serialisable without serialising it; anything else is left to json.dumps."""
+    for k, v in extra.items():
+        if type(k) is not str:
+            return False
+        t = type(v)
+        if t in _PLAIN_SCALARS:
+            continue
+        if (t is list or t is tuple) and set(map(type, v)) <= _PLAIN_SCALARS:
+            continue
+        return False
+    return True
+
+
+_DECLARED: dict = {}
+
+
+def _declared(own, family) -> dict:
+    """The column declarations that apply to a result: its class's ``COLUMNS``, overridden by its family's
+    (cached while both are the same tuple objects: the gate asks for every row)."""
+    hit = _DECLARED.get((id(own), id(family)))
+    if hit is not None and hit[0] is own and hit[1] is family and type(own) is tuple and type(family) is tuple:
+        return hit[2]
+    out = {**{c.name: c for c in own}, **{c.name: c for c in family}}
+    if len(_DECLARED) > 256:
+        _DECLARED.clear()
+    _DECLARED[(id(own), id(family))] = (own, family, out)
+    return out
+
+
 def check_result(result, data=None) -> str | None:
     """The gate every result passes before it becomes a row (None: it passes; else the reason, one line).
 
@@ -405,10 +460,11 @@ def check_result(result, data=None) -> str | None:
         return f"message must be a string, got {_describe(result.message)}"
     if not isinstance(result.extra, dict) or not isinstance(result.params, dict):
         return "extra and params must be dicts"
-    try:
-        json.dumps(jsonable(result.extra), allow_nan=False)
-    except (TypeError, ValueError) as exc:
-        return f"extra is not JSON-serialisable ({type(exc).__name__}: {str(exc)[:80]})"
+    if not _plain_extra(result.extra):  # else serialised: what json cannot write is refused
+        try:
+            json.dumps(jsonable(result.extra), allow_nan=False)
+        except (TypeError, ValueError) as exc:
+            return f"extra is not JSON-serialisable ({type(exc).__name__}: {str(exc)[:80]})"
     n = None
     if isinstance(data, np.ndarray) and data.ndim == 2:
         n = data.shape[0]
@@ -421,7 +477,7 @@ def check_result(result, data=None) -> str | None:
     except Exception as exc:  # a geometry the class cannot even read out
         return f"the geometry cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
     rules = cls or type(result)  # the family's declarations win over a subclass's own
-    declared = {**{c.name: c for c in type(result).COLUMNS}, **{c.name: c for c in rules.COLUMNS}}
+    declared = _declared(type(result).COLUMNS, rules.COLUMNS)
     problems = [_value_problem(name, v, declared[name].check if name in declared else "finite", converged)
                 for name, v in values.items()]
     if any(problems):

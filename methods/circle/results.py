@@ -51,17 +51,36 @@ class CircleFit(FitResult):
     @staticmethod
     def consistency(result: "CircleFit", points: np.ndarray) -> str | None:
         """A converged circle's form error and residuals are those of its points about its centre and radius."""
+        radius = float(result.radius)
         with np.errstate(all="ignore"):
-            r = np.hypot(points[:, 0] - result.center[0], points[:, 1] - result.center[1])
-            span = float(r.max() - r.min())
-            scale = float(r.max()) + abs(float(result.radius))
-            tol = 1e-9 * scale + 1e-6 * span
+            swept = _compiled_sweep(points, result.center, radius)  # r_i - R, min and max r_i in one pass
+            if swept is None:
+                r = np.hypot(points[:, 0] - result.center[0], points[:, 1] - result.center[1])
+                deviations, r_min, r_max = r - radius, float(r.min()), float(r.max())
+            else:
+                deviations, r_min, r_max = swept
+            span = r_max - r_min
+            tol = 1e-9 * (r_max + abs(radius)) + 1e-6 * span
             if not abs(float(result.form_error) - span) <= tol:
                 return (f"form_error = {float(result.form_error):.10g} but the points' radial span about the "
                         f"returned centre is {span:.10g}")
-            if result.residuals.shape == r.shape and not np.all(np.abs(result.residuals - (r - result.radius)) <= tol):
+            if result.residuals.shape == deviations.shape and not (np.abs(result.residuals - deviations) <= tol).all():
                 return "residuals are not the radial distances minus the radius about the returned centre"
         return None
+
+
+def _compiled_sweep(points, center, radius: float):
+    """(r_i - R, min r_i, max r_i) by the compiled sweep (``methods/circle/_ckernels.c`` ``radial``), or None
+    where :func:`_compiled_residuals` would be (no kernel, other input, a distance outside (1e-145, 1e150))."""
+    ck = point_kernels()
+    if ck is None or not is_point_array(points) or not points.shape[0]:
+        return None
+    cx, cy = float(center[0]), float(center[1])
+    if not (math.isfinite(cx) and math.isfinite(cy) and math.isfinite(radius)):
+        return None
+    out = np.empty(points.shape[0])
+    r_min, r_max, _, outside = ck.radial(points, cx, cy, radius, out)
+    return None if outside else (out, float(r_min), float(r_max))
 
 
 def _compiled_residuals(points, center, radius: float):

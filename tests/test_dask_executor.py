@@ -74,7 +74,7 @@ def statuses(results: Path) -> pd.DataFrame:
     return df
 
 
-@pytest.mark.slow
+@pytest.mark.system  # a Dask cluster whose workers are killed and restarted: 10-40 s
 def test_rows_blocked_in_c_end_as_timeout_on_dask(tmp_path, hostile_site):
     """--row-timeout on a Dask LocalCluster: a row sleeping in C with the alarm ignored (it ran for ever in the
     worker's thread: an exception raised in a thread cannot interrupt a C call) is ``timeout``, a Python loop
@@ -93,7 +93,7 @@ def test_rows_blocked_in_c_end_as_timeout_on_dask(tmp_path, hostile_site):
     assert not left, f"processes of the run still alive after it ended: {left}"
 
 
-@pytest.mark.slow
+@pytest.mark.system  # a Dask cluster whose workers are killed and restarted: 10-40 s
 def test_workers_dying_again_and_again_never_hang_the_run(tmp_path, hostile_site):
     """No time limit: each os._exit kills a Dask worker. With LocalCluster's lost-worker timeout short (it closed
     a nanny whose restarted worker had not registered yet: after a few deaths no worker was left and the run

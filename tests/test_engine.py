@@ -436,7 +436,7 @@ def hostile_methods(*whats):
     return KASA_GN + "".join(f'[[methods]]\nid = "circle.hostile"\nparams = {{ what = "{w}" }}\n' for w in whats)
 
 
-@pytest.mark.slow
+@pytest.mark.system  # ~30-60 s each: every hostile row waits for its time limit, twice (run and rerun)
 @pytest.mark.parametrize("jobs", ["1", "2"])
 def test_hangs_exits_and_interrupts_are_labelled_and_the_study_goes_on(tmp_path, hostile_site, jobs):
     """A method that hangs is ``timeout``; one that os._exit()s, raises SystemExit or KeyboardInterrupt is

@@ -594,8 +594,10 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
     """A pivot (or a grouped aggregate) of the rows, as declared."""
     rows = [t["rows"]] if isinstance(t["rows"], str) else list(t["rows"])
     how = t.get("aggregate", "mean")
-    data = _where(df, t.get("where"))
     value = t["values"]
+    # only the columns read below (selecting the rows of the whole frame would copy every column)
+    used = [*rows, *([t["columns"]] if t.get("columns") else []), value, "status", *(t.get("where") or {})]
+    data = _where(df[[c for c in dict.fromkeys(used) if c in df.columns]], t.get("where"))
     if how == "ok_share":
         data = data.assign(_ok=(data["status"] == "ok").astype(float))
         value, how = "_ok", "mean"
@@ -636,7 +638,12 @@ def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Fig
             what = readable(args[axis]) if axis == "x" else _aggregate_words(args.get("aggregate", "mean"), args[axis])
             args[label] = f"{what} [{unit}]" if unit else what
     fig, ax = plt.subplots(figsize=(f.get("width", 6.4), f.get("height", 4.2)))
-    PLOTS[f["plot"]](_where(df[df["status"] == "ok"], f.get("where")), ax, **args)
+    plot = PLOTS[f["plot"]]
+    if plot in (lines, bars):  # these read only the columns their arguments name: select the rows of those alone
+        named = [c for a in PLOT_COLUMNS[f["plot"]][0] for c in
+                 ([args[a]] if isinstance(args.get(a), str) else list(args.get(a) or ()))]
+        df = df[[c for c in dict.fromkeys([*named, "status", *(f.get("where") or {})]) if c in df.columns]]
+    plot(_where(df[df["status"] == "ok"], f.get("where")), ax, **args)
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     name = f"figure_{number}_{f['plot']}.png"
@@ -721,9 +728,10 @@ def default_declarations(cfg: dict, df: pd.DataFrame) -> tuple[dict | None, dict
     """The table and figure of a study that declares none, chosen from its metrics: the first error against the
     truth its rows have (RMSE), else the form error (median); per method, against the first data parameter that
     varies (else per data set). Units come from the metric declarations (``methods.results``)."""
-    ok = df[df["status"] == "ok"] if "status" in df else df
+    ok = (df["status"] == "ok").to_numpy() if "status" in df else slice(None)  # a mask: no copy of the rows
     errors = results.truth_error_columns()
-    metric = next((c for c in (*errors, "form_error") if c in ok and pd.to_numeric(ok[c], errors="coerce").notna().any()),
+    metric = next((c for c in (*errors, "form_error")
+                   if c in df and pd.to_numeric(df[c].iloc[ok], errors="coerce").notna().any()),
                   None)
     if metric is None:
         return None, None

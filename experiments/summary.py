@@ -18,8 +18,13 @@ def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
     against the truth (the columns the result classes declare as ``truth_error``), median iterations and time."""
     by = [c for c in by if c in df.columns]
     declared = result_base.row_columns()
+    # the groups hold only the columns read below (the keys group them from outside): splitting the whole frame
+    # would copy every column of every row once more
+    wanted = ["status", "form_error", "iterations", "time_median_s", *result_base.truth_error_columns(),
+              *(p for c in result_base.truth_error_columns() for p in declared[c].components)]
+    values = df[[c for c in dict.fromkeys(wanted) if c in df.columns]]
     groups = []
-    for key, g in df.groupby(by, sort=False, dropna=False):
+    for key, g in values.groupby([df[c] for c in by], sort=False, dropna=False):
         ok = g[g["status"] == "ok"] if "status" in g else g
         row = dict(zip(by, key if isinstance(key, tuple) else (key,)))
         row["runs"] = len(g)

@@ -23,10 +23,18 @@ def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
     wanted = ["status", "form_error", "iterations", "time_median_s", *result_base.truth_error_columns(),
               *(p for c in result_base.truth_error_columns() for p in declared[c].components)]
     values = df[[c for c in dict.fromkeys(wanted) if c in df.columns]]
+    # a key column with one value everywhere (most data parameters of a study) does not split the rows: its
+    # value (as the grouping gives it) joins every key instead of costing one code per row in the grouping
+    const = {c: next(iter(df[c].iloc[:1].groupby(df[c].iloc[:1], sort=False, dropna=False).groups))
+             for c in by if len(df) and df[c].nunique(dropna=False) == 1}
+    split = [c for c in by if c not in const]
+    parts = (values.groupby([df[c] for c in split], sort=False, dropna=False) if split or not by
+             else [((), values)] if len(values) else [])
     groups = []
-    for key, g in values.groupby([df[c] for c in by], sort=False, dropna=False):
+    for key, g in parts:
         ok = g[g["status"] == "ok"] if "status" in g else g
-        row = dict(zip(by, key if isinstance(key, tuple) else (key,)))
+        key = iter(key if isinstance(key, tuple) else (key,))
+        row = {c: const[c] if c in const else next(key) for c in by}
         row["runs"] = len(g)
         row["ok_share"] = len(ok) / len(g) if len(g) else np.nan
         if "form_error" in g:

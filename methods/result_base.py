@@ -369,9 +369,10 @@ def _describe(v) -> str:
 
 
 def _value_problem(name: str, v, check: str, converged: bool) -> str | None:
-    if not _is_real(v):
-        return f"{name} must be a number, got {_describe(v)}"
-    v = float(v)
+    if type(v) is not float:  # a Python float (what the built-in results hold) is a number as it is
+        if not _is_real(v):
+            return f"{name} must be a number, got {_describe(v)}"
+        v = float(v)
     if not converged or not check:
         return None
     if not math.isfinite(v):
@@ -384,15 +385,21 @@ def _value_problem(name: str, v, check: str, converged: bool) -> str | None:
 
 
 def _shape_problem(name: str, value, shape: tuple, n: int | None) -> str | None:
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        return f"{name} must be numbers of shape {shape}, got {_describe(value)}"
-    want = tuple(n if s == "n" else s for s in shape)
-    if any(s is None for s in want):
-        want = tuple(a if w is None else w for a, w in zip(arr.shape, want)) if arr.ndim == len(want) else want
-    if arr.shape != want:
-        return f"{name} must have shape {want}, got {arr.shape}"
+    t = type(value)
+    if t is np.ndarray and value.dtype.kind in "fiu":
+        got = value.shape  # what np.asarray(value, dtype=float) would have, without converting
+    elif t is tuple and all(type(v) is float for v in value):
+        got = (len(value),)
+    else:
+        try:
+            got = np.asarray(value, dtype=float).shape
+        except (TypeError, ValueError):
+            return f"{name} must be numbers of shape {shape}, got {_describe(value)}"
+    want = shape if type(shape) is tuple and "n" not in shape else tuple(n if s == "n" else s for s in shape)
+    if None in want:
+        want = tuple(a if w is None else w for a, w in zip(got, want)) if len(got) == len(want) else want
+    if got != want:
+        return f"{name} must have shape {want}, got {got}"
     return None
 
 
@@ -454,7 +461,8 @@ def check_result(result, data=None) -> str | None:
     converged = bool(result.converged)
     for name in ("iterations", "nfev"):
         v = getattr(result, name)
-        if v is not None and not (isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_)) and v >= 0):
+        if v is not None and not (type(v) is int and v >= 0) and not (
+                isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_)) and v >= 0):
             return f"{name} must be None or a count >= 0, got {_describe(v)}"
     if not isinstance(result.message, str):
         return f"message must be a string, got {_describe(result.message)}"
@@ -468,7 +476,9 @@ def check_result(result, data=None) -> str | None:
     n = None
     if isinstance(data, np.ndarray) and data.ndim == 2:
         n = data.shape[0]
-    for name, shape in {**type(result).SHAPES, **(cls or type(result)).SHAPES}.items():
+    rules = cls or type(result)  # the family's declarations win over a subclass's own
+    own_shapes, shapes = type(result).SHAPES, rules.SHAPES
+    for name, shape in (shapes if own_shapes is shapes else {**own_shapes, **shapes}).items():
         problem = _shape_problem(name, getattr(result, name), shape, n)
         if problem:
             return problem
@@ -476,7 +486,6 @@ def check_result(result, data=None) -> str | None:
         values = {"form_error": result.form_error, **result.geometry()}
     except Exception as exc:  # a geometry the class cannot even read out
         return f"the geometry cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
-    rules = cls or type(result)  # the family's declarations win over a subclass's own
     declared = _declared(type(result).COLUMNS, rules.COLUMNS)
     problems = [_value_problem(name, v, declared[name].check if name in declared else "finite", converged)
                 for name, v in values.items()]

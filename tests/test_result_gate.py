@@ -33,11 +33,36 @@ LIES = {
     "object in extra": (dict(extra={"f": open}), "extra is not JSON-serialisable"),
     "flattering form error": (dict(form_error=1e-9), "radial span"),
     "non-finite residuals": (dict(residuals=np.full(40, np.nan)), "residuals are not finite"),
+    "residuals off by a micrometre": (dict(residuals=honest().residuals + 1e-3), "residuals are not the radial"),
+    "one residual off": (dict(residuals=honest().residuals + np.eye(40)[7] * 1e-3), "residuals are not the radial"),
+    "array centre of three": (dict(center=np.array([1.0, 2.0, 3.0])), "center must have shape (2,), got (3,)"),
+    "text in the centre": (dict(center=(1200.0, "650")), "center_y must be a number, got str"),
+    "numpy text centre": (dict(center=np.array(["1200", "650"])), "center_x must be a number, got str_"),
+    "float count": (dict(nfev=3.0), "nfev must be None or a count"),
+    "boolean count": (dict(iterations=True), "iterations must be None or a count"),
+}
+
+#: the same honest result in the other types a method may return (the gate's quick paths take Python floats,
+#: tuples of them and float64 arrays; every other type is converted and checked as before)
+HONEST_IN_OTHER_TYPES = {
+    "centre as a list": dict(center=[1200.0, 650.0]),
+    "centre as an array": dict(center=np.array([1200.0, 650.0])),
+    "centre of numpy floats": dict(center=(np.float64(1200.0), np.float64(650.0))),
+    "numpy radius": dict(radius=np.float64(299.0)),
+    "numpy counts": dict(iterations=np.int64(3), nfev=np.int32(4)),
+    "residuals one ulp away": dict(residuals=np.nextafter(honest().residuals, np.inf)),
+    "residuals in float32": dict(residuals=honest().residuals.astype(np.float32)),
+    "residuals not contiguous": dict(residuals=np.repeat(honest().residuals, 2)[::2]),
 }
 
 
 def test_an_honest_result_passes():
     assert results.check_result(honest(), CIRCLE) is None
+
+
+@pytest.mark.parametrize("variant", list(HONEST_IN_OTHER_TYPES))
+def test_an_honest_result_in_other_types_passes(variant):
+    assert results.check_result(honest(**HONEST_IN_OTHER_TYPES[variant]), CIRCLE) is None
 
 
 @pytest.mark.parametrize("lie", list(LIES))

@@ -52,19 +52,25 @@ class CircleFit(FitResult):
     def consistency(result: "CircleFit", points: np.ndarray) -> str | None:
         """A converged circle's form error and residuals are those of its points about its centre and radius."""
         radius = float(result.radius)
-        with np.errstate(all="ignore"):
-            swept = _compiled_sweep(points, result.center, radius)  # r_i - R, min and max r_i in one pass
-            if swept is None:
+        swept = _compiled_sweep(points, result.center, radius)  # r_i - R, min and max r_i in one pass
+        if swept is None:
+            with np.errstate(all="ignore"):
                 r = np.hypot(points[:, 0] - result.center[0], points[:, 1] - result.center[1])
                 deviations, r_min, r_max = r - radius, float(r.min()), float(r.max())
-            else:
-                deviations, r_min, r_max = swept
-            span = r_max - r_min
-            tol = 1e-9 * (r_max + abs(radius)) + 1e-6 * span
-            if not abs(float(result.form_error) - span) <= tol:
-                return (f"form_error = {float(result.form_error):.10g} but the points' radial span about the "
-                        f"returned centre is {span:.10g}")
-            if result.residuals.shape == deviations.shape and not (np.abs(result.residuals - deviations) <= tol).all():
+        else:  # finite r_i - R (the sweep returns None otherwise), computed without a NumPy operation
+            deviations, r_min, r_max = swept
+        span = r_max - r_min
+        tol = 1e-9 * (r_max + abs(radius)) + 1e-6 * span
+        if not abs(float(result.form_error) - span) <= tol:
+            return (f"form_error = {float(result.form_error):.10g} but the points' radial span about the "
+                    f"returned centre is {span:.10g}")
+        residuals = result.residuals
+        if residuals.shape != deviations.shape:
+            return None
+        if swept is not None and residuals.dtype == deviations.dtype and residuals.tobytes() == deviations.tobytes():
+            return None  # the very numbers (as a builder computes them: the same sweep), finite: within any tol >= 0
+        with np.errstate(all="ignore"):
+            if not (np.abs(residuals - deviations) <= tol).all():
                 return "residuals are not the radial distances minus the radius about the returned centre"
         return None
 

@@ -34,7 +34,8 @@ import datasets
 import methods
 from datasets import sources
 from experiments.executors import execute
-from experiments.rows import RERUN_STATUSES, source_of, run_chunk
+from experiments.rowframe import MissingRows, RowFrame
+from experiments.rows import RERUN_STATUSES, row_from_json, run_chunk, source_of
 # the row API of studies with their own ``execute`` and of the command (engine.base_row, engine.fit_row, ...)
 from experiments.rows import ENVIRONMENT_STATUSES, base_row, fit_row, load_data, note_signal, task_data  # noqa: F401
 from experiments.store import RowStore
@@ -354,7 +355,7 @@ class _Interner:
         self.limit = limit
 
     def __call__(self, text: str) -> dict:
-        row = json.loads(text)
+        row = row_from_json(text)
         table = self.table
         for k, v in row.items():
             if type(v) is str and len(v) < 256 and k != "data_stream":  # data_stream: one per row
@@ -437,21 +438,40 @@ def up_to_date(cfg: dict, tasks, target: Path) -> int | None:
 
 # ---------------------------------------------------------------- the run
 
+class Landing:
+    """Where the executors put each finished chunk: the row store (the cache, one transaction a chunk) and the run's
+    frame (:class:`experiments.rowframe.RowFrame`), from the columns the worker made (or, for a chunk that came
+    without them, its JSON rows)."""
+
+    def __init__(self, store: RowStore, frame: RowFrame):
+        self.store, self.frame = store, frame
+
+    def put_batch(self, keys: list[str], batch: dict) -> None:
+        self.store.put_batch(keys, batch)
+        part = batch.get("part")
+        if part is not None:
+            self.frame.add(part)
+        else:
+            self.frame.add_rows([row_from_json(text) for text in batch["row"]])
+
+
 def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, scheduler: str | None,
         desc: str, log=print, row_timeout: float | None = None, chunk_rows: int | None = None,
         outputs: str | None = None):
     """Run what is not stored yet (and rows whose status is in :data:`RERUN_STATUSES`); return the rows
     as one DataFrame in task order, and the counts.
 
-    ``tasks`` is a list of prepared tasks or a function returning a fresh iterable of them (it is called
-    once to run, once to collect the rows): the tasks of a large study are never all in memory, rows go
-    to the store as their chunk finishes, and the frame is built a block at a time. With ``outputs``
-    (:func:`outputs_code`) the counts hold the study's :func:`fingerprint`, and the store records that it holds
-    every row of it when none is to be run again."""
+    ``tasks`` is a list of prepared tasks or a function returning a fresh iterable of them (it is called once to
+    count, once to run and, when some rows were stored before, once to read those): the tasks of a large study
+    are never all in memory. Rows go to the store as their chunk finishes; the frame is made from the columns the
+    workers return, and from the store for the rows it already held. With ``outputs`` (:func:`outputs_code`) the
+    counts hold the study's :func:`fingerprint`, and the store records that it holds every row of it when none is
+    to be run again."""
     make = tasks if callable(tasks) else (lambda: tasks)
     counts = {"tasks": 0, "stored": 0, "to_run": 0, "retried_errors": 0}
     used = set()
     keys = hashlib.sha256((outputs or "").encode())
+    to_run = bytearray()  # one flag per task, in task order
     for block in _blocks(make(), 2000):
         status = {} if force else store.done([t["key"] for t in block])
         counts["tasks"] += len(block)
@@ -460,97 +480,39 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
             keys.update(b"\n")
             used.add((t["method"], _source_name(t["dataset"])))
             s = status.get(t["key"])
-            if s is None or s in RERUN_STATUSES:
-                counts["to_run"] += 1
-                counts["retried_errors"] += s is not None
+            again = s is None or s in RERUN_STATUSES
+            to_run.append(again)
+            counts["to_run"] += again
+            counts["retried_errors"] += again and s is not None
     counts["stored"] = counts["tasks"] - counts["to_run"]
     log(f"   {counts['tasks']} rows: {counts['stored']} already stored, {counts['to_run']} to run"
         + (f" ({counts['retried_errors']} failed before, retried)"
            if counts["retried_errors"] else ""))
-
-    def todo():
-        for block in _blocks(make(), 2000):
-            status = {} if force else store.done([t["key"] for t in block])
-            for t in block:
-                s = status.get(t["key"])
-                if force or s is None or s in RERUN_STATUSES:
-                    yield t
+    frame = RowFrame()
     t0 = time.perf_counter()
     run_rows = execute
     if executor == "dask":  # the Dask executor sits above the local ones (it reuses their chunks and worker loop)
         from experiments.dask_executor import execute as run_rows
-    run_rows(todo(), store, work=run_chunk, jobs=jobs, executor=executor, scheduler=scheduler, desc=desc,
-             total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log)
+    todo = (t for n, t in enumerate(make()) if to_run[n])
+    run_rows(todo, Landing(store, frame), work=run_chunk, jobs=jobs, executor=executor, scheduler=scheduler,
+             desc=desc, total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log)
     counts["wall_s"] = time.perf_counter() - t0
-    columns = _Columns()
-    decode = _Interner()
-    for block in _blocks(make(), 5000):
-        stored = store.get_by_key([t["key"] for t in block], decode=decode)
-        rows = [stored[t["key"]] for t in block if t["key"] in stored]
-        if len(rows) != len(block):
-            raise RuntimeError(f"{len(block) - len(rows)} rows of {desc} are missing from the row store after the run; "
-                               f"run the same command again (the stored rows are kept)")
-        for r in rows:  # the order of the rows is the order of the tasks, whatever order they were stored in
-            r.pop("task_index", None)
-        columns.add(rows)
-        del rows, stored
-    df = columns.frame()
+    if counts["stored"]:
+        decode = _Interner()
+        stored = (t for n, t in enumerate(make()) if not to_run[n])
+        for block in _blocks(stored, 5000):
+            found = store.get_by_key([t["key"] for t in block], decode=decode)
+            if len(found) != len(block):
+                raise MissingRows(len(block) - len(found))
+            rows = [found[t["key"]] for t in block]
+            for r, t in zip(rows, block):  # a stored row's place is its task's place in this run
+                r["task_index"] = t["index"]
+            frame.add_rows(rows)
+            del rows, found
+    df = frame.frame(counts["tasks"])
     counts["used"] = used
     if outputs is not None:
         counts["fingerprint"] = keys.hexdigest()[:32]
         if len(df) and not df["status"].isin(RERUN_STATUSES).any():
             store.mark_complete(counts["fingerprint"], len(df))
     return df, counts
-
-
-class _Columns:
-    """The rows of a study gathered a block at a time as one array per column and block, then joined a
-    column at a time (each column's blocks freed as it is joined: the rows are never held twice). The
-    column types are those one ``DataFrame(rows)`` of all rows would have: a block where every row failed
-    holds None where others hold numbers (numbers, with NaN), a row without a column gets NaN."""
-
-    def __init__(self):
-        self.parts: dict = {}
-        self.n = 0
-
-    def add(self, rows: list[dict]) -> None:
-        import pandas as pd
-        if not rows:
-            return
-        names: dict = {}
-        for r in rows:
-            for k in r:
-                names.setdefault(k, None)
-        for name in self.parts:
-            names.setdefault(name, None)
-        nan = float("nan")
-        for name in names:
-            part = pd.Series([r.get(name, nan) for r in rows])
-            parts = self.parts.get(name)
-            if parts is None:  # a column new in this block: NaN in the rows before (built only then: it has self.n rows)
-                parts = self.parts[name] = [pd.Series([nan] * self.n)] if self.n else []
-            parts.append(part)
-        self.n += len(rows)
-
-    def frame(self):
-        import pandas as pd
-        if not self.parts:
-            return pd.DataFrame()
-        out = {}
-        for name in list(self.parts):
-            parts = self.parts.pop(name)
-            col = parts[0] if len(parts) == 1 else pd.concat(parts, ignore_index=True)
-            del parts
-            if col.dtype == object:
-                col = _numbers_if_numbers(col)
-            out[name] = col
-        return pd.DataFrame(out, copy=False)
-
-
-def _numbers_if_numbers(col):
-    """An object column of numbers and None/NaN, as DataFrame(rows) makes it: float64 (ints too)."""
-    import pandas as pd
-    non_null = col.dropna()
-    if len(non_null) and len(non_null) < len(col) and non_null.map(type).isin([float, int]).all():
-        return pd.to_numeric(col)
-    return col

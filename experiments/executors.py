@@ -115,7 +115,9 @@ def execute(tasks, store: RowStore, *, work, jobs: int, executor: str, scheduler
 
 
 def _store(store: RowStore, batch: dict, tasks: list, bar) -> None:
-    store.put_encoded([t["key"] for t in tasks], batch["status"], batch["row"])
+    """A finished chunk (:func:`experiments.rows.encode_rows`) to the store: the row store, or the run's landing
+    (``experiments.engine.Landing``: the row store and the run's frame)."""
+    store.put_batch([t["key"] for t in tasks], batch)
     bar.update(len(tasks))
 
 

@@ -14,10 +14,12 @@ import threading
 import time
 
 import numpy as np
+import orjson
 
 import methods
 from datasets import sources
 from experiments.metrics import metrics
+from experiments.rowframe import part_of
 from experiments.studies import study_of
 from experiments.timing import time_call
 from methods import InvalidInputError
@@ -217,7 +219,8 @@ def run_task(task: dict, row_timeout: float | None = None) -> dict:
 
 
 def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None) -> dict:
-    """Run a chunk of tasks in a worker; the rows come back as the store's columns (:func:`encode_rows`). ``progress``
+    """Run a chunk of tasks in a worker; the rows come back encoded for the store and as the columns of the run's frame
+    (:func:`encode_rows`). ``progress``
     (a shared array of two doubles) receives the start time and position of the running row, so that
     the parent can end a row stuck in compiled code."""
     rows = []
@@ -230,9 +233,27 @@ def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None
 
 
 def encode_rows(rows: list[dict]) -> dict:
-    """A chunk's rows in the columns of the row store (``status``, ``row`` as JSON text), encoded by the
-    worker: the process that stores them only inserts (it serves every worker)."""
-    return {"status": [r.get("status") for r in rows], "row": [json.dumps(r) for r in rows]}
+    """A chunk's rows in the columns of the row store (``status``, ``row`` as JSON text) and as a part of the run's
+    frame (``part``: :func:`experiments.rowframe.part_of`), made by the worker: the process that stores them only
+    inserts and keeps the columns (it serves every worker)."""
+    return {"status": [r.get("status") for r in rows], "row": [row_json(r) for r in rows], "part": part_of(rows)}
+
+
+def row_json(row: dict) -> str:
+    """A row as JSON text (orjson; what orjson does not write, such as an integer beyond 64 bits or a key that is
+    not a string, is written by :mod:`json`: the same JSON value)."""
+    try:
+        return orjson.dumps(row).decode()
+    except orjson.JSONEncodeError:
+        return json.dumps(row)
+
+
+def row_from_json(text: str) -> dict:
+    """A stored row (JSON text; a NaN literal an older run wrote is read by :mod:`json`)."""
+    try:
+        return orjson.loads(text)
+    except orjson.JSONDecodeError:
+        return json.loads(text)
 
 
 def _plain(row: dict) -> dict:

@@ -153,6 +153,10 @@ class RowStore:
                 self.db.executemany("INSERT OR REPLACE INTO rows VALUES (?, ?, ?)", data)
         self._guard(write)
 
+    def put_batch(self, keys: list[str], batch: dict) -> None:
+        """Store a chunk's rows as a worker encoded them (:func:`experiments.rows.encode_rows`)."""
+        self.put_encoded(keys, batch["status"], batch["row"])
+
     def get(self, keys: list[str]) -> list[dict]:
         rows = self.get_by_key(keys)
         return [rows[k] for k in keys if k in rows]

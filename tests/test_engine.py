@@ -20,6 +20,7 @@ import pytest
 
 from conftest import install_plugin, subprocess_env
 from experiments import codehash, engine, executors, rows as row_code, run
+from experiments.rowframe import MissingRows, RowFrame, part_of
 from experiments.store import RowStore, StoreIOError
 
 STUDY = '''name = "{name}"
@@ -93,9 +94,7 @@ def test_rows_come_back_encoded_for_the_store(tmp_path):
     store.close()
 
 
-def test_frame_built_in_blocks_has_the_types_of_one_frame():
-    """A block whose rows all failed holds None where other blocks hold floats, ints or bools: the frame of
-    the blocks must equal the frame of all rows (else results.csv writes repr() floats, not %.17g)."""
+def _rows_of_every_kind():
     rng = np.random.default_rng(1)
     rows = []
     for i in range(60):
@@ -103,29 +102,65 @@ def test_frame_built_in_blocks_has_the_types_of_one_frame():
         rows.append({"status": "error" if failed else "ok", "radius": None if failed else float(rng.normal()),
                      "iterations": None if failed else int(i), "converged": None if failed else bool(i % 2),
                      **({} if i < 50 else {"extra": 0.1 * i}), **({"first": i} if i < 10 else {}),
-                     "label": str(i % 3), "flag": None if i % 7 == 0 else True})
-    whole = pd.DataFrame(rows)
-    columns = engine._Columns()
-    for i in range(0, 60, 20):
-        columns.add(rows[i:i + 20])
-    blocks = columns.frame()
-    pd.testing.assert_frame_equal(whole, blocks)
-    assert whole.to_csv(index=False, float_format="%.17g") == blocks.to_csv(index=False, float_format="%.17g")
+                     "label": str(i % 3), "flag": None if i % 7 == 0 else True, "task_index": i})
+    return rows
 
 
-def test_gathering_a_block_of_rows_costs_the_block_not_the_rows_before(monkeypatch):
-    """Each block adds its own values; the NaN filler of the rows before is built only for a column new in the block
-    (it was built for every column of every block, which made gathering 10^6 rows quadratic: 250 s instead of 40 s)."""
-    made = []
-    real = pd.Series
-    monkeypatch.setattr(pd, "Series", lambda data=None, *a, **k: made.append(len(data)) or real(data, *a, **k))
-    columns = engine._Columns()
-    for block in range(10):
-        columns.add([{"a": float(i), "b": "x", **({"late": 1.0} if block >= 5 else {})} for i in range(100)])
-    assert sum(made) == 10 * 100 * 2 + 5 * 100 + 500  # a, b in every block; late in 5 blocks; its NaNs once
-    monkeypatch.setattr(pd, "Series", real)
-    frame = columns.frame()
-    assert len(frame) == 1000 and frame["late"].isna().sum() == 500
+@pytest.mark.parametrize("block", [1, 7, 5000])
+@pytest.mark.parametrize("order", ["in order", "reversed", "shuffled"])
+def test_frame_of_parts_is_the_frame_of_all_rows(order, block, monkeypatch):
+    """Chunks of rows finish in any order (several workers, rows run again after a crash) and a block where every row
+    failed holds None where others hold floats, ints or bools: the frame of the parts must equal the frame of all rows
+    in task order (else results.csv writes repr() floats, not %.17g, or puts the columns in another order)."""
+    rows = _rows_of_every_kind()
+    whole = pd.DataFrame([{k: v for k, v in r.items() if k != "task_index"} for r in rows])
+    chunks = [rows[i:i + 13] for i in range(0, 60, 13)]
+    if order == "reversed":
+        chunks = chunks[::-1]
+    elif order == "shuffled":
+        chunks = [chunks[i] for i in np.random.default_rng(3).permutation(len(chunks))]
+    monkeypatch.setattr(RowFrame, "block", block)
+    frame = RowFrame()
+    for chunk in chunks:
+        frame.add(part_of(chunk))
+    built = frame.frame(60)
+    pd.testing.assert_frame_equal(whole, built)
+    assert whole.to_csv(index=False, float_format="%.17g") == built.to_csv(index=False, float_format="%.17g")
+
+
+def test_a_task_run_twice_keeps_its_last_row_and_a_missing_row_is_refused():
+    rows = _rows_of_every_kind()
+    frame = RowFrame()
+    frame.add(part_of(rows[:30]))
+    frame.add(part_of([{**rows[5], "status": "again"}]))
+    frame.add(part_of(rows[30:]))
+    built = frame.frame(60)
+    assert len(built) == 60 and built["status"][5] == "again"
+    short = RowFrame()
+    short.add(part_of(rows[:59]))
+    with pytest.raises(MissingRows, match="1 rows are missing"):
+        short.frame(60)
+
+
+def test_a_row_with_a_list_has_no_part_and_is_read_from_its_json():
+    rows = [{"a": [1, 2], "task_index": 0}, {"a": 1.5, "task_index": 1}]
+    assert part_of(rows) is None
+    batch = row_code.encode_rows(rows)
+    frame = RowFrame()
+    frame.add_rows([row_code.row_from_json(text) for text in batch["row"]])
+    assert frame.frame(2)["a"].tolist() == [[1, 2], 1.5]
+
+
+def test_single_row_parts_are_joined_into_blocks():
+    """A slow study sends its rows one chunk of one row at a time: the frame must not keep (and join at the end) one
+    Series per column and row; parts are joined into blocks of RowFrame.block rows as they arrive."""
+    frame = RowFrame()
+    for i in range(12_000):
+        frame.add(part_of([{"a": float(i), "b": "x", **({"late": 1.0} if i >= 6000 else {}), "task_index": i}]))
+    assert len(frame.parts) == 12_000 // RowFrame.block and frame.n_pending == 12_000 % RowFrame.block
+    built = frame.frame(12_000)
+    assert len(built) == 12_000 and built["late"].isna().sum() == 6000 and list(built.columns) == ["a", "b", "late"]
+    assert built["a"].dtype == np.float64 and built["a"].tolist() == [float(i) for i in range(12_000)]
 
 
 def test_chunk_size_follows_the_measured_cost_of_a_row():

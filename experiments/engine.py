@@ -457,7 +457,7 @@ class Landing:
 
 def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, scheduler: str | None,
         desc: str, log=print, row_timeout: float | None = None, chunk_rows: int | None = None,
-        outputs: str | None = None):
+        outputs: str | None = None, while_rows_run=None):
     """Run what is not stored yet (and rows whose status is in :data:`RERUN_STATUSES`); return the rows
     as one DataFrame in task order, and the counts.
 
@@ -466,7 +466,7 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     are never all in memory. Rows go to the store as their chunk finishes; the frame is made from the columns the
     workers return, and from the store for the rows it already held. With ``outputs`` (:func:`outputs_code`) the
     counts hold the study's :func:`fingerprint`, and the store records that it holds every row of it when none is
-    to be run again."""
+    to be run again. ``while_rows_run`` is called (without arguments) just before rows are run, if any are."""
     make = tasks if callable(tasks) else (lambda: tasks)
     counts = {"tasks": 0, "stored": 0, "to_run": 0, "retried_errors": 0}
     used = set()
@@ -494,6 +494,8 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     if executor == "dask":  # the Dask executor sits above the local ones (it reuses their chunks and worker loop)
         from experiments.dask_executor import execute as run_rows
     todo = (t for n, t in enumerate(make()) if to_run[n])
+    if while_rows_run is not None and counts["to_run"]:
+        while_rows_run()
     run_rows(todo, Landing(store, frame), work=run_chunk, jobs=jobs, executor=executor, scheduler=scheduler,
              desc=desc, total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log)
     counts["wall_s"] = time.perf_counter() - t0

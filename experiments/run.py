@@ -182,7 +182,10 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     try:
         df, counts = engine.run(make, store, force=force, jobs=jobs, executor=executor, scheduler=scheduler,
                                 desc=cfg["name"], log=log, row_timeout=row_timeout, chunk_rows=cfg.get("chunk_rows"),
-                                outputs=engine.outputs_code(cfg))
+                                outputs=engine.outputs_code(cfg),
+                                # this process waits for the workers: it loads what the figures need meanwhile
+                                while_rows_run=contract.load_plotting_in_background if jobs > 1 or executor == "dask"
+                                else None)
     finally:
         store.close()
     failure = environment_failure(cfg, df)

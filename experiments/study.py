@@ -624,6 +624,22 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
                  colour=t.get("colour", ""))  # significant digits
 
 
+def load_plotting_in_background() -> None:
+    """Import matplotlib (Agg) and pyplot in a daemon thread: a run whose rows run in worker processes waits for them
+    meanwhile, and its figures need the import after the rows (0.5-0.7 s here). An import that fails here fails
+    again, with its message, where the figures are drawn."""
+    import threading
+
+    def load():
+        try:
+            import matplotlib
+            matplotlib.use("Agg")
+            import matplotlib.pyplot  # noqa: F401
+        except Exception:  # reported where the figures import it
+            pass
+    threading.Thread(target=load, daemon=True, name="fitbench-load-plotting").start()
+
+
 def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Figure:
     if "file" in f:
         return Figure(caption=f["caption"], file=f["file"])

@@ -36,19 +36,58 @@ def ellipse_points(center=(0.0, 0.0), semi_axes=(2.0, 1.0), angle=0.0, n=100, *,
     return pts
 
 
+def _exact_key(*values):
+    """A dict key equal only for values that give the same bits (None for a value that is not a finite int
+    or float, or a list/tuple of them): ints and floats apart, -0.0 apart from 0.0."""
+    key = []
+    for v in values:
+        if type(v) in (list, tuple):
+            sub = _exact_key(*v)
+            if sub is None:
+                return None
+            key.append(sub)
+        elif type(v) is float and math.isfinite(v):
+            key.append(v.hex())
+        elif type(v) is int:
+            key.append(v)
+        else:
+            return None
+    return tuple(key)
+
+
+#: noise-free arcs of :func:`_circle` by their exact parameters (read-only arrays; a study draws thousands of
+#: repetitions of one data set: the angles, cosines and sines are computed once)
+_ARCS: dict = {}
+
+
+def _noise_free_circle(center, radius, n, arc_deg, arc_start_deg) -> np.ndarray:
+    """The points of :func:`_circle` before noise (a read-only array, shared: add to it, never write into it)."""
+    key = _exact_key(center, radius, n, arc_deg, arc_start_deg)
+    pts = _ARCS.get(key) if key is not None else None
+    if pts is None:
+        start = np.radians(arc_start_deg)
+        span = np.radians(arc_deg)
+        pts = circle_points(center, radius, n, arc=(start, start + span), endpoint=not arc_deg >= 360.0)
+        pts.flags.writeable = False
+        if key is not None:
+            if len(_ARCS) >= 64:
+                _ARCS.clear()
+            _ARCS[key] = pts
+    return pts
+
+
 def _circle(rng, *, center=(0.0, 0.0), radius=1.0, n=100, arc_deg=360.0, arc_start_deg=0.0, noise=0.0,
             noise_model="isotropic"):
     """Points on a circle (or arc of ``arc_deg`` degrees); Gaussian noise of s.d. ``noise`` per
     coordinate ('isotropic') or along the radius ('radial')."""
-    start = np.radians(arc_start_deg)
-    span = np.radians(arc_deg)
-    full = arc_deg >= 360.0
     if noise_model == "radial":
-        pts = circle_points(center, radius, n, arc=(start, start + span), noise=noise, rng=rng, endpoint=not full)
+        start = np.radians(arc_start_deg)
+        span = np.radians(arc_deg)
+        pts = circle_points(center, radius, n, arc=(start, start + span), noise=noise, rng=rng,
+                            endpoint=not arc_deg >= 360.0)
     elif noise_model == "isotropic":
-        pts = circle_points(center, radius, n, arc=(start, start + span), endpoint=not full)
-        if noise:
-            pts = pts + rng.normal(0.0, noise, pts.shape)
+        pts = _noise_free_circle(center, radius, n, arc_deg, arc_start_deg)
+        pts = pts + rng.normal(0.0, noise, pts.shape) if noise else pts.copy()
     else:
         raise ValueError(f"noise_model must be 'isotropic' or 'radial', got {noise_model!r}")
     return pts, {"family": "circle", "center": tuple(map(float, center)), "radius": float(radius)}

@@ -1,6 +1,8 @@
 """Benchmark metrics: computed from a result and the truth, never inside a method."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods import result_base
@@ -10,12 +12,21 @@ from methods.result_base import EXACT, Tolerance
 def metrics(result, truth: dict | None) -> dict:
     """Columns for one fit: form error, residual RMS, the fitted geometry and its errors against the truth
     where known, all read through the result interface (``FitResult.geometry`` / ``truth_errors``)."""
-    row = {"form_error": result.form_error,
-           "residual_rms": float(np.sqrt(np.mean(np.square(result.residuals)))) if len(result.residuals) else np.nan,
-           **result.geometry()}
+    row = {"form_error": result.form_error, "residual_rms": residual_rms(result.residuals), **result.geometry()}
     if truth:
         row.update(result.truth_errors(truth))
     return row
+
+
+def residual_rms(residuals) -> float:
+    """sqrt(mean(r_i^2)) of the residuals (NaN for none): for a float64 vector the sum and the division of
+    ``np.mean`` (one ``np.add.reduce``, then / N) without its per-call overhead, hence the same bits."""
+    n = len(residuals)
+    if not n:
+        return np.nan
+    if type(residuals) is np.ndarray and residuals.dtype == np.float64 and residuals.ndim == 1:
+        return math.sqrt(float(np.add.reduce(np.square(residuals))) / n)
+    return float(np.sqrt(np.mean(np.square(residuals))))
 
 
 # ---------------------------------------------------------------- tolerances of the verify command

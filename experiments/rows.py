@@ -257,10 +257,14 @@ def row_from_json(text: str) -> dict:
 
 
 def _plain(row: dict) -> dict:
+    """The row with JSON's values: NumPy scalars as Python ones, non-finite floats as None (a new dict)."""
     out = {}
     for k, v in row.items():
         t = type(v)
-        if t is not str and t is not int and t is not bool and v is not None:
+        if t is float:
+            if not math.isfinite(v):
+                v = None
+        elif t is not str and t is not int and t is not bool and v is not None:
             if isinstance(v, np.generic):
                 v = v.item()
             if isinstance(v, float) and not math.isfinite(v):

@@ -1,0 +1,90 @@
+"""The quick paths of one benchmark row give the very bits of the general code they stand in for: the residual
+RMS without np.mean's overhead, the JSON-ready row, the generated circles built on cached noise-free arcs."""
+import math
+
+import numpy as np
+import pytest
+
+from datasets import sources, synthetic
+from experiments import metrics, rows
+
+
+def _rms_by_mean(r):
+    return float(np.sqrt(np.mean(np.square(r)))) if len(r) else np.nan
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 7, 8, 9, 16, 17, 100, 127, 128, 129, 255, 1000, 4097, 100_003])
+def test_residual_rms_is_np_mean_s_bits(n):
+    rng = np.random.default_rng(n)
+    for scale in (1e-9, 1e-3, 1.0, 1e3, 1e150):
+        r = rng.normal(size=n) * scale
+        assert metrics.residual_rms(r) == _rms_by_mean(r)
+
+
+def test_residual_rms_of_other_inputs():
+    r = np.random.default_rng(0).normal(size=50)
+    r_nan = r.copy()
+    r_nan[3] = np.nan
+    for given in (r.astype(np.float32), r.reshape(5, 10), r[::2], list(r), r_nan):
+        got, want = metrics.residual_rms(given), _rms_by_mean(given)
+        assert got == want or (math.isnan(got) and math.isnan(want))
+    assert math.isnan(metrics.residual_rms(np.empty(0)))
+
+
+def _plain_reference(row):
+    out = {}
+    for k, v in row.items():
+        if isinstance(v, np.generic):
+            v = v.item()
+        if isinstance(v, float) and not math.isfinite(v):
+            v = None
+        out[k] = v
+    return out
+
+
+def test_plain_row():
+    row = {"a": 1.5, "b": float("nan"), "c": float("-inf"), "d": np.float64(2.5), "e": np.float64("nan"),
+           "f": np.int64(3), "g": np.bool_(True), "h": "text", "i": 7, "j": True, "k": None, "l": np.float32(0.5),
+           "m": [1.0, 2.0]}
+    got = rows._plain(row)
+    assert got == _plain_reference(row) and list(got) == list(row)
+    assert [type(v) for v in got.values()] == [type(v) for v in _plain_reference(row).values()]
+
+
+CIRCLES = [dict(), dict(center=[1200.0, 650.0], radius=299.0, n=40), dict(center=[0, 0], radius=1, n=7),
+           dict(center=[-0.0, 0.0], arc_start_deg=-0.0, arc_deg=90.0, n=30), dict(arc_deg=90, arc_start_deg=45, n=12),
+           dict(center=(1e6, -1e6), radius=1e-3, n=1000, arc_deg=359.0)]
+
+
+def _circle_uncached(rng, *, center=(0.0, 0.0), radius=1.0, n=100, arc_deg=360.0, arc_start_deg=0.0, noise=0.0):
+    start, span = np.radians(arc_start_deg), np.radians(arc_deg)
+    pts = synthetic.circle_points(center, radius, n, arc=(start, start + span), endpoint=not arc_deg >= 360.0)
+    return pts + rng.normal(0.0, noise, pts.shape) if noise else pts
+
+
+@pytest.mark.parametrize("params", CIRCLES)
+@pytest.mark.parametrize("noise", [0.0, 1e-3])
+def test_generated_circles_keep_their_bits(params, noise):
+    """The noise-free arc is built once per exact parameter set; every draw is the same as without the cache
+    (twice: the second one comes from the cache), and -0.0 or an int parameter gets its own arc."""
+    for _ in range(2):
+        got, truth = synthetic._circle(np.random.default_rng(5), noise=noise, **params)
+        want = _circle_uncached(np.random.default_rng(5), noise=noise, **params)
+        assert got.tobytes() == want.tobytes() and got.shape == want.shape and truth["family"] == "circle"
+        assert got.flags.writeable and got.flags.c_contiguous  # the caller's own array, as before
+
+
+def test_a_caller_cannot_change_the_cached_arc():
+    pts, _ = synthetic._circle(None, n=10)
+    pts[:] = 0.0
+    again, _ = synthetic._circle(None, n=10)
+    assert again.tobytes() == _circle_uncached(None, n=10).tobytes()
+    src, _ = sources.get_source("circle").load(np.random.default_rng(1), n=10, noise=0.1)
+    with pytest.raises(ValueError):
+        src[0, 0] = 1.0
+
+
+def test_exact_keys():
+    key = synthetic._exact_key
+    assert key(0.0) != key(-0.0) and key(1) != key(1.0) and key([1.0, 2.0]) == key((1.0, 2.0))
+    assert key(float("nan")) is None and key(True) is None and key(np.float64(1.0)) is None and key("1") is None

@@ -290,8 +290,10 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
     next_id = startup_failures = 0
     with _one_blas_thread_per_worker():
         try:
+            kept = _KEPT if _KEPT is not None else []
+            workers = [kept.pop() for _ in range(min(jobs, len(kept)))]
             with _workers_ignore_ctrl_c():
-                workers = [_Worker(ctx) for _ in range(jobs)]
+                workers += [_Worker(ctx) for _ in range(jobs - len(workers))]
             while True:
                 for w in workers:
                     if w.chunk is None:
@@ -362,4 +364,30 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                 w.stop(now=True)
             raise
         for w in workers:
+            if _KEPT is not None and w.proc.is_alive():
+                _KEPT.append(w)  # for the next study of the run (kept_workers)
+            else:
+                w.stop()
+
+
+#: idle worker processes kept between the studies of one run (:func:`kept_workers`), else None
+_KEPT: list | None = None
+
+
+@contextlib.contextmanager
+def kept_workers(jobs: int):
+    """Start ``jobs`` local worker processes now and keep them between the studies run inside the block: they import
+    while the run prepares its first study (0.4 s a worker here) and start once per run, not once per study. They
+    are stopped when the block ends, however it ends."""
+    global _KEPT
+    import multiprocessing as mp
+    ctx = mp.get_context("spawn")
+    _KEPT = []
+    try:
+        with _one_blas_thread_per_worker(), _workers_ignore_ctrl_c():
+            _KEPT.extend(_Worker(ctx) for _ in range(jobs))
+        yield
+    finally:
+        kept, _KEPT = _KEPT, None
+        for w in kept:
             w.stop()

@@ -377,7 +377,9 @@ def _main(argv=None) -> int:
         lock_out(args.out)
         jobs = args.jobs if args.scheduler else usable_jobs(args.jobs)
         t0 = time.perf_counter()
-        with tempfile.TemporaryDirectory(prefix="fitbench-reference-") as ref_dir:
+        from experiments.executors import kept_workers
+        workers = kept_workers(jobs) if args.executor == "local" and jobs > 1 else contextlib.nullcontext()
+        with workers, tempfile.TemporaryDirectory(prefix="fitbench-reference-") as ref_dir:
             study_names = [configs.load(n, quick=args.quick)["name"] for n in names]
             refs = compare.reference_snapshot(args.out, study_names, args.quick, Path(ref_dir))
             for name in names:

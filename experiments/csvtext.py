@@ -1,41 +1,64 @@
 """``results.csv`` text, the bytes ``DataFrame.to_csv(index=False, float_format="%.17g")`` writes, made column by
 column: pandas formats each float of a float column through a Python callable with its own overhead (1.0 s of a
-40,000-row study here); this formats a float64 column with one ``"%.17g" %`` per value and hands the rows to the same
-:mod:`csv` writer pandas uses (minimal quoting, ``"`` doubled). Columns of another type than float64, int64, bool,
-str or object go to pandas itself, so the text is always pandas' (``tests/test_engine.py`` compares the bytes).
+40,000-row study here); this formats a float64 column with one ``"%.17g" %`` per value, has the
+:mod:`csv` writer pandas uses quote the rare text that needs it and joins the fields of each row. Columns of another
+type than float64, int64, bool, str or object go to pandas itself, so the text is always pandas' (``tests/test_engine.py`` compares the bytes).
 """
 from __future__ import annotations
 
 import csv
+import io
 import os
+import re
 
 import numpy as np
 
 
 def _strings(col) -> list[str] | None:
-    """The CSV text of each value of one column (a missing value: ''), or None for a dtype left to pandas."""
+    """The CSV field of each value of one column (a missing value: ''; text quoted as :mod:`csv` quotes it), or None
+    for a dtype left to pandas."""
     kind = col.dtype
     if kind == np.float64:
-        return ["" if v != v else "%.17g" % v for v in col.to_numpy().tolist()]
+        values = col.to_numpy()
+        out = list(map("%.17g".__mod__, values.tolist()))
+        for i in np.flatnonzero(np.isnan(values)).tolist():
+            out[i] = ""
+        return out
     if kind == np.int64:
         return list(map(str, col.to_numpy().tolist()))
     if kind == np.bool_:
         return ["True" if v else "False" for v in col.to_numpy().tolist()]
     if kind == object or str(kind) == "str":
         missing = col.isna().to_numpy().tolist()
-        return ["" if m else str(v) for v, m in zip(col.to_numpy(dtype=object).tolist(), missing)]
+        return _quoted(["" if m else str(v) for v, m in zip(col.to_numpy(dtype=object).tolist(), missing)])
     return None
+
+
+_SPECIAL = re.compile(r'[,"\r\n]')
+
+
+def _quoted(fields: list[str]) -> list[str]:
+    """Fields as the :mod:`csv` writer pandas uses writes them (``QUOTE_MINIMAL``, delimiter ``,``, quote ``"``): only
+    a field holding one of those characters or a line break may need quotes, and the writer itself says how."""
+    special = _SPECIAL.search
+    return [_csv_field(f) if special(f) else f for f in fields]
+
+
+def _csv_field(field: str) -> str:
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator=os.linesep, quoting=csv.QUOTE_MINIMAL).writerow([field, ""])
+    return buf.getvalue()[:-len(os.linesep) - 1]
 
 
 def write_csv(df, fh, *, header: bool = True) -> None:
     """Write ``df`` to the text file ``fh`` as ``df.to_csv(fh, index=False, header=header, float_format="%.17g")``
     does, byte for byte."""
-    columns = [_strings(df[c]) for c in df.columns] if df.columns.is_unique and len(df.columns) else [None]
-    if any(c is None for c in columns):
+    columns = [_strings(df[c]) for c in df.columns] if df.columns.is_unique and len(df.columns) > 1 else [None]
+    if any(c is None for c in columns):  # (one column: csv quotes an empty field that is a row alone)
         df.to_csv(fh, index=False, header=header, float_format="%.17g")
         return
-    writer = csv.writer(fh, lineterminator=os.linesep, quoting=csv.QUOTE_MINIMAL)
+    end = os.linesep
     if header:
-        writer.writerow([str(c) for c in df.columns])
+        fh.write(",".join(_quoted([str(c) for c in df.columns])) + end)
     if len(df):
-        writer.writerows(zip(*columns))
+        fh.write(end.join(map(",".join, zip(*columns))) + end)

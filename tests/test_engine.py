@@ -607,10 +607,13 @@ def test_results_csv_text_is_pandas_to_csv_byte_for_byte():
         "f": np.where(rng.random(n) < 0.1, np.nan, rng.normal(size=n) * 10.0 ** rng.integers(-300, 300, n)),
         "special": np.resize([0.0, -0.0, np.inf, -np.inf, 5e-324, 1.7976931348623157e308, 0.1], n),
         "i": rng.integers(-10**12, 10**12, n), "b": rng.random(n) < 0.5,
-        "s": pd.Series(rng.choice(["a,b", 'q"uote', "new\nline", None, "", " sp ", "plain", "é ü"], n), dtype="str"),
+        "s": pd.Series(rng.choice(["a,b", 'q"uote', "new\nline", "cr\rhere", None, "", " sp ", "plain", "é ü", '"'], n),
+                       dtype="str"),
         "o": pd.Series(rng.choice(np.array([0.1, "x", None, True, 3, np.nan, 1e-320, "y,z"], dtype=object), n),
                        dtype=object)})
-    for frame in (df, df.iloc[:0], df[["s"]], df.assign(cat=pd.Categorical(rng.choice(["u", "v"], n)))):
+    odd_names = df.rename(columns={"f": "a,b", "i": 'q"n'})
+    for frame in (df, df.iloc[:0], df[["s"]], df[["s", "o"]], odd_names,
+                  df.assign(cat=pd.Categorical(rng.choice(["u", "v"], n)))):
         for header in (True, False):
             ours = io.StringIO()
             write_csv(frame, ours, header=header)

@@ -487,10 +487,21 @@ def check_result(result, data=None) -> str | None:
     except Exception as exc:  # a geometry the class cannot even read out
         return f"the geometry cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
     declared = _declared(type(result).COLUMNS, rules.COLUMNS)
-    problems = [_value_problem(name, v, declared[name].check if name in declared else "finite", converged)
-                for name, v in values.items()]
-    if any(problems):
-        return "; ".join(p for p in problems if p)
+    for name, v in values.items():  # Python floats that meet their checks pass here; any other value is told below
+        if type(v) is not float:
+            break
+        if converged:
+            col = declared.get(name)
+            check = "finite" if col is None else col.check
+            if check and not (math.isfinite(v) and (check != "positive" or v > 0) and (check != "nonnegative" or v >= 0)):
+                break
+    else:
+        values = None
+    if values is not None:
+        problems = [_value_problem(name, v, declared[name].check if name in declared else "finite", converged)
+                    for name, v in values.items()]
+        if any(problems):
+            return "; ".join(p for p in problems if p)
     residuals = result.residuals
     if not isinstance(residuals, np.ndarray) or residuals.dtype.kind not in "fiu":
         return f"residuals must be a numeric array, got {_describe(residuals)}"

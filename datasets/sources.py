@@ -57,6 +57,11 @@ class DataSource:
         return (immutable(data) if isinstance(data, np.ndarray) else data), truth
 
     @property
+    def builtin(self) -> bool:
+        """True for fitbench's own sources (the ``datasets`` package), False for a plugin's."""
+        return self.module == "datasets" or self.module.startswith("datasets.")
+
+    @property
     def parameters(self) -> list[str]:
         return [p for p in inspect.signature(self.func).parameters if p != "rng"]
 

@@ -266,9 +266,11 @@ def run_isolated(tasks: list, row_timeout: float) -> dict:
 # ---------------------------------------------------------------- in the client
 
 def execute(tasks, store, *, work, jobs: int, scheduler: str | None, desc: str, total: int | None = None,
-            row_timeout: float | None = None, chunk_rows: int | None = None, log=print, executor: str = "dask"):
+            row_timeout: float | None = None, chunk_rows: int | None = None, log=print, executor: str = "dask",
+            isolate: bool = False):
     """``experiments.executors.execute`` on Dask: the tasks in chunks (sized as there), each chunk's rows
-    stored as it returns (:func:`run_dask`)."""
+    stored as it returns (:func:`run_dask`). Rows always run in Dask's worker processes (``isolate`` changes
+    nothing here)."""
     if total == 0:
         return
     bar = Progress(total if total is not None else 0, desc, log)

@@ -222,6 +222,22 @@ def _source_name(spec) -> str | None:
     return None
 
 
+def runs_plugin_code(used) -> bool:
+    """Whether rows of these (method id, source name) pairs run a plugin's code: a plugin's method or data source
+    (such rows always run in a worker process, which a plugin that ends its process cannot take the run down with)."""
+    known = _method_ids()
+    for method, source in used:
+        if method in known and not methods.get(method).builtin:
+            return True
+        if source is not None:
+            try:
+                if not sources.get_source(source).builtin:
+                    return True
+            except KeyError:
+                pass
+    return False
+
+
 def _has_source(spec: dict) -> bool:
     """Specs built by a study's own ``tasks`` may carry no registered source (its code is the study's)."""
     try:
@@ -497,7 +513,8 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     if while_rows_run is not None and counts["to_run"]:
         while_rows_run()
     run_rows(todo, Landing(store, frame), work=run_chunk, jobs=jobs, executor=executor, scheduler=scheduler,
-             desc=desc, total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log)
+             desc=desc, total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log,
+             isolate=runs_plugin_code(used))
     counts["wall_s"] = time.perf_counter() - t0
     if counts["stored"]:
         decode = _Interner()

@@ -94,10 +94,11 @@ class Chunks:
 
 
 def execute(tasks, store: RowStore, *, work, jobs: int, executor: str, scheduler: str | None, desc: str,
-            total: int | None = None, row_timeout: float | None = None, chunk_rows: int | None = None, log=print):
-    """Run tasks (an iterable) in chunks and store each chunk's rows as it finishes. With one job and no
-    time limit the rows run in this process; with a time limit, or several jobs, in worker processes that
-    a crash or a stuck row cannot take down with the run. KeyboardInterrupt cancels what is pending; what
+            total: int | None = None, row_timeout: float | None = None, chunk_rows: int | None = None, log=print,
+            isolate: bool = False):
+    """Run tasks (an iterable) in chunks and store each chunk's rows as it finishes. With one job, no time limit
+    and rows of fitbench's own code (not ``isolate``: no plugin's method or data source) the rows run in this
+    process; otherwise in worker processes that a crash, an exit or a stuck row cannot take down with the run. KeyboardInterrupt cancels what is pending; what
     finished stays stored."""
     if total == 0:
         return
@@ -106,7 +107,7 @@ def execute(tasks, store: RowStore, *, work, jobs: int, executor: str, scheduler
     try:
         if executor != "local":
             raise ValueError(f"executor {executor!r}: this module runs rows locally (Dask: experiments.dask_executor)")
-        if jobs <= 1 and not row_timeout:
+        if jobs <= 1 and not row_timeout and not isolate:
             _run_here(work, chunks, store, bar)
         else:
             _run_processes(work, chunks, store, max(jobs, 1), bar, row_timeout)

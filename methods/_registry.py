@@ -84,6 +84,11 @@ class MethodSpec(MethodInfo):
         would cost passes over the points (at 10^5 points, four times the algebraic fit itself)."""
         return _run(self, points, params, gate=self.id not in BUILTIN_IDS)
 
+    @property
+    def builtin(self) -> bool:
+        """True for fitbench's own methods, False for a plugin's."""
+        return self.id in BUILTIN_IDS
+
     def unchecked(self, points, **params):
         """The method's result without the gate, for a caller that applies :func:`methods.check_result` itself
         (the benchmark engine: such a result becomes an ``invalid`` row, and the timing measures the fit alone)."""

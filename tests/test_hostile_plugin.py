@@ -171,6 +171,45 @@ def test_lies_become_invalid_rows_and_the_study_completes(site, tmp_path):
     assert f"**invalid results: {2 * len(LIES)} of {len(df)}**" in report
 
 
+@pytest.mark.slow
+def test_with_one_job_a_plugin_that_ends_its_process_ends_only_its_rows(site, tmp_path):
+    """--jobs 1 runs fitbench's own rows in the run's process; a plugin's rows run in a worker process: a method
+    calling os._exit labels its rows crashed and the built-in method's rows are kept (it used to end the run
+    with exit 3, no message and no row stored, again on every rerun)."""
+    study = tmp_path / "exits.toml"
+    study.write_text(textwrap.dedent('''
+        name = "exits"
+        title = "A plugin that ends its process"
+        kind = "grid"
+        seed = 3
+        repetitions = 2
+        [[datasets]]
+        source = "circle"
+        params = { radius = 5.0, noise = 0.01, n = 30 }
+        [[methods]]
+        id = "circle.kasa"
+        [[methods]]
+        id = "circle.os_exit"
+    '''))
+    out = tmp_path / "out"
+    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report", path_first=[site])
+    assert proc.returncode == 0, proc.stderr
+    df = pd.read_csv(out / "exits" / "results.csv")
+    assert set(df[df["method"] == "circle.kasa"]["status"]) == {"ok"}
+    exits = df[df["method"] == "circle.os_exit"]
+    assert len(exits) == 2 and set(exits["status"]) == {"crashed"}
+    assert all("exit code 3" in m for m in exits["message"])
+
+
+def test_rows_of_a_plugin_method_or_source_are_rows_of_plugin_code(site):
+    from experiments.engine import runs_plugin_code
+    assert not runs_plugin_code({("circle.kasa", "circle"), ("circle.gauss_newton", "published")})
+    assert not runs_plugin_code({("not-a-method", None)})  # a study's own rows: its code is fitbench's
+    proc = run_python("-c", "from experiments.engine import runs_plugin_code; "
+                            "print(runs_plugin_code({('circle.os_exit', 'circle')}))", path_first=[site])
+    assert proc.stdout.strip() == "True", proc.stderr
+
+
 def test_the_caller_s_array_cannot_be_changed_through_the_api(site):
     code = textwrap.dedent('''
         import numpy as np, methods

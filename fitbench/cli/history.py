@@ -10,7 +10,8 @@ import json
 from pathlib import Path
 
 from methods import InvalidInputError
-from fitbench.cli.options import check_plot_path, save_figure
+from methods.files import open_regular
+from fitbench.cli.options import DATE_FORMATS, check_plot_path, save_figure, warn as _warn
 
 #: the columns of each test's trend: (JSON path, printed name, factor to the printed unit, unit)
 COLUMNS = {
@@ -57,9 +58,11 @@ def _get(d, path):
 
 
 def _date(d: dict, path: Path) -> _dt.datetime:
+    """The test's date: its conditions' ``date`` (:data:`DATE_FORMATS`), else the file's modification time; a
+    date that is not one is an :class:`~methods.InvalidInputError` naming the file."""
     text = ((d.get("details") or {}).get("conditions") or {}).get("date")
     if text:
-        for fmt in ("%Y-%m-%d", "%Y-%m-%d %H:%M", "%Y-%m-%dT%H:%M:%S", "%d.%m.%Y"):
+        for fmt in DATE_FORMATS:
             try:
                 return _dt.datetime.strptime(str(text).strip(), fmt)
             except ValueError:
@@ -68,23 +71,43 @@ def _date(d: dict, path: Path) -> _dt.datetime:
     return _dt.datetime.fromtimestamp(path.stat().st_mtime)
 
 
-def collect(folder) -> dict:
-    """{test: [(date, file, {column: value})]} from the JSON results in ``folder``, oldest first."""
+def _load(path: Path):
+    """The JSON value in ``path`` (any size: a roundness result is one line of 100 kB and more), or an
+    :class:`~methods.InvalidInputError` saying why it cannot be read (a FIFO or a device is refused unopened)."""
+    try:
+        with open_regular(path, encoding="utf-8-sig") as fh:
+            return json.load(fh)
+    except InvalidInputError:
+        raise
+    except OSError as exc:
+        raise InvalidInputError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise InvalidInputError(f"{path}: not UTF-8 text") from None
+    except (ValueError, RecursionError) as exc:
+        raise InvalidInputError(f"{path}: not valid JSON ({str(exc).splitlines()[0][:120]})") from None
+
+
+def collect(folder, warn=None) -> dict:
+    """{test: [(date, file, {column: value})]} from the JSON results in ``folder``, oldest first. A ``*.json``
+    that is not a result (unreadable, not JSON, another JSON, a test date that is not a date) is skipped and
+    told to ``warn`` (a function taking one line; default :func:`fitbench.cli.options.warn`)."""
+    warn = warn or _warn
     folder = Path(folder)
     if not folder.is_dir():
         raise InvalidInputError(f"{folder}: not a folder; give the folder holding the tests' JSON results")
-    from datasets.io import read_lines
     out: dict = {}
     for path in sorted(folder.rglob("*.json")):
         try:
-            d = json.loads("\n".join(read_lines(path, "")))
-        except ValueError:
-            continue  # not one of our results (read_lines refuses special files in one line)
-        kind = kind_of(d) if isinstance(d, dict) else None
-        if kind is None:
+            d = _load(path)
+            kind = kind_of(d) if isinstance(d, dict) else None
+            if kind is None:
+                raise InvalidInputError(f"{path}: not a JSON result of circular-test, positioning or roundness")
+            date = _date(d, path)
+        except InvalidInputError as exc:
+            warn(f"{exc}; skipped")
             continue
         row = {name: (None if (v := _get(d, p)) is None else v * f) for p, name, f, _ in COLUMNS[kind]}
-        out.setdefault(kind, []).append((_date(d, path), path.name, row))
+        out.setdefault(kind, []).append((date, path.name, row))
     if not out:
         raise InvalidInputError(f"{folder}: no JSON results of circular-test, positioning or roundness found "
                                 "(save them with: fitbench circular-test ... --json > DIR/2026-11-25.json)")

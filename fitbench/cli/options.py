@@ -149,6 +149,10 @@ def verdict_lines(v: dict | None) -> list[str]:
     return lines
 
 
+#: the test dates ``fitbench history`` reads from a result's conditions (strptime formats; --date writes the first)
+DATE_FORMATS = ("%Y-%m-%d", "%Y-%m-%d %H:%M", "%Y-%m-%dT%H:%M:%S", "%d.%m.%Y")
+
+
 def add_test_identity_options(p):
     """--machine and --date of a machine-tool test (circular-test, positioning, roundness): printed in the report
     and recorded in the JSON result's ``details.conditions``, where ``fitbench history`` dates the test."""

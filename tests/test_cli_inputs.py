@@ -1,0 +1,78 @@
+"""What the ``fitbench`` command does with a user's inputs beyond the happy path: ``history`` over results of any
+size and over files that are not results, ``--date`` checked where it is given, error lines naming the option or
+the file the user gave, plugin methods that raise or print, and files in encodings the readers cannot read."""
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from datasets.circular_test import MachineErrors, TestConditions, circular_test
+from datasets.positioning import axis_test, to_frame
+from fitbench.cli import main
+
+
+def cli(*args):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in args])
+    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
+
+
+def one_error_line(out, *words):
+    assert out.returncode == 2, (out.stdout, out.stderr)
+    assert "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
+    for w in words:
+        assert w in out.stderr, out.stderr
+
+
+def profile_file(path, n=3600, seed=3):
+    """A Ø40 mm shaft with three lobes and noise, x, y in mm."""
+    t = 2 * np.pi * np.arange(n) / n
+    r = 20.0 + 1.5e-3 * np.cos(3 * t + 0.4) + 2e-5 * np.random.default_rng(seed).standard_normal(n)
+    np.savetxt(path, np.c_[r * np.cos(t), r * np.sin(t)], delimiter=",", header="x,y", comments="", fmt="%.9f")
+    return path
+
+
+def circular_runs_file(path, seed=0):
+    cond = TestConditions(nominal_radius=100.0, nominal_center=(0.0, 0.0), sampling_hz=50.0)
+    cw, ccw, _ = circular_test(cond, MachineErrors(squareness=20e-6, noise=0.0002), seed=seed)
+    path.write_text("run,x,y\n" + "".join(f"{lab},{x:.7f},{y:.7f}\n" for lab, pts in (("cw", cw), ("ccw", ccw))
+                                          for x, y in pts))
+    return path
+
+
+# ------------------------------------------------------------------------------------------ history
+def test_history_reads_results_longer_than_a_reader_line_and_names_what_it_skips(tmp_path):
+    """A roundness result (3600 points) and a 401-target positioning result are each one JSON line of more
+    than 64 K characters: history trends them; a file that is not a result is named on stderr and skipped."""
+    folder = tmp_path / "machine"
+    folder.mkdir()
+    out = cli("roundness", profile_file(tmp_path / "shaft.csv"), "--json", "--date", "2026-11-25")
+    assert out.returncode == 0, out.stderr
+    (folder / "r.json").write_text(out.stdout)
+    data, _ = axis_test(travel=(0.0, 2000.0), targets=401, rng=np.random.default_rng(5))
+    pos = tmp_path / "laser.csv"
+    to_frame(data, actual=False).to_csv(pos, index=False)
+    out = cli("positioning", pos, "--json", "--date", "2026-11-20")
+    assert out.returncode == 0, out.stderr
+    (folder / "p.json").write_text(out.stdout)
+    assert min(len((folder / n).read_text()) for n in ("r.json", "p.json")) > 1 << 16
+    (folder / "notes.json").write_text('{"operator": "A. N. Other"}')
+    (folder / "broken.json").write_text('{"G_b": ')
+    got = cli("history", folder, "--json")
+    assert got.returncode == 0, got.stderr
+    trend = json.loads(got.stdout)
+    assert [t["date"][:10] for t in trend["roundness"]["tests"]] == ["2026-11-25"]
+    assert [t["date"][:10] for t in trend["positioning"]["tests"]] == ["2026-11-20"]
+    rond = json.loads((folder / "r.json").read_text())
+    assert trend["roundness"]["tests"][0]["RONt LSCI"] == pytest.approx(rond["references"]["lsci"]["RONt"] * 1e3)
+    assert trend["positioning"]["tests"][0]["A"] == pytest.approx(json.loads((folder / "p.json").read_text())["A"] * 1e3)
+    lines = got.stderr.strip().splitlines()
+    assert len(lines) == 2 and "Traceback" not in got.stderr, got.stderr
+    assert any("notes.json" in ln and "skipped" in ln for ln in lines), got.stderr
+    assert any("broken.json" in ln and "not valid JSON" in ln for ln in lines), got.stderr

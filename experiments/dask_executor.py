@@ -32,6 +32,7 @@ import json
 import mmap
 import os
 import queue
+import signal
 import socket
 import subprocess
 import sys
@@ -197,6 +198,16 @@ class _RowProcess:
             self.page.close()
 
 
+def dask_setup(worker) -> None:
+    """Preload of the local cluster's worker processes (each start and restart): they ignore SIGINT, which a
+    terminal's Ctrl-C sends to the whole process group; the run stops them itself and prints one line (else each
+    worker printed its KeyboardInterrupt traceback)."""
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread of the worker process: nothing to do there
+        pass
+
+
 def run_isolated(tasks: list, row_timeout: float) -> dict:
     """A Dask task: run a chunk in a row process of this worker (see the module's docstring) and return its
     rows in the store's columns, every row labelled, in the order of ``tasks``."""
@@ -303,7 +314,8 @@ def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> Non
             with _one_blas_thread_per_worker():
                 cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
                                        dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
-                                       silence_logs=50)  # its HTTP server on a free local port, no dashboard
+                                       silence_logs=50,  # its HTTP server on a free local port, no dashboard
+                                       preload=[__name__])  # dask_setup below: Ctrl-C is the run's alone
             client = Client(cluster)
             where = "the local Dask cluster"
         fn = run_isolated if row_timeout else work

@@ -136,6 +136,37 @@ def test_a_killed_run_leaves_no_dask_worker_nor_row_process(tmp_path, hostile_si
     assert not left, f"processes of a killed run still alive: {left}"
 
 
+@pytest.mark.system  # a local Dask cluster, interrupted while its workers run rows: about 15 s
+def test_ctrl_c_of_a_dask_run_prints_one_line_and_leaves_no_process(tmp_path, hostile_site):
+    """Ctrl-C on a terminal reaches the whole process group: the local cluster's workers ignore it (the run stops
+    them) and the run prints its one line (each worker printed a KeyboardInterrupt traceback, 68 lines in all)."""
+    study = write_study(tmp_path, name="dk", reps=20000)
+    marker = uuid.uuid4().hex
+    proc = subprocess.Popen([sys.executable, "-m", "experiments.run", str(study), "--jobs", "2", "--executor", "dask",
+                             "--no-report", "--out", str(tmp_path / "out")], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            env=subprocess_env(hostile_site, OPENBLAS_NUM_THREADS="1", FITBENCH_TEST_RUN=marker))
+    try:
+        deadline = time.monotonic() + 120
+        while not (tmp_path / "out" / "dk" / "rows.sqlite").exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        time.sleep(3)  # the workers are running rows
+        os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    left = survivors(marker)
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines() == [f"experiments.run: interrupted; finished rows are kept in "
+                                        f"{tmp_path / 'out' / 'dk' / 'rows.sqlite'}; run the same command again to "
+                                        f"resume"], err
+    assert not left
+
+
 DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
 
 

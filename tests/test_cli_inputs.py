@@ -76,3 +76,39 @@ def test_history_reads_results_longer_than_a_reader_line_and_names_what_it_skips
     assert len(lines) == 2 and "Traceback" not in got.stderr, got.stderr
     assert any("notes.json" in ln and "skipped" in ln for ln in lines), got.stderr
     assert any("broken.json" in ln and "not valid JSON" in ln for ln in lines), got.stderr
+
+
+@pytest.mark.parametrize("date", ["2026-13-45", "2026-02-30", "25.11.2026", "yesterday"])
+def test_date_is_checked_where_it_is_given(tmp_path, date):
+    """Every subcommand taking --date refuses one that is not a YYYY-MM-DD calendar date in one line, before
+    writing a result that history could not date."""
+    runs = circular_runs_file(tmp_path / "runs.csv")
+    shaft = profile_file(tmp_path / "shaft.csv", n=360)
+    data, _ = axis_test(rng=np.random.default_rng(2))
+    pos = tmp_path / "pos.csv"
+    to_frame(data, actual=False).to_csv(pos, index=False)
+    for cmd in (("circular-test", runs, "--nominal-radius", 100), ("roundness", shaft), ("positioning", pos)):
+        out = cli(*cmd, "--date", date, "--json")
+        one_error_line(out, "--date", repr(date), "YYYY-MM-DD")
+        assert out.stdout == ""
+    good = cli("roundness", shaft, "--date", "2026-1-5", "--json")
+    assert good.returncode == 0, good.stderr
+    assert json.loads(good.stdout)["details"]["conditions"]["date"] == "2026-01-05"
+
+
+def test_history_skips_a_result_with_a_bad_date_and_keeps_the_others(tmp_path):
+    """A result written before --date was checked may hold any text as its date: that file is named in one
+    warning and skipped; the folder's other results are trended."""
+    folder = tmp_path / "machine"
+    folder.mkdir()
+    out = cli("circular-test", circular_runs_file(tmp_path / "runs.csv"), "--nominal-radius", 100,
+              "--nominal-center", 0, 0, "--date", "2026-05-03", "--json")
+    assert out.returncode == 0, out.stderr
+    (folder / "good.json").write_text(out.stdout)
+    old = json.loads(out.stdout)
+    old["details"]["conditions"]["date"] = "2026-13-45"
+    (folder / "old.json").write_text(json.dumps(old))
+    got = cli("history", folder, "--json")
+    assert got.returncode == 0, got.stderr
+    assert [t["file"] for t in json.loads(got.stdout)["circular-test"]["tests"]] == ["good.json"]
+    assert len(got.stderr.strip().splitlines()) == 1 and "old.json" in got.stderr and "2026-13-45" in got.stderr

@@ -153,11 +153,26 @@ def verdict_lines(v: dict | None) -> list[str]:
 DATE_FORMATS = ("%Y-%m-%d", "%Y-%m-%d %H:%M", "%Y-%m-%dT%H:%M:%S", "%d.%m.%Y")
 
 
+def test_date(text: str) -> str:
+    """A ``--date`` as written into a result: YYYY-MM-DD (zero-padded), checked to be a calendar date, so that
+    ``fitbench history`` can date the test later; '' (not given) stays ''."""
+    import argparse
+    import datetime as dt
+    text = str(text).strip()
+    if not text:
+        return ""
+    try:
+        return dt.datetime.strptime(text, DATE_FORMATS[0]).date().isoformat()
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a date; give the test date as YYYY-MM-DD, "
+                                         "e.g. 2026-11-25") from None
+
+
 def add_test_identity_options(p):
     """--machine and --date of a machine-tool test (circular-test, positioning, roundness): printed in the report
     and recorded in the JSON result's ``details.conditions``, where ``fitbench history`` dates the test."""
     p.add_argument("--machine", default="", help="machine name (the report's title, the JSON result's conditions)")
-    p.add_argument("--date", default="", help="test date, YYYY-MM-DD (the report, the JSON result's conditions; "
+    p.add_argument("--date", default="", type=test_date, help="test date, YYYY-MM-DD (the report, the JSON result's conditions; "
                                                 "'fitbench history' dates the test by it, else by the file's time)")
 
 

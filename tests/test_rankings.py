@@ -108,3 +108,23 @@ def test_the_report_ranking_table_states_units(tmp_path):
         _rankings_section(collect(studies), None, tmp_path, add_table, lambda *a: [], Doc())
         (caption, unit), = captions
         assert want[0] in caption and unit == want[1]
+
+
+def test_rows_without_the_metric_are_not_unsolved_problems(tmp_path):
+    """Rows that finished (ok) with no value of the metric at all (the published study's rounding Monte Carlo
+    rows: no form error, no runtime) are not problems of the ranking: they are neither in the table nor counted
+    as solved by no method (the report's caption said "9 solved by no method left out")."""
+    nan = float("nan")
+    name, folder, meta = study(tmp_path, "published", {"circle.kasa": [1.0, 2.0], "circle.taubin": [2.0, nan]})
+    rows = pd.read_csv(folder / "results.csv")
+    extra = pd.DataFrame([{"study": name, "dataset": "d (rounding Monte Carlo)", "data_stream": "s0", "repetition": 0,
+                           "method": m, "params": "{}", "status": "ok", "form_error": nan}
+                          for m in ("circle.kasa", "circle.taubin")])
+    pd.concat([rows, extra]).to_csv(folder / "results.csv", index=False)
+    r = collect([(name, folder, meta)])["circularity"]
+    assert r.unsolved == 0 and r.not_measured == 1
+    assert sorted(r.table.index) == ["published | d | s0 | 0", "published | d | s1 | 0"]
+    # a problem every method failed on is still unsolved, not "not measured"
+    failed = study(tmp_path, "noise", {"circle.kasa": [nan], "circle.taubin": [nan]})
+    r2 = collect([(name, folder, meta), failed])["circularity"]
+    assert r2.unsolved == 1 and r2.not_measured == 1

@@ -17,7 +17,9 @@ the pooled problems is profiled, with no config edit (a plugin method run by a s
 joins): a method not run on a problem is absent there (not a failure), and its ρ is the share of the
 problems it ran on; so a study that declares a ranking adds problems and never removes a method from it.
 A problem no method solved is left out (it counts for nobody: no inf == inf "win") and counted in
-``unsolved``.
+``unsolved``. Rows that finished (status ok) without the metric at all (the published study's rounding Monte
+Carlo rows have no form error or runtime) are not problems of the ranking: a problem on which no row carries
+the metric and every row is ok is left out without being called unsolved (counted in ``not_measured``).
 """
 from __future__ import annotations
 
@@ -42,6 +44,7 @@ class Ranking:
     rows: list[pd.DataFrame] = field(default_factory=list, repr=False)
     left_out: list[str] = field(default_factory=list)   #: methods left out (none: every method run is profiled)
     unsolved: int = 0   #: pooled problems that no method solved (left out of the table)
+    not_measured: int = 0   #: pooled problems whose rows are all ok and none carries the metric (not ranked)
     runs: dict = field(default_factory=dict)   #: method -> number of problems it ran on (of the table's)
     table: pd.DataFrame | None = field(default=None, repr=False)
     by_dataset: pd.DataFrame | None = field(default=None, repr=False)
@@ -108,6 +111,10 @@ def collect(studies: list[tuple[str, Path, dict]]) -> dict[str, Ranking]:
                                  "floor": float(d.get("floor", 0.0 if d.get("unit") == "s" else 1e-12))})
             unit = ranking_unit(name, d)
             r = out.setdefault(d["profile"], Ranking(d["profile"], metric, unit))
+            # a problem whose rows all finished without the metric does not measure it: not a problem here
+            blank = (part["cost"].isna() & (part["status"] == "ok")).groupby(part["problem"]).transform("all")
+            r.not_measured += int(part.loc[blank, "problem"].nunique())
+            part = part[~blank]
             r.units[name] = unit
             if r.unit != unit:          # rows in different units: the table says which (Ranking.unit_words)
                 r.unit = ""

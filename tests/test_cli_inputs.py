@@ -112,3 +112,22 @@ def test_history_skips_a_result_with_a_bad_date_and_keeps_the_others(tmp_path):
     assert got.returncode == 0, got.stderr
     assert [t["file"] for t in json.loads(got.stdout)["circular-test"]["tests"]] == ["good.json"]
     assert len(got.stderr.strip().splitlines()) == 1 and "old.json" in got.stderr and "2026-13-45" in got.stderr
+
+
+# ------------------------------------------------------------------------------------------ output options
+def test_report_and_plot_errors_name_the_option_given(tmp_path):
+    """A bad --report file (unknown format, missing folder, a folder) is refused naming --report, a bad --plot
+    naming --plot, on every subcommand that takes them."""
+    runs = circular_runs_file(tmp_path / "runs.csv")
+    shaft = profile_file(tmp_path / "shaft.csv", n=360)
+    data, _ = axis_test(rng=np.random.default_rng(2))
+    pos = tmp_path / "pos.csv"
+    to_frame(data, actual=False).to_csv(pos, index=False)
+    bad = {"rep.txt": "unknown image format", str(tmp_path / "missing" / "rep.pdf"): "does not exist",
+           str(tmp_path): "is a folder"}
+    for cmd in (("circular-test", runs, "--nominal-radius", 100), ("roundness", shaft), ("positioning", pos)):
+        for option in ("--report", "--plot"):
+            for path, why in bad.items():
+                out = cli(*cmd, option, path)
+                one_error_line(out, f"{option} {path}:", why)
+                assert ("--plot" if option == "--report" else "--report") not in out.stderr

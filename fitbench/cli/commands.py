@@ -197,7 +197,7 @@ def cmd_circular_test(args) -> int:
     pitch = finite("--cyclic-pitch", args.cyclic_pitch, positive=True)
     arc = finite("--arc", args.arc, positive=True)
     plot_path = check_plot_path(args.plot)
-    report_path = check_plot_path(args.report)
+    report_path = check_plot_path(args.report, "--report")
     tolerances = parse_tolerances(args.tolerance, ("G", "G_cw", "G_ccw", "G_b", "H"))
     runs, first, labelled = _read_circular_runs(args)
     args.unit = first.unit
@@ -313,7 +313,7 @@ def cmd_positioning(args) -> int:
     from fitbench.plots.positioning import plot, text
 
     plot_path = check_plot_path(args.plot)
-    report_path = check_plot_path(args.report)
+    report_path = check_plot_path(args.report, "--report")
     instrument_u = finite("--instrument-u", args.instrument_u)
     mpe = finite("--mpe", args.mpe)
     if args.degree < 0:

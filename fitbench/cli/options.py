@@ -40,8 +40,9 @@ def finite(name: str, value, *, positive: bool = False, allow_none: bool = True)
     return v
 
 
-def check_plot_path(path) -> Path | None:
-    """Refuse, before any computation, a plot file in a missing folder or with a format matplotlib cannot write."""
+def check_plot_path(path, option: str = "--plot") -> Path | None:
+    """Refuse, before any computation, a plot file in a missing folder or with a format matplotlib cannot write;
+    ``option``: the option that gave it (named in the error line)."""
     if path is None:
         return None
     path = Path(path)
@@ -51,14 +52,14 @@ def check_plot_path(path) -> Path | None:
     formats = Figure().canvas.get_supported_filetypes()
     ext = path.suffix.lower().lstrip(".")
     if path.is_dir():
-        raise InvalidInputError(f"--plot {path}: is a folder; give a file name such as {path / 'plot.png'}")
+        raise InvalidInputError(f"{option} {path}: is a folder; give a file name such as {path / 'plot.png'}")
     if ext not in formats:
-        raise InvalidInputError(f"--plot {path}: unknown image format {path.suffix or '(none)'!r}; "
+        raise InvalidInputError(f"{option} {path}: unknown image format {path.suffix or '(none)'!r}; "
                                 f"use one of .{', .'.join(sorted(formats))}")
     target = writable_target(path)  # a FIFO, a device or a folder: refused now, not after the computation
     parent = target.parent if str(target.parent) else Path(".")
     if not parent.is_dir():
-        raise InvalidInputError(f"--plot {path}: the folder {parent} does not exist; create it first")
+        raise InvalidInputError(f"{option} {path}: the folder {parent} does not exist; create it first")
     return path
 
 

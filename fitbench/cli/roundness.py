@@ -43,7 +43,7 @@ def run(args) -> int:
 
     cutoff = parse_cutoff(args.cutoff, "--cutoff")
     plot_path = check_plot_path(args.plot)
-    report_path = check_plot_path(args.report)
+    report_path = check_plot_path(args.report, "--report")
     tolerances = parse_tolerances(args.tolerance, ("RONt", "RONp", "RONv", "RONq"))
     source, points, unit, notes, axes = read_profile_args(args)
     with warnings.catch_warnings(record=True) as caught:

@@ -273,7 +273,8 @@ def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path) -> 
             (into / name / "results.csv").write_bytes(csv.read_bytes())
             commit = str(meta.get("git_commit") or "?")[:10]
             what = "the committed tables" if _committed(csv) else "the previous results"
-            refs[name] = {"folder": into, "reference": f"{what} ({folder}, commit {commit}, {meta.get('date', '?')})"}
+            refs[name] = {"folder": into,
+                          "reference": f"{what} ({_shown(folder)}, commit {commit}, {meta.get('date', '?')})"}
             break
     return refs
 
@@ -306,7 +307,7 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
                                    f"DIFFERS from {ref['reference']} in: "
                                    + ", ".join(p["column"] for p in r["problems"])))
     studies = list(entries.values())
-    verdict = {"agree": all(s.get("agree") for s in studies), "date": date, "results": str(out),
+    verdict = {"agree": all(s.get("agree") for s in studies), "date": date, "results": _shown(out),
                "studies": studies, "run": {"date": date, "studies": list(names)}}
     write_atomic(Path(out) / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
     return verdict

@@ -308,3 +308,28 @@ def test_a_table_compared_with_itself_gives_the_full_comparisons_verdict_cheaply
     root = REPO / "results" / "quick"
     df = compare._read(root, study, "--results")
     assert compare.self_comparison(study, root) == compare.compare_study(study, df, df.copy())
+
+
+def test_the_runs_verdicts_are_committed_with_the_results_and_name_no_folder_of_this_machine(tmp_path, monkeypatch):
+    """The verdicts a run earned (RESULTS/verify.json) are outputs of that run, committed with its results, so that
+    `python -m experiments.report` on a fresh checkout keeps each study's "Reproducibility. Verdict ..." line
+    (git ignored the file: every verdict was dropped). The file names no folder of this machine, even for an
+    absolute --out."""
+    import subprocess
+    for rel in ("results/verify.json", "results/quick/verify.json"):
+        ignored = subprocess.run(["git", "check-ignore", "--no-index", "-q", rel], cwd=REPO)
+        assert ignored.returncode == 1, f"{rel} is ignored by git"
+    cfg = tmp_path / "vstudy.toml"
+    cfg.write_text(STUDY, encoding="utf-8")
+    out = tmp_path / "deep" / "out"
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    for _ in range(2):   # the second run is compared with the first's results in --out
+        assert runner.main([str(cfg), "--jobs", "1", "--out", str(out), "--no-report"]) == 0
+        for fh in runner._LOCKS:
+            fh.close()
+        runner._LOCKS.clear()
+    text = (out / verify.VERDICT_FILE).read_text(encoding="utf-8")
+    assert json.loads(text)["studies"][0]["agree"] is True
+    assert str(tmp_path) not in text

@@ -224,13 +224,16 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
         ranking_problem = str(exc)
     has_rankings = bool(rankings) or ranking_problem is not None
     verdicts = study_verdicts(results, [e[2] for e in entries if e[4] is not None],
-                              {n: "not a default study" for n in present if not known.get(n, {}).get("default")})
+                              {n: "not a default study" for n in present if not known.get(n, {}).get("default")},
+                              quick={e[2]: bool(e[4].get("quick")) for e in entries if e[4] is not None},
+                              shown=_shown(results))
 
     # the command that fills a missing study into this folder: its --quick grid when the folder's studies are
-    # quick runs, and this folder as --out unless it is the default results/
+    # quick runs, and this folder as --out unless it is the grid's default (results/, results/quick/)
     folder_quick = any(e[4] and e[4].get("quick") for e in entries)
-    missing_args = (" --quick" if folder_quick else "") + \
-        ("" if results.resolve() == Path("results").resolve() else f" --out {_shown(results)}")
+    from experiments.verdict import grid_options
+    quick_flag, folder_arg = grid_options(results, folder_quick, _shown(results))
+    missing_args = quick_flag + (f" --out{folder_arg}" if folder_arg else "")
 
     doc = Document()
     doc.heading(1, "fitbench: comparison report")

@@ -63,28 +63,44 @@ def study_sentence(entry: dict) -> str:
     return f"Verdict ({when}): this run differs from {ref} in: {_columns(entry)} (details: verify.json)."
 
 
-def study_verdicts(results: Path, studies: list[str], reasons: dict[str, str] | None = None) \
+def grid_options(results: Path, quick: bool, shown: str | None = None) -> tuple[str, str]:
+    """(' --quick' or '', ' DIR' or '') of the commands that write or check the results in ``results``: the
+    folder is named unless it is the default of its grid (``results/``; ``results/quick/`` with --quick),
+    as ``shown`` (default: the path as given), quoted for a shell."""
+    import shlex
+    default = Path("results/quick" if quick else "results")
+    same = Path(results).resolve() == default.resolve()
+    return (" --quick" if quick else ""), ("" if same else " " + shlex.quote(shown or str(results)))
+
+
+def study_verdicts(results: Path, studies: list[str], reasons: dict[str, str] | None = None,
+                   quick: dict[str, bool] | None = None, shown: str | None = None) \
         -> dict[str, list[tuple[str, str]]]:
     """{study: [(label, plain sentence), ...]} for the report: the current verdict, an out-of-date one said to
     be out of date, and a study not in the last ``experiments.run`` said to come from an earlier run
-    (``reasons``: why that run did not include it, e.g. "not a default study")."""
+    (``reasons``: why that run did not include it, e.g. "not a default study"). The commands it suggests
+    regenerate or check these results: with --quick where the study ran the quick grid (``quick``: study ->
+    bool) and the folder (``shown``: how to name ``results``) unless it is the grid's default."""
     current, stale = current_entries(results)
     v = last_verdict(results) or {}
     run = v.get("run") if isinstance(v.get("run"), dict) else None
     out: dict[str, list[tuple[str, str]]] = {}
     for name in studies:
         lines = []
+        q, folder = grid_options(results, bool((quick or {}).get(name)), shown)
         if name in current:
             e = current[name]
             lines.append(("Reproducibility" if e.get("agree") else "Reproducibility: differs", study_sentence(e)))
         elif name in stale:
             lines.append(("Reproducibility: out of date",
                           f"The last verification ({stale[name].get('date', '?')}) judged other results than these "
-                          f"(results.csv changed since); run python -m experiments.verify {name} again."))
+                          f"(results.csv changed since); run python -m experiments.verify {name}{q}"
+                          f"{' --results' + folder if folder else ''} again."))
         if run and name not in run.get("studies", []):
             lines.append(("Older results", f"These results are older than the last run ({run.get('date', '?')}), which "
                           f"did not include this study ({(reasons or {}).get(name, 'not among the studies it ran')}); "
-                          f"rerun it with python -m experiments.run {name}."))
+                          f"rerun it with python -m experiments.run {name}{q}"
+                          f"{' --out' + folder if folder else ''}."))
         if lines:
             out[name] = lines
     return out

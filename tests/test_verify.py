@@ -333,3 +333,35 @@ def test_the_runs_verdicts_are_committed_with_the_results_and_name_no_folder_of_
     text = (out / verify.VERDICT_FILE).read_text(encoding="utf-8")
     assert json.loads(text)["studies"][0]["agree"] is True
     assert str(tmp_path) not in text
+
+
+def test_the_reports_hints_give_the_command_that_regenerates_these_results(tmp_path, monkeypatch, capsys):
+    """After `experiments.run vstudy --quick --out DIR`, the report's hint for a study of DIR the run did not
+    include reruns it into DIR with its quick grid (it said `python -m experiments.run vother`, which runs the
+    full grid into results/), and an out-of-date verdict is checked again with --quick --results DIR."""
+    for name in ("vstudy", "vother"):
+        (tmp_path / f"{name}.toml").write_text(STUDY.replace('name = "vstudy"', f'name = "{name}"'), encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "mine"
+
+    def run(*names, report=True):
+        code = runner.main([*(str(tmp_path / f"{n}.toml") for n in names), "--quick", "--jobs", "1", "--out", "mine",
+                            *([] if report else ["--no-report"])])
+        for fh in runner._LOCKS:
+            fh.close()
+        runner._LOCKS.clear()
+        return code
+    assert run("vstudy", "vother", report=False) == 0
+    assert run("vstudy") == 0
+    md = (out / "paper" / "report.md").read_text(encoding="utf-8")
+    other = md.split("(`vother`)")[1].split("### ")[0]
+    assert "rerun it with python -m experiments.run vother --quick --out mine." in other
+    edit(out, 0, "radius", lambda v: repr(float(v) * 2))
+    from experiments.verdict import study_verdicts
+    lines = dict(study_verdicts(out, ["vstudy"], quick={"vstudy": True}, shown="mine")["vstudy"])
+    assert "run python -m experiments.verify vstudy --quick --results mine again" in lines["Reproducibility: out of date"]
+    # the grid's default folder is not named: results/quick/ for a quick run
+    default = tmp_path / "results" / "quick"
+    shutil.copytree(out, default)
+    older = dict(study_verdicts(default, ["vother"], quick={"vother": True}, shown="results/quick")["vother"])
+    assert older["Older results"].endswith("rerun it with python -m experiments.run vother --quick.")

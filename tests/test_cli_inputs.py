@@ -131,3 +131,58 @@ def test_report_and_plot_errors_name_the_option_given(tmp_path):
                 out = cli(*cmd, option, path)
                 one_error_line(out, f"{option} {path}:", why)
                 assert ("--plot" if option == "--report" else "--report") not in out.stderr
+
+
+# ------------------------------------------------------------------------------------------ plugin methods
+def _raises(points):
+    raise RuntimeError("solver exploded\n  at step 3")
+
+
+def _writes(points):
+    points -= points.mean(axis=0)          # a plugin that centres its input in place
+    raise AssertionError("not reached: the input is read-only")
+
+
+def _chatty(points):
+    import methods
+    print("iteration 1: cost 0.5")
+    print("iteration 2: cost 0.1")
+    return methods.get("circle.kasa").func(points)
+
+
+@pytest.fixture
+def plugin_methods():
+    """Methods of a plugin (registered from this module, not methods.*) for one test only."""
+    import methods
+    from methods import _registry
+    ids = {"circle.cli_raises": _raises, "circle.cli_writes": _writes, "circle.cli_chatty": _chatty}
+    for mid, func in ids.items():
+        methods.register(mid, kind="closed form", summary="CLI test plugin", reference="fitbench test")(func)
+    yield
+    for mid in ids:
+        _registry._REGISTRY.pop(mid, None)
+
+
+def test_a_plugin_method_that_raises_is_one_line_naming_it(tmp_path, plugin_methods):
+    shaft = profile_file(tmp_path / "shaft.csv", n=360)
+    for mid, words in (("circle.cli_raises", ("RuntimeError: solver exploded at step 3",)),
+                       ("circle.cli_writes", ("ValueError", "read-only", "points.copy()"))):
+        for extra in ((), ("--json",)):
+            out = cli("fit", mid, shaft, *extra)
+            assert out.returncode not in (0, 1), (out.returncode, out.stderr)   # 1: a fit that did not converge
+            assert out.stdout == "" and "Traceback" not in out.stderr
+            assert len(out.stderr.strip().splitlines()) == 1, out.stderr
+            assert f"{mid} failed" in out.stderr and "test_cli_inputs" in out.stderr, out.stderr
+            for w in words:
+                assert w in out.stderr, out.stderr
+
+
+def test_a_plugin_method_that_prints_leaves_stdout_to_the_json(tmp_path, plugin_methods):
+    import methods
+    shaft = profile_file(tmp_path / "shaft.csv", n=360)
+    out = cli("fit", "circle.cli_chatty", shaft, "--json")
+    assert out.returncode == 0, out.stderr
+    d = json.loads(out.stdout)                               # the whole of stdout is the one JSON object
+    ref = methods.fit("circle.kasa", np.loadtxt(shaft, delimiter=",", skiprows=1))
+    assert d["method"] == "circle.cli_chatty" and d["radius"] == pytest.approx(ref.radius, rel=1e-12)
+    assert "iteration 1: cost 0.5" in out.stderr and "iteration 2: cost 0.1" in out.stderr

@@ -12,6 +12,7 @@ a function ``add_NAME(sub)`` that builds its parser and sets ``func``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
@@ -29,6 +30,8 @@ from fitbench.cli.options import (PROFILE_LIMIT_MM, add_reader_options, add_repo
                                   write_text_atomic)
 
 EXIT_BAD_INPUT = 2
+#: a method raised an exception of its own (a bug in the method, not bad input): one line, this status
+EXIT_METHOD_FAILED = 3
 
 
 PROG = "python -m methods"
@@ -71,6 +74,29 @@ def parse_value(key: str, text: str, default, method_id: str):
     except json.JSONDecodeError:
         return stripped
     return value[0] if len(value) == 1 and not stripped.startswith("[") else value
+
+
+class MethodFailed(Exception):
+    """A method raised an exception other than :class:`~methods.InvalidInputError` (its own bug, e.g. a
+    plugin writing into its read-only input): printed as one line, exit status :data:`EXIT_METHOD_FAILED`."""
+
+
+def run_method(spec, data, **params):
+    """``spec(data, **params)`` with the method's prints sent to stderr (stdout carries the command's output
+    alone: ``--json`` stays one JSON object) and its own exceptions turned into one line naming it
+    (:class:`MethodFailed`); bad input (:class:`~methods.InvalidInputError`, the result gate's refusal) passes."""
+    try:
+        with contextlib.redirect_stdout(sys.stderr):
+            return spec(data, **params)
+    except InvalidInputError:
+        raise
+    except Exception as exc:
+        text = " ".join(str(exc).split()) or "(no message)"
+        hint = ("a bug in fitbench: please report it" if spec.builtin else
+                f"an error inside the method (module {spec.module}), not in the data: report it to its author")
+        if isinstance(exc, ValueError) and "read-only" in text:
+            hint += "; a method gets read-only points and must copy them (points.copy()) before writing"
+        raise MethodFailed(f"{spec.id} failed: {type(exc).__name__}: {text[:300]} ({hint})") from None
 
 
 def _fmt(v) -> str:
@@ -124,7 +150,7 @@ def cmd_fit(args) -> int:
         params[key] = parse_value(key, text, spec.defaults[key], spec.id)
     plot_path = check_plot_path(args.plot)
     source, points, unit, notes, axes = read_profile_args(args)
-    result = spec(points, **params)
+    result = run_method(spec, points, **params)
     if plot_path:
         if spec.family not in ("circle", "ellipse"):
             raise InvalidInputError(f"--plot draws circle and ellipse fits; {spec.id} is a {spec.family} method")
@@ -505,7 +531,7 @@ def cmd_multilaterate(args) -> int:
     if spec.family != "multilateration":
         raise InvalidInputError(f"{method} is not a multilateration method; "
                                 f"'python -m methods list --family multilateration' lists them")
-    res = spec(data, **({"max_iter": args.max_iter} if args.max_iter is not None and "max_iter" in spec.defaults else {}))
+    res = run_method(spec, data, **({"max_iter": args.max_iter} if args.max_iter is not None and "max_iter" in spec.defaults else {}))
     ident = _identify(data, res, args.degree) if args.identify else None
     if ident is not None and args.errors_csv:
         from methods.multilateration.export import errors_csv
@@ -651,5 +677,8 @@ def main(argv=None, prog: str = PROG, extra_commands: dict | None = None) -> int
     except InvalidInputError as exc:
         print(f"fitbench: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except MethodFailed as exc:
+        print(f"fitbench: error: {exc}", file=sys.stderr)
+        return EXIT_METHOD_FAILED
     except BrokenPipeError:
         return 0

@@ -170,9 +170,16 @@ def _write_build_manifest(out: Path, files: list[str]) -> None:
                                                   indent=1) + "\n")
 
 
+def is_default_results(results: Path) -> bool:
+    """Whether ``results`` is a folder ``python -m experiments.run`` fills by default (``results/`` or
+    ``results/quick/`` of the current folder or of the repository)."""
+    here = Path(results).resolve()
+    return any(here == (base / sub).resolve() for base in (Path("."), REPO) for sub in ("results", "results/quick"))
+
+
 def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, render_md=None) -> Path:
-    """Build the report from every study folder in ``results`` and every default study (missing ones
-    are shown as missing). ``render_latex(table, caption, label, unit, digits) -> [fragment]`` and
+    """Build the report from every study folder in ``results``; in a default results folder
+    (``is_default_results``) every default study it lacks is shown as missing. ``render_latex(table, caption, label, unit, digits) -> [fragment]`` and
     ``render_md(table, fmt)`` render one table (swap in another renderer).
 
     Writes report.md, report.html (numbered <figcaption>/<caption>, nav#toc, images embedded), report.tex
@@ -196,7 +203,10 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
         except InvalidInputError:
             continue
     present = sorted(p.name for p in results.iterdir() if is_study_folder(p)) if results.exists() else []
-    names = present + [n for n, c in known.items() if c.get("default") and n not in present]
+    # a report of a results folder holds the studies in it; only the default folders (results/, results/quick/),
+    # which a run of the default studies fills, name the default studies they lack as missing
+    names = present + ([n for n, c in known.items() if c.get("default") and n not in present]
+                       if is_default_results(results) else [])
     entries = []  # (section, order, name, title, meta | None, manifest | None, problem | None)
     for name in names:
         cfg = known.get(name, {})

@@ -70,7 +70,7 @@ def test_sections_tables_figures(built):
     manifest = json.loads((built.parent / "results" / "published" / "report.json").read_text())
     first = re.split(r"(?<=[.;])\s", manifest["findings"], maxsplit=1)[0].rstrip(".;")
     assert first.split()[0] in abstract and "studies (" in abstract
-    for section in ("Roundness paper", "Circle/ellipse paper", "Positioning paper", "Magnification paper"):
+    for section in ("Roundness paper", "Circle/ellipse paper", "Magnification paper"):  # the studies present
         assert f"## {section}" in md
     assert "*Table 1:" in md and "| roundness_set2 | MIC | 1.7287 |" in re.sub(r" +", " ", md)
     for name in ("published", "magnification", "ellipse_angle"):  # a table and a figure per study
@@ -87,13 +87,23 @@ def test_sections_tables_figures(built):
     assert len(vector) >= 3 and len(vector) == len(list(built.glob("figures/*.pdf"))), sorted(built.glob("figures/*"))
 
 
-def test_missing_and_failed_studies_are_shown(built):
+def test_failed_studies_are_shown_and_a_results_folder_holds_its_own_studies(built):
+    """A report of a results folder of one's own (--out DIR) holds the studies in it: no default study it lacks
+    is listed as missing (it listed 10 "**Missing**: no results in DIR/published ..." sections)."""
     md = (built / "report.md").read_text()
-    assert "**Missing**: no results" in md and "python -m experiments.run noise" in md
     assert "(`broken_study`)" in md and "**failed rows: 2 of" in md
-    assert "python -m experiments.run multilateration" in md  # its section exists; its results are missing here
-    # the suggested command fills this folder with the same grid: --quick, and this folder as --out
-    results = built.parent / "results"
+    assert "**Missing**" not in md and "(`noise`)" not in md and "(`multilateration`)" not in md
+
+
+def test_the_default_results_folder_shows_the_default_studies_it_lacks(built, tmp_path, monkeypatch):
+    """results/ (of the current folder) is what a run of the default studies fills: a default study it lacks is
+    missing, with the command that fills it (the same grid: --quick, and this folder as --out, since results/
+    is not the quick grid's default folder)."""
+    results = tmp_path / "results"
+    shutil.copytree(built.parent / "results" / "magnification", results / "magnification")
+    monkeypatch.chdir(tmp_path)
+    md = (build(results, tmp_path / "paper", log=lambda *a: None) / "report.md").read_text()
+    assert "**Missing**: no results" in md and "python -m experiments.run multilateration" in md
     assert f"python -m experiments.run noise --quick --out {results}" in md.replace("\\", "")
 
 

@@ -540,11 +540,17 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
                         f"give --columns NAME NAME or --plane xy|yz|zx{skip_rows_hint(layout)}")
 
 
+#: a label a data row may carry beside its numbers (a direction or run column: CW, ccw, +, up, run1, G02)
+_ROW_LABEL = re.compile(r"[A-Za-z0-9+\-_]{1,16}")
+
+
 def _numeric_fields(line: str) -> tuple[str | None, int] | None:
-    """(separator, number of fields) when ``line`` is a row of at least two numbers under some separator."""
+    """(separator, number of fields) when ``line`` is a data row under some separator: at least two numbers,
+    and at most one other field, a label such as a direction or run (``CW;0,250;1,9019``)."""
     for sep in (";", "\t", ",", None):
         toks = _split(line, sep)
-        if len(toks) >= 2 and all(_is_number(t.replace(",", ".") if sep != "," else t) for t in toks):
+        words = [t for t in toks if not _is_number(t.replace(",", ".") if sep != "," else t)]
+        if len(toks) - len(words) >= 2 and (not words or (len(words) == 1 and _ROW_LABEL.fullmatch(words[0]))):
             return sep, len(toks)
     return None
 
@@ -552,24 +558,32 @@ def _numeric_fields(line: str) -> tuple[str | None, int] | None:
 def skip_rows_hint(layout: Layout, before: int | None = None) -> str:
     """'; or, if ... is a preamble, give --skip-rows N' naming the first row of numbers (and keeping the header
     line just above it when it has as many fields), or '' when no such row is in the first lines."""
+    return preamble_hint(layout.name, layout.header_line, before)
+
+
+def preamble_hint(name, header_line: int = 1, before: int | None = None) -> str:
+    """:func:`skip_rows_hint` for the file ``name`` whose header was taken from line ``header_line``: the hint
+    when the first data row (:func:`_numeric_fields`; a direction or run label allowed) lies below the line
+    after that header (and after line ``before``, the line an error names), else ''."""
     previous = None
+    name = os.fspath(name)
     try:
-        with _open_text(layout.name) as fh:
-            for lineno, raw in iter_lines(fh, layout.name):
+        with _open_text(name) as fh:
+            for lineno, raw in iter_lines(fh, name):
                 ln = raw.strip()
-                if lineno < layout.header_line or not ln or ln.startswith(COMMENT_PREFIXES):
+                if lineno < header_line or not ln or ln.startswith(COMMENT_PREFIXES):
                     continue
                 got = _numeric_fields(ln)
                 if got is not None:
                     n = lineno - 1
                     if previous is not None and previous[0] == lineno - 1 and len(_split(previous[1], got[0])) == got[1]:
                         n = lineno - 2                                  # keep the header line above the numbers
-                    if n < layout.header_line or (before is not None and lineno <= before):
+                    if n < header_line or (before is not None and lineno <= before):
                         return ""
                     return (f"; if {'line 1 is' if n == 1 else f'lines 1-{n} are'} an instrument's preamble, give "
                             f"--skip-rows {n} (the first row of numbers is line {lineno})")
                 previous = (lineno, ln)
-                if lineno > SNIFF_LINES + layout.header_line:
+                if lineno > SNIFF_LINES + header_line:
                     return ""
     except (DataFileError, UnicodeDecodeError, OSError):
         return ""
@@ -872,6 +886,24 @@ def read_positioning(path, *, unit: str | None = None, deviation_unit: str | Non
     ``Target (mm)``, ``Deviation [µm]``, ``Run 1 + (um)``); lengths are converted to mm from the header's units,
     else ``unit`` (targets, actual positions; default mm) and ``deviation_unit`` (deviations; default the
     targets' unit); a header unit contradicting them is an error. ``with_units``: also return the two units."""
+    try:
+        return _read_positioning(path, unit=unit, deviation_unit=deviation_unit, skip_rows=skip_rows,
+                                 with_units=with_units)
+    except InvalidInputError as exc:
+        _add_preamble_hint(exc, path, skip_rows)
+        raise
+
+
+def _add_preamble_hint(exc: InvalidInputError, path, skip_rows: int) -> None:
+    """Append :func:`preamble_hint` to the message of ``exc`` (a file read without --skip-rows whose data
+    rows start below a preamble: its first line was taken as the header)."""
+    if skip_rows == 0 and len(exc.args) == 1 and "--skip-rows" not in str(exc.args[0]):
+        hint = preamble_hint(path)
+        if hint:
+            exc.args = (f"{exc.args[0]}{hint}",)
+
+
+def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units):
     from methods.positioning import from_frame
 
     # 'nan' and 'inf' stay text here and are refused as not finite by _numeric_column, like every reader

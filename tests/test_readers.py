@@ -111,6 +111,33 @@ def test_a_preamble_without_skip_rows_is_answered_with_the_skip_rows_to_give(tmp
     np.testing.assert_allclose(np.hypot(*read_points(path, skip_rows=skip).T), 20.0, atol=1e-5)
 
 
+def test_a_preamble_above_rows_with_a_direction_label_gets_the_skip_rows_hint(tmp_path):
+    """A ballbar export (Windows-1252, a preamble, then 'CW;0,250;1,9019': a direction label before the
+    numbers) and a positioning table ('0;+;1;0,001') gave no --skip-rows hint: their rows are not numbers
+    only. The hint is the x, y case's, and the number it names reads the file."""
+    from datasets.io import EncodingNote, read_runs
+    t = np.arange(0.0, 360.0, 2.5)
+    rows = [f"{lab};{a:.3f};{2.0 + 0.3 * np.cos(np.radians(2 * a)) * (1 if lab == 'CW' else -1):.4f}".replace(".", ",")
+            for lab in ("CW", "CCW") for a in t]
+    ballbar = tmp_path / "ballbar.txt"
+    ballbar.write_bytes("\r\n".join(["Renishaw Ballbar 20 Data File", "Machine: VMC-1", "Radius: 150.0000 mm",
+                                       "Feedrate: 1000 mm/min", "Date: 25/11/2026", "",
+                                       "Direction;Angle [°];Radial deviation (µm)", *rows, ""]).encode("cp1252"))
+    with pytest.raises(DataFileError, match=r"give --skip-rows 6 \(the first row of numbers is line 8\)"):
+        with pytest.warns(EncodingNote):
+            read_runs(ballbar, nominal_radius=150.0)
+    with pytest.warns(EncodingNote):
+        runs = read_runs(ballbar, skip_rows=6, nominal_radius=150.0)
+    assert [tag for tag, _ in runs.runs] == ["cw", "ccw"] and all(len(p) == len(t) for _, p in runs.runs)
+    pos = tmp_path / "laser.csv"
+    pos.write_text("\n".join(["Laser XL-80 linear export", "Axis: X", "", "target;direction;run;deviation",
+                               *(f"{x};{d};{r};{0.001 * (r + x / 100) * (1 if d == '+' else -1):.4f}".replace(".", ",")
+                                 for r in (1, 2) for x in (0, 100, 200, 300, 400) for d in "+-")]) + "\n")
+    with pytest.raises(DataFileError, match=r"give --skip-rows 3 \(the first row of numbers is line 5\)"):
+        read_positioning(pos)
+    assert len(read_positioning(pos, skip_rows=3).targets) == 5
+
+
 @pytest.mark.parametrize("preamble, skip", [(["Roundness trace", "Part: shaft"], 2), (["Talyrond"], 1)])
 def test_other_preamble_errors_name_the_skip_rows_too(tmp_path, preamble, skip):
     path = tmp_path / "pre.csv"

@@ -120,10 +120,11 @@ def _register_builtins():
         return ds.points, None
 
     @register_source("file", random=False, summary="points read from a file (CSV, whitespace, ...)",
-                     files=lambda path, truth=None: [path])
-    def file(rng=None, *, path, truth=None):
-        """Points of ``path`` (any format ``datasets.read_points`` reads), with an optional truth table."""
-        return read_points(path), truth
+                     files=lambda path, **reading: [path])
+    def file(rng=None, *, path, truth=None, columns=("x", "y"), plane=None, unit=None, skip_rows=0):
+        """Points of ``path`` (any format ``datasets.read_points`` reads, with its options), with an optional truth
+        table."""
+        return read_points(path, tuple(columns), plane=plane, unit=unit, skip_rows=skip_rows), truth
 
     def _nist_files(name):
         folder = nist_folder()

@@ -73,7 +73,8 @@ def expand_datasets(cfg: dict, where: str) -> list[dict]:
         if not isinstance(entry, dict):
             raise ConfigError(f"{here}: each data set is a table with 'source', 'generator', 'published' or 'file', "
                               f"got {entry!r}")
-        unknown = set(entry) - {"source", "generator", "published", "file", "truth", "variant", "params", "grid", "label"}
+        unknown = set(entry) - {"source", "generator", "published", "file", "truth", "variant", "params", "grid", "label",
+                                *FILE_READING}
         if unknown:
             raise ConfigError(f"{here}: unknown key(s) {', '.join(sorted(unknown))}")
         given = [k for k in ("source", "generator", "published", "file") if k in entry]
@@ -101,8 +102,15 @@ def expand_datasets(cfg: dict, where: str) -> list[dict]:
             spec = {"entry": i, "point": 0, "file": str(path), "label": entry.get("label", Path(entry["file"]).stem)}
             if truth is not None:
                 spec["truth"] = truth
+            reading = {k: entry[k] for k in FILE_READING if k in entry}
+            if reading:
+                spec["read"] = reading
+            check_file(spec, here)
             out.append(spec)
             continue
+        if set(entry) & set(FILE_READING):
+            raise ConfigError(f"{here}: {', '.join(sorted(set(entry) & set(FILE_READING)))} belong(s) to a file = ... "
+                              f"data set")
         gen = entry.get("source", entry.get("generator"))
         try:
             source = sources.get_source(gen)
@@ -123,6 +131,43 @@ def expand_datasets(cfg: dict, where: str) -> list[dict]:
             out.append({"entry": i, "point": j, key: gen, "params": params, "label": entry.get("label", gen),
                         **({} if source.random else {"fixed": True})})
     return out
+
+
+#: the keys of a ``file = ...`` data set that say how to read it (``datasets.read_points``' options)
+FILE_READING = ("columns", "plane", "unit", "skip_rows")
+_FILES_READ: dict = {}
+
+
+def check_file(spec: dict, where: str) -> None:
+    """Read a ``file`` data set once (per file version and reading options) when its config is expanded: a file the
+    rows could not read is refused before any row runs, with the reader's message in the config's words."""
+    path = Path(spec["file"])
+    try:
+        stat = path.stat()
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot read {path}: {exc.strerror}") from None
+    memo = (str(path), stat.st_size, stat.st_mtime_ns, json.dumps(spec.get("read", {}), sort_keys=True))
+    if memo in _FILES_READ:
+        return
+    try:
+        sources.get_source("file").load(None, path=str(path), **spec.get("read", {}))
+    except InvalidInputError as exc:
+        raise ConfigError(f"{where}: {_in_config_words(str(exc))}") from None
+    if len(_FILES_READ) > 256:
+        _FILES_READ.clear()
+    _FILES_READ[memo] = True
+
+
+#: the reader's command-line options in a message, as the keys of a ``file = ...`` data set
+_CONFIG_WORDS = (("--columns NAME NAME", 'columns = ["X", "Y"]'), ("--columns 0 1", "columns = [0, 1]"),
+                 ("--plane xy|yz|zx", 'plane = "xy", "yz" or "zx"'), ("--columns", "columns"),
+                 ("--skip-rows ", "skip_rows = "), ("--unit", "unit"))
+
+
+def _in_config_words(text: str) -> str:
+    for option, key in _CONFIG_WORDS:
+        text = text.replace(option, key)
+    return text
 
 
 def expand_methods(cfg: dict, where: str) -> list[tuple[str, dict]]:
@@ -223,19 +268,24 @@ def _source_name(spec) -> str | None:
 
 
 def runs_plugin_code(used) -> bool:
-    """Whether rows of these (method id, source name) pairs run a plugin's code: a plugin's method or data source
-    (such rows always run in a worker process, which a plugin that ends its process cannot take the run down with)."""
+    """Whether rows of these (method id, source name) pairs run an installed plugin's code: a method or data source
+    of a distribution other than fitbench (such rows always run in a worker process, which a plugin that ends its
+    process cannot take the run down with). Code registered by the calling program itself (a script, a test) is
+    not a plugin: worker processes would not know it."""
+    from methods.plugins import distributions_of
     known = _method_ids()
+    modules = set()
     for method, source in used:
         if method in known and not methods.get(method).builtin:
-            return True
+            modules.add(methods.get(method).module)
         if source is not None:
             try:
-                if not sources.get_source(source).builtin:
-                    return True
+                spec = sources.get_source(source)
             except KeyError:
-                pass
-    return False
+                continue
+            if not spec.builtin:
+                modules.add(spec.module)
+    return bool(modules) and bool(distributions_of(sorted(modules)))
 
 
 def _has_source(spec: dict) -> bool:

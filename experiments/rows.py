@@ -40,7 +40,7 @@ def load_data(spec: dict, seed: int, stream: list[int]):
     if "published" in spec:
         return sources.get_source("published").load(None, name=spec["published"], variant=spec.get("variant"))
     if "file" in spec:
-        return sources.get_source("file").load(None, path=spec["file"], truth=spec.get("truth"))
+        return sources.get_source("file").load(None, path=spec["file"], truth=spec.get("truth"), **spec.get("read", {}))
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=tuple(stream)))
     return sources.get_source(source_of(spec)).load(rng, **spec["params"])
 

@@ -71,10 +71,16 @@ class SourceEntry(_Table):
 
 
 class FileEntry(_Table):
-    """A points file, with its truth when known."""
+    """A points file, with its truth when known, and how to read it (``datasets.read_points``' options)."""
     file: Annotated[str, Field(min_length=1, description="a points file, relative to the TOML")]
     truth: dict[str, Any] = None
     label: str = None
+    columns: Annotated[list[Union[str, Annotated[int, Field(ge=0)]]],
+                       Field(min_length=2, max_length=2, description="the x and y columns: header names or 0-based "
+                                                                     "indices")] = None
+    plane: Literal["xy", "yz", "zx"] = None
+    unit: Annotated[str, Field(min_length=1, description="the file's length unit (default: the header's, else mm)")] = None
+    skip_rows: Annotated[int, Field(ge=0, description="lines of preamble before the header or the numbers")] = None
 
 
 class MethodEntry(_Table):

@@ -22,6 +22,7 @@ from conftest import install_plugin, subprocess_env
 from experiments import codehash, engine, executors, rows as row_code, run
 from experiments.rowframe import MissingRows, RowFrame, part_of
 from experiments.store import RowStore, StoreIOError
+from methods import InvalidInputError
 
 STUDY = '''name = "{name}"
 title = "engine test study"
@@ -618,3 +619,55 @@ def test_results_csv_text_is_pandas_to_csv_byte_for_byte():
             ours = io.StringIO()
             write_csv(frame, ours, header=header)
             assert ours.getvalue() == frame.to_csv(index=False, header=header, float_format="%.17g")
+
+
+# ---------------------------------------------------------------- a file data set read with the reader's options
+
+def _export_with_preamble(folder: Path) -> Path:
+    angles = np.linspace(0.0, 2.0 * np.pi, 40, endpoint=False)
+    lines = ["Instrument XYZ export", "Date: 2026-11-25", "Operator: A", "t,X (um),Y (um)"]
+    lines += [f"{i},{5000.0 * np.cos(a):.3f},{5000.0 * np.sin(a):.3f}" for i, a in enumerate(angles)]
+    path = folder / "export.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _file_study(folder: Path, reading: str) -> Path:
+    path = folder / "fromfile.toml"
+    path.write_text(f'name = "fromfile"\ntitle = "t"\nkind = "grid"\nseed = 1\n[[datasets]]\nfile = "export.csv"\n'
+                    f'{reading}\n[[methods]]\nid = "circle.kasa"\n')
+    return path
+
+
+def test_a_file_data_set_takes_the_reader_s_options(tmp_path):
+    """An instrument export (a preamble, a header with units, a third column) is read as the CLI reads it: a file
+    data set takes columns, plane, unit and skip_rows (it took none, so the reader's advice could not be followed)."""
+    _export_with_preamble(tmp_path)
+    study = _file_study(tmp_path, 'skip_rows = 3\ncolumns = ["X", "Y"]')
+    assert run.main([str(study), "--out", str(tmp_path / "o"), "--no-report", "--jobs", "1"]) == 0
+    df = pd.read_csv(tmp_path / "o" / "fromfile" / "results.csv")
+    assert df["status"].tolist() == ["ok"]
+    assert df["radius"][0] == pytest.approx(5.0, rel=1e-6)  # micrometres in the header: read as 5 mm
+
+
+@pytest.mark.parametrize("reading, words", [
+    ("", "give skip_rows = 3"),
+    ('skip_rows = 3\nunit = "mm"', "drop unit or correct the header"),
+    ('skip_rows = 3\ncolumns = ["X", "Z"]', "no column 'Z'"),
+])
+def test_a_file_the_rows_cannot_read_is_refused_before_any_row(tmp_path, capsys, reading, words):
+    _export_with_preamble(tmp_path)
+    study = _file_study(tmp_path, reading)
+    assert run.main([str(study), "--out", str(tmp_path / "o"), "--no-report", "--jobs", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "fromfile.toml datasets[0]" in err[0] and words in err[0], err
+    assert not (tmp_path / "o" / "fromfile" / "rows.sqlite").exists()
+
+
+def test_reading_options_belong_to_a_file_data_set(tmp_path):
+    path = tmp_path / "gen.toml"
+    path.write_text('name = "gen"\ntitle = "t"\nkind = "grid"\nseed = 1\n[[datasets]]\nsource = "circle"\n'
+                    'skip_rows = 2\nparams = { radius = 1.0, noise = 0.01, n = 10 }\n[[methods]]\nid = "circle.kasa"\n')
+    with pytest.raises(InvalidInputError, match="skip_rows"):
+        cfg = run.configs.load(str(path))
+        engine.expand_datasets(cfg, cfg.where)

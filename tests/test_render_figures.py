@@ -104,3 +104,39 @@ def test_legend_outside_right_and_pdf(tmp_path):
         assert {"1", "10", "100"} <= set(labels) and not any("$" in t for t in labels)
         path = style.save(fig, tmp_path / "f.png", pdf=True)
     assert path.exists() and path.with_suffix(".pdf").read_bytes()[:4] == b"%PDF"
+
+
+def test_a_plugin_never_recolours_a_built_in_method(monkeypatch):
+    """Colours come from the rank within the family: a plugin method whose id sorts first ('circle.aaa_fit') moved
+    every built-in circle method to the next colour (Figure 15 re-coloured by installing any plugin)."""
+    from types import SimpleNamespace
+
+    import methods
+    ids = ["circle.kasa", "circle.gauss_newton", "circle.minimum_zone", "ellipse.halir_flusser"]
+    monkeypatch.setattr(style, "_ORDER", None)
+    before = {m: style.method_style(m) for m in ids}
+    builtins = methods.list_methods()
+    plugin = SimpleNamespace(id="circle.aaa_fit", family="circle", builtin=False)
+    monkeypatch.setattr(methods, "list_methods", lambda *a, **k: [plugin, *builtins])
+    monkeypatch.setattr(style, "_ORDER", None)
+    assert {m: style.method_style(m) for m in ids} == before
+    assert style.method_style("circle.aaa_fit")["color"] in style.PALETTE
+
+
+def test_saved_figures_carry_no_creation_date(tmp_path):
+    """A figure saved twice gives the same bytes: matplotlib's PDF carries a CreationDate unless told not to, so
+    every report rebuild changed every figure PDF."""
+    import matplotlib.pyplot as plt
+
+    from fitbench.plots import save_atomic
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [1, 0])
+    for suffix in (".pdf", ".svg", ".png"):
+        save_atomic(fig, tmp_path / f"a{suffix}")
+        first = (tmp_path / f"a{suffix}").read_bytes()
+        assert b"CreationDate" not in first and b"<dc:date>" not in first, suffix
+        save_atomic(fig, tmp_path / f"b{suffix}")
+        assert (tmp_path / f"b{suffix}").read_bytes() == first, suffix
+    plt.close(fig)
+    style.save(*plt.subplots()[:1], tmp_path / "c.png")
+    assert b"CreationDate" not in (tmp_path / "c.pdf").read_bytes()

@@ -78,18 +78,19 @@ def _registry_order() -> dict[str, int]:
         specs = methods.list_methods()
     except Exception:                                 # style must work without the registry (plugins absent)
         return {}
-    by_family: dict[str, list[str]] = {}
-    for s in specs:
-        by_family.setdefault(s.family, []).append(s.id)
-    return {mid: k for ids in by_family.values() for k, mid in enumerate(sorted(ids))}
+    by_family: dict[str, list[tuple[bool, str]]] = {}
+    for s in specs:   # fitbench's own methods first: installing a plugin never re-colours a built-in method
+        by_family.setdefault(s.family, []).append((not getattr(s, "builtin", True), s.id))
+    return {mid: k for ids in by_family.values() for k, (_, mid) in enumerate(sorted(ids))}
 
 
 _ORDER: dict[str, int] | None = None
 
 
 def method_index(method_id: str) -> int:
-    """A stable index for a method id: its rank within its family in the registry (sorted ids), so a method
-    keeps its colour in every figure; ids outside the registry get an index from a hash of the id."""
+    """A stable index for a method id: its rank within its family in the registry (sorted ids, the built-in
+    methods before the plugins' so that a plugin never changes a built-in method's colour), so a method keeps its
+    colour in every figure; ids outside the registry get an index from a hash of the id."""
     global _ORDER
     if _ORDER is None:
         _ORDER = _registry_order()

@@ -23,13 +23,26 @@ def pyplot():
     return plt
 
 
+#: metadata that would make a file differ from one save to the next (matplotlib's ``savefig(metadata=...)``:
+#: None leaves the entry out), per format: the same figure gives the same bytes (SVG ids are salted too)
+#: (PNG carries no date; matplotlib's PostScript always writes one and the file's name)
+REPRODUCIBLE_METADATA = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}
+
+
 def save_atomic(fig, path, *, dpi: float | None = None) -> None:
     """Write ``fig`` to ``path`` (format from the suffix; ``dpi`` None: matplotlib's ``savefig.dpi``)
     through :func:`methods.files.atomic_path`: the whole figure or the old file, through a symlink to its
-    regular target, a FIFO or a device refused; a new file gets the umask's mode."""
+    regular target, a FIFO or a device refused; a new file gets the umask's mode. No creation date is
+    written (``REPRODUCIBLE_METADATA``): saving the same figure again gives the same bytes."""
     path = Path(path)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format=path.suffix.lower().lstrip(".") or "png", **({} if dpi is None else {"dpi": dpi}))
+    fmt = path.suffix.lower().lstrip(".") or "png"
+    extra = {} if dpi is None else {"dpi": dpi}
+    if fmt in REPRODUCIBLE_METADATA:
+        extra["metadata"] = REPRODUCIBLE_METADATA[fmt]
+    import matplotlib
+    # SVG ids are random unless salted (matplotlib's svg.hashsalt)
+    with atomic_path(path) as tmp, matplotlib.rc_context({"svg.hashsalt": "fitbench"} if fmt == "svg" else {}):
+        fig.savefig(tmp, format=fmt, **extra)
 
 
 def tight(fig) -> None:

@@ -301,6 +301,63 @@ def test_bad_reference_and_repeated_point():
         methods.fit("roundness.iso12181", np.vstack([good, good[:1]]))
 
 
+def _arc(n, keep, *, start=0.0, lobes=((3, 1.5e-3, 0.4), (17, 3e-4, 1.0))):
+    """The ``keep`` of ``n`` equal angles from ``start`` (rad) of a lobed profile: a revolution with a part missing."""
+    pts, t, _ = lobed(n, list(lobes), center=(30.0, -5.0), radius=12.5)
+    idx = (np.arange(keep) + int(round(start / (2 * np.pi) * n))) % n
+    return pts[idx]
+
+
+@pytest.mark.parametrize("keep_deg,start_deg,cutoff", [(270, 0, 50), (270, 0, None), (270, 135, 1), (270, 135, 150),
+                                                     (180, 0, 15), (355, 40, 15), (355, 40, None)])
+def test_open_profile_is_refused(cutoff, keep_deg, start_deg):
+    """A 3600-point revolution with 5° to 180° missing, the gap at the wrap or in the middle: ISO 12181
+    defines roundness on the closed profile; the periodic filter joined the ends (a 270° arc read its 1.5 um
+    3-lobe as 1.27 um, all four circles 'ok'). One line naming the gap and what to do. (A 5° gap at a 1 UPR
+    cut-off is within the 51° spacing ISO 12181-2 allows there: evaluated.)"""
+    pts = _arc(3600, keep_deg * 10, start=np.radians(start_deg))
+    with pytest.raises(InvalidInputError, match="profile is open") as info:
+        methods.fit("roundness.iso12181", pts, cutoff_upr=cutoff)
+    msg = str(info.value)
+    assert "\n" not in msg and "measure the whole circumference" in msg
+    assert f"a gap of {360 - keep_deg + 0.1:.3g}°" in msg
+
+
+@pytest.mark.parametrize("layout", ["equal", "jitter 30 %", "random angles", "3 points dropped"])
+@pytest.mark.parametrize("cutoff", [None, 15, 50, 150])
+def test_closed_profiles_with_irregular_spacing_are_not_refused(layout, cutoff):
+    """What is closed passes the gap check: equal, jittered and uniformly random angles (largest step ~11
+    median steps at 2000 points), a few consecutive points missing (an outlier removal)."""
+    n = 2000
+    rng = np.random.default_rng(21)
+    h = 2 * np.pi / n
+    t = {"equal": h * np.arange(n), "jitter 30 %": np.sort(np.mod(h * np.arange(n) + rng.uniform(-0.3, 0.3, n) * h, 2 * np.pi)),
+         "random angles": np.sort(rng.uniform(0, 2 * np.pi, n)),
+         "3 points dropped": np.delete(h * np.arange(n), [700, 701, 702])}[layout]
+    pts, _, _ = lobed(t.size, [(3, 1e-3, 0.0), (7, 2e-4, 1.0)], angles=t)
+    res = methods.fit("roundness.iso12181", pts, cutoff_upr=cutoff, reference="lsci")
+    assert res.references["lsci"]["RONt"] > 0
+
+
+def test_sparse_published_profile_at_the_standards_spacing_is_not_refused():
+    """The published 25-point profile at 3 UPR: its largest step (20.3°) exceeds ISO 12181-2's 17.1° but is
+    1.4 median steps: a sparse closed sampling, evaluated (the roundness study's row)."""
+    import datasets
+    pts = datasets.load("roundness_set1", drop_repeated_closing_point=True).points
+    assert methods.fit("roundness.iso12181", pts, cutoff_upr=3).references["mzci"]["RONt"] > 0
+
+
+def test_cli_open_profile_one_line_exit_2(tmp_path, capsys):
+    from fitbench.cli.commands import main
+    f = tmp_path / "threeq.csv"
+    np.savetxt(f, _arc(3600, 2700), delimiter=",", header="x,y", comments="")
+    assert main(["roundness", str(f), "--cutoff", "50"]) == 2
+    cap = capsys.readouterr()
+    err = cap.err.strip()
+    assert err.startswith("fitbench: error: roundness: the profile is open") and "\n" not in err
+    assert "Traceback" not in err and "RONt" not in cap.out
+
+
 def test_evaluate_pure_function_matches_registered():
     pts, _, _ = lobed(500, [(4, 1e-3, 0.0)])
     ev = evaluate(pts, cutoff_upr=15, reference="lsci")

@@ -67,6 +67,7 @@ def filtered_profile(points: np.ndarray, cutoff_upr: float | None) -> dict:
     c0 = np.array(raw.center)
     ang = np.arctan2(points[:, 1] - c0[1], points[:, 0] - c0[0])
     order, theta = rfilter.order_by_angle(ang)
+    rfilter.check_closed(theta, cutoff_upr)
     r = radial_distances(points, c0)[order]
     dev = r - raw.radius
     dev_f, path = rfilter.gaussian_filter(theta, dev, cutoff_upr)
@@ -85,12 +86,12 @@ def evaluate(points: np.ndarray, cutoff_upr=50, reference: str = "all", lobes: i
     points = methods.validate_points(points, min_points=MIN_POINTS, method="roundness")
     cutoff = rfilter.parse_cutoff(cutoff_upr)
     check_choice("reference", reference, ("all", *REFERENCES), "roundness")
+    prof = filtered_profile(points, cutoff)   # refuses an open profile before any warning about its sampling
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", rfilter.UndersampledWarning)
         note = rfilter.check_sampling(points.shape[0], cutoff)
     for w in caught:  # re-issue to the caller's filters, keep the text for the result
         warnings.warn(w.message, w.category, stacklevel=2)
-    prof = filtered_profile(points, cutoff)
     kinds = list(REFERENCES) if reference == "all" else [reference]
     refs, ok, messages = {}, True, []
     for kind in kinds:

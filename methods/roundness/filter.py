@@ -60,6 +60,9 @@ NUFFT_TOL = 1e-13
 #: Angles count as equally spaced when each lies within this fraction of a step 2 pi / N from an equal grid
 #: (an eccentricity e of the instrument's spindle about the LSCI centre displaces them by e / R rad).
 EQUAL_SPACING_TOL = 1e-3
+#: A profile is open when its largest angular step exceeds this many median steps and ISO 12181-2's spacing
+#: for the cut-off (:func:`check_closed`).
+GAP_MEDIAN_STEPS = 25
 
 
 class UndersampledWarning(UserWarning):
@@ -110,6 +113,41 @@ def order_by_angle(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         raise InvalidInputError(f"roundness: two points lie at the same polar angle (point {i}); a closed profile "
                                 "needs one point per angle (drop a repeated closing point)")
     return order, a
+
+
+def check_closed(sorted_angles: np.ndarray, cutoff_upr: float | None) -> None:
+    """Refuse an open profile (an arc, or a revolution with a part missing): ISO 12181-1:2011 defines the
+    roundness parameters on the closed roundness profile, the whole circumference of the section, and the
+    ISO 16610-21 clause 5 filter is the closed-profile (periodic) one, which would join the two ends of an arc
+    across the gap as if they were neighbours.
+
+    The largest angular step between neighbouring points (the wrap-around one included) is a gap when it
+    exceeds both
+      * GAP_MEDIAN_STEPS x the median step: more than the spacing's own irregularity (uniformly random
+        angles, the most irregular closed sampling, have a largest step of about ln(N) / ln(2) median steps,
+        10 to 17 for 1e3 to 1e5 points), and
+      * the step ISO 12181-2 asks of the sampling for the cut-off, 2 pi / (7 lambda_c), at most 2 pi / 7
+        (7 points per revolution); unfiltered: no such term (the median rule alone),
+    so the check refuses what is missing, never a sparse but spread-out sampling the standard allows."""
+    n = sorted_angles.size
+    steps = np.diff(np.concatenate([sorted_angles, [sorted_angles[0] + 2 * np.pi]]))
+    i = int(np.argmax(steps))
+    gap, median = float(steps[i]), float(np.median(steps))
+    limit = GAP_MEDIAN_STEPS * median
+    spec = ""
+    if cutoff_upr is not None:
+        spacing = 2 * np.pi / (POINTS_PER_CUTOFF * max(cutoff_upr, 1.0))
+        spec = f" and than the {math.degrees(spacing):.3g}° spacing ISO 12181-2 allows at a {cutoff_upr:g} UPR cut-off"
+        limit = max(limit, spacing)
+    if gap <= limit:
+        return
+    start = math.degrees(np.mod(sorted_angles[i], 2 * np.pi))
+    end = math.degrees(np.mod(sorted_angles[(i + 1) % n], 2 * np.pi))
+    raise InvalidInputError(
+        f"roundness: the profile is open: no point between {start:.1f}° and {end:.1f}° (a gap of {math.degrees(gap):.3g}°, "
+        f"wider than {GAP_MEDIAN_STEPS} x the median spacing of {math.degrees(median):.3g}°{spec}); ISO 12181 roundness "
+        "is defined on the closed profile: measure the whole circumference, or fit a circle to the arc "
+        "(fitbench fit circle.minimum_zone FILE) for its centre, radius and form error")
 
 
 def equal_grid_origin(sorted_angles: np.ndarray, tol: float = EQUAL_SPACING_TOL) -> float | None:

@@ -197,7 +197,7 @@ def test_quick_run_is_marked_in_the_pdf_source(built):
                     "texlive-latex-extra texlive-science)")
 def test_docs_say_how_to_get_the_pdf_and_the_command_works(built):
     """docs/report.md gives the command that compiles report.tex to report.pdf; run in the built folder, it
-    makes the PDF."""
+    makes the PDF with settled page numbers."""
     from pathlib import Path
     docs = (Path(__file__).resolve().parents[1] / "docs" / "report.md").read_text(encoding="utf-8")
     command = next(line for line in docs.splitlines() if line.startswith("cd paper && pdflatex"))
@@ -207,6 +207,9 @@ def test_docs_say_how_to_get_the_pdf_and_the_command_works(built):
                           text=True, timeout=600, stdin=subprocess.DEVNULL)
     assert done.returncode == 0, done.stdout[-2000:]
     assert (built / "report.pdf").stat().st_size > 10_000
+    # the page numbers have settled (two passes left "Label(s) may have changed": a contents with wrong pages)
+    log = (built / "report.log").read_text(encoding="latin-1")
+    assert not re.search(r"Rerun to get|Label\(s\) may have changed", log), log[-2000:]
 
 
 def test_the_committed_paper_shows_every_study_from_its_last_run():

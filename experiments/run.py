@@ -353,9 +353,13 @@ def _main(argv=None) -> int:
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if threading.current_thread() is threading.main_thread() else None
     try:
         if args.list:
-            for name in configs.available():
-                cfg = configs.load(name)
-                print(f"{name:<18} {'default' if cfg.get('default') else '       '}  {cfg['title']}")
+            try:
+                for name in configs.available():
+                    cfg = configs.load(name)
+                    print(f"{name:<18} {'default' if cfg.get('default') else '       '}  {cfg['title']}")
+                sys.stdout.flush()
+            except BrokenPipeError:   # `--list | head -1`: the reader has all it wanted (as `fitbench list | head`)
+                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # nothing left to flush at exit
             return 0
         if args.jobs < 1:
             raise InvalidInputError(f"--jobs must be at least 1, got {args.jobs}")

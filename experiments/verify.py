@@ -48,7 +48,13 @@ def main(argv=None) -> int:
                                        "--out results/quick and committed)" if args.quick else ""))
         if args.against is not None and not args.against.is_dir():
             raise InvalidInputError(f"--against {args.against} is not a folder of results")
-        studies = args.studies or sorted(p.parent.name for p in results.glob("*/results.csv"))
+        present = sorted(p.parent.name for p in results.glob("*/results.csv"))
+        known = configs.available()
+        for s in args.studies:   # a name that is neither a study here nor a known one: never "run it first"
+            if s not in present and s not in known:
+                raise InvalidInputError(f"unknown study {s!r}: --results {results} holds "
+                                        f"{', '.join(present) or 'no study'}; the known studies are {', '.join(known)}")
+        studies = args.studies or present
         if not studies:
             raise InvalidInputError(f"--results {results} holds no study (no */results.csv)")
         for s in studies:

@@ -65,6 +65,20 @@ def test_list_and_defaults(capsys):
         n for n in configs.available() if configs.load(n).get("default")}
 
 
+def test_list_into_a_closed_pipe_ends_quietly():
+    """`python -m experiments.run --list | head -1`: the reader closed the pipe; the listing ends with exit 0 and
+    nothing on stderr, as `fitbench list | head` (it said "cannot write: Broken pipe; the finished rows are
+    kept ..." with exit 2)."""
+    read, write = os.pipe()
+    os.close(read)   # the reader has gone before anything is written
+    try:
+        done = subprocess.run([sys.executable, "-m", "experiments.run", "--list"], cwd=REPO, stdout=write,
+                              stderr=subprocess.PIPE, text=True, timeout=120)
+    finally:
+        os.close(write)
+    assert done.returncode == 0 and done.stderr == ""
+
+
 @pytest.mark.slow
 def test_two_runs_identical_and_rows_complete(tmp_path):
     cfg = tiny(tmp_path)

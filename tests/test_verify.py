@@ -365,3 +365,13 @@ def test_the_reports_hints_give_the_command_that_regenerates_these_results(tmp_p
     shutil.copytree(out, default)
     older = dict(study_verdicts(default, ["vother"], quick={"vother": True}, shown="results/quick")["vother"])
     assert older["Older results"].endswith("rerun it with python -m experiments.run vother --quick.")
+
+
+def test_an_unknown_study_is_named_unknown_with_the_known_ones(committed, tmp_path, capsys):
+    """`experiments.verify nosuch --against DIR` said "run python -m experiments.run nosuch ... first", a study
+    that does not exist: it is unknown, and the studies of --results and the known ones are listed."""
+    fresh = copy_run(committed, tmp_path)
+    assert verify.main(["nosuch", "--results", str(committed), "--against", str(fresh)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "unknown study 'nosuch'" in err
+    assert "vstudy" in err and "published" in err and "experiments.run nosuch" not in err

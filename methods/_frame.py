@@ -26,6 +26,7 @@ import os
 import threading
 import weakref
 from dataclasses import dataclass
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
@@ -158,11 +159,28 @@ KERNEL_MODULE = "methods.circle._ckernels"
 
 
 _loaded: dict = {}
+#: reads FITBENCH_KERNELS for :func:`point_kernels` (chosen at its first call, see :func:`_choice_reader`)
+_read_choice = None
+
+
+def _choice_reader():
+    """The compiled kernels' ``env_value`` (C ``getenv``: the environment os.environ writes through, without the
+    KeyError os.environ.get raises and catches for an unset variable, which cost more than the kernel sweeps
+    of a small fit), or os.environ.get where the kernels are not built."""
+    global _read_choice
+    try:
+        from methods.circle._ckernels import env_value
+    except ImportError:
+        _read_choice = partial(os.environ.get, "FITBENCH_KERNELS")
+    else:
+        _read_choice = partial(env_value, b"FITBENCH_KERNELS")
+    return _read_choice
+
 
 def point_kernels():
     """The compiled point-set kernels, or None on the NumPy reference path (``FITBENCH_KERNELS=numpy``);
     the choice is read from the environment at every call (cached per value: a fit calls this thrice)."""
-    choice = os.environ.get("FITBENCH_KERNELS")
+    choice = (_read_choice or _choice_reader())()
     try:
         return _loaded[choice]
     except KeyError:

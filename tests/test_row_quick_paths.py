@@ -46,9 +46,13 @@ def test_plain_row():
     row = {"a": 1.5, "b": float("nan"), "c": float("-inf"), "d": np.float64(2.5), "e": np.float64("nan"),
            "f": np.int64(3), "g": np.bool_(True), "h": "text", "i": 7, "j": True, "k": None, "l": np.float32(0.5),
            "m": [1.0, 2.0]}
-    got = rows._plain(row)
-    assert got == _plain_reference(row) and list(got) == list(row)
-    assert [type(v) for v in got.values()] == [type(v) for v in _plain_reference(row).values()]
+    plain = {"a": 1.5, "b": "x", "c": 3, "d": True, "e": None, "f": -0.0, "g": 1e308}
+    for given in (row, plain, {**plain, "h": 1e308}, {**plain, "h": float("inf")}, {**plain, "h": float("nan")},
+                  {**plain, "h": np.float64(1.0)}, {"s": "only text"}, {}):
+        got = rows._plain(given)
+        want = _plain_reference(given)
+        assert got == want and list(got) == list(given) and got is not given
+        assert [type(v) for v in got.values()] == [type(v) for v in want.values()]
 
 
 CIRCLES = [dict(), dict(center=[1200.0, 650.0], radius=299.0, n=40), dict(center=[0, 0], radius=1, n=7),
@@ -88,3 +92,21 @@ def test_exact_keys():
     key = synthetic._exact_key
     assert key(0.0) != key(-0.0) and key(1) != key(1.0) and key([1.0, 2.0]) == key((1.0, 2.0))
     assert key(float("nan")) is None and key(True) is None and key(np.float64(1.0)) is None and key("1") is None
+
+
+def test_the_kernel_choice_follows_os_environ_in_process(monkeypatch):
+    """point_kernels reads FITBENCH_KERNELS through the C environment that os.environ writes (no KeyError per
+    call): setting, changing and deleting it in process switches the path at the next call."""
+    from methods import _frame
+    from methods.circle import _ckernels
+    monkeypatch.delenv("FITBENCH_KERNELS", raising=False)
+    assert _frame.point_kernels() is _ckernels
+    for value, path in (("numpy", None), ("compiled", _ckernels), (" NumPy ", None), ("", _ckernels)):
+        monkeypatch.setenv("FITBENCH_KERNELS", value)
+        assert _ckernels.env_value(b"FITBENCH_KERNELS") == value.encode()
+        assert _frame.point_kernels() is path, value
+    monkeypatch.delenv("FITBENCH_KERNELS")
+    assert _ckernels.env_value(b"FITBENCH_KERNELS") is None and _frame.point_kernels() is _ckernels
+    monkeypatch.setenv("FITBENCH_KERNELS", "cuda")
+    with pytest.raises(ValueError, match="FITBENCH_KERNELS='cuda' is not one of"):
+        _frame.point_kernels()

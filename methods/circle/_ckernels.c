@@ -31,6 +31,7 @@
 #include <Python.h>
 #include <math.h>
 #include <string.h>
+#include <stdlib.h>
 
 #define BLOCK 256
 #define MAXLEV 64
@@ -619,7 +620,23 @@ static PyObject *psd_decrease(PyObject *self, PyObject *args) {
     return PyFloat_FromDouble(dec);
 }
 
+/* ---- the process environment without os.environ's Python layers ---------------------------------------
+ * getenv(name) as bytes or None: what os.environ holds (it updates the C environment through putenv/unsetenv
+ * under the GIL, as this reads it), without the KeyError that os.environ.get raises and catches for an unset
+ * name (methods/_frame.py reads the kernel choice for every sweep of a fit). */
+static PyObject *env_value(PyObject *self, PyObject *name) {
+    const char *v;
+    if (!PyBytes_Check(name)) {
+        PyErr_SetString(PyExc_TypeError, "env_value: the name must be bytes");
+        return NULL;
+    }
+    v = getenv(PyBytes_AS_STRING(name));
+    if (v == NULL) Py_RETURN_NONE;
+    return PyBytes_FromString(v);
+}
+
 static PyMethodDef Methods[] = {
+    {"env_value", env_value, METH_O, "env_value(name: bytes) -> the environment variable's value as bytes, or None"},
     {"frame_stats", frame_stats, METH_VARARGS,
      "frame_stats(points) -> (token, mean_x, mean_y, Sxx, Syy, Sxy): pass 1 (centroid, centred scatter)"},
     {"moments", moments, METH_VARARGS,

@@ -29,7 +29,7 @@ from experiments import engine
 from experiments import study as contract
 from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
-from experiments.summary import summarise, to_markdown
+from experiments.summary import summarise, summary_units, to_markdown
 from fitbench import __version__
 import methods
 from methods import InvalidInputError
@@ -213,7 +213,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     buf = io.StringIO()
     summary.to_csv(buf, index=False, float_format="%.10g")
     write_atomic(target / "summary.csv", buf.getvalue())
-    write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary))
+    write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary, units=summary_units(summary, cfg)))
     write_atomic(target / "meta.json", json.dumps(meta, indent=1, default=str) + "\n")
     remove_leftover_tmp(target)
     bad = {k: v for k, v in meta["status_counts"].items() if k != "ok"}

@@ -59,7 +59,55 @@ def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
     return pd.DataFrame(groups)
 
 
-def to_markdown(df: pd.DataFrame, floatfmt: str = ".4g") -> str:
-    """A GitHub Markdown table (``experiments.render.page.markdown_table``)."""
+#: the generators' parameters that are lengths (``datasets.synthetic``: lengths in the unit of the data)
+DATA_LENGTHS = ("data_center", "data_radius", "data_semi_axes", "data_noise")
+_LENGTHS = {"mm", "µm", "um", "nm", "m", "cm"}
+
+
+def length_unit(cfg: dict | None) -> str | None:
+    """The unit a study declares for its lengths: the ``unit`` of its ``[[rankings]]`` of a length metric when
+    that differs from the metric's declared unit ('R' for data on a unit circle, as the noise study declares),
+    else None (the result classes' declared units)."""
+    from experiments.study import column_unit
+    for decl in (cfg or {}).get("rankings") or []:
+        unit, own = decl.get("unit"), column_unit(str(decl.get("metric", "")))
+        if unit and own in _LENGTHS and unit != own:
+            return str(unit)
+    return None
+
+
+def summary_units(summary: pd.DataFrame, cfg: dict | None = None) -> dict[str, str]:
+    """{column: unit} of a :func:`summarise` table ('' for counts and shares): each statistic of a row column
+    takes that column's declared unit (``experiments.study.column_unit``: the result classes' declarations, s for
+    timings, a unit suffix such as ``_deg``); lengths in the study's own length unit where it declares one
+    (:func:`length_unit`)."""
+    from experiments.study import column_unit
+    lengths = length_unit(cfg)
+    source = {"form_error_median": "form_error", "iterations_median": "iterations", "time_median_s": "time_median_s"}
+    for col in result_base.truth_error_columns():
+        name = col.replace("_error", "")
+        source[f"{name}_rmse"] = source[f"{name}_bias"] = col
+    units = {}
+    for c in summary.columns:
+        if c in ("runs", "ok_share"):
+            units[c] = ""
+            continue
+        unit = column_unit(source.get(c, c))
+        if lengths and (unit in _LENGTHS or (c in DATA_LENGTHS and not unit)):
+            unit = lengths
+        elif c in DATA_LENGTHS and not unit:
+            unit = column_unit("form_error")     # a length of the data: the declared length unit
+        units[c] = unit
+    return units
+
+
+def to_markdown(df: pd.DataFrame, floatfmt: str = ".4g", units: dict[str, str] | None = None) -> str:
+    """A GitHub Markdown table (``experiments.render.page.markdown_table``) whose headers carry the units
+    (``units``: {column: unit}, default :func:`summary_units` of ``df``): 'form error median [mm]'."""
     from experiments.render.page import markdown_table
-    return markdown_table(df, floatfmt, escape=False) + "\n"
+    from experiments.render.text import human_unit
+    from experiments.study import readable
+    units = summary_units(df) if units is None else units
+    shown = df.rename(columns={c: readable(c) + (f" [{human_unit(units[c])}]" if units.get(c) else "")
+                               for c in df.columns})
+    return markdown_table(shown, floatfmt, escape=False) + "\n"

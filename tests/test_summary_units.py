@@ -1,0 +1,64 @@
+"""Every number of a study's summary.md carries its unit: the headers take the units the result classes declare
+(form error, centre and radius errors in the data's unit, angles in rad, timings in s), a study on unit circles
+its declared 'R'; counts and shares carry none."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pandas as pd
+
+from experiments.run import run_study
+from experiments.summary import summary_units, to_markdown
+
+STUDY = '''name = "ustudy"
+title = "units test study"
+kind = "grid"
+seed = 5
+repetitions = 2
+
+[[datasets]]
+generator = "circle"
+params = { center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }
+
+[[methods]]
+id = "circle.kasa"
+[[methods]]
+id = "circle.gauss_newton"
+'''
+
+UNITLESS = {"runs", "ok share", "iterations median", "n", "dataset", "method", "params"}
+
+
+def _header(md: str) -> list[str]:
+    line = next(x for x in md.splitlines() if x.startswith("|"))
+    return [c.strip() for c in line.strip("|").split("|")]
+
+
+def test_summary_md_headers_carry_the_declared_units(tmp_path):
+    cfg = tmp_path / "ustudy.toml"
+    cfg.write_text(STUDY, encoding="utf-8")
+    run_study(str(cfg), tmp_path / "out", quick=False, jobs=1, log=lambda *a: None)
+    head = _header((tmp_path / "out" / "ustudy" / "summary.md").read_text(encoding="utf-8"))
+    assert "form error median [mm]" in head and "center rmse [mm]" in head and "radius bias [mm]" in head
+    assert "time median [s]" in head or not any(h.startswith("time") for h in head)
+    numbers = pd.read_csv(tmp_path / "out" / "ustudy" / "summary.csv")   # machine-readable names stay
+    assert "form_error_median" in numbers.columns
+    for h, col in zip(head, numbers.columns):
+        if pd.api.types.is_numeric_dtype(numbers[col]) and h not in UNITLESS:
+            assert re.search(r"\[[^]]+\]$", h), f"{col}: {h!r} has no unit"
+
+
+def test_a_unit_circle_study_shows_its_lengths_relative_to_the_radius():
+    """The noise study declares its rankings in R (unit circles): its summary's lengths are in R too, angles
+    and timings keep theirs."""
+    summary = pd.DataFrame({"data_noise": [0.01], "method": ["circle.kasa"], "runs": [4], "ok_share": [1.0],
+                            "form_error_median": [0.03], "center_rmse": [0.002], "angle_bias": [0.1],
+                            "time_median_s": [1e-5], "iterations_median": [np.nan]})
+    cfg = {"rankings": [{"profile": "p", "metric": "center_error", "unit": "R"},
+                        {"profile": "t", "metric": "time_median_s", "unit": "s"}]}
+    head = _header(to_markdown(summary, units=summary_units(summary, cfg)))
+    assert head == ["noise [R]", "method", "runs", "ok share", "form error median [R]", "center rmse [R]",
+                    "angle bias [rad]", "time median [s]", "iterations median"]
+    plain = _header(to_markdown(summary))
+    assert "form error median [mm]" in plain and "noise [mm]" in plain

@@ -3,7 +3,7 @@ circular-test runs (x, y or angle + radial deviation, one or both directions in 
 positioning tables (long or wide laser exports, :func:`read_positioning`) and multilateration lengths
 (:func:`read_multilateration`). Header optional; comma, semicolon, tab or whitespace separated (tab and
 whitespace files may use decimal commas, header or not; fields may be double-quoted, quoted decimal commas
-too); UTF-8, UTF-16 with BOM, else Windows-1252 (:func:`file_encoding`); ``#`` and ``%`` comment lines; ``skip_rows``
+too); UTF-8, UTF-16 or UTF-32 (with a BOM or without), else Windows-1252 (:func:`file_encoding`); ``#`` and ``%`` comment lines; ``skip_rows``
 drops a preamble (instrument software writes test conditions above the table). Every reader takes the
 file's length unit (``unit``, default mm) and returns millimetres.
 
@@ -78,7 +78,8 @@ class EncodingNote(UserWarning):
 
 
 def file_encoding(path) -> str:
-    """The text encoding of ``path``: UTF-16 when it starts with a UTF-16 byte-order mark, UTF-8 (a BOM
+    """The text encoding of ``path``: UTF-32 or UTF-16 when it starts with their byte-order mark, or when its first
+    64 KiB hold NUL bytes and read as such text without one (:func:`_wide_without_bom`), UTF-8 (a BOM
     skipped) when its bytes are UTF-8, else Windows-1252 (``cp1252``, the Windows exports' ANSI code page, a
     superset of Latin-1's printable characters), or Latin-1 for bytes cp1252 leaves undefined. The UTF-8
     check streams the file in 4 MiB blocks (ASCII blocks are checked without decoding)."""
@@ -92,10 +93,11 @@ def file_encoding(path) -> str:
         return _ENCODINGS[key]
     try:
         with open_regular(name, encoding=None) as fh:
-            head = fh.read(2)
-            if head in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
-                enc = "utf-16"
-            else:
+            head = fh.read(1 << 16)
+            enc = ("utf-32" if head[:4] in (codecs.BOM_UTF32_LE, codecs.BOM_UTF32_BE) else
+                   "utf-16" if head[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) else
+                   _wide_without_bom(head) if b"\x00" in head else None)
+            if enc is None:
                 fh.seek(0)
                 enc, dec = "utf-8-sig", codecs.getincrementaldecoder("utf-8")()
                 while True:
@@ -119,6 +121,26 @@ def file_encoding(path) -> str:
         return "utf-8-sig"   # the open below reports it in one line
     _ENCODINGS[key] = enc
     return enc
+
+
+#: bytes per code unit of the wide encodings :func:`file_encoding` may decide (1 for the others)
+CODE_UNIT_BYTES = {"utf-16": 2, "utf-16-le": 2, "utf-16-be": 2, "utf-32": 4, "utf-32-le": 4, "utf-32-be": 4}
+
+
+def _wide_without_bom(head: bytes) -> str | None:
+    """The UTF-32 or UTF-16 byte order (``utf-32-le``, ..., ``utf-16-be``) in which the first bytes of a file
+    holding NUL bytes decode strictly to text without NULs, nearly all printable and mostly ASCII (a table
+    saved as "Unicode" without a byte-order mark); None for anything else (a binary file, a stray NUL in ASCII
+    text: read as before, its line refused)."""
+    for enc in ("utf-32-le", "utf-32-be", "utf-16-le", "utf-16-be"):
+        try:
+            text = codecs.getincrementaldecoder(enc)().decode(head, final=False)
+        except UnicodeDecodeError:
+            continue
+        if text and "\x00" not in text and sum(c.isascii() for c in text) >= 0.5 * len(text) and \
+                sum(c.isprintable() or c in "\r\n\t" for c in text) >= 0.99 * len(text):
+            return enc
+    return None
 
 
 def note_encoding(path) -> None:
@@ -176,7 +198,7 @@ def check_line_lengths(path) -> None:
     """Refuse a file holding a line longer than :data:`MAX_LINE_CHARS` bytes (vectorised over 4 MiB blocks),
     before a parser that reads a whole line into memory sees it."""
     name = os.fspath(path)
-    limit = (MAX_LINE_CHARS + 1) * (2 if file_encoding(name) == "utf-16" else 1)   # bytes; + 1: a CR before the LF
+    limit = (MAX_LINE_CHARS + 1) * CODE_UNIT_BYTES.get(file_encoding(name), 1)   # bytes; + 1: a CR before the LF
     with _open_text(name) as text:
         fh = text.buffer
         lineno, run = 1, 0
@@ -402,6 +424,9 @@ def _diagnose(layout: Layout, idx, skip_rows: int):
         ln = ln.strip()
         if lineno < layout.first_data_line or not ln or ln.startswith(COMMENT_PREFIXES):
             continue
+        if "\x00" in ln:
+            raise DataFileError(f"{name} line {lineno}: holds NUL bytes, so it is not a text table; if it is UTF-16 or "
+                                "UTF-32 text, save it as UTF-8 (or with a byte-order mark)")
         toks = _split(ln, layout.sep)
         if len(toks) != layout.ncol:
             raise DataFileError(f"{name} line {lineno}: {len(toks)} fields where the first line has {layout.ncol}: {ln!r}"

@@ -2,6 +2,8 @@
 tab files with decimal commas, ragged point lists, and the same refusals through every table reader."""
 from __future__ import annotations
 
+import codecs
+
 import numpy as np
 import pytest
 
@@ -136,6 +138,29 @@ def test_a_preamble_above_rows_with_a_direction_label_gets_the_skip_rows_hint(tm
     with pytest.raises(DataFileError, match=r"give --skip-rows 3 \(the first row of numbers is line 5\)"):
         read_positioning(pos)
     assert len(read_positioning(pos, skip_rows=3).targets) == 5
+
+
+@pytest.mark.parametrize("n", [12, 4000])          # below and above the small-file size (the pandas path)
+@pytest.mark.parametrize("encoding, bom", [("utf-16-le", False), ("utf-16-be", False), ("utf-32-le", False),
+                                           ("utf-32-be", False), ("utf-32", True)])
+def test_utf16_and_utf32_tables_are_read_with_or_without_a_byte_order_mark(tmp_path, encoding, bom, n):
+    """'Unicode' exports without a byte-order mark, and UTF-32 with one, were read as UTF-8 or UTF-16 and
+    refused as "'\\x001\\x00' is not a number": each is read, and gives the UTF-8 file's numbers."""
+    text = "x [µm];y [µm]\n" + "\n".join(circle_lines(n)).replace(",", ";") + "\n"
+    utf8 = tmp_path / "utf8.csv"
+    utf8.write_text(text, encoding="utf-8")
+    wide = tmp_path / f"{encoding}.csv"
+    wide.write_bytes(text.encode(encoding))               # Python's "utf-32" writes the BOM, the -le/-be forms none
+    assert wide.read_bytes().startswith((codecs.BOM_UTF32_LE, codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)) == bom
+    np.testing.assert_array_equal(read_points(wide), read_points(utf8))
+    assert len(read_points(wide)) == n
+
+
+def test_a_stray_nul_byte_is_named_in_one_line(tmp_path):
+    path = tmp_path / "nul.csv"
+    path.write_bytes(b"x,y\n1,0\n0,1\n-1,0\n0\x00,-1\n")
+    with pytest.raises(DataFileError, match=r"line 5: holds NUL bytes, so it is not a text table; if it is UTF-16"):
+        read_points(path)
 
 
 @pytest.mark.parametrize("preamble, skip", [(["Roundness trace", "Part: shaft"], 2), (["Talyrond"], 1)])

@@ -4,4 +4,4 @@ import sys
 
 from fitbench.cli.commands import main
 
-sys.exit(main())
+sys.exit(main(prog="python -m methods"))

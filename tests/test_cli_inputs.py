@@ -186,3 +186,28 @@ def test_a_plugin_method_that_prints_leaves_stdout_to_the_json(tmp_path, plugin_
     ref = methods.fit("circle.kasa", np.loadtxt(shaft, delimiter=",", skiprows=1))
     assert d["method"] == "circle.cli_chatty" and d["radius"] == pytest.approx(ref.radius, rel=1e-12)
     assert "iteration 1: cost 0.5" in out.stderr and "iteration 2: cost 0.1" in out.stderr
+
+
+# ------------------------------------------------------------------------------------------ program name
+def test_errors_and_warnings_name_the_program_the_user_ran(tmp_path):
+    """'python -m methods run' answered 'fitbench: error: ... invalid choice'; the lines now start with the
+    program used, and the experiment subcommands are pointed to the command that has them."""
+    from conftest import run_python
+    from fitbench.cli import DELEGATED
+    from fitbench.cli.commands import EXPERIMENT_SUBCOMMANDS, main as commands_main
+    assert set(EXPERIMENT_SUBCOMMANDS) == set(DELEGATED)
+    out = run_python("-m", "methods", "run", "published")
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    assert out.stderr.startswith("python -m methods: error: 'run' is a subcommand of fitbench"), out.stderr
+    assert "'fitbench run ...'" in out.stderr and len(out.stderr.strip().splitlines()) == 1
+    latin = tmp_path / "latin.csv"
+    latin.write_bytes("x [µm],y [µm]\n".encode("cp1252") + b"".join(b"%.4f,%.4f\n" % (np.cos(a) * 1e3, np.sin(a) * 1e3)
+                                                                    for a in np.linspace(0, 6, 20)))
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        assert commands_main(["fit", "circle.kasa", str(latin)], prog="python -m methods") == 0
+        assert commands_main(["fit", "circle.kasa", str(tmp_path / "absent.csv")], prog="python -m methods") == 2
+    lines = err.getvalue().strip().splitlines()
+    assert lines[0].startswith("python -m methods: warning: ") and "Windows-1252" in lines[0], lines
+    assert lines[-1].startswith("python -m methods: error: ") and "absent.csv: no such file" in lines[-1], lines
+    assert cli("fit", "circle.kasa", tmp_path / "absent.csv").stderr.startswith("fitbench: error: ")

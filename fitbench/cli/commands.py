@@ -20,6 +20,7 @@ import warnings
 
 import numpy as np
 
+import fitbench.cli.options as cli_options
 import methods
 from methods import InvalidInputError
 from methods.units import JSON_UNITS, UNIT_CHOICES, canonical, warn_implausible
@@ -30,6 +31,9 @@ from fitbench.cli.options import (PROFILE_LIMIT_MM, add_reader_options, add_repo
                                   write_text_atomic)
 
 EXIT_BAD_INPUT = 2
+#: the subcommands of ``fitbench`` that run the experiment modules (fitbench.cli.DELEGATED), absent from
+#: ``python -m methods``
+EXPERIMENT_SUBCOMMANDS = ("run", "report", "verify")
 #: a method raised an exception of its own (a bug in the method, not bad input): one line, this status
 EXIT_METHOD_FAILED = 3
 
@@ -663,11 +667,18 @@ def build_parser(prog: str = PROG, extra_commands: dict | None = None) -> argpar
     return p
 
 
-def main(argv=None, prog: str = PROG, extra_commands: dict | None = None) -> int:
+def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) -> int:
+    """The command ``prog`` (``fitbench``, or ``python -m methods`` without the experiment subcommands): error
+    and warning lines start with ``prog`` (:data:`fitbench.cli.options.PROGRAM`)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    saved, cli_options.PROGRAM = cli_options.PROGRAM, prog
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", category=UserWarning)
             try:
+                if argv and argv[0] in EXPERIMENT_SUBCOMMANDS and argv[0] not in (extra_commands or {}):
+                    raise InvalidInputError(f"'{argv[0]}' is a subcommand of fitbench, not of {prog}: use "
+                                            f"'fitbench {argv[0]} ...' or 'python -m experiments.{argv[0]} ...'")
                 args = build_parser(prog, extra_commands).parse_args(argv)
                 return args.func(args)
             finally:
@@ -675,10 +686,12 @@ def main(argv=None, prog: str = PROG, extra_commands: dict | None = None) -> int
                     if issubclass(w.category, UserWarning):
                         warn(str(w.message))
     except InvalidInputError as exc:
-        print(f"fitbench: error: {exc}", file=sys.stderr)
+        print(f"{prog}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except MethodFailed as exc:
-        print(f"fitbench: error: {exc}", file=sys.stderr)
+        print(f"{prog}: error: {exc}", file=sys.stderr)
         return EXIT_METHOD_FAILED
     except BrokenPipeError:
         return 0
+    finally:
+        cli_options.PROGRAM = saved

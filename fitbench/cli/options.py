@@ -23,8 +23,12 @@ def version() -> str:
     return __version__
 
 
+#: the program the user ran, which starts every error and warning line (set by :func:`fitbench.cli.commands.main`)
+PROGRAM = "fitbench"
+
+
 def warn(message: str) -> None:
-    print(f"fitbench: warning: {message}", file=sys.stderr)
+    print(f"{PROGRAM}: warning: {message}", file=sys.stderr)
 
 
 def finite(name: str, value, *, positive: bool = False, allow_none: bool = True):

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-import sys
 import warnings
 
 import numpy as np
@@ -11,7 +10,7 @@ from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
                                   add_tolerance_option, check_plot_path, parse_tolerances, test_conditions, read_profile_args, save_figure, verdict, verdict_lines,
-                                  verdict_title, write_report)
+                                  verdict_title, warn, write_report)
 
 
 def add_parser(subparsers):
@@ -51,7 +50,7 @@ def run(args) -> int:
         res = methods.fit("roundness.iso12181", points, cutoff_upr=cutoff, reference=args.reference)
     for w in caught:
         if issubclass(w.category, UndersampledWarning):
-            print(f"fitbench: warning: {w.message}", file=sys.stderr)
+            warn(str(w.message))
     check = verdict({f"{name} {kind.upper()}": r[name] for kind, r in res.references.items() for name in tolerances},
                     {f"{name} {kind.upper()}": tol for kind in res.references for name, tol in tolerances.items()})
     if plot_path:

@@ -211,3 +211,25 @@ def test_errors_and_warnings_name_the_program_the_user_ran(tmp_path):
     assert lines[0].startswith("python -m methods: warning: ") and "Windows-1252" in lines[0], lines
     assert lines[-1].startswith("python -m methods: error: ") and "absent.csv: no such file" in lines[-1], lines
     assert cli("fit", "circle.kasa", tmp_path / "absent.csv").stderr.startswith("fitbench: error: ")
+
+
+def test_output_of_compiled_code_in_a_method_leaves_stdout_to_the_json(tmp_path):
+    """A method whose compiled solver writes its log to descriptor 1 (printf, still in the C buffers when the
+    method returns, and a raw write) keeps ``--json`` one JSON object on stdout: the log goes to stderr."""
+    from conftest import run_python
+    shaft = profile_file(tmp_path / "shaft.csv", n=360)
+    script = tmp_path / "chatty_c.py"
+    script.write_text(
+        "import ctypes, os, sys\n"
+        "import methods\n"
+        "from fitbench.cli import main\n"
+        "@methods.register('circle.c_chatty', kind='closed form', summary='C log (test)', reference='fitbench test')\n"
+        "def c_chatty(points):\n"
+        "    ctypes.CDLL(None).printf(b'solver log from printf\\n')\n"
+        "    os.write(1, b'solver log from write\\n')\n"
+        "    return methods.get('circle.kasa').func(points)\n"
+        "sys.exit(main(sys.argv[1:]))\n")
+    out = run_python(script, "fit", "circle.c_chatty", shaft, "--json", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["method"] == "circle.c_chatty"
+    assert "solver log from printf" in out.stderr and "solver log from write" in out.stderr, out.stderr

@@ -15,6 +15,7 @@ import argparse
 import contextlib
 import json
 import math
+import os
 import sys
 import warnings
 
@@ -85,12 +86,46 @@ class MethodFailed(Exception):
     plugin writing into its read-only input): printed as one line, exit status :data:`EXIT_METHOD_FAILED`."""
 
 
+def _flush_c_stdio() -> None:
+    """Flush the C library's stdio buffers (what compiled code printed with printf is still in them)."""
+    try:
+        import ctypes
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError, TypeError):
+        pass   # no C library to reach (Windows): Python's prints are redirected all the same
+
+
+@contextlib.contextmanager
+def stdout_to_stderr():
+    """Send what is printed to stdout to stderr inside the block: Python's prints (``sys.stdout``) and, when
+    stdout is a real file descriptor, what compiled code writes to descriptor 1 (a Fortran or C solver's
+    iteration log), whose C buffers are flushed before descriptor 1 is restored."""
+    with contextlib.redirect_stdout(sys.stderr):
+        try:
+            out_fd, err_fd = sys.__stdout__.fileno(), sys.__stderr__.fileno()
+        except (AttributeError, OSError, ValueError):
+            out_fd = None
+        if out_fd is None or out_fd == err_fd:
+            yield
+            return
+        sys.__stdout__.flush()
+        _flush_c_stdio()
+        saved = os.dup(out_fd)
+        try:
+            os.dup2(err_fd, out_fd)
+            yield
+        finally:
+            _flush_c_stdio()
+            os.dup2(saved, out_fd)
+            os.close(saved)
+
+
 def run_method(spec, data, **params):
     """``spec(data, **params)`` with the method's prints sent to stderr (stdout carries the command's output
     alone: ``--json`` stays one JSON object) and its own exceptions turned into one line naming it
     (:class:`MethodFailed`); bad input (:class:`~methods.InvalidInputError`, the result gate's refusal) passes."""
     try:
-        with contextlib.redirect_stdout(sys.stderr):
+        with stdout_to_stderr():
             return spec(data, **params)
     except InvalidInputError:
         raise

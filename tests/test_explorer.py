@@ -59,6 +59,11 @@ window.addEventListener('load', function () { setTimeout(function () {
   var box = document.querySelector('#ranking-1 input[data-method="0"]');
   box.checked = false; box.dispatchEvent(new Event('change'));
   out.methods = r.methods;
+  out.axes = explorer.data.map(function (d, k) {   // every axis of a cost names its unit
+    var rt = document.getElementById('runtime-' + (k + 1));
+    return {profile: document.getElementById('profile-' + (k + 1)).layout.title.text,
+            runtime: rt.layout ? [rt.layout.xaxis.title.text, rt.layout.yaxis.title.text] : null};
+  });
   out.visible = explorer.figures[0].map(function (id) {
     return document.getElementById(id).data.map(function (t) { return t.visible === undefined ? true : t.visible; });
   });
@@ -97,6 +102,10 @@ def _number(text: str) -> float:
 def test_explorer_toggles_sorts_filters_and_draws_a_fit_offline(built):
     out = run_in_chromium(built / "explorer.html", EXPLORE)
     assert out["ready"] == "ready" and out["plotly"] == "object" and out["external"] == 0
+    for axes in out["axes"]:   # readable names with units, never a bare column name such as form_error
+        assert "_" not in axes["profile"], axes
+        if axes["runtime"]:
+            assert all(re.search(r"\[[^]]+\]$", t) and "_" not in t for t in axes["runtime"]), axes
     for figure in out["visible"]:          # method 0 hidden in every plot of the ranking, the others shown
         assert figure[0] == "legendonly" and all(v is True for v in figure[1:])
     assert out["fit"]["problem"] == out["fit"]["asked"][0] and out["fit"]["method"] == out["fit"]["asked"][1]
@@ -126,7 +135,7 @@ window.addEventListener('load', function () {
 @needs_chromium
 def test_no_table_or_caption_of_the_report_overflows_at_1280_px(built):
     out = run_in_chromium(built / "report.html", OVERFLOW, width=1280)
-    assert out["checked"] > 50 and out["bad"] == [], out["bad"][:5]
+    assert out["checked"] > 40 and out["bad"] == [], out["bad"][:5]   # two studies and their rankings
     assert out["scroll"] <= out["width"]
 
 

@@ -1,5 +1,7 @@
 """Cross-study rankings are open: every method run on the pooled problems is profiled without a config edit, a
 study declaring a ranking never removes a method from it, and a problem no method solved counts for nobody."""
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 
@@ -128,3 +130,23 @@ def test_rows_without_the_metric_are_not_unsolved_problems(tmp_path):
     failed = study(tmp_path, "noise", {"circle.kasa": [nan], "circle.taubin": [nan]})
     r2 = collect([(name, folder, meta), failed])["circularity"]
     assert r2.unsolved == 1 and r2.not_measured == 1
+
+
+def test_the_explorer_shows_every_cost_with_its_unit(tmp_path):
+    """explorer.html's axes and hovers named the bare column ('form_error', 'time_median_s') and a ranking that
+    pools studies in different units (mm and R) showed no unit at all: the page's data now carry a readable label,
+    the axis unit (each study's where they differ) and every problem's unit."""
+    from experiments.render.explorer import ranking_data
+    published = study(tmp_path, "published", {"circle.kasa": [1.0], "circle.taubin": [2.0]})
+    noise = study(tmp_path, "noise", {"circle.kasa": [0.1], "circle.taubin": [0.2]})
+    noise[2]["config"]["rankings"] = [{**DECL, "unit": "R"}]
+    r = collect([published, noise])["circularity"]
+    folders = {name: folder for name, folder, _ in (published, noise)}
+    data = ranking_data("circularity", r, folders, {})
+    assert data["label"] == "form error"
+    assert data["axis_unit"] == "mm (published) or R (noise)"
+    assert dict(zip(data["problems"], data["units"])) == {"published | d | s0 | 0": "mm", "noise | d | s0 | 0": "R"}
+    alone = ranking_data("circularity", collect([published])["circularity"], folders, {})
+    assert alone["axis_unit"] == "mm" and alone["units"] == ["mm"]
+    script = (Path(__file__).resolve().parents[1] / "experiments" / "render" / "templates" / "explorer.js").read_text()
+    assert "esc(r.metric)" not in script and "r.axis_unit" in script and "r.units[i]" in script

@@ -106,7 +106,20 @@ def ranking_data(name: str, r, folders: dict[str, Path], metas: dict[str, dict])
     top = max(float(finite.max()) if finite.size else 1.0, 1.0 + 1e-9)
     taus = np.unique(np.concatenate([[1.0], np.geomspace(1.0, top * 1.01, 240)]))   # a grid, not every ratio
     prof = profile(table, taus=taus)
-    data = {"name": name, "metric": r.metric, "unit": r.unit, "methods": methods, "problems": list(map(str, table.index)),
+    from experiments.render.text import human_unit
+    from experiments.study import readable
+    problems = list(map(str, table.index))
+    # every number carries its unit: one for the ranking, or each study's ("mm (published, scaling) or R (noise)")
+    by_unit: dict = {}
+    for study, u in r.units.items():
+        by_unit.setdefault(human_unit(u), []).append(study)
+    if r.unit or len(by_unit) <= 1:
+        axis_unit = human_unit(r.unit) or next(iter(by_unit), "")
+    else:
+        axis_unit = " or ".join(f"{u or 'no unit'} ({', '.join(st)})" for u, st in by_unit.items())
+    data = {"name": name, "metric": r.metric, "label": readable(r.metric), "unit": r.unit, "axis_unit": axis_unit,
+            "units": [human_unit(r.units.get(p.split(" | ")[0], r.unit)) for p in problems],
+            "methods": methods, "problems": problems,
             "cost": [[_r(v) for v in row] for row in table.to_numpy(float)],
             "ratio": [[_r(v, 4) for v in row] for row in ratios.to_numpy(float)],
             "profile": {"tau": [_r(t, 5) for t in prof.index], "rho": {m: [_r(v, 5) for v in prof[m]] for m in methods

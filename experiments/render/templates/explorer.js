@@ -7,11 +7,11 @@
   function esc(s) { return String(s).replace(/&/g, '&amp;').replace(/</g, '&lt;').replace(/>/g, '&gt;'); }
   window.explorer = {data: DATA, figures: []};
   DATA.forEach(function (r, k) {
-    var n = k + 1, unit = r.unit ? ' [' + esc(r.unit) + ']' : '';
+    var n = k + 1, unit = r.axis_unit ? ' [' + esc(r.axis_unit) + ']' : '', label = esc(r.label || r.metric);
     var prof = r.methods.map(function (m) {
       return {x: r.profile.tau, y: r.profile.rho[m], name: esc(m), mode: 'lines', line: {shape: 'hv'}};
     });
-    Plotly.newPlot('profile-' + n, prof, {title: {text: 'Performance profile: ' + esc(r.metric)},
+    Plotly.newPlot('profile-' + n, prof, {title: {text: 'Performance profile: ' + label},
       xaxis: {title: {text: 'τ (cost / best cost)'}, type: 'log'}, yaxis: {title: {text: 'ρ(τ): share of problems'},
       range: [0, 1.02]}, legend: {font: {size: 9}}, margin: {t: 40}}, cfg);
     var figs = ['profile-' + n];
@@ -20,8 +20,8 @@
         return {x: r.time.map(function (row) { return row[j]; }), y: r.cost.map(function (row) { return row[j]; }),
                 text: r.problems.map(esc), name: esc(m), mode: 'markers', type: 'scatter', marker: {size: 5}};
       });
-      Plotly.newPlot('runtime-' + n, rt, {title: {text: esc(r.metric) + ' against runtime'},
-        xaxis: {title: {text: 'median runtime [s]'}, type: 'log'}, yaxis: {title: {text: esc(r.metric) + unit}, type: 'log'},
+      Plotly.newPlot('runtime-' + n, rt, {title: {text: label + ' against runtime'},
+        xaxis: {title: {text: 'median runtime [s]'}, type: 'log'}, yaxis: {title: {text: label + unit}, type: 'log'},
         showlegend: false, margin: {t: 40}}, cfg);
       figs.push('runtime-' + n);
     } else {
@@ -30,7 +30,9 @@
     var z = r.ratio.map(function (row) { return row.map(function (v) { return v === null ? null : Math.log10(v); }); });
     Plotly.newPlot('map-' + n, [{type: 'heatmap', z: z, x: r.methods.map(esc), y: r.problems.map(esc), colorscale: [[0, '#1a9850'], [0.25, '#d9ef8b'], [0.5, '#fee08b'], [1, '#d73027']],
       zmin: 0, zmax: 1, colorbar: {title: {text: 'log₁₀ ratio<br>(blank: failed)'}},
-      customdata: r.cost, hovertemplate: '%{y}<br>%{x}<br>' + esc(r.metric) + ' %{customdata}' + unit + '<extra></extra>'}],
+      text: r.cost.map(function (row, i) { return row.map(function (v) {   // each problem's cost in its study's unit
+        return v === null ? 'failed or not run' : v + ' ' + esc(r.units[i]); }); }),
+      hovertemplate: '%{y}<br>%{x}<br>' + label + ' %{text}<extra></extra>'}],
       {title: {text: 'Ratio to the best method per problem'}, xaxis: {tickangle: 45, tickfont: {size: 8}},
        yaxis: {showticklabels: false, title: {text: 'problems'}}, margin: {t: 40, b: 110}}, cfg);
     document.getElementById('map-' + n).on('plotly_click', function (ev) {

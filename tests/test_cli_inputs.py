@@ -112,6 +112,12 @@ def test_history_skips_a_result_with_a_bad_date_and_keeps_the_others(tmp_path):
     assert got.returncode == 0, got.stderr
     assert [t["file"] for t in json.loads(got.stdout)["circular-test"]["tests"]] == ["good.json"]
     assert len(got.stderr.strip().splitlines()) == 1 and "old.json" in got.stderr and "2026-13-45" in got.stderr
+    # details that are not an object (a hand-edited file): no date there, the file's time dates it
+    old["details"] = "edited by hand"
+    (folder / "old.json").write_text(json.dumps(old))
+    got = cli("history", folder, "--json")
+    assert got.returncode == 0 and got.stderr == "", got.stderr
+    assert sorted(t["file"] for t in json.loads(got.stdout)["circular-test"]["tests"]) == ["good.json", "old.json"]
 
 
 # ------------------------------------------------------------------------------------------ output options
@@ -131,6 +137,8 @@ def test_report_and_plot_errors_name_the_option_given(tmp_path):
                 out = cli(*cmd, option, path)
                 one_error_line(out, f"{option} {path}:", why)
                 assert ("--plot" if option == "--report" else "--report") not in out.stderr
+                if why == "is a folder":
+                    assert ("report.pdf" if option == "--report" else "plot.png") in out.stderr
 
 
 # ------------------------------------------------------------------------------------------ plugin methods

@@ -60,7 +60,9 @@ def _get(d, path):
 def _date(d: dict, path: Path) -> _dt.datetime:
     """The test's date: its conditions' ``date`` (:data:`DATE_FORMATS`), else the file's modification time; a
     date that is not one is an :class:`~methods.InvalidInputError` naming the file."""
-    text = ((d.get("details") or {}).get("conditions") or {}).get("date")
+    details = d.get("details")
+    conditions = details.get("conditions") if isinstance(details, dict) else None
+    text = conditions.get("date") if isinstance(conditions, dict) else None
     if text:
         for fmt in DATE_FORMATS:
             try:

@@ -56,7 +56,8 @@ def check_plot_path(path, option: str = "--plot") -> Path | None:
     formats = Figure().canvas.get_supported_filetypes()
     ext = path.suffix.lower().lstrip(".")
     if path.is_dir():
-        raise InvalidInputError(f"{option} {path}: is a folder; give a file name such as {path / 'plot.png'}")
+        raise InvalidInputError(f"{option} {path}: is a folder; give a file name such as "
+                                f"{path / ('report.pdf' if option == '--report' else 'plot.png')}")
     if ext not in formats:
         raise InvalidInputError(f"{option} {path}: unknown image format {path.suffix or '(none)'!r}; "
                                 f"use one of .{', .'.join(sorted(formats))}")

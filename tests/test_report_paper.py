@@ -79,7 +79,8 @@ def test_report_tex_compiles_with_contents(built):
     assert result["ok"], result["errors"] or result["log"][-2000:]
     assert not _overfull(result), _overfull(result)[:5]
     toc = (built / "report_check.toc").read_text(encoding="latin-1")
-    assert "Rankings across data sets" in toc and toc.count("\\contentsline {section}") >= 3
+    # the studies' section(s) and the rankings (a report of these three studies holds no other section)
+    assert "Rankings across data sets" in toc and toc.count("\\contentsline {section}") >= 2
 
 
 @needs_chromium

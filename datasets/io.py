@@ -412,6 +412,11 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     numeric = all(_is_number(t.replace(",", ".") if decimal_comma else t) for t in head)
     if numeric:
         return Layout(name, sep, decimal_comma, None, 0, body[0][0], len(head), comment, preamble)
+    if _numeric_fields(first) is not None and len(body) > 1 and _numeric_fields(body[1][1]) is not None:
+        # numbers and a label ('CW;1,250;2,2597') above more of them: data where the header should be
+        what = ((f"if --skip-rows {skip_rows} skipped the header line, give fewer; else " if skip_rows else "")
+                + "add a header line naming the columns (e.g. direction;angle [deg];radial deviation [um])")
+        raise DataFileError(f"{name} line {body[0][0]}: {first!r} is a row of data where the header should be; {what}")
     if len(body) < 2:
         raise DataFileError(f"{name}: a header but no data lines")
     return Layout(name, sep, decimal_comma, head, body[0][0], body[1][0], len(head), comment, preamble)

@@ -140,6 +140,25 @@ def test_a_preamble_above_rows_with_a_direction_label_gets_the_skip_rows_hint(tm
     assert len(read_positioning(pos, skip_rows=3).targets) == 5
 
 
+def test_a_labelled_data_row_is_never_taken_for_the_header(tmp_path):
+    """'--skip-rows 6' on a ballbar export without a preamble skipped its header: the error listed 'the header
+    has CW, 1,250, 2,2597'. A row of numbers with a direction label above more of them is named as data where
+    the header should be, with what to do."""
+    from datasets.io import read_runs
+    rows = [f"{lab};{a:.3f};{2.0 + 0.1 * np.sin(np.radians(a)):.4f}".replace(".", ",")
+            for lab in ("CW", "CCW") for a in np.arange(0.0, 360.0, 5.0)]
+    path = tmp_path / "ballbar.txt"
+    path.write_text("\n".join(["Direction;Angle [deg];Radial deviation (um)", *rows]) + "\n", encoding="utf-8")
+    assert [tag for tag, _ in read_runs(path, nominal_radius=150.0).runs] == ["cw", "ccw"]
+    with pytest.raises(DataFileError, match=r"line 7: 'CW;25,000;2,0423' is a row of data where the header should "
+                                            r"be; if --skip-rows 6 skipped the header line, give fewer"):
+        read_runs(path, skip_rows=6, nominal_radius=150.0)
+    path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    with pytest.raises(DataFileError, match=r"line 1: 'CW;0,000;2,0000' is a row of data where the header should "
+                                            r"be; add a header line naming the columns"):
+        read_runs(path, nominal_radius=150.0)
+
+
 @pytest.mark.parametrize("n", [12, 4000])          # below and above the small-file size (the pandas path)
 @pytest.mark.parametrize("encoding, bom", [("utf-16-le", False), ("utf-16-be", False), ("utf-32-le", False),
                                            ("utf-32-be", False), ("utf-32", True)])

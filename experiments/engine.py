@@ -554,7 +554,7 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     log(f"   {counts['tasks']} rows: {counts['stored']} already stored, {counts['to_run']} to run"
         + (f" ({counts['retried_errors']} failed before, retried)"
            if counts["retried_errors"] else ""))
-    frame = RowFrame()
+    frame = RowFrame(counts["tasks"])
     t0 = time.perf_counter()
     run_rows = execute
     if executor == "dask":  # the Dask executor sits above the local ones (it reuses their chunks and worker loop)
@@ -578,7 +578,7 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
                 r["task_index"] = t["index"]
             frame.add_rows(rows)
             del rows, found
-    df = frame.frame(counts["tasks"])
+    df = frame.frame()
     counts["used"] = used
     if outputs is not None:
         counts["fingerprint"] = keys.hexdigest()[:32]

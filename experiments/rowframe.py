@@ -2,8 +2,9 @@
 
 A worker turns the rows of its chunk into a *part* (:func:`part_of`: one Series per column, the task index of
 each row, where each column first appears), so the run's process never holds a row's values as Python objects;
-it keeps the parts as they arrive (:class:`RowFrame`) and joins them once at the end, in task order, whatever
-order the chunks finished in. The rows served from the row store (cached) are decoded into parts of their own.
+it writes each part's numbers into the frame's arrays as the chunk arrives and keeps its other columns
+(:class:`RowFrame`), joined at the end in task order, whatever order the chunks finished in. The rows served from
+the row store (cached) are decoded into parts of their own.
 
 The frame equals ``DataFrame(rows)`` of all rows in task order (``tests/test_engine.py``): the columns in the
 order they first appear, a row without a column NaN, and the column types of one frame of all rows (a column of
@@ -43,26 +44,76 @@ def _part(rows: list[dict], first: dict) -> dict:
             "columns": {name: pd.Series([r.get(name, nan) for r in rows]) for name in first}}
 
 
+#: column types written straight into the run's frame as chunks arrive (every other type is kept as the chunk's Series)
+DENSE = (np.dtype(np.float64), np.dtype(np.int64))
+
+
 class RowFrame:
-    """The parts of a run, kept as one Series per column and block of at least :attr:`block` rows (small parts, such
-    as the single rows of slow studies, are joined into blocks first) until :meth:`frame` joins them in task order."""
+    """The rows of a run of ``n_rows`` tasks, gathered as chunks arrive: a float64 or int64 column of a chunk is written
+    into one array of ``n_rows`` values at its rows' task indices (no copy of the rows is kept besides the frame's
+    own); other columns (text, booleans, Nones) are kept as the chunks' Series, joined into blocks of at least
+    :attr:`block` rows, until :meth:`frame` joins them in task order. A task whose row arrives twice keeps the
+    columns of its last row."""
 
     block = 5000
 
-    def __init__(self):
-        self.parts: list = []    # (task indices, {column: (first task index, rank)}, {column: Series})
-        self.pending: list = []  # small parts, until they make a block
-        self.n_pending = 0
+    def __init__(self, n_rows: int):
+        self.n = n_rows
+        self.seq = np.full(n_rows, -1, dtype=np.int64)  # the chunk that delivered each row last (-1: none yet)
+        self.chunks = 0
+        self.dense: dict = {}     # column -> (values, present): float64/int64 values, bool: the row has them
+        self.pieces: dict = {}    # column -> [(task indices, chunk of each row, Series)]
+        self.pending: dict = {}   # column -> rows in its small pieces not yet joined into a block
+        self.first: dict = {}     # column -> (task index, rank) of the first row that has it: the column order
 
     def add(self, part: dict) -> None:
-        index = part["task_index"]
+        index = np.asarray(part["task_index"], dtype=np.int64)
         if not len(index):
             return
-        order = {name: (int(index[pos]), rank) for rank, (name, pos) in enumerate(part["first"].items())}
-        self.pending.append((index, order, part["columns"]))
-        self.n_pending += len(index)
-        if self.n_pending >= self.block:
-            self._flush()
+        if index.min() < 0 or index.max() >= self.n:
+            raise ValueError(f"a row's task index is outside 0..{self.n - 1}")
+        chunk = self.chunks
+        self.chunks += 1
+        for rank, (name, pos) in enumerate(part["first"].items()):
+            at = (int(index[pos]), rank)
+            if name not in self.first or at < self.first[name]:
+                self.first[name] = at
+        again = index[self.seq[index] >= 0]
+        if len(again):  # rows delivered before: the columns of their earlier row no longer count
+            for _, present in self.dense.values():
+                present[again] = False
+        self.seq[index] = chunk
+        for name, values in part["columns"].items():
+            if values.dtype in DENSE:
+                self._write(name, index, values.to_numpy())
+            else:
+                pieces = self.pieces.setdefault(name, [])
+                pieces.append((index, np.full(len(index), chunk, dtype=np.int64), values))
+                self.pending[name] = self.pending.get(name, 0) + len(index)
+                if self.pending[name] >= self.block:
+                    self._join(name)
+
+    def _write(self, name: str, index, values) -> None:
+        held = self.dense.get(name)
+        if held is None:
+            held = self.dense[name] = (np.empty(self.n, dtype=values.dtype), np.zeros(self.n, dtype=bool))
+        elif held[0].dtype != values.dtype and held[0].dtype == np.int64:  # ints meet floats: float64, as pd.concat
+            held = self.dense[name] = (held[0].astype(np.float64), held[1])
+        held[0][index] = values
+        held[1][index] = True
+
+    def _join(self, name: str) -> None:
+        """Join a column's small pieces (a slow study's one-row chunks) into one piece."""
+        import pandas as pd
+        pieces, small = self.pieces[name], self.pending.pop(name, 0)
+        n, k = 0, len(pieces)
+        while k > 0 and n < small:
+            k -= 1
+            n += len(pieces[k][0])
+        tail = pieces[k:]
+        if len(tail) > 1:
+            pieces[k:] = [(np.concatenate([p[0] for p in tail]), np.concatenate([p[1] for p in tail]),
+                           pd.concat([p[2] for p in tail], ignore_index=True))]
 
     def add_rows(self, rows: list[dict]) -> None:
         """Rows decoded from JSON (the row store's, or a chunk that came without a part)."""
@@ -71,67 +122,63 @@ class RowFrame:
             part = _any_part(rows)
         self.add(part)
 
-    def _flush(self) -> None:
-        if not self.pending:
-            return
-        if len(self.pending) == 1:
-            self.parts.append(self.pending[0])
-        else:
-            order: dict = {}
-            for _, o, _ in self.pending:
-                for name, at in o.items():
-                    if name not in order or at < order[name]:
-                        order[name] = at
-            index = np.concatenate([idx for idx, _, _ in self.pending])
-            self.parts.append((index, order, _joined([(len(idx), cols) for idx, _, cols in self.pending], order)))
-        self.pending, self.n_pending = [], 0
-
-    def frame(self, n_rows: int):
-        """All rows in task order (a task run twice: its last row); refused unless there are ``n_rows``."""
+    def frame(self):
+        """All rows in task order, each column of the type one ``DataFrame`` of all rows would give it; refused
+        unless every task has its row."""
         import pandas as pd
-        self._flush()
-        if not self.parts or not n_rows:
-            if n_rows:
-                raise MissingRows(n_rows)
-            self.parts.clear()
-            return pd.DataFrame()
-        index = np.concatenate([p[0] for p in self.parts])
-        if len(index) == n_rows and (np.diff(index) > 0).all() and index[0] == 0 and index[-1] == n_rows - 1:
-            keep = None  # every row once, in task order (one worker): nothing to reorder
-        else:
-            last = np.unique(index[::-1], return_index=True)[1]  # the last occurrence of each task index ...
-            keep = len(index) - 1 - last                         # ... as positions in ``index``, in task order
-            present = int(((index[keep] >= 0) & (index[keep] < n_rows)).sum())
-            if present != n_rows or len(keep) != n_rows:
-                raise MissingRows(n_rows - present)
-        first: dict = {}
-        for _, order, _ in self.parts:  # a column's place: the first row (in task order) that has it
-            for name, at in order.items():
-                if name not in first or at < first[name]:
-                    first[name] = at
+        missing = int((self.seq < 0).sum())
+        if missing:
+            raise MissingRows(missing)
         out = {}
-        sized = [(len(index), cols) for index, _, cols in self.parts]
-        self.parts.clear()
-        for name in sorted(first, key=first.__getitem__):
-            col = _column(sized, name)
-            if keep is not None:
-                col = col.take(keep).reset_index(drop=True)
-            if col.dtype == object:
-                col = _numbers_if_numbers(col)
-            out[name] = col
-        return pd.DataFrame(out, copy=False)
+        for name in sorted(self.first, key=self.first.__getitem__):
+            col = self._column(name)
+            out[name] = _numbers_if_numbers(col) if col.dtype == object else col
+        self.dense.clear()
+        self.pieces.clear()
+        return pd.DataFrame(out, copy=False) if out else pd.DataFrame(index=range(self.n))
 
-
-def _column(sized: list, name: str):
-    """One column of consecutive parts ((rows, {column: Series}) each; a part without it: NaN), each part's piece
-    freed as it is taken."""
-    import pandas as pd
-    pieces = [cols.pop(name) if name in cols else pd.Series([float("nan")] * n) for n, cols in sized]
-    return pieces[0] if len(pieces) == 1 else pd.concat(pieces, ignore_index=True)
-
-
-def _joined(sized: list, order: dict) -> dict:
-    return {name: _column(sized, name) for name in order}
+    def _column(self, name: str):
+        import pandas as pd
+        nan = float("nan")
+        values, present = self.dense.pop(name, (None, None))
+        kept = []  # the pieces of the rows' last chunks
+        for index, chunk, piece in self.pieces.pop(name, []):
+            current = self.seq[index] == chunk
+            if current.all():
+                kept.append((index, piece))
+            elif current.any():
+                kept.append((index[current], piece[current]))
+        covered = present.copy() if present is not None else np.zeros(self.n, dtype=bool)
+        for index, _ in kept:
+            covered[index] = True
+        absent = ~covered
+        if values is None and not kept:  # every row that had it arrived again without it
+            return pd.Series(np.full(self.n, nan))
+        if not kept:  # numbers only: as pd.concat of the pieces and a NaN filler for the rows without the column
+            if values.dtype == np.int64 and not absent.any():
+                return pd.Series(values)
+            col = values.astype(np.float64, copy=False)
+            col[absent] = nan
+            return pd.Series(col)
+        if values is None:  # no numbers: the pieces (and the filler) joined, then put in task order
+            if absent.any():
+                rows = np.flatnonzero(absent)
+                kept.append((rows, pd.Series([nan] * len(rows))))
+            index = np.concatenate([i for i, _ in kept])
+            col = kept[0][1] if len(kept) == 1 else pd.concat([p for _, p in kept], ignore_index=True)
+            order = np.argsort(index, kind="stable")
+            if (order != np.arange(len(order))).any():
+                col = col.take(order)
+            return col.reset_index(drop=True)
+        if all(piece.isna().all() for _, piece in kept):  # numbers and missing values: float64 with NaN
+            col = values.astype(np.float64, copy=False)
+            col[~present] = nan
+            return pd.Series(col)
+        col = np.full(self.n, nan, dtype=object)  # numbers and other values (text, booleans): an object column
+        col[present] = values[present].astype(object)
+        for index, piece in kept:
+            col[index] = piece.to_numpy(dtype=object)
+        return pd.Series(col, dtype=object)
 
 
 class MissingRows(RuntimeError):

@@ -103,7 +103,9 @@ def _rows_of_every_kind():
         rows.append({"status": "error" if failed else "ok", "radius": None if failed else float(rng.normal()),
                      "iterations": None if failed else int(i), "converged": None if failed else bool(i % 2),
                      **({} if i < 50 else {"extra": 0.1 * i}), **({"first": i} if i < 10 else {}),
-                     "label": str(i % 3), "flag": None if i % 7 == 0 else True, "task_index": i})
+                     "label": str(i % 3), "flag": None if i % 7 == 0 else True,
+                     "mixed": "text" if i % 13 == 0 else 1.5 * i, "count": i if i < 30 else i + 0.5,
+                     **({"only_ints": i} if i % 2 else {}), "task_index": i})
     return rows
 
 
@@ -121,45 +123,48 @@ def test_frame_of_parts_is_the_frame_of_all_rows(order, block, monkeypatch):
     elif order == "shuffled":
         chunks = [chunks[i] for i in np.random.default_rng(3).permutation(len(chunks))]
     monkeypatch.setattr(RowFrame, "block", block)
-    frame = RowFrame()
+    frame = RowFrame(60)
     for chunk in chunks:
         frame.add(part_of(chunk))
-    built = frame.frame(60)
+    built = frame.frame()
     pd.testing.assert_frame_equal(whole, built)
     assert whole.to_csv(index=False, float_format="%.17g") == built.to_csv(index=False, float_format="%.17g")
 
 
 def test_a_task_run_twice_keeps_its_last_row_and_a_missing_row_is_refused():
     rows = _rows_of_every_kind()
-    frame = RowFrame()
+    frame = RowFrame(60)
     frame.add(part_of(rows[:30]))
-    frame.add(part_of([{**rows[5], "status": "again"}]))
+    frame.add(part_of([{**rows[5], "status": "again", "radius": None}]))  # its radius is gone with its first row
     frame.add(part_of(rows[30:]))
-    built = frame.frame(60)
-    assert len(built) == 60 and built["status"][5] == "again"
-    short = RowFrame()
+    built = frame.frame()
+    assert len(built) == 60 and built["status"][5] == "again" and np.isnan(built["radius"][5])
+    assert built["radius"][6] == rows[6]["radius"] and built["radius"].dtype == np.float64
+    short = RowFrame(60)
     short.add(part_of(rows[:59]))
     with pytest.raises(MissingRows, match="1 rows are missing"):
-        short.frame(60)
+        short.frame()
 
 
 def test_a_row_with_a_list_has_no_part_and_is_read_from_its_json():
     rows = [{"a": [1, 2], "task_index": 0}, {"a": 1.5, "task_index": 1}]
     assert part_of(rows) is None
     batch = row_code.encode_rows(rows)
-    frame = RowFrame()
+    frame = RowFrame(2)
     frame.add_rows([row_code.row_from_json(text) for text in batch["row"]])
-    assert frame.frame(2)["a"].tolist() == [[1, 2], 1.5]
+    assert frame.frame()["a"].tolist() == [[1, 2], 1.5]
 
 
 def test_single_row_parts_are_joined_into_blocks():
     """A slow study sends its rows one chunk of one row at a time: the frame must not keep (and join at the end) one
     Series per column and row; parts are joined into blocks of RowFrame.block rows as they arrive."""
-    frame = RowFrame()
+    frame = RowFrame(12_000)
     for i in range(12_000):
         frame.add(part_of([{"a": float(i), "b": "x", **({"late": 1.0} if i >= 6000 else {}), "task_index": i}]))
-    assert len(frame.parts) == 12_000 // RowFrame.block and frame.n_pending == 12_000 % RowFrame.block
-    built = frame.frame(12_000)
+    blocks = [len(index) for index, _, _ in frame.pieces["b"]]  # text: joined into blocks as they arrive
+    assert blocks[:2] == [RowFrame.block] * 2 and len(blocks) == 2 + 12_000 % RowFrame.block
+    assert set(frame.dense) == {"a", "late"}  # numbers: written into the frame's arrays
+    built = frame.frame()
     assert len(built) == 12_000 and built["late"].isna().sum() == 6000 and list(built.columns) == ["a", "b", "late"]
     assert built["a"].dtype == np.float64 and built["a"].tolist() == [float(i) for i in range(12_000)]
 

@@ -155,6 +155,8 @@ class StudyConfigModel(_Table):
     max_jobs: PositiveInt = None
     row_timeout: Annotated[float, Field(gt=0, description="seconds a row may run (engine)")] = None
     chunk_rows: PositiveInt = None
+    length_unit: Annotated[str, Field(min_length=1, description="the unit of the study's lengths when they are not "
+                                                                 "in mm, e.g. R for data on a unit circle")] = None
     summary_by: Annotated[list[str], Field(min_length=1)] = None
     datasets: Annotated[list[Union[GeneratorEntry, PublishedEntry, SourceEntry, FileEntry]], Field(min_length=1)] = None
     methods: Annotated[list[Annotated[Union[Annotated[str, Field(min_length=1)], MethodEntry],

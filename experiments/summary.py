@@ -65,10 +65,12 @@ _LENGTHS = {"mm", "µm", "um", "nm", "m", "cm"}
 
 
 def length_unit(cfg: dict | None) -> str | None:
-    """The unit a study declares for its lengths: the ``unit`` of its ``[[rankings]]`` of a length metric when
-    that differs from the metric's declared unit ('R' for data on a unit circle, as the noise study declares),
-    else None (the result classes' declared units)."""
+    """The unit a study declares for its lengths: its ``length_unit`` ('R' for data on a unit circle), else the
+    ``unit`` of its ``[[rankings]]`` of a length metric when that differs from the metric's declared unit, else
+    None (the result classes' declared units)."""
     from experiments.study import column_unit
+    if (cfg or {}).get("length_unit"):
+        return str(cfg["length_unit"])
     for decl in (cfg or {}).get("rankings") or []:
         unit, own = decl.get("unit"), column_unit(str(decl.get("metric", "")))
         if unit and own in _LENGTHS and unit != own:

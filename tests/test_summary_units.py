@@ -62,3 +62,13 @@ def test_a_unit_circle_study_shows_its_lengths_relative_to_the_radius():
                     "angle bias [rad]", "time median [s]", "iterations median"]
     plain = _header(to_markdown(summary))
     assert "form error median [mm]" in plain and "noise [mm]" in plain
+
+
+def test_a_study_declares_the_unit_of_its_lengths():
+    """The convergence study's data are unit circles (no rankings to carry a unit): length_unit = "R" says so, and
+    its summary no longer labels radii as mm."""
+    from experiments import config as configs
+    cfg = configs.load("convergence")
+    assert cfg["length_unit"] == "R"
+    summary = pd.DataFrame({"method": ["circle.kasa"], "runs": [4], "center_rmse": [0.002]})
+    assert _header(to_markdown(summary, units=summary_units(summary, cfg))) == ["method", "runs", "center rmse [R]"]

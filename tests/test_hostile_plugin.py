@@ -130,6 +130,23 @@ def hostile_site(tmp_path_factory):
                           {"fitbench.methods": {"hostile": "fitbench_hostile"}}, version="6.6.6")
 
 
+def write_hostile_study(folder, name: str, method_ids) -> object:
+    """A grid study of two repetitions of one generated circle with these methods."""
+    study = folder / f"{name}.toml"
+    ids = "\n".join(f'[[methods]]\nid = "{m}"' for m in method_ids)
+    study.write_text(textwrap.dedent(f'''
+        name = "{name}"
+        title = "Hostile plugin"
+        kind = "grid"
+        seed = 3
+        repetitions = 2
+        [[datasets]]
+        source = "circle"
+        params = {{ radius = 5.0, noise = 0.01, n = 30 }}
+    ''') + ids + "\n")
+    return study
+
+
 @pytest.fixture(scope="module")
 def site(tmp_path_factory):
     return hostile_site(tmp_path_factory)
@@ -137,18 +154,7 @@ def site(tmp_path_factory):
 
 @pytest.mark.slow
 def test_lies_become_invalid_rows_and_the_study_completes(site, tmp_path):
-    study = tmp_path / "hostile.toml"
-    ids = "\n".join(f'[[methods]]\nid = "{m}"' for m in [*LIES, "circle.mutator", "circle.kasa"])
-    study.write_text(textwrap.dedent('''
-        name = "hostile"
-        title = "Hostile plugin"
-        kind = "grid"
-        seed = 3
-        repetitions = 2
-        [[datasets]]
-        source = "circle"
-        params = { radius = 5.0, noise = 0.01, n = 30 }
-    ''') + ids + "\n")
+    study = write_hostile_study(tmp_path, "hostile", [*LIES, "circle.mutator", "circle.kasa"])
     out = tmp_path / "out"
     proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", path_first=[site])
     assert proc.returncode == 0, proc.stderr
@@ -176,21 +182,7 @@ def test_with_one_job_a_plugin_that_ends_its_process_ends_only_its_rows(site, tm
     """--jobs 1 runs fitbench's own rows in the run's process; a plugin's rows run in a worker process: a method
     calling os._exit labels its rows crashed and the built-in method's rows are kept (it used to end the run
     with exit 3, no message and no row stored, again on every rerun)."""
-    study = tmp_path / "exits.toml"
-    study.write_text(textwrap.dedent('''
-        name = "exits"
-        title = "A plugin that ends its process"
-        kind = "grid"
-        seed = 3
-        repetitions = 2
-        [[datasets]]
-        source = "circle"
-        params = { radius = 5.0, noise = 0.01, n = 30 }
-        [[methods]]
-        id = "circle.kasa"
-        [[methods]]
-        id = "circle.os_exit"
-    '''))
+    study = write_hostile_study(tmp_path, "exits", ["circle.kasa", "circle.os_exit"])
     out = tmp_path / "out"
     proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report", path_first=[site])
     assert proc.returncode == 0, proc.stderr

@@ -176,6 +176,56 @@ def test_dense_lobed_mic_is_not_lost_outside_the_profile():
     assert np.hypot(*res.center) < 0.01
 
 
+def _dense_smooth_profile(seed: int, n: int = 150_000):
+    """A turned profile (R 12.5 mm, 3-lobe 1.5 um, 17-UPR 0.3 um, 0.08 um noise) on n equal angles, through the
+    1500 UPR Gaussian filter: dense and smooth, its k most extreme radii are neighbours of one peak and one valley."""
+    from methods.roundness.evaluation import filtered_profile
+    rng = np.random.default_rng(seed)
+    th = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    r = 12.5 + 1e-3 * (1.5 * np.cos(3 * th + rng.uniform(0, 6)) + 0.3 * np.cos(17 * th) + rng.normal(0, 0.08, n))
+    return np.ascontiguousarray(filtered_profile(np.c_[r * np.cos(th), r * np.sin(th)], 1500.0)["points"])
+
+
+def test_dense_smooth_profile_minimum_zone_is_certified_at_the_optimum():
+    """150,000 filtered points: the local solver's sub-problem on the k most extreme radii (one peak, one valley)
+    walked off to a zone of hundreds of um, and so did every restart from a better centre the branch and bound
+    found; after 10 restarts the centre returned was worse than the last one found: 7.28 um, converged False
+    (175.7 um on another such profile), while the zone is 3.53 um. Restarts now start from the extreme points of
+    every angular sector: certified global, no wider than the zone about any other method's centre, equal to the
+    convex Chebyshev LP's certified zone to 1e-9 (its centre is the limacon approximation's)."""
+    P = _dense_smooth_profile(5)
+    mz = methods.fit("circle.minimum_zone", P)
+    assert mz.converged and mz.extra["certified"] == "global", mz.message
+    cheb, mcc = (methods.fit(m, P) for m in ("circle.chebyshev_lp", "circle.min_circumscribed"))
+    assert mz.form_error <= cheb.form_error * (1 + 1e-12) and mz.form_error <= mcc.form_error * (1 + 1e-12)
+    assert cheb.extra["certified"] == "global" and mz.form_error == pytest.approx(cheb.form_error, rel=1e-9)
+
+
+@pytest.mark.slow  # ~5 s: the first branch and bound starts from a local centre outside the profile
+def test_dense_smooth_profile_mic_is_certified():
+    """The MIC of such a profile (seed 3): restarts polished the branch and bound's centres a little each; after 10
+    the circle returned was 16.3 um of RONt, not certified. A restart from the sectors' extreme points reaches the
+    optimum: certified global, its circle at least the inner circle about the minimum zone's centre."""
+    P = _dense_smooth_profile(3)
+    mic = methods.fit("circle.max_inscribed", P)
+    assert mic.converged and mic.extra["certified"] == "global", mic.message
+    mz = methods.fit("circle.minimum_zone", P)
+    assert mic.inner_radius >= mz.inner_radius * (1 - 1e-15) and mic.form_error >= mz.form_error * (1 - 1e-12)
+
+
+def test_out_of_restarts_returns_the_best_centre_found_and_claims_nothing(monkeypatch):
+    """With no restart left, a better centre the branch and bound found is returned (never the centre it beats) and
+    nothing is claimed: converged False, certified False, the message saying why."""
+    from methods.circle import _global
+    P = _dense_smooth_profile(5)
+    local = methods.fit("circle.minimum_zone", P, global_search="never")
+    monkeypatch.setattr(_global, "MAX_RESTARTS", 0)
+    res = methods.fit("circle.minimum_zone", P)
+    assert res.form_error < local.form_error
+    assert not res.converged and res.extra["certified"] is False
+    assert "after 0 restarts" in res.message and "best centre found is returned" in res.message
+
+
 # ---- beyond the brute-force size: the overlay of Qhull's nearest- and farthest-point Voronoi diagrams -------------
 
 @pytest.mark.slow

@@ -50,6 +50,10 @@ FALLBACK_RADIUS = 10.0
 MAX_LEVELS = 90
 MAX_BOXES = 20_000
 MAX_FULL_PASSES = 400
+#: local-solver restarts from better centres the branch and bound finds, at most
+MAX_RESTARTS = 10
+#: angular sectors whose extreme points start a restart's active set (:func:`methods.circle._zone.sector_extremes`)
+RESTART_SECTORS = 32
 
 
 def growth_rate(A: np.ndarray, B: np.ndarray | None) -> float:
@@ -405,6 +409,16 @@ def polish_inscribed(x, y, c, polygon: ProfilePolygon, steps: int = 12):
     return c0, f0
 
 
+def _sector_rerun(rerun, start):
+    """``rerun(start)`` with the extreme points of RESTART_SECTORS angular sectors in its first active set, or None
+    when its convex program fails (the centre the branch and bound found stands then)."""
+    from methods.circle._zone import SolverFailure
+    try:
+        return rerun(start, sectors=RESTART_SECTORS)
+    except SolverFailure:
+        return None
+
+
 def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet, scale, shift=None,
               unit="data units"):
     """The global stage of :mod:`methods.circle._zone`'s fits (see the module docstring).
@@ -426,7 +440,7 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
     if not zone and not polygon.contains(np.asarray(c, dtype=float)[None, :])[0]:
         valid = False  # the local centre is outside the profile: not an admissible MIC
     outcome = None
-    for _ in range(10):
+    for attempt in range(MAX_RESTARTS + 1):
         f, r = _value(x, y, c, zone)
         if zone and f <= 1e-11:
             outcome = Outcome(True, reason="zero width")
@@ -466,14 +480,34 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
         S = outcome.working_set
         if outcome.better is None:
             break
+        if attempt == MAX_RESTARTS:  # no restart left: return the better centre found, never the one it beats
+            c, contacts, ok, message, valid = outcome.better, ((), ()), False, "centre from the branch and bound", True
+            outcome = Outcome(False, reason=f"the branch and bound still found better centres after {MAX_RESTARTS} "
+                                            "restarts of the local solver (the best centre found is returned)")
+            break
         info["restarts"] += 1
         fb, _ = _value(x, y, outcome.better, zone)
-        if not zone:  # the MIC's local LP can walk out of a lobed profile: climb by exact candidates instead
-            c, f = polish_inscribed(x, y, outcome.better, polygon)
-            contacts, ok, message, valid = ((), ()), False, "polished from the branch and bound", True
+        if not zone:  # the MIC's local LP can walk out of a lobed profile: climb by exact candidates; and restart
+            # the LP with the extreme points of every angular sector in its active set (they surround the centre)
+            cp, fp = polish_inscribed(x, y, outcome.better, polygon)
+            second = _sector_rerun(rerun, outcome.better)
+            c2, contacts2, ok2, message2, stats2 = second or (cp, ((), ()), False, "", {})
+            f2, _ = _value(x, y, c2, zone)
+            if f2 > max(fb, fp) and polygon.contains(np.asarray(c2, dtype=float)[None, :])[0]:
+                c, contacts, ok, message, valid = c2, contacts2, ok2, message2, True
+                S = np.union1d(S, stats2.get("active", []))
+            else:
+                c, contacts, ok, message, valid = cp, ((), ()), False, "polished from the branch and bound", True
             continue
         c2, contacts2, ok2, message2, stats2 = rerun(outcome.better)
         f2, _ = _value(x, y, c2, zone)
+        if f2 > fb:  # walked off: on a dense smooth profile the k most extreme radii are neighbours of one peak and
+            # one valley, and the sub-problem on them narrows towards a straight zone; restart with the extreme
+            # points of every angular sector in the active set too (they surround the centre)
+            second = _sector_rerun(rerun, outcome.better)
+            f3 = _value(x, y, second[0], zone)[0] if second is not None else np.inf
+            if f3 < f2:
+                (c2, contacts2, ok2, message2, stats2), f2 = second, f3
         inside2 = zone or polygon.contains(np.asarray(c2, dtype=float)[None, :])[0]
         if inside2 and ((f2 <= fb) if zone else (f2 >= fb)):
             c, contacts, ok, message = c2, contacts2, ok2, message2

@@ -50,6 +50,21 @@ def extremes(r: np.ndarray, k: int, largest: bool) -> np.ndarray:
     return np.argpartition(r, r.size - k)[r.size - k:].copy() if largest else np.argpartition(r, k - 1)[:k].copy()
 
 
+def sector_extremes(x: np.ndarray, y: np.ndarray, c, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """(outer, inner): the farthest and the nearest point about c in each of m equal angular sectors about c
+    (empty sectors give none). An active set holding them surrounds the centre: its sub-problem cannot
+    narrow the zone by walking off towards a straight zone, as the k most extreme radii of a dense smooth
+    profile (all neighbours of one peak and one valley) let it."""
+    dx, dy = x - c[0], y - c[1]
+    r = np.sqrt(dx * dx + dy * dy)
+    sec = np.minimum(((np.arctan2(dy, dx) + np.pi) * (m / (2 * np.pi))).astype(np.intp), m - 1)
+    order = np.lexsort((r, sec))
+    first = np.searchsorted(sec[order], np.arange(m), side="left")
+    last = np.searchsorted(sec[order], np.arange(m), side="right") - 1
+    full = last >= first
+    return np.unique(order[last[full]]), np.unique(order[first[full]])
+
+
 def add_violators(active: np.ndarray, excess: np.ndarray, k: int) -> np.ndarray:
     """Add up to k of the worst violators (excess > 0) to an active index set."""
     bad = np.flatnonzero(excess > 0)
@@ -298,19 +313,25 @@ def relabel_extremes(x, y, act, c, contacts):
     return c, (oc, ic)
 
 
-def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_rounds):
+def active_set_fit(x, y, *, start, local_solve, exact, certify, sides, k, max_rounds, sectors: int = 0):
     """The loop shared by the zone methods.
 
     ``local_solve(out, inn, c) -> (c_approx, solves, solver_iterations, history)`` solves the convex
     (sub)problem on the active points; ``exact(act, c_approx) -> (c, (outer, inner))`` gives the exact
     centre from the contact configurations; every point is then checked in one vectorised pass
     against the contacts' radii on the used ``sides`` ('outer', 'inner'); violators join the active
-    set. ``certify(c, outer, inner) -> (bool, message)`` checks optimality. Raises SolverFailure.
+    set. ``certify(c, outer, inner) -> (bool, message)`` checks optimality. ``sectors`` > 0: the start's
+    active set also holds the extreme points of that many angular sectors (:func:`sector_extremes`). Raises
+    SolverFailure.
     """
     c = start
     r_all = radii(x, y, c)
     out = extremes(r_all, max(k, 4), True) if "outer" in sides else np.empty(0, dtype=np.intp)
     inn = extremes(r_all, max(k, 4), False) if "inner" in sides else np.empty(0, dtype=np.intp)
+    if sectors:
+        so, si = sector_extremes(x, y, c, sectors)
+        out = np.union1d(out, so) if "outer" in sides else out
+        inn = np.union1d(inn, si) if "inner" in sides else inn
     stats = {"solves": 0, "solver_iterations": 0, "history": [], "rounds": 0}
     for stats["rounds"] in range(1, max_rounds + 1):
         ck, solves, iters, hist = local_solve(out, inn, c)
@@ -369,9 +390,9 @@ def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max
     ``extra["certified"]`` is "global", "local" or False and the message says which and why."""
     x, y = frame.x, frame.y
 
-    def run(s):
+    def run(s, sectors=0):
         return active_set_fit(x, y, start=s, local_solve=local_solve, exact=exact, certify=certify, sides=sides,
-                              k=k, max_rounds=max_rounds)
+                              k=k, max_rounds=max_rounds, sectors=sectors)
     info = {}
     try:
         c, (oc, ic), ok, message, stats = run(start)

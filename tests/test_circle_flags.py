@@ -91,6 +91,19 @@ def test_nearly_straight_points_give_no_converged_circle_at_infinity():
         assert (not res.converged) or ("stationary" in res.message and res.radius < 1e8)
 
 
+def test_a_circle_beyond_float64_says_why_it_is_not_converged():
+    """Nearly straight points at 1e300 mm: Kåsa's closed form is right in the unit frame, but its centre and radius
+    overflow in data units; the result is downgraded to not converged and its message said only 'closed-form
+    solution' (the CLI printed 'converged NO (closed-form solution)'). The message now says why."""
+    t = np.linspace(-1, 1, 9)
+    pts = np.column_stack([1e300 * t, 1e290 * (1 - t * t)])
+    with np.errstate(over="ignore", invalid="ignore"):
+        res = methods.fit("circle.kasa", pts)
+    assert not res.converged and not np.isfinite(res.radius)
+    assert res.message.startswith("the circle is not finite in float64") and "no fit is claimed" in res.message
+    assert res.message.endswith("the method said: closed-form solution")
+
+
 def _ulp_perturbed(pts, rng):
     return np.nextafter(pts, np.where(rng.random(pts.shape) < 0.5, np.inf, -np.inf))
 

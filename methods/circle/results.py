@@ -118,6 +118,9 @@ def circle_result(points: np.ndarray, center, radius: float, *, converged: bool,
         with np.errstate(over="ignore", invalid="ignore"):
             form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
         residuals = r - radius
+    if converged and not ok_geometry:  # the downgrade says why (the method's own words follow)
+        message = (f"the circle is not finite in float64 (centre ({xc:.6g}, {yc:.6g}), radius {radius:.6g}: e.g. points so "
+                   f"nearly straight that their circle is beyond float64's range), so no fit is claimed; the method said: {message}")
     return CircleFit(center=center, radius=radius, form_error=form_error, residuals=residuals,
                      converged=bool(converged and ok_geometry), iterations=iterations, nfev=nfev,
                      history=list(history) if history else [], message=message,

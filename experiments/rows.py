@@ -257,17 +257,17 @@ def row_from_json(text: str) -> dict:
 
 
 def _plain(row: dict) -> dict:
-    """The row with JSON's values: NumPy scalars as Python ones, non-finite floats as None (a new dict)."""
-    out = {}
+    """The row with JSON's values, converted in place (run_task's row is its own): NumPy scalars as Python ones,
+    non-finite floats as None; the keys and their order stay."""
     for k, v in row.items():
         t = type(v)
         if t is float:
             if not math.isfinite(v):
-                v = None
+                row[k] = None
         elif t is not str and t is not int and t is not bool and v is not None:
             if isinstance(v, np.generic):
                 v = v.item()
             if isinstance(v, float) and not math.isfinite(v):
                 v = None
-        out[k] = v
-    return out
+            row[k] = v
+    return row

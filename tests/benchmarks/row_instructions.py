@@ -8,7 +8,7 @@ same data (``MethodSpec.unchecked``, after making the data), the data alone (``r
 repetition: its methods share it). Prints instructions per row of the fits, per repetition of the data and per
 row of everything else (rows - fits: the gate, the metrics, the row's columns). docs/speed.md lists the figures.
 
-Run from the repository root (about 3 minutes):  python tests/benchmarks/row_instructions.py
+Run from the repository root (about 4 minutes):  python tests/benchmarks/row_instructions.py
 """
 from __future__ import annotations
 
@@ -60,6 +60,7 @@ def instructions(mode: str) -> int:
 
 
 def main() -> None:
+    instructions("none")  # warm-up: a first run after a code change also parses the changed modules for the cache keys
     counts = {mode: instructions(mode) for mode in ("none", "rows", "fits", "data")}
     fits = (counts["fits"] - counts["data"]) / ROWS
     data = (counts["data"] - counts["none"]) / (ROWS // 2)

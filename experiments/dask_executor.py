@@ -286,7 +286,7 @@ def execute(tasks, store, *, work, jobs: int, scheduler: str | None, desc: str, 
         return
     bar = Progress(total if total is not None else 0, desc, log)
     try:
-        run_dask(work, Chunks(tasks, chunk_rows, jobs), store, jobs, scheduler, bar, row_timeout)
+        run_dask(work, Chunks(tasks, chunk_rows, jobs, total), store, jobs, scheduler, bar, row_timeout)
     finally:
         bar.close()
 

@@ -59,17 +59,19 @@ def _duration(seconds: float) -> str:
 class Chunks:
     """Tasks cut into chunks whose size follows the measured cost of a row: a chunk takes about
     :attr:`target_s` seconds of a worker (one transaction of the store, one message each way) (between 1 and :attr:`max_rows` rows), so that microsecond
-    fits travel in thousands and slow rows one by one; ``declared`` fixes the size. Rows of a chunk that
-    failed as a whole (a worker died) come back one at a time first."""
+    fits travel in thousands and slow rows one by one; ``declared`` fixes the size. With several workers and a known
+    ``total``, a chunk is at most half of what is left per worker, so the run's last chunks are short. Rows of a
+    chunk that failed as a whole (a worker died) come back one at a time first."""
 
     target_s = 0.5
     max_rows = 10000
 
-    def __init__(self, tasks, declared: int | None = None, workers: int = 1):
+    def __init__(self, tasks, declared: int | None = None, workers: int = 1, total: int | None = None):
         self.it = iter(tasks)
         self.declared = declared
         self.size = declared or 4
         self.workers = workers
+        self.left = total  # rows not handed out yet (None: unknown)
         self.retry: list[list] = []
         self.cost = None  # seconds per row, smoothed
 
@@ -83,7 +85,14 @@ class Chunks:
     def next(self) -> list | None:
         if self.retry:
             return self.retry.pop(0)
-        chunk = list(itertools.islice(self.it, self.size))
+        size = self.size
+        if not self.declared and self.left is not None and self.workers > 1:
+            # the last chunks shrink (at most a share of what is left per worker): no worker runs a long last chunk
+            # while the others wait
+            size = max(1, min(size, -(-self.left // (2 * self.workers))))
+        chunk = list(itertools.islice(self.it, size))
+        if self.left is not None:
+            self.left -= len(chunk)
         if not self.declared and self.cost is None:
             self.size = min(self.size * 2, 64)  # until a cost is measured: small chunks, growing
         return chunk or None
@@ -103,7 +112,7 @@ def execute(tasks, store: RowStore, *, work, jobs: int, executor: str, scheduler
     if total == 0:
         return
     bar = Progress(total if total is not None else 0, desc, log)
-    chunks = Chunks(tasks, chunk_rows, jobs)
+    chunks = Chunks(tasks, chunk_rows, jobs, total)
     try:
         if executor != "local":
             raise ValueError(f"executor {executor!r}: this module runs rows locally (Dask: experiments.dask_executor)")

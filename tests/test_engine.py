@@ -169,6 +169,23 @@ def test_single_row_parts_are_joined_into_blocks():
     assert built["a"].dtype == np.float64 and built["a"].tolist() == [float(i) for i in range(12_000)]
 
 
+def test_the_last_chunks_shrink_so_that_no_worker_waits_long_for_another():
+    chunks = executors.Chunks(iter(range(100_000)), workers=2, total=100_000)
+    chunks.measured(10, 10 * 20e-6)  # 20 us a row: chunks of max_rows
+    sizes = []
+    while (chunk := chunks.next()) is not None:
+        sizes.append(len(chunk))
+    assert sum(sizes) == 100_000 and sizes[0] == executors.Chunks.max_rows
+    left = 100_000
+    for size in sizes:  # never more than a quarter of what was left (half of it per worker, two workers)
+        assert size <= max(1, -(-left // 4))
+        left -= size
+    assert sizes[-1] == 1 and len(sizes) < 60
+    one = executors.Chunks(iter(range(1000)), workers=1, total=1000)  # one worker: nothing to balance
+    one.measured(10, 10 * 20e-6)
+    assert len(one.next()) == 1000
+
+
 def test_chunk_size_follows_the_measured_cost_of_a_row():
     chunks = executors.Chunks(iter(range(100_000)))
     sizes = [len(chunks.next()) for _ in range(3)]

@@ -297,6 +297,7 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
     from multiprocessing.connection import wait
     ctx = mp.get_context("spawn")
     workers: list[_Worker] = []
+    received: list = []  # chunks whose rows came back, stored once their workers have their next chunk
     next_id = startup_failures = 0
     with _one_blas_thread_per_worker():
         try:
@@ -318,6 +319,9 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                                 w = workers[workers.index(w)] = _Worker(ctx)
                             w.send(next_id, chunk, row_timeout)
                         next_id += 1
+                while received:  # the workers run their next chunks meanwhile
+                    out, chunk = received.pop(0)
+                    _store(store, out["columns"], chunk, bar)
                 busy = [w for w in workers if w.chunk is not None]
                 if not busy:
                     break
@@ -339,7 +343,7 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                                     _lost_chunk(chunks, store, bar, chunk, 0, "error", out["failed"])
                                 continue
                             chunks.measured(len(chunk), out["seconds"])
-                            _store(store, out["columns"], chunk, bar)
+                            received.append((out, chunk))
                             continue
                     if died:
                         pos, started = w.progress[1], w.progress[0]
@@ -369,9 +373,12 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                                     f"the row ran longer than its limit of {row_timeout:g} s (its worker was ended)")
                         with _workers_ignore_ctrl_c():
                             workers[workers.index(w)] = _Worker(ctx)
-        except BaseException:
+        except BaseException as exc:
             for w in workers:
                 w.stop(now=True)
+            if isinstance(exc, KeyboardInterrupt):  # what finished stays stored
+                for out, chunk in received:
+                    _store(store, out["columns"], chunk, bar)
             raise
         for w in workers:
             if _KEPT is not None and w.proc.is_alive():

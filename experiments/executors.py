@@ -389,22 +389,30 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
 
 #: idle worker processes kept between the studies of one run (:func:`kept_workers`), else None
 _KEPT: list | None = None
+_KEPT_JOBS = 0
 
 
 @contextlib.contextmanager
 def kept_workers(jobs: int):
-    """Start ``jobs`` local worker processes now and keep them between the studies run inside the block: they import
-    while the run prepares its first study (0.4 s a worker here) and start once per run, not once per study. They
-    are stopped when the block ends, however it ends."""
-    global _KEPT
-    import multiprocessing as mp
-    ctx = mp.get_context("spawn")
-    _KEPT = []
+    """Keep local worker processes between the studies run inside the block (they start once per run, not once per
+    study: 0.4 s of imports a worker here); :func:`start_kept_workers` starts them early. They are stopped when the
+    block ends, however it ends."""
+    global _KEPT, _KEPT_JOBS
+    _KEPT, _KEPT_JOBS = [], jobs
     try:
-        with _one_blas_thread_per_worker(), _workers_ignore_ctrl_c():
-            _KEPT.extend(_Worker(ctx) for _ in range(jobs))
         yield
     finally:
-        kept, _KEPT = _KEPT, None
+        kept, _KEPT, _KEPT_JOBS = _KEPT, None, 0
         for w in kept:
             w.stop()
+
+
+def start_kept_workers() -> None:
+    """Inside :func:`kept_workers`: start the workers not started yet now, so that they import while the run prepares
+    a study's rows (a study whose outputs are up to date needs none: call this once rows may run)."""
+    if _KEPT is None or len(_KEPT) >= _KEPT_JOBS:
+        return
+    import multiprocessing as mp
+    ctx = mp.get_context("spawn")
+    with _one_blas_thread_per_worker(), _workers_ignore_ctrl_c():
+        _KEPT.extend(_Worker(ctx) for _ in range(_KEPT_JOBS - len(_KEPT)))

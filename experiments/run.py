@@ -27,6 +27,7 @@ from experiments import compare  # the verdict on every run: fresh results again
 from experiments import config as configs
 from experiments import engine
 from experiments import study as contract
+from experiments.executors import kept_workers, start_kept_workers
 from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
 from experiments.summary import summarise, summary_units, to_markdown
@@ -177,6 +178,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     if n_rows is not None:  # the same rows analysed by the same code: the outputs there are this run's
         log(f"   {n_rows} rows: {n_rows} already stored, 0 to run; results.csv, tables and figures up to date")
         return target
+    start_kept_workers()  # rows may run: workers (of a run on several) import while this study prepares
     store = engine.RowStore(target / "rows.sqlite", log=log)
     _CURRENT["store"] = target / "rows.sqlite"
     try:
@@ -381,7 +383,6 @@ def _main(argv=None) -> int:
         lock_out(args.out)
         jobs = args.jobs if args.scheduler else usable_jobs(args.jobs)
         t0 = time.perf_counter()
-        from experiments.executors import kept_workers
         workers = kept_workers(jobs) if args.executor == "local" and jobs > 1 else contextlib.nullcontext()
         with workers, tempfile.TemporaryDirectory(prefix="fitbench-reference-") as ref_dir:
             study_names = [configs.load(n, quick=args.quick)["name"] for n in names]

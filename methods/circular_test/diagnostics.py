@@ -99,7 +99,16 @@ class _Model:
 
     def spike_decay(self, theta, at):
         """(exp(-phi / phi_tau) factor's phi: angle since the last reversal at ``at`` + k pi, or inf if
-        that reversal came before the run's first point)."""
+        that reversal came before the run's first point). Kept for the last ``theta`` array (the fit asks for the
+        same angles' decays in the fields and the Jacobian)."""
+        memo = self.__dict__.get("_decay")
+        if memo is None or memo[0] is not theta:
+            memo = self._decay = (theta, {})
+        if at not in memo[1]:
+            memo[1][at] = self._spike_decay(theta, at)
+        return memo[1][at]
+
+    def _spike_decay(self, theta, at):
         d = self.d
         theta0 = theta[self.first][self.run_of]
         tol = self.start_tol
@@ -108,7 +117,7 @@ class _Model:
         return np.where(since <= swept + tol, since, np.inf)
 
     def fields(self, theta, phi_tau, derivative=False):
-        """{name: G_j (N, 2)} (and {name: dG_j / dtheta} with ``derivative``)."""
+        """{name: G_j as its (x, y) components} (and {name: dG_j / dtheta} with ``derivative``)."""
         R, d = self.R, self.d
         c, s = np.cos(theta), np.sin(theta)
         zero, one = np.zeros_like(c), np.ones_like(c)
@@ -134,34 +143,35 @@ class _Model:
             G["cyc_xc"], dG["cyc_xc"] = (np.cos(k * X), zero), (k * R * s * np.sin(k * X), zero)
             G["cyc_ys"], dG["cyc_ys"] = (zero, np.sin(k * Y)), (zero, k * R * c * np.cos(k * Y))
             G["cyc_yc"], dG["cyc_yc"] = (zero, np.cos(k * Y)), (zero, -k * R * c * np.sin(k * Y))
-        G = {n: np.column_stack(G[n]) for n in self.names if n != "radius_difference"}
+        G = {n: G[n] for n in self.names if n != "radius_difference"}
         if not derivative:
             return G
-        return G, {n: np.column_stack(dG[n]) for n in G}
+        return G, {n: dG[n] for n in G}
 
     def path(self, theta, beta, phi_tau, derivative=False):
-        """Model point(s) R u(theta) + D(theta) (and d/dtheta, and the fields)."""
+        """Model point(s) R u(theta) + D(theta) as (x, y) (and d/dtheta, and the fields). Each coordinate is summed
+        on its own (the same operations, in the same order, as on (N, 2) rows, without building them)."""
         out = self.fields(theta, phi_tau, derivative)
         G, dG = out if derivative else (out, None)
-        p = self.R * np.column_stack([np.cos(theta), np.sin(theta)])
+        px, py = self.R * np.cos(theta), self.R * np.sin(theta)
         for j, n in enumerate(self.names):
             if n in G and beta[j]:
-                p = p + beta[j] * G[n]
+                px, py = px + beta[j] * G[n][0], py + beta[j] * G[n][1]
         if not derivative:
-            return p
-        pt = self.R * np.column_stack([-np.sin(theta), np.cos(theta)])
+            return px, py
+        tx, ty = self.R * -np.sin(theta), self.R * np.cos(theta)
         for j, n in enumerate(self.names):
             if n in dG and beta[j]:
-                pt = pt + beta[j] * dG[n]
-        return p, pt, G
+                tx, ty = tx + beta[j] * dG[n][0], ty + beta[j] * dG[n][1]
+        return (px, py), (tx, ty), G
 
     def theta(self, beta, phi_tau):
         """The commanded angle of each point: angle(R u(theta) + D(theta)) = the measured angle."""
         warm = getattr(self, "_theta", None)  # the last solution: a warm start (the fit moves it little)
         theta = self.phi.copy() if warm is None else warm.copy()
         for _ in range(THETA_ITERATIONS):
-            p = self.path(theta, beta, phi_tau)
-            err = np.mod(np.arctan2(p[:, 1], p[:, 0]) - self.phi + np.pi, 2 * np.pi) - np.pi
+            px, py = self.path(theta, beta, phi_tau)
+            err = np.mod(np.arctan2(py, px) - self.phi + np.pi, 2 * np.pi) - np.pi
             theta = theta - err
             if np.max(np.abs(err)) <= 4 * np.finfo(float).eps * (1 + np.max(np.abs(theta))):
                 break
@@ -170,8 +180,8 @@ class _Model:
 
     def residual(self, beta, phi_tau):
         theta = self.theta(beta, phi_tau)
-        p = self.path(theta, beta, phi_tau)
-        return self.r - np.hypot(p[:, 0], p[:, 1]) - self._radial(beta), theta
+        px, py = self.path(theta, beta, phi_tau)
+        return self.r - np.hypot(px, py) - self._radial(beta), theta
 
     def _radial(self, beta):
         if "radius_difference" in self.names:
@@ -182,26 +192,29 @@ class _Model:
         """d(model radius at the measured angle)/d beta_j (N, p): G_j . n - (p_theta . n) (G_j . t) / (p_theta . t)
         with n, t the unit radial and tangential directions of the model point (theta moves with beta); with
         ``log_tau`` a last column for log phi_tau (the spikes' G_j phi / phi_tau, times their amplitudes)."""
-        p, pt, G = self.path(theta, beta, phi_tau, derivative=True)
-        rn = np.hypot(p[:, 0], p[:, 1])
-        n = p / rn[:, None]
-        t = np.column_stack([-n[:, 1], n[:, 0]])
-        ratio = np.sum(pt * n, axis=1) / np.sum(pt * t, axis=1)
-        cols = []
-        for name in self.names:
+        (px, py), (ptx, pty), G = self.path(theta, beta, phi_tau, derivative=True)
+        rn = np.hypot(px, py)
+        nx, ny = px / rn, py / rn
+        tx, ty = -ny, nx
+        ratio = (ptx * nx + pty * ny) / (ptx * tx + pty * ty)
+        out = np.empty((len(px), len(self.names) + bool(log_tau)))
+        for j, name in enumerate(self.names):
             if name == "radius_difference":
-                cols.append(0.5 * self.d)
+                out[:, j] = 0.5 * self.d
                 continue
-            g = G[name]
-            cols.append(np.sum(g * n, axis=1) - ratio * np.sum(g * t, axis=1))
+            gx, gy = G[name]
+            out[:, j] = (gx * nx + gy * ny) - ratio * (gx * tx + gy * ty)
         if log_tau:
-            g = np.zeros_like(p)
+            gx, gy = np.zeros_like(px), np.zeros_like(py)
             for name, at in (("reversal_spike_x", 0.0), ("reversal_spike_y", np.pi / 2)):
                 if name in G:
                     since = self.spike_decay(theta, at)
-                    g += beta[self.names.index(name)] * G[name] * np.where(np.isfinite(since), since / phi_tau, 0.0)[:, None]
-            cols.append(np.sum(g * n, axis=1) - ratio * np.sum(g * t, axis=1))
-        return np.column_stack(cols)
+                    w = np.where(np.isfinite(since), since / phi_tau, 0.0)
+                    b = beta[self.names.index(name)]
+                    gx += b * G[name][0] * w
+                    gy += b * G[name][1] * w
+            out[:, -1] = (gx * nx + gy * ny) - ratio * (gx * tx + gy * ty)
+        return out
 
     def spike_first_order(self, theta, phi_tau):
         """The first-order columns of the X and Y reversal spikes at angles theta (N, 2)."""
@@ -215,8 +228,8 @@ class _Model:
     def first_order(self, theta, phi_tau):
         """The first-order (small-deviation) columns at angles theta: G_j . u."""
         G = self.fields(theta, phi_tau)
-        u = np.column_stack([np.cos(theta), np.sin(theta)])
-        return np.column_stack([0.5 * self.d if n == "radius_difference" else np.sum(G[n] * u, axis=1)
+        ux, uy = np.cos(theta), np.sin(theta)
+        return np.column_stack([0.5 * self.d if n == "radius_difference" else G[n][0] * ux + G[n][1] * uy
                                 for n in self.names])
 
 
@@ -242,12 +255,11 @@ def _fit(model, spikes):
         # points within GRID_REVERSAL_ZONE of a reversal are left out: which side of it a start's angles put
         # them on is uncertain, and a point on the wrong side would decide the grid alone
         if base.get("theta") is not theta:   # the columns but the spikes' depend on theta only
-            base.update(theta=theta, X=model.first_order(theta, phi_tau))
-        X = base["X"].copy()
+            keep = (np.abs(np.sin(theta)) > GRID_REVERSAL_ZONE) & (np.abs(np.cos(theta)) > GRID_REVERSAL_ZONE)
+            base.update(theta=theta, keep=keep, X=model.first_order(theta, phi_tau)[keep], y=dr0[keep])
+        keep, X, y = base["keep"], base["X"].copy(), base["y"]
         if spike_cols:
-            X[:, spike_cols] = model.spike_first_order(theta, phi_tau)[:, spike_axes]
-        keep = (np.abs(np.sin(theta)) > GRID_REVERSAL_ZONE) & (np.abs(np.cos(theta)) > GRID_REVERSAL_ZONE)
-        X, y = X[keep], dr0[keep]
+            X[:, spike_cols] = model.spike_first_order(theta, phi_tau)[keep][:, spike_axes]
         scale = np.linalg.norm(X, axis=0)
         scale[scale == 0] = 1.0
         coef, *_ = np.linalg.lstsq(X / scale, y, rcond=None)

@@ -693,3 +693,24 @@ def test_reading_options_belong_to_a_file_data_set(tmp_path):
     with pytest.raises(InvalidInputError, match="skip_rows"):
         cfg = run.configs.load(str(path))
         engine.expand_datasets(cfg, cfg.where)
+
+
+@pytest.mark.slow
+def test_worker_processes_do_not_import_the_run_s_main_module(tmp_path):
+    """A spawned worker imported the parent's __main__ first (experiments.run under python -m: 0.6 s of CPU a
+    worker, for code no worker runs); the workers start without it."""
+    study = write_study(tmp_path, reps=4)
+    marker = tmp_path / "main-imported-by"
+    script = tmp_path / "main_script.py"
+    script.write_text("import os, sys\n"
+                      "if __name__ != '__main__':\n"
+                      f"    open({str(marker)!r}, 'a').write(f'{{os.getpid()}}\\n')\n"
+                      "else:\n"
+                      "    from experiments import run\n"
+                      f"    sys.exit(run.main([{str(study)!r}, '--jobs', '2', '--no-report', "
+                      f"'--out', {str(tmp_path / 'o')!r}]))\n")
+    res = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                         env=subprocess_env(OPENBLAS_NUM_THREADS="1"))
+    assert res.returncode == 0, res.stderr
+    assert len(pd.read_csv(tmp_path / "o" / "eng" / "results.csv")) > 0
+    assert not marker.exists(), f"workers imported the main module: {marker.read_text()}"

@@ -330,17 +330,28 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                             break
                         try:
                             w.send(next_id, chunk, row_timeout)
-                        except OSError:  # the idle worker was killed from outside: a new one takes the chunk
+                        except OSError:  # the idle worker has ended (killed from outside, or it could not start)
+                            w.proc.join(timeout=5)
+                            code = w.proc.exitcode
                             w.stop(now=True)
+                            startup_failures += 1
+                            if startup_failures >= 3:
+                                from methods import InvalidInputError
+                                raise InvalidInputError(
+                                    f"worker processes end before running a row (exit code {code}, 3 times); "
+                                    f"run with --jobs 1 to see why") from None
+                            chunks.retry.insert(0, chunk)  # the chunk goes to the worker that replaces it
                             with _workers_ignore_ctrl_c():
-                                w = workers[workers.index(w)] = _Worker(ctx)
-                            w.send(next_id, chunk, row_timeout)
+                                workers[workers.index(w)] = _Worker(ctx)
+                            continue
                         next_id += 1
                 while received:  # the workers run their next chunks meanwhile
                     out, chunk = received.pop(0)
                     _store(store, out["columns"], chunk, bar)
                 busy = [w for w in workers if w.chunk is not None]
                 if not busy:
+                    if chunks.retry:  # a chunk waits for the worker that replaced one that had ended
+                        continue
                     break
                 ready = wait([w.conn for w in busy] + [w.proc.sentinel for w in busy], timeout=0.5)
                 for w in busy:
@@ -361,6 +372,7 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                                 continue
                             chunks.measured(len(chunk), out["seconds"])
                             received.append((out, chunk))
+                            startup_failures = 0
                             continue
                     if died:
                         pos, started = w.progress[1], w.progress[0]

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from methods import InvalidInputError
+
 #: the value types a part carries as they are: exactly those JSON gives back unchanged
 PLAIN = frozenset({str, int, float, bool, type(None)})
 
@@ -181,7 +183,9 @@ class RowFrame:
         return pd.Series(col, dtype=object)
 
 
-class MissingRows(RuntimeError):
+class MissingRows(InvalidInputError):
+    """Rows of a run that no chunk delivered (one line; the next run computes them)."""
+
     def __init__(self, missing: int):
         super().__init__(f"{missing} rows are missing from the row store after the run; run the same command again "
                          f"(the stored rows are kept)")

@@ -409,22 +409,21 @@ def polish_inscribed(x, y, c, polygon: ProfilePolygon, steps: int = 12):
     return c0, f0
 
 
-def _sector_rerun(rerun, start):
+def _sector_rerun(rerun, start, solver_failure):
     """``rerun(start)`` with the extreme points of RESTART_SECTORS angular sectors in its first active set, or None
-    when its convex program fails (the centre the branch and bound found stands then)."""
-    from methods.circle._zone import SolverFailure
+    when its convex program fails (raises ``solver_failure``: the centre the branch and bound found stands then)."""
     try:
         return rerun(start, sectors=RESTART_SECTORS)
-    except SolverFailure:
+    except solver_failure:
         return None
 
 
 def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet, scale, shift=None,
-              unit="data units"):
+              unit="data units", solver_failure: type[Exception]):
     """The global stage of :mod:`methods.circle._zone`'s fits (see the module docstring).
 
     ``rerun(start)`` runs the local solver from another start and returns what
-    ``active_set_fit`` returns. Returns (centre, contacts, converged, certified, message, info) with
+    ``active_set_fit`` returns, or raises ``solver_failure`` when its convex program fails. Returns (centre, contacts, converged, certified, message, info) with
     certified one of "global", "local", False. With the frame's ``shift``, the centre is also chosen among the
     float centres in data units (:func:`float_centre`): ``info["center_data"]`` is the one to return, ``centre``
     its unit-frame image, and ``info["bound"]`` (data units, certified "global" only) what the message states:
@@ -490,7 +489,7 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
         if not zone:  # the MIC's local LP can walk out of a lobed profile: climb by exact candidates; and restart
             # the LP with the extreme points of every angular sector in its active set (they surround the centre)
             cp, fp = polish_inscribed(x, y, outcome.better, polygon)
-            second = _sector_rerun(rerun, outcome.better)
+            second = _sector_rerun(rerun, outcome.better, solver_failure)
             c2, contacts2, ok2, message2, stats2 = second or (cp, ((), ()), False, "", {})
             f2, _ = _value(x, y, c2, zone)
             if f2 > max(fb, fp) and polygon.contains(np.asarray(c2, dtype=float)[None, :])[0]:
@@ -504,7 +503,7 @@ def globalise(x, y, *, kind, c, contacts, ok, message, stats, rerun, hulls_meet,
         if f2 > fb:  # walked off: on a dense smooth profile the k most extreme radii are neighbours of one peak and
             # one valley, and the sub-problem on them narrows towards a straight zone; restart with the extreme
             # points of every angular sector in the active set too (they surround the centre)
-            second = _sector_rerun(rerun, outcome.better)
+            second = _sector_rerun(rerun, outcome.better, solver_failure)
             f3 = _value(x, y, second[0], zone)[0] if second is not None else np.inf
             if f3 < f2:
                 (c2, contacts2, ok2, message2, stats2), f2 = second, f3

@@ -410,7 +410,7 @@ def fit_zone(points, frame, *, start, local_solve, exact, certify, sides, k, max
         else:
             c, (oc, ic), ok, certified, message, info = _global.globalise(
                 x, y, kind=proof, c=c, contacts=(oc, ic), ok=ok, message=message, stats=stats, rerun=run,
-                hulls_meet=hulls_meet, scale=frame.scale, shift=frame.shift)
+                hulls_meet=hulls_meet, scale=frame.scale, shift=frame.shift, solver_failure=SolverFailure)
     except SolverFailure as exc:
         c, (oc, ic), ok, certified, message = start, ((), ()), False, False, f"{exc}; no result is claimed"
         stats = {"solves": None, "solver_iterations": None, "history": [], "rounds": None, "active_points": None}

@@ -386,6 +386,8 @@ def _main(argv=None) -> int:
         workers = kept_workers(jobs) if args.executor == "local" and jobs > 1 else contextlib.nullcontext()
         with workers, tempfile.TemporaryDirectory(prefix="fitbench-reference-") as ref_dir:
             study_names = [configs.load(n, quick=args.quick)["name"] for n in names]
+            if args.force or any(not (args.out / n / "meta.json").is_file() for n in study_names):
+                start_kept_workers()  # a study never run here runs rows: the workers import meanwhile
             refs = compare.reference_snapshot(args.out, study_names, args.quick, Path(ref_dir))
             for name in names:
                 run_study(name, args.out, quick=args.quick, jobs=jobs, executor=args.executor,

@@ -21,6 +21,7 @@ at the cost of last-bit differences in its iterations). Data whose sums leave
 """
 from __future__ import annotations
 
+import importlib
 import math
 import os
 import threading
@@ -168,9 +169,9 @@ def _choice_reader():
     KeyError os.environ.get raises and catches for an unset variable, which cost more than the kernel sweeps
     of a small fit), or os.environ.get where the kernels are not built."""
     global _read_choice
-    try:
-        from methods.circle._ckernels import env_value
-    except ImportError:
+    try:  # the kernel module by its name, as point_kernels loads it (kernels(KERNEL_MODULE))
+        env_value = importlib.import_module(KERNEL_MODULE).env_value
+    except (ImportError, AttributeError):
         _read_choice = partial(os.environ.get, "FITBENCH_KERNELS")
     else:
         _read_choice = partial(env_value, b"FITBENCH_KERNELS")

@@ -10,22 +10,9 @@ import pandas as pd
 
 from experiments.run import run_study
 from experiments.summary import summary_units, to_markdown
+from test_verify import STUDY as VERIFY_STUDY
 
-STUDY = '''name = "ustudy"
-title = "units test study"
-kind = "grid"
-seed = 5
-repetitions = 2
-
-[[datasets]]
-generator = "circle"
-params = { center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }
-
-[[methods]]
-id = "circle.kasa"
-[[methods]]
-id = "circle.gauss_newton"
-'''
+STUDY = VERIFY_STUDY.replace('name = "vstudy"', 'name = "ustudy"').replace("verify test study", "units test study")
 
 UNITLESS = {"runs", "ok share", "iterations median", "n", "dataset", "method", "params"}
 

@@ -323,6 +323,8 @@ def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> Non
         retry: collections.deque = collections.deque()  # chunks whose worker died: each runs alone
         deaths: collections.Counter = collections.Counter()  # row key -> deaths of the worker running it
         finished: queue.Queue = queue.Queue()
+        interrupted = threading.Event()
+        previous = _ctrl_c_sets(interrupted, finished)
         try:
             threads = _threads(client)
 
@@ -365,6 +367,8 @@ def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> Non
                     fut = finished.get(timeout=CHECK_EVERY_S)
                 except queue.Empty:
                     fut = None
+                if interrupted.is_set():
+                    raise KeyboardInterrupt
                 if fut is not None and fut.key in pending:
                     _, chunk, alone = pending[fut.key]
                     try:
@@ -416,11 +420,29 @@ def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> Non
                 client.cancel([f for f, _, _ in pending.values()])
             raise
         finally:
+            if previous is not None:
+                signal.signal(signal.SIGINT, previous)
             with contextlib.suppress(Exception):
                 client.close()
             if cluster is not None:
                 with contextlib.suppress(Exception):
                     cluster.close()
+
+
+def _ctrl_c_sets(interrupted: threading.Event, wake: queue.Queue):
+    """In the main thread: SIGINT sets ``interrupted`` and wakes the run's loop (a None in ``wake``), which then
+    raises KeyboardInterrupt itself; Python's own handler raised it wherever the main thread was, and distributed's
+    callbacks in this process (its garbage-collection timer) swallowed it with a printed traceback. Returns the
+    previous handler (None outside the main thread: nothing changed)."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    from experiments.rows import note_signal
+
+    def on_sigint(signum, frame):
+        note_signal()
+        interrupted.set()
+        wake.put(None)
+    return signal.signal(signal.SIGINT, on_sigint)
 
 
 def _threads(client) -> int:

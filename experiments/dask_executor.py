@@ -41,7 +41,8 @@ import threading
 import time
 from concurrent.futures import CancelledError
 
-from experiments.executors import KILL_GRACE_S, Chunks, Progress, _one_blas_thread_per_worker, _store
+from experiments.executors import (KILL_GRACE_S, Chunks, Progress, _main_module_not_imported_by_workers,
+                                  _one_blas_thread_per_worker, _store)
 from methods import InvalidInputError
 
 #: how long a connection to a Dask scheduler may take before the run gives up (seconds)
@@ -294,10 +295,14 @@ def execute(tasks, store, *, work, jobs: int, scheduler: str | None, desc: str, 
 def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> None:
     """Run ``chunks`` (an ``experiments.executors.Chunks``) as Dask tasks of ``work`` (or
     :func:`run_isolated` with a time limit) on a LocalCluster of ``jobs`` single-threaded worker processes,
-    or on the cluster at ``scheduler``; store each chunk's rows as it returns (see the module's docstring)."""
+    or on the cluster at ``scheduler``; store each chunk's rows as it returns (see the module's docstring).
+
+    Ctrl-C is the run's own from before the cluster starts (:func:`_ctrl_c_sets`): interrupted while a LocalCluster
+    started, Python had raised KeyboardInterrupt inside its start, and distributed's exit hook then failed to close
+    the half-started cluster with a long traceback; the workers start with SIGINT blocked (:func:`_ctrl_c_held`)
+    until their preload ignores it."""
     import dask
-    from distributed import Client, KilledWorker, LocalCluster
-    from experiments.rows import encode_rows, failed_row
+    from distributed import Client, LocalCluster
     limit_s = no_worker_limit_s()
     settings = {"distributed.scheduler.allowed-failures": 0}
     if scheduler is None:
@@ -305,128 +310,141 @@ def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> Non
         # death; with workers dying one after another the timeout fell on a restart, every nanny was closed
         # and the run waited for ever. Our nannies restart their workers themselves.
         settings["distributed.deploy.lost-worker-timeout"] = "100000 s"
-    cluster = None
-    with dask.config.set(settings):
-        if scheduler is not None:
-            client = connect_dask(scheduler)
-            where = f"the Dask cluster at {scheduler.strip()}"
-        else:
-            with _one_blas_thread_per_worker():
-                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
-                                       dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
-                                       silence_logs=50,  # its HTTP server on a free local port, no dashboard
-                                       preload=[__name__])  # dask_setup below: Ctrl-C is the run's alone
-            client = Client(cluster)
-            where = "the local Dask cluster"
-        fn = run_isolated if row_timeout else work
-        pending: dict = {}  # key -> (future, chunk, ran alone)
-        retry: collections.deque = collections.deque()  # chunks whose worker died: each runs alone
-        deaths: collections.Counter = collections.Counter()  # row key -> deaths of the worker running it
-        finished: queue.Queue = queue.Queue()
-        interrupted = threading.Event()
-        previous = _ctrl_c_sets(interrupted, finished)
-        try:
-            threads = _threads(client)
-
-            def submit(chunk, alone):
-                fut = client.submit(fn, chunk, row_timeout, pure=False)
-                pending[fut.key] = (fut, chunk, alone)
-                fut.add_done_callback(finished.put)
-
-            def fill():
-                while True:
-                    if retry:
-                        if not pending:
-                            submit(retry.popleft(), True)
-                        return
-                    if len(pending) >= 2 * max(threads, 1):
-                        return
-                    chunk = chunks.next()
-                    if chunk is None:
-                        return
-                    submit(chunk, False)
-
-            def died(chunk, alone, why):
-                for t in chunk:
-                    deaths[t["key"]] += 1
-                if len(chunk) > 1:
-                    half = len(chunk) // 2
-                    retry.extendleft([chunk[half:], chunk[:half]])
-                elif alone and deaths[chunk[0]["key"]] >= DASK_ROW_ATTEMPTS:
-                    msg = (f"its Dask worker died each of the {deaths[chunk[0]['key']]} times it ran this row, the last "
-                           f"time with nothing else running ({why})")
-                    _store(store, encode_rows([failed_row(chunk[0], "crashed", msg)]), chunk, bar)
-                else:
-                    retry.appendleft(chunk)
-
-            fill()
-            cancelled = 0
-            seen = checked = time.monotonic()
-            while pending:
-                try:
-                    fut = finished.get(timeout=CHECK_EVERY_S)
-                except queue.Empty:
-                    fut = None
-                if interrupted.is_set():
-                    raise KeyboardInterrupt
-                if fut is not None and fut.key in pending:
-                    _, chunk, alone = pending[fut.key]
-                    try:
-                        out = fut.result(timeout=10)
-                    except KilledWorker as exc:
-                        del pending[fut.key]
-                        died(chunk, alone, type(exc).__name__)
-                    except RowProcessError as exc:
-                        raise InvalidInputError(f"{exc}; run with --jobs 1 on that machine to see why") from None
-                    except TimeoutError:  # its result was lost with a worker before it was fetched
-                        if not fut.done():
-                            fut.add_done_callback(finished.put)  # computed again: wait for it
-                        else:
-                            del pending[fut.key]
-                            retry.appendleft(chunk)
-                    except CancelledError as exc:  # the scheduler lost it (restarted), or the connection is gone
-                        del pending[fut.key]
-                        cancelled += 1
-                        if client.status not in ("running", "connecting") or cancelled > MAX_CANCELLED:
-                            raise InvalidInputError(f"the connection to {where} was lost ({type(exc).__name__}); "
-                                                    f"the finished rows are kept, run the same command again") from None
-                        retry.appendleft(chunk)
-                    except Exception as exc:  # the engine itself failed: the rows alone, then an error row
-                        del pending[fut.key]
-                        if len(chunk) > 1:
-                            retry.extendleft([t] for t in reversed(chunk))
-                        else:
-                            _store(store, encode_rows([failed_row(chunk[0], "error", f"{type(exc).__name__}: {exc}")]),
-                                   chunk, bar)
-                    else:
-                        del pending[fut.key]
-                        cancelled = 0
-                        chunks.measured(len(chunk), out["seconds"])
-                        _store(store, out["columns"], chunk, bar)
-                now = time.monotonic()
-                if now - checked >= CHECK_EVERY_S:
-                    checked = now
-                    threads = _threads(client)
-                    if threads:
-                        seen = now
-                    elif now - seen > limit_s:
-                        raise InvalidInputError(
-                            f"{where} has had no worker for {limit_s:g} s ({len(pending)} chunks waiting); "
-                            f"the finished rows are kept: start workers (dask worker ADDRESS) and run the same command "
-                            f"again, or give workers longer to come with FITBENCH_DASK_NO_WORKER_S=SECONDS")
-                fill()
-        except BaseException:
+    cluster = client = None
+    finished: queue.Queue = queue.Queue()
+    interrupted = threading.Event()
+    pending: dict = {}  # key -> (future, chunk, ran alone)
+    previous = _ctrl_c_sets(interrupted, finished)
+    try:
+        with dask.config.set(settings):
+            if scheduler is not None:
+                client = connect_dask(scheduler)
+                where = f"the Dask cluster at {scheduler.strip()}"
+            else:
+                with _one_blas_thread_per_worker(), _ctrl_c_held(), _main_module_not_imported_by_workers():
+                    cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
+                                           dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
+                                           silence_logs=50,  # its HTTP server on a free local port, no dashboard
+                                           preload=[__name__])  # dask_setup below: Ctrl-C is the run's alone
+                client = Client(cluster)
+                where = "the local Dask cluster"
+            _drive(client, where, work, chunks, store, bar, row_timeout, limit_s, interrupted, finished, pending)
+    except BaseException:
+        if client is not None:
             with contextlib.suppress(Exception):
                 client.cancel([f for f, _, _ in pending.values()])
-            raise
-        finally:
-            if previous is not None:
-                signal.signal(signal.SIGINT, previous)
+        raise
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+        if client is not None:
             with contextlib.suppress(Exception):
                 client.close()
-            if cluster is not None:
-                with contextlib.suppress(Exception):
-                    cluster.close()
+        if cluster is not None:
+            with contextlib.suppress(Exception):
+                cluster.close()
+
+
+def _drive(client, where: str, work, chunks, store, bar, row_timeout, limit_s: float, interrupted: threading.Event,
+           finished: queue.Queue, pending: dict) -> None:
+    """The run's loop over the chunks on ``client`` (see the module's docstring); ``pending`` holds the chunks in
+    flight (the caller cancels them when the loop raises)."""
+    from distributed import KilledWorker
+    from experiments.rows import encode_rows, failed_row
+    if interrupted.is_set():
+        raise KeyboardInterrupt
+    fn = run_isolated if row_timeout else work
+    retry: collections.deque = collections.deque()  # chunks whose worker died: each runs alone
+    deaths: collections.Counter = collections.Counter()  # row key -> deaths of the worker running it
+    threads = _threads(client)
+
+    def submit(chunk, alone):
+        fut = client.submit(fn, chunk, row_timeout, pure=False)
+        pending[fut.key] = (fut, chunk, alone)
+        fut.add_done_callback(finished.put)
+
+    def fill():
+        while True:
+            if retry:
+                if not pending:
+                    submit(retry.popleft(), True)
+                return
+            if len(pending) >= 2 * max(threads, 1):
+                return
+            chunk = chunks.next()
+            if chunk is None:
+                return
+            submit(chunk, False)
+
+    def died(chunk, alone, why):
+        for t in chunk:
+            deaths[t["key"]] += 1
+        if len(chunk) > 1:
+            half = len(chunk) // 2
+            retry.extendleft([chunk[half:], chunk[:half]])
+        elif alone and deaths[chunk[0]["key"]] >= DASK_ROW_ATTEMPTS:
+            msg = (f"its Dask worker died each of the {deaths[chunk[0]['key']]} times it ran this row, the last "
+                   f"time with nothing else running ({why})")
+            _store(store, encode_rows([failed_row(chunk[0], "crashed", msg)]), chunk, bar)
+        else:
+            retry.appendleft(chunk)
+
+    fill()
+    cancelled = 0
+    seen = checked = time.monotonic()
+    while pending:
+        try:
+            fut = finished.get(timeout=CHECK_EVERY_S)
+        except queue.Empty:
+            fut = None
+        if interrupted.is_set():
+            raise KeyboardInterrupt
+        if fut is not None and fut.key in pending:
+            _, chunk, alone = pending[fut.key]
+            try:
+                out = fut.result(timeout=10)
+            except KilledWorker as exc:
+                del pending[fut.key]
+                died(chunk, alone, type(exc).__name__)
+            except RowProcessError as exc:
+                raise InvalidInputError(f"{exc}; run with --jobs 1 on that machine to see why") from None
+            except TimeoutError:  # its result was lost with a worker before it was fetched
+                if not fut.done():
+                    fut.add_done_callback(finished.put)  # computed again: wait for it
+                else:
+                    del pending[fut.key]
+                    retry.appendleft(chunk)
+            except CancelledError as exc:  # the scheduler lost it (restarted), or the connection is gone
+                del pending[fut.key]
+                cancelled += 1
+                if client.status not in ("running", "connecting") or cancelled > MAX_CANCELLED:
+                    raise InvalidInputError(f"the connection to {where} was lost ({type(exc).__name__}); "
+                                            f"the finished rows are kept, run the same command again") from None
+                retry.appendleft(chunk)
+            except Exception as exc:  # the engine itself failed: the rows alone, then an error row
+                del pending[fut.key]
+                if len(chunk) > 1:
+                    retry.extendleft([t] for t in reversed(chunk))
+                else:
+                    _store(store, encode_rows([failed_row(chunk[0], "error", f"{type(exc).__name__}: {exc}")]),
+                           chunk, bar)
+            else:
+                del pending[fut.key]
+                cancelled = 0
+                chunks.measured(len(chunk), out["seconds"])
+                _store(store, out["columns"], chunk, bar)
+        now = time.monotonic()
+        if now - checked >= CHECK_EVERY_S:
+            checked = now
+            threads = _threads(client)
+            if threads:
+                seen = now
+            elif now - seen > limit_s:
+                raise InvalidInputError(
+                    f"{where} has had no worker for {limit_s:g} s ({len(pending)} chunks waiting); "
+                    f"the finished rows are kept: start workers (dask worker ADDRESS) and run the same command "
+                    f"again, or give workers longer to come with FITBENCH_DASK_NO_WORKER_S=SECONDS")
+        fill()
 
 
 def _ctrl_c_sets(interrupted: threading.Event, wake: queue.Queue):
@@ -443,6 +461,23 @@ def _ctrl_c_sets(interrupted: threading.Event, wake: queue.Queue):
         interrupted.set()
         wake.put(None)
     return signal.signal(signal.SIGINT, on_sigint)
+
+
+@contextlib.contextmanager
+def _ctrl_c_held():
+    """SIGINT blocked in this thread while a LocalCluster starts: the threads it starts and the worker processes
+    they spawn inherit the blocked signal (fork and exec keep the signal mask), so a Ctrl-C before a worker's
+    preload (:func:`dask_setup`) ignores it cannot end that worker with a traceback; here it waits until the
+    block ends and then reaches the run's own handler. multiprocessing's resource tracker starts first: starting, it
+    blocks and then *unblocks* SIGINT in the thread that starts it (the same guard for its own process), which
+    would undo this block in the thread that spawns the workers."""
+    from multiprocessing import resource_tracker
+    resource_tracker.ensure_running()
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def _threads(client) -> int:

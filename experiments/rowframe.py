@@ -46,26 +46,28 @@ def _part(rows: list[dict], first: dict) -> dict:
             "columns": {name: pd.Series([r.get(name, nan) for r in rows]) for name in first}}
 
 
-#: column types written straight into the run's frame as chunks arrive (every other type is kept as the chunk's Series)
+#: column types written into a column's number array (every other type goes to its object array)
 DENSE = (np.dtype(np.float64), np.dtype(np.int64))
+#: a column's text is shared across chunks (one object per distinct value) while its distinct values are at most
+#: :data:`SHARE_RATIO` of its rows (or fewer than :data:`SHARE_MIN`); a column of mostly distinct text (the seed
+#: stream's label) is shared within each chunk only, so that no table of its values is kept
+SHARE_MIN, SHARE_RATIO = 4096, 0.25
 
 
 class RowFrame:
-    """The rows of a run of ``n_rows`` tasks, gathered as chunks arrive: a float64 or int64 column of a chunk is written
-    into one array of ``n_rows`` values at its rows' task indices (no copy of the rows is kept besides the frame's
-    own); other columns (text, booleans, Nones) are kept as the chunks' Series, joined into blocks of at least
-    :attr:`block` rows, until :meth:`frame` joins them in task order. A task whose row arrives twice keeps the
-    columns of its last row."""
-
-    block = 5000
+    """The rows of a run of ``n_rows`` tasks, gathered as chunks arrive. Each column is held in arrays of ``n_rows``
+    values written at the rows' task indices, with a mask of the rows that have it: float64 and int64 values in a
+    number array, every other value (text, booleans, None) in an object array, so no chunk's Series is kept and a
+    task whose row arrives twice keeps the columns of its last row. Equal texts are stored as one object (a row's
+    message or label was its own string: 10^5 rows of one certificate message held 10^5 copies of it)."""
 
     def __init__(self, n_rows: int):
         self.n = n_rows
-        self.seq = np.full(n_rows, -1, dtype=np.int64)  # the chunk that delivered each row last (-1: none yet)
-        self.chunks = 0
-        self.dense: dict = {}     # column -> (values, present): float64/int64 values, bool: the row has them
-        self.pieces: dict = {}    # column -> [(task indices, chunk of each row, Series)]
-        self.pending: dict = {}   # column -> rows in its small pieces not yet joined into a block
+        self.arrived = np.zeros(n_rows, dtype=bool)
+        self.numbers: dict = {}   # column -> (float64/int64 values, bool: the row has a number there)
+        self.objects: dict = {}   # column -> (object values, bool: the row has an object there)
+        self.shared: dict = {}    # column -> {text: the one object of it} (None: shared within each chunk only)
+        self.counted: dict = {}   # column -> rows of it written as objects so far
         self.first: dict = {}     # column -> (task index, rank) of the first row that has it: the column order
 
     def add(self, part: dict) -> None:
@@ -74,48 +76,59 @@ class RowFrame:
             return
         if index.min() < 0 or index.max() >= self.n:
             raise ValueError(f"a row's task index is outside 0..{self.n - 1}")
-        chunk = self.chunks
-        self.chunks += 1
         for rank, (name, pos) in enumerate(part["first"].items()):
             at = (int(index[pos]), rank)
             if name not in self.first or at < self.first[name]:
                 self.first[name] = at
-        again = index[self.seq[index] >= 0]
+        again = index[self.arrived[index]]
         if len(again):  # rows delivered before: the columns of their earlier row no longer count
-            for _, present in self.dense.values():
-                present[again] = False
-        self.seq[index] = chunk
+            for held in (self.numbers, self.objects):
+                for _, present in held.values():
+                    present[again] = False
+        self.arrived[index] = True
         for name, values in part["columns"].items():
             if values.dtype in DENSE:
-                self._write(name, index, values.to_numpy())
+                self._numbers(name, index, values.to_numpy())
             else:
-                pieces = self.pieces.setdefault(name, [])
-                pieces.append((index, np.full(len(index), chunk, dtype=np.int64), values))
-                self.pending[name] = self.pending.get(name, 0) + len(index)
-                if self.pending[name] >= self.block:
-                    self._join(name)
+                self._objects(name, index, values)
 
-    def _write(self, name: str, index, values) -> None:
-        held = self.dense.get(name)
+    def _numbers(self, name: str, index, values) -> None:
+        held = self.numbers.get(name)
         if held is None:
-            held = self.dense[name] = (np.empty(self.n, dtype=values.dtype), np.zeros(self.n, dtype=bool))
+            held = self.numbers[name] = (np.empty(self.n, dtype=values.dtype), np.zeros(self.n, dtype=bool))
         elif held[0].dtype != values.dtype and held[0].dtype == np.int64:  # ints meet floats: float64, as pd.concat
-            held = self.dense[name] = (held[0].astype(np.float64), held[1])
+            held = self.numbers[name] = (held[0].astype(np.float64), held[1])
         held[0][index] = values
         held[1][index] = True
 
-    def _join(self, name: str) -> None:
-        """Join a column's small pieces (a slow study's one-row chunks) into one piece."""
+    def _objects(self, name: str, index, values) -> None:
+        held = self.objects.get(name)
+        if held is None:
+            held = self.objects[name] = (np.empty(self.n, dtype=object), np.zeros(self.n, dtype=bool))
+        held[0][index] = self._one_object_per_text(name, values)
+        held[1][index] = True
+
+    def _one_object_per_text(self, name: str, values):
+        """``values`` as an object array in which equal texts are one object (see :data:`SHARE_RATIO`)."""
         import pandas as pd
-        pieces, small = self.pieces[name], self.pending.pop(name, 0)
-        n, k = 0, len(pieces)
-        while k > 0 and n < small:
-            k -= 1
-            n += len(pieces[k][0])
-        tail = pieces[k:]
-        if len(tail) > 1:
-            pieces[k:] = [(np.concatenate([p[0] for p in tail]), np.concatenate([p[1] for p in tail]),
-                           pd.concat([p[2] for p in tail], ignore_index=True))]
+        array = values.to_numpy(dtype=object)
+        if not (isinstance(values.dtype, pd.StringDtype)
+                or pd.api.types.infer_dtype(array, skipna=True) == "string"):
+            return array  # numbers, booleans, None among them: left as they are (True == 1 to a hash table)
+        codes, uniques = pd.factorize(array)  # a missing value (None, NaN) has code -1 and stays as it is
+        seen = self.shared.setdefault(name, {})
+        self.counted[name] = self.counted.get(name, 0) + len(array)
+        if seen is not None:
+            uniques = [seen.setdefault(text, text) for text in uniques.tolist()]
+            if len(seen) > max(SHARE_MIN, SHARE_RATIO * self.counted[name]):
+                self.shared[name] = None
+        one = np.empty(len(uniques), dtype=object)
+        one[:] = uniques
+        known = codes >= 0
+        if known.all():
+            return one[codes]
+        array[known] = one[codes[known]]
+        return array
 
     def add_rows(self, rows: list[dict]) -> None:
         """Rows decoded from JSON (the row store's, or a chunk that came without a part)."""
@@ -128,58 +141,43 @@ class RowFrame:
         """All rows in task order, each column of the type one ``DataFrame`` of all rows would give it; refused
         unless every task has its row."""
         import pandas as pd
-        missing = int((self.seq < 0).sum())
+        missing = int((~self.arrived).sum())
         if missing:
             raise MissingRows(missing)
+        self.shared.clear()
         out = {}
         for name in sorted(self.first, key=self.first.__getitem__):
             col = self._column(name)
             out[name] = _numbers_if_numbers(col) if col.dtype == object else col
-        self.dense.clear()
-        self.pieces.clear()
         return pd.DataFrame(out, copy=False) if out else pd.DataFrame(index=range(self.n))
 
     def _column(self, name: str):
         import pandas as pd
         nan = float("nan")
-        values, present = self.dense.pop(name, (None, None))
-        kept = []  # the pieces of the rows' last chunks
-        for index, chunk, piece in self.pieces.pop(name, []):
-            current = self.seq[index] == chunk
-            if current.all():
-                kept.append((index, piece))
-            elif current.any():
-                kept.append((index[current], piece[current]))
-        covered = present.copy() if present is not None else np.zeros(self.n, dtype=bool)
-        for index, _ in kept:
-            covered[index] = True
-        absent = ~covered
-        if values is None and not kept:  # every row that had it arrived again without it
-            return pd.Series(np.full(self.n, nan))
-        if not kept:  # numbers only: as pd.concat of the pieces and a NaN filler for the rows without the column
-            if values.dtype == np.int64 and not absent.any():
+        values, present = self.numbers.pop(name, (None, None))
+        objects, has = self.objects.pop(name, (None, None))
+        if objects is not None and not has.any():
+            objects = None  # every row that had an object there arrived again without it
+        if objects is None:  # numbers only: as pd.concat of the chunks and a NaN filler for the rows without them
+            if values is None:
+                return pd.Series(np.full(self.n, nan))
+            if values.dtype == np.int64 and present.all():
                 return pd.Series(values)
             col = values.astype(np.float64, copy=False)
-            col[absent] = nan
+            col[~present] = nan
             return pd.Series(col)
-        if values is None:  # no numbers: the pieces (and the filler) joined, then put in task order
-            if absent.any():
-                rows = np.flatnonzero(absent)
-                kept.append((rows, pd.Series([nan] * len(rows))))
-            index = np.concatenate([i for i, _ in kept])
-            col = kept[0][1] if len(kept) == 1 else pd.concat([p for _, p in kept], ignore_index=True)
-            order = np.argsort(index, kind="stable")
-            if (order != np.arange(len(order))).any():
-                col = col.take(order)
-            return col.reset_index(drop=True)
-        if all(piece.isna().all() for _, piece in kept):  # numbers and missing values: float64 with NaN
+        if values is not None and not present.any():
+            values = None
+        if values is None:  # no numbers: the objects, typed as one Series of them all (DataFrame(rows) does the same)
+            objects[~has] = nan
+            return pd.Series(objects.tolist())
+        if pd.isna(objects[has]).all():  # numbers and missing values: float64 with NaN
             col = values.astype(np.float64, copy=False)
             col[~present] = nan
             return pd.Series(col)
         col = np.full(self.n, nan, dtype=object)  # numbers and other values (text, booleans): an object column
         col[present] = values[present].astype(object)
-        for index, piece in kept:
-            col[index] = piece.to_numpy(dtype=object)
+        col[has] = objects[has]
         return pd.Series(col, dtype=object)
 
 

@@ -17,10 +17,13 @@ VERDICT_FILE = "verify.json"
 
 
 def results_sha256(folder: Path) -> str | None:
-    """SHA-256 of ``folder/results.csv`` (None when it cannot be read)."""
+    """SHA-256 of ``folder/results.csv`` (None when it cannot be read), read a block at a time."""
     try:
         with open(Path(folder) / "results.csv", "rb") as fh:
-            return hashlib.sha256(fh.read()).hexdigest()
+            digest = hashlib.sha256()
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+            return digest.hexdigest()
     except OSError:
         return None
 

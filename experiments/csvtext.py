@@ -7,6 +7,7 @@ type than float64, int64, bool, str or object go to pandas itself, so the text i
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import os
 import re
@@ -62,3 +63,21 @@ def write_csv(df, fh, *, header: bool = True) -> None:
         fh.write(",".join(_quoted([str(c) for c in df.columns])) + end)
     if len(df):
         fh.write(end.join(map(",".join, zip(*columns))) + end)
+
+
+def write_results(df, path, block: int = 5000) -> str:
+    """``df`` as ``results.csv`` (:func:`write_csv`), streamed a block of rows at a time into a temporary file that
+    replaces ``path`` at the end (atomic); return the SHA-256 of the bytes written."""
+    from methods.files import atomic_path
+    digest = hashlib.sha256()
+    with atomic_path(path, make_parents=True) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            for i in range(0, max(len(df), 1), block):
+                buf = io.StringIO()
+                write_csv(df.iloc[i:i + block], buf, header=(i == 0))
+                text = buf.getvalue()
+                digest.update(text.encode("utf-8"))
+                fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+    return digest.hexdigest()

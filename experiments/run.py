@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import hashlib
 import io
 import json
 import os
@@ -27,7 +26,8 @@ from experiments import compare  # the verdict on every run: fresh results again
 from experiments import config as configs
 from experiments import engine
 from experiments import study as contract
-from experiments.executors import kept_workers, start_kept_workers
+from experiments.csvtext import write_results
+from experiments.executors import beside, kept_workers, start_kept_workers
 from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
 from experiments.summary import summarise, summary_units, to_markdown
@@ -143,25 +143,6 @@ def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
                               f"result: fix it and run the same command again")
 
 
-def write_results(df, path: Path, block: int = 5000) -> str:
-    """``df`` as CSV, streamed a block of rows at a time into a temporary file that replaces ``path`` at the
-    end (atomic); return the SHA-256 of the bytes written."""
-    from experiments.csvtext import write_csv
-    from methods.files import atomic_path
-    digest = hashlib.sha256()
-    with atomic_path(path, make_parents=True) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline="") as fh:
-            for i in range(0, max(len(df), 1), block):
-                buf = io.StringIO()
-                write_csv(df.iloc[i:i + block], buf, header=(i == 0))  # df.to_csv(..., float_format="%.17g")
-                text = buf.getvalue()
-                digest.update(text.encode("utf-8"))
-                fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-    return digest.hexdigest()
-
-
 def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", scheduler=None, force=False,
               seed=None, log=print, max_rows=configs.MAX_ROWS, row_timeout=None) -> Path:
     cfg = configs.load(name, quick=quick, seed=seed)
@@ -195,11 +176,14 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
         raise failure
     used = counts.pop("used")
     remove_leftover_tmp(target)
-    results_sha256 = write_results(df, target / "results.csv")
-    t0 = time.perf_counter()
-    log("   analysis, tables and figures ...")
-    findings, analysis = contract.analyse(study, df, cfg, target, log)
-    log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
+    written = beside(write_results, df, target / "results.csv")  # in an idle worker of the run, if it has one
+    try:
+        t0 = time.perf_counter()
+        log("   analysis, tables and figures ...")
+        findings, analysis = contract.analyse(study, df, cfg, target, log)
+        log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
+    finally:
+        results_sha256 = written()
     if cfg.get("summary_by") and set(cfg["summary_by"]) - set(df.columns):
         raise configs.ConfigError(f"{cfg.where}: summary_by: no row has the column(s) "
                                   f"{', '.join(sorted(set(cfg['summary_by']) - set(df.columns)))}; "

@@ -50,7 +50,9 @@ def evaluation_row(task):
     cond, err, cw, ccw = scenario(task["seed"])
     ev = evaluate(cw, ccw, cond.nominal_radius, cond.nominal_center, conditions=cond)
     dg = diagnose(cw, ccw, cond.nominal_radius, cond.nominal_center, feed_mm_min=cond.feed_mm_min)
-    row = {**engine.base_row(task), "path": "cw+ccw", "status": "ok", "message": ""}
+    converged = dg["_model"]["converged"]   # the diagnostics' fit: a row that did not converge says so
+    row = {**engine.base_row(task), "path": "cw+ccw", "status": "ok" if converged else "not converged",
+           "message": "" if converged else f"diagnostics: {dg['_model']['message']}"}
     row.update({f"iso_{k}": ev.figures[k] for k in ISO_FIGURES})
     for k, v in dg.items():
         if not k.startswith("_"):

@@ -310,6 +310,8 @@ def cmd_circular_test(args) -> int:
     dg = None
     if center is not None:
         dg = diagnose(runs["cw"], runs["ccw"], R, center, feed_mm_min=feed, cyclic_pitch=pitch, partial=ev.partial_arc)
+        if not dg["_model"]["converged"]:
+            warn(f"diagnostics: {dg['_model']['message']}; the estimates are its last iterate's")
     values = dict(ev.figures, G=max(ev.figures["G_cw"], ev.figures["G_ccw"]))
     check = verdict({n: values[n] for n in tolerances}, tolerances)
     if plot_path:

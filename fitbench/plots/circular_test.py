@@ -98,7 +98,10 @@ def text(ev, dg: dict | None) -> str:
                 lines.append(f"  {label:<22}  {item['value']:+10.3f} +- {item['u']:.3f} {unit:<5}  "
                              f"contribution {contrib:7.2f} µm")
         m = dg["_model"]
-        lines.append(f"  residual RMS {m['residual_rms_um']:.2f} µm; spike decay {m['spike_decay_deg']:.2f}°")
+        fit = f"fit converged in {m['iterations']} iterations" if m["converged"] else "fit NOT converged (below)"
+        lines.append(f"  residual RMS {m['residual_rms_um']:.2f} µm; spike decay {m['spike_decay_deg']:.2f}°; {fit}")
+        if not m["converged"]:
+            lines.append(f"  {m['message']}; the values above are its last iterate's")
     return "\n".join(lines)
 
 
@@ -149,6 +152,8 @@ def _table_rows(ev, cond: dict, R: float, div: float, diagnostics) -> list:
             ("row", "F max / min", f"{_num(f['F_max'] * um, signed=True)} / {_num(f['F_min'] * um, signed=True)} µm", "")]
     if diagnostics:
         rows.append(("head", "Diagnostics (ranked)", "value", "contribution"))
+        if not diagnostics["_model"]["converged"]:
+            rows.append(("row", "least-squares fit", "NOT converged", ""))
         for label, item, contrib in ranked(diagnostics, R, feed, cond.get("plane")):
             if item["value"] is None:
                 rows.append(("row", label, "n/a", ""))

@@ -449,6 +449,21 @@ def scipy_minimum(cw, ccw, R, x0):
     return 2 * sol.cost, sol.x
 
 
+def fit_point(dg):
+    """The diagnostics' result as the model's parameters (centre, mean scale, radius difference, the sources in mm
+    and rad, no feed; log spike decay), its sum of squares and sigma^2 = RSS / (N - p)."""
+    m = dg["_model"]
+    rss = (m["residual_rms_um"] * 1e-3) ** 2 * m["points"]
+    radius = m["radius_offset_um"]
+    x = np.r_[np.array(m["centre_offset_um"]) * 1e-3, 0.5e-3 * (radius["cw"] + radius["ccw"]) / 150.0,
+              1e-3 * (radius["ccw"] - radius["cw"]),
+              [dg[k]["value"] * f for k, f in (("scale_mismatch", 1e-6), ("squareness", 1e-6), ("servo_mismatch", 1e-3),
+                                               ("backlash_x", 1e-3), ("backlash_y", 1e-3), ("reversal_spike_x", 1e-3),
+                                               ("reversal_spike_y", 1e-3))],
+              np.log(np.radians(m["spike_decay_deg"]))]
+    return x, rss, rss / (m["points"] - len(x))
+
+
 def test_diagnostics_fit_converges_to_the_minimum_where_gauss_newton_zigzagged():
     """No spikes in noise: the full Gauss-Newton step overshot along the decay angle and was taken for any decrease,
     so the fit zigzagged about the minimum until the iteration limit (30) and said nothing (here 0.0034 u from the
@@ -461,17 +476,27 @@ def test_diagnostics_fit_converges_to_the_minimum_where_gauss_newton_zigzagged()
     m = dg["_model"]
     assert m["converged"] is True and m["iterations"] < MAX_ITERATIONS, m["message"]
     assert m["message"].startswith("converged: ") and m["gauss_newton_step_u"] <= 1e-3
-    rss = (m["residual_rms_um"] * 1e-3) ** 2 * m["points"]
-    ms, dr = 0.5 * sum(m["radius_offset_um"].values()) * 1e-3, (m["radius_offset_um"]["ccw"] - m["radius_offset_um"]["cw"]) * 1e-3
-    x_fit = np.r_[np.array(m["centre_offset_um"]) * 1e-3, ms / 150.0, dr,
-                  [dg[k]["value"] * f for k, f in (("scale_mismatch", 1e-6), ("squareness", 1e-6), ("servo_mismatch", 1e-3),
-                                                   ("backlash_x", 1e-3), ("backlash_y", 1e-3), ("reversal_spike_x", 1e-3),
-                                                   ("reversal_spike_y", 1e-3))],
-                  np.log(np.radians(m["spike_decay_deg"]))]
-    sigma2 = rss / (m["points"] - len(x_fit))
+    x_fit, rss, sigma2 = fit_point(dg)
     for x0 in (x_fit, np.r_[np.zeros(len(x_fit) - 1), np.log(np.radians(1.0))]):
         rss_ref, _ = scipy_minimum(cw, ccw, 150.0, x0)
         assert rss - rss_ref <= 1e-6 * sigma2, (rss - rss_ref) / sigma2
+
+
+@pytest.mark.parametrize("seed, bound", [(0, 10.0), (2, 0.1)])
+def test_a_spike_decay_at_its_bound_converges_there(seed, bound):
+    """The decay angle runs to a bound (10 deg, 0.1 deg) and the step pushes it further out: clipping only that
+    component of the full step stalled the fit 0.1 u from the bounded minimum (no trial lowered the sum of
+    squares); the step with the decay held at the bound converges to it (scipy's bounded least_squares from
+    there finds nothing lower by (1e-3 u)^2 sigma^2)."""
+    cw, ccw = flat_decay_runs(seed=seed)
+    dg = diagnose(cw, ccw, 150.0, (0.0, 0.0))
+    m = dg["_model"]
+    assert m["spike_decay_deg"] == pytest.approx(bound, rel=1e-12)
+    assert m["converged"] is True and "held at its bound" in m["message"], m["message"]
+    x_fit, rss, sigma2 = fit_point(dg)
+    rss_ref, x_ref = scipy_minimum(cw, ccw, 150.0, x_fit)
+    assert np.degrees(np.exp(x_ref[-1])) == pytest.approx(bound, rel=1e-9)
+    assert rss - rss_ref <= 1e-6 * sigma2, (rss - rss_ref) / sigma2
 
 
 def test_a_fit_stopped_at_its_iteration_limit_says_so(monkeypatch, tmp_path, capsys):

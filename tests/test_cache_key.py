@@ -16,6 +16,16 @@ kind = "{kind}"
 seed = 3
 repetitions = 2
 
+# a declared table and a figure given as a file: no plot is drawn (the rows and their keys are what this file checks)
+[[tables]]
+caption = "form error"
+rows = "method"
+values = "form_error"
+
+[[figures]]
+caption = "not drawn"
+file = "none.png"
+
 [[datasets]]
 generator = "circle"
 params = {{ center = [1.0, 2.0], radius = 3.0, noise = 0.01, n = 15 }}
@@ -36,8 +46,8 @@ def repo_copy(tmp_path):
 
 
 def run(repo, study, out, extra_path=()):
-    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", cwd=repo, path_first=extra_path,
-                      repo=repo, timeout=300)
+    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report", cwd=repo,
+                      path_first=extra_path, repo=repo, timeout=300)
     assert proc.returncode == 0, proc.stderr
     m = re.search(r"(\d+) rows: (\d+) already stored, (\d+) to run", proc.stdout)
     assert m, proc.stdout

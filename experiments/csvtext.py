@@ -70,14 +70,13 @@ def write_results(df, path, block: int = 5000) -> str:
     replaces ``path`` at the end (atomic); return the SHA-256 of the bytes written."""
     from methods.files import atomic_path
     digest = hashlib.sha256()
-    with atomic_path(path, make_parents=True) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline="") as fh:
-            for i in range(0, max(len(df), 1), block):
-                buf = io.StringIO()
-                write_csv(df.iloc[i:i + block], buf, header=(i == 0))
-                text = buf.getvalue()
-                digest.update(text.encode("utf-8"))
-                fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
+    with atomic_path(path, make_parents=True) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+        for i in range(0, max(len(df), 1), block):
+            buf = io.StringIO()
+            write_csv(df.iloc[i:i + block], buf, header=(i == 0))
+            text = buf.getvalue()
+            digest.update(text.encode("utf-8"))
+            fh.write(text)
+        fh.flush()
+        os.fsync(fh.fileno())
     return digest.hexdigest()

@@ -506,7 +506,7 @@ def test_hangs_exits_and_interrupts_are_labelled_and_the_study_goes_on(tmp_path,
     """A method that hangs is ``timeout``; one that os._exit()s, raises SystemExit or KeyboardInterrupt is
     ``crashed``; the other rows are ok, results.csv is written, exit 0. A rerun recomputes exactly the
     labelled rows (never served from the cache)."""
-    study = write_study(tmp_path, reps=2, methods=hostile_methods("hang", "hang_in_c", "exit", "sysexit", "kbint"))
+    study = write_study(tmp_path, reps=1, methods=hostile_methods("hang", "hang_in_c", "exit", "sysexit", "kbint"))
     out = tmp_path / "out"
     jobs = ["--jobs", jobs]
     res = cli([study, *jobs, "--row-timeout", "1", "--out", out], tmp_path, hostile_site)

@@ -10,19 +10,37 @@ from experiments.render import style
 from experiments.studies import magnification
 
 
-@pytest.fixture
-def drawn(monkeypatch, tmp_path, caplog):
-    """Draw the study's own panels; keep the figure that style.save writes (and closes)."""
-    kept = []
+class _Records(logging.Handler):
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.records = []
+
+    def emit(self, record):
+        self.records.append(record)
+
+
+@pytest.fixture(scope="module")
+def drawn(tmp_path_factory):
+    """Draw the study's own panels once for this file's tests (the figure is only read); keep the figure that
+    style.save writes (and closes) and matplotlib's warnings logged while drawing."""
+    kept, records, logger = [], _Records(), logging.getLogger("matplotlib")
     save = style.save
-    monkeypatch.setattr(style, "save", lambda fig, path, **kw: (kept.append(fig), save(fig, path, **kw))[1])
+    target = tmp_path_factory.mktemp("magnification") / "magnification.png"
     cfg = configs.load("magnification", quick=True)
     cfg["examples"] = {name: 200.0 for name in cfg["examples"]}
     panels = magnification._panels(cfg)
-    with caplog.at_level(logging.WARNING, logger="matplotlib"):
-        magnification.trajectories_figure(panels, tmp_path / "magnification.png")
-    assert (tmp_path / "magnification.png").stat().st_size > 10_000
-    return panels, kept[0], caplog.records
+    level = logger.level
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(style, "save", lambda fig, path, **kw: (kept.append(fig), save(fig, path, **kw))[1])
+        logger.addHandler(records)
+        logger.setLevel(logging.WARNING)
+        try:
+            magnification.trajectories_figure(panels, target)
+        finally:
+            logger.removeHandler(records)
+            logger.setLevel(level)
+    assert target.stat().st_size > 10_000
+    return panels, kept[0], records.records
 
 
 def test_no_aspect_warning(drawn):

@@ -38,7 +38,7 @@ id = "{method}"
 @pytest.fixture
 def repo_copy(tmp_path):
     dst = tmp_path / "repo"
-    for part in ("methods", "datasets", "experiments"):
+    for part in ("methods", "datasets", "experiments", "fitbench"):
         shutil.copytree(REPO / part, dst / part, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
     shutil.copy(REPO / "pyproject.toml", dst)
     shutil.copy(REPO / "setup.py", dst)

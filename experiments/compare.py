@@ -13,6 +13,7 @@ imports neither (so the two commands do not import each other). The verdict is w
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
 import json
 from pathlib import Path
 
@@ -251,11 +252,82 @@ def _committed(path: Path) -> bool:
     return tracked.returncode == 0 and same.returncode == 0
 
 
-def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path) -> dict[str, dict]:
+#: config keys that only present or schedule a study's rows, never change them: a change of these keeps the
+#: previous results comparable
+PRESENTATION = frozenset({"title", "description", "default", "report", "tables", "figures", "summary_by",
+                          "max_jobs", "chunk_rows", "row_timeout"})
+
+
+def _data_files(cfg: dict) -> dict[str, str]:
+    """{"datasets[i] NAME": SHA-256} of the files the study's ``[[datasets]]`` read (a ``file`` source, a published
+    set), named without the folders of this machine."""
+    from datasets import sources
+    from experiments.engine import expand_datasets
+    from experiments.rows import source_of
+    out = {}
+    for spec in expand_datasets(cfg, getattr(cfg, "where", cfg.get("name", "?"))):
+        source = sources.get_source(source_of(spec))
+        if source.files is None:
+            continue
+        if "published" in spec:
+            files = source.files(spec["published"], spec.get("variant"))
+        elif "file" in spec:
+            files = source.files(spec["file"])
+        else:
+            files = source.files(**spec["params"])
+        for f in files:
+            digest = hashlib.sha256()
+            with open(f, "rb") as fh:
+                for block in iter(lambda: fh.read(1 << 20), b""):
+                    digest.update(block)
+            out[f"datasets[{spec['entry']}] {Path(f).name}"] = digest.hexdigest()
+    return out
+
+
+def inputs(cfg: dict) -> dict:
+    """What a study's rows are computed from besides the code (``meta.json`` records it): its config without the
+    keys that only present or schedule the rows (:data:`PRESENTATION`), seed and repetitions included, and the
+    SHA-256 of each data file it reads. Two runs with the same inputs ask for the same rows from the same data;
+    the code may differ (that is what a verdict checks)."""
+    config = json.loads(json.dumps(dict(cfg), sort_keys=True, default=str))
+    return {"config": {k: v for k, v in config.items() if k not in PRESENTATION}, "data_files": _data_files(cfg)}
+
+
+def _short(value) -> str:
+    text = json.dumps(value, sort_keys=True, default=str)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def changed_inputs(old_meta: dict, now: dict) -> list[str]:
+    """What differs between the inputs of a previous run (its ``meta.json``) and ``now`` (:func:`inputs`), one phrase
+    each ("repetitions 250, now 200", "data file datasets[0] trace.csv"); empty when they are the same. A
+    ``meta.json`` written before the inputs were recorded is judged by its config alone."""
+    recorded = old_meta.get("inputs")
+    if isinstance(recorded, dict) and isinstance(recorded.get("config"), dict):
+        old_cfg, old_files = recorded["config"], recorded.get("data_files")
+    else:
+        config = old_meta.get("config")
+        old_cfg = {k: v for k, v in config.items() if k not in PRESENTATION} if isinstance(config, dict) else {}
+        old_files = None  # not recorded: the data files cannot be compared
+    new_cfg, new_files = now["config"], now["data_files"]
+    changes = [(f"{k} {_short(old_cfg[k])}, now {_short(new_cfg[k])}" if k in old_cfg and k in new_cfg else
+                f"{k} {'added' if k in new_cfg else 'removed'}")
+               for k in sorted(set(old_cfg) | set(new_cfg)) if old_cfg.get(k) != new_cfg.get(k)]
+    if isinstance(old_files, dict):
+        changes += [f"data file {k} {'changed' if k in old_files and k in new_files else 'added' if k in new_files else 'removed'}"
+                    for k in sorted(set(old_files) | set(new_files)) if old_files.get(k) != new_files.get(k)]
+    return changes
+
+
+def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path,
+                       inputs_now: dict[str, dict] | None = None) -> dict[str, dict]:
     """Before ``experiments.run`` writes into ``out``: for each study, a copy (under ``into``) of the results the
     fresh run will be compared with, and how to name them. The reference is the study's results already in
     ``out`` (a rerun), else the committed ones in ``results/`` (``results/quick/`` with ``--quick``) of the
-    current folder; only a run of the same grid (quick or full) is a reference."""
+    current folder; only a run of the same grid (quick or full) and, when ``inputs_now`` gives the study's
+    :func:`inputs`, of the same inputs is a reference (other repetitions, another seed or edited data give other
+    rows by design). A study whose only previous results are of other inputs gets ``{"other": why}``: not
+    compared."""
     refs = {}
     committed_root = Path("results/quick" if quick else "results")
     for name in names:
@@ -268,6 +340,11 @@ def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path) -> 
             except (OSError, ValueError):
                 continue
             if not isinstance(meta, dict) or bool(meta.get("quick")) != quick:
+                continue
+            changes = changed_inputs(meta, inputs_now[name]) if inputs_now and name in inputs_now else []
+            if changes:
+                refs.setdefault(name, {"other": f"the previous results in {_shown(folder)} are of another config or data "
+                                                f"({'; '.join(changes)})"})
                 continue
             (into / name).mkdir(parents=True, exist_ok=True)
             (into / name / "results.csv").write_bytes(csv.read_bytes())
@@ -291,6 +368,9 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
         ref = refs.get(name)
         if ref is None:
             log(f"verify: {name}: no committed results to compare with (results/{name} of the same grid)")
+            continue
+        if "other" in ref:
+            log(f"verify: {name}: not compared: {ref['other']}; other rows by design")
             continue
         try:
             fresh_sha = results_sha256(Path(out) / name)

@@ -194,7 +194,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
             "row_timeout_s": row_timeout, "environment": engine.environment(),
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
             "plugins": plugin_distributions(used), "results_sha256": results_sha256, "findings": findings,
-            "fingerprint": counts.pop("fingerprint")}
+            "fingerprint": counts.pop("fingerprint"), "inputs": compare.inputs(cfg)}
     contract.write_manifest(target, cfg, analysis, summary)
     buf = io.StringIO()
     summary.to_csv(buf, index=False, float_format="%.10g")
@@ -369,17 +369,18 @@ def _main(argv=None) -> int:
         t0 = time.perf_counter()
         workers = kept_workers(jobs) if args.executor == "local" and jobs > 1 else contextlib.nullcontext()
         with workers, tempfile.TemporaryDirectory(prefix="fitbench-reference-") as ref_dir:
-            study_names = [configs.load(n, quick=args.quick)["name"] for n in names]
+            loaded = [configs.load(n, quick=args.quick, seed=args.seed) for n in names]
+            study_names = [c["name"] for c in loaded]
             if args.force or any(not (args.out / n / "meta.json").is_file() for n in study_names):
                 start_kept_workers()  # a study never run here runs rows: the workers import meanwhile
-            refs = compare.reference_snapshot(args.out, study_names, args.quick, Path(ref_dir))
+            refs = compare.reference_snapshot(args.out, study_names, args.quick, Path(ref_dir),
+                                              {c["name"]: compare.inputs(c) for c in loaded})
             for name in names:
                 run_study(name, args.out, quick=args.quick, jobs=jobs, executor=args.executor,
                           scheduler=args.scheduler, force=args.force, seed=args.seed, max_rows=args.max_rows,
                           row_timeout=args.row_timeout)
             print(f"done: {len(names)} studies in {time.perf_counter() - t0:.0f} s")
-            if args.seed is None:  # another seed gives other numbers by design: nothing to compare
-                compare.verdict_after_run(args.out, study_names, refs)
+            compare.verdict_after_run(args.out, study_names, refs)  # results of another seed or config: not compared
         if not args.no_report:
             from experiments.report import build
             paper = Path("paper") if args.out == DEFAULT_OUT else args.out / "paper"

@@ -6,6 +6,7 @@ import json
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -375,3 +376,56 @@ def test_an_unknown_study_is_named_unknown_with_the_known_ones(committed, tmp_pa
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "unknown study 'nosuch'" in err
     assert "vstudy" in err and "published" in err and "experiments.run nosuch" not in err
+
+
+def test_previous_results_of_another_config_or_data_are_not_compared(tmp_path, capsys):
+    """Other repetitions, another seed (in the study or with --seed) or an edited data file give other rows by design:
+    the run says in one line that the previous results are not compared and records no verdict for the study (it
+    said "DIFFERS ... in: (rows)" and the report "Reproducibility: differs"); a run of the same config and data as
+    the previous one is compared as before, whatever changed in between."""
+    from experiments import engine
+    data = tmp_path / "trace.csv"
+    rng = np.random.default_rng(3)
+    t = rng.uniform(0.0, 2.0 * np.pi, 20)
+    pd.DataFrame({"X": 5.0 * np.cos(t) + 1.0, "Y": 5.0 * np.sin(t) - 2.0}).to_csv(data, index=False)
+    study = STUDY + '''
+[[datasets]]
+file = "trace.csv"
+'''
+    cfg = tmp_path / "vstudy.toml"
+    out = tmp_path / "out"
+
+    def run(text, *more, report=False):
+        cfg.write_text(text, encoding="utf-8")
+        code = runner.main([str(cfg), "--jobs", "1", "--out", str(out), *more, *([] if report else ["--no-report"])])
+        for fh in runner._LOCKS:
+            fh.close()
+        runner._LOCKS.clear()
+        assert code == 0
+        return [line for line in capsys.readouterr().out.splitlines() if line.startswith("verify:")]
+
+    def no_verdict():
+        studies = json.loads((out / verify.VERDICT_FILE).read_text(encoding="utf-8"))["studies"]
+        return not [s for s in studies if s["study"] == "vstudy"]
+
+    run(study)
+    for text, more, changed in ((study.replace("repetitions = 2", "repetitions = 3"), (), "repetitions 2, now 3"),
+                                (study, (), "repetitions 3, now 2"),
+                                (study.replace("seed = 5", "seed = 9"), (), "seed 5, now 9"),
+                                (study, ("--seed", "8"), "seed 9, now 8")):
+        lines = run(text, *more)
+        assert len(lines) == 1 and "DIFFERS" not in lines[0], lines
+        assert lines[0].startswith("verify: vstudy: not compared: the previous results in ") and changed in lines[0]
+        assert no_verdict()
+    lines = run(study, "--seed", "8")                       # the previous run had --seed 8 too: compared
+    assert len(lines) == 1 and "verify: vstudy: reproduces the previous results" in lines[0]
+    run(study)
+    data.write_text(data.read_text(encoding="utf-8") + "6.0,-2.0\n", encoding="utf-8")   # one point more
+    engine.reset_caches()   # this process hashed the data file once for its row keys: hash it again, as a new run does
+    lines = run(study, report=True)
+    assert len(lines) == 1 and "not compared" in lines[0] and "data file datasets[1] trace.csv changed" in lines[0]
+    assert no_verdict()
+    md = (out / "paper" / "report.md").read_text(encoding="utf-8")
+    assert "differ" not in md.lower(), [l for l in md.splitlines() if "differ" in l.lower()]
+    lines = run(study)
+    assert len(lines) == 1 and "verify: vstudy: reproduces the previous results" in lines[0]

@@ -18,6 +18,12 @@ gets one repetition. Adding a source::
         ...
         return points, {"family": "circle", "center": (0.0, 0.0), "radius": 1.0}
 
+A source declares its parameters' types as a method does: by annotation (``n: int = 100``, ``share: float``,
+``path: Literal["cw", "ccw"]``, ``Annotated[float, pydantic.Field(gt=0)]``), else by the type of the default (an
+int default takes integers, a float default numbers, a str default strings, a tuple of numbers a list of them;
+no default or None: anything). A study's values are checked against them before any row runs
+(``experiments.schema.check_values``): ``n = 30.5`` or ``radius = "5"`` is refused in one line, never coerced.
+
 Third-party packages register sources through the entry-point group ``fitbench.datasets`` (the entry
 point names a module that registers on import); the engine loads them before it checks any config.
 """
@@ -26,13 +32,15 @@ from __future__ import annotations
 import inspect
 import json
 import os
+import typing
 from dataclasses import dataclass, field
 from decimal import Decimal
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, Literal
 
 import numpy as np
 
+from datasets.synthetic import NonNegative
 from methods import immutable
 from methods.plugins import add_entry, load_entry_points
 
@@ -64,6 +72,37 @@ class DataSource:
     @property
     def parameters(self) -> list[str]:
         return [p for p in inspect.signature(self.func).parameters if p != "rng"]
+
+    def parameter_types(self) -> dict[str, tuple]:
+        """{parameter: (type, default)}: the type its annotation declares, else the type of its default (as a
+        method's parameters, ``methods.check_param``: bool, int, float taking ints too, str, a list of them);
+        ``typing.Any`` when neither says. The default is ``inspect.Parameter.empty`` for a required parameter.
+        Raises ValueError when an annotation cannot be resolved."""
+        try:
+            hints = typing.get_type_hints(self.func, include_extras=True)
+        except Exception as exc:  # a string annotation naming what the source's module does not define
+            raise ValueError(f"data source {self.name!r}: its parameter annotations cannot be resolved "
+                             f"({type(exc).__name__}: {exc})") from None
+        params = inspect.signature(self.func).parameters
+        return {name: (hints.get(name, type_of_default(p.default)), p.default) for name, p in params.items()
+                if name != "rng" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)}
+
+
+def type_of_default(value):
+    """The type a parameter's default declares when the parameter has no annotation (``typing.Any`` for none)."""
+    if value is inspect.Parameter.empty or value is None:
+        return Any
+    for kind in (bool, int, float, str):
+        if isinstance(value, kind):
+            return kind
+    if isinstance(value, (list, tuple)):
+        kinds = {type_of_default(v) for v in value}
+        if kinds == {int, float}:
+            kinds = {float}
+        return list[kinds.pop()] if len(kinds) == 1 else list
+    if isinstance(value, dict):
+        return dict
+    return Any
 
 
 _REGISTRY: dict[str, DataSource] = {}
@@ -114,7 +153,7 @@ def _register_builtins():
 
     @register_source("published", random=False, summary="a published data set shipped with fitbench",
                      files=_published_files)
-    def published(rng=None, *, name, variant=None):
+    def published(rng=None, *, name: str, variant: Literal["drop_repeated_closing_point"] | None = None):
         """Points of a published set (``variant = "drop_repeated_closing_point"`` drops a repeated last point)."""
         ds = datasets.load(name, drop_repeated_closing_point=variant == "drop_repeated_closing_point")
         return ds.points, None
@@ -131,7 +170,7 @@ def _register_builtins():
         return [folder / f"{name}.csv", folder / f"{name}.json"]
 
     @register_source("nist", random=False, summary="a NIST Circle2d set (FITBENCH_NIST_DIR)", files=_nist_files)
-    def nist(rng=None, *, name):
+    def nist(rng=None, *, name: str):
         """Points of NIST set ``name``; truth = NIST's reference least-squares circle (certified digits)."""
         folder = nist_folder()
         meta = json.loads((folder / f"{name}.json").read_text())
@@ -153,7 +192,8 @@ def _register_simulators():
 
     @register_source("circular_test", random=True,
                      summary="ISO 230-4 circular test of the LOLA HBG 130 scenario (both runs, or one path)")
-    def circular_test(rng, *, scenario="lola_hbg130", path="both"):
+    def circular_test(rng, *, scenario: Literal["lola_hbg130"] = "lola_hbg130",
+                      path: Literal["both", "cw", "ccw"] = "both"):
         """Points of a simulated circular test; ``path`` is 'both', 'cw' or 'ccw'."""
         if scenario != "lola_hbg130" or path not in ("both", "cw", "ccw"):
             raise ValueError("circular_test: scenario must be 'lola_hbg130' and path 'both', 'cw' or 'ccw'")
@@ -169,14 +209,15 @@ def _register_simulators():
     register_source("positioning", random=True, summary="ISO 230-2 positioning test of a simulated axis")(positioning)
 
     @register_source("contouring", random=False, summary="a reference and a measured contouring trajectory")
-    def contouring_example(rng=None, *, example):
+    def contouring_example(rng=None, *, example: str):
         """Example ``example`` of ``datasets.contouring.EXAMPLES`` as a magnify input."""
         from methods.magnify import MagnifyInput
         ref, meas = contouring.EXAMPLES[example]()
         return MagnifyInput(ref, meas), None
 
     @register_source("multilateration", random=True, summary="a simulated multilateration campaign")
-    def multilateration(rng, *, stations=6, grid=(5, 4, 4), noise=1.0, errors="default"):
+    def multilateration(rng, *, stations: int | list[int] = 6, grid: tuple[int, int, int] = (5, 4, 4),
+                        noise: NonNegative = 1.0, errors: Literal["default", "none"] = "default"):
         """A simulated campaign (``datasets.multilateration.simulate``; errors = 'none' for a perfect machine)."""
         return ml.simulate(rng=rng, stations=tuple(stations) if isinstance(stations, list) else stations,
                            grid=tuple(grid), noise=noise, errors=None if errors == "none" else errors)

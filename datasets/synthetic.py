@@ -1,10 +1,20 @@
 """Synthetic data with known truth."""
 from __future__ import annotations
 
-import inspect
 import math
+from typing import Annotated, Literal
 
 import numpy as np
+from pydantic import Field
+
+#: The generators' parameter types (their annotations are what a study's values are checked against before any
+#: row runs, ``datasets.sources.DataSource.parameter_types``). Lengths in the unit of the data, angles in degrees.
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+Count = Annotated[int, Field(ge=1)]
+Degrees = float
+ArcDegrees = Annotated[float, Field(gt=0, le=360)]
+Point = tuple[float, float]
 
 
 def circle_points(center=(0.0, 0.0), radius=1.0, n=100, *, arc=(0.0, 2 * np.pi), noise=0.0,
@@ -76,8 +86,9 @@ def _noise_free_circle(center, radius, n, arc_deg, arc_start_deg) -> np.ndarray:
     return pts
 
 
-def _circle(rng, *, center=(0.0, 0.0), radius=1.0, n=100, arc_deg=360.0, arc_start_deg=0.0, noise=0.0,
-            noise_model="isotropic"):
+def _circle(rng, *, center: Point = (0.0, 0.0), radius: Positive = 1.0, n: Count = 100, arc_deg: ArcDegrees = 360.0,
+            arc_start_deg: Degrees = 0.0, noise: NonNegative = 0.0,
+            noise_model: Literal["isotropic", "radial"] = "isotropic"):
     """Points on a circle (or arc of ``arc_deg`` degrees); Gaussian noise of s.d. ``noise`` per
     coordinate ('isotropic') or along the radius ('radial')."""
     if noise_model == "radial":
@@ -93,8 +104,9 @@ def _circle(rng, *, center=(0.0, 0.0), radius=1.0, n=100, arc_deg=360.0, arc_sta
     return pts, {"family": "circle", "center": tuple(map(float, center)), "radius": float(radius)}
 
 
-def _ellipse(rng, *, center=(0.0, 0.0), semi_axes=(2.0, 1.0), angle_deg=0.0, n=100, arc_deg=360.0,
-             arc_start_deg=0.0, noise=0.0):
+def _ellipse(rng, *, center: Point = (0.0, 0.0), semi_axes: tuple[Positive, Positive] = (2.0, 1.0),
+             angle_deg: Degrees = 0.0, n: Count = 100, arc_deg: ArcDegrees = 360.0, arc_start_deg: Degrees = 0.0,
+             noise: NonNegative = 0.0):
     """Points on an ellipse (or arc), Gaussian noise of s.d. ``noise`` per coordinate."""
     start = np.radians(arc_start_deg)
     full = arc_deg >= 360.0
@@ -108,43 +120,6 @@ def _ellipse(rng, *, center=(0.0, 0.0), semi_axes=(2.0, 1.0), angle_deg=0.0, n=1
 
 #: synthetic generators by name: f(rng, **params) -> (points, truth)
 GENERATORS = {"circle": _circle, "ellipse": _ellipse}
-
-
-def _num(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def _pair(check):
-    return lambda v: isinstance(v, (list, tuple)) and len(v) == 2 and all(check(x) for x in v)
-
-
-#: Per-parameter checks of the generators' values (a config is refused before any row runs):
-#: name -> (test, what the value must be). Lengths are in the unit of the data, angles in degrees.
-PARAMETER_CHECKS = {
-    "center": (_pair(_num), "a pair of finite numbers [x, y]"),
-    "radius": (lambda v: _num(v) and v > 0, "a positive finite number"),
-    "semi_axes": (_pair(lambda x: _num(x) and x > 0), "a pair of positive finite numbers [a, b]"),
-    "n": (lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 1, "a positive integer"),
-    "noise": (lambda v: _num(v) and v >= 0, "a non-negative finite number (standard deviation)"),
-    "arc_deg": (lambda v: _num(v) and 0 < v <= 360, "a number of degrees in (0, 360]"),
-    "arc_start_deg": (_num, "a finite number of degrees"),
-    "angle_deg": (_num, "a finite number of degrees"),
-    "noise_model": (lambda v: v in ("isotropic", "radial"), "'isotropic' or 'radial'"),
-}
-
-
-def check_params(name: str, params: dict) -> None:
-    """Raise ValueError naming the first parameter of generator ``name`` whose value is unusable."""
-    if name not in GENERATORS:
-        raise ValueError(f"unknown generator {name!r}; known: {', '.join(GENERATORS)}")
-    allowed = set(inspect.signature(GENERATORS[name]).parameters) - {"rng"}
-    for key, value in params.items():
-        if key not in allowed:
-            raise ValueError(f"generator {name!r} has no parameter {key!r}; its parameters are: "
-                             f"{', '.join(sorted(allowed))}")
-        test, what = PARAMETER_CHECKS.get(key, (lambda v: True, ""))
-        if not test(value):
-            raise ValueError(f"{key} = {value!r} must be {what}")
 
 
 def generate(name: str, rng: np.random.Generator, **params):

@@ -10,15 +10,16 @@ ONE PLACE TO EXTEND:
   needs no edit of this file (its ``validate`` checks the values the schema cannot express);
 * a new kind of data source in ``[[datasets]]`` (e.g. ``file = "trace.csv"``, a plugin source): add its
   key to :data:`DATASET_SOURCES` with the schema of the entry's own keys (:func:`properties` of its model), and register the check of its
-  parameter values with :func:`register_source_check` (the source validates its parameters, not this
-  schema).
-Structure errors come from the schema; value errors of generator and method parameters from the
-generators' ``check_params`` and the method registry's ``MethodSpec.check_params``. Every error is one
-line: ``FILE: KEY: PROBLEM``.
+  parameter values with :func:`register_source_check`; a registered data source (``source = "NAME"``, a plugin's
+  too) needs nothing here: its parameters' declared types (``DataSource.parameter_types``) are its schema.
+Structure errors come from the schema; value errors of data source and method parameters from the sources'
+declared types (:func:`check_source_params`) and the method registry's ``MethodSpec.check_params``. Every error
+is one line: ``FILE: KEY: PROBLEM``.
 """
 from __future__ import annotations
 
 import copy
+import inspect
 import math
 from typing import Annotated, Any, Callable, Literal, Union
 
@@ -350,14 +351,97 @@ def register_source_check(source: str, check: Callable[[dict], None]) -> None:
     SOURCE_CHECKS[source] = check
 
 
+#: the JSON Schema of each parameter of a data source, by (name, function): its declared types (annotations, else
+#: the defaults' types, ``datasets.sources.DataSource.parameter_types``) through pydantic
+_SOURCE_SCHEMAS: dict = {}
+
+
+def source_parameters(source) -> dict[str, dict]:
+    """{parameter: JSON Schema} of a registered data source (``datasets.sources.DataSource``)."""
+    memo = (source.name, source.func)
+    if memo not in _SOURCE_SCHEMAS:
+        from pydantic import PydanticSchemaGenerationError, TypeAdapter
+        schemas = {}
+        for name, (kind, _) in source.parameter_types().items():
+            try:
+                schemas[name] = _plain(_inline(TypeAdapter(kind).json_schema()))
+            except PydanticSchemaGenerationError:
+                raise ValueError(f"data source {source.name!r}: parameter {name!r} is annotated {kind!r}, a type no "
+                                 f"TOML value has; annotate it with int, float, str, bool, list[...], tuple[...] or "
+                                 f"Literal[...]") from None
+        _SOURCE_SCHEMAS[memo] = schemas
+    return _SOURCE_SCHEMAS[memo]
+
+
+_BOUNDS = (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="), ("exclusiveMaximum", "<"))
+_NOUNS = {"integer": ("an integer", "integers"), "number": ("a number", "numbers"), "string": ("a string", "strings"),
+          "boolean": ("true or false", "booleans"), "object": ("a table", "tables"), "array": ("a list", "lists")}
+
+
+def describe(schema: dict, plural: bool = False) -> str:
+    """What a value of a (plain) JSON Schema must be, in words: ``an integer >= 1``, ``a list of 2 numbers``,
+    ``one of 'isotropic', 'radial'``."""
+    if "description" in schema:
+        return schema["description"]
+    if "enum" in schema:
+        return ("one of " if len(schema["enum"]) > 1 else "") + ", ".join(map(repr, schema["enum"]))
+    if "anyOf" in schema:
+        return " or ".join(describe(alt, plural) for alt in schema["anyOf"])
+    kind = schema.get("type")
+    if kind not in _NOUNS:
+        return "values" if plural else "any value"
+    text = _NOUNS[kind][plural]
+    bounds = [f"{op} {schema[key]}" for key, op in _BOUNDS if key in schema]
+    if bounds:
+        text += " " + " and ".join(bounds)
+    if kind == "array":
+        items = schema.get("prefixItems")
+        if items and all(item == items[0] for item in items):
+            text = f"{'lists' if plural else 'a list'} of {len(items)} {describe(items[0], True)}"
+        elif items:
+            text += " [" + ", ".join(describe(item) for item in items) + "]"
+        elif schema.get("items"):
+            text += " of " + describe(schema["items"], True)
+    return text
+
+
+def check_source_params(name: str, params: dict, grid: dict, what: str = "data source") -> None:
+    """Raise ValueError for the first parameter of data source ``name`` (a ``[[datasets]]`` entry's ``params`` and
+    ``grid``) that it does not have, that is missing, or whose value is not of its declared type
+    (:func:`source_parameters`): ``grid.n = 30.5 must be an integer >= 1``. Numbers given as strings are refused,
+    never coerced (``radius = "5"``)."""
+    from datasets import sources
+    try:
+        source = sources.get_source(name)
+    except KeyError:
+        known = ", ".join(s.name for s in sources.list_sources() if s.name not in ("published", "file"))
+        raise ValueError(f"unknown {what} {name!r}; known: {known}") from None
+    if name in ("published", "file"):
+        raise ValueError(f"write {name} = ... instead of source = {name!r}")
+    schemas = source_parameters(source)
+    for key in [*params, *grid]:
+        if key not in schemas:
+            raise ValueError(f"{what} {name!r} has no parameter {key!r}; its parameters are: "
+                             f"{', '.join(sorted(schemas)) or 'none'}")
+        if key in params and key in grid:
+            raise ValueError(f"{key} is both in params and in grid")
+    missing = [key for key, (_, default) in source.parameter_types().items()
+               if default is inspect.Parameter.empty and key not in params and key not in grid]
+    if missing:
+        raise ValueError(f"{what} {name!r} needs the parameter(s) {', '.join(missing)} (in params or grid)")
+    values = [(f"params.{k}", k, v) for k, v in params.items()]
+    values += [(f"grid.{k}", k, v) for k, vs in grid.items() for v in (vs if isinstance(vs, list) else [vs])]
+    for label, key, value in values:
+        if next(_Validator(schemas[key]).iter_errors(value), None) is not None:
+            raise ValueError(f"{label} = {value!r} must be {describe(schemas[key])}")
+
+
 def _check_generator(entry: dict) -> None:
-    from datasets.synthetic import check_params
-    check_params(entry["generator"], entry.get("params", {}))
-    for key, values in entry.get("grid", {}).items():
-        for v in values:
-            check_params(entry["generator"], {key: v})
-            if key in entry.get("params", {}):
-                raise ValueError(f"{key} is both in params and in grid")
+    check_source_params(entry["generator"], entry.get("params", {}), entry.get("grid", {}), "generator")
+
+
+def _check_source(entry: dict) -> None:
+    check_source_params(entry["source"], entry.get("params", {}), entry.get("grid", {}))
 
 
 def _check_published(entry: dict) -> None:
@@ -367,6 +451,7 @@ def _check_published(entry: dict) -> None:
 
 
 register_source_check("generator", _check_generator)
+register_source_check("source", _check_source)
 register_source_check("published", _check_published)
 
 

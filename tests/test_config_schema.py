@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Literal
 
+import numpy as np
 import pytest
 
 from experiments import config as configs
@@ -207,3 +209,89 @@ def test_study_data_in_its_toml_is_checked(tmp_path, config, old, new, key):
         configs.load(str(path), quick=True)
     msg = str(info.value)
     assert "\n" not in msg and key in msg, msg
+
+
+SOURCE_STUDY = '''name = "study"
+title = "t"
+seed = 1
+repetitions = 5
+[[datasets]]
+source = "{source}"
+params = {{ {params} }}
+{grid}
+[[methods]]
+id = "circle.kasa"
+'''
+
+
+@pytest.mark.parametrize("params, grid, key, expected", [
+    ("radius = 5.0, noise = 0.01, n = 30.5", "", "params.n = 30.5", "an integer"),
+    ('radius = 5.0, arc_deg = "90", noise = 0.01, n = 30', "", "params.arc_deg = '90'", "a number"),
+    ('radius = 5.0, center = "0,0", noise = 0.01, n = 30', "", "params.center = '0,0'", "a list of 2 numbers"),
+    ('radius = 5.0, noise = "0.01", n = 30', "grid = { arc_deg = [360.0, 90.0] }", "params.noise = '0.01'",
+     "a number"),
+    ('radius = "5", noise = 0.01, n = 30', "", "params.radius = '5'", "a number"),
+    ("radius = 5.0, noise = 0.01", "grid = { n = [30, 40.0] }", "grid.n = 40.0", "an integer"),
+    ('radius = 5.0, n = 30, noise_model = "gaussian"', "", "params.noise_model = 'gaussian'", "'radial'"),
+])
+def test_data_source_parameter_types_are_checked_before_any_row(tmp_path, capsys, params, grid, key, expected):
+    """A ``source = ...`` data set's parameters are checked against the types the source declares before any row
+    runs (a string is refused where a number is expected, never coerced): one line naming the file, the data set,
+    the key and the expected type, exit 2, nothing stored."""
+    path = write(tmp_path, SOURCE_STUDY.format(source="circle", params=params, grid=grid))
+    code = runner.main([str(path), "--out", str(tmp_path / "out"), "--jobs", "1", "--no-report"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err, err
+    assert "study.toml: datasets[0] (source 'circle'): " in err and key in err and expected in err, err
+    assert not (tmp_path / "out" / "study" / "rows.sqlite").exists()
+
+
+@pytest.fixture
+def plugin_scene():
+    """A data source registered as a plugin registers it (``register_source``), with and without annotations."""
+    from datasets import sources
+
+    def scene(rng, *, n=40, share=0.1, mode: Literal["inside", "outside"] = "inside", scale: float = 1,
+              offset=(0.0, 0.0), tag=None):
+        t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+        return np.column_stack([scale * np.cos(t), scale * np.sin(t)]), None
+
+    def needs_name(rng, *, name: str):
+        return np.zeros((3, 2)), None
+
+    def unresolvable(rng, *, x: "NoSuchType" = 1):  # noqa: F821
+        return np.zeros((3, 2)), None
+
+    names = {"test_scene": scene, "test_needs_name": needs_name, "test_unresolvable": unresolvable}
+    for name, func in names.items():
+        sources.register_source(name, random=True, summary="plugin test source")(func)
+    yield
+    for name in names:
+        sources._REGISTRY.pop(name, None)
+
+
+@pytest.mark.parametrize("source, params, problem", [
+    ("test_scene", "n = 40.5", "params.n = 40.5 must be an integer"),  # typed by its default
+    ("test_scene", 'share = "0.2"', "params.share = '0.2' must be a number"),
+    ("test_scene", 'mode = "around"', "params.mode = 'around' must be one of 'inside', 'outside'"),  # annotated
+    ("test_scene", 'scale = "2"', "params.scale = '2' must be a number"),
+    ("test_scene", 'offset = [1.0, "x"]', "params.offset = [1.0, 'x'] must be a list of numbers"),
+    ("test_scene", "shape = 1", "data source 'test_scene' has no parameter 'shape'"),
+    ("test_needs_name", "", "needs the parameter(s) name"),
+    ("test_needs_name", "name = 3", "params.name = 3 must be a string"),
+    ("test_unresolvable", "x = 1", "its parameter annotations cannot be resolved"),
+])
+def test_a_plugin_data_source_gets_the_same_parameter_check(tmp_path, plugin_scene, source, params, problem):
+    path = write(tmp_path, SOURCE_STUDY.format(source=source, params=params, grid=""))
+    with pytest.raises(ConfigError) as info:
+        configs.load(str(path))
+    msg = str(info.value)
+    assert "\n" not in msg and msg.startswith(f"study.toml: datasets[0] (source '{source}'): "), msg
+    assert problem in msg, msg
+
+
+def test_a_plugin_data_source_takes_values_of_its_declared_types(tmp_path, plugin_scene):
+    """An int where a float is declared is a number; an untyped parameter (default None) takes anything."""
+    path = write(tmp_path, SOURCE_STUDY.format(source="test_scene", grid='grid = { share = [0, 0.5] }', params=(
+        'n = 12, mode = "outside", scale = 2, offset = [1, 2.5], tag = { any = "thing" }')))
+    assert configs.load(str(path))["datasets"][0]["params"]["scale"] == 2

@@ -240,8 +240,9 @@ _LOCKS: list = []
 
 
 def lock_out(out: Path):
-    """Hold an exclusive lock on ``out`` for the rest of the run (``fcntl.flock``, released by the kernel when
-    the process ends, however it ends); a second run into the same folder gets one line and exit 2."""
+    """Hold an exclusive lock on ``out`` for the rest of the run (``fcntl.flock``: :func:`main` releases it when it
+    returns, and the kernel when the process ends, however it ends); a second run into the same folder gets one
+    line and exit 2."""
     try:
         import fcntl
     except ImportError:  # not POSIX: no lock (documented)
@@ -307,9 +308,21 @@ def plugin_warnings_once():
             os.environ["PYTHONWARNINGS"] = env
 
 
+def release_locks(keep: int = 0) -> None:
+    """Release the ``--out`` locks taken after the first ``keep`` (closing the file releases its ``flock``)."""
+    while len(_LOCKS) > keep:
+        _LOCKS.pop().close()
+
+
 def main(argv=None) -> int:
-    with plugin_warnings_once():
-        return _main(argv)
+    """The command line as a function (exit status returned); the ``--out`` lock it takes is released when it
+    returns, however it ends, so a second call in the same process can write to the same folder."""
+    held = len(_LOCKS)
+    try:
+        with plugin_warnings_once():
+            return _main(argv)
+    finally:
+        release_locks(held)
 
 
 def _main(argv=None) -> int:

@@ -241,6 +241,43 @@ def test_unknown_study_and_bad_flags(capsys):
     assert main(["--scheduler", "tcp://x:1", "published"]) == 2
 
 
+SMALL = """name = "small"
+title = "small"
+[[datasets]]
+source = "circle"
+params = { n = 12, noise = 0.01 }
+[[methods]]
+id = "circle.kasa"
+"""
+
+
+def test_main_releases_its_out_lock_when_it_returns(tmp_path, capsys):
+    """``experiments.run.main`` (the Python API) called twice in one process writes to the same --out twice; the
+    lock it holds while it runs still keeps another process out, and is free again when that process ends."""
+    import fcntl
+    from experiments import run as runner
+    study, out = tmp_path / "small.toml", tmp_path / "out"
+    study.write_text(SMALL)
+    args = [str(study), "--out", str(out), "--jobs", "1", "--no-report"]
+    assert main(args) == 0
+    assert main(args) == 0, capsys.readouterr().err  # was: "--out ... is in use by another experiments.run (pid <its own>)"
+    assert not runner._LOCKS
+    with open(out / runner.LOCK_NAME, "a+") as fh:  # nothing of this process holds the folder any more
+        fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    holder = subprocess.Popen([sys.executable, "-c", "import sys; from pathlib import Path; from experiments import run; "
+                               f"run.lock_out(Path({str(out)!r})); print('locked', flush=True); sys.stdin.read()"],
+                              cwd=REPO, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        capsys.readouterr()
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip()
+        assert "in use by another experiments.run" in err and f"pid {holder.pid}" in err, err
+    finally:
+        holder.communicate("", timeout=60)
+    assert main(args) == 0
+
+
 @pytest.mark.slow
 def test_quick_published_study(tmp_path):
     run_study("published", tmp_path, quick=True, jobs=2, log=lambda *a: None)

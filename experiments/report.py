@@ -97,6 +97,49 @@ def load_study(folder: Path) -> tuple[dict, dict]:
     return meta, _read_json(folder / "report.json")
 
 
+#: what a row of each status other than "ok" is, in the report's words (label, what it is); the statuses of the engine
+#: (``experiments.rows``: error, and the environment's timeout, crashed, unavailable), of a family's contract (invalid)
+#: and of the studies (not converged, skipped); any other status is named as it is. The values of the tables and
+#: figures are those of the "ok" rows (a share of ok rows counts the others as failures).
+_AGAIN = "the next `python -m experiments.run` runs them again"
+LEFT_OUT = {
+    "error": ("failed rows", "the method raised an error: no result (the messages are in `results.csv`)"),
+    "invalid": ("invalid results", "results that broke their family's contract: not used (the reasons are in "
+                                   "`results.csv`)"),
+    "timeout": ("timed-out rows", f"ended at the row time-out: no result ({_AGAIN})"),
+    "crashed": ("crashed rows", f"the worker process running them died: no result ({_AGAIN})"),
+    "unavailable": ("unavailable rows", "the method could not run here (a kernel not built, a module that does not "
+                                        f"import): no result ({_AGAIN})"),
+    "not converged": ("rows not converged", "the iteration stopped without converging: their values are not a result"),
+    "skipped": ("skipped rows", "the method does not apply to these data: no result"),
+}
+
+
+def left_out_rows(folder: Path, meta: dict) -> list[tuple[str, str, str]]:
+    """[(label, what they are, the rows of each method)] for each status other than "ok" among a study's rows (the
+    status counts of ``meta.json``): how many rows of how many, what they are (:data:`LEFT_OUT`) and how many of them
+    each method has (read from ``results.csv`` only when there are such rows)."""
+    counts = meta.get("status_counts") if isinstance(meta.get("status_counts"), dict) else {}
+    other = {str(k): v for k, v in counts.items() if k != "ok" and isinstance(v, int) and v > 0}
+    if not other:
+        return []
+    order = [k for k in LEFT_OUT if k in other] + sorted(k for k in other if k not in LEFT_OUT)
+    try:
+        rows = pd.read_csv(folder / "results.csv", usecols=["method", "status"], dtype=str, keep_default_na=False)
+        by_method = rows[rows["status"] != "ok"].groupby(["status", "method"], sort=True).size()
+    except (OSError, ValueError, pd.errors.ParserError):
+        by_method = None
+    out = []
+    for status in order:
+        label, what = LEFT_OUT.get(status, (f"rows with status '{status}'", "not an ok result (the messages are in "
+                                                                          "`results.csv`)"))
+        methods = ""
+        if by_method is not None and status in by_method.index.get_level_values(0):
+            methods = ", ".join(f"{m} {int(n)}" for m, n in by_method.loc[status].items())
+        out.append((f"{label}: {other[status]} of {meta.get('n_rows')}", what, methods))
+    return out
+
+
 def _figure_path(folder: Path, name) -> Path:
     """A declared figure, confined to the study folder, checked to be a PNG."""
     if not isinstance(name, str):
@@ -332,14 +375,10 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
                 tex_studies[-1]["findings"] = f"Broken: {problem}."
                 continue
             provenance = provenance or meta
-            counts = meta.get("status_counts", {}) if isinstance(meta.get("status_counts"), dict) else {}
-            if counts.get("error"):
-                doc.prose(f"**failed rows: {md_escape(counts['error'])} of {md_escape(meta.get('n_rows'))}**: the tables "
-                          "below hold what ran; the failed rows are in `results.csv`.")
-            if counts.get("invalid"):
-                doc.prose(f"**invalid results: {md_escape(counts['invalid'])} of {md_escape(meta.get('n_rows'))}**: "
-                          "results that broke their family's contract (left out of the tables; the reasons are in "
-                          "`results.csv`).")
+            for label, what, per_method in left_out_rows(results / name, meta):  # every row the tables do not hold
+                by = f"; by method: {per_method}" if per_method else ""
+                doc.prose(f"**{md_escape(label)}**: {what}{md_escape(by)}.")  # what: the builder's own words
+                tex_studies[-1].setdefault("notes", []).append(f"{label}: {what.replace('`', '')}{by}.")
             plugins = meta.get("plugins") if isinstance(meta.get("plugins"), dict) else {}
             doc.prose(md_escape(f"{meta.get('n_rows')} rows{'; quick run (reduced grid)' if meta.get('quick') else ''}; "
                                 f"commit {str(meta.get('git_commit') or '?')[:10]}"

@@ -759,7 +759,9 @@ def default_declarations(cfg: dict, df: pd.DataFrame) -> tuple[dict | None, dict
     rows = ["method"] + (["params"] if "params" in df and df["params"].nunique() > 1 else [])
     what = _aggregate_words(how, metric)
     shown = f"{what} [{unit}]" if unit else what
-    table = {"caption": f"{what} per method{f' and {across}' if across else ''} over {len(df)} rows of "
+    n_ok = len(df) if isinstance(ok, slice) else int(ok.sum())
+    over = f"{len(df)} rows" if n_ok == len(df) else f"the {n_ok} ok rows of {len(df)}"  # the others are not in it
+    table = {"caption": f"{what} per method{f' and {across}' if across else ''} over {over} of "
                         f"{cfg['name']} (the default table of a study that declares none)",
              "rows": rows, "values": metric, "aggregate": how, "unit": unit, "digits": 4, "colour": "lower_is_better",
              **({"columns": across} if across else {})}

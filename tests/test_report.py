@@ -219,3 +219,41 @@ def test_the_committed_paper_shows_every_study_from_its_last_run():
     for name in ("report.md", "report.tex", "report.html"):
         text = (paper / name).read_text(encoding="utf-8")
         assert "older than the last run" not in text, f"paper/{name}: rebuild it from one run of every study"
+
+
+def test_every_row_the_tables_leave_out_is_counted_by_status_and_method(tmp_path):
+    """Rows that are not results (timeout, crashed, unavailable, as error and invalid, and any other status) are
+    counted per status and method in the report's text and in the PDF's notes: the report of a study with 3 ok,
+    3 timeout and 3 crashed rows said only "9 rows" and showed a table of the one method that ran."""
+    import hashlib
+
+    import pandas as pd
+    cfg = tmp_path / "leftout.toml"
+    cfg.write_text('name = "leftout"\ntitle = "rows left out"\nseed = 3\nrepetitions = 3\n[[datasets]]\n'
+                   'source = "circle"\nparams = { radius = 5.0, noise = 0.01, n = 12 }\n'
+                   '[[methods]]\nid = "circle.kasa"\n[[methods]]\nid = "circle.gauss_newton"\n[[methods]]\n'
+                   'id = "circle.taubin"\n', encoding="utf-8")
+    results = tmp_path / "results"
+    folder = run_study(str(cfg), results, jobs=1, log=lambda *a: None)
+    df = pd.read_csv(folder / "results.csv", dtype=str, keep_default_na=False)
+    statuses = {"circle.gauss_newton": ["timeout"] * 3, "circle.taubin": ["crashed", "crashed", "my status"]}
+    for method, new in statuses.items():   # as a run whose rows timed out and whose workers died would leave them
+        df.loc[df["method"] == method, "status"] = new
+    df.to_csv(folder / "results.csv", index=False)
+    meta = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
+    meta["status_counts"] = df["status"].value_counts().to_dict()
+    meta["results_sha256"] = hashlib.sha256((folder / "results.csv").read_bytes()).hexdigest()
+    (folder / "meta.json").write_text(json.dumps(meta), encoding="utf-8")
+    paper = build(results, tmp_path / "paper", log=lambda *a: None)
+    md = (paper / "report.md").read_text(encoding="utf-8")
+    lines = {line.split("**")[1]: line for line in md.splitlines() if line.startswith("**") and " of 9**" in line}
+    assert set(lines) == {"timed-out rows: 3 of 9", "crashed rows: 2 of 9", "rows with status 'my status': 1 of 9"}, lines
+    assert lines["timed-out rows: 3 of 9"].endswith("by method: circle.gauss_newton 3.")
+    assert lines["crashed rows: 2 of 9"].endswith("by method: circle.taubin 2.")
+    assert lines["rows with status 'my status': 1 of 9"].endswith("by method: circle.taubin 1.")
+    tex = (paper / "report.tex").read_text(encoding="utf-8")
+    assert "timed-out rows: 3 of 9" in tex and "crashed rows: 2 of 9" in tex and "circle.taubin 2" in tex
+    # the default table holds the ok rows: its caption counts those (it said "over 9 rows" of a table of 3)
+    from experiments.study import default_declarations
+    table, _ = default_declarations({"name": "leftout"}, pd.read_csv(folder / "results.csv"))
+    assert "over the 3 ok rows of 9 of leftout" in table["caption"], table["caption"]

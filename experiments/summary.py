@@ -103,13 +103,32 @@ def summary_units(summary: pd.DataFrame, cfg: dict | None = None) -> dict[str, s
     return units
 
 
+def share_text(value, digits: int = 4) -> str:
+    """A share (0 to 1) in ``digits`` significant digits, with as many more as it takes that a share below 1 never
+    reads 1 and one above 0 never reads 0 (1 crashed row of 25,000: 0.99996, not 1); NaN is empty."""
+    v = float(value)
+    if v != v:
+        return ""
+    for d in range(digits, 18):
+        text = format(v, f".{d}g")
+        if (float(text) == 1.0) == (v == 1.0) and (float(text) == 0.0) == (v == 0.0):
+            return text
+    return repr(v)
+
+
+#: the summary's columns that are shares (:func:`share_text`)
+SHARE_COLUMNS = ("ok_share",)
+
+
 def to_markdown(df: pd.DataFrame, floatfmt: str = ".4g", units: dict[str, str] | None = None) -> str:
     """A GitHub Markdown table (``experiments.render.page.markdown_table``) whose headers carry the units
-    (``units``: {column: unit}, default :func:`summary_units` of ``df``): 'form error median [mm]'."""
+    (``units``: {column: unit}, default :func:`summary_units` of ``df``): 'form error median [mm]'. Numbers in
+    ``floatfmt``, shares by :func:`share_text` (never a rounded 1 or 0)."""
     from experiments.render.page import markdown_table
     from experiments.render.text import human_unit
     from experiments.study import readable
     units = summary_units(df) if units is None else units
-    shown = df.rename(columns={c: readable(c) + (f" [{human_unit(units[c])}]" if units.get(c) else "")
-                               for c in df.columns})
-    return markdown_table(shown, floatfmt, escape=False) + "\n"
+    names = {c: readable(c) + (f" [{human_unit(units[c])}]" if units.get(c) else "") for c in df.columns}
+    shown = df.rename(columns=names)
+    return markdown_table(shown, floatfmt, escape=False,
+                          formats={names[c]: share_text for c in SHARE_COLUMNS if c in names}) + "\n"

@@ -59,3 +59,23 @@ def test_a_study_declares_the_unit_of_its_lengths():
     assert cfg["length_unit"] == "R"
     summary = pd.DataFrame({"method": ["circle.kasa"], "runs": [4], "center_rmse": [0.002]})
     assert _header(to_markdown(summary, units=summary_units(summary, cfg))) == ["method", "runs", "center rmse [R]"]
+
+
+def test_a_share_below_one_never_reads_one_nor_one_above_zero_zero():
+    """summary.md showed 'ok share 1' for a group with 1 crashed row of 25,000 (summary.csv: 0.99996): a share
+    prints with the digits it takes to stay below 1 (above 0); exact shares and other numbers are as before."""
+    shares = [24999 / 25000, 149999 / 150000, 1 / 150000, 1.0, 0.0, 0.5, 2 / 3, np.nan]
+    summary = pd.DataFrame({"method": [f"m{i}" for i in range(len(shares))], "runs": [25000] * len(shares),
+                            "ok_share": shares, "form_error_median": [0.123456] * len(shares)})
+    md = to_markdown(summary, units={"runs": "", "ok_share": "", "form_error_median": "mm"})
+    head = _header(md)
+    rows = [[c.strip() for c in line.strip("|").split("|")] for line in md.splitlines()[2:] if line.startswith("|")]
+    shown = [r[head.index("ok share")] for r in rows]
+    for value, text in zip(shares, shown):
+        if value != value:
+            assert text == ""
+            continue
+        assert (float(text) == 1.0) == (value == 1.0) and (float(text) == 0.0) == (value == 0.0), (value, text)
+        assert abs(float(text) - value) <= 5e-4 * max(value, 1e-300), (value, text)
+    assert shown[:4] == ["0.99996", "0.99999", "6.667e-06", "1"] and shown[6] == "0.6667"
+    assert {r[head.index("form error median [mm]")] for r in rows} == {"0.1235"}

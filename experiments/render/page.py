@@ -30,10 +30,11 @@ def md_escape(text) -> str:
     return _MD_SPECIAL.sub(lambda m: "\\" + m.group(0), re.sub(r"\s+", " ", str(text))).strip()
 
 
-def markdown_table(df, floatfmt: str = ".7g", *, escape: bool = True) -> str:
+def markdown_table(df, floatfmt: str = ".7g", *, escape: bool = True, formats: dict | None = None) -> str:
     """``df`` as a GitHub (pipe) Markdown table by pandas' ``DataFrame.to_markdown`` (tabulate): floats in
-    ``floatfmt`` (NaN empty), every other cell and the headers as text, ``md_escape``d unless ``escape`` is
-    false (a table of the builder's own words); number columns right-aligned."""
+    ``floatfmt`` (NaN empty) or, for a column ``formats`` names, by its function (value -> text), every other cell
+    and the headers as text, ``md_escape``d unless ``escape`` is false (a table of the builder's own words); number
+    columns right-aligned."""
     import numpy as np
     import pandas as pd
     text = md_escape if escape else str
@@ -42,7 +43,9 @@ def markdown_table(df, floatfmt: str = ".7g", *, escape: bool = True) -> str:
         if isinstance(v, (float, np.floating)):
             return "" if v != v else format(v, floatfmt)
         return text(v)
-    shown = pd.DataFrame([[cell(v) for v in row] for row in df.itertuples(index=False)], columns=range(df.shape[1]))
+    own = [(formats or {}).get(c) for c in df.columns]
+    shown = pd.DataFrame([[f(v) if f else cell(v) for f, v in zip(own, row)] for row in df.itertuples(index=False)],
+                         columns=range(df.shape[1]))
     align = ["right" if pd.api.types.is_numeric_dtype(t) and not pd.api.types.is_bool_dtype(t) else "left"
              for t in df.dtypes]
     return shown.to_markdown(index=False, headers=[text(c) for c in df.columns], tablefmt="pipe",

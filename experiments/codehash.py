@@ -34,6 +34,7 @@ import hashlib
 import importlib.util
 import json
 import os
+import sys
 import tempfile
 from functools import lru_cache
 from importlib import metadata
@@ -44,9 +45,22 @@ FITBENCH_PACKAGES = ("methods", "datasets", "experiments")
 _BOOKKEEPING = {"RECORD", "INSTALLER", "REQUESTED", "direct_url.json"}
 
 
+def main_file() -> Path | None:
+    """The file of the program that runs (``__main__``: a script, or a module run with ``python -m``), None when it
+    has none (``python -c``, an interactive session, a notebook)."""
+    path = getattr(sys.modules.get("__main__"), "__file__", None)
+    if not path or not str(path).endswith(".py"):
+        return None
+    path = Path(path).resolve()
+    return path if path.is_file() else None
+
+
 def _origin(name: str) -> Path | None:
     """The source file of module ``name`` (None: not found, built in, or a namespace package). A module of fitbench's
-    own packages is found by its path under its package's folder, without importing its parent packages."""
+    own packages is found by its path under its package's folder, without importing its parent packages; the running
+    program's ``__main__`` by its file (:func:`main_file`: code a script registers is keyed by the script)."""
+    if name == "__main__":
+        return main_file()
     top, _, rest = name.partition(".")
     if rest and top in FITBENCH_PACKAGES:
         base = _package_dir(top)
@@ -173,6 +187,9 @@ def module_closure(module: str) -> tuple[tuple[str, Path], ...]:
     follow = set(FITBENCH_PACKAGES) | {module.split(".")[0]}
     by_name = _method_modules()
     follow |= {m.split(".")[0] for m in by_name.values()}
+    if module == "__main__" and main_file() is not None:  # a script's own modules beside it
+        follow |= {n.split(".")[0] for n in _imported_names(main_file(), module, by_name)
+                   if _beside(n.split(".")[0], main_file().parent)}
     seen: dict[str, Path] = {}
     todo = [p for p in _imported_names_of_parents(module)]
     while todo:
@@ -186,6 +203,12 @@ def module_closure(module: str) -> tuple[tuple[str, Path], ...]:
         todo.extend(_imported_names(path, name, by_name) - set(seen))
     _save_scans()
     return tuple(sorted(seen.items()))
+
+
+def _beside(top: str, folder: Path) -> bool:
+    """Whether the top-level module ``top`` is a file or package of ``folder`` (or below it)."""
+    path = _origin(top)
+    return path is not None and folder in path.parents
 
 
 def _imported_names_of_parents(module: str) -> list[str]:

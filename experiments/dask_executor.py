@@ -63,6 +63,11 @@ class RowProcessError(RuntimeError):
     """A Dask worker cannot start a row process (it dies before running a row): the run stops."""
 
 
+class WorkerCodeError(RuntimeError):
+    """A Dask worker would compute rows with other code or another environment than the run that keys them: the run
+    stops before any of its rows is stored."""
+
+
 def no_worker_limit_s() -> float:
     """:data:`NO_WORKER_S`, or the seconds in ``FITBENCH_DASK_NO_WORKER_S`` (a cluster whose workers queue
     for a batch system may need longer)."""
@@ -207,6 +212,97 @@ def dask_setup(worker) -> None:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     except ValueError:  # not the main thread of the worker process: nothing to do there
         pass
+
+
+# ---------------------------------------------------------------- in a Dask worker: the code it runs is the run's
+
+_STAMPS: dict = {}  # file -> (mtime_ns, size) when this worker first looked at it: its code as loaded
+
+
+def _stat(path: str):
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return st.st_mtime_ns, st.st_size
+
+
+def run_checked(fn, tasks: list, row_timeout, expected) -> dict:
+    """A Dask task: ``fn(tasks, row_timeout)`` once this worker's code and environment are shown to be the run's
+    (:func:`check_code`), since the run stores the rows under keys of its own code. A worker started before a method
+    was edited (or a ``git pull``) runs the code it loaded then: its rows were stored under the new code's keys."""
+    check_code(tasks, expected)
+    return fn(tasks, row_timeout)
+
+
+def check_code(tasks: list, expected) -> None:
+    """Raise :class:`WorkerCodeError` unless this process computes as the run does: the same environment
+    (``engine.environment``: kernels, Python and numerical packages' versions), the same code hashes for one task of
+    each (method, study kind, data set) of the chunk (``engine.task_code``, as the run computed them), and none of
+    those files changed since this worker loaded its modules (their size and time stamp when it first looked)."""
+    from experiments import codehash, engine
+    reps, environment = expected
+    host = socket.gethostname()
+    restart = ("restart the workers (they load fitbench and the plugins when they start) and run the same command "
+               "again; the finished rows are kept")
+    mine = engine.environment()
+    if mine != environment:
+        differ = sorted(k for k in set(mine) | set(environment) if mine.get(k) != environment.get(k))
+        raise WorkerCodeError(f"the Dask worker on {host} computes with another environment than this run "
+                              f"({', '.join(differ)}: {[mine.get(k) for k in differ]} there, "
+                              f"{[environment.get(k) for k in differ]} here); install the same versions there, then "
+                              f"{restart}")
+    if not _STAMPS:
+        for module in list(sys.modules.values()):
+            path = getattr(module, "__file__", None)
+            if path:
+                _STAMPS.setdefault(os.path.realpath(path), _stat(path))
+    for pos, code in reps:
+        task = tasks[pos]
+        theirs = engine.task_code(task)
+        if theirs != code:
+            differ = [k for k in code if theirs.get(k) != code[k]]
+            raise WorkerCodeError(f"the Dask worker on {host} has other code than this run for {task['method']} "
+                                  f"({', '.join(differ)}); give the workers this run's code (the same commit and "
+                                  f"plugins), then {restart}")
+        modules = [m for m in (methods_module(task["method"]), source_module(task)) if m]
+        modules += ["experiments.metrics", "experiments.timing", "experiments.rows", f"experiments.studies.{task['kind']}"]
+        for module in modules:
+            for path in map(os.path.realpath, map(str, codehash.files_of(module))):
+                now = _stat(path)
+                if _STAMPS.setdefault(path, now) != now:
+                    raise WorkerCodeError(f"the Dask worker on {host} loaded {path} before it was changed: its "
+                                          f"{task['method']} rows would not be this code's; {restart}")
+
+
+def methods_module(method: str) -> str | None:
+    import methods
+    try:
+        return methods.get(method).module
+    except LookupError:  # unknown here: its code hash already differs from the run's
+        return None
+
+
+def source_module(task: dict) -> str | None:
+    from datasets import sources
+    from experiments import engine
+    try:
+        return sources.get_source(engine.source_of(task["dataset"])).module
+    except (LookupError, TypeError, ValueError):  # a study's own data (its code is the study's)
+        return None
+
+
+def expected_code(chunk: list) -> tuple:
+    """What :func:`check_code` compares in the worker: the run's environment and code hashes of one task of each
+    (method, study kind, data set) of ``chunk``."""
+    from experiments import engine
+    seen, reps = set(), []
+    for pos, task in enumerate(chunk):
+        k = (task["method"], task["kind"], id(task["dataset"]))
+        if k not in seen:
+            seen.add(k)
+            reps.append((pos, engine.task_code(task)))
+    return reps, engine.environment()
 
 
 def run_isolated(tasks: list, row_timeout: float) -> dict:
@@ -359,7 +455,7 @@ def _drive(client, where: str, work, chunks, store, bar, row_timeout, limit_s: f
     threads = _threads(client)
 
     def submit(chunk, alone):
-        fut = client.submit(fn, chunk, row_timeout, pure=False)
+        fut = client.submit(run_checked, fn, chunk, row_timeout, expected_code(chunk), pure=False)
         pending[fut.key] = (fut, chunk, alone)
         fut.add_done_callback(finished.put)
 
@@ -408,6 +504,8 @@ def _drive(client, where: str, work, chunks, store, bar, row_timeout, limit_s: f
                 died(chunk, alone, type(exc).__name__)
             except RowProcessError as exc:
                 raise InvalidInputError(f"{exc}; run with --jobs 1 on that machine to see why") from None
+            except WorkerCodeError as exc:
+                raise InvalidInputError(str(exc)) from None
             except TimeoutError:  # its result was lost with a worker before it was fetched
                 if not fut.done():
                     fut.add_done_callback(finished.put)  # computed again: wait for it

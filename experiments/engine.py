@@ -251,13 +251,49 @@ def task_code(task: dict) -> dict:
         from experiments import codehash
         study = f"experiments.studies.{task['kind']}"
         method = methods.get(task["method"]).module if task["method"] in _method_ids() else None
-        code = {"method": codehash.code_hash(method) if method else None,
+        code = {"method": module_code(method) if method else None,
                 "source": source_hash(spec) if _has_source(spec) else None,
                 "metrics": codehash.code_hash("experiments.metrics", "experiments.timing"),
                 "rows": codehash.code_hash("experiments.rows"),
                 "study": codehash.code_hash(study)}
         _CODE[memo] = code
     return code
+
+
+#: the stand-in code hash of a program without a file (``python -c``, an interactive session), one per process: the
+#: rows of methods or data sources it registers are keyed by it, so that no later run takes them for its own
+_UNKEYED: list = []
+
+
+def module_code(module: str) -> str:
+    """The code hash of a method's or data source's module (``experiments.codehash``). The running program's own
+    ``__main__`` is keyed by its file; without one (``python -c``, a notebook) its rows cannot be keyed by their code
+    and get a key of this process alone: they are computed again by every run, never reused."""
+    from experiments import codehash
+    if module == "__main__" and codehash.main_file() is None:
+        if not _UNKEYED:
+            import uuid
+            _UNKEYED.append(f"no-file-{uuid.uuid4().hex}")
+        return _UNKEYED[0]
+    return codehash.code_hash(module)
+
+
+def script_code(used) -> list[str]:
+    """The method ids and source names among ``used`` ((method id, source name) pairs) that the running program's
+    ``__main__`` registers: worker processes do not import it, so they would not know them."""
+    found = []
+    known = _method_ids()
+    for method, source in sorted(used, key=str):
+        if method in known and methods.get(method).module == "__main__" and method not in found:
+            found.append(method)
+        if source is not None:
+            try:
+                spec = sources.get_source(source)
+            except KeyError:
+                continue
+            if spec.module == "__main__" and source not in found:
+                found.append(source)
+    return found
 
 
 def _source_name(spec) -> str | None:
@@ -372,7 +408,7 @@ def source_hash(spec: dict) -> str:
     """Hash of a data set's source code (with its imports) and of the data files it reads."""
     from experiments import codehash
     source = sources.get_source(source_of(spec))
-    parts = [codehash.code_hash(source.module)]
+    parts = [module_code(source.module)]
     if source.files is not None:
         if "published" in spec:
             files = source.files(spec["published"], spec.get("variant"))
@@ -551,6 +587,15 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
             counts["to_run"] += again
             counts["retried_errors"] += again and s is not None
     counts["stored"] = counts["tasks"] - counts["to_run"]
+    isolate = runs_plugin_code(used)
+    script = script_code(used) if counts["to_run"] else []
+    if script and (jobs > 1 or executor == "dask" or row_timeout or isolate):
+        why = (f"--jobs {jobs}" if jobs > 1 else "--executor dask" if executor == "dask" else
+               "a row time limit" if row_timeout else "an installed plugin's method or data source in the study")
+        raise InvalidInputError(f"{', '.join(script)} {'is' if len(script) == 1 else 'are'} registered by the program "
+                                f"that runs (its __main__ module), which worker processes do not import, and {why} "
+                                f"runs rows in worker processes: run with --jobs 1 and no row time limit (such rows "
+                                f"then run in this process), or register it in a module or a plugin (docs/plugins.md)")
     log(f"   {counts['tasks']} rows: {counts['stored']} already stored, {counts['to_run']} to run"
         + (f" ({counts['retried_errors']} failed before, retried)"
            if counts["retried_errors"] else ""))
@@ -564,7 +609,7 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
         while_rows_run()
     run_rows(todo, Landing(store, frame), work=run_chunk, jobs=jobs, executor=executor, scheduler=scheduler,
              desc=desc, total=counts["to_run"], row_timeout=row_timeout, chunk_rows=chunk_rows, log=log,
-             isolate=runs_plugin_code(used))
+             isolate=isolate)
     counts["wall_s"] = time.perf_counter() - t0
     if counts["stored"]:
         decode = _Interner()

@@ -17,6 +17,7 @@ import time
 import uuid
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -216,3 +217,92 @@ def test_a_cluster_without_workers_stops_the_run_in_one_line(tmp_path, hostile_s
                 p.wait(timeout=20)
             except subprocess.TimeoutExpired:
                 p.kill()
+
+
+DRIFT = '''
+"""A plugin method whose code the test edits while a Dask worker has it loaded."""
+import numpy as np
+
+from methods import register
+from methods.results import circle_result
+
+FACTOR = 1.0
+
+
+@register("circle.drift", kind="closed form", summary="centroid and mean distance", reference="test")
+def drift(points):
+    """The centroid and FACTOR times the mean distance to it."""
+    c = points.mean(axis=0)
+    return circle_result(points, c, FACTOR * float(np.hypot(*(points - c).T).mean()), converged=True,
+                         message="closed form")
+'''
+
+
+@pytest.mark.system
+@pytest.mark.skipif(DASK is None, reason="the dask command line (package distributed) is not installed")
+def test_a_worker_that_loaded_a_method_before_it_changed_stores_no_row(tmp_path):
+    """A standing cluster's worker keeps the code it loaded: after an edit of a plugin's method the run keyed its rows
+    by the new code while the worker computed them with the old (a reviewer found radius 5.0 stored where the edited
+    method gives 10.0). The run now stops in one line before storing any row of it; a fresh worker runs them."""
+    from conftest import install_plugin
+    site = install_plugin(tmp_path, "fitbench-drift", {"fitbench_drift": DRIFT}, {"fitbench.methods": {"drift": "fitbench_drift"}})
+    env = subprocess_env(site, OPENBLAS_NUM_THREADS="1")
+    port = free_port()
+    address = f"tcp://127.0.0.1:{port}"
+
+    def worker():
+        return subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-dashboard",
+                                 "--local-directory", str(tmp_path / "w")], cwd=tmp_path, env=env,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    procs = [subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                              cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        time.sleep(2)
+        procs.append(worker())
+        from distributed import Client
+        with Client(address, timeout=30) as c:
+            c.wait_for_workers(1, timeout=120)
+        methods = '[[methods]]\nid = "circle.drift"\n'
+        args = ["--executor", "dask", "--scheduler", address, "--out", tmp_path / "out"]
+        code, out, err, _ = run([write_study(tmp_path, name="dr", reps=2, methods=methods), *args], tmp_path, site)
+        assert code == 0, err
+        ident = ["data_arc_deg", "repetition"]
+        first = pd.read_csv(tmp_path / "out" / "dr" / "results.csv").set_index(ident)["radius"]
+        plugin = site / "fitbench_drift.py"
+        time.sleep(0.05)  # a later time stamp than the worker saw, on any file system
+        plugin.write_text(plugin.read_text().replace("FACTOR = 1.0", "FACTOR = 2.0"))
+        code, out, err, _ = run([write_study(tmp_path, name="dr", reps=4, methods=methods), *args], tmp_path, site)
+        lines = err.strip().splitlines()
+        assert code == 2 and len(lines) == 1 and "circle.drift" in lines[0] and "restart the workers" in lines[0], err
+        stored = pd.read_csv(tmp_path / "out" / "dr" / "results.csv").set_index(ident)["radius"]
+        assert stored.equals(first)  # the first run's outputs, nothing of the second
+        procs[1].terminate()
+        procs[1].wait(timeout=30)
+        procs[1] = worker()
+        code, out, err, _ = run([write_study(tmp_path, name="dr", reps=4, methods=methods), *args], tmp_path, site)
+        assert code == 0, err
+        fresh = pd.read_csv(tmp_path / "out" / "dr" / "results.csv").set_index(ident)["radius"]
+        assert len(fresh) == 8  # every row by the edited code (all were keyed anew): twice the first run's radii
+        assert np.allclose(fresh.loc[first.index] / first, 2.0, rtol=1e-12, atol=0)
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def test_a_worker_with_other_code_or_environment_is_refused():
+    """The check a Dask task makes before its rows: the run's code hashes and environment against the worker's."""
+    from experiments import dask_executor, engine
+    task = next(engine.iter_grid_tasks({"name": "ck", "kind": "grid", "seed": 1, "repetitions": 1,
+                                        "datasets": [{"source": "circle", "params": {"n": 10}}],
+                                        "methods": [{"id": "circle.kasa"}]}, "ck.toml"))
+    reps, env = dask_executor.expected_code([task])
+    dask_executor.check_code([task], (reps, env))  # this process: the same code
+    with pytest.raises(dask_executor.WorkerCodeError, match=r"other code than this run for circle.kasa \(method\)"):
+        dask_executor.check_code([task], ([(0, {**reps[0][1], "method": "0" * 16})], env))
+    with pytest.raises(dask_executor.WorkerCodeError, match="another environment than this run"):
+        dask_executor.check_code([task], (reps, {**env, "kernels": "elsewhere"}))

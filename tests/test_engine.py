@@ -752,3 +752,54 @@ def test_beside_runs_in_an_idle_kept_worker_and_raises_its_exception_here():
         kept.proc.kill()
         assert wait() is None and kept not in executors._KEPT  # slept here: the killed worker's call
     assert executors.beside(os.getpid)() == os.getpid()  # no kept worker: here
+
+
+SCRIPT = '''import sys
+import numpy as np
+from methods import register
+from methods.results import circle_result
+from experiments import run
+
+@register("circle.script_fit", kind="closed form", summary="centroid", reference="test")
+def script_fit(points):
+    """The centroid and FACTOR times the mean distance to it."""
+    c = points.mean(axis=0)
+    return circle_result(points, c, FACTOR * float(np.hypot(*(points - c).T).mean()), converged=True, message="c")
+
+FACTOR = 1.0
+sys.exit(run.main(sys.argv[1:]))
+'''
+
+
+def _script_run(tmp_path, program, *args):
+    return subprocess.run([sys.executable, *program, str(tmp_path / "sc.toml"), "--no-report", "--out",
+                           str(tmp_path / "out"), *args], cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                          env=subprocess_env(OPENBLAS_NUM_THREADS="1"))
+
+
+def test_a_method_a_script_registers_is_keyed_by_the_script_and_refused_on_workers(tmp_path):
+    """A method registered by the program that runs (the documented run.main API) was keyed by no code at all: an edit
+    of it kept the old rows ("up to date"); with --jobs 2 every row was 'skipped: unknown method id' (workers do not
+    import the program) and cached."""
+    write_study(tmp_path, name="sc", reps=2, methods='[[methods]]\nid = "circle.script_fit"\n')
+    script = tmp_path / "fits.py"
+    script.write_text(SCRIPT)
+    first = _script_run(tmp_path, [script], "--jobs", "1")
+    assert first.returncode == 0, first.stderr
+    before = pd.read_csv(tmp_path / "out" / "sc" / "results.csv")["radius"]
+    script.write_text(SCRIPT.replace("FACTOR = 1.0", "FACTOR = 2.0"))
+    again = _script_run(tmp_path, [script], "--jobs", "1")
+    assert again.returncode == 0 and "0 already stored, 4 to run" in again.stdout, again.stdout + again.stderr
+    assert np.allclose(pd.read_csv(tmp_path / "out" / "sc" / "results.csv")["radius"] / before, 2.0, rtol=1e-12)
+    refused = _script_run(tmp_path, [script], "--jobs", "2", "--force")
+    lines = refused.stderr.strip().splitlines()
+    assert refused.returncode == 2 and len(lines) == 1 and "circle.script_fit is registered by the program" in lines[0]
+    assert "--jobs 2" in lines[0] and "run with --jobs 1" in lines[0], lines
+
+
+def test_a_method_of_a_program_without_a_file_is_never_reused(tmp_path):
+    """python -c (or a notebook) has no file to key its methods by: their rows are computed again by every run."""
+    write_study(tmp_path, name="sc", reps=2, methods='[[methods]]\nid = "circle.script_fit"\n')
+    for _ in range(2):
+        done = _script_run(tmp_path, ["-c", SCRIPT], "--jobs", "1")
+        assert done.returncode == 0 and "0 already stored, 4 to run" in done.stdout, done.stdout + done.stderr

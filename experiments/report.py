@@ -1,5 +1,6 @@
 """``python -m experiments.report [--results DIR] [--out DIR]``: the comparison report, built only from
-the studies' output in ``results/`` (default ``results/`` -> ``paper/``).
+the studies' output in ``results/`` (default ``results/`` of the current folder -> ``paper/``; another folder
+``DIR`` -> ``DIR/paper``, as ``experiments.run --out DIR`` does).
 
 Writes ``report.md``, a self-contained ``report.html`` (images embedded, numbered captions, nav#toc, coloured
 method tables), ``report.tex`` (compiles on A4) with the LaTeX table fragments ``tables/*.tex`` (siunitx,
@@ -550,15 +551,24 @@ def save_csv_plain(df: pd.DataFrame, path: Path) -> None:
     write_atomic(path, buf.getvalue())
 
 
+def default_out(results: Path) -> Path:
+    """Where the report of ``results`` goes unless told: ``paper/`` beside the default ``results/`` of the current
+    folder (the committed report), else ``RESULTS/paper``, inside the folder (``results/quick/paper``, ``DIR/paper``:
+    two results folders never share one report). ``python -m experiments.run --out DIR`` writes its report there
+    too."""
+    return Path("paper") if Path(results).resolve() == Path("results").resolve() else Path(results) / "paper"
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.report", description="Build paper/ from results/.")
     from fitbench import __version__
     parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
-    parser.add_argument("--results", type=Path, default=REPO / "results")
-    parser.add_argument("--out", type=Path, help="default: paper/ beside the results folder")
+    parser.add_argument("--results", type=Path, default=Path("results"),
+                        help="the results folder (default: results/ in the current folder)")
+    parser.add_argument("--out", type=Path, help="default: paper/ for results/ of the current folder, else RESULTS/paper")
     args = parser.parse_args(argv)
     if args.out is None:
-        args.out = args.results.resolve().parent / "paper"
+        args.out = default_out(args.results)
     if not args.results.is_dir():
         print(f"experiments.report: error: no results folder {args.results}; run python -m experiments.run first",
               file=sys.stderr)

@@ -395,8 +395,8 @@ def _main(argv=None) -> int:
             print(f"done: {len(names)} studies in {time.perf_counter() - t0:.0f} s")
             compare.verdict_after_run(args.out, study_names, refs)  # results of another seed or config: not compared
         if not args.no_report:
-            from experiments.report import build
-            paper = Path("paper") if args.out == DEFAULT_OUT else args.out / "paper"
+            from experiments.report import build, default_out
+            paper = default_out(args.out)   # paper/ for results/, else OUT/paper: where experiments.report puts it
             t1 = time.perf_counter()
             print("report ...")
             build(args.out, paper)

@@ -257,3 +257,29 @@ def test_every_row_the_tables_leave_out_is_counted_by_status_and_method(tmp_path
     from experiments.study import default_declarations
     table, _ = default_declarations({"name": "leftout"}, pd.read_csv(folder / "results.csv"))
     assert "over the 3 ok rows of 9 of leftout" in table["caption"], table["caption"]
+
+
+def test_the_report_goes_where_experiments_run_puts_it(tmp_path, monkeypatch):
+    """One rule for both commands (experiments.report.default_out): paper/ for results/ of the current folder, else
+    RESULTS/paper. `experiments.report --results DIR` wrote DIR/../paper (a shared parent: two results folders
+    overwrote one report), while `experiments.run --out DIR` writes DIR/paper; results/quick gave results/paper."""
+    from experiments import report
+    from experiments.run import main as run_main
+    monkeypatch.chdir(tmp_path)
+    for folder in ("mine", "results", "results/quick"):
+        (tmp_path / folder).mkdir(parents=True, exist_ok=True)
+    assert report.main(["--results", "mine"]) == 0
+    assert (tmp_path / "mine" / "paper" / "report.md").is_file() and not (tmp_path / "paper").exists()
+    assert report.main(["--results", str(tmp_path / "results" / "quick")]) == 0
+    assert (tmp_path / "results" / "quick" / "paper" / "report.md").is_file()
+    assert not (tmp_path / "results" / "paper").exists() and not (tmp_path / "paper").exists()
+    assert report.main([]) == 0 and (tmp_path / "paper" / "report.md").is_file()   # results/ -> paper/
+    assert report.default_out(tmp_path / "results") == Path("paper")            # however results/ is named
+    # experiments.run --out DIR builds the same place
+    cfg = tmp_path / "rstudy.toml"
+    cfg.write_text('name = "rstudy"\ntitle = "where the report goes"\nseed = 1\nrepetitions = 1\n[[datasets]]\n'
+                   'source = "circle"\nparams = { radius = 5.0, noise = 0.01, n = 12 }\n[[methods]]\nid = "circle.kasa"\n',
+                   encoding="utf-8")
+    assert run_main([str(cfg), "--jobs", "1", "--out", "other"]) == 0
+    assert (tmp_path / "other" / "paper" / "report.md").is_file()
+    assert report.default_out(Path("other")) == Path("other") / "paper"

@@ -1,6 +1,7 @@
 """Study configs: one TOML file per study in ``experiments/configs/`` (or any path), validated on load."""
 from __future__ import annotations
 
+import os
 import tomllib
 from pathlib import Path
 
@@ -83,6 +84,12 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> StudyCon
         stem = path.stem
     else:
         configs = available()
+        if name not in configs and (path.suffix == ".toml" or "/" in name or os.sep in name):
+            if path.exists():
+                raise ConfigError(f"{name}: not a .toml file; a study config is a TOML file named NAME.toml")
+            hint = (f"; the built-in study {path.stem!r} is run by its name: python -m experiments.run {path.stem}"
+                    if path.stem in configs else "")
+            raise ConfigError(f"no such file: {name}{hint}")
         if name not in configs:
             raise ConfigError(f"unknown study {name!r}; 'python -m experiments.run --list' shows them "
                               f"({', '.join(configs) or 'none'})")

@@ -241,6 +241,22 @@ def test_unknown_study_and_bad_flags(capsys):
     assert main(["--scheduler", "tcp://x:1", "published"]) == 2
 
 
+@pytest.mark.parametrize("given, said", [
+    ("{tmp}/nope/x.toml", "no such file: {tmp}/nope/x.toml"),
+    ("x.toml", "no such file: x.toml"),
+    ("noise.toml", "no such file: noise.toml; the built-in study 'noise' is run by its name"),
+    ("{tmp}/notes.txt", "{tmp}/notes.txt: not a .toml file"),
+])
+def test_a_study_path_that_is_no_toml_file_is_one_line(tmp_path, capsys, monkeypatch, given, said):
+    """A name that is a path (a separator, or .toml) names the file that is missing, not the built-in studies."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "notes.txt").write_text("x")
+    assert main([given.format(tmp=tmp_path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith(f"experiments.run: error: {said.format(tmp=tmp_path)}"), err
+    assert "unknown study" not in err and not (tmp_path / "out").exists()
+
+
 SMALL = """name = "small"
 title = "small"
 [[datasets]]

@@ -206,6 +206,27 @@ def _shown(path: Path) -> str:
         return Path(*p.parts[-2:]).as_posix()
 
 
+def _meta(folder: Path) -> dict | None:
+    try:
+        meta = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return meta if isinstance(meta, dict) else None
+
+
+def _same_inputs(committed: Path, fresh: Path) -> None:
+    """Refuse (one line) to compare two runs of a study whose ``meta.json`` record other inputs (another seed,
+    other repetitions or grid, edited data): their rows differ by design, not by the code."""
+    old, new = _meta(committed), _meta(fresh)
+    if old is None or new is None:
+        return
+    changes = changed_inputs(old, recorded_inputs(new))
+    if changes:
+        raise InvalidInputError(f"{_shown(fresh)} holds a run of another config or data than {_shown(committed)} "
+                                f"({'; '.join(changes)}): other rows by design, nothing to compare; compare runs of "
+                                f"one config, or regenerate the committed results with python -m experiments.run")
+
+
 def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
     """Compare ``against`` with the committed ``results``; the verdict dict (also written to RESULTS/verify.json)."""
     reports = []
@@ -213,6 +234,7 @@ def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
     for study in studies:
         committed = _read(results, study, "--results")
         fresh = _read(against, study, "--against")
+        _same_inputs(results / study, against / study)
         reports.append({**compare_study(study, committed, fresh), "date": date,
                         "results_sha256": results_sha256(results / study),   # what this verdict judged
                         "against_sha256": results_sha256(against / study),
@@ -298,22 +320,28 @@ def _short(value) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def changed_inputs(old_meta: dict, now: dict) -> list[str]:
-    """What differs between the inputs of a previous run (its ``meta.json``) and ``now`` (:func:`inputs`), one phrase
-    each ("repetitions 250, now 200", "data file datasets[0] trace.csv"); empty when they are the same. A
-    ``meta.json`` written before the inputs were recorded is judged by its config alone."""
-    recorded = old_meta.get("inputs")
+def recorded_inputs(meta: dict) -> dict:
+    """The inputs a ``meta.json`` records (:func:`inputs`); one written before they were recorded gives its config
+    (without :data:`PRESENTATION`) and ``data_files`` None (unknown)."""
+    recorded = meta.get("inputs")
     if isinstance(recorded, dict) and isinstance(recorded.get("config"), dict):
-        old_cfg, old_files = recorded["config"], recorded.get("data_files")
-    else:
-        config = old_meta.get("config")
-        old_cfg = {k: v for k, v in config.items() if k not in PRESENTATION} if isinstance(config, dict) else {}
-        old_files = None  # not recorded: the data files cannot be compared
-    new_cfg, new_files = now["config"], now["data_files"]
+        files = recorded.get("data_files")
+        return {"config": recorded["config"], "data_files": files if isinstance(files, dict) else None}
+    config = meta.get("config")
+    return {"config": {k: v for k, v in config.items() if k not in PRESENTATION} if isinstance(config, dict) else {},
+            "data_files": None}
+
+
+def changed_inputs(old_meta: dict, now: dict) -> list[str]:
+    """What differs between the inputs of a previous run (its ``meta.json``) and ``now`` (:func:`inputs`, or
+    :func:`recorded_inputs` of another run), one phrase each ("repetitions 250, now 200", "data file datasets[0]
+    trace.csv changed"); empty when they are the same. Data files are compared where both runs recorded them."""
+    old = recorded_inputs(old_meta)
+    old_cfg, old_files, new_cfg, new_files = old["config"], old["data_files"], now["config"], now["data_files"]
     changes = [(f"{k} {_short(old_cfg[k])}, now {_short(new_cfg[k])}" if k in old_cfg and k in new_cfg else
                 f"{k} {'added' if k in new_cfg else 'removed'}")
                for k in sorted(set(old_cfg) | set(new_cfg)) if old_cfg.get(k) != new_cfg.get(k)]
-    if isinstance(old_files, dict):
+    if isinstance(old_files, dict) and isinstance(new_files, dict):
         changes += [f"data file {k} {'changed' if k in old_files and k in new_files else 'added' if k in new_files else 'removed'}"
                     for k in sorted(set(old_files) | set(new_files)) if old_files.get(k) != new_files.get(k)]
     return changes

@@ -429,3 +429,24 @@ file = "trace.csv"
     assert "differ" not in md.lower(), [l for l in md.splitlines() if "differ" in l.lower()]
     lines = run(study)
     assert len(lines) == 1 and "verify: vstudy: reproduces the previous results" in lines[0]
+
+
+def test_verify_refuses_runs_of_another_config_in_one_line(committed, tmp_path, capsys):
+    """experiments.verify --against a run of another seed (or repetitions, or data) said DIFFER with every row
+    missing: it says in one line that the two runs are of other configs, exit 2, and writes no verdict."""
+    fresh = copy_run(committed, tmp_path)
+    meta_path = fresh / "vstudy" / "meta.json"
+    meta = json.loads(meta_path.read_text(encoding="utf-8"))
+    meta["inputs"]["config"]["seed"] = 8           # as `experiments.run vstudy --seed 8` records it
+    meta_path.write_text(json.dumps(meta), encoding="utf-8")
+    verdict = committed / verify.VERDICT_FILE
+    before = verdict.read_bytes() if verdict.exists() else None
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "another config or data" in err and "seed 5, now 8" in err, err
+    assert (verdict.read_bytes() if verdict.exists() else None) == before     # no verdict written
+    del meta["inputs"]                               # a run written before meta.json recorded its inputs: its config
+    meta["config"]["seed"] = 8
+    meta_path.write_text(json.dumps(meta), encoding="utf-8")
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 2
+    assert "seed 5, now 8" in capsys.readouterr().err

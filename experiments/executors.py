@@ -33,7 +33,7 @@ class Progress:
         rate = self.done / elapsed
         eta = (self.total - self.done) / rate if rate > 0 else float("inf")
         return (f"   {self.desc}: {self.done:,}/{self.total:,} rows ({self.done / max(self.total, 1):.0%}), "
-                f"{rate:,.0f} rows/s, ETA {_duration(eta)}")
+                f"{_rate(rate)}, ETA {_duration(eta)}")
 
     def update(self, n: int = 1) -> None:
         self.done += n
@@ -45,6 +45,18 @@ class Progress:
 
     def close(self) -> None:
         self.bar.close()
+
+
+def _rate(rows_per_s: float) -> str:
+    """A rate a person reads: ``250 rows/s``, ``4.2 rows/s``, or for rows slower than one a second ``3.7 s/row``."""
+    if rows_per_s <= 0:
+        return "no row done yet"
+    if rows_per_s >= 9.95:
+        return f"{rows_per_s:,.0f} rows/s"
+    if rows_per_s >= 1:
+        return f"{rows_per_s:.1f} rows/s"
+    per_row = 1 / rows_per_s
+    return f"{per_row:.1f} s/row" if per_row < 9.95 else f"{per_row:,.0f} s/row"
 
 
 def _duration(seconds: float) -> str:

@@ -220,6 +220,21 @@ def test_progress_reports_rows_per_second_and_eta(monkeypatch):
     assert "2,200/10,000 rows (22%)" in lines[0] and "200 rows/s" in lines[0] and "ETA 39 s" in lines[0]
 
 
+@pytest.mark.parametrize("done, seconds, rate", [(3, 11.0, "3.7 s/row"), (3, 200.0, "67 s/row"), (12, 11.0, "1.1 rows/s"),
+                                                 (50, 11.0, "4.5 rows/s"), (9, 36.0, "4.0 s/row")])
+def test_progress_of_slow_rows_reads_as_seconds_per_row(monkeypatch, done, seconds, rate):
+    """Under 10 rows/s the rate keeps its digits (was '0 rows/s' and '1 rows/s'); under 1 row/s it is seconds a row."""
+    lines = []
+    now = [100.0]
+    monkeypatch.setattr(executors.time, "monotonic", lambda: now[0])
+    bar = executors.Progress(100, "slow", log=lines.append)
+    bar.bar.disable = True
+    now[0] += seconds
+    bar.update(done)
+    bar.close()
+    assert lines == [f"   slow: {done}/100 rows ({done}%), {rate}, ETA {executors._duration((100 - done) * seconds / done)}"]
+
+
 def test_generic_chunks_give_the_rows_of_single_rows(tmp_path):
     """In-process chunks of any size give the same rows as one row at a time."""
     cfg = run.configs.load(str(write_study(tmp_path, reps=5)))

@@ -111,8 +111,11 @@ LEFT_OUT = {
     "crashed": ("crashed rows", f"the worker process running them died: no result ({_AGAIN})"),
     "unavailable": ("unavailable rows", "the method could not run here (a kernel not built, a module that does not "
                                         f"import): no result ({_AGAIN})"),
-    "not converged": ("rows not converged", "the iteration stopped without converging: their values are not a result"),
-    "skipped": ("skipped rows", "the method does not apply to these data: no result"),
+    "not converged": ("rows not converged", "the method reported no converged result (an iteration that stopped, a "
+                                            "solution that does not exist): their values are not a result (the "
+                                            "reasons are in `results.csv`)"),
+    "skipped": ("skipped rows", "the method does not apply to these data: no result (the reasons are in "
+                                "`results.csv`)"),
 }
 
 

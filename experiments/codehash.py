@@ -278,9 +278,19 @@ def code_hash(*modules: str) -> str:
     return _digest(files)
 
 
-@lru_cache(maxsize=None)
 def file_hash(path: str) -> str:
-    """Hash of one data file's bytes (a ``file`` data source, a published set's CSV and JSON)."""
+    """Hash of one data file's bytes (a ``file`` data source, a published set's CSV and JSON), as the file is now: a
+    data file is read again by every run, so a second run in one process after an edit must not reuse the first
+    one's hash (it is remembered by the file's size and time stamp)."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return _file_hash(path, None, None)  # the read says what is wrong
+    return _file_hash(path, st.st_mtime_ns, st.st_size)
+
+
+@lru_cache(maxsize=None)
+def _file_hash(path: str, mtime_ns, size) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
 
 

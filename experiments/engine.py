@@ -229,6 +229,12 @@ def environment() -> dict:
     return _ENV
 
 
+def forget_data_hashes() -> None:
+    """Forget the code hashes of the data sets (a run of a process that ran studies before: the data files it reads
+    may have changed since; the code it runs has not, its modules are the ones loaded)."""
+    _CODE.clear()
+
+
 def reset_caches() -> None:
     """Forget the code hashes and the environment (a test that edits code in the same process)."""
     from experiments import codehash
@@ -236,7 +242,7 @@ def reset_caches() -> None:
     _ENV.clear()
     codehash.code_hash.cache_clear()
     codehash.module_closure.cache_clear()
-    codehash.file_hash.cache_clear()
+    codehash._file_hash.cache_clear()
 
 
 def task_code(task: dict) -> dict:

@@ -145,6 +145,7 @@ def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
 
 def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", scheduler=None, force=False,
               seed=None, log=print, max_rows=configs.MAX_ROWS, row_timeout=None) -> Path:
+    engine.forget_data_hashes()
     cfg = configs.load(name, quick=quick, seed=seed)
     study = contract.study_of(cfg["kind"])
     target = confined(out, cfg["name"])

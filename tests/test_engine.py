@@ -708,6 +708,19 @@ def test_a_file_data_set_takes_the_reader_s_options(tmp_path):
     assert df["radius"][0] == pytest.approx(5.0, rel=1e-6)  # micrometres in the header: read as 5 mm
 
 
+def test_a_second_run_in_one_process_reads_an_edited_data_file_anew(tmp_path):
+    """run.main twice in one process (a notebook, a loop over studies) with the data file edited between: the second
+    run kept the first one's hash of the file and served its rows as already stored."""
+    path = _export_with_preamble(tmp_path)
+    study = _file_study(tmp_path, 'skip_rows = 3\ncolumns = ["X", "Y"]')
+    args = [str(study), "--out", str(tmp_path / "o"), "--no-report", "--jobs", "1"]
+    assert run.main(args) == 0
+    path.write_text(path.read_text().replace("Y (um)", "Y (um) ").replace("5000.000", "6000.000"))
+    assert run.main(args) == 0
+    df = pd.read_csv(tmp_path / "o" / "fromfile" / "results.csv")
+    assert df["radius"][0] != pytest.approx(5.0, rel=1e-6)  # the edited points: no longer the first file's circle
+
+
 @pytest.mark.parametrize("reading, words", [
     ("", "give skip_rows = 3"),
     ('skip_rows = 3\nunit = "mm"', "drop unit or correct the header"),

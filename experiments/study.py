@@ -590,6 +590,16 @@ def _where(df, cond):
     return df
 
 
+def _no_result(df: pd.DataFrame) -> str:
+    """Why the rows lack a column the config's check expected (a metric): none of them has a result; their
+    statuses and most frequent message (empty when some row has a result)."""
+    if "status" not in df.columns or df["status"].isin(("ok", "not converged")).any() or not len(df):
+        return ""
+    counts = ", ".join(f"{n:,} {s}" for s, n in df["status"].value_counts().items())
+    message = str(df["message"].mode().iloc[0])[:200] if "message" in df.columns and df["message"].notna().any() else ""
+    return f": no row has a result ({counts}{f'; most often: {message}' if message else ''})"
+
+
 def declared_table(df: pd.DataFrame, t: dict) -> Table:
     """A pivot (or a grouped aggregate) of the rows, as declared."""
     rows = [t["rows"]] if isinstance(t["rows"], str) else list(t["rows"])
@@ -605,7 +615,7 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
         data = data[data["status"] == "ok"]
     for c in rows + ([t["columns"]] if t.get("columns") else []) + [value]:
         if c not in data.columns:
-            raise ConfigError(f"table {t['caption'][:40]!r}: no column {c!r} in the rows "
+            raise ConfigError(f"table {t['caption'][:40]!r}: no column {c!r} in the rows{_no_result(df)} "
                               f"(columns: {', '.join(df.columns)})")
     if t.get("columns"):
         out = data.pivot_table(index=rows, columns=t["columns"], values=value, aggfunc=AGGREGATES[how], sort=False)

@@ -206,6 +206,34 @@ def test_crashed_rows_are_recorded_and_retried(tmp_path, flaky_method):
     assert set(df["status"]) == {"ok"} and len(df) == 4
 
 
+def test_a_table_of_rows_without_a_result_names_why(tmp_path, flaky_method):
+    """A declared table whose metric no row has (every fit failed) says that no row has a result, with the statuses
+    and the most frequent message (was only: no column 'radius_error' in the rows)."""
+    path = tmp_path / "allfail.toml"
+    path.write_text(textwrap.dedent('''
+        name = "allfail"
+        title = "every fit fails"
+        repetitions = 2
+        [[datasets]]
+        source = "circle"
+        params = { n = 10, noise = 0.01 }
+        [[methods]]
+        id = "circle.test_flaky"
+        [[tables]]
+        caption = "Radius RMSE"
+        rows = ["method"]
+        values = "radius_error"
+        aggregate = "rmse"
+        unit = "mm"
+    '''))
+    _crash["on"] = True
+    with pytest.raises(ConfigError) as info:
+        run_study(str(path), tmp_path, jobs=1, log=lambda *a: None)
+    msg = str(info.value)
+    assert "no column 'radius_error'" in msg and "no row has a result (2 error; most often: RuntimeError: simulated " \
+        "crash)" in msg and "\n" not in msg, msg
+
+
 @pytest.mark.parametrize("body, match", [
     ('title = "t"\nkind = "grid"\n', "missing required key 'name'"),
     ('name = "bad"\ntitle = "t"\nkind = "nope"\n', "unknown kind 'nope'"),

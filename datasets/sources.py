@@ -215,6 +215,8 @@ def _register_simulators():
         ref, meas = contouring.EXAMPLES[example]()
         return MagnifyInput(ref, meas), None
 
+    contouring_example.__annotations__["example"] = Literal[tuple(contouring.EXAMPLES)]  # the names it knows
+
     @register_source("multilateration", random=True, summary="a simulated multilateration campaign")
     def multilateration(rng, *, stations: int | list[int] = 6, grid: tuple[int, int, int] = (5, 4, 4),
                         noise: NonNegative = 1.0, errors: Literal["default", "none"] = "default"):

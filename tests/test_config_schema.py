@@ -295,3 +295,13 @@ def test_a_plugin_data_source_takes_values_of_its_declared_types(tmp_path, plugi
     path = write(tmp_path, SOURCE_STUDY.format(source="test_scene", grid='grid = { share = [0, 0.5] }', params=(
         'n = 12, mode = "outside", scale = 2, offset = [1, 2.5], tag = { any = "thing" }')))
     assert configs.load(str(path))["datasets"][0]["params"]["scale"] == 2
+
+
+def test_a_built_in_simulator_refuses_a_name_it_does_not_know(tmp_path):
+    """The contouring source's ``example`` is one of the examples it has (was a KeyError in every row)."""
+    from datasets import contouring
+    text = SOURCE_STUDY.format(source="contouring", params='example = "nope"', grid="")
+    with pytest.raises(ConfigError, match=r"datasets\[0\] \(source 'contouring'\): params.example = 'nope' must be one "
+                                          r"of 'corner_inside_convex'"):
+        configs.load(str(write(tmp_path, text)))
+    configs.load(str(write(tmp_path, text.replace("nope", next(iter(contouring.EXAMPLES))))))

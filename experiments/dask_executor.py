@@ -347,7 +347,7 @@ def run_isolated(tasks: list, row_timeout: float) -> dict:
             if what == "timeout":
                 pos = info[0]
                 label(idx[pos], "timeout",
-                      f"the row ran longer than its limit of {row_timeout:g} s (its row process was ended)")
+                      f"the row ran longer than its limit of {row_timeout:g} s (the process running it was ended)")
             else:
                 pos, started, code = info
                 if not started:  # it died before running a row: the process, not a row
@@ -357,7 +357,7 @@ def run_isolated(tasks: list, row_timeout: float) -> dict:
                                               f"running a row (exit code {code}, {start_failures} times)")
                     todo.appendleft(idx)
                     continue
-                label(idx[pos], "crashed", f"the row process ended (exit code {code}) while running this row")
+                label(idx[pos], "crashed", f"the process running this row ended (exit code {code})")
             rest = idx[:pos] + idx[pos + 1:]  # the rows before it died with the process: they run again
             if rest:
                 todo.appendleft(rest)

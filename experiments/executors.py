@@ -412,7 +412,7 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                         else:
                             startup_failures = 0
                             _lost_chunk(chunks, store, bar, w.chunk, pos, "crashed",
-                                        f"the worker process ended (exit code {code}) while running this row")
+                                        f"the process running this row ended (exit code {code})")
                         w.stop(now=True)
                         with _workers_ignore_ctrl_c():
                             workers[workers.index(w)] = _Worker(ctx)
@@ -422,7 +422,7 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                         pos = w.progress[1]
                         w.stop(now=True)
                         _lost_chunk(chunks, store, bar, w.chunk, pos, "timeout",
-                                    f"the row ran longer than its limit of {row_timeout:g} s (its worker was ended)")
+                                    f"the row ran longer than its limit of {row_timeout:g} s (the process running it was ended)")
                         with _workers_ignore_ctrl_c():
                             workers[workers.index(w)] = _Worker(ctx)
         except BaseException as exc:

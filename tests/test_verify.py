@@ -208,11 +208,7 @@ def test_every_run_ends_with_a_verdict_the_report_shows(tmp_path, capsys):
     args = ["--jobs", "1", "--out", str(out)]
 
     def run(*names):
-        code = runner.main([*names, *args])
-        for fh in runner._LOCKS:   # main holds --out locked for the life of its process: here, one run each
-            fh.close()
-        runner._LOCKS.clear()
-        return code
+        return runner.main([*names, *args])   # main releases its --out lock when it returns
     assert run(str(tmp_path / "vstudy.toml"), str(tmp_path / "vother.toml")) == 0
     assert "verify: vstudy: no committed results to compare with" in capsys.readouterr().out
     assert run(str(tmp_path / "vstudy.toml")) == 0                          # a rerun: compared with the first
@@ -328,9 +324,6 @@ def test_the_runs_verdicts_are_committed_with_the_results_and_name_no_folder_of_
     monkeypatch.chdir(elsewhere)
     for _ in range(2):   # the second run is compared with the first's results in --out
         assert runner.main([str(cfg), "--jobs", "1", "--out", str(out), "--no-report"]) == 0
-        for fh in runner._LOCKS:
-            fh.close()
-        runner._LOCKS.clear()
     text = (out / verify.VERDICT_FILE).read_text(encoding="utf-8")
     assert json.loads(text)["studies"][0]["agree"] is True
     assert str(tmp_path) not in text
@@ -348,9 +341,6 @@ def test_the_reports_hints_give_the_command_that_regenerates_these_results(tmp_p
     def run(*names, report=True):
         code = runner.main([*(str(tmp_path / f"{n}.toml") for n in names), "--quick", "--jobs", "1", "--out", "mine",
                             *([] if report else ["--no-report"])])
-        for fh in runner._LOCKS:
-            fh.close()
-        runner._LOCKS.clear()
         return code
     assert run("vstudy", "vother", report=False) == 0
     assert run("vstudy") == 0
@@ -398,9 +388,6 @@ file = "trace.csv"
     def run(text, *more, report=False):
         cfg.write_text(text, encoding="utf-8")
         code = runner.main([str(cfg), "--jobs", "1", "--out", str(out), *more, *([] if report else ["--no-report"])])
-        for fh in runner._LOCKS:
-            fh.close()
-        runner._LOCKS.clear()
         assert code == 0
         return [line for line in capsys.readouterr().out.splitlines() if line.startswith("verify:")]
 

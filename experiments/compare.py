@@ -413,7 +413,9 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
                          "reference": ref["reference"]}
         log(f"verify: {name}: " + ("reproduces " + ref["reference"] if r["agree"] else
                                    f"DIFFERS from {ref['reference']} in: "
-                                   + ", ".join(p["column"] for p in r["problems"])))
+                                   + ", ".join(dict.fromkeys(f"{p['n_rows']} {p['problem'].replace('row ', 'rows ', 1)}"
+                                                             if p["column"] == "(rows)" else p["column"]
+                                                             for p in r["problems"]))))
     studies = list(entries.values())
     verdict = {"agree": all(s.get("agree") for s in studies), "date": date, "results": _shown(out),
                "studies": studies, "run": {"date": date, "studies": list(names)}}

@@ -203,9 +203,9 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary, units=summary_units(summary, cfg)))
     write_atomic(target / "meta.json", json.dumps(meta, indent=1, default=str) + "\n")
     remove_leftover_tmp(target)
-    bad = {k: v for k, v in meta["status_counts"].items() if k != "ok"}
-    log(f"-> {target}/results.csv ({len(df)} rows" + (f"; {bad}" if bad else "") +
-        f", {counts['wall_s']:.1f} s), summary.csv, summary.md, meta.json")
+    bad = ", ".join(f"{v} {k}" for k, v in meta["status_counts"].items() if k != "ok")
+    log(f"-> {target}/results.csv ({len(df)} rows" + (f": {bad}" if bad else "") +
+        f"; rows run in {counts['wall_s']:.1f} s), summary.csv, summary.md, meta.json")
     return target
 
 
@@ -393,7 +393,7 @@ def _main(argv=None) -> int:
                 run_study(name, args.out, quick=args.quick, jobs=jobs, executor=args.executor,
                           scheduler=args.scheduler, force=args.force, seed=args.seed, max_rows=args.max_rows,
                           row_timeout=args.row_timeout)
-            print(f"done: {len(names)} studies in {time.perf_counter() - t0:.0f} s")
+            print(f"done: {len(names)} {'study' if len(names) == 1 else 'studies'} in {time.perf_counter() - t0:.0f} s")
             compare.verdict_after_run(args.out, study_names, refs)  # results of another seed or config: not compared
         if not args.no_report:
             from experiments.report import build, default_out

@@ -6,9 +6,9 @@ its box). The report is built from a quick run of the ranked studies (published,
 from __future__ import annotations
 
 import json
+import os
 import re
 import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from experiments import report
-from tests.report_checks import chromium
+from tests.report_checks import chromium, run_once_per_session
 
 REPO = Path(__file__).resolve().parents[1]
 needs_chromium = pytest.mark.skipif(chromium() is None, reason="no chromium on PATH (.ci/run installs Debian's chromium)")
@@ -27,17 +27,15 @@ OFFLINE = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    results = tmp_path_factory.mktemp("explorer") / "results"
-    proc = subprocess.run([sys.executable, "-m", "experiments.run", "published", "noise", "--quick", "--jobs", "1",
-                           "--out", str(results)], cwd=REPO, capture_output=True, text=True, timeout=1800)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    return results.parent / "results" / "paper"
+def built(tmp_path_factory, worker_id):
+    results = run_once_per_session(tmp_path_factory, worker_id, "explorer-quick",
+                                   ["published", "noise", "--quick", "--jobs", "1"], cwd=REPO)
+    return results / "paper"
 
 
 def run_in_chromium(page: Path, script: str, width: int = 1280) -> dict:
     """Load a copy of ``page`` with ``script`` appended (it must put JSON into <pre id="__check__">)."""
-    probed = page.with_name(f".check-{page.name}")
+    probed = page.with_name(f".check-{os.getpid()}-{page.name}")  # the page may be shared by xdist workers
     text = page.read_text(encoding="utf-8")
     probed.write_text(text.replace("</body>", f"<script>{script}</script></body>"), encoding="utf-8")
     try:

@@ -9,12 +9,9 @@ about a minute). ``FITBENCH_REPORT_RESULTS=DIR`` reuses an existing results fold
 """
 from __future__ import annotations
 
-import fcntl
 import os
 import re
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +22,7 @@ from experiments import report
 from experiments.render.latex import compile_pdf, standalone_document
 from experiments.render.rankings import collect
 from experiments.render.report_tables import html_table, latex_fragments
-from tests.report_checks import check_html_report, chromium
+from tests.report_checks import check_html_report, chromium, run_once_per_session
 
 pytestmark = pytest.mark.system  # builds the report of a quick run, compiles it with TeX, renders it in Chromium
 
@@ -38,28 +35,11 @@ MAX_OVERFULL_PT = 1.0
 RANKED_STUDIES = ("published", "noise", "scaling")
 
 
-def quick_results(tmp_path_factory, worker_id) -> Path:
-    """The quick run of the ranked studies, made once per test session: pytest-xdist workers that both run tests of
-    this file share it (the first makes it under a file lock in the session's temporary folder, the others wait for
-    it); the report is built from it and never writes into it."""
-    base = tmp_path_factory.getbasetemp()
-    shared = base if worker_id == "master" else base.parent  # the session's folder, above each worker's own
-    results = shared / "report-paper-quick" / "results"
-    with open(shared / "report-paper-quick.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not (results.parent / "done").exists():
-            shutil.rmtree(results.parent, ignore_errors=True)
-            proc = subprocess.run([sys.executable, "-m", "experiments.run", *RANKED_STUDIES, "--quick", "--out",
-                                   str(results)], cwd=REPO, capture_output=True, text=True, timeout=1800)
-            assert proc.returncode == 0, proc.stderr[-2000:]
-            (results.parent / "done").write_text("")
-    return results
-
-
 @pytest.fixture(scope="module")
 def built(tmp_path_factory, worker_id):
     given = os.environ.get("FITBENCH_REPORT_RESULTS")
-    results = Path(given) if given else quick_results(tmp_path_factory, worker_id)
+    results = Path(given) if given else run_once_per_session(
+        tmp_path_factory, worker_id, "report-paper-quick", [*RANKED_STUDIES, "--quick"], cwd=REPO)
     out = tmp_path_factory.mktemp("paper")
     report.build(results, out, log=lambda *a: None)
     return out

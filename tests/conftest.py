@@ -1,10 +1,15 @@
 """Shared fixtures and helpers. Tests import fitbench's own ``datasets``/``methods`` from the repository;
 a test that starts another Python (a CLI, a study run, a Dask worker) gives it :func:`subprocess_env`, and
-a test that needs a third-party plugin builds one offline with :func:`install_plugin`."""
+a test that needs a third-party plugin builds one offline with :func:`install_plugin`, and a test that
+interrupts a run among its rows does it through :func:`while_storing_rows` (not after a poll that a loaded
+machine makes late)."""
 import os
+import signal
+import sqlite3
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +43,50 @@ def run_python(*args, cwd=REPO, path_first=(), repo: Path = REPO, timeout=600, *
     """``python ARGS`` in ``cwd`` with :func:`subprocess_env`, output captured as text."""
     return subprocess.run([sys.executable, *map(str, args)], cwd=cwd, capture_output=True, text=True,
                           timeout=timeout, env=subprocess_env(*path_first, repo=repo, **variables))
+
+
+def stored_rows(db: Path) -> int:
+    """Rows in a run's row store (0 while it does not exist or cannot be read)."""
+    try:
+        con = sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=0.2)
+        try:
+            return con.execute("SELECT count(*) FROM rows").fetchone()[0]
+        finally:
+            con.close()
+    except sqlite3.Error:
+        return 0
+
+
+def while_storing_rows(proc: subprocess.Popen, db: Path, at_least: int, total: int, act, *, group: bool,
+                       timeout: float = 300.0) -> int | None:
+    """Call ``act()`` (send a signal, kill...) while the run ``proc`` is among its rows: ``at_least`` of its
+    ``total`` rows are in the row store ``db`` and the others are not. Whatever the speed of the machine or its load,
+    the run cannot get past its rows between the count and ``act``: the test stops it (SIGSTOP; its whole process
+    group with ``group``, which must then be its own session) for the count and ``act``, then lets it go on
+    (SIGCONT), so a signal that ``act`` sends lands among the rows.
+
+    Returns the rows counted, or None when the run stored all its rows or ended while it ran between two counts
+    (this test was descheduled that long: start the run again)."""
+    pause = (lambda s: os.killpg(proc.pid, s)) if group else (lambda s: os.kill(proc.pid, s))
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            return None
+        pause(signal.SIGSTOP)
+        try:
+            n = stored_rows(db)
+            if n >= total:
+                return None
+            if n >= at_least:
+                act()
+                return n
+        finally:
+            try:
+                pause(signal.SIGCONT)
+            except ProcessLookupError:  # ``act`` killed it (and its group)
+                pass
+        time.sleep(0.02)
+    raise AssertionError(f"the run stored fewer than {at_least} rows in {timeout:.0f} s")
 
 
 def install_plugin(workdir: Path, name: str, modules: dict, entry_points: dict, version: str = "0.0.1") -> Path:

@@ -6,13 +6,12 @@ import sqlite3
 import subprocess
 import sys
 import textwrap
-import time
 
 import pandas as pd
 import pytest
 
 import methods
-from conftest import REPO
+from conftest import REPO, while_storing_rows
 from experiments import config as configs
 from experiments.engine import ConfigError
 from experiments.run import main, run_study
@@ -126,30 +125,24 @@ def test_interrupted_run_resumes_to_the_uninterrupted_rows(tmp_path):
     """Ctrl-C (SIGINT) in the middle of a run; the next run finishes without redoing or duplicating."""
     cfg = tiny(tmp_path, reps=25)
     run_study(str(cfg), tmp_path / "whole", jobs=1, log=lambda *a: None)
-    out = tmp_path / "cut"
-    proc = subprocess.Popen([sys.executable, "-m", "experiments.run", str(cfg), "--out", str(out), "--jobs", "1"],
-                            cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    db = out / "tiny" / "rows.sqlite"
-    deadline = time.time() + 120
-    stored = 0
-    while time.time() < deadline and proc.poll() is None:
-        if db.exists():
-            try:
-                with sqlite3.connect(db) as con:
-                    stored = con.execute("SELECT COUNT(*) FROM rows").fetchone()[0]
-            except sqlite3.OperationalError:
-                stored = 0
-            if stored >= 30:
-                break
-        time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
+    total = (4 * 25 + 1) * 5
+    for attempt in range(3):  # its rows take 1 s here: started again only if this test slept through all of them
+        out = tmp_path / f"cut{attempt}"
+        proc = subprocess.Popen([sys.executable, "-m", "experiments.run", str(cfg), "--out", str(out), "--jobs", "1"],
+                                cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        db = out / "tiny" / "rows.sqlite"
+        if while_storing_rows(proc, db, 30, total, lambda: proc.send_signal(signal.SIGINT), group=False) is not None:
+            break
+        proc.kill()
+        proc.communicate(timeout=60)
+    else:
+        raise AssertionError(f"the run stored all its {total} rows before this test could interrupt it, 3 times")
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
     assert not (out / "tiny" / "results.csv").exists()  # nothing half-written
     with sqlite3.connect(db) as con:
         partial = con.execute("SELECT COUNT(*) FROM rows").fetchone()[0]
-    total = (4 * 25 + 1) * 5
     assert 30 <= partial < total
     logged = []
     run_study(str(cfg), out, jobs=1, log=logged.append)

@@ -6,7 +6,6 @@ from __future__ import annotations
 import os
 import random
 import signal
-import sqlite3
 import subprocess
 import sys
 import time
@@ -15,7 +14,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from conftest import subprocess_env
+from conftest import stored_rows, subprocess_env, while_storing_rows
 
 pytestmark = pytest.mark.slow  # kills, interrupts and restarts whole study runs
 
@@ -87,17 +86,6 @@ def alive(pids) -> set[int]:
     return left
 
 
-def stored_rows(db: Path) -> int:
-    try:
-        con = sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=0.2)
-        try:
-            return con.execute("SELECT count(*) FROM rows").fetchone()[0]
-        finally:
-            con.close()
-    except sqlite3.Error:
-        return 0
-
-
 def wait_rows(proc, db: Path, at_least: int, timeout=120):
     t0 = time.time()
     while time.time() - t0 < timeout:
@@ -115,21 +103,40 @@ def non_timing(path: Path) -> pd.DataFrame:
     return df[[c for c in df.columns if not c.startswith("time_")]]
 
 
-def no_survivors(pids, within=10.0):
-    t0 = time.time()
-    while alive(pids) and time.time() - t0 < within:
+def no_survivors(pids, within=60.0):
+    """The processes of ``pids`` still alive after waiting up to ``within`` seconds for them to end."""
+    t0 = time.monotonic()
+    while alive(pids) and time.monotonic() - t0 < within:
         time.sleep(0.1)
     return alive(pids)
 
 
+def interrupted_among_rows(tmp_path, act, reps=400, ns="[50, 200]", attempts=3):
+    """A --jobs 2 run (in its own session) of a study of ``reps`` x ``ns`` x 3 methods rows, and ``act(proc)`` done
+    while some of its rows are stored and others are not (:func:`conftest.while_storing_rows`). The study is large
+    (2,400 rows, about 3 s of rows here) and interrupted after its first rows: it costs its start only. The run is
+    started again only when this test was descheduled for the whole of its rows."""
+    cfg = study(tmp_path, reps=reps, ns=ns)
+    total = reps * len(ns.strip("[]").split(",")) * 3
+    for attempt in range(attempts):
+        out = tmp_path / f"out{attempt}"
+        proc = start([cfg, "--jobs", "2", "--out", out], tmp_path)
+        if while_storing_rows(proc, out / "faults" / "rows.sqlite", 2, total, lambda: act(proc), group=True) is not None:
+            return proc
+        proc.kill()
+        proc.communicate(timeout=60)
+    raise AssertionError(f"the run stored all its {total} rows before this test could act, {attempts} times")
+
+
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_sigterm_and_ctrl_c_print_one_line_and_leave_no_process(tmp_path, sig):
-    cfg = study(tmp_path, reps=40, ns="[50, 200]")
-    proc = start([cfg, "--jobs", "2", "--out", tmp_path / "out"], tmp_path)
-    wait_rows(proc, tmp_path / "out" / "faults" / "rows.sqlite", 2)
-    kids = children(proc.pid)
+    kids = set()
+
+    def interrupt(proc):
+        kids.update(children(proc.pid))
+        os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(sig)  # Ctrl-C reaches the whole group
+    proc = interrupted_among_rows(tmp_path, interrupt)
     assert kids, "the run started no worker"
-    os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(sig)  # Ctrl-C reaches the whole group
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == (143 if sig == signal.SIGTERM else 130), err
     lines = [ln for ln in err.splitlines() if ln.strip()]
@@ -139,14 +146,15 @@ def test_sigterm_and_ctrl_c_print_one_line_and_leave_no_process(tmp_path, sig):
 
 
 def test_sigkill_of_the_parent_ends_workers_and_resource_tracker(tmp_path):
-    cfg = study(tmp_path, reps=40, ns="[50, 200]")
-    proc = start([cfg, "--jobs", "2", "--out", tmp_path / "out"], tmp_path)
-    wait_rows(proc, tmp_path / "out" / "faults" / "rows.sqlite", 2)
-    kids = children(proc.pid)
+    kids = set()
+
+    def kill(proc):
+        kids.update(children(proc.pid))
+        proc.kill()
+    proc = interrupted_among_rows(tmp_path, kill)
+    proc.wait(timeout=60)
     assert len(kids) >= 2
-    proc.kill()
-    proc.wait(timeout=10)
-    assert not no_survivors(kids, within=10), "processes outlived their SIGKILLed parent"
+    assert not no_survivors(kids), "processes outlived their SIGKILLed parent"
 
 
 @pytest.mark.system  # kills whole runs at random moments, repeatedly
@@ -170,7 +178,7 @@ def test_fault_injection_sigkill_at_random_moments_then_rerun_reproduces(tmp_pat
             time.sleep(rng.uniform(0.0, 0.5))
         kids = children(proc.pid)
         proc.kill()
-        proc.wait(timeout=10)
+        proc.wait(timeout=60)
         assert not no_survivors(kids), f"seed {seed}: processes outlived their parent"
         again = run([cfg, "--jobs", jobs, "--out", out], tmp_path)
         assert again.returncode == 0, again.stderr

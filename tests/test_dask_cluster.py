@@ -45,6 +45,19 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def wait_listening(proc: subprocess.Popen, port: int, timeout: float = 300.0) -> None:
+    """Until ``proc`` (the scheduler) accepts connections on ``port``; it must not end meanwhile."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, f"the scheduler ended (exit code {proc.returncode}) before it listened"
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=5).close()
+            return
+        except OSError:
+            time.sleep(0.1)
+    raise AssertionError(f"the scheduler did not listen on port {port} within {timeout:.0f} s")
+
+
 def non_timing(path: Path) -> pd.DataFrame:
     df = pd.read_csv(path)
     return df[[c for c in df.columns if not c.startswith("time_")]]
@@ -63,13 +76,13 @@ def test_study_on_a_separate_scheduler_and_workers_matches_local_run(tmp_path):
     procs = [subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
                               cwd=worker_dir, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
-        time.sleep(2)
+        wait_listening(procs[0], port)  # 0.3 s here, 1.8 s beside 10 busy processes: not a fixed sleep
         for _ in range(2):
             procs.append(subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-dashboard",
                                            "--local-directory", str(worker_dir)],
                                           cwd=worker_dir, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         from distributed import Client
-        with Client(address, timeout=30) as c:
+        with Client(address, timeout=120) as c:
             c.wait_for_workers(2, timeout=120)
             assert all(Path(d) != client_dir for d in c.run(os.getcwd).values())
         common = [sys.executable, "-m", "experiments.run", str(cfg)]

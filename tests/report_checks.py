@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import fcntl
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -43,12 +44,13 @@ window.addEventListener('load', function () {
 </script>"""
 
 
-def run_once_per_session(tmp_path_factory, worker_id: str, name: str, args, cwd: Path) -> Path:
+def run_once_per_session(tmp_path_factory, name: str, args, cwd: Path) -> Path:
     """The results folder of ``python -m experiments.run ARGS --out RESULTS``, run once per test session: the
     pytest-xdist workers whose tests need it share one run (the first makes it under a file lock in the session's
     temporary folder, the others wait for it). Its users only read it."""
     base = tmp_path_factory.getbasetemp()
-    shared = (base if worker_id == "master" else base.parent) / name  # the session's folder, above each worker's own
+    worker = os.environ.get("PYTEST_XDIST_WORKER")  # set in each pytest-xdist worker
+    shared = (base.parent if worker else base) / name  # the session's folder, above each worker's own
     results = shared / "results"
     shared.parent.mkdir(parents=True, exist_ok=True)
     with open(shared.parent / f"{name}.lock", "w") as lock:

@@ -27,9 +27,9 @@ OFFLINE = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory, worker_id):
-    results = run_once_per_session(tmp_path_factory, worker_id, "explorer-quick",
-                                   ["published", "noise", "--quick", "--jobs", "1"], cwd=REPO)
+def built(tmp_path_factory):
+    results = run_once_per_session(tmp_path_factory, "explorer-quick", ["published", "noise", "--quick", "--jobs", "1"],
+                                   cwd=REPO)
     return results / "paper"
 
 

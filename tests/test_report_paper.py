@@ -36,10 +36,10 @@ RANKED_STUDIES = ("published", "noise", "scaling")
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory, worker_id):
+def built(tmp_path_factory):
     given = os.environ.get("FITBENCH_REPORT_RESULTS")
     results = Path(given) if given else run_once_per_session(
-        tmp_path_factory, worker_id, "report-paper-quick", [*RANKED_STUDIES, "--quick"], cwd=REPO)
+        tmp_path_factory, "report-paper-quick", [*RANKED_STUDIES, "--quick"], cwd=REPO)
     out = tmp_path_factory.mktemp("paper")
     report.build(results, out, log=lambda *a: None)
     return out

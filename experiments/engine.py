@@ -243,6 +243,7 @@ def reset_caches() -> None:
     codehash.code_hash.cache_clear()
     codehash.module_closure.cache_clear()
     codehash._file_hash.cache_clear()
+    codehash._packages_distributions.cache_clear()
 
 
 def task_code(task: dict) -> dict:

@@ -446,7 +446,7 @@ def _drive(client, where: str, work, chunks, store, bar, row_timeout, limit_s: f
     """The run's loop over the chunks on ``client`` (see the module's docstring); ``pending`` holds the chunks in
     flight (the caller cancels them when the loop raises)."""
     from distributed import KilledWorker
-    from experiments.rows import encode_rows, failed_row
+    from experiments.rows import encode_rows, failed_row, raise_if_signalled
     if interrupted.is_set():
         raise KeyboardInterrupt
     fn = run_isolated if row_timeout else work
@@ -495,6 +495,7 @@ def _drive(client, where: str, work, chunks, store, bar, row_timeout, limit_s: f
             fut = None
         if interrupted.is_set():
             raise KeyboardInterrupt
+        raise_if_signalled()  # SIGTERM: the run's handler raised it, maybe where it was lost
         if fut is not None and fut.key in pending:
             _, chunk, alone = pending[fut.key]
             try:

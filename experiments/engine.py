@@ -35,7 +35,7 @@ import methods
 from datasets import sources
 from experiments.executors import execute
 from experiments.rowframe import MissingRows, RowFrame
-from experiments.rows import RERUN_STATUSES, row_from_json, run_chunk, source_of
+from experiments.rows import RERUN_STATUSES, raise_if_signalled, row_from_json, run_chunk, source_of
 # the row API of studies with their own ``execute`` and of the command (engine.base_row, engine.fit_row, ...)
 from experiments.rows import ENVIRONMENT_STATUSES, base_row, fit_row, load_data, note_signal, task_data  # noqa: F401
 from experiments.store import RowStore
@@ -562,6 +562,7 @@ class Landing:
             self.frame.add(part)
         else:
             self.frame.add_rows([row_from_json(text) for text in batch["row"]])
+        raise_if_signalled()  # an interrupt swallowed while the chunk landed (numpy's dtype comparison drops it)
 
 
 def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, scheduler: str | None,

@@ -9,7 +9,7 @@ import sys
 import threading
 import time
 
-from experiments.rows import encode_rows, failed_row, note_signal, run_chunk
+from experiments.rows import encode_rows, failed_row, note_signal, raise_if_signalled, run_chunk
 from experiments.store import RowStore
 
 
@@ -156,6 +156,7 @@ def _run_here(work, chunks: Chunks, store: RowStore, bar) -> None:
         previous = signal.signal(signal.SIGINT, on_sigint)
     try:
         while (chunk := chunks.next()) is not None:
+            raise_if_signalled()
             out = work(chunk)
             chunks.measured(len(chunk), out["seconds"])
             _store(store, out["columns"], chunk, bar)
@@ -376,6 +377,7 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                     if chunks.retry:  # a chunk waits for the worker that replaced one that had ended
                         continue
                     break
+                raise_if_signalled()
                 ready = wait([w.conn for w in busy] + [w.proc.sentinel for w in busy], timeout=0.5)
                 for w in busy:
                     died = w.proc.sentinel in ready and not w.conn.poll()

@@ -30,6 +30,7 @@ from experiments.csvtext import write_results
 from experiments.executors import beside, kept_workers, start_kept_workers
 from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
+from experiments.rows import Terminated, clear_signal, note_signal, raise_if_signalled, signalled
 from experiments.summary import summarise, summary_units, to_markdown
 from fitbench import __version__
 import methods
@@ -172,6 +173,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
                                 else None)
     finally:
         store.close()
+    raise_if_signalled()
     failure = environment_failure(cfg, df)
     if failure is not None:
         raise failure
@@ -185,6 +187,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
         log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
     finally:
         results_sha256 = written()
+    raise_if_signalled()
     if cfg.get("summary_by") and set(cfg["summary_by"]) - set(df.columns):
         raise configs.ConfigError(f"{cfg.where}: summary_by: no row has the column(s) "
                                   f"{', '.join(sorted(set(cfg['summary_by']) - set(df.columns)))}; "
@@ -201,6 +204,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     summary.to_csv(buf, index=False, float_format="%.10g")
     write_atomic(target / "summary.csv", buf.getvalue())
     write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary, units=summary_units(summary, cfg)))
+    raise_if_signalled()  # before meta.json: a study whose outputs are not all written is not up to date
     write_atomic(target / "meta.json", json.dumps(meta, indent=1, default=str) + "\n")
     remove_leftover_tmp(target)
     bad = ", ".join(f"{v} {k}" for k, v in meta["status_counts"].items() if k != "ok")
@@ -265,13 +269,34 @@ def lock_out(out: Path):
     return fh
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread so that the run stops the way Ctrl-C stops it."""
+def _on_signal(signum, frame):
+    """SIGINT (Ctrl-C) and SIGTERM: recorded, then raised in the main thread (KeyboardInterrupt, ``Terminated``);
+    :func:`experiments.rows.raise_if_signalled` raises it again at the run's safe points if code swallowed it."""
+    exc_type = Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+    note_signal(exc_type)
+    raise exc_type()
 
 
-def _on_sigterm(signum, frame):
-    engine.note_signal()
-    raise Terminated()
+@contextlib.contextmanager
+def _interrupts_are_the_run_s():
+    """The run's own handlers for SIGINT and SIGTERM (main thread only), and quiet about an interrupt an exception
+    callback swallowed (``Exception ignored in: ... KeyboardInterrupt``): the run raises it again itself."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+    hook = sys.unraisablehook
+
+    def unraisable(info):
+        if not (isinstance(info.exc_value, KeyboardInterrupt) and signalled()):
+            hook(info)
+    sys.unraisablehook = unraisable
+    try:
+        yield
+    finally:
+        sys.unraisablehook = hook
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 @contextlib.contextmanager
@@ -350,7 +375,12 @@ def _main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.out is None:  # a quick grid never lands in the folder of the full results
         args.out = DEFAULT_OUT / "quick" if args.quick else DEFAULT_OUT
-    previous = signal.signal(signal.SIGTERM, _on_sigterm) if threading.current_thread() is threading.main_thread() else None
+    clear_signal()
+    with _interrupts_are_the_run_s():
+        return _run(args)
+
+
+def _run(args) -> int:
     try:
         if args.list:
             try:
@@ -393,14 +423,17 @@ def _main(argv=None) -> int:
                 run_study(name, args.out, quick=args.quick, jobs=jobs, executor=args.executor,
                           scheduler=args.scheduler, force=args.force, seed=args.seed, max_rows=args.max_rows,
                           row_timeout=args.row_timeout)
+                raise_if_signalled()
             print(f"done: {len(names)} {'study' if len(names) == 1 else 'studies'} in {time.perf_counter() - t0:.0f} s")
             compare.verdict_after_run(args.out, study_names, refs)  # results of another seed or config: not compared
+            raise_if_signalled()
         if not args.no_report:
             from experiments.report import build, default_out
             paper = default_out(args.out)   # paper/ for results/, else OUT/paper: where experiments.report puts it
             t1 = time.perf_counter()
             print("report ...")
             build(args.out, paper)
+            raise_if_signalled()
             print(f"report done ({time.perf_counter() - t1:.0f} s)")
     except InvalidInputError as exc:
         print(f"experiments.run: error: {exc}", file=sys.stderr)
@@ -416,9 +449,6 @@ def _main(argv=None) -> int:
         kept = f"finished rows are kept in {store}" if store else "no rows had run"
         print(f"\nexperiments.run: {what}; {kept}; run the same command again to resume", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
     return 0
 
 

@@ -254,17 +254,6 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
             return
         if msg is None:
             return
-        if msg[0] == "call":  # work of the run's own beside the rows (:func:`beside`)
-            _, fn, args = msg
-            try:
-                reply = ("call", True, fn(*args))
-            except Exception as exc:  # noqa: BLE001 - handed to the run, which raises it
-                reply = ("call", False, exc)
-            try:
-                conn.send(reply)
-            except Exception as exc:  # noqa: BLE001 - an exception that does not pickle: its text
-                conn.send(("call", False, RuntimeError(f"{type(reply[2]).__name__}: {reply[2]} ({exc})")))
-            continue
         chunk_id, tasks, row_timeout = msg
         try:
             out = run_chunk(tasks, row_timeout, progress)
@@ -471,29 +460,3 @@ def start_kept_workers() -> None:
     with _one_blas_thread_per_worker(), _workers_ignore_ctrl_c():
         _KEPT.extend(_Worker(ctx) for _ in range(_KEPT_JOBS - len(_KEPT)))
 
-
-def beside(fn, *args):
-    """Start ``fn(*args)`` in an idle kept worker (:func:`kept_workers`) while this process goes on, and return a
-    function that waits for its result (or raises its exception). A run on several local workers writes
-    ``results.csv`` this way while it draws the figures: the workers are idle once the rows are done. With no kept
-    worker (``--jobs 1``, Dask), or one that cannot take it, ``fn`` runs here when the result is asked for: the same
-    call, so the same result. ``fn`` must be importable by the worker (a module's function)."""
-    worker = next((w for w in _KEPT or () if w.proc.is_alive()), None)
-    if worker is None:
-        return lambda: fn(*args)
-    try:
-        worker.conn.send(("call", fn, args))
-    except Exception:  # noqa: BLE001 - not picklable, or the pipe is gone: the call runs here
-        return lambda: fn(*args)
-
-    def result():
-        try:
-            _, ok, value = worker.conn.recv()
-        except (EOFError, OSError):  # the worker died with it (killed): it is replaced, the call runs here
-            _KEPT.remove(worker)
-            worker.stop(now=True)
-            return fn(*args)
-        if not ok:
-            raise value
-        return value
-    return result

@@ -27,7 +27,7 @@ from experiments import config as configs
 from experiments import engine
 from experiments import study as contract
 from experiments.csvtext import write_results
-from experiments.executors import beside, kept_workers, start_kept_workers
+from experiments.executors import kept_workers, start_kept_workers
 from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
 from experiments.rows import Terminated, clear_signal, note_signal, raise_if_signalled, signalled
@@ -179,14 +179,11 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
         raise failure
     used = counts.pop("used")
     remove_leftover_tmp(target)
-    written = beside(write_results, df, target / "results.csv")  # in an idle worker of the run, if it has one
-    try:
-        t0 = time.perf_counter()
-        log("   analysis, tables and figures ...")
-        findings, analysis = contract.analyse(study, df, cfg, target, log)
-        log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
-    finally:
-        results_sha256 = written()
+    results_sha256 = write_results(df, target / "results.csv")
+    t0 = time.perf_counter()
+    log("   analysis, tables and figures ...")
+    findings, analysis = contract.analyse(study, df, cfg, target, log)
+    log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
     raise_if_signalled()
     if cfg.get("summary_by") and set(cfg["summary_by"]) - set(df.columns):
         raise configs.ConfigError(f"{cfg.where}: summary_by: no row has the column(s) "

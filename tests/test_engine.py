@@ -9,11 +9,9 @@ from __future__ import annotations
 
 import fcntl
 import json
-import os
 import sqlite3
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -764,23 +762,6 @@ def test_worker_processes_do_not_import_the_run_s_main_module(tmp_path):
     assert res.returncode == 0, res.stderr
     assert len(pd.read_csv(tmp_path / "o" / "eng" / "results.csv")) > 0
     assert not marker.exists(), f"workers imported the main module: {marker.read_text()}"
-
-
-def test_beside_runs_in_an_idle_kept_worker_and_raises_its_exception_here():
-    """A run on several workers writes results.csv in one of them while it draws the figures: the call runs in
-    another process, its result or its exception comes back, and a worker killed meanwhile leaves the call to this
-    process (the same call: the same result)."""
-    with executors.kept_workers(2):
-        executors.start_kept_workers()
-        wait = executors.beside(os.getpid)
-        assert wait() != os.getpid()
-        with pytest.raises(ValueError, match="invalid literal"):
-            executors.beside(int, "not a number")()
-        kept = executors._KEPT[0]
-        wait = executors.beside(time.sleep, 1.0)
-        kept.proc.kill()
-        assert wait() is None and kept not in executors._KEPT  # slept here: the killed worker's call
-    assert executors.beside(os.getpid)() == os.getpid()  # no kept worker: here
 
 
 SCRIPT = '''import sys

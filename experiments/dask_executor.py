@@ -237,15 +237,15 @@ def run_checked(fn, tasks: list, row_timeout, expected) -> dict:
 
 def check_code(tasks: list, expected) -> None:
     """Raise :class:`WorkerCodeError` unless this process computes as the run does: the same environment
-    (``engine.environment``: kernels, Python and numerical packages' versions), the same code hashes for one task of
-    each (method, study kind, data set) of the chunk (``engine.task_code``, as the run computed them), and none of
+    (``codekeys.environment``: kernels, Python and numerical packages' versions), the same code hashes for one task of
+    each (method, study kind, data set) of the chunk (``codekeys.task_code``, as the run computed them), and none of
     those files changed since this worker loaded its modules (their size and time stamp when it first looked)."""
-    from experiments import codehash, engine
+    from experiments import codehash, codekeys
     reps, environment = expected
     host = socket.gethostname()
     restart = ("restart the workers (they load fitbench and the plugins when they start) and run the same command "
                "again; the finished rows are kept")
-    mine = engine.environment()
+    mine = codekeys.environment()
     if mine != environment:
         differ = sorted(k for k in set(mine) | set(environment) if mine.get(k) != environment.get(k))
         raise WorkerCodeError(f"the Dask worker on {host} computes with another environment than this run "
@@ -259,7 +259,7 @@ def check_code(tasks: list, expected) -> None:
                 _STAMPS.setdefault(os.path.realpath(path), _stat(path))
     for pos, code in reps:
         task = tasks[pos]
-        theirs = engine.task_code(task)
+        theirs = codekeys.task_code(task)
         if theirs != code:
             differ = [k for k in code if theirs.get(k) != code[k]]
             raise WorkerCodeError(f"the Dask worker on {host} has other code than this run for {task['method']} "
@@ -285,9 +285,9 @@ def methods_module(method: str) -> str | None:
 
 def source_module(task: dict) -> str | None:
     from datasets import sources
-    from experiments import engine
+    from experiments.rows import source_of
     try:
-        return sources.get_source(engine.source_of(task["dataset"])).module
+        return sources.get_source(source_of(task["dataset"])).module
     except (LookupError, TypeError, ValueError):  # a study's own data (its code is the study's)
         return None
 
@@ -295,14 +295,14 @@ def source_module(task: dict) -> str | None:
 def expected_code(chunk: list) -> tuple:
     """What :func:`check_code` compares in the worker: the run's environment and code hashes of one task of each
     (method, study kind, data set) of ``chunk``."""
-    from experiments import engine
+    from experiments import codekeys
     seen, reps = set(), []
     for pos, task in enumerate(chunk):
         k = (task["method"], task["kind"], id(task["dataset"]))
         if k not in seen:
             seen.add(k)
-            reps.append((pos, engine.task_code(task)))
-    return reps, engine.environment()
+            reps.append((pos, codekeys.task_code(task)))
+    return reps, codekeys.environment()
 
 
 def run_isolated(tasks: list, row_timeout: float) -> dict:

@@ -3,7 +3,7 @@ fit row, a row's time limit and isolation, and a chunk's rows encoded as the row
 
 This module sits below both the engine (``experiments.engine``: configs, tasks, keys, the run) and the executors
 (``experiments.executors``: where chunks run): the executors call :func:`run_chunk` without importing the
-engine. Its code is part of every row's cache key (``experiments.engine.task_code``).
+engine. Its code is part of every row's cache key (``experiments.codekeys.task_code``).
 """
 from __future__ import annotations
 

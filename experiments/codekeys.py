@@ -1,0 +1,118 @@
+"""The cache key's code part of a row: hashes of the code (and data files) a task's row depends on, and the
+environment that changes numbers (``experiments.engine`` keys the rows with them; a Dask worker compares its own
+with the run's, ``experiments.dask_executor.check_code``). Kept apart from the engine so that a worker imports
+no more than it needs."""
+from __future__ import annotations
+
+import json
+import sys
+
+import methods
+from datasets import sources
+from experiments.rows import source_of
+
+#: versions of the libraries whose arithmetic can change a row's numbers (part of every key and of meta.json)
+NUMBER_PACKAGES = ("numpy", "scipy", "cvxpy", "clarabel", "nlopt")
+_CODE: dict = {}
+_ENV: dict = {}
+
+
+def environment() -> dict:
+    """What changes numbers besides the code (computed once per process): the kernel backend
+    (``FITBENCH_KERNELS``: compiled or numpy), Python's version and those of :data:`NUMBER_PACKAGES`."""
+    if not _ENV:
+        from importlib import metadata
+        from methods import kernel_path
+        versions = {"python": ".".join(map(str, sys.version_info[:3]))}
+        for pkg in NUMBER_PACKAGES:
+            try:
+                versions[pkg] = metadata.version(pkg)
+            except metadata.PackageNotFoundError:
+                versions[pkg] = None
+        _ENV.update(kernels=kernel_path(), versions=versions)
+    return _ENV
+
+
+def forget_data_hashes() -> None:
+    """Forget the code hashes of the data sets (a run of a process that ran studies before: the data files it reads
+    may have changed since; the code it runs has not, its modules are the ones loaded)."""
+    _CODE.clear()
+
+
+def reset_caches() -> None:
+    """Forget the code hashes and the environment (a test that edits code in the same process)."""
+    from experiments import codehash
+    _CODE.clear()
+    _ENV.clear()
+    codehash.code_hash.cache_clear()
+    codehash.module_closure.cache_clear()
+    codehash._file_hash.cache_clear()
+    codehash._packages_distributions.cache_clear()
+
+
+def task_code(task: dict) -> dict:
+    """Hashes of all code (and data files) a task's row depends on (see ``experiments.codehash``): the
+    method's module and its imports, the data source, the metrics, the row runner (``experiments.rows``: the generic
+    fit row, the data from the seed stream) and the study's own module. Computed once
+    per (method, study kind, data set) in a run: the files are hashed once, not per row."""
+    spec = task["dataset"]
+    memo = (task["method"], task["kind"], json.dumps(spec, sort_keys=True, default=str))
+    code = _CODE.get(memo)
+    if code is None:
+        from experiments import codehash
+        study = f"experiments.studies.{task['kind']}"
+        method = methods.get(task["method"]).module if task["method"] in _method_ids() else None
+        code = {"method": module_code(method) if method else None,
+                "source": source_hash(spec) if _has_source(spec) else None,
+                "metrics": codehash.code_hash("experiments.metrics", "experiments.timing"),
+                "rows": codehash.code_hash("experiments.rows"),
+                "study": codehash.code_hash(study)}
+        _CODE[memo] = code
+    return code
+
+
+#: the stand-in code hash of a program without a file (``python -c``, an interactive session), one per process: the
+#: rows of methods or data sources it registers are keyed by it, so that no later run takes them for its own
+_UNKEYED: list = []
+
+
+def module_code(module: str) -> str:
+    """The code hash of a method's or data source's module (``experiments.codehash``). The running program's own
+    ``__main__`` is keyed by its file; without one (``python -c``, a notebook) its rows cannot be keyed by their code
+    and get a key of this process alone: they are computed again by every run, never reused."""
+    from experiments import codehash
+    if module == "__main__" and codehash.main_file() is None:
+        if not _UNKEYED:
+            import uuid
+            _UNKEYED.append(f"no-file-{uuid.uuid4().hex}")
+        return _UNKEYED[0]
+    return codehash.code_hash(module)
+
+
+def _has_source(spec: dict) -> bool:
+    """Specs built by a study's own ``tasks`` may carry no registered source (its code is the study's)."""
+    try:
+        sources.get_source(source_of(spec))
+    except KeyError:
+        return False
+    return True
+
+
+def _method_ids() -> set[str]:
+    return {s.id for s in methods.list_methods()}
+
+
+def source_hash(spec: dict) -> str:
+    """Hash of a data set's source code (with its imports) and of the data files it reads."""
+    from experiments import codehash
+    source = sources.get_source(source_of(spec))
+    parts = [module_code(source.module)]
+    if source.files is not None:
+        if "published" in spec:
+            files = source.files(spec["published"], spec.get("variant"))
+        elif "file" in spec:
+            files = source.files(spec["file"])
+        else:
+            files = source.files(**spec["params"])
+        parts += [codehash.file_hash(str(f)) for f in files]
+    return ":".join(parts)

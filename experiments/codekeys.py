@@ -102,17 +102,20 @@ def _method_ids() -> set[str]:
     return {s.id for s in methods.list_methods()}
 
 
+def data_files(spec: dict) -> list:
+    """The data files a data set's source reads (none for a generated set)."""
+    source = sources.get_source(source_of(spec))
+    if source.files is None:
+        return []
+    if "published" in spec:
+        return list(source.files(spec["published"], spec.get("variant")))
+    if "file" in spec:
+        return list(source.files(spec["file"]))
+    return list(source.files(**spec["params"]))
+
+
 def source_hash(spec: dict) -> str:
     """Hash of a data set's source code (with its imports) and of the data files it reads."""
     from experiments import codehash
     source = sources.get_source(source_of(spec))
-    parts = [module_code(source.module)]
-    if source.files is not None:
-        if "published" in spec:
-            files = source.files(spec["published"], spec.get("variant"))
-        elif "file" in spec:
-            files = source.files(spec["file"])
-        else:
-            files = source.files(**spec["params"])
-        parts += [codehash.file_hash(str(f)) for f in files]
-    return ":".join(parts)
+    return ":".join([module_code(source.module), *(codehash.file_hash(str(f)) for f in data_files(spec))])

@@ -283,21 +283,11 @@ PRESENTATION = frozenset({"title", "description", "default", "report", "tables",
 def _data_files(cfg: dict) -> dict[str, str]:
     """{"datasets[i] NAME": SHA-256} of the files the study's ``[[datasets]]`` read (a ``file`` source, a published
     set), named without the folders of this machine."""
-    from datasets import sources
+    from experiments.codekeys import data_files
     from experiments.engine import expand_datasets
-    from experiments.rows import source_of
     out = {}
     for spec in expand_datasets(cfg, getattr(cfg, "where", cfg.get("name", "?"))):
-        source = sources.get_source(source_of(spec))
-        if source.files is None:
-            continue
-        if "published" in spec:
-            files = source.files(spec["published"], spec.get("variant"))
-        elif "file" in spec:
-            files = source.files(spec["file"])
-        else:
-            files = source.files(**spec["params"])
-        for f in files:
+        for f in data_files(spec):
             digest = hashlib.sha256()
             with open(f, "rb") as fh:
                 for block in iter(lambda: fh.read(1 << 20), b""):

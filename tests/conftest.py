@@ -39,6 +39,18 @@ def subprocess_env(*path_first, repo: Path = REPO, **variables) -> dict:
     return {**os.environ, **variables, "PYTHONPATH": os.pathsep.join([*map(str, path_first), str(repo)])}
 
 
+def stop_processes(procs) -> None:
+    """Terminate the processes a test started (a scheduler and its workers: the last started first), and kill those
+    still alive 20 s later."""
+    for p in reversed(procs):
+        p.terminate()
+    for p in procs:
+        try:
+            p.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            p.kill()
+
+
 def run_python(*args, cwd=REPO, path_first=(), repo: Path = REPO, timeout=600, **variables):
     """``python ARGS`` in ``cwd`` with :func:`subprocess_env`, output captured as text."""
     return subprocess.run([sys.executable, *map(str, args)], cwd=cwd, capture_output=True, text=True,

@@ -13,7 +13,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from conftest import subprocess_env
+from conftest import stop_processes, subprocess_env
 
 pytestmark = pytest.mark.system  # starts a Dask scheduler and workers as separate processes
 
@@ -98,10 +98,4 @@ def test_study_on_a_separate_scheduler_and_workers_matches_local_run(tmp_path):
         assert len(a) == 2 * 3 * 3
         pd.testing.assert_frame_equal(a, b)
     finally:
-        for p in reversed(procs):
-            p.terminate()
-        for p in procs:
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        stop_processes(procs)

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import subprocess_env
+from conftest import stop_processes, subprocess_env
 from test_engine import hostile_methods, hostile_site, write_study  # noqa: F401 (hostile_site: a fixture)
 
 pytestmark = pytest.mark.skipif(not Path("/proc/self/environ").exists(), reason="looks for processes in /proc")
@@ -211,13 +211,7 @@ def test_a_cluster_without_workers_stops_the_run_in_one_line(tmp_path, hostile_s
         assert time.monotonic() - t0 < 120
         assert not left
     finally:
-        for p in reversed(procs):
-            p.terminate()
-        for p in procs:
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        stop_processes(procs)
 
 
 DRIFT = '''
@@ -286,13 +280,7 @@ def test_a_worker_that_loaded_a_method_before_it_changed_stores_no_row(tmp_path)
         assert len(fresh) == 8  # every row by the edited code (all were keyed anew): twice the first run's radii
         assert np.allclose(fresh.loc[first.index] / first, 2.0, rtol=1e-12, atol=0)
     finally:
-        for p in reversed(procs):
-            p.terminate()
-        for p in procs:
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        stop_processes(procs)
 
 
 def test_a_worker_with_other_code_or_environment_is_refused():

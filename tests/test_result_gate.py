@@ -205,3 +205,31 @@ def test_fit_and_the_cli_refuse_a_result_that_breaks_its_contract(recipe_site, t
     assert bad.returncode != 0 and "converged" not in bad.stdout, bad.stdout
     assert "Traceback" not in bad.stderr and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
     assert "circle.my_fit returned a result that breaks its family's contract: radius = 0 must be > 0" in bad.stderr
+
+
+def test_a_converged_claim_with_a_nan_circle_is_an_invalid_row():
+    """A plugin method that builds its result with ``circle_result`` from a NaN circle and claims converged=True
+    broke its promise (NaN is no answer): the row is ``invalid`` and says so. The builder downgraded it to "not
+    converged" with a message about nearly straight points (a NaN circle is not one beyond float64's range: an
+    overflowing one, all of whose non-finite values are infinite, is still downgraded, tests/test_circle_flags.py)."""
+    from experiments.rows import fit_row
+
+    @methods.register("circle.test_gate_nan", kind="closed form", summary="a NaN circle, converged", reference="gate test")
+    def nan_circle(points, *, which="all"):
+        center = (np.nan, np.nan) if which == "all" else (1200.0, np.nan) if which == "center_y" else (np.inf, np.nan)
+        radius = np.nan if which == "all" else 299.0
+        return results.circle_result(points, center, radius, converged=True, message="closed form")
+
+    task = {"study": "gate", "dataset": {"label": "circle"}, "repetition": 0, "seed": 1, "stream": (0,),
+            "method": "circle.test_gate_nan", "params": {}}
+    try:
+        for which, reason in (("all", "center_x = nan is not finite in a converged result"),
+                              ("center_y", "center_y = nan is not finite in a converged result"),
+                              ("inf_and_nan", "center_x = inf is not finite in a converged result")):
+            res = methods.get("circle.test_gate_nan").unchecked(CIRCLE, which=which)
+            assert res.converged and reason in methods.check_result(res, CIRCLE)
+            row = fit_row({**task, "params": {"which": which}}, CIRCLE, {"center": (1200.0, 650.0), "radius": 299.0})
+            assert row["status"] == "invalid" and reason in row["message"], row
+            assert "float64's range" not in row["message"]
+    finally:
+        _REGISTRY.pop("circle.test_gate_nan", None)

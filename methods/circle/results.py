@@ -105,10 +105,15 @@ def _compiled_residuals(points, center, radius: float):
 
 def circle_result(points: np.ndarray, center, radius: float, *, converged: bool, message: str,
                   iterations=None, nfev=None, history=None, extra=None) -> CircleFit:
-    """Build a :class:`CircleFit`, computing residuals and form error from the data in data units."""
+    """Build a :class:`CircleFit`, computing residuals and form error from the data in data units.
+
+    A converged claim about a circle that is infinite but not NaN (a finite circle beyond float64's range: what a
+    fit of nearly straight points gives in data units) is downgraded to not converged, with the reason. A claim
+    about a NaN centre or radius is kept: NaN is no answer, and the result gate refuses it (an ``invalid`` row)."""
     xc, yc, radius = float(center[0]), float(center[1]), float(radius)
     center = (xc, yc)
     ok_geometry = math.isfinite(xc) and math.isfinite(yc) and math.isfinite(radius)
+    beyond_range = not ok_geometry and not (math.isnan(xc) or math.isnan(yc) or math.isnan(radius))
     residuals = _compiled_residuals(points, center, radius) if ok_geometry else None
     if residuals is not None:
         residuals, form_error = residuals
@@ -118,11 +123,11 @@ def circle_result(points: np.ndarray, center, radius: float, *, converged: bool,
         with np.errstate(over="ignore", invalid="ignore"):
             form_error = float(r.max() - r.min()) if ok_geometry else float("nan")
         residuals = r - radius
-    if converged and not ok_geometry:  # the downgrade says why (the method's own words follow)
+    if converged and beyond_range:  # the downgrade says why (the method's own words follow)
         message = (f"the circle is not finite in float64 (centre ({xc:.6g}, {yc:.6g}), radius {radius:.6g}: e.g. points so "
                    f"nearly straight that their circle is beyond float64's range), so no fit is claimed; the method said: {message}")
     return CircleFit(center=center, radius=radius, form_error=form_error, residuals=residuals,
-                     converged=bool(converged and ok_geometry), iterations=iterations, nfev=nfev,
+                     converged=bool(converged and not beyond_range), iterations=iterations, nfev=nfev,
                      history=list(history) if history else [], message=message,
                      extra=dict(extra) if extra else {})
 

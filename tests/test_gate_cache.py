@@ -28,14 +28,16 @@ def test_declarations_follow_a_redeclared_columns_tuple():
     class GateCacheCols(results.FitResult):
         side: float = 1.0
         FAMILY = "gatecachecols"
-        COLUMNS = (*results.FitResult.COLUMNS, *results.geometry_columns("side", check="positive"))
+        # a column name of its own: the class lives on until the next garbage collection, and the first
+        # declaration of a name is the row column's (tests/test_family_columns.py declares a "side")
+        COLUMNS = (*results.FitResult.COLUMNS, *results.geometry_columns("gate_cache_side", check="positive"))
 
         def geometry(self):
-            return {"side": self.side}
+            return {"gate_cache_side": self.side}
 
     res = GateCacheCols(method="gatecachecols.x", converged=True, form_error=0.0, side=-1.0)
-    assert "side = -1 must be > 0" in result_base.check_result(res)
-    GateCacheCols.COLUMNS = (*results.FitResult.COLUMNS, *results.geometry_columns("side", check="finite"))
+    assert "gate_cache_side = -1 must be > 0" in result_base.check_result(res)
+    GateCacheCols.COLUMNS = (*results.FitResult.COLUMNS, *results.geometry_columns("gate_cache_side", check="finite"))
     assert result_base.check_result(res) is None
 
 

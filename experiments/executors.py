@@ -252,8 +252,8 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
             msg = conn.recv()
         except (EOFError, OSError):
             return
-        if msg is None:
-            return
+        if msg is None:  # the run needs no more rows: end at once (the interpreter's own finalisation of NumPy,
+            _exit_now()   # SciPy and the methods took 0.25 s a worker, in the run's last moments)
         chunk_id, tasks, row_timeout = msg
         try:
             out = run_chunk(tasks, row_timeout, progress)
@@ -261,6 +261,15 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
             out = {"failed": f"{type(exc).__name__}: {exc}"}
         progress[0] = 0.0
         conn.send((chunk_id, out))
+
+
+def _exit_now() -> None:
+    """End this worker process now: what it printed is flushed, nothing else of its interpreter is torn down (a
+    worker holds no file, lock or process of its own that needs it)."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(0)
 
 
 @contextlib.contextmanager
@@ -290,18 +299,26 @@ class _Worker:
         child.close()
         self.chunk = None
         self.chunk_id = None
+        self.stopping = False
 
     def send(self, chunk_id: int, chunk: list, row_timeout) -> None:
         self.chunk, self.chunk_id = chunk, chunk_id
         self.progress[0] = 0.0
         self.conn.send((chunk_id, chunk, row_timeout))
 
-    def stop(self, now: bool = False) -> None:
-        with contextlib.suppress(Exception):
-            if now:
-                self.proc.kill()
-            else:
+    def ask_to_stop(self) -> None:
+        """Tell the worker to end once it is idle, without waiting for it (:meth:`stop` then waits)."""
+        if not self.stopping:
+            self.stopping = True
+            with contextlib.suppress(Exception):
                 self.conn.send(None)
+
+    def stop(self, now: bool = False) -> None:
+        if now:
+            with contextlib.suppress(Exception):
+                self.proc.kill()
+        else:
+            self.ask_to_stop()
         self.proc.join(timeout=5)
         if self.proc.is_alive():
             self.proc.kill()
@@ -333,6 +350,9 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
         try:
             kept = _KEPT if _KEPT is not None else []
             workers = [kept.pop() for _ in range(min(jobs, len(kept)))]
+            for w in [w for w in workers if w.stopping]:  # told to end (a study with a second round of rows)
+                workers.remove(w)
+                w.stop()
             with _workers_ignore_ctrl_c():
                 workers += [_Worker(ctx) for _ in range(jobs - len(workers))]
             while True:
@@ -426,6 +446,8 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
         for w in workers:
             if _KEPT is not None and w.proc.is_alive():
                 _KEPT.append(w)  # for the next study of the run (kept_workers)
+                if _KEPT_LAST:
+                    w.ask_to_stop()  # the run's last rows are done: the worker ends while the outputs are written
             else:
                 w.stop()
 
@@ -433,6 +455,7 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
 #: idle worker processes kept between the studies of one run (:func:`kept_workers`), else None
 _KEPT: list | None = None
 _KEPT_JOBS = 0
+_KEPT_LAST = False  # the study running is the run's last one (:func:`last_study`)
 
 
 @contextlib.contextmanager
@@ -440,14 +463,24 @@ def kept_workers(jobs: int):
     """Keep local worker processes between the studies run inside the block (they start once per run, not once per
     study: 0.4 s of imports a worker here); :func:`start_kept_workers` starts them early. They are stopped when the
     block ends, however it ends."""
-    global _KEPT, _KEPT_JOBS
-    _KEPT, _KEPT_JOBS = [], jobs
+    global _KEPT, _KEPT_JOBS, _KEPT_LAST
+    _KEPT, _KEPT_JOBS, _KEPT_LAST = [], jobs, False
     try:
         yield
     finally:
-        kept, _KEPT, _KEPT_JOBS = _KEPT, None, 0
+        kept, _KEPT, _KEPT_JOBS, _KEPT_LAST = _KEPT, None, 0, False
+        for w in kept:  # all told first, then waited for: they end side by side
+            w.ask_to_stop()
         for w in kept:
             w.stop()
+
+
+def last_study() -> None:
+    """Inside :func:`kept_workers`: the study about to run is the run's last, so its workers are told to end as soon as
+    its rows are done (they end while the run writes its outputs, instead of after)."""
+    global _KEPT_LAST
+    if _KEPT is not None:
+        _KEPT_LAST = True
 
 
 def start_kept_workers() -> None:

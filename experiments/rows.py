@@ -7,6 +7,7 @@ engine. Its code is part of every row's cache key (``experiments.codekeys.task_c
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import signal
@@ -22,7 +23,7 @@ from experiments.metrics import metrics
 from experiments.rowframe import part_of
 from experiments.studies import study_of
 from experiments.timing import time_call
-from methods import InvalidInputError
+from methods import InvalidInputError, check_result
 
 
 def source_of(spec: dict) -> str:
@@ -92,11 +93,16 @@ def fit_row(task: dict, points, truth) -> dict:
         return {**row, "status": "skipped", "message": str(exc)}
     except Exception as exc:  # a method's bug: recorded, retried on the next run
         return {**row, "status": "error", "message": f"{type(exc).__name__}: {exc}"}
-    problem = methods.check_result(res, points)  # the gate: a result that breaks its family's contract is no row
+    problem = check_result(res, points)  # the gate: a result that breaks its family's contract is no row
     if problem:
         return {**row, "status": "invalid", "message": f"invalid result: {problem}"}
-    row.update(status="ok" if res.converged else "not converged", message=res.message, converged=res.converged,
-               iterations=res.iterations, nfev=res.nfev, **metrics(res, truth))
+    converged = res.converged
+    row["status"] = "ok" if converged else "not converged"
+    row["message"] = res.message
+    row["converged"] = converged
+    row["iterations"] = res.iterations
+    row["nfev"] = res.nfev
+    row.update(metrics(res, truth))
     if task.get("timing"):
         t = task["timing"]
         row.update(time_call(lambda: spec.unchecked(points, **task["params"]),
@@ -227,7 +233,7 @@ def run_task(task: dict, row_timeout: float | None = None) -> dict:
     KeyboardInterrupt (not the run's own interrupt) is ``crashed``; a kernel or module that cannot be
     loaded makes it ``unavailable``."""
     try:
-        with _time_limit(row_timeout):
+        with (_time_limit(row_timeout) if row_timeout else _NO_LIMIT):
             study = study_of(task["kind"])
             try:
                 row = study.execute(task)  # the generic fit unless the study kind has its own rows
@@ -245,6 +251,9 @@ def run_task(task: dict, row_timeout: float | None = None) -> dict:
         row["status"] = "unavailable"
     row["task_index"] = task.get("index")
     return _plain(row)
+
+
+_NO_LIMIT = contextlib.nullcontext()  # a row without a time limit
 
 
 def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None) -> dict:
@@ -288,15 +297,18 @@ def row_from_json(text: str) -> dict:
 def _plain(row: dict) -> dict:
     """The row with JSON's values, converted in place (run_task's row is its own): NumPy scalars as Python ones,
     non-finite floats as None; the keys and their order stay."""
+    isfinite = math.isfinite
     for k, v in row.items():
         t = type(v)
+        if t is str or t is int or t is bool or v is None:
+            continue
         if t is float:
-            if not math.isfinite(v):
+            if v - v != 0.0:  # inf - inf and NaN - NaN are NaN: not finite
                 row[k] = None
-        elif t is not str and t is not int and t is not bool and v is not None:
-            if isinstance(v, np.generic):
-                v = v.item()
-            if isinstance(v, float) and not math.isfinite(v):
-                v = None
-            row[k] = v
+            continue
+        if isinstance(v, np.generic):
+            v = v.item()
+        if isinstance(v, float) and not isfinite(v):
+            v = None
+        row[k] = v
     return row

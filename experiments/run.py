@@ -27,7 +27,7 @@ from experiments import config as configs
 from experiments import engine
 from experiments import study as contract
 from experiments.csvtext import write_results
-from experiments.executors import kept_workers, start_kept_workers
+from experiments.executors import kept_workers, last_study, start_kept_workers
 from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
 from experiments.rows import Terminated, clear_signal, note_signal, raise_if_signalled, signalled
@@ -416,7 +416,9 @@ def _run(args) -> int:
                 start_kept_workers()  # a study never run here runs rows: the workers import meanwhile
             refs = compare.reference_snapshot(args.out, study_names, args.quick, Path(ref_dir),
                                               {c["name"]: compare.inputs(c) for c in loaded})
-            for name in names:
+            for i, name in enumerate(names):
+                if i == len(names) - 1:
+                    last_study()
                 run_study(name, args.out, quick=args.quick, jobs=jobs, executor=args.executor,
                           scheduler=args.scheduler, force=args.force, seed=args.seed, max_rows=args.max_rows,
                           row_timeout=args.row_timeout)

@@ -668,7 +668,11 @@ def test_results_csv_text_is_pandas_to_csv_byte_for_byte():
         "s": pd.Series(rng.choice(["a,b", 'q"uote', "new\nline", "cr\rhere", None, "", " sp ", "plain", "é ü", '"'], n),
                        dtype="str"),
         "o": pd.Series(rng.choice(np.array([0.1, "x", None, True, 3, np.nan, 1e-320, "y,z"], dtype=object), n),
-                       dtype=object)})
+                       dtype=object),
+        # equal but not the same: 0.0 and -0.0 among missing values, False, 0 and 0.0 in one object column
+        "z": np.resize([0.0, -0.0, np.nan, 1.0, -np.nan], n),
+        "e": pd.Series(np.resize(np.array([False, 0, 0.0, "0", None, 1, True], dtype=object), n), dtype=object),
+        "t": pd.Series(np.resize(["a", None, "a,b", "", "a"], n), dtype=object)})
     odd_names = df.rename(columns={"f": "a,b", "i": 'q"n'})
     for frame in (df, df.iloc[:0], df[["s"]], df[["s", "o"]], odd_names,
                   df.assign(cat=pd.Categorical(rng.choice(["u", "v"], n)))):

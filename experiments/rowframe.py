@@ -24,10 +24,24 @@ PLAIN = frozenset({str, int, float, bool, type(None)})
 
 def part_of(rows: list[dict]) -> dict | None:
     """The columns of ``rows`` (each carries its ``task_index``), or None when a value is not a plain scalar."""
+    if not rows:
+        return _part(rows, {})
+    names = tuple(rows[0])
+    if all(tuple(row) == names for row in rows):  # the same columns in the same order (a chunk of results): transposed
+        columns = list(zip(*[row.values() for row in rows]))
+        types = [set(map(type, column)) for column in columns]
+        if not all(t <= PLAIN for t in types):
+            return None
+        at = dict(zip(names, zip(columns, types)))
+        index, kinds = at.pop("task_index", (None, None))
+        if index is None or kinds != {int}:  # a row made outside a run (no task index): no place in a frame
+            return None
+        return {"task_index": np.array(index, dtype=np.int64), "first": dict.fromkeys(at, 0),
+                "columns": {name: _series(column, kinds) for name, (column, kinds) in at.items()}}
     first: dict = {}
     plain = PLAIN
     for pos, row in enumerate(rows):
-        if type(row.get("task_index")) is not int:  # a row made outside a run (no task index): no place in a frame
+        if type(row.get("task_index")) is not int:
             return None
         for name, value in row.items():
             if type(value) not in plain:
@@ -39,11 +53,35 @@ def part_of(rows: list[dict]) -> dict | None:
 
 
 def _part(rows: list[dict], first: dict) -> dict:
-    import pandas as pd
     nan = float("nan")
-    return {"task_index": np.array([r["task_index"] for r in rows], dtype=np.int64),
+    return _columns(np.array([r["task_index"] for r in rows], dtype=np.int64), first,
+                    {name: [r.get(name, nan) for r in rows] for name in first})
+
+
+def _columns(index: np.ndarray, first: dict, values: dict) -> dict:
+    import pandas as pd
+    return {"task_index": index,
             "first": first,  # column -> position of the first row that has it (dict order: first appearance)
-            "columns": {name: pd.Series([r.get(name, nan) for r in rows]) for name in first}}
+            "columns": {name: pd.Series(column) for name, column in values.items()}}
+
+
+_DTYPE_OF = {float: np.float64, bool: np.bool_}
+
+
+def _series(values: tuple, kinds: set):
+    """``pd.Series(list(values))``; a column of one number type (``kinds``: the types of its values) made without
+    pandas' inference (the same dtype and values)."""
+    import pandas as pd
+    if len(kinds) == 1:
+        (kind,) = kinds
+        if kind in _DTYPE_OF:
+            return pd.Series(np.array(values, dtype=_DTYPE_OF[kind]))
+        if kind is int:
+            try:
+                return pd.Series(np.array(values, dtype=np.int64))
+            except OverflowError:  # beyond 64 bits: pandas' own choice (uint64 or object)
+                pass
+    return pd.Series(list(values))
 
 
 #: column types written into a column's number array (every other type goes to its object array)

@@ -130,6 +130,25 @@ def test_frame_of_parts_is_the_frame_of_all_rows(order, size):
     assert whole.to_csv(index=False, float_format="%.17g") == built.to_csv(index=False, float_format="%.17g")
 
 
+@pytest.mark.parametrize("size", [1, 7, 40])
+def test_chunks_of_rows_with_the_same_columns_make_the_frame_of_all_rows(size):
+    """A chunk whose rows have the same columns in the same order (the rows of results) is transposed at once and its
+    columns of one number type are made without pandas' inference: the frame still equals the frame of all rows."""
+    rows = [{"ok": float(i) / 3, "i": i, "big": 2 ** 70 + i if i % 2 else i, "b": bool(i % 3), "s": f"t{i % 4}",
+             "f_none": None if i % 5 == 0 else 0.5 * i, "s_none": None if i % 6 == 0 else "x", "ints_floats": i if i % 2
+             else i + 0.25, "nan": float("nan") if i % 4 == 0 else -0.0, "none": None, "b_none": None if i < 20 else True,
+             "task_index": i} for i in range(40)]
+    whole = pd.DataFrame([{k: v for k, v in r.items() if k != "task_index"} for r in rows])
+    frame = RowFrame(40)
+    for i in range(0, 40, size):
+        frame.add(part_of(rows[i:i + size]))
+    built = frame.frame()
+    pd.testing.assert_frame_equal(whole, built)
+    assert whole.to_csv(index=False, float_format="%.17g") == built.to_csv(index=False, float_format="%.17g")
+    assert part_of([{"a": 1.0, "task_index": 0}, {"a": [1], "task_index": 1}]) is None  # not plain: no part
+    assert part_of([{"a": 1.0, "task_index": None}]) is None  # no task index: no place in a frame
+
+
 def test_a_task_run_twice_keeps_its_last_row_and_a_missing_row_is_refused():
     rows = _rows_of_every_kind()
     frame = RowFrame(60)

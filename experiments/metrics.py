@@ -24,9 +24,14 @@ def residual_rms(residuals) -> float:
     n = len(residuals)
     if not n:
         return np.nan
-    if type(residuals) is np.ndarray and residuals.dtype == np.float64 and residuals.ndim == 1:
-        return math.sqrt(float(np.add.reduce(np.square(residuals))) / n)
+    if type(residuals) is np.ndarray and residuals.ndim == 1 and (residuals.dtype is _FLOAT64
+                                                                  or residuals.dtype == _FLOAT64):
+        return math.sqrt(float(_add_reduce(_square(residuals))) / n)
     return float(np.sqrt(np.mean(np.square(residuals))))
+
+
+_FLOAT64 = np.dtype(np.float64)
+_add_reduce, _square = np.add.reduce, np.square
 
 
 # ---------------------------------------------------------------- tolerances of the verify command

@@ -51,7 +51,9 @@ class CircleFit(FitResult):
     @staticmethod
     def consistency(result: "CircleFit", points: np.ndarray) -> str | None:
         """A converged circle's form error and residuals are those of its points about its centre and radius."""
-        radius = float(result.radius)
+        radius = result.radius
+        if type(radius) is not float:
+            radius = float(radius)
         swept = _compiled_sweep(points, result.center, radius)  # r_i - R, min and max r_i in one pass
         if swept is None:
             with np.errstate(all="ignore"):
@@ -61,13 +63,16 @@ class CircleFit(FitResult):
             deviations, r_min, r_max = swept
         span = r_max - r_min
         tol = 1e-9 * (r_max + abs(radius)) + 1e-6 * span
-        if not abs(float(result.form_error) - span) <= tol:
-            return (f"form_error = {float(result.form_error):.10g} but the points' radial span about the "
+        form_error = result.form_error
+        if type(form_error) is not float:
+            form_error = float(form_error)
+        if not abs(form_error - span) <= tol:
+            return (f"form_error = {form_error:.10g} but the points' radial span about the "
                     f"returned centre is {span:.10g}")
         residuals = result.residuals
         if residuals.shape != deviations.shape:
             return None
-        if swept is not None and residuals.dtype == deviations.dtype and residuals.tobytes() == deviations.tobytes():
+        if swept is not None and residuals.dtype == _FLOAT64 and residuals.tobytes() == deviations.tobytes():
             return None  # the very numbers (as a builder computes them: the same sweep), finite: within any tol >= 0
         with np.errstate(all="ignore"):
             if not (np.abs(residuals - deviations) <= tol).all():
@@ -75,16 +80,31 @@ class CircleFit(FitResult):
         return None
 
 
+_FLOAT64 = np.dtype(np.float64)
+
+
 def _compiled_sweep(points, center, radius: float):
     """(r_i - R, min r_i, max r_i) by the compiled sweep (``methods/circle/_ckernels.c`` ``radial``), or None
     where :func:`_compiled_residuals` would be (no kernel, other input, a distance outside (1e-145, 1e150))."""
     ck = point_kernels()
-    if ck is None or not is_point_array(points) or not points.shape[0]:
+    if ck is None:
         return None
-    cx, cy = float(center[0]), float(center[1])
+    if type(points) is np.ndarray and points.dtype is _FLOAT64:  # the validated data: only their layout to check
+        if not (points.ndim == 2 and points.shape[1] == 2 and points.flags.c_contiguous):
+            return None
+    elif not is_point_array(points):
+        return None
+    m = points.shape[0]
+    if not m:
+        return None
+    cx, cy = center[0], center[1]
+    if type(cx) is not float:
+        cx = float(cx)
+    if type(cy) is not float:
+        cy = float(cy)
     if not (math.isfinite(cx) and math.isfinite(cy) and math.isfinite(radius)):
         return None
-    out = np.empty(points.shape[0])
+    out = np.empty(m)
     r_min, r_max, _, outside = ck.radial(points, cx, cy, radius, out)
     return None if outside else (out, float(r_min), float(r_max))
 

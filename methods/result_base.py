@@ -66,7 +66,19 @@ def center_errors(center, truth: dict) -> dict:
     if "center" not in truth:
         return {}
     dx, dy = center[0] - truth["center"][0], center[1] - truth["center"][1]
-    return {"center_error_x": dx, "center_error_y": dy, "center_error": float(np.hypot(dx, dy))}
+    return {"center_error_x": dx, "center_error_y": dy, "center_error": _hypot(dx, dy)}
+
+
+def _hypot(x, y) -> float:
+    """``float(np.hypot(x, y))``, without a ufunc call for two finite Python floats: CPython's ``abs(complex)``
+    returns C's ``hypot`` of finite parts (OverflowError when it overflows), the function NumPy's hypot loop calls,
+    hence the same bits (tests/test_row_quick_paths.py); ``math.hypot`` has an algorithm of its own."""
+    if type(x) is float and type(y) is float and math.isfinite(x) and math.isfinite(y):
+        try:
+            return abs(complex(x, y))
+        except OverflowError:
+            pass
+    return float(np.hypot(x, y))
 
 
 def radial_distances(points: np.ndarray, center) -> np.ndarray:
@@ -449,9 +461,29 @@ def _declared_checks(own, family) -> dict[str, str]:
     return out
 
 
-def _meets(v: float, check: str) -> bool:
-    """True when the Python float ``v`` of a converged result meets its column's ``check``."""
-    return not check or (math.isfinite(v) and (check != "positive" or v > 0) and (check != "nonnegative" or v >= 0))
+def _floats_meet_checks(form_error, geometry: dict, checks: dict, converged: bool) -> bool:
+    """True when the form error and every value of a dict geometry are Python floats that meet their columns'
+    checks in a converged result (finite; > 0 "positive", >= 0 "nonnegative"): :func:`_value_problem` would find
+    no problem in them. False: it decides and explains."""
+    if not converged:
+        if type(form_error) is not float:
+            return False
+        for v in geometry.values():
+            if type(v) is not float:
+                return False
+        return True
+    get = checks.get
+    check, v = get("form_error", "finite"), form_error
+    if type(v) is not float or check and not (math.isfinite(v) and (check != "positive" or v > 0)
+                                              and (check != "nonnegative" or v >= 0)):
+        return False
+    for name, v in geometry.items():  # the same test on each value
+        if type(v) is not float:
+            return False
+        check = get(name, "finite")
+        if check and not (math.isfinite(v) and (check != "positive" or v > 0) and (check != "nonnegative" or v >= 0)):
+            return False
+    return True
 
 
 def _count_problem(name: str, v) -> str | None:
@@ -530,13 +562,7 @@ def check_result(result, data=None) -> str | None:
         return f"the geometry cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
     checks = _declared_checks(own.COLUMNS, rules.COLUMNS)
     if geometry is not None:  # Python floats that meet their checks pass here; any other value is told below
-        quick = type(form_error) is float and (not converged or _meets(form_error, checks.get("form_error", "finite")))
-        if quick:
-            for name, v in geometry.items():
-                if type(v) is not float or (converged and not _meets(v, checks.get(name, "finite"))):
-                    quick = False
-                    break
-        if not quick:
+        if not _floats_meet_checks(form_error, geometry, checks, converged):
             values = {"form_error": form_error, **geometry}
     if values is not None:
         problems = [_value_problem(name, v, checks.get(name, "finite"), converged) for name, v in values.items()]

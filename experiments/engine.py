@@ -291,25 +291,26 @@ def iter_grid_tasks(cfg: dict, where: str, *, keyed: bool = False):
     method) pair is serialised once, not per repetition)."""
     specs, runs, reps, timing = _grid_parts(cfg, where)
     index = 0
-    idents: dict = {}
-    for si, spec in enumerate(specs):
+    study, kind, seed = cfg["name"], cfg["kind"], cfg["seed"]
+    for spec in specs:
         n_rep = 1 if ("published" in spec or "file" in spec or spec.get("fixed")) else reps
+        n = spec.get("params", {}).get("n")
+        pairs = [(m, extra["params"]) for m, extra in runs  # the methods run on this data set
+                 if (extra["on"] is None or spec["label"] in extra["on"])
+                 and (extra["max_n"] is None or n is None or n <= extra["max_n"])]
+        prefixes = [None] * len(pairs)  # per pair, the hash state after its identity: a key hashes only its stream
+        entry, point = spec["entry"], spec["point"]
         for r in range(n_rep):
-            for mi, (m, extra) in enumerate(runs):
-                if extra["on"] is not None and spec["label"] not in extra["on"]:
-                    continue
-                n = spec.get("params", {}).get("n")
-                if extra["max_n"] is not None and n is not None and n > extra["max_n"]:
-                    continue
-                task = {"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": r,
-                        "stream": [spec["entry"], spec["point"], r], "seed": cfg["seed"], "method": m,
-                        "params": extra["params"], "timing": timing}
+            stream_text = f"[{entry}, {point}, {r}]".encode()  # str([entry, point, r])
+            for j, (m, params) in enumerate(pairs):
+                task = {"study": study, "kind": kind, "dataset": spec, "repetition": r, "stream": [entry, point, r],
+                        "seed": seed, "method": m, "params": params, "timing": timing}
                 if keyed:
-                    prefix = idents.get((si, mi))
-                    if prefix is None:  # the hash state after the pair's identity: a key hashes only its stream
-                        prefix = idents[(si, mi)] = hashlib.sha256(f"{_ident(task)}|".encode())
+                    prefix = prefixes[j]
+                    if prefix is None:
+                        prefix = prefixes[j] = hashlib.sha256(f"{_ident(task)}|".encode())
                     h = prefix.copy()
-                    h.update(str(task["stream"]).encode())
+                    h.update(stream_text)
                     task["index"] = index
                     task["key"] = h.hexdigest()[:24]
                     index += 1
@@ -477,13 +478,20 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     keys = hashlib.sha256((outputs or "").encode())
     to_run = bytearray()  # one flag per task, in task order
     for block in _blocks(make(), 2000):
-        status = {} if force else store.done([t["key"] for t in block])
+        block_keys = [t["key"] for t in block]
+        status = {} if force else store.done(block_keys)
         counts["tasks"] += len(block)
+        keys.update("".join(k + "\n" for k in block_keys).encode())
+        seen = {}  # (method, data set spec) pairs of the block: their source is looked up once
         for t in block:
-            keys.update(t["key"].encode())
-            keys.update(b"\n")
-            used.add((t["method"], _source_name(t["dataset"])))
-            s = status.get(t["key"])
+            seen[(t["method"], id(t["dataset"]))] = t
+        used.update((t["method"], _source_name(t["dataset"])) for t in seen.values())
+        if not status:  # nothing stored: every task runs
+            to_run.extend(b"\x01" * len(block))
+            counts["to_run"] += len(block)
+            continue
+        for k in block_keys:
+            s = status.get(k)
             again = s is None or s in RERUN_STATUSES
             to_run.append(again)
             counts["to_run"] += again

@@ -90,18 +90,37 @@ def write_csv(df, fh, *, header: bool = True) -> None:
         fh.write(end.join(map(line.__mod__, zip(*(values for _, values in columns)))) + end)
 
 
-def write_results(df, path, block: int = 5000) -> str:
-    """``df`` as ``results.csv`` (:func:`write_csv`), streamed a block of rows at a time into a temporary file that
-    replaces ``path`` at the end (atomic); return the SHA-256 of the bytes written."""
+def csv_text(df, header: bool) -> str:
+    """:func:`write_csv` of ``df`` as a string (a block of ``results.csv``; a worker process may make it)."""
+    buf = io.StringIO()
+    write_csv(df, buf, header=header)
+    return buf.getvalue()
+
+
+def blocks(df, rows: int = 5000):
+    """The (block of rows, header?) arguments of :func:`csv_text` whose texts, one after the other, are the whole
+    file."""
+    for i in range(0, max(len(df), 1), rows):
+        yield df.iloc[i:i + rows], i == 0
+
+
+def write_results(df, path, texts=None) -> str:
+    """``df`` as ``results.csv`` (:func:`write_csv`), streamed a block at a time into a temporary file that replaces
+    ``path`` at the end (atomic); return the SHA-256 of the bytes written. ``texts``: the blocks' texts in order, made
+    elsewhere (the idle worker processes of the run); by default they are made here."""
     from methods.files import atomic_path
     digest = hashlib.sha256()
-    with atomic_path(path, make_parents=True) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
-        for i in range(0, max(len(df), 1), block):
-            buf = io.StringIO()
-            write_csv(df.iloc[i:i + block], buf, header=(i == 0))
-            text = buf.getvalue()
-            digest.update(text.encode("utf-8"))
-            fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
+    if texts is None:
+        texts = (csv_text(*args) for args in blocks(df))
+    try:
+        with atomic_path(path, make_parents=True) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+            for text in texts:
+                digest.update(text.encode("utf-8"))
+                fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+    finally:
+        close = getattr(texts, "close", None)
+        if close is not None:  # texts not read (the disk is full): their making ends
+            close()
     return digest.hexdigest()

@@ -254,6 +254,13 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
             return
         if msg is None:  # the run needs no more rows: end at once (the interpreter's own finalisation of NumPy,
             _exit_now()   # SciPy and the methods took 0.25 s a worker, in the run's last moments)
+        if msg[0] == _CALL:  # a piece of the run's own work (map_in_idle_workers)
+            _, func, args = msg
+            try:
+                conn.send((True, func(*args)))
+            except Exception as exc:
+                conn.send((False, f"{type(exc).__name__}: {exc}"))
+            continue
         chunk_id, tasks, row_timeout = msg
         try:
             out = run_chunk(tasks, row_timeout, progress)
@@ -261,6 +268,62 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
             out = {"failed": f"{type(exc).__name__}: {exc}"}
         progress[0] = 0.0
         conn.send((chunk_id, out))
+
+
+_CALL = "call"  # the first item of a message that asks a worker for func(*args), not for rows
+
+
+def map_in_idle_workers(func, arguments):
+    """``func(*args)`` for each ``args`` of ``arguments``, in the run's idle local workers (:func:`kept_workers`),
+    yielded in order; what no worker makes (there is none, or one ended) is made in this process. The first calls
+    start at once, one per worker, so that the workers make them while this process does something else before it
+    reads the results; each worker has one call at a time (a worker never waits to send a result while this process
+    waits to send it the next). A generator: closed before its end (an error, Ctrl-C), it ends the workers that still
+    have a call, so that no result is left for the next use of the workers."""
+    import collections
+    free = [w for w in (_KEPT or []) if not w.stopping and w.chunk is None and w.proc.is_alive()]
+    todo = iter(arguments)
+    pending: collections.deque = collections.deque()  # (worker or None, args), in order
+
+    def send_next() -> bool:
+        args = next(todo, None)
+        if args is None:
+            return False
+        worker = free.pop(0) if free else None
+        if worker is not None:
+            try:
+                worker.conn.send((_CALL, func, args))
+            except OSError:  # the worker has ended: this process makes it
+                worker = None
+        pending.append((worker, args))
+        return True
+
+    def gen():
+        try:
+            while free and send_next():
+                pass
+            while pending or send_next():
+                worker, args = pending.popleft()
+                done = False
+                if worker is not None:
+                    try:
+                        done, value = worker.conn.recv()
+                    except (EOFError, OSError):  # the worker ended: not one of the free workers any more
+                        worker = None
+                    else:
+                        free.append(worker)
+                if not done:  # no worker, or it failed: made here (a failure of func raises here, as it would)
+                    value = func(*args)
+                while free and send_next():
+                    pass
+                yield value
+        finally:
+            for worker, _ in pending:  # abandoned with a call running: its result must not reach the next user
+                if worker is not None:
+                    worker.stop(now=True)
+                    with contextlib.suppress(ValueError):
+                        _KEPT.remove(worker)
+    return gen()
 
 
 def _exit_now() -> None:
@@ -445,9 +508,7 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
             raise
         for w in workers:
             if _KEPT is not None and w.proc.is_alive():
-                _KEPT.append(w)  # for the next study of the run (kept_workers)
-                if _KEPT_LAST:
-                    w.ask_to_stop()  # the run's last rows are done: the worker ends while the outputs are written
+                _KEPT.append(w)  # for the next study of the run (kept_workers), and the writing of its outputs
             else:
                 w.stop()
 
@@ -476,11 +537,18 @@ def kept_workers(jobs: int):
 
 
 def last_study() -> None:
-    """Inside :func:`kept_workers`: the study about to run is the run's last, so its workers are told to end as soon as
-    its rows are done (they end while the run writes its outputs, instead of after)."""
+    """Inside :func:`kept_workers`: the study about to run is the run's last (:func:`workers_done`)."""
     global _KEPT_LAST
     if _KEPT is not None:
         _KEPT_LAST = True
+
+
+def workers_done() -> None:
+    """A study has no more work for the workers: after the run's last study they are told to end now, and end while
+    the run writes the rest of its outputs (not after it)."""
+    if _KEPT is not None and _KEPT_LAST:
+        for w in _KEPT:
+            w.ask_to_stop()
 
 
 def start_kept_workers() -> None:

@@ -26,8 +26,8 @@ from experiments import compare  # the verdict on every run: fresh results again
 from experiments import config as configs
 from experiments import engine
 from experiments import study as contract
-from experiments.csvtext import write_results
-from experiments.executors import kept_workers, last_study, start_kept_workers
+from experiments.csvtext import blocks, csv_text, write_results
+from experiments.executors import kept_workers, last_study, map_in_idle_workers, start_kept_workers, workers_done
 from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
 from experiments.rows import Terminated, clear_signal, note_signal, raise_if_signalled, signalled
@@ -179,11 +179,16 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
         raise failure
     used = counts.pop("used")
     remove_leftover_tmp(target)
-    results_sha256 = write_results(df, target / "results.csv")
-    t0 = time.perf_counter()
-    log("   analysis, tables and figures ...")
-    findings, analysis = contract.analyse(study, df, cfg, target, log)
-    log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
+    # results.csv is made by the run's idle workers (if any) while this process analyses the rows
+    texts = map_in_idle_workers(csv_text, blocks(df, 10_000))
+    try:
+        t0 = time.perf_counter()
+        log("   analysis, tables and figures ...")
+        findings, analysis = contract.analyse(study, df, cfg, target, log)
+        log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
+    finally:  # written also when the analysis fails: the rows are the run's result
+        results_sha256 = write_results(df, target / "results.csv", texts)
+        workers_done()
     raise_if_signalled()
     if cfg.get("summary_by") and set(cfg["summary_by"]) - set(df.columns):
         raise configs.ConfigError(f"{cfg.where}: summary_by: no row has the column(s) "

@@ -858,3 +858,59 @@ def test_an_interrupt_that_code_swallowed_still_stops_the_run(tmp_path, monkeypa
     assert not (tmp_path / "o" / "eng" / "meta.json").exists()
     monkeypatch.setattr(engine, "run", real)
     assert run.main([str(study), "--jobs", "1", "--no-report", "--out", str(tmp_path / "o")]) == 0  # a new run
+
+
+# ---------------------------------------------------------------- results.csv made by the run's idle workers
+
+def _results_frame(n: int) -> pd.DataFrame:
+    rng = np.random.default_rng(5)
+    return pd.DataFrame({"method": np.resize(["circle.kasa", "circle.gauss_newton"], n), "radius": rng.normal(size=n),
+                         "iterations": np.where(rng.random(n) < 0.3, np.nan, 4.0), "message": np.resize(["a,b", "ok"], n)})
+
+
+def test_results_csv_made_by_idle_workers_is_the_file_made_here(tmp_path):
+    """With a run's workers idle, the blocks of results.csv are made by them (while the run analyses the rows): the same
+    bytes, in order; a worker that ends while it makes a block leaves that block to this process, whose file is the
+    same."""
+    df = _results_frame(2345)
+    from experiments.csvtext import blocks, csv_text, write_results
+    expected = write_results(df, tmp_path / "here.csv")
+    with executors.kept_workers(2):
+        executors.start_kept_workers()
+        workers = list(executors._KEPT)
+        texts = executors.map_in_idle_workers(csv_text, blocks(df, 500))
+        first = next(texts)  # both workers have a block now
+        assert all(w.proc.is_alive() for w in workers)
+        workers[1].proc.kill()  # it had the second block: this process makes it
+        workers[1].proc.join(5)
+        rest = list(texts)
+        assert "".join([first, *rest]) == (tmp_path / "here.csv").read_text()
+        assert workers[1] not in [w for w in executors._KEPT if w.proc.is_alive()]
+        got = write_results(df, tmp_path / "workers.csv", executors.map_in_idle_workers(csv_text, blocks(df, 300)))
+    assert got == expected and (tmp_path / "workers.csv").read_bytes() == (tmp_path / "here.csv").read_bytes()
+
+
+def _fails_on_second(frame, header):
+    if not header:
+        raise ValueError("cannot format this block")
+    return "first"
+
+
+def test_an_abandoned_map_ends_its_busy_workers_and_a_failure_is_raised_here():
+    """A failure in a worker is raised in this process, as the call itself raises it; a map left before its end (an
+    error, Ctrl-C) ends the workers that still make a block, so that their result reaches no later user of them."""
+    df = _results_frame(100)
+    from experiments.csvtext import blocks
+    with executors.kept_workers(2):
+        executors.start_kept_workers()
+        texts = executors.map_in_idle_workers(_fails_on_second, blocks(df, 10))
+        assert next(texts) == "first"
+        with pytest.raises(ValueError, match="cannot format this block"):
+            next(texts)
+        busy = executors.map_in_idle_workers(_fails_on_second, blocks(df, 10))
+        assert next(busy) == "first"
+        busy.close()  # one worker still had a call
+        alive = [w for w in executors._KEPT if w.proc.is_alive()]
+        assert len(alive) <= 1
+        for w in executors._KEPT:  # what remains is idle: a call gets its own answer
+            assert not w.conn.poll(0.2)

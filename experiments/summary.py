@@ -124,7 +124,7 @@ def to_markdown(df: pd.DataFrame, floatfmt: str = ".4g", units: dict[str, str] |
     """A GitHub Markdown table (``experiments.render.page.markdown_table``) whose headers carry the units
     (``units``: {column: unit}, default :func:`summary_units` of ``df``): 'form error median [mm]'. Numbers in
     ``floatfmt``, shares by :func:`share_text` (never a rounded 1 or 0)."""
-    from experiments.render.page import markdown_table
+    from experiments.render.markdown import markdown_table
     from experiments.render.text import human_unit
     from experiments.study import readable
     units = summary_units(df) if units is None else units

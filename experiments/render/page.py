@@ -19,37 +19,7 @@ import jinja2
 from markdown_it import MarkdownIt
 from markupsafe import Markup, escape
 
-_MD_SPECIAL = re.compile(r"[\\`*\[\]<>!|&~{}#]|(?<![A-Za-z0-9])_|_(?![A-Za-z0-9])")
-
-
-def md_escape(text) -> str:
-    """``text`` as literal Markdown text: the characters that could start a link, an image, HTML, code,
-    emphasis, an entity or a table cell backslash-escaped (CommonMark lets any ASCII punctuation be escaped;
-    an underscore inside a word cannot open emphasis and stays as it is), whitespace and line breaks folded
-    into one space (so user text never starts a line, hence never a heading, list or block)."""
-    return _MD_SPECIAL.sub(lambda m: "\\" + m.group(0), re.sub(r"\s+", " ", str(text))).strip()
-
-
-def markdown_table(df, floatfmt: str = ".7g", *, escape: bool = True, formats: dict | None = None) -> str:
-    """``df`` as a GitHub (pipe) Markdown table by pandas' ``DataFrame.to_markdown`` (tabulate): floats in
-    ``floatfmt`` (NaN empty) or, for a column ``formats`` names, by its function (value -> text), every other cell
-    and the headers as text, ``md_escape``d unless ``escape`` is false (a table of the builder's own words); number
-    columns right-aligned."""
-    import numpy as np
-    import pandas as pd
-    text = md_escape if escape else str
-
-    def cell(v) -> str:
-        if isinstance(v, (float, np.floating)):
-            return "" if v != v else format(v, floatfmt)
-        return text(v)
-    own = [(formats or {}).get(c) for c in df.columns]
-    shown = pd.DataFrame([[f(v) if f else cell(v) for f, v in zip(own, row)] for row in df.itertuples(index=False)],
-                         columns=range(df.shape[1]))
-    align = ["right" if pd.api.types.is_numeric_dtype(t) and not pd.api.types.is_bool_dtype(t) else "left"
-             for t in df.dtypes]
-    return shown.to_markdown(index=False, headers=[text(c) for c in df.columns], tablefmt="pipe",
-                             disable_numparse=True, colalign=align)
+from experiments.render.markdown import markdown_table, md_escape  # noqa: F401  (this module's API too)
 
 
 def _markdown() -> MarkdownIt:

@@ -12,7 +12,15 @@ import textwrap
 import time
 from pathlib import Path
 
-import numpy as np
+# One BLAS thread per test process, set before NumPy is first imported (no pytest plugin imports it earlier) and
+# inherited by every Python a test starts, unless the user chose otherwise: with `-n auto` on 2 cores, two xdist
+# workers x 2 OpenBLAS threads oversubscribe the cores, and OpenBLAS's waiting threads made the circular-test
+# diagnostics' small least-squares solves ~9x slower in CPU (10 arcs of the coverage test: 3.5 s against 0.39 s).
+# The same rule as the engine's workers (experiments.executors.BLAS_THREAD_VARS).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402  (after the BLAS thread count)
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]

@@ -7,8 +7,9 @@ are where the iteration stopped, not a result.
 
 :func:`verify` serves ``python -m experiments.verify`` (:mod:`experiments.verify`), :func:`reference_snapshot`
 and :func:`verdict_after_run` the end of ``python -m experiments.run``; both commands import this module, which
-imports neither (so the two commands do not import each other). The verdict is written atomically to
-``RESULTS/verify.json`` (:mod:`experiments.verdict` reads it for the report).
+imports neither (so the two commands do not import each other). The run's verdict is written atomically to
+``OUT/verify.json``; ``experiments.verify`` writes ``RESULTS/verify.json`` only with ``--write-verdict``
+(:mod:`experiments.verdict` reads the file for the report).
 """
 from __future__ import annotations
 
@@ -197,13 +198,14 @@ def _table(problems: list[tuple[str, dict]]) -> str:
 
 
 def _shown(path: Path) -> str:
-    """``path`` as the verdict records it: relative to the current folder when inside it, else its last two
-    parts (a verdict names the folders it compared without the layout of this machine)."""
+    """``path`` as a verdict records it (the file may be committed): relative to the current folder when inside
+    it (``results/quick``), else its name after ``.../`` (``.../review-q``), saying that folders of this
+    machine are left out (the last two parts, ``main/results``, read as a relative path that leads nowhere)."""
     p = Path(path).resolve()
     try:
-        return p.relative_to(Path.cwd().resolve()).as_posix()
+        return p.relative_to(Path.cwd().resolve()).as_posix() or "."
     except ValueError:
-        return Path(*p.parts[-2:]).as_posix()
+        return f".../{p.name}"
 
 
 def _meta(folder: Path) -> dict | None:
@@ -222,13 +224,16 @@ def _same_inputs(committed: Path, fresh: Path) -> None:
         return
     changes = changed_inputs(old, recorded_inputs(new))
     if changes:
-        raise InvalidInputError(f"{_shown(fresh)} holds a run of another config or data than {_shown(committed)} "
+        raise InvalidInputError(f"{fresh} holds a run of another config or data than {committed} "
                                 f"({'; '.join(changes)}): other rows by design, nothing to compare; compare runs of "
                                 f"one config, or regenerate the committed results with python -m experiments.run")
 
 
-def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
-    """Compare ``against`` with the committed ``results``; the verdict dict (also written to RESULTS/verify.json)."""
+def verify(studies: list[str], results: Path, against: Path, log=print, write: bool = False,
+           against_name: str | None = None) -> dict:
+    """Compare ``against`` with the committed ``results``; the verdict dict. Only with ``write`` is it recorded
+    in ``RESULTS/verify.json`` (the verdict the report of ``results`` shows): a check leaves both folders as
+    they were unless asked. ``against_name`` names ``against`` when it is a temporary run (default: its path)."""
     reports = []
     date = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     for study in studies:
@@ -238,7 +243,7 @@ def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
         reports.append({**compare_study(study, committed, fresh), "date": date,
                         "results_sha256": results_sha256(results / study),   # what this verdict judged
                         "against_sha256": results_sha256(against / study),
-                        "reference": f"the run in {_shown(against / study)}"})
+                        "reference": against_name or f"the run in {_shown(against)}/{study}"})
     for r in reports:
         n_bad = sum(p["n_rows"] for p in r["problems"])
         skipped = (f"; {r['not_converged_values']} value(s) of rows that did not converge in both runs not compared "
@@ -256,8 +261,10 @@ def verify(studies: list[str], results: Path, against: Path, log=print) -> dict:
             by_reason.setdefault(t.why, []).append(f"{s}/{m}/{c} rtol={t.rtol:g} atol={t.atol:g}")
         log("wider tolerances declared for methods chaotic by nature: " +
             "; ".join(f"{', '.join(cols)} (why: {why})" for why, cols in by_reason.items()))
-    verdict = {"agree": not bad, "date": date, "results": _shown(results), "against": _shown(against), "studies": reports}
-    write_atomic(results / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
+    verdict = {"agree": not bad, "date": date, "results": _shown(results), "against": against_name or _shown(against),
+               "studies": reports}
+    if write:
+        write_atomic(results / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
     return verdict
 
 

@@ -1,6 +1,6 @@
 """The reproducibility verdicts the report shows, read from ``RESULTS/verify.json``.
 
-``python -m experiments.verify`` and the end of ``python -m experiments.run`` write that file; each study's
+``python -m experiments.verify --write-verdict`` and the end of ``python -m experiments.run`` write that file; each study's
 entry names the SHA-256 of the ``results.csv`` it judged (``results_sha256``, the file in the folder that holds
 ``verify.json``). The report shows a verdict only while that file is unchanged: after the study is run again
 with other numbers the old verdict is reported as out of date, never as agreement.
@@ -98,7 +98,7 @@ def study_verdicts(results: Path, studies: list[str], reasons: dict[str, str] | 
             lines.append(("Reproducibility: out of date",
                           f"The last verification ({stale[name].get('date', '?')}) judged other results than these "
                           f"(results.csv changed since); run python -m experiments.verify {name}{q}"
-                          f"{' --results' + folder if folder else ''} again."))
+                          f"{' --results' + folder if folder else ''} --write-verdict again."))
         if run and name not in run.get("studies", []):
             lines.append(("Older results", f"These results are older than the last run ({run.get('date', '?')}), which "
                           f"did not include this study ({(reasons or {}).get(name, 'not among the studies it ran')}); "
@@ -114,7 +114,7 @@ def verdict_markdown(results: Path) -> list[str]:
     from experiments.render.page import md_escape
     current, stale = current_entries(results)
     if not current:
-        return ["No current reproducibility verdict: run `python -m experiments.verify`"
+        return ["No current reproducibility verdict: run `python -m experiments.verify --write-verdict`"
                 + (f" (the last one judged other results for {len(stale)} "
                    f"{'study' if len(stale) == 1 else 'studies'})" if stale else "") + "."]
     differ = [k for k, e in current.items() if not e.get("agree")]

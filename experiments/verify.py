@@ -1,4 +1,4 @@
-"""``python -m experiments.verify [STUDY ...] [--results DIR] [--against DIR] [--quick] [--jobs N]``
+"""``python -m experiments.verify [STUDY ...] [--results DIR] [--against DIR] [--quick] [--jobs N] [--write-verdict]``
 
 Reproducibility verdict: runs the studies (into a temporary folder) or reads a finished run (``--against``)
 and compares every non-timing column of each ``results.csv`` with the committed one (``--results``; default
@@ -8,8 +8,10 @@ Rows are matched by their identity (study, data set, data stream, repetition, se
 A row with the same status other than "ok" in both runs (an iteration that did not converge) is compared by
 its status and counts only: its values are where the iteration stopped, not a result.
 
-Prints one line per study and a table of the columns outside tolerance with their worst rows; writes the
-verdict atomically to ``RESULTS/verify.json`` (:func:`last_verdict` reads it for the report).
+Prints one line per study and a table of the columns outside tolerance with their worst rows. A check modifies
+neither folder: only with ``--write-verdict`` is the verdict recorded (atomically) in ``RESULTS/verify.json``,
+the file the report of RESULTS shows (:func:`last_verdict` reads it; ``python -m experiments.run`` records
+its own verdict in ``OUT/verify.json``).
 The comparison itself is :mod:`experiments.compare` (the end of ``python -m experiments.run`` uses it too).
 Exit status: 0 all agree, 1 some values differ, 2 bad input (missing folder or study, unreadable table).
 """
@@ -39,6 +41,9 @@ def main(argv=None) -> int:
     parser.add_argument("--against", type=Path, help="a finished run to check (default: run the studies now, in a temporary folder)")
     parser.add_argument("--quick", action="store_true", help="the quick grids (compared with results/quick)")
     parser.add_argument("--jobs", type=int, default=2, help="workers when the studies are run (default: 2)")
+    parser.add_argument("--write-verdict", action="store_true",
+                        help="record the verdict in RESULTS/verify.json, which the report of RESULTS shows "
+                             "(default: print it, write nothing)")
     args = parser.parse_args(argv)
     results = args.results or (Path("results/quick") if args.quick else Path("results"))
     try:
@@ -68,7 +73,7 @@ def main(argv=None) -> int:
                     raise InvalidInputError(f"{results}/{s} holds a {'quick' if committed_quick else 'full'} run; "
                                             f"{'add' if committed_quick else 'drop'} --quick or choose another --results")
         if args.against is not None:
-            verdict = verify(studies, results, args.against)
+            verdict = verify(studies, results, args.against, write=args.write_verdict)
         else:
             ready = []
             for s in studies:  # a study whose data are not available here: named -> an error, implied -> a note
@@ -85,7 +90,8 @@ def main(argv=None) -> int:
             with tempfile.TemporaryDirectory(prefix="fitbench-verify-") as tmp:
                 for s in studies:
                     runner.run_study(s, Path(tmp), quick=args.quick, jobs=runner.usable_jobs(args.jobs))
-                verdict = verify(studies, results, Path(tmp))
+                verdict = verify(studies, results, Path(tmp), write=args.write_verdict,
+                                 against_name=f"a fresh run of python -m experiments.verify (fitbench {__version__})")
     except InvalidInputError as exc:
         print(f"experiments.verify: error: {exc}", file=sys.stderr)
         return 2

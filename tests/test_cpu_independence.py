@@ -40,7 +40,7 @@ def test_quick_studies_agree_across_blas_kernels_and_simd_levels(tmp_path):
         assert proc.returncode == 0, proc.stderr[-2000:]
         runs[name] = out
     proc = run_python("-m", "experiments.verify", "--quick", "--against", runs["other_blas"],
-                      "--results", runs["avx2_fma"])
+                      "--results", runs["avx2_fma"], "--write-verdict")
     assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-2000:]
     verdict = json.loads((runs["avx2_fma"] / "verify.json").read_text())
     assert verdict["agree"] and len(verdict["studies"]) >= 10

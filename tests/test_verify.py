@@ -59,7 +59,7 @@ def edit(folder: Path, row: int, column: str, change) -> str:
 
 def test_identical_run_agrees_and_writes_verdict(committed, tmp_path, capsys):
     fresh = copy_run(committed, tmp_path)
-    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 0
+    assert verify.main(["--results", str(committed), "--against", str(fresh), "--write-verdict"]) == 0
     assert capsys.readouterr().out.startswith("vstudy: agree")
     assert verify.last_verdict(committed)["agree"] is True
     assert "agree" in verify.verdict_markdown(committed)[0]
@@ -81,7 +81,7 @@ def test_values_within_tolerance_pass(committed, tmp_path, capsys):
 def test_perturbation_beyond_tolerance_fails_naming_study_column_row(committed, tmp_path, capsys, column, change):
     fresh = copy_run(committed, tmp_path)
     method = edit(fresh, 3, column, change)  # row 3: repetition 1, circle.gauss_newton
-    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 1
+    assert verify.main(["--results", str(committed), "--against", str(fresh), "--write-verdict"]) == 1
     out = capsys.readouterr().out
     assert out.splitlines()[0].startswith("vstudy: DIFFER")
     bad = [ln for ln in out.splitlines() if ln.startswith("vstudy ")]
@@ -164,7 +164,7 @@ def test_a_missing_column_is_a_difference(committed, tmp_path, capsys, side, col
     base = copy_run(committed, tmp_path / "a")
     fresh = copy_run(committed, tmp_path / "b")
     _drop(base if side == "committed" else fresh, columns)
-    assert verify.main(["--results", str(base), "--against", str(fresh)]) == 1
+    assert verify.main(["--results", str(base), "--against", str(fresh), "--write-verdict"]) == 1
     out = capsys.readouterr().out
     assert out.startswith("vstudy: DIFFER")
     named = {p["column"] for p in json.loads((base / verify.VERDICT_FILE).read_text())["studies"][0]["problems"]}
@@ -187,7 +187,7 @@ def test_verdict_names_the_results_it_judged_and_goes_out_of_date(committed, tmp
     from experiments.verdict import study_verdicts
     base = copy_run(committed, tmp_path / "a")
     fresh = copy_run(committed, tmp_path / "b")
-    assert verify.main(["--results", str(base), "--against", str(fresh)]) == 0
+    assert verify.main(["--results", str(base), "--against", str(fresh), "--write-verdict"]) == 0
     entry = json.loads((base / verify.VERDICT_FILE).read_text())["studies"][0]
     assert entry["results_sha256"] == verify.results_sha256(base / "vstudy")
     assert "all 1 verified study agrees" in verify.verdict_markdown(base)[0]
@@ -287,6 +287,25 @@ def test_the_verdict_names_no_folder_of_this_machine(committed, tmp_path):
     assert str(tmp_path) not in text and verdict["against"].endswith("fresh")
 
 
+def test_a_check_writes_nothing_unless_asked_and_names_folders_plainly(committed, tmp_path, monkeypatch, capsys):
+    """`experiments.verify --results DIR --against RUN` rewrote DIR/verify.json (a tracked file of the committed
+    results) and recorded "main/results", a path with its first parts cut: a check leaves both folders as they
+    were; --write-verdict records the verdict in DIR, naming a folder inside the current one by its relative
+    path and one outside it by `.../NAME` (no folder of this machine)."""
+    base = copy_run(committed, tmp_path / "ref")
+    fresh = copy_run(committed, tmp_path / "run")
+    before = {p: p.read_bytes() for folder in (base, fresh) for p in folder.rglob("*") if p.is_file()}
+    assert verify.main(["--results", str(base), "--against", str(fresh)]) == 0
+    after = {p: p.read_bytes() for folder in (base, fresh) for p in folder.rglob("*") if p.is_file()}
+    assert after == before and "vstudy: agree" in capsys.readouterr().out
+    monkeypatch.chdir(tmp_path / "ref")                       # base inside the current folder, fresh outside
+    assert verify.main(["--results", str(base), "--against", str(fresh), "--write-verdict"]) == 0
+    verdict = json.loads((base / verify.VERDICT_FILE).read_text(encoding="utf-8"))
+    assert str(tmp_path) not in json.dumps(verdict) and not (fresh / verify.VERDICT_FILE).exists()
+    assert (verdict["results"], verdict["against"]) == ("fresh", ".../fresh")
+    assert verdict["studies"][0]["reference"] == "the run in .../fresh/vstudy"
+
+
 def test_a_quick_run_without_out_writes_beside_the_full_results_never_into_them(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     cfg = tmp_path / "vstudy.toml"
@@ -350,7 +369,7 @@ def test_the_reports_hints_give_the_command_that_regenerates_these_results(tmp_p
     edit(out, 0, "radius", lambda v: repr(float(v) * 2))
     from experiments.verdict import study_verdicts
     lines = dict(study_verdicts(out, ["vstudy"], quick={"vstudy": True}, shown="mine")["vstudy"])
-    assert "run python -m experiments.verify vstudy --quick --results mine again" in lines["Reproducibility: out of date"]
+    assert "run python -m experiments.verify vstudy --quick --results mine --write-verdict again" in lines["Reproducibility: out of date"]
     # the grid's default folder is not named: results/quick/ for a quick run
     default = tmp_path / "results" / "quick"
     shutil.copytree(out, default)
@@ -428,7 +447,7 @@ def test_verify_refuses_runs_of_another_config_in_one_line(committed, tmp_path, 
     meta_path.write_text(json.dumps(meta), encoding="utf-8")
     verdict = committed / verify.VERDICT_FILE
     before = verdict.read_bytes() if verdict.exists() else None
-    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 2
+    assert verify.main(["--results", str(committed), "--against", str(fresh), "--write-verdict"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "another config or data" in err and "seed 5, now 8" in err, err
     assert (verdict.read_bytes() if verdict.exists() else None) == before     # no verdict written

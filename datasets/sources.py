@@ -13,7 +13,7 @@ gets one repetition. Adding a source::
 
     from datasets.sources import register_source
 
-    @register_source("outliers", random=True, summary="circle with 10 % gross outliers")
+    @register_source("outliers", random=True, summary="circle with 10 % gross outliers", gives=np.ndarray)
     def outliers(rng, *, n=100, share=0.1):
         ...
         return points, {"family": "circle", "center": (0.0, 0.0), "radius": 1.0}
@@ -23,6 +23,11 @@ A source declares its parameters' types as a method does: by annotation (``n: in
 int default takes integers, a float default numbers, a str default strings, a tuple of numbers a list of them;
 no default or None: anything). A study's values are checked against them before any row runs
 (``experiments.schema.check_values``): ``n = 30.5`` or ``radius = "5"`` is refused in one line, never coerced.
+
+A source declares what its data are with ``gives`` (a type: ``numpy.ndarray`` for an (N, 2) array of points, the
+default of none: not declared): a study pairing it with a method that takes other data (the type its family's
+validator returns, ``methods.register(validator=...)``; a method without one takes points) is refused when the
+config is loaded (``experiments.schema.check_data_kinds``), never run into ``skipped`` rows.
 
 Third-party packages register sources through the entry-point group ``fitbench.datasets`` (the entry
 point names a module that registers on import); the engine loads them before it checks any config.
@@ -59,6 +64,8 @@ class DataSource:
     module: str
     #: data files the output depends on, given the params (hashed into the cache key)
     files: Callable[..., list] | None = field(default=None, repr=False)
+    #: the type of the data it gives (``numpy.ndarray``: an (N, 2) array of points); None: not declared
+    gives: type | None = None
 
     def load(self, rng, **params):
         data, truth = self.func(rng, **params)
@@ -108,13 +115,18 @@ def type_of_default(value):
 _REGISTRY: dict[str, DataSource] = {}
 
 
-def register_source(name: str, *, random: bool, summary: str, files: Callable | None = None):
-    """Register ``func(rng, **params) -> (data, truth)`` as data source ``name``."""
+def register_source(name: str, *, random: bool, summary: str, files: Callable | None = None,
+                    gives: type | None = None):
+    """Register ``func(rng, **params) -> (data, truth)`` as data source ``name``; ``gives``: the type of its data
+    (``numpy.ndarray`` for points), checked against the methods a study pairs it with before any row runs."""
+    if gives is not None and not isinstance(gives, type):
+        raise ValueError(f"data source {name!r}: gives must be a type (numpy.ndarray for points), got {gives!r}")
+
     def deco(func):
         if name in _REGISTRY and _REGISTRY[name].func is not func:
             raise ValueError(f"data source {name!r} is already registered (by {_REGISTRY[name].module})")
         add_entry(_REGISTRY, name, DataSource(name=name, func=func, random=random, summary=summary,
-                                              module=func.__module__, files=files))
+                                              module=func.__module__, files=files, gives=gives))
         return func
     return deco
 
@@ -146,20 +158,21 @@ def _register_builtins():
     from datasets.synthetic import GENERATORS
 
     for gen_name, gen in GENERATORS.items():
-        register_source(gen_name, random=True, summary=(gen.__doc__ or "").strip().splitlines()[0])(gen)
+        register_source(gen_name, random=True, summary=(gen.__doc__ or "").strip().splitlines()[0],
+                        gives=np.ndarray)(gen)
 
     def _published_files(name, variant=None):
         return [datasets.PUBLISHED_DIR / f"{name}.csv", datasets.PUBLISHED_DIR / f"{name}.json"]
 
     @register_source("published", random=False, summary="a published data set shipped with fitbench",
-                     files=_published_files)
+                     files=_published_files, gives=np.ndarray)
     def published(rng=None, *, name: str, variant: Literal["drop_repeated_closing_point"] | None = None):
         """Points of a published set (``variant = "drop_repeated_closing_point"`` drops a repeated last point)."""
         ds = datasets.load(name, drop_repeated_closing_point=variant == "drop_repeated_closing_point")
         return ds.points, None
 
     @register_source("file", random=False, summary="points read from a file (CSV, whitespace, ...)",
-                     files=lambda path, **reading: [path])
+                     files=lambda path, **reading: [path], gives=np.ndarray)
     def file(rng=None, *, path, truth=None, columns=("x", "y"), plane=None, unit=None, skip_rows=0):
         """Points of ``path`` (any format ``datasets.read_points`` reads, with its options), with an optional truth
         table."""
@@ -169,7 +182,8 @@ def _register_builtins():
         folder = nist_folder()
         return [folder / f"{name}.csv", folder / f"{name}.json"]
 
-    @register_source("nist", random=False, summary="a NIST Circle2d set (FITBENCH_NIST_DIR)", files=_nist_files)
+    @register_source("nist", random=False, summary="a NIST Circle2d set (FITBENCH_NIST_DIR)", files=_nist_files,
+                     gives=np.ndarray)
     def nist(rng=None, *, name: str):
         """Points of NIST set ``name``; truth = NIST's reference least-squares circle (certified digits)."""
         folder = nist_folder()
@@ -191,7 +205,8 @@ def _register_simulators():
     from datasets import positioning as pos
 
     @register_source("circular_test", random=True,
-                     summary="ISO 230-4 circular test of the LOLA HBG 130 scenario (both runs, or one path)")
+                     summary="ISO 230-4 circular test of the LOLA HBG 130 scenario (both runs, or one path)",
+                     gives=np.ndarray)
     def circular_test(rng, *, scenario: Literal["lola_hbg130"] = "lola_hbg130",
                       path: Literal["both", "cw", "ccw"] = "both"):
         """Points of a simulated circular test; ``path`` is 'both', 'cw' or 'ccw'."""
@@ -206,18 +221,22 @@ def _register_simulators():
         return pos.axis_test(rng=rng, **params)
 
     positioning.__signature__ = inspect.signature(pos.axis_test)
-    register_source("positioning", random=True, summary="ISO 230-2 positioning test of a simulated axis")(positioning)
+    register_source("positioning", random=True, summary="ISO 230-2 positioning test of a simulated axis",
+                    gives=pos.PositioningData)(positioning)
 
-    @register_source("contouring", random=False, summary="a reference and a measured contouring trajectory")
+    from methods.magnify.data import MagnifyInput
+
+    @register_source("contouring", random=False, summary="a reference and a measured contouring trajectory",
+                     gives=MagnifyInput)
     def contouring_example(rng=None, *, example: str):
         """Example ``example`` of ``datasets.contouring.EXAMPLES`` as a magnify input."""
-        from methods.magnify import MagnifyInput
         ref, meas = contouring.EXAMPLES[example]()
         return MagnifyInput(ref, meas), None
 
     contouring_example.__annotations__["example"] = Literal[tuple(contouring.EXAMPLES)]  # the names it knows
 
-    @register_source("multilateration", random=True, summary="a simulated multilateration campaign")
+    @register_source("multilateration", random=True, summary="a simulated multilateration campaign",
+                     gives=ml.MultilaterationData)
     def multilateration(rng, *, stations: int | list[int] = 6, grid: tuple[int, int, int] = (5, 4, 4),
                         noise: NonNegative = 1.0, errors: Literal["default", "none"] = "default"):
         """A simulated campaign (``datasets.multilateration.simulate``; errors = 'none' for a perfect machine)."""

@@ -488,3 +488,75 @@ def check_values(cfg: dict, where: str) -> None:
                         spec.check_params({key: v})
             except ValueError as exc:
                 raise ConfigError(f"{where}: methods[{i}]: {exc}") from None
+    check_data_kinds(cfg, where)
+
+
+def method_takes(spec) -> type | None:
+    """The type of data a method takes: what its family's validator returns (its return annotation,
+    ``methods.register(validator=...)``), ``numpy.ndarray`` (an (N, 2) array of points) for a method without a
+    validator (the registry's ``validate_points``); None when its validator declares no type."""
+    import typing
+    import numpy as np
+    if spec.validator is None:
+        return np.ndarray
+    try:
+        kind = typing.get_type_hints(spec.validator).get("return")
+    except Exception:  # an annotation that cannot be resolved: not declared
+        return None
+    return kind if isinstance(kind, type) else None
+
+
+def data_words(kind: type) -> str:
+    """A type of data as a message names it: 'points (an (N, 2) array)', else the class name."""
+    import numpy as np
+    return "points (an (N, 2) array)" if kind is np.ndarray else kind.__name__
+
+
+def _entry_source(entry: dict) -> tuple[str, str]:
+    """(the registered source of a ``[[datasets]]`` entry, its label as ``on = [...]`` names it)."""
+    if "published" in entry:
+        return "published", entry.get("label", entry["published"] + (f":{entry['variant']}" if entry.get("variant")
+                                                                      else ""))
+    if "file" in entry:
+        from pathlib import PurePath
+        return "file", entry.get("label", PurePath(entry["file"]).stem)
+    name = entry.get("source", entry.get("generator"))
+    return name, entry.get("label", name)
+
+
+def check_data_kinds(cfg: dict, where: str) -> None:
+    """Refuse a method paired with a data set whose data it cannot take (a positioning method on the points of
+    ``source = "circle"``): the type the data source declares it gives (``datasets.sources.register_source(gives=
+    ...)``) against the type the method takes (:func:`method_takes`), for every data set the method runs on (all,
+    or those its ``on`` names). Nothing is checked where either side declares no type."""
+    from experiments.engine import ConfigError
+    from datasets import sources
+    import methods
+    if not cfg.get("datasets") or not cfg.get("methods"):
+        return
+    data = []
+    for j, entry in enumerate(cfg["datasets"]):
+        name, label = _entry_source(entry)
+        try:
+            gives = sources.get_source(name).gives
+        except KeyError:
+            continue
+        if gives is not None:
+            data.append((j, name, label, gives))
+    for i, entry in enumerate(cfg["methods"]):
+        entry = {"id": entry} if isinstance(entry, str) else entry
+        mid = entry["id"]
+        if "." not in mid:
+            continue
+        specs = methods.list_methods(mid[:-2]) if mid.endswith(".*") else [methods.get(mid)]
+        on = entry.get("on")
+        for spec in specs:
+            takes = method_takes(spec)
+            if takes is None:
+                continue
+            for j, name, label, gives in data:
+                if (on is None or label in on) and not issubclass(gives, takes):
+                    raise ConfigError(
+                        f"{where}: methods[{i}]{f' ({mid})' if mid != spec.id else ''}: {spec.id} cannot take the data "
+                        f"of datasets[{j}] (source {name!r}): the source gives {data_words(gives)}, {spec.id} takes "
+                        f"{data_words(takes)}; remove the method, or name the data sets it takes in its on = [...]")

@@ -300,8 +300,77 @@ def test_a_plugin_data_source_takes_values_of_its_declared_types(tmp_path, plugi
 def test_a_built_in_simulator_refuses_a_name_it_does_not_know(tmp_path):
     """The contouring source's ``example`` is one of the examples it has (was a KeyError in every row)."""
     from datasets import contouring
-    text = SOURCE_STUDY.format(source="contouring", params='example = "nope"', grid="")
+    text = SOURCE_STUDY.format(source="contouring", params='example = "nope"', grid="").replace(
+        'id = "circle.kasa"', 'id = "magnify.nearest"')  # the methods that take its data
     with pytest.raises(ConfigError, match=r"datasets\[0\] \(source 'contouring'\): params.example = 'nope' must be one "
                                           r"of 'corner_inside_convex'"):
         configs.load(str(write(tmp_path, text)))
     configs.load(str(write(tmp_path, text.replace("nope", next(iter(contouring.EXAMPLES))))))
+
+
+WRONG_DATA = """name = "study"
+title = "t"
+seed = 1
+repetitions = 2
+[[datasets]]
+source = "circle"
+params = { radius = 5.0, noise = 0.01, n = 30 }
+[[datasets]]
+source = "positioning"
+label = "axis"
+[[methods]]
+id = "circle.kasa"
+on = ["circle"]
+[[methods]]
+id = "ellipse.fitzgibbon"
+on = ["circle"]
+[[methods]]
+id = "positioning.iso230_2"
+"""
+
+
+def test_a_method_that_cannot_take_a_data_set_is_refused_before_any_row(tmp_path, capsys):
+    """A positioning method on the points of a circle source (it ran into 'skipped' rows, exit 0): one line naming
+    the method, the data set and what each side takes, exit 2, nothing run; ``on`` that leaves the data set out
+    passes."""
+    path = write(tmp_path, WRONG_DATA)
+    code = runner.main([str(path), "--out", str(tmp_path / "out"), "--jobs", "1", "--no-report"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err and "Traceback" not in err, err
+    assert ("study.toml: methods[2]: positioning.iso230_2 cannot take the data of datasets[0] (source 'circle'): "
+            "the source gives points (an (N, 2) array), positioning.iso230_2 takes PositioningData") in err, err
+    assert not (tmp_path / "out" / "study" / "rows.sqlite").exists()
+    configs.load(str(write(tmp_path, WRONG_DATA + 'on = ["axis"]\n')))   # each method on the data it takes
+    with pytest.raises(ConfigError, match=r"methods\[0\]: circle.kasa cannot take the data of datasets\[1\] "
+                                          r"\(source 'positioning'\): the source gives PositioningData"):
+        configs.load(str(write(tmp_path, WRONG_DATA.replace('on = ["circle"]\n', "", 1) + 'on = ["axis"]\n')))
+    with pytest.raises(ConfigError, match=r"methods\[0\] \(magnify\.\*\): magnify.nearest cannot take the data of "
+                                          r"datasets\[0\] \(source 'circle'\)"):
+        configs.load(str(write(tmp_path, WRONG_DATA.replace('id = "circle.kasa"', 'id = "magnify.*"'))))
+
+
+def test_a_plugin_data_source_declares_what_it_gives(tmp_path):
+    """The check is the sources' and the families' declarations, not a list of names: a plugin source that gives
+    the magnify family's input is refused for a circle method and taken by a magnify method; one that declares
+    nothing is not checked."""
+    from datasets import sources
+    from methods.magnify import MagnifyInput
+
+    def trajectory(rng, *, n=20):
+        t = np.linspace(0, 1, n)
+        return MagnifyInput(np.column_stack([t, t]), np.column_stack([t, t + 1e-3])), None
+    try:
+        sources.register_source("test_trajectory", random=False, summary="plugin test", gives=MagnifyInput)(trajectory)
+        sources.register_source("test_undeclared", random=False, summary="plugin test")(trajectory)
+        text = SOURCE_STUDY.format(source="test_trajectory", params="n = 10", grid="")
+        with pytest.raises(ConfigError, match=r"circle.kasa cannot take the data of datasets\[0\] \(source "
+                                              r"'test_trajectory'\): the source gives MagnifyInput, circle.kasa takes "
+                                              r"points"):
+            configs.load(str(write(tmp_path, text)))
+        configs.load(str(write(tmp_path, text.replace("circle.kasa", "magnify.offset"))))
+        configs.load(str(write(tmp_path, text.replace("test_trajectory", "test_undeclared"))))
+        with pytest.raises(ValueError, match="gives must be a type"):
+            sources.register_source("test_bad_gives", random=False, summary="t", gives="points")
+    finally:
+        for name in ("test_trajectory", "test_undeclared"):
+            sources._REGISTRY.pop(name, None)

@@ -3,14 +3,16 @@ from __future__ import annotations
 
 import contextlib
 import itertools
-import os
 import signal
 import sys
 import threading
 import time
 
-from experiments.rows import encode_rows, failed_row, note_signal, raise_if_signalled, run_chunk
+from experiments.rows import encode_rows, failed_row, note_signal, raise_if_signalled
 from experiments.store import RowStore
+from experiments.localworkers import (_CALL, BLAS_THREAD_VARS, _main_module_not_imported_by_workers,  # noqa: F401
+                                      _one_blas_thread_per_worker, _Worker, _worker_main, _workers_ignore_ctrl_c,
+                                      take_early)
 
 
 
@@ -165,69 +167,6 @@ def _run_here(work, chunks: Chunks, store: RowStore, bar) -> None:
             signal.signal(signal.SIGINT, previous)
 
 
-BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-@contextlib.contextmanager
-def _one_blas_thread_per_worker():
-    """Workers inherit the environment when they start (lazily, at the first submit): one BLAS thread each,
-    unless the user chose otherwise. With several workers, multi-threaded BLAS on small matrices
-    oversubscribes the cores (the multilateration study ran 3x slower with 2 workers x 2 OpenBLAS threads
-    on 2 cores)."""
-    saved = {v: os.environ.get(v) for v in BLAS_THREAD_VARS}
-    for var in BLAS_THREAD_VARS:
-        os.environ.setdefault(var, "1")
-    try:
-        yield
-    finally:
-        for v, val in saved.items():
-            if val is None:
-                os.environ.pop(v, None)
-            else:
-                os.environ[v] = val
-
-
-def _die_with_parent(parent_pid: int) -> None:
-    """Worker initializer: the worker ends when the run that started it ends, however it ends.
-
-    On Linux the kernel sends SIGKILL to the worker when its parent dies (``prctl(PR_SET_PDEATHSIG)``
-    through ctypes); elsewhere a daemon thread polls ``os.getppid()`` every 0.5 s. A worker ignores
-    Ctrl-C (SIGINT reaches the whole process group): the parent stops the pool and prints one line.
-    When the workers are gone, the multiprocessing resource tracker sees its pipe close and exits too."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    armed = False
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-            libc = ctypes.CDLL(None, use_errno=True)
-            armed = libc.prctl(1, signal.SIGKILL, 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
-        except (OSError, AttributeError):
-            armed = False
-    if os.getppid() != parent_pid:  # the parent died before the guard was armed
-        os._exit(1)
-    if not armed:
-        def watch():
-            while os.getppid() == parent_pid:
-                time.sleep(0.5)
-            os._exit(1)
-        threading.Thread(target=watch, daemon=True, name="fitbench-parent-watchdog").start()
-
-
-@contextlib.contextmanager
-def _workers_ignore_ctrl_c():
-    """Start workers with SIGINT ignored (an ignored signal stays ignored across exec, and Python then
-    installs no KeyboardInterrupt handler): Ctrl-C reaches the whole process group, and a worker still
-    importing must not print a traceback. The parent's own handler is restored at once."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 def _stop_pool(pool) -> None:
     """Stop a ProcessPoolExecutor now: cancel what is pending and end the running workers."""
     pool.shutdown(wait=False, cancel_futures=True)
@@ -242,35 +181,6 @@ def _stop_pool(pool) -> None:
 #: extra seconds a row may run past its limit before its worker is killed (a row stuck in compiled code
 #: does not see the SIGALRM that ends a row running Python)
 KILL_GRACE_S = 2.0
-
-
-def _worker_main(conn, parent_pid: int, progress) -> None:
-    """A local worker: receive chunks, send back their rows as columns, until told to stop."""
-    _die_with_parent(parent_pid)
-    while True:
-        try:
-            msg = conn.recv()
-        except (EOFError, OSError):
-            return
-        if msg is None:  # the run needs no more rows: end at once (the interpreter's own finalisation of NumPy,
-            _exit_now()   # SciPy and the methods took 0.25 s a worker, in the run's last moments)
-        if msg[0] == _CALL:  # a piece of the run's own work (map_in_idle_workers)
-            _, func, args = msg
-            try:
-                conn.send((True, func(*args)))
-            except Exception as exc:
-                conn.send((False, f"{type(exc).__name__}: {exc}"))
-            continue
-        chunk_id, tasks, row_timeout = msg
-        try:
-            out = run_chunk(tasks, row_timeout, progress)
-        except BaseException as exc:  # a failure of the engine itself: reported, the chunk is retried alone
-            out = {"failed": f"{type(exc).__name__}: {exc}"}
-        progress[0] = 0.0
-        conn.send((chunk_id, out))
-
-
-_CALL = "call"  # the first item of a message that asks a worker for func(*args), not for rows
 
 
 def map_in_idle_workers(func, arguments):
@@ -324,70 +234,6 @@ def map_in_idle_workers(func, arguments):
                     with contextlib.suppress(ValueError):
                         _KEPT.remove(worker)
     return gen()
-
-
-def _exit_now() -> None:
-    """End this worker process now: what it printed is flushed, nothing else of its interpreter is torn down (a
-    worker holds no file, lock or process of its own that needs it)."""
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(Exception):
-            stream.flush()
-    os._exit(0)
-
-
-@contextlib.contextmanager
-def _main_module_not_imported_by_workers():
-    """While a worker process is started: a spawned process imports the parent's ``__main__`` module first (under
-    ``python -m experiments.run``, experiments.run with pandas, pydantic and the report's code: 0.6 s of CPU a
-    worker here), which a worker never uses (it runs :func:`_worker_main` of this module). An empty stand-in
-    ``__main__`` (no name, no file) makes the start-up import nothing of it."""
-    import types
-    real = sys.modules.get("__main__")
-    sys.modules["__main__"] = types.ModuleType("__main__")
-    try:
-        yield
-    finally:
-        if real is not None:
-            sys.modules["__main__"] = real
-
-
-class _Worker:
-    def __init__(self, ctx):
-        self.conn, child = ctx.Pipe()
-        self.progress = ctx.RawArray("d", 2)
-        self.proc = ctx.Process(target=_worker_main, args=(child, os.getpid(), self.progress), daemon=True,
-                                name="fitbench-worker")
-        with _main_module_not_imported_by_workers():
-            self.proc.start()
-        child.close()
-        self.chunk = None
-        self.chunk_id = None
-        self.stopping = False
-
-    def send(self, chunk_id: int, chunk: list, row_timeout) -> None:
-        self.chunk, self.chunk_id = chunk, chunk_id
-        self.progress[0] = 0.0
-        self.conn.send((chunk_id, chunk, row_timeout))
-
-    def ask_to_stop(self) -> None:
-        """Tell the worker to end once it is idle, without waiting for it (:meth:`stop` then waits)."""
-        if not self.stopping:
-            self.stopping = True
-            with contextlib.suppress(Exception):
-                self.conn.send(None)
-
-    def stop(self, now: bool = False) -> None:
-        if now:
-            with contextlib.suppress(Exception):
-                self.proc.kill()
-        else:
-            self.ask_to_stop()
-        self.proc.join(timeout=5)
-        if self.proc.is_alive():
-            self.proc.kill()
-            self.proc.join(timeout=5)
-        with contextlib.suppress(Exception):
-            self.conn.close()
 
 
 def _lost_chunk(chunks: Chunks, store: RowStore, bar, chunk: list, pos: int, status: str, message: str) -> None:
@@ -525,7 +371,7 @@ def kept_workers(jobs: int):
     study: 0.4 s of imports a worker here); :func:`start_kept_workers` starts them early. They are stopped when the
     block ends, however it ends."""
     global _KEPT, _KEPT_JOBS, _KEPT_LAST
-    _KEPT, _KEPT_JOBS, _KEPT_LAST = [], jobs, False
+    _KEPT, _KEPT_JOBS, _KEPT_LAST = take_early(jobs), jobs, False
     try:
         yield
     finally:

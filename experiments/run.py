@@ -22,6 +22,10 @@ import time
 from itertools import islice
 from pathlib import Path
 
+if __name__ == "__main__":  # the command: its local workers start now and import while this process imports its own
+    from experiments.localworkers import start_early
+    start_early(sys.argv[1:])
+
 from experiments import compare  # the verdict on every run: fresh results against the committed ones
 from experiments import config as configs
 from experiments import engine

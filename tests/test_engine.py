@@ -914,3 +914,27 @@ def test_an_abandoned_map_ends_its_busy_workers_and_a_failure_is_raised_here():
         assert len(alive) <= 1
         for w in executors._KEPT:  # what remains is idle: a call gets its own answer
             assert not w.conn.poll(0.2)
+
+
+def test_the_command_starts_its_workers_before_its_own_imports_only_when_rows_will_run(tmp_path, monkeypatch):
+    """``python -m experiments.run`` starts its local workers as it begins (they import while it imports) when its
+    arguments ask for several jobs on the local executor into a new --out folder, or with --force; otherwise (one job,
+    Dask, an --out folder that holds results, --help, an argument it cannot read) it starts none and the run decides
+    as before. The run takes the workers started so (kept_workers)."""
+    from experiments import localworkers
+    monkeypatch.setattr(localworkers.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    new, old = str(tmp_path / "new"), str(tmp_path)
+    for argv in (["s.toml", "--jobs", "1", "--out", new], ["--jobs", "2", "--executor", "dask", "--out", new],
+                 ["--jobs", "2", "--out", old], ["--jobs", "2", "--out", new, "--help"], ["--jobs", "two", "--out", new],
+                 ["--jobs", "2", "--scheduler", "tcp://h:1", "--out", new], ["--list", "--out", new]):
+        localworkers.start_early(argv)
+        assert localworkers.take_early(2) == [], argv
+    localworkers.start_early(["s.toml", "--jobs", "2", "--out", old, "--force"])
+    started = list(localworkers._EARLY)
+    assert len(started) == 2 and all(w.proc.is_alive() for w in started)
+    with executors.kept_workers(1):  # a run of one job keeps one of them, the other ends
+        assert executors._KEPT == started[:1] and localworkers._EARLY == []
+        started[1].proc.join(5)
+        assert not started[1].proc.is_alive()
+    started[0].proc.join(5)
+    assert not started[0].proc.is_alive()

@@ -1,0 +1,214 @@
+"""Local worker processes (spawned, one BLAS thread each, SIGINT ignored): started, told to stop, ended.
+
+Light to import (the standard library only): ``python -m experiments.run`` starts its workers with :func:`start_early`
+before it imports its own modules (pandas, the report's code: 0.4 s), so that both import at once; a worker imports
+the rows' code (:mod:`experiments.rows`) itself. :mod:`experiments.executors` runs chunks on them.
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import sys
+import threading
+import time
+
+
+BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+@contextlib.contextmanager
+def _one_blas_thread_per_worker():
+    """Workers inherit the environment when they start (lazily, at the first submit): one BLAS thread each,
+    unless the user chose otherwise. With several workers, multi-threaded BLAS on small matrices
+    oversubscribes the cores (the multilateration study ran 3x slower with 2 workers x 2 OpenBLAS threads
+    on 2 cores)."""
+    saved = {v: os.environ.get(v) for v in BLAS_THREAD_VARS}
+    for var in BLAS_THREAD_VARS:
+        os.environ.setdefault(var, "1")
+    try:
+        yield
+    finally:
+        for v, val in saved.items():
+            if val is None:
+                os.environ.pop(v, None)
+            else:
+                os.environ[v] = val
+
+
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c():
+    """Start workers with SIGINT ignored (an ignored signal stays ignored across exec, and Python then
+    installs no KeyboardInterrupt handler): Ctrl-C reaches the whole process group, and a worker still
+    importing must not print a traceback. The parent's own handler is restored at once."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def _main_module_not_imported_by_workers():
+    """While a worker process is started: a spawned process imports the parent's ``__main__`` module first (under
+    ``python -m experiments.run``, experiments.run with pandas, pydantic and the report's code: 0.6 s of CPU a
+    worker here), which a worker never uses (it runs :func:`_worker_main`). An empty stand-in
+    ``__main__`` (no name, no file) makes the start-up import nothing of it."""
+    import types
+    real = sys.modules.get("__main__")
+    sys.modules["__main__"] = types.ModuleType("__main__")
+    try:
+        yield
+    finally:
+        if real is not None:
+            sys.modules["__main__"] = real
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Worker initializer: the worker ends when the run that started it ends, however it ends.
+
+    On Linux the kernel sends SIGKILL to the worker when its parent dies (``prctl(PR_SET_PDEATHSIG)``
+    through ctypes); elsewhere a daemon thread polls ``os.getppid()`` every 0.5 s. A worker ignores
+    Ctrl-C (SIGINT reaches the whole process group): the parent stops the pool and prints one line.
+    When the workers are gone, the multiprocessing resource tracker sees its pipe close and exits too."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    armed = False
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+            libc = ctypes.CDLL(None, use_errno=True)
+            armed = libc.prctl(1, signal.SIGKILL, 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            armed = False
+    if os.getppid() != parent_pid:  # the parent died before the guard was armed
+        os._exit(1)
+    if not armed:
+        def watch():
+            while os.getppid() == parent_pid:
+                time.sleep(0.5)
+            os._exit(1)
+        threading.Thread(target=watch, daemon=True, name="fitbench-parent-watchdog").start()
+
+
+_CALL = "call"  # the first item of a message that asks a worker for func(*args), not for rows
+
+
+def _worker_main(conn, parent_pid: int, progress) -> None:
+    """A local worker: receive chunks, send back their rows as columns, until told to stop."""
+    from experiments.rows import run_chunk  # the rows' code: imported here, in the worker
+    _die_with_parent(parent_pid)
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            return
+        if msg is None:  # the run needs no more rows: end at once (the interpreter's own finalisation of NumPy,
+            _exit_now()   # SciPy and the methods took 0.25 s a worker, in the run's last moments)
+        if msg[0] == _CALL:  # a piece of the run's own work (map_in_idle_workers)
+            _, func, args = msg
+            try:
+                conn.send((True, func(*args)))
+            except Exception as exc:
+                conn.send((False, f"{type(exc).__name__}: {exc}"))
+            continue
+        chunk_id, tasks, row_timeout = msg
+        try:
+            out = run_chunk(tasks, row_timeout, progress)
+        except BaseException as exc:  # a failure of the engine itself: reported, the chunk is retried alone
+            out = {"failed": f"{type(exc).__name__}: {exc}"}
+        progress[0] = 0.0
+        conn.send((chunk_id, out))
+
+
+def _exit_now() -> None:
+    """End this worker process now: what it printed is flushed, nothing else of its interpreter is torn down (a
+    worker holds no file, lock or process of its own that needs it)."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(0)
+
+
+class _Worker:
+    def __init__(self, ctx):
+        self.conn, child = ctx.Pipe()
+        self.progress = ctx.RawArray("d", 2)
+        self.proc = ctx.Process(target=_worker_main, args=(child, os.getpid(), self.progress), daemon=True,
+                                name="fitbench-worker")
+        with _main_module_not_imported_by_workers():
+            self.proc.start()
+        child.close()
+        self.chunk = None
+        self.chunk_id = None
+        self.stopping = False
+
+    def send(self, chunk_id: int, chunk: list, row_timeout) -> None:
+        self.chunk, self.chunk_id = chunk, chunk_id
+        self.progress[0] = 0.0
+        self.conn.send((chunk_id, chunk, row_timeout))
+
+    def ask_to_stop(self) -> None:
+        """Tell the worker to end once it is idle, without waiting for it (:meth:`stop` then waits)."""
+        if not self.stopping:
+            self.stopping = True
+            with contextlib.suppress(Exception):
+                self.conn.send(None)
+
+    def stop(self, now: bool = False) -> None:
+        if now:
+            with contextlib.suppress(Exception):
+                self.proc.kill()
+        else:
+            self.ask_to_stop()
+        self.proc.join(timeout=5)
+        if self.proc.is_alive():
+            self.proc.kill()
+            self.proc.join(timeout=5)
+        with contextlib.suppress(Exception):
+            self.conn.close()
+
+
+#: workers started by :func:`start_early`, until the run takes them (:func:`take_early`)
+_EARLY: list = []
+
+
+def start_early(argv: list[str]) -> None:
+    """Start the local workers of ``python -m experiments.run ARGV`` now, before the run imports its own modules, when
+    the arguments clearly ask for them: ``--jobs N`` above 1 (or its default on a machine of several cores) on the
+    local executor, and rows that will run (``--force``, or an ``--out`` folder that does not exist yet: a run into a
+    folder with results first finds out which of its studies are up to date, and starts workers only then). Anything
+    else (an option this cannot read, ``--help``) starts nothing: the run decides as it always does."""
+    try:
+        import argparse
+        parser = argparse.ArgumentParser(add_help=False)
+        parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1))
+        parser.add_argument("--executor", default="local")
+        parser.add_argument("--scheduler")
+        parser.add_argument("--out")
+        parser.add_argument("--force", action="store_true")
+        parser.add_argument("--list", action="store_true")
+        parser.add_argument("-h", "--help", "--version", dest="other", action="store_true")
+        args, _ = parser.parse_known_args(argv)
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        jobs = min(args.jobs, cores)
+        if (jobs < 2 or args.executor != "local" or args.scheduler or args.list or args.other or
+                not (args.force or (args.out and not os.path.exists(args.out)))):
+            return
+    except (SystemExit, Exception):  # an argument this cannot read: the run's own parser says what is wrong
+        return
+    import multiprocessing as mp
+    ctx = mp.get_context("spawn")
+    with _one_blas_thread_per_worker(), _workers_ignore_ctrl_c():
+        _EARLY.extend(_Worker(ctx) for _ in range(jobs))
+
+
+def take_early(jobs: int) -> list:
+    """The workers :func:`start_early` started (at most ``jobs``; any beyond are ended), now the caller's."""
+    taken, extra = _EARLY[:jobs], _EARLY[jobs:]
+    _EARLY.clear()
+    for w in extra:
+        w.stop(now=True)
+    return taken

@@ -253,7 +253,7 @@ def _read_circular_runs(args):
 def cmd_circular_test(args) -> int:
     from methods.circular_test import diagnose, evaluate
     from fitbench.plots.circular_test import FIGSIZE as POLAR_FIGSIZE, diagnostics_json, polar_plot, text
-    from methods.circular_test.runs import check_nominal, check_pair, trim
+    from methods.circular_test.runs import check_nominal, check_pair, drop_repeated, trim
 
     R = finite("--nominal-radius", args.nominal_radius, positive=True, allow_none=False)
     if args.nominal_center is not None:
@@ -278,8 +278,12 @@ def cmd_circular_test(args) -> int:
     notes = ["angle + radial deviation: points placed about the nominal centre (0, 0), which the diagnostics use"] \
         if polar_centre else []
     for name in ("cw", "ccw"):
+        runs[name], repeats, said = drop_repeated(runs[name], center0, name.upper())  # a dwell is no contour point
+        if said:
+            warn(said)
+            notes.append(said)
         runs[name], rep = trim(runs[name], center0, arc_deg=arc, lead_in_deg=args.lead_in, lead_out_deg=args.lead_out)
-        trimmed[name] = rep
+        trimmed[name] = dict(rep, **repeats)
         if len(runs[name]) < 10:
             raise InvalidInputError(f"circular test ({name.upper()} run): {len(runs[name])} point(s) left after removing "
                                     f"the lead-in/out and the overrun beyond {arc:g}°; at least 10 are needed")

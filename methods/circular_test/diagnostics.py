@@ -38,7 +38,9 @@ pattern by +l / R, which reads as a servo mismatch of -2 l (s_x - s_y) and a sca
 and 8 um at R = 150 mm), and moves the steps at the reversals by l / R along the path.
 
 Uncertainties: the covariance sigma^2 (J^T J)^+ of the full model at the solution (every source and
-nuisance, phi_tau included), sigma^2 = RSS / (N - rank). They assume independent residuals and are
+nuisance, phi_tau included), sigma^2 = RSS / (N - rank), N counting independent points: a run with repeated
+samples is refused (:func:`methods.circular_test.evaluation.refuse_repeated`; each sample twice would divide
+every u by sqrt 2). They assume independent residuals and are
 optimistic where vibration or unmodelled errors leave correlated residuals. Every source stays in the
 model whatever is reported, so a source the arc cannot separate does not leak into the others: its
 confounding is in their uncertainties. A source is withheld (value None, with the reason) when:
@@ -55,6 +57,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods._errors import InvalidInputError
+from methods.circular_test.evaluation import refuse_repeated
 
 REVERSAL_ZONE = 1e-9  # |sin| or |cos| below which an axis is at its reversal: the sign of its motion is 0
 
@@ -450,6 +453,9 @@ def diagnose(cw, ccw, nominal_radius: float, nominal_center, *, feed_mm_min: flo
     if not np.all(np.isfinite(np.asarray(nominal_center, dtype=float))):
         raise InvalidInputError(f"the nominal centre must be two finite numbers, got {nominal_center!r}")
     cw, ccw = np.asarray(cw, float), np.asarray(ccw, float)
+    for pts, name in ((cw, "CW"), (ccw, "CCW")):   # sigma^2 = RSS / (N - rank) counts independent points only
+        if pts.ndim == 2 and pts.shape[1:] == (2,):
+            refuse_repeated(pts, name)
     R = float(nominal_radius)
     center = np.asarray(nominal_center, dtype=float)
     pts = np.vstack([cw, ccw])

@@ -14,6 +14,12 @@
   radius, about the nominal centre when given, else the least-squares centre of both runs.
 * mean radial deviation: the mean of those deviations.
 
+Repeated samples (a sample with the coordinates of the one before it: the machine dwelling, or a logger writing
+each sample twice) are refused (:func:`refuse_repeated`): the contour is the path while the machine moves, and a
+repeated position weights the least-squares centres (a 60-sample dwell moved G(b) by 0.3 um) and makes the
+diagnostics' uncertainties optimistic (every sample twice divides them by sqrt 2).
+:func:`methods.circular_test.runs.drop_repeated` drops them and says where (``fitbench circular-test`` does).
+
 Partial arcs (ISO 230-4 allows arcs smaller than 360 deg, e.g. in vertical planes where the
 ballbar's fixture blocks part of the circle: 180 deg or 220 deg): G, G(b) and F are evaluated on the
 arc measured (the least-squares centre of an arc of at least 90 deg is well determined); H on the
@@ -65,6 +71,37 @@ def arc_tolerance_deg(points, center, deviations: bool = True) -> float:
         return 0.0
     roundoff = ARC_ULPS * np.finfo(float).eps * (2 * np.pi + 3 * m / r_min)
     return float(np.degrees(roundoff + (ARC_DEVIATIONS * (float(r.max()) - r_min) / r_mid if deviations else 0.0)))
+
+
+def repeated_groups(mask) -> list[tuple[int, int]]:
+    """The groups of consecutive repeated samples of a run: [(first, last)] 0-based sample indices, ``first`` the
+    sample that the group repeats (``mask[i]``: sample i repeats sample i - 1)."""
+    mask = np.asarray(mask, bool)
+    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
+    return [(int(a) - 1, int(b) - 1) for a, b in zip(edges[::2], edges[1::2])]
+
+
+def groups_text(groups, limit: int = 3) -> str:
+    """'samples 1-60 are one position' / 'samples 1-2, 3-4, 5-6 and 3379 more groups are one position each'
+    (1-based sample numbers in the run's order)."""
+    shown = ", ".join(f"{a + 1}-{b + 1}" for a, b in groups[:limit])
+    more = len(groups) - limit
+    return (f"samples {shown}" + (f" and {more} more group{'s' if more > 1 else ''}" if more > 0 else "") +
+            (" are one position each" if len(groups) > 1 else " are one position"))
+
+
+def refuse_repeated(points, name: str) -> None:
+    """Refuse a run with consecutive samples at exactly the same coordinates (a dwell, a logger repeating samples):
+    they are not independent points of the contour (module docstring)."""
+    pts = np.asarray(points, float)
+    mask = np.r_[False, np.all(pts[1:] == pts[:-1], axis=1)] if len(pts) else np.zeros(0, bool)
+    if mask.any():
+        groups = repeated_groups(mask)
+        raise InvalidInputError(
+            f"{name} run: {int(mask.sum())} sample(s) repeat the one before them ({groups_text(groups)}: a dwell, "
+            "or a logger writing samples twice); repeated samples weight the least-squares "
+            "centres and make the diagnostics' uncertainties optimistic: drop them first "
+            "(methods.circular_test.runs.drop_repeated; fitbench circular-test does and says where)")
 
 
 def coverage_deg(points, center) -> tuple[float, float]:
@@ -146,6 +183,8 @@ def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = 
         raise InvalidInputError(f"the nominal radius must be a positive number, got {nominal_radius!r}")
     cw = validate_points(cw, min_points=10, method="circular test (CW run)")
     ccw = validate_points(ccw, min_points=10, method="circular test (CCW run)")
+    refuse_repeated(cw, "CW")
+    refuse_repeated(ccw, "CCW")
     both = np.vstack([cw, ccw])
     c_both = np.array(methods.fit("circle.gauss_newton", both).center)
     arcs = {}

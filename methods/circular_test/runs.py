@@ -10,6 +10,12 @@
   :func:`~methods.circular_test.evaluation.arc_tolerance_deg` (roundoff and the path's own deviations): a
   partial run recorded over exactly its nominal arc keeps its end point; a full circle drops only the point
   that closes it (back at 360 deg within roundoff).
+* Repeated samples (the machine at rest: a dwell before it moves, a feed hold; or a logger writing each sample
+  twice) are not points of the contour: a sample that moved less than ``REPEAT_FRACTION`` of its run's median
+  sampling step from the one before it repeats it, and is dropped by :func:`drop_repeated`, which says how many
+  and where (the first sample of each group, the position the machine stood at, is kept). Kept, a 60-sample
+  dwell at the start pulled the least-squares centres towards it (G CW 25.22 instead of 25.11 um) and every
+  sample twice divided the diagnostics' u by sqrt 2.
 * A nominal centre or radius far from the data's own least-squares circle gives F values dominated by
   the set-up error: warned with the fitted values (threshold ``NOMINAL_WARN_FRACTION`` of the radius).
 """
@@ -18,11 +24,14 @@ from __future__ import annotations
 import numpy as np
 
 from methods._errors import InvalidInputError
-from methods.circular_test.evaluation import MIN_ARC_DEG, arc_tolerance_deg
+from methods.circular_test.evaluation import MIN_ARC_DEG, arc_tolerance_deg, groups_text, repeated_groups
 
 #: nominal centre or radius further than this fraction of the radius from the fitted circle: a warning
 #: (2e-4 R = 60 µm at R = 300 mm, 20 µm for a 100 mm ballbar: well above a careful set-up)
 NOMINAL_WARN_FRACTION = 2e-4
+#: a sample closer than this fraction of its run's median (non-zero) sampling step to the one before it repeats it
+#: (the machine did not move: 1 % of a step is 5 µm at 1000 mm/min and 30 Hz, far above an encoder's flicker)
+REPEAT_FRACTION = 0.01
 
 
 def unwrapped_angle(points, center) -> np.ndarray:
@@ -36,6 +45,42 @@ def direction(points, center) -> tuple[str, float]:
     a = unwrapped_angle(points, center)
     swept = float(np.degrees(a[-1] - a[0]))
     return ("ccw" if swept > 0 else "cw"), swept
+
+
+def repeated(points) -> np.ndarray:
+    """Mask of the samples that repeat the one before them: moved by at most ``REPEAT_FRACTION`` of the run's
+    median non-zero sampling step (exact repeats included)."""
+    pts = np.asarray(points, float)
+    if len(pts) < 2:
+        return np.zeros(len(pts), bool)
+    step = np.hypot(*np.diff(pts, axis=0).T)
+    moving = step[step > 0]
+    limit = REPEAT_FRACTION * float(np.median(moving)) if len(moving) else 0.0
+    return np.r_[False, step <= limit]
+
+
+def drop_repeated(points, center=None, name: str = "") -> tuple[np.ndarray, dict, str | None]:
+    """(the run without its repeated samples, report, warning text or None). The report gives the number dropped
+    and each group as [first, last] 1-based sample numbers of the run as read (the first is kept) with its
+    polar angle about ``center`` (degrees, None without a centre)."""
+    pts = np.asarray(points, float)
+    mask = repeated(pts)
+    groups = repeated_groups(mask)
+    ang = None
+    if center is not None and groups:
+        ang = np.degrees(np.arctan2(pts[:, 1] - center[1], pts[:, 0] - center[0])) % 360.0
+    report = {"repeated_samples_dropped": int(mask.sum()),
+              "repeated_groups": [[a + 1, b + 1, None if ang is None else round(float(ang[a]), 3)] for a, b in groups]}
+    if not groups:
+        return pts, report, None
+    where = ""
+    if len(groups) <= 3 and ang is not None:
+        where = ", at " + ", ".join(f"{ang[a]:.1f}°" for a, _ in groups)
+    why = "a dwell at the start" if groups[0][0] == 0 and len(groups) == 1 else "a dwell or a logger repeating samples"
+    text = (f"{name + ' run: ' if name else ''}{int(mask.sum())} repeated sample(s) dropped: {groups_text(groups)}"
+            f"{where} ({why}: the machine moved less than {REPEAT_FRACTION:.0%} of a sampling step); they are not "
+            f"contour points, so each position is evaluated once ({len(pts) - int(mask.sum())} of {len(pts)} samples kept)")
+    return pts[~mask], report, text
 
 
 def trim(points, center, *, arc_deg: float | None = 360.0, lead_in_deg: float = 0.0, lead_out_deg: float = 0.0):

@@ -379,14 +379,54 @@ def add_circular_test(sub):
 
 
 # ----------------------------------------------------------------------------------------- positioning
+def instrument_length(option: str, text) -> tuple[float | None, bool]:
+    """(mm, unit given?) of ``--mpe`` / ``--instrument-u``: a length with its unit (``2um``, ``2 µm``, ``0.5nm``,
+    ``0.002mm``) or a bare number in mm (as before units were accepted); a one-line error otherwise."""
+    import re
+    from methods.units import mm_per
+    if text is None:
+        return None, False
+    m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s.+-][^\s]*)?\s*", str(text))
+    if not m:
+        raise InvalidInputError(f"{option} {text!r}: give a length with its unit, e.g. {option} 2um (or a bare number in mm)")
+    unit = m.group(2)
+    if unit is not None:
+        try:
+            factor = mm_per(unit)
+        except InvalidInputError:
+            raise InvalidInputError(f"{option} {text!r}: unknown unit {unit!r}; use um (µm), nm or mm, e.g. {option} 2um") from None
+    value = finite(option, m.group(1)) * (factor if unit is not None else 1.0)
+    if value < 0:
+        raise InvalidInputError(f"{option} {text!r} must not be negative")
+    return value, unit is not None
+
+
+def _check_instrument(option: str, text, value_mm: float | None, explicit: bool, data) -> None:
+    """Warn when a bare-number (mm) ``--mpe`` / ``--instrument-u`` exceeds every deviation of the axis: the
+    option is in mm while ``--tolerance`` and the printout are in µm, and 2 (meant as µm) gave U = 2309 µm."""
+    if value_mm is None or explicit or value_mm == 0:
+        return
+    devs = np.concatenate([np.ravel(a) for a in (data.up, data.down) if a is not None])
+    devs = devs[np.isfinite(devs)]
+    largest = float(np.max(np.abs(devs))) if len(devs) else 0.0
+    if value_mm <= largest:
+        return
+    from methods.units import likely_unit
+    guess = likely_unit(value_mm, max(largest, 1e-6))
+    hint = (f"is it in {guess}? give {option} {text}{guess.replace('µ', 'u')}" if guess else
+            f"give its unit, e.g. {option} {text}um")
+    warn(f"{option} {text} is read as {value_mm:g} mm (a bare number is mm), larger than every deviation of this axis "
+         f"(largest |deviation| {largest * 1e3:.3g} µm): {hint} (or {option} {text}mm to keep mm)")
+
+
 def cmd_positioning(args) -> int:
     from datasets.io import read_positioning
     from fitbench.plots.positioning import plot, text
 
     plot_path = check_plot_path(args.plot)
     report_path = check_plot_path(args.report, "--report")
-    instrument_u = finite("--instrument-u", args.instrument_u)
-    mpe = finite("--mpe", args.mpe)
+    instrument_u, u_explicit = instrument_length("--instrument-u", args.instrument_u)
+    mpe, mpe_explicit = instrument_length("--mpe", args.mpe)
     if args.degree < 0:
         raise InvalidInputError(f"--degree must be >= 0, got {args.degree}")
     temperature = finite("--material-temperature", args.material_temperature)
@@ -401,6 +441,8 @@ def cmd_positioning(args) -> int:
                                                             skip_rows=args.skip_rows, with_units=True)
     if given_deviation_unit is None and args.deviation_unit == args.unit:
         args.deviation_unit = None  # printed as one unit, as before
+    _check_instrument("--instrument-u", args.instrument_u, instrument_u, u_explicit, data)
+    _check_instrument("--mpe", args.mpe, mpe, mpe_explicit, data)
     POS_FIGURES = ("A", "E", "R", "B", "M", "A_up", "A_down", "E_up", "E_down", "R_up", "R_down", "B_mean")
     tolerances = parse_tolerances(args.tolerance, POS_FIGURES)
     thermal = None
@@ -469,8 +511,10 @@ def add_positioning(sub):
                          "(target, then one column per run: run1 / run1+ run1- / ...)")
     pp.add_argument("--degree", type=int, default=3, help="degree of the polynomial (default 3)")
     g = pp.add_mutually_exclusive_group()
-    g.add_argument("--instrument-u", type=float, metavar="U_MM", help="standard uncertainty of the instrument (mm)")
-    g.add_argument("--mpe", type=float, metavar="MPE_MM", help="the instrument's maximum permissible error (mm, rectangular)")
+    g.add_argument("--instrument-u", metavar="U", help="standard uncertainty of the instrument: a length with its unit "
+                   "(0.5um, 0.0005mm); a bare number is mm (unlike --tolerance, in µm)")
+    g.add_argument("--mpe", metavar="MPE", help="the instrument's maximum permissible error (rectangular, u = MPE/√3): a "
+                   "length with its unit (2um, 0.002mm); a bare number is mm (unlike --tolerance, in µm)")
     pp.add_argument("--standard", choices=("iso230-2:2014", "iso230-2:1988", "vdi3441"), default="iso230-2:2014")
     add_tolerance_option(pp, "A, E, R, B, M, A_up, ...")
     add_report_option(pp)

@@ -635,7 +635,7 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
 
 
 def load_plotting_in_background() -> None:
-    """Import matplotlib (Agg) and pyplot in a daemon thread: a run whose rows run in worker processes waits for them
+    """Import matplotlib (Agg), pyplot and the PNG and PDF backends in a daemon thread: a run whose rows run in worker processes waits for them
     meanwhile, and its figures need the import after the rows (0.5-0.7 s here). An import that fails here fails
     again, with its message, where the figures are drawn."""
     import threading
@@ -645,6 +645,8 @@ def load_plotting_in_background() -> None:
             import matplotlib
             matplotlib.use("Agg")
             import matplotlib.pyplot  # noqa: F401
+            import matplotlib.backends.backend_agg  # noqa: F401  (the PNG of each figure)
+            import matplotlib.backends.backend_pdf  # noqa: F401  (its PDF, for the report's LaTeX: 0.15 s more)
         except Exception:  # reported where the figures import it
             pass
     threading.Thread(target=load, daemon=True, name="fitbench-load-plotting").start()

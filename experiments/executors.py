@@ -45,6 +45,13 @@ class Progress:
             self.last = now
             self.log(self.line())
 
+    def notice(self, text: str) -> None:
+        """A line of its own, above the bar on a terminal."""
+        if self.bar.disable:
+            self.log(text)
+        else:
+            self.bar.write(text)
+
     def close(self) -> None:
         self.bar.close()
 
@@ -236,6 +243,26 @@ def map_in_idle_workers(func, arguments):
     return gen()
 
 
+#: seconds after which a row running without a time limit is named in the run's output (once)
+STUCK_NOTICE_S = 60.0
+
+
+def _notice_stuck_row(w: _Worker, seconds: float, bar) -> None:
+    """Say once which row a worker has been running for :data:`STUCK_NOTICE_S` seconds without a time limit (a method
+    that hangs would otherwise freeze the progress line with no word)."""
+    pos = int(w.progress[1])
+    if w.noticed == (w.chunk_id, pos) or not 0 <= pos < len(w.chunk or ()):
+        return
+    w.noticed = (w.chunk_id, pos)
+    task = w.chunk[pos]
+    spec = task.get("dataset")
+    where = f" on {spec.get('label')}" if isinstance(spec, dict) and spec.get("label") else ""
+    rep = f", repetition {task['repetition']}" if "repetition" in task else ""
+    bar.notice(f"   a row has been running for {seconds:.0f} s: {task.get('method', 'a row')}{where}{rep}; without a "
+               f"time limit nothing ends it (--row-timeout SECONDS, or row_timeout in the study's TOML, ends such rows "
+               f"as 'timeout')")
+
+
 def _lost_chunk(chunks: Chunks, store: RowStore, bar, chunk: list, pos: int, status: str, message: str) -> None:
     """A worker died (or was killed) at row ``pos`` of ``chunk``: that row gets ``status``; the rows before
     it (their results died with the worker) and after it run again, one per chunk."""
@@ -338,6 +365,8 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                             workers[workers.index(w)] = _Worker(ctx)
                         continue
                     started = w.progress[0]
+                    if not row_timeout and started and time.monotonic() - started > STUCK_NOTICE_S:
+                        _notice_stuck_row(w, time.monotonic() - started, bar)
                     if row_timeout and started and time.monotonic() - started > row_timeout + KILL_GRACE_S:
                         pos = w.progress[1]
                         w.stop(now=True)

@@ -144,6 +144,7 @@ class _Worker:
         self.chunk = None
         self.chunk_id = None
         self.stopping = False
+        self.noticed = None  # (chunk id, position) of the row last named as running long
 
     def send(self, chunk_id: int, chunk: list, row_timeout) -> None:
         self.chunk, self.chunk_id = chunk, chunk_id

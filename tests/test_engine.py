@@ -497,6 +497,8 @@ def hostile(points, *, what="ok"):
     if what == "hang":
         while True:
             time.sleep(0.01)
+    if what == "slow":
+        time.sleep(2.5)
     if what == "hang_in_c":  # a row that neither the alarm nor an exception raised in its thread can end
         if threading.current_thread() is threading.main_thread():  # a Dask worker runs rows in a thread
             signal.signal(signal.SIGALRM, signal.SIG_IGN)
@@ -557,6 +559,23 @@ def test_hangs_exits_and_interrupts_are_labelled_and_the_study_goes_on(tmp_path,
     again = cli([study, *jobs, "--row-timeout", "1", "--out", out], tmp_path, hostile_site)
     assert again.returncode == 0, again.stderr
     assert f"{len(df) - (what == '').sum()} to run" in again.stdout
+
+
+@pytest.mark.slow
+def test_a_row_running_long_without_a_time_limit_is_named_once(tmp_path, hostile_site):
+    """A method that hangs froze the progress line with no word when no time limit was set: the run names each row
+    that has been running for STUCK_NOTICE_S seconds (60 s; 1 s here, the rows take 2.5 s), once, and says what would
+    end it."""
+    study = write_study(tmp_path, name="eng4", reps=1, methods=hostile_methods("slow"))
+    code = ("import sys; import experiments.executors as e; e.STUCK_NOTICE_S = 1.0; from experiments import run; "
+            "sys.exit(run.main(sys.argv[1:]))")
+    res = subprocess.run([sys.executable, "-c", code, str(study), "--jobs", "2", "--out", str(tmp_path / "o"),
+                          "--no-report"], cwd=tmp_path, capture_output=True, text=True, timeout=600,
+                         env=subprocess_env(hostile_site, OPENBLAS_NUM_THREADS="1"))
+    assert res.returncode == 0, res.stderr
+    named = [line for line in res.stdout.splitlines() if "a row has been running for" in line]
+    assert len(named) == 2, res.stdout  # the study's two slow rows (one per data set), each named once
+    assert "circle.hostile on " in named[0] and "--row-timeout SECONDS" in named[0]
 
 
 @pytest.mark.slow

@@ -19,6 +19,7 @@ is one line: ``FILE: KEY: PROBLEM``.
 from __future__ import annotations
 
 import copy
+import difflib
 import inspect
 import math
 from typing import Annotated, Any, Callable, Literal, Union
@@ -271,13 +272,34 @@ def _path(error) -> str:
     return ".".join(parts) or "(top level)"
 
 
-def _message(error) -> str:
-    """A one-line reading of a jsonschema error (the most specific one for oneOf/anyOf)."""
+def _slip(error, extra: list[str], known, top_level) -> str:
+    """The likely cause of an unknown key in a table (``[report]``) or in an entry of an array of tables
+    (``[[methods]]``): the table's own key it is close to, else a top-level key written after the table's header
+    (in TOML it belongs to that table)."""
+    path = list(error.absolute_path)
+    header = (f"[{path[0]}]" if len(path) == 1 and isinstance(path[0], str) else
+              f"[[{path[0]}]]" if len(path) == 2 and isinstance(path[0], str) and isinstance(path[1], int) else None)
+    for key in extra:
+        own = difflib.get_close_matches(key, list(known), n=1)
+        top = [key] if key in top_level else difflib.get_close_matches(key, list(top_level), n=1)
+        if header and top and (top[0] == key or not own):
+            what = f"{key!r} is a top-level key, and" if top[0] == key else f"did you mean the top-level key {top[0]!r}?"
+            return (f"; {what} a key written after {header} belongs to that table in TOML: move it above the "
+                    f"first [...] or [[...]]")
+        if own:
+            return f"; did you mean {own[0]!r}?"
+    return ""
+
+
+def _message(error, top_level=()) -> str:
+    """A one-line reading of a jsonschema error (the most specific one for oneOf/anyOf); ``top_level``: the keys a
+    config may have at its top level (for the hint of a key written after a ``[[table]]``)."""
     v = error.validator
     if v == "additionalProperties":
         extra = sorted(set(error.instance) - set(error.schema.get("properties", {})))
         known = ", ".join(sorted(error.schema.get("properties", {})))
-        return f"unknown key(s) {', '.join(extra)} (known: {known})"
+        return (f"unknown key{'s' if len(extra) > 1 else ''} {', '.join(map(repr, extra))} (known: {known})"
+                + _slip(error, extra, error.schema.get("properties", {}), top_level))
     if v == "required":
         return f"missing required key {error.message.split(' ')[0]}"
     if v == "type":
@@ -302,7 +324,14 @@ def _message(error) -> str:
         if sub:
             best = jsonschema.exceptions.best_match(sub)
             where = ".".join(str(p) for p in best.relative_path)
-            return (where + ": " if where else "") + _message(best)
+            return (where + ": " if where else "") + _message(best, top_level)
+    if v == "anyOf" and isinstance(error.instance, dict):  # a table where a value or a table may stand: the table's
+        tables = [k for k, alt in enumerate(error.validator_value) if alt.get("type") == "object"]   # own problem
+        sub = [e for e in error.context if e.relative_schema_path and e.relative_schema_path[0] in tables]
+        if len(tables) == 1 and sub:
+            best = jsonschema.exceptions.best_match(sub)
+            where = ".".join(str(p) for p in best.relative_path)
+            return (where + ": " if where else "") + _message(best, top_level)
     if v == "anyOf" and "description" in error.schema:
         return f"must be {error.schema['description']}, got {error.instance!r}"
     return error.message
@@ -319,11 +348,12 @@ def check_structure(cfg: dict, where: str, study_keys: dict | None = None) -> No
     """Raise ConfigError for the first structural problem (unknown key, wrong type, missing table);
     ``study_keys``: the keys the config's study kind declares (its ``Study.config_schema``)."""
     from experiments.engine import ConfigError
-    validator = _Validator(config_schema(study_keys))
+    schema = config_schema(study_keys)
+    validator = _Validator(schema)
     errors = sorted(validator.iter_errors(cfg), key=lambda e: (list(map(str, e.absolute_path)), e.validator))
     if errors:
         err = errors[0]
-        raise ConfigError(f"{where}: {_path(err)}: {_message(err)}")
+        raise ConfigError(f"{where}: {_path(err)}: {_message(err, schema['properties'])}")
     _check_finite(cfg, where, "")
 
 

@@ -372,6 +372,40 @@ def validate(cfg: dict, where: str) -> None:
                 if a in numeric and how not in ("count", "max", "min") and columns[args[a]] == "text":
                     raise ConfigError(f"{here}.aggregate: the {how} of {args[a]!r} (a text column) is not defined; "
                                       "use count, or a numeric column")
+    for i, r in enumerate(cfg.get("rankings", [])):
+        _check_ranking(r, cfg, columns, f"{where}: rankings[{i}]")
+
+
+def _check_ranking(r: dict, cfg: dict, columns: dict | None, here: str) -> None:
+    """A ``[[rankings]]`` entry (``experiments.render.rankings``), before any row runs: its metric a numeric column
+    of the rows, its problem and where columns too, its methods pattern matching a method of the study (its unit is
+    checked by the report, ``ranking_unit``)."""
+    import fnmatch
+    _check_where(r.get("where"), columns, f"{here}.where")
+    if columns is not None:
+        _check_column(r["metric"], columns, f"{here}.metric")
+        if columns[r["metric"]] != "number":
+            raise ConfigError(f"{here}.metric: {r['metric']!r} is not a number (a ranking's metric is a cost, lower "
+                              "is better)")
+        for c in r.get("problem", []):
+            _check_column(c, columns, f"{here}.problem")
+        ids = _method_ids(cfg)
+        if ids and "methods" in r and not any(fnmatch.fnmatchcase(m, r["methods"]) for m in ids):
+            raise ConfigError(f"{here}.methods: {r['methods']!r} matches none of the study's methods "
+                              f"({', '.join(ids)})")
+
+
+def _method_ids(cfg: dict) -> list[str]:
+    """The registered method ids of a study's ``[[methods]]`` (wildcards expanded)."""
+    import methods
+    ids = []
+    for entry in cfg.get("methods", []):
+        mid = entry if isinstance(entry, str) else entry["id"]
+        if mid.endswith(".*"):
+            ids += [s.id for s in methods.list_methods(mid[:-2])]
+        elif "." in mid:
+            ids.append(mid)
+    return list(dict.fromkeys(ids))
 
 
 def _plot_arguments(f: dict) -> dict:

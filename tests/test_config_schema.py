@@ -374,3 +374,63 @@ def test_a_plugin_data_source_declares_what_it_gives(tmp_path):
     finally:
         for name in ("test_trajectory", "test_undeclared"):
             sources._REGISTRY.pop(name, None)
+
+
+@pytest.mark.parametrize("where, key, problem", [
+    ("methods", 'summary_by = ["method"]', "methods[1]: unknown key 'summary_by' (known: grid, id, max_n, on, params); "
+     "'summary_by' is a top-level key, and a key written after [[methods]] belongs to that table in TOML: move it "
+     "above the first [...] or [[...]]"),
+    ("methods", "repetitons = 3", "methods[1]: unknown key 'repetitons' (known: grid, id, max_n, on, params); did you "
+     "mean the top-level key 'repetitions'? a key written after [[methods]]"),
+    ("datasets", "seed = 4", "datasets[0]: unknown key 'seed' (known: generator, grid, label, params); 'seed' is a "
+     "top-level key, and a key written after [[datasets]] belongs to that table"),
+    ("report", "seed = 4", "report: unknown key 'seed' (known: findings, order, section); 'seed' is a top-level key, "
+     "and a key written after [report] belongs to that table"),
+    ("quick", "repetitons = 1", "quick: unknown key 'repetitons' (known: "),   # a key of [quick] itself: ...
+    ("top", "repetitons = 1", "(top level): unknown key 'repetitons' (known: "),
+])
+def test_a_top_level_key_written_after_a_table_is_named_with_its_likely_cause(tmp_path, where, key, problem):
+    """TOML's slip: a key written after ``[[methods]]`` (or any table) belongs to that table. The message names the
+    key and the cause (it named the whole table: 'must be a method id, or a table with ..., got {...}')."""
+    text = GOOD.format(name="study")
+    if where == "datasets":
+        text = text.replace("grid = { n = [10, 20] }", "grid = { n = [10, 20] }\n" + key)
+    elif where == "top":
+        text = key + "\n" + text
+    else:
+        text += {"methods": "", "report": '[report]\nsection = "s"\n', "quick": "[quick]\n"}[where] + key + "\n"
+    with pytest.raises(ConfigError) as info:
+        configs.load(str(write(tmp_path, text)))
+    msg = str(info.value)
+    assert "\n" not in msg and msg.startswith(f"study.toml: {problem}"), msg
+    if where in ("quick", "top"):   # a typo of the table's (or the file's) own key: its close match, no slip
+        assert msg.endswith("; did you mean 'repetitions'?") and "written after" not in msg, msg
+
+
+RANKED = GOOD.format(name="study") + '''[[rankings]]
+profile = "p"
+metric = "radius_error"
+methods = "circle.*"
+'''
+
+
+@pytest.mark.parametrize("old, new, problem", [
+    ('metric = "radius_error"', 'metric = "radius_eror"',
+     "rankings[0].metric: no row will have the column 'radius_eror'; did you mean 'radius_error'?"),
+    ('metric = "radius_error"', 'metric = "method"', "rankings[0].metric: 'method' is not a number"),
+    ('methods = "circle.*"', 'methods = "cirle.*"', "rankings[0].methods: 'cirle.*' matches none of the study's "
+                                                      "methods (circle.kasa, circle.gauss_newton)"),
+    ('methods = "circle.*"', 'methods = "circle.*"\nproblem = ["dataset", "repetiton"]',
+     "rankings[0].problem: no row will have the column 'repetiton'; did you mean 'repetition'?"),
+    ('methods = "circle.*"', 'methods = "circle.*"\nwhere = { data_nn = 10 }',
+     "rankings[0].where: no row will have the column 'data_nn'"),
+])
+def test_a_ranking_declaration_is_checked_before_any_row(tmp_path, capsys, old, new, problem):
+    """``[[rankings]]`` are checked with the config as tables and figures are (a misspelt metric was found only by
+    the report, after every row had run)."""
+    path = write(tmp_path, RANKED.replace(old, new, 1))
+    code = runner.main([str(path), "--out", str(tmp_path / "out"), "--jobs", "1", "--no-report"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err and f"study.toml: {problem}" in err, err
+    assert not (tmp_path / "out" / "study" / "rows.sqlite").exists()
+    assert configs.load(str(write(tmp_path, RANKED)))["rankings"][0]["metric"] == "radius_error"   # as written: fine

@@ -88,3 +88,93 @@ def test_cli_drops_repeated_samples_says_where_and_counts_independent_points(run
         for name, item in clean["diagnostics"].items():
             assert got["diagnostics"][name] == item, name
         assert got["details"]["diagnostics_model"]["points"] == len(cw) + len(ccw)
+
+
+# ------------------------------------------------------------------------------------------------ signs
+def hand_built_runs(n=1440, R=150.0, centre=(400.0, 250.0), feed=1000.0, squareness=50e-6, scale_x=20e-6,
+                    lag_x=0.002, backlash_x=0.005, spike_y=0.004, spike_decay_deg=1.0, offset=(0.003, -0.002)):
+    """CW and CCW runs of a machine built from the documented geometric meaning of each sign, not from the
+    diagnostics' model: the Y axis moves along (sin a, cos a) (the angle between +X and +Y is 90 deg - a); X travels
+    (1 + scale_x) mm per mm commanded; X follows its command lag_x s late; X falls short of its command by
+    backlash_x / 2 in its direction of travel; Y sticks at its reversals (it stays behind its new direction of
+    travel by spike_y, decaying over spike_decay_deg of arc); the path's centre is offset from the nominal one."""
+    omega = feed / 60.0 / R                                   # rad/s
+    out = {}
+    for name, d in (("cw", -1.0), ("ccw", 1.0)):
+        theta = np.radians(10.1) + d * np.arange(n) * 2 * np.pi / n
+        theta_x = theta - d * omega * lag_x                   # where X was commanded lag_x ago
+        x = R * np.cos(theta_x) * (1 + scale_x) + 0.5 * backlash_x * d * np.sign(np.sin(theta))  # short of -sign(xdot)
+        ydot_sign = d * np.sign(np.cos(theta))
+        since = np.mod(d * (theta - np.pi / 2), np.pi)        # arc travelled since the last Y reversal (90, 270 deg)
+        y = R * np.sin(theta) - spike_y * ydot_sign * np.exp(-since / np.radians(spike_decay_deg))
+        pts = np.column_stack([x + y * np.sin(squareness), y * np.cos(squareness)])
+        out[name] = pts + np.asarray(centre) + np.asarray(offset)
+    return out["cw"], out["ccw"]
+
+
+def test_signs_follow_their_documented_geometric_meaning(tmp_path, capsys):
+    """+50 µrad of squareness built as 'the angle between +X and +Y is 90 deg - 50 µrad' gives +50 µrad; likewise
+    X travelling further (+20 µm/m), X lagging behind Y (+2 ms), X's lost motion (+5 µm), Y sticking at its reversals
+    (+4 µm, outward) and the centre offset (+3, -2 µm); the JSON says what each sign means and the text names the
+    meaning of each resolved sign."""
+    cw, ccw = hand_built_runs()
+    dg = diagnose(cw, ccw, 150.0, (400.0, 250.0), feed_mm_min=1000.0)
+    assert dg["squareness"]["value"] == pytest.approx(50.0, abs=0.05)
+    assert dg["scale_mismatch"]["value"] == pytest.approx(20.0, abs=0.05)
+    assert dg["servo_mismatch"]["value"] == pytest.approx(2.0, abs=0.01)
+    assert dg["backlash_x"]["value"] == pytest.approx(5.0, abs=0.01)
+    assert dg["reversal_spike_y"]["value"] == pytest.approx(4.0, abs=0.05)
+    assert dg["_model"]["centre_offset_um"] == pytest.approx([3.0, -2.0], abs=0.01)
+    code = cli_main(["circular-test", write(tmp_path / "cw.csv", cw), write(tmp_path / "ccw.csv", ccw),
+                     "--nominal-radius", "150", "--nominal-center", "400", "250", "--feed", "1000", "--json"])
+    d = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert d["diagnostics"]["squareness"]["sign"].startswith("positive: the angle between the +X and +Y axes is less "
+                                                              "than 90° by the value")
+    assert d["diagnostics"]["scale_mismatch"]["sign"].startswith("X scale error minus Y's: positive: X travels further")
+    assert "positive: X lags behind Y" in d["diagnostics"]["servo_mismatch"]["sign"]
+    assert d["diagnostics"]["backlash_x"]["sign"].startswith("positive: lost motion")
+    assert d["diagnostics"]["reversal_spike_y"]["sign"].startswith("positive: Y sticks at its reversals (90° and 270°)")
+    assert "minus the nominal centre" in d["details"]["diagnostics_model"]["signs"]["centre_offset"]
+    assert cli_main(["circular-test", str(tmp_path / "cw.csv"), str(tmp_path / "ccw.csv"), "--nominal-radius", "150",
+                     "--nominal-center", "400", "250", "--feed", "1000"]) == 0
+    lines = {ln.split("  ")[1].strip(): ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("  ")}
+    for label, words in (("squareness", "angle X-Y below 90°"), ("scale mismatch X-Y", "X travels further"),
+                         ("servo mismatch X-Y", "X lags behind Y"), ("backlash X", "lost motion"),
+                         ("reversal spike Y", "outward spike")):
+        assert lines[label].endswith(words), lines[label]
+    # the opposite machine gives the opposite signs and words
+    cw, ccw = hand_built_runs(squareness=-50e-6, scale_x=-20e-6, backlash_x=-0.005, spike_y=-0.004)
+    dg = diagnose(cw, ccw, 150.0, (400.0, 250.0), feed_mm_min=1000.0)
+    for name, value in (("squareness", -50.0), ("scale_mismatch", -20.0), ("backlash_x", -5.0),
+                        ("reversal_spike_y", -4.0)):
+        assert dg[name]["value"] == pytest.approx(value, abs=0.05), name
+
+
+def test_the_words_follow_the_plane():
+    from fitbench.plots.circular_test import SIGNS, for_plane, meaning
+    assert meaning("squareness", 50.0, 0.1, "zx") == "angle Z-X below 90°"
+    assert meaning("servo_mismatch", -1.0, 0.1, "yz") == "Z lags behind Y"
+    assert meaning("backlash_x", 0.1, 0.1) == ""                       # within 2 u: the sign is not resolved
+    assert for_plane(SIGNS["squareness"], "zx").startswith("positive: the angle between the +Z and +X axes")
+
+
+def test_the_json_model_is_in_the_json_units(tmp_path, capsys):
+    """``details.diagnostics_model`` is in the units the JSON declares (mm, rad), as docs/circular-test.md says: it
+    held centre_offset_um, radius_offset_um, spike_decay_deg and residual_rms_um beside units {length: mm}."""
+    files = [write(tmp_path / f"{n}.csv", pts) for n, pts in zip(("cw", "ccw"), hand_built_runs())]
+    cw, ccw = (np.loadtxt(f, delimiter=",", skiprows=1) for f in files)   # the points the CLI reads
+    m = diagnose(cw, ccw, 150.0, (400.0, 250.0), feed_mm_min=1000.0)["_model"]
+    code = cli_main(["circular-test", *files, "--nominal-radius", "150", "--nominal-center", "400", "250", "--feed",
+                     "1000", "--json"])
+    d = json.loads(capsys.readouterr().out)
+    assert code == 0 and d["units"]["length"] == "mm" and d["units"]["angle"] == "rad"
+    got = d["details"]["diagnostics_model"]
+    assert not [k for k in got if k.endswith(("_um", "_deg"))], sorted(got)
+    assert got["centre_offset"] == pytest.approx([v * 1e-3 for v in m["centre_offset_um"]], rel=1e-6)
+    assert got["centre_offset"] == pytest.approx([0.003, -0.002], abs=1e-5)
+    assert got["radius_offset"] == pytest.approx({k: v * 1e-3 for k, v in m["radius_offset_um"].items()}, rel=1e-6)
+    assert got["spike_decay"] == pytest.approx(np.radians(m["spike_decay_deg"]), rel=1e-9)
+    assert got["spike_decay"] == pytest.approx(np.radians(1.0), rel=0.05)
+    assert got["residual_rms"] == pytest.approx(m["residual_rms_um"] * 1e-3, rel=1e-9)
+    assert got["points"] == len(cw) + len(ccw) and got["converged"] is True

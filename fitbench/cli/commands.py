@@ -212,7 +212,9 @@ def cmd_fit(args) -> int:
     rows = [("method", result.method), ("data", f"{source} ({len(points)} points)")]
     rows += [(_axis_label(k, axes), v) for k, v in result.report_lines()]
     rows += [("form error", f"{_fmt(result.form_error)} mm"),
-             ("converged", f"{'yes' if result.converged else 'NO'} ({result.message})"),
+             # the solver's own test (in its unit frame) is for --verbose and the JSON; the reason of a NO is the operator's
+             ("converged", "yes" if result.converged else f"NO ({result.message})"),
+             *([("solver", result.message)] if args.verbose and result.converged else []),
              ("iterations", _fmt(result.iterations)), ("evaluations", _fmt(result.nfev)),
              ("runtime", f"{result.runtime_s * 1e3:.3f} ms"),
              ("parameters", ", ".join(f"{k}={v!r}" for k, v in result.params.items()) or "-")]
@@ -252,7 +254,7 @@ def _read_circular_runs(args):
 
 def cmd_circular_test(args) -> int:
     from methods.circular_test import diagnose, evaluate
-    from fitbench.plots.circular_test import FIGSIZE as POLAR_FIGSIZE, diagnostics_json, polar_plot, text
+    from fitbench.plots.circular_test import FIGSIZE as POLAR_FIGSIZE, diagnostics_json, model_json, polar_plot, text
     from methods.circular_test.runs import check_nominal, check_pair, drop_repeated, trim
 
     R = finite("--nominal-radius", args.nominal_radius, positive=True, allow_none=False)
@@ -335,7 +337,8 @@ def cmd_circular_test(args) -> int:
         d = ev.to_dict(residuals=False)
         out = {k: d.pop(k) for k in (*ev.FIGURES, "center")}
         out["units"] = dict(JSON_UNITS, input_unit=canonical(args.unit))
-        out["diagnostics"] = (diagnostics_json(dg) if dg else "not estimated: give --nominal-center X Y")
+        out["diagnostics"] = (diagnostics_json(dg, conditions["plane"]) if dg else
+                              "not estimated: give --nominal-center X Y")
         from dataclasses import fields
         from methods import FitResult
         shared = {f.name for f in fields(FitResult)}  # the evaluation's own fields only
@@ -344,7 +347,7 @@ def cmd_circular_test(args) -> int:
         if check:
             out["verdict"] = check
         if dg:
-            out["details"]["diagnostics_model"] = dg["_model"]
+            out["details"]["diagnostics_model"] = model_json(dg["_model"], conditions["plane"])
         print(json.dumps(_jsonable(out)))
         return 0
     print("\n".join(lines))
@@ -716,6 +719,9 @@ def add_fit(sub):
     add_reader_options(pf, polar=True, printed="mm")
     pf.add_argument("--json", action="store_true", help="print the result as one JSON object")
     pf.add_argument("--no-residuals", action="store_true", help="leave the per-point residuals out of --json")
+    pf.add_argument("--verbose", action="store_true",
+                    help="also print the solver's message on a converged fit (its stopping and optimality tests; "
+                         "always in --json as 'message')")
     pf.add_argument("--plot", metavar="FILE", help="write a quick look: points, fitted curve, residuals (.png, .pdf, .svg)")
     pf.set_defaults(func=cmd_fit)
 

@@ -4,6 +4,7 @@ scale in µm per division, the G band (minimum and maximum circles), start and d
 runs, a test-conditions panel and the diagnostics ranked by their contribution to the circular deviation."""
 from __future__ import annotations
 
+import re
 import textwrap
 
 import numpy as np
@@ -13,6 +14,50 @@ from fitbench.plots import report_figure
 LABELS = {"squareness": "squareness", "scale_mismatch": "scale mismatch X-Y", "servo_mismatch": "servo mismatch X-Y",
           "backlash_x": "backlash X", "backlash_y": "backlash Y", "reversal_spike_x": "reversal spike X",
           "reversal_spike_y": "reversal spike Y", "cyclic_error": "cyclic error"}
+#: what the sign of each diagnostic means (X, Y: the plane's first and second axes; angles about the centre from +X
+#: towards +Y), by the model of methods/circular_test/diagnostics.py (checked on a hand-built path in
+#: tests/test_circular_test_operator.py); in the JSON as each diagnostic's ``sign``
+SIGNS = {
+    "squareness": "positive: the angle between the +X and +Y axes is less than 90° by the value (the Y axis leans "
+                  "towards +X); negative: more than 90°",
+    "scale_mismatch": "X scale error minus Y's: positive: X travels further than Y for the same command (the path is "
+                      "longer along X); negative: Y travels further",
+    "servo_mismatch": "X's following error minus Y's (a lag time with the feed, else a lag length): positive: X lags "
+                      "behind Y; negative: Y lags behind X",
+    "backlash_x": "positive: lost motion: X falls short of its command by half the value in its direction of travel, "
+                  "a step of the value at its reversals (0° and 180°); negative: overshoot",
+    "backlash_y": "positive: lost motion: Y falls short of its command by half the value in its direction of travel, "
+                  "a step of the value at its reversals (90° and 270°); negative: overshoot",
+    "reversal_spike_x": "positive: X sticks at its reversals (0° and 180°): a spike of the value outwards from the "
+                        "circle, decaying over the spike decay angle; negative: inwards (an overshoot)",
+    "reversal_spike_y": "positive: Y sticks at its reversals (90° and 270°): a spike of the value outwards from the "
+                        "circle, decaying over the spike decay angle; negative: inwards (an overshoot)",
+    "cyclic_error": "an amplitude (no sign): the mean of the X and Y cyclic errors' amplitudes"}
+#: the same for the set-up (``details.diagnostics_model`` of the JSON)
+MODEL_SIGNS = {"centre_offset": "the measured path's centre minus the nominal centre, (X, Y)",
+               "radius_offset": "each run's mean radius minus the nominal radius: positive: larger"}
+#: the meaning of a positive and of a negative value in a few words (the text output's last column)
+SHORT = {"squareness": ("angle X-Y below 90°", "angle X-Y above 90°"),
+         "scale_mismatch": ("X travels further", "Y travels further"),
+         "servo_mismatch": ("X lags behind Y", "Y lags behind X"),
+         "backlash_x": ("lost motion", "overshoot"), "backlash_y": ("lost motion", "overshoot"),
+         "reversal_spike_x": ("outward spike", "inward spike"), "reversal_spike_y": ("outward spike", "inward spike")}
+
+
+def for_plane(text: str, plane: str | None) -> str:
+    """``text`` with X and Y (the first and second axes) named as the plane names them ('zx': Z and X)."""
+    a, b = (plane or "xy").upper()[:2] if plane and len(plane) >= 2 else ("X", "Y")
+    return re.sub(r"\b([XY])\b", lambda m: a if m.group(1) == "X" else b, text)
+
+
+def meaning(name: str, value, u=None, plane: str | None = None) -> str:
+    """What ``value`` of the diagnostic ``name`` means, in a few words; '' when its sign is not resolved (within
+    2 u of 0, or 0)."""
+    if name not in SHORT or value is None or value == 0 or (u is not None and abs(value) <= 2 * u):
+        return ""
+    return for_plane(SHORT[name][0 if value > 0 else 1], plane)
+
+
 #: human unit of each diagnostics unit, and the factor to the JSON's (mm, rad, s, ratio)
 HUMAN_UNIT = {"um": "µm", "urad": "µrad", "um/m": "µm/m", "ms": "ms"}
 TO_JSON = {"um": (1e-3, "mm"), "urad": (1e-6, "rad"), "um/m": (1e-6, "1 (m/m)"), "ms": (1e-3, "s")}
@@ -41,28 +86,42 @@ def contribution_um(name: str, item: dict, R_mm: float, feed_mm_min: float | Non
 
 def _label(name: str, plane: str | None) -> str:
     """The label with the plane's axis letters (X, Y for 'xy'; Z, X for 'zx'; Y, Z for 'yz')."""
-    a, b = (plane or "xy").upper()[:2] if plane and len(plane) >= 2 else ("X", "Y")
-    return LABELS[name].replace("X-Y", "#1-#2").replace(" X", " #1").replace(" Y", " #2").replace("#1", a).replace("#2", b)
+    return for_plane(LABELS[name], plane)
 
 
-def ranked(dg: dict, R_mm: float, feed_mm_min=None, plane: str | None = None) -> list:
-    """[(label, item, contribution µm or None)] sorted by contribution, the largest first."""
-    rows = [(_label(n, plane), dg[n], contribution_um(n, dg[n], R_mm, feed_mm_min)) for n in LABELS if n in dg]
-    return sorted(rows, key=lambda r: (r[2] is None, -(r[2] or 0.0)))
+def ranked(dg: dict, R_mm: float, feed_mm_min=None, plane: str | None = None, names: bool = False) -> list:
+    """[(label, item, contribution µm or None)] sorted by contribution, the largest first (with ``names``, the
+    diagnostic's name first in each tuple)."""
+    rows = [(n, _label(n, plane), dg[n], contribution_um(n, dg[n], R_mm, feed_mm_min)) for n in LABELS if n in dg]
+    rows.sort(key=lambda r: (r[3] is None, -(r[3] or 0.0)))
+    return rows if names else [r[1:] for r in rows]
 
 
-def diagnostics_json(dg: dict) -> dict:
-    """The diagnostics in the JSON's units (mm, rad, s, ratio)."""
+def diagnostics_json(dg: dict, plane: str | None = None) -> dict:
+    """The diagnostics in the JSON's units (mm, rad, s, ratio), each with what its sign means (``sign``)."""
     out = {}
     for k, item in dg.items():
         if k.startswith("_"):
             continue
         f, unit = TO_JSON[item["unit"]]
         d = {"value": None if item["value"] is None else item["value"] * f, "unit": unit,
-             "u": None if item["u"] is None else item["u"] * f}
+             "u": None if item["u"] is None else item["u"] * f, "sign": for_plane(SIGNS[k], plane)}
         if "note" in item:
             d["note"] = item["note"]
         out[k] = d
+    return out
+
+
+def model_json(model: dict, plane: str | None = None) -> dict:
+    """``diagnose``'s ``_model`` in the JSON's units: centre and radius offsets and the residual RMS in mm, the spike
+    decay angle in rad (the API's dict names them in µm and degrees), with the signs of the offsets."""
+    out = {"centre_offset": [v * 1e-3 for v in model["centre_offset_um"]],
+           "radius_offset": {k: v * 1e-3 for k, v in model["radius_offset_um"].items()},
+           "spike_decay": float(np.radians(model["spike_decay_deg"])),
+           "residual_rms": model["residual_rms_um"] * 1e-3}
+    out.update({k: v for k, v in model.items()
+                if k not in ("centre_offset_um", "radius_offset_um", "spike_decay_deg", "residual_rms_um")})
+    out["signs"] = {k: for_plane(v, plane) for k, v in MODEL_SIGNS.items()}
     return out
 
 
@@ -88,15 +147,16 @@ def text(ev, dg: dict | None) -> str:
     if dg:
         feed = ev.conditions.get("feed_mm_min")
         lines += ["diagnostics (least squares on the error signatures; value +- standard uncertainty), ranked by "
-                  "their contribution to the circular deviation (peak-to-valley, µm)"]
+                  "their contribution to the circular deviation (peak-to-valley, µm); last, what the sign means where "
+                  "it is resolved (beyond 2 u; all signs: docs/circular-test.md, the JSON's 'sign')"]
         plane = ev.conditions.get("plane")
-        for label, item, contrib in ranked(dg, ev.nominal_radius, feed, plane):
+        for name, label, item, contrib in ranked(dg, ev.nominal_radius, feed, plane, names=True):
             if item["value"] is None:
                 lines.append(f"  {label:<22}  {item.get('note', 'not estimated')}")
             else:
                 unit = HUMAN_UNIT.get(item["unit"], item["unit"])
-                lines.append(f"  {label:<22}  {item['value']:+10.3f} +- {item['u']:.3f} {unit:<5}  "
-                             f"contribution {contrib:7.2f} µm")
+                lines.append((f"  {label:<22}  {item['value']:+10.3f} +- {item['u']:.3f} {unit:<5}  "
+                              f"contribution {contrib:7.2f} µm  {meaning(name, item['value'], item['u'], plane)}").rstrip())
         m = dg["_model"]
         fit = f"fit converged in {m['iterations']} iterations" if m["converged"] else "fit NOT converged (below)"
         lines.append(f"  residual RMS {m['residual_rms_um']:.2f} µm; spike decay {m['spike_decay_deg']:.2f}°; {fit}")

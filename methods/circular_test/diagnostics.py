@@ -9,7 +9,7 @@ sources (R = nominal radius; X, Y the nominal machine coordinates):
 * centre offset (o_x, o_y): (o_x, o_y)                                            (nuisance)
 * mean scale s: s R u (with the probe length, the common radius)                   (nuisance)
 * scale mismatch s_x - s_y: (R / 2) (cos theta, -sin theta)
-* squareness alpha (X leaning towards Y): R (sin theta, 0)
+* squareness alpha (the Y axis leaning towards +X: the angle between +X and +Y is 90 deg - alpha): R (sin theta, 0)
 * servo mismatch l_x - l_y (lag lengths l = tau v; in ms with the feed v): (d / 2) (sin theta, cos theta)
 * backlash b_x: (d / 2) sign(sin theta) (1, 0);  b_y: -(d / 2) sign(cos theta) (0, 1)
 * reversal spike h_x: d sign(sin theta) exp(-phi_x / phi_tau) (1, 0), phi_x the angle travelled since the

@@ -98,8 +98,8 @@ _CALL = "call"  # the first item of a message that asks a worker for func(*args)
 
 def _worker_main(conn, parent_pid: int, progress) -> None:
     """A local worker: receive chunks, send back their rows as columns, until told to stop."""
+    _die_with_parent(parent_pid)  # first: a run killed while this worker imports takes it along
     from experiments.rows import run_chunk  # the rows' code: imported here, in the worker
-    _die_with_parent(parent_pid)
     while True:
         try:
             msg = conn.recv()

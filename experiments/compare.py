@@ -199,13 +199,14 @@ def _table(problems: list[tuple[str, dict]]) -> str:
 
 def _shown(path: Path) -> str:
     """``path`` as a verdict records it (the file may be committed): relative to the current folder when inside
-    it (``results/quick``), else its name after ``.../`` (``.../review-q``), saying that folders of this
-    machine are left out (the last two parts, ``main/results``, read as a relative path that leads nowhere)."""
+    it (``results/quick``), else its last two parts after ``.../`` (``.../review-q/noise``), saying that the
+    folders of this machine before them are left out (``review-q/noise`` alone reads as a relative path that
+    leads nowhere)."""
     p = Path(path).resolve()
     try:
         return p.relative_to(Path.cwd().resolve()).as_posix() or "."
     except ValueError:
-        return f".../{p.name}"
+        return ".../" + Path(*p.parts[-2:]).as_posix()
 
 
 def _meta(folder: Path) -> dict | None:
@@ -243,7 +244,7 @@ def verify(studies: list[str], results: Path, against: Path, log=print, write: b
         reports.append({**compare_study(study, committed, fresh), "date": date,
                         "results_sha256": results_sha256(results / study),   # what this verdict judged
                         "against_sha256": results_sha256(against / study),
-                        "reference": against_name or f"the run in {_shown(against)}/{study}"})
+                        "reference": against_name or f"the run in {_shown(against / study)}"})
     for r in reports:
         n_bad = sum(p["n_rows"] for p in r["problems"])
         skipped = (f"; {r['not_converged_values']} value(s) of rows that did not converge in both runs not compared "

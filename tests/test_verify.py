@@ -291,7 +291,7 @@ def test_a_check_writes_nothing_unless_asked_and_names_folders_plainly(committed
     """`experiments.verify --results DIR --against RUN` rewrote DIR/verify.json (a tracked file of the committed
     results) and recorded "main/results", a path with its first parts cut: a check leaves both folders as they
     were; --write-verdict records the verdict in DIR, naming a folder inside the current one by its relative
-    path and one outside it by `.../NAME` (no folder of this machine)."""
+    path and one outside it by `.../` and its last two parts (no folder of this machine)."""
     base = copy_run(committed, tmp_path / "ref")
     fresh = copy_run(committed, tmp_path / "run")
     before = {p: p.read_bytes() for folder in (base, fresh) for p in folder.rglob("*") if p.is_file()}
@@ -302,7 +302,7 @@ def test_a_check_writes_nothing_unless_asked_and_names_folders_plainly(committed
     assert verify.main(["--results", str(base), "--against", str(fresh), "--write-verdict"]) == 0
     verdict = json.loads((base / verify.VERDICT_FILE).read_text(encoding="utf-8"))
     assert str(tmp_path) not in json.dumps(verdict) and not (fresh / verify.VERDICT_FILE).exists()
-    assert (verdict["results"], verdict["against"]) == ("fresh", ".../fresh")
+    assert (verdict["results"], verdict["against"]) == ("fresh", ".../run/fresh")
     assert verdict["studies"][0]["reference"] == "the run in .../fresh/vstudy"
 
 

@@ -171,10 +171,28 @@ def _anchor(text: str) -> str:
     return slug or "s-" + hashlib.sha256(str(text).encode("utf-8")).hexdigest()[:10]
 
 
-def latex_fragments(table: pd.DataFrame, caption: str, label: str, unit: str = "", digits: int = 4) -> list[str]:
-    """The table as LaTeX fragments that fit an A4 page (``experiments.render.report_tables``)."""
+def latex_fragments(table: pd.DataFrame, caption: str, label: str, unit: str = "", digits: int = 4,
+                    decimals: dict | None = None, exact=()) -> list[str]:
+    """The table as LaTeX fragments that fit an A4 page (``experiments.render.report_tables``), with the
+    columns' declared formats."""
     from experiments.render.report_tables import latex_fragments as fragments
-    return fragments(table, caption=caption, label=label, unit=unit, digits=digits)
+    return fragments(table, caption=caption, label=label, unit=unit, digits=digits, decimals=decimals, exact=exact)
+
+
+def declared_formats(entry: dict, table: pd.DataFrame) -> dict:
+    """The declared column formats of a table entry of ``report.json`` (``study.Table``'s ``decimals`` {column:
+    n} and ``exact`` [column]) as keyword arguments of the renderers; a declaration that is not a number column
+    of ``table`` or not 0..15 decimals is a broken table (``BrokenStudy``), never silently ignored."""
+    decimals, exact = entry.get("decimals") or {}, entry.get("exact") or []
+    if not isinstance(decimals, dict) or not isinstance(exact, list) or not all(
+            isinstance(n, int) and not isinstance(n, bool) and 0 <= n <= 15 for n in decimals.values()):
+        raise BrokenStudy(f"table {entry.get('file')!r}: decimals must map columns to 0..15, exact list columns")
+    bad = [str(c) for c in [*decimals, *exact]
+           if c not in table.columns or not pd.api.types.is_numeric_dtype(table[c])]
+    if bad:
+        raise BrokenStudy(f"table {entry.get('file')!r} declares the format of {', '.join(map(repr, bad))}, "
+                          "not a number column of it")
+    return {k: v for k, v in (("decimals", decimals), ("exact", exact)) if v}
 
 
 def _with_unit(caption: str, unit: str) -> str:
@@ -226,7 +244,7 @@ def is_default_results(results: Path) -> bool:
 
 def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, render_md=None) -> Path:
     """Build the report from every study folder in ``results``; in a default results folder
-    (``is_default_results``) every default study it lacks is shown as missing. ``render_latex(table, caption, label, unit, digits) -> [fragment]`` and
+    (``is_default_results``) every default study it lacks is shown as missing. ``render_latex(table, caption, label, unit, digits, [decimals=, exact=]) -> [fragment]`` and
     ``render_md(table, fmt)`` render one table (swap in another renderer).
 
     Writes report.md, report.html (numbered <figcaption>/<caption>, nav#toc, images embedded), report.tex
@@ -324,12 +342,13 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     n_table = n_figure = 0
     tex_sections = []
 
-    def add_table(table, caption, unit, digits, colour=""):
+    def add_table(table, caption, unit, digits, colour="", declared=None):
         nonlocal n_table
         n_table += 1
         label = f"table-{n_table}"
         caption = _with_unit(caption, unit)
-        fragments = render_latex(table, f"{caption}", label, unit, digits)
+        declared = declared or {}       # the columns' declared formats: {"decimals": {column: n}, "exact": [column]}
+        fragments = render_latex(table, f"{caption}", label, unit, digits, **declared)
         files = []
         for k, frag in enumerate(fragments):
             name = f"{label}.tex" if len(fragments) == 1 else f"{label}-{k + 1}.tex"
@@ -337,13 +356,13 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
             files.append(f"tables/{name}")
         save_csv_plain(table, out / "tables" / f"{label}.csv")
         explorer_tables.append({"caption": f"Table {n_table}: {caption}", "data": table, "unit": unit,
-                                "digits": digits, "colour": colour})
+                                "digits": digits, "colour": colour, **declared})
         written.extend(files + [f"tables/{label}.csv"])
         fmt = f".{int(digits or 7)}g"
         doc.block(Markup(html_table(table, caption=f"Table {n_table}: {caption}", unit=unit, digits=digits,
-                                    colour=colour, table_id=label)),
+                                    colour=colour, table_id=label, **declared)),
                   f"*Table {n_table}: {md_escape(caption)}*\n\n"
-                  + render_md(text_frame(table, unit=unit, digits=digits), fmt))
+                  + render_md(text_frame(table, unit=unit, digits=digits, **declared), fmt))
         return [{"kind": "table", "file": f} for f in files]
 
     def add_figure(png, caption):
@@ -407,11 +426,12 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
                         raise BrokenStudy(f"table {t['file']!r} is not a regular file")
                     table = pd.read_csv(path, keep_default_na=False, na_values=[""])
                     digits = int(t.get("digits") or 7)
+                    declared = declared_formats(t, table)
                 except (OSError, ValueError, KeyError, TypeError, BrokenStudy, pd.errors.ParserError) as exc:
                     doc.prose(f"**Broken table**: {md_escape(exc)}.")
                     continue
                 items += add_table(table, str(t.get("caption", "")), str(t.get("unit") or ""), digits,
-                                   str(t.get("colour", "")))
+                                   str(t.get("colour", "")), declared)
             for f in manifest.get("figures", []) if isinstance(manifest.get("figures"), list) else []:
                 try:
                     png = _figure_path(results / name, f.get("file") if isinstance(f, dict) else None)

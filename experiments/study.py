@@ -102,6 +102,17 @@ class Table:
     unit: str = ""
     digits: int = 7
     colour: str = ""   #: "lower_is_better": a method comparison, coloured per row in the HTML report
+    #: {column: n}: fixed, n decimals, where a comparison needs a resolution the chosen digits would round away
+    #: (radii of 299.0132 mm compared at 0.1 µm: 4); ``exact``: columns printed as given (published values)
+    decimals: dict = field(default_factory=dict)
+    exact: tuple = ()
+
+    def __post_init__(self):
+        declared = [*self.decimals, *self.exact]
+        bad = [c for c in declared if c not in self.data.columns or not pd.api.types.is_numeric_dtype(self.data[c])]
+        if bad or not all(isinstance(n, int) and 0 <= n <= 15 for n in self.decimals.values()):
+            raise ValueError(f"table {self.caption[:40]!r}: decimals/exact must name number columns of its data "
+                             f"(decimals 0..15); got {', '.join(map(repr, bad)) or self.decimals}")
 
 
 @dataclass
@@ -753,7 +764,9 @@ def write_manifest(target: Path, cfg: dict, analysis: Analysis, summary: pd.Data
         name = f"tables/table_{k + 1}.csv"
         write_atomic(target / name, buf.getvalue())
         entries.append({"caption": t.caption, "file": name, "unit": t.unit, "digits": t.digits,
-                        **({"colour": t.colour} if t.colour else {})})
+                        **({"colour": t.colour} if t.colour else {}),
+                        **({"decimals": dict(t.decimals)} if t.decimals else {}),
+                        **({"exact": list(t.exact)} if t.exact else {})})
     rep = cfg.get("report", {})
     findings = analysis.findings
     if not findings and rep.get("findings"):

@@ -1,11 +1,18 @@
 """Number formats a reader sees: never ×10⁰, one format per column (not scientific beside plain), whole
 cut-offs as integers, a unit said once in a caption, the Markdown table in the same formats as the HTML."""
+import json
+import re
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
+import pytest
 
 from experiments.render.numbers import NumberFormat, column_format
 from experiments.render.report_tables import html_table, text_frame
 from experiments.report import _with_unit
+
+REPO = Path(__file__).resolve().parents[1]
 
 #: median runtimes [ms] of the scaling study's N = 10 column (committed results): 1.6 ms beside 0.008 ms
 RUNTIMES = [1.605, 0.048, 0.01, 0.008, 0.057, 1.419, 0.438, 1.783, 2.299, 0.175, 16.647, 12.071]
@@ -46,3 +53,126 @@ def test_whole_cutoffs_print_as_integers():
     rows = pd.DataFrame({"dataset": ["p"] * 3, "cutoff_upr": [50.0, 500.0, "none"], "status": ["ok"] * 3,
                          **{f"RONt_{k}_um": np.ones(3) for k in REFS}, **{f"certified_{k}": [True] * 3 for k in REFS}})
     assert list(cutoff_table(rows)["cutoff_upr"]) == ["50", "500", "none"]
+
+
+# ---------------------------------------------------------------- declared formats: the comparison a table exists for
+def _md_table(md: str, caption_words: str) -> pd.DataFrame:
+    """The Markdown table after the caption that contains ``caption_words``, cells as text."""
+    after = md.split(caption_words, 1)[1].split("\n\n", 1)[1]
+    lines = [ln for ln in after.split("\n\n", 1)[0].splitlines() if ln.startswith("|")]
+    cells = [[c.strip().replace("\\[", "[").replace("\\]", "]") for c in ln.strip("|").split("|")] for ln in lines]
+    return pd.DataFrame(cells[2:], columns=cells[0])
+
+
+def _within_resolution(stored: pd.DataFrame, shown: pd.DataFrame, columns, resolution: float):
+    for c in columns:
+        values, texts = stored[c].to_numpy(float), shown[c].to_numpy(str)
+        keep = np.isfinite(values)
+        assert keep.any() and np.all(np.abs(texts[keep].astype(float) - values[keep]) <= resolution / 2 + 1e-12), \
+            (c, texts)
+
+
+def _reads_off(stored: pd.DataFrame, shown: pd.DataFrame):
+    """The published column as stored, and published + difference = reproduced in the shown cells."""
+    assert [float(t) for t in shown["published [mm]"]] == list(stored["published"].astype(float)), shown
+    p, r, d = (shown[c].astype(float).to_numpy() for c in ("published [mm]", "reproduced [mm]", "difference [mm]"))
+    assert np.allclose(p + d, r, rtol=0, atol=1e-12), shown
+
+
+QUICK = REPO / "results" / "quick"
+#: (study, its table file, caption words, what the table must let a reader compare)
+TABLES = {"circular_test": "Fitted centres (about the nominal centre)",
+          "published": "Circularity of the roundness paper's published profiles"}
+
+
+def _check(study: str, stored: pd.DataFrame, shown: pd.DataFrame):
+    if study == "circular_test":   # the fits, the truth and the paper's tables 1-5 compared at 0.1 µm (299.0132 mm)
+        _within_resolution(stored, shown, ["R [mm]", "a [mm]", "b [mm]"], 1e-4)
+    else:
+        _reads_off(stored, shown)
+
+
+@pytest.mark.parametrize("study", sorted(TABLES))
+def test_the_studies_declare_the_formats_their_comparisons_need(study, tmp_path, monkeypatch):
+    """The LOLA fits' table printed R, a, b as 299.01, 299.02, 299.00 mm (10 µm) where fits, truth and paper are
+    compared at 0.1 µm; the published table printed the paper's 0.029807 as 0.0298 (and the reproduced 0.0291592
+    as 0.0292) beside a difference -6.478×10⁻⁴ of the unrounded values. The studies' tables (analysed by this code
+    from the committed quick rows, as report.json declares them) show R, a, b within 0.05 µm, the published values
+    as published and published + difference = reproduced."""
+    import shutil
+    import fitbench.plots.circular_test
+    from experiments import config as configs
+    from experiments import study as contract
+    from experiments.report import declared_formats
+    from experiments.render.report_tables import text_frame
+    from experiments.studies import published, study_of
+    monkeypatch.setattr(published, "circularity_figure", lambda *a, **k: None)          # figures are not the point
+    monkeypatch.setattr(fitbench.plots.circular_test, "polar_plot", lambda *a, **k: None)
+    folder = tmp_path / study
+    shutil.copytree(QUICK / study, folder)
+    cfg = configs.load(study, quick=True)
+    df = pd.read_csv(folder / "results.csv", keep_default_na=False, na_values=[""])
+    _, analysis = contract.analyse(study_of(cfg["kind"]), df, cfg, folder, lambda *a: None)
+    contract.write_manifest(folder, cfg, analysis, pd.read_csv(folder / "summary.csv"))
+    entry = next(t for t in json.loads((folder / "report.json").read_text(encoding="utf-8"))["tables"]
+                 if TABLES[study] in t["caption"])
+    stored = pd.read_csv(folder / entry["file"], keep_default_na=False, na_values=[""])
+    _check(study, stored, text_frame(stored, unit=entry["unit"], digits=entry["digits"],
+                                     **declared_formats(entry, stored)))
+
+
+def _study_folder(results: Path, name: str, table: pd.DataFrame, entry: dict) -> None:
+    """A finished study folder as the runner writes it, holding one table with the given report.json entry."""
+    import hashlib
+    folder = results / name
+    (folder / "tables").mkdir(parents=True)
+    pd.DataFrame({"method": ["circle.kasa"], "status": ["ok"], "radius": [1.0]}).to_csv(folder / "results.csv",
+                                                                                       index=False)
+    table.to_csv(folder / "tables" / "table_1.csv", index=False, float_format="%.10g")
+    digest = hashlib.sha256((folder / "results.csv").read_bytes()).hexdigest()
+    (folder / "meta.json").write_text(json.dumps({"n_rows": 1, "status_counts": {"ok": 1}, "git_commit": "abc",
+                                                  "date": "2026-01-01", "config_hash": "h", "results_sha256": digest}))
+    (folder / "report.json").write_text(json.dumps({"title": name, "section": "s", "order": 10, "findings": "f",
+                                                    "tables": [{"file": "tables/table_1.csv", **entry}],
+                                                    "figures": []}))
+
+
+def test_the_report_renders_declared_formats_alike_in_markdown_html_latex_and_the_explorer(tmp_path):
+    """report.json's declared ``decimals`` and ``exact`` reach every rendering: the same cells in report.md,
+    report.html, the LaTeX fragment and explorer.html; a declaration naming no number column of the table is a
+    broken table, never silently ignored."""
+    from experiments.report import build
+    results = tmp_path / "results"
+    tables = {}
+    for k, (study, words) in enumerate(sorted(TABLES.items())):
+        table = pd.read_csv(QUICK / study / "tables" / "table_1.csv", keep_default_na=False, na_values=[""])
+        declared = ({"decimals": {"R [mm]": 4, "a [mm]": 4, "b [mm]": 4}} if study == "circular_test" else
+                    {"exact": ["published"], "decimals": {"reproduced": 7, "difference": 7}})
+        _study_folder(results, f"s{k}_{study}", table, {"caption": words, "unit": "mm", "digits": 7, **declared})
+        tables[study] = table
+    _study_folder(results, "s9_bad", tables["published"], {"caption": "bad declaration", "unit": "mm", "digits": 7,
+                                                           "decimals": {"nosuch": 4}})
+    paper = tmp_path / "paper"
+    build(results, paper, log=lambda *a: None)
+    md = (paper / "report.md").read_text(encoding="utf-8")
+    html = (paper / "report.html").read_text(encoding="utf-8")
+    explorer = (paper / "explorer.html").read_text(encoding="utf-8")
+    for study, words in TABLES.items():
+        shown = _md_table(md, words)
+        _check(study, tables[study], shown)
+        number = md.split(words, 1)[0].rsplit("*Table ", 1)[1].split(":", 1)[0]
+        tex = (paper / "tables" / f"table-{number}.tex").read_text(encoding="utf-8")
+        page = html.split(f'id="T_table-{number}"', 1)[1].split("</table>", 1)[0]
+        for c in shown.columns[shown.columns.str.endswith("[mm]")]:
+            for cell in set(shown[c]) - {"–"}:
+                assert f">{cell}<" in page and f">{cell}<" in explorer, (c, cell)
+                assert re.search(rf"& {re.escape(cell)} (&|\\\\)", tex), (c, cell)
+    assert "**Broken table**: table 'tables/table_1.csv' declares the format of 'nosuch'" in md
+
+
+def test_a_declaration_naming_no_number_column_is_refused():
+    from experiments.study import Table
+    with pytest.raises(ValueError, match="number columns"):
+        Table(caption="c", data=pd.DataFrame({"m": ["a"], "R [mm]": [1.0]}), decimals={"R": 4})
+    with pytest.raises(ValueError, match="number columns"):
+        Table(caption="c", data=pd.DataFrame({"m": ["a"], "R [mm]": [1.0]}), exact=("m",))

@@ -176,14 +176,16 @@ def table_blocks(tables: list[dict]) -> list[dict]:
     for k, t in enumerate(tables, start=1):
         out.append({"id": f"xtable-{k}", "html": Markup(html_table(t["data"], caption=t["caption"], unit=t["unit"],
                                                                     digits=t["digits"], colour=t["colour"],
-                                                                    table_id=f"xtable-{k}"))})
+                                                                    table_id=f"xtable-{k}",
+                                                                    decimals=t.get("decimals"),
+                                                                    exact=t.get("exact", ())))})
     return out
 
 
 def write_explorer(out: Path, rankings: dict, tables: list[dict], folders: dict[str, Path], metas: dict[str, dict],
                    *, title: str = "fitbench: interactive explorer") -> Path:
     """Write ``out/explorer.html`` (see the module docstring). ``tables``: [{caption, data, unit, digits,
-    colour}] in report order."""
+    colour, and the declared decimals and exact when given}] in report order."""
     from plotly.offline import get_plotlyjs
     data = [ranking_data(n, r, folders, metas) for n, r in rankings.items() if r.table is not None and len(r.table)]
     from experiments.render.page import TEMPLATES, html_template

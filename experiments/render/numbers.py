@@ -30,15 +30,19 @@ MAX_FIXED_DECIMALS = 5   #: a column whose smallest value needs more decimals th
 
 @dataclass(frozen=True)
 class NumberFormat:
-    kind: str            #: "integer" | "fixed" | "exponent"
+    kind: str            #: "integer" | "fixed" | "exponent" | "exact" (each number as given: published values)
     decimals: int = 0    #: decimals (fixed) or mantissa decimals (exponent)
 
     def text(self, v: float) -> str:
-        """Plain text (HTML, Markdown): 2080, 0.0123, 4.07×10⁸."""
+        """Plain text (HTML, Markdown): 2080, 0.0123, 4.07×10⁸; "exact": the shortest decimal that gives back
+        the stored value, without padding zeros (0.029807 stays 0.029807)."""
         if v is None or not np.isfinite(v):
             return "–"
         if self.kind == "integer":
             return f"{int(round(v))}"
+        if self.kind == "exact":
+            s = np.format_float_positional(float(v), trim="-")
+            return s[1:] if s.startswith("-") and float(s) == 0 else s
         if self.kind == "fixed":
             s = f"{v:.{self.decimals}f}"
             return s[1:] if s.startswith("-") and float(s) == 0 else s
@@ -91,12 +95,25 @@ def column_format(values, digits: int = 3) -> NumberFormat:
     return NumberFormat("fixed", d)
 
 
-def table_formats(df, columns, units: dict, digits: int = 3) -> dict:
-    """{column: NumberFormat} for the number ``columns`` of ``df``; columns with the same non-empty unit
-    (``units[column]``) share one format chosen from all their values, the others get their own."""
+def declared_format(decimals: dict | None = None, exact=()) -> dict:
+    """{column: NumberFormat} of a table's declared columns: ``decimals`` {column: n} fixed with n decimals (the
+    resolution its comparison needs: 299.0132 mm against 299.0131 mm, decimals 4), ``exact`` columns each number
+    as given (published values)."""
+    out = {c: NumberFormat("fixed", int(n)) for c, n in (decimals or {}).items()}
+    out.update({c: NumberFormat("exact") for c in exact or ()})
+    return out
+
+
+def table_formats(df, columns, units: dict, digits: int = 3, declared: dict | None = None) -> dict:
+    """{column: NumberFormat} for the number ``columns`` of ``df``; a column in ``declared`` ({column:
+    NumberFormat}, :func:`declared_format`) gets its declared format; of the others, columns with the same
+    non-empty unit (``units[column]``) share one format chosen from all their values, the rest get their own."""
     import pandas as pd
+    declared = declared or {}
     groups: dict = {}
     for c in columns:
+        if c in declared:
+            continue
         groups.setdefault(("unit", units.get(c)) if units.get(c) else ("column", c), []).append(c)
     out = {}
     for cols in groups.values():
@@ -107,7 +124,8 @@ def table_formats(df, columns, units: dict, digits: int = 3) -> dict:
         shared = joint.kind == "fixed" and all(f.kind in ("fixed", "integer") for f in alone.values())
         for c in cols:
             out[c] = joint if shared else alone[c]
-    return out
+    out.update({c: f for c, f in declared.items() if c in columns})
+    return {c: out[c] for c in columns}
 
 
 def is_count(name) -> bool:

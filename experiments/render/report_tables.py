@@ -1,5 +1,5 @@
 """A declared table of the report in LaTeX and HTML: the bridge between a study's table CSV (caption, unit,
-significant digits, optional ``colour``) and the renderers ``latex.latex_table`` / ``html_tables.coloured_table``.
+significant digits, optional ``colour``, the columns' declared ``decimals`` and ``exact``) and the renderers ``latex.latex_table`` / ``html_tables.coloured_table``.
 
 ``latex_fragments`` never returns an overflowing table: a table too wide for the page (``TableTooWide``) is
 split into parts that keep the key (text) columns and share out the number columns; a table that cannot fit
@@ -11,7 +11,8 @@ import numpy as np
 import pandas as pd
 
 from experiments.render.html_tables import coloured_table, plain_table
-from experiments.render.numbers import header_unit, human_header, human_unit_text, is_count, table_formats
+from experiments.render.numbers import (declared_format, header_unit, human_header, human_unit_text, is_count,
+                                        table_formats)
 from experiments.render.latex import Column, TableTooWide, latex_table
 from experiments.render.text import human_unit, tex
 
@@ -46,11 +47,13 @@ def column_unit(name, s: pd.Series, unit: str) -> str:
     return unit
 
 
-def _formats(df: pd.DataFrame, values, unit: str, digits: int) -> dict:
-    """One format per number column (``numbers.table_formats``): columns with the same unit, from their header
-    or the table's, share it; counts are formatted alone."""
+def _formats(df: pd.DataFrame, values, unit: str, digits: int, decimals: dict | None = None, exact=()) -> dict:
+    """One format per number column (``numbers.table_formats``): the declared ones (``decimals``: {column: n}
+    fixed decimals; ``exact``: as given) as declared; of the others, columns with the same unit, from their header
+    or the table's, share one; counts are formatted alone."""
     units = {c: (None if is_count(c) else (header_unit(c) or unit or None)) for c in values}
-    return table_formats(df, values, units, max(1, min(int(digits or 3), MAX_DIGITS)))
+    return table_formats(df, values, units, max(1, min(int(digits or 3), MAX_DIGITS)),
+                         declared=declared_format(decimals, exact))
 
 
 def _humanised(df: pd.DataFrame) -> pd.DataFrame:
@@ -74,17 +77,20 @@ def _header(c) -> str | None:
     return "".join(p if p.startswith("$") else p.replace("_", " ") for p in re.split(r"(\$[^$]+\$)", shown))
 
 
-def _columns(df: pd.DataFrame, keys, values, unit: str, digits: int) -> list[Column]:
+def _columns(df: pd.DataFrame, keys, values, unit: str, digits: int, decimals: dict | None = None,
+             exact=()) -> list[Column]:
     cols = []
     for i, c in enumerate(keys):
         repeated = len(df) > 1 and df[c].duplicated().any() and len(keys) > 1 and i == 0
         cols.append(Column(str(c), header=_header(c), kind="text", group=bool(repeated)))
-    formats = _formats(df, values, unit, digits)
+    formats = _formats(df, values, unit, digits, decimals, exact)
     for c in values:
         fmt = formats[c]
         header = _header(c)
         u = column_unit(c, df[c], unit) or None
-        if fmt.kind == "integer":
+        if fmt.kind == "exact":
+            cols.append(Column(str(c), header=header, unit=u, kind="number", exact=True))
+        elif fmt.kind == "integer":
             cols.append(Column(str(c), header=header, unit=u, kind="integer"))
         elif fmt.kind == "fixed":
             cols.append(Column(str(c), header=header, unit=u, kind="number", decimals=fmt.decimals, exponent=False))
@@ -93,14 +99,17 @@ def _columns(df: pd.DataFrame, keys, values, unit: str, digits: int) -> list[Col
     return cols
 
 
-def latex_fragments(df: pd.DataFrame, *, caption: str, label: str, unit: str = "", digits: int = 4) -> list[str]:
-    """One or more LaTeX fragments for the table (more than one when it had to be split)."""
+def latex_fragments(df: pd.DataFrame, *, caption: str, label: str, unit: str = "", digits: int = 4,
+                    decimals: dict | None = None, exact=()) -> list[str]:
+    """One or more LaTeX fragments for the table (more than one when it had to be split). ``decimals`` ({column:
+    n}) and ``exact`` (columns) are the table's declared formats (``study.Table``), the same in every rendering."""
     df = _humanised(df)
     keys, values = split_columns(df)
     notes = ["-- : no value (the method did not run there or failed)"] if df.isna().any().any() else None
 
     def attempt(vals, cap, lab):
-        return latex_table(df[keys + vals], _columns(df, keys, vals, unit, digits), caption=cap, label=lab, notes=notes)
+        return latex_table(df[keys + vals], _columns(df, keys, vals, unit, digits, decimals, exact), caption=cap,
+                           label=lab, notes=notes)
 
     try:
         return [attempt(values, caption, label)]
@@ -125,7 +134,7 @@ def latex_fragments(df: pd.DataFrame, *, caption: str, label: str, unit: str = "
 
 
 def html_table(df: pd.DataFrame, *, caption: str, unit: str = "", digits: int = 4, colour: str = "",
-               table_id: str = "table") -> str:
+               table_id: str = "table", decimals: dict | None = None, exact=()) -> str:
     """The table as self-contained HTML with ``<caption>`` (``html_tables``, pandas' Styler);
     ``colour='lower_is_better'``: the number columns are methods (or other competitors), each cell coloured by
     its ratio to the row's lowest value."""
@@ -137,21 +146,22 @@ def html_table(df: pd.DataFrame, *, caption: str, unit: str = "", digits: int = 
         t.index.name = " | ".join(keys)
         numbers = t.to_numpy(float)
         if np.all(np.isnan(numbers) | (numbers >= 0)):
-            formats = _formats(t, list(t.columns), unit, digits)
+            formats = _formats(t, list(t.columns), unit, digits, decimals, exact)
             return coloured_table(t, unit=human_unit(unit), caption=caption, table_id=table_id,
                                   formats=[formats[c] for c in t.columns])
     headers = {c: human_header(c) + (f" [{human_unit(u)}]" if c in values and (u := column_unit(c, df[c], unit)) else "")
                for c in df.columns}
-    return plain_table(df, caption=caption, headers=headers, formats=_formats(df, values, unit, digits),
+    return plain_table(df, caption=caption, headers=headers, formats=_formats(df, values, unit, digits, decimals, exact),
                        table_id=table_id)
 
 
-def text_frame(df: pd.DataFrame, *, unit: str = "", digits: int = 4) -> pd.DataFrame:
+def text_frame(df: pd.DataFrame, *, unit: str = "", digits: int = 4, decimals: dict | None = None,
+               exact=()) -> pd.DataFrame:
     """The table as the HTML shows it, every cell text: number columns in their one format per column
     (``_formats``), headers with their unit; for the Markdown rendering, which must not choose its own."""
     df = _humanised(df)
     keys, values = split_columns(df)
-    formats = _formats(df, values, unit, digits)
+    formats = _formats(df, values, unit, digits, decimals, exact)
     out = pd.DataFrame({c: (df[c].map(lambda v, f=formats[c]: f.text(float(v)) if v == v else "–") if c in values
                             else df[c].map(lambda v: "" if v != v else str(v)))
                         for c in df.columns})

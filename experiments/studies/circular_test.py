@@ -222,7 +222,8 @@ class CircularTestStudy(Study):
                          "least-squares circle of the injected errors.")
         scen = "synthetic LOLA HBG 130 circular test (R 299 mm, the paper's scenario; measured data not published)"
         tables = [Table(caption=f"Fitted centres (about the nominal centre) and radii or semi-axes of each method and path, {scen}",
-                        data=fits, unit="µm, mm"),
+                        data=fits, unit="µm, mm",   # radii and axes to 0.1 µm, as the paper prints them (299.0132 mm)
+                        decimals={"R [mm]": 4, "a [mm]": 4, "b [mm]": 4}),
                   Table(caption=f"ISO 230-4 figures of the {scen}, and the published values", data=iso_rows, unit="µm"),
                   Table(caption=f"Error sources estimated from the two runs (cw, ccw) of the {scen}, with their standard "
                                 "uncertainty u, against the injected values", data=diag_rows)]

@@ -161,7 +161,11 @@ class PublishedStudy(Study):
                    f"coordinates consistent with the printed digits give ({values['rounding_samples']} fits each) [mm]")
         fig = Figure(caption="Published profiles of the roundness paper: reproduced circularity and the 99 % range the "
                              "printed digits allow, relative to the published value [µm]", file="published.png")
-        return Analysis(tables=[Table(caption=caption, data=shown, unit="mm")], figures=[fig], values=values,
+        # the paper's values as printed (0.029807, not 0.0298); reproduced and difference to the 7 decimals they are
+        # rounded to, so that published - reproduced reads as the difference column says
+        table = Table(caption=caption, data=shown, unit="mm", exact=("published",),
+                      decimals={"reproduced": 7, "difference": 7})
+        return Analysis(tables=[table], figures=[fig], values=values,
                         findings=findings)
 
 

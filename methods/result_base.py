@@ -218,8 +218,10 @@ class FitResult:
 
     def report_lines(self, unit: str = "mm") -> list[tuple[str, str]]:
         """(label, text) lines of the fitted geometry for a person to read, every length in ``unit`` (the
-        data's unit: the CLI converts every input to mm), angles in rad."""
-        return []
+        data's unit: the CLI converts every input to mm), angles in rad. By default each value of
+        :meth:`geometry` with the unit its column declares (``side 2 mm``): a new family's geometry is printed."""
+        units = {c.name: unit if c.quantity == "length" else c.unit for c in type(self).COLUMNS}
+        return [(k.replace("_", " "), f"{number_text(v)} {units.get(k, '')}".rstrip()) for k, v in self.geometry().items()]
 
     def to_dict(self, residuals: bool = True) -> dict:
         """The JSON-ready dict the CLI prints (``residuals=False`` leaves the per-point array out)."""

@@ -332,6 +332,7 @@ def cmd_circular_test(args) -> int:
         write_report(report_path, f"ISO 230-4 circular test{': ' + args.machine if args.machine else ''}",
                      [f"files        {', '.join(str(f) for f in args.files)}", f"date         {args.date or '-'}",
                       *lines], lambda sub: polar_plot(runs["cw"], runs["ccw"], ev, None, diagnostics=dg,
+                                                      title=verdict_title(check).lstrip("; "),
                                                       conditions=conditions, into=sub), aspect=POLAR_FIGSIZE[1] / POLAR_FIGSIZE[0])
     if args.json:
         d = ev.to_dict(residuals=False)

@@ -146,9 +146,8 @@ def text(ev, dg: dict | None) -> str:
              f"  mean radial deviation   {_signed(ev.figures['mean_radial_deviation'] * um)} µm"]
     if dg:
         feed = ev.conditions.get("feed_mm_min")
-        lines += ["diagnostics (least squares on the error signatures; value +- standard uncertainty), ranked by "
-                  "their contribution to the circular deviation (peak-to-valley, µm); last, what the sign means where "
-                  "it is resolved (beyond 2 u; all signs: docs/circular-test.md, the JSON's 'sign')"]
+        lines += ["diagnostics (least squares on the error signatures; value +- standard uncertainty u), ranked by their",
+                  "  contribution to the circular deviation (peak-to-valley); last: what a sign beyond 2 u means"]
         plane = ev.conditions.get("plane")
         for name, label, item, contrib in ranked(dg, ev.nominal_radius, feed, plane, names=True):
             if item["value"] is None:

@@ -5,6 +5,7 @@ command's own plot function (vector graphics in the PDF)."""
 from __future__ import annotations
 
 import datetime as _dt
+import textwrap
 
 from fitbench import __version__
 from fitbench.plots import report_figure
@@ -12,16 +13,22 @@ from fitbench.plots import report_figure
 A4_INCHES = (8.27, 11.69)
 _LEFT, _RIGHT, _TOP = 0.05, 0.95, 0.955
 _CHAR_WIDTH = 0.62      # DejaVu Sans Mono: advance width / font size (0.60), with a margin
+_FONT_PT = 8.0          # the text's font size, unless the lines would not fit half the page's height
 
 
 def one_page(path, *, title: str, lines: list[str], draw, aspect: float = 0.6, save=None) -> None:
     """Write the page: ``title`` and ``lines`` (monospaced text, sized to fit the width and at most half the
     height) in the upper part; ``draw(subfigure)`` draws the test's plot below (a matplotlib SubFigure: the
     plot functions' ``into``), ``aspect`` = its height / width."""
-    text = [ln for block in lines for ln in str(block).splitlines()] or [""]
     width_pt = (_RIGHT - _LEFT) * A4_INCHES[0] * 72
+    chars = int(width_pt / (_CHAR_WIDTH * _FONT_PT))
+    # a line longer than the page is wide at 8 pt is wrapped (its continuation indented), not set in a smaller font:
+    # one long heading made the whole block about 4 pt
+    text = [part for block in lines for ln in str(block).splitlines()
+            for part in (textwrap.wrap(ln, chars, subsequent_indent=" " * (len(ln) - len(ln.lstrip()) + 4),
+                                       break_on_hyphens=False, break_long_words=True) or [""])] or [""]
     longest = max(len(ln) for ln in text)
-    size = min(8.0, width_pt / (_CHAR_WIDTH * max(longest, 1)), 0.5 * A4_INCHES[1] * 72 / (1.2 * len(text)))
+    size = min(_FONT_PT, width_pt / (_CHAR_WIDTH * max(longest, 1)), 0.5 * A4_INCHES[1] * 72 / (1.2 * len(text)))
     with report_figure(path, dpi=150, save=save, figsize=A4_INCHES, layout="constrained") as fig:
         stamp = _dt.datetime.now().strftime("%Y-%m-%d %H:%M")
         fig.text(_LEFT, 0.98, title, fontsize=12, fontweight="bold", va="top")

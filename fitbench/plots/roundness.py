@@ -3,6 +3,7 @@ the reference circles, beside the harmonic spectrum with the filter's transmissi
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
 
@@ -12,6 +13,8 @@ from methods.roundness.filter import transmission
 #: the figure's size (inches) and its smallest font (pt): 8.5 pt is about 9.4 px high with the figure 800 px wide
 FIGSIZE = (10.0, 5.8)
 MIN_FONT_PT = 8.5
+#: the polar panel's title is wrapped at this many characters (10 pt text, the panel about 4.5 in wide)
+TITLE_CHARS = 56
 
 
 def _nice_step(span_um: float) -> float:
@@ -72,7 +75,12 @@ def plot(res, path, title: str = "", *, save=None, into=None) -> None:
                         color=colors[kind], lw=0.6, ls=":")
         cut = "unfiltered" if res.cutoff_upr is None else f"Gaussian {res.cutoff_upr:g} UPR"
         ax.tick_params(axis="x", labelsize=9, pad=9)   # the angle labels clear of the ring labels at the rim
-        ax.set_title(f"{title}\n{cut}, {step:g} µm/div", fontsize=10)
+        # the title (the file and a verdict) wrapped to the polar panel's width, as the circular-test plot does: one
+        # line ran past the figure's left edge and over the spectrum's title
+        # lines break only after a comma or semicolon: a figure stays with its name, value, unit and tolerance
+        keep = title.replace(" ", "\u00a0").replace(",\u00a0", ", ").replace(";\u00a0", "; ")
+        head = "\n".join(textwrap.wrap(keep, TITLE_CHARS)) + "\n" if title else ""
+        ax.set_title(f"{head}{cut}, {step:g} µm/div", fontsize=10)
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), fontsize=MIN_FONT_PT, ncol=2, frameon=False,
                   columnspacing=1.0, handlelength=1.8)
 
@@ -102,3 +110,7 @@ def plot(res, path, title: str = "", *, save=None, into=None) -> None:
             tx.set_ylim(0, 1.05)
             tx.tick_params(labelsize=9)
         tight(fig)
+        if hasattr(fig, "canvas") and hasattr(fig, "tight_layout"):
+            for _ in range(2):  # a polar title is placed above its angle labels when drawn: lay out again around it
+                fig.canvas.draw()
+                tight(fig)

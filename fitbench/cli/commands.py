@@ -466,7 +466,7 @@ def cmd_positioning(args) -> int:
     if args.compensation:
         from fitbench.compensation import write_tables
         comp = write_tables(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
-                            source=args.compensation_from, axis=args.axis, write=write_text_atomic,
+                            source=args.compensation_from, axis=args.axis or "X1", write=write_text_atomic,
                             reference_mm=finite("--reference", args.reference))
     missing = [n for n in tolerances if n not in res.figures]
     if missing:
@@ -497,7 +497,8 @@ def cmd_positioning(args) -> int:
                                  "degree": p["degree"], "U_at_targets": p["U_at_targets"], "k": p["k"]}
                              for d, p in res.polynomial.items()}
         out["u_delta"] = res.extra["u_delta"]
-        out["details"] = {"conditions": test_conditions(args, files=[str(args.file)])}
+        # the axis as given (--axis; '' if not): fitbench history keeps each machine's axes apart
+        out["details"] = {"conditions": test_conditions(args, axis=args.axis or "", files=[str(args.file)])}
         print(json.dumps(_jsonable(out)))
         return 0
     print("\n".join(lines))
@@ -538,7 +539,8 @@ def add_positioning(sub):
                     help="compensation point spacing (mm; default: the target spacing)")
     pp.add_argument("--compensation-from", choices=("model", "mean"), default="model",
                     help="compensation values from the GLS polynomial (default) or the mean deviations at the targets")
-    pp.add_argument("--axis", default="X1", help="axis name in the controller's table (default X1)")
+    pp.add_argument("--axis", default=None, help="the axis tested: recorded in the JSON result (fitbench history trends "
+                    "each machine's axes apart) and its name in the controller's table (default X1)")
     pp.add_argument("--reference", type=float, metavar="MM", help="the machine's reference point, where the table "
                     "holds 0 (mm; default 0 if the travel contains it, else the nearer end)")
     pp.add_argument("--json", action="store_true", help="print one JSON object (mm; see its 'units')")

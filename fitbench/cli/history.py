@@ -2,7 +2,9 @@
 ``fitbench circular-test|positioning|roundness --json`` printed (saved as ``*.json`` in DIR): a table per test
 of G, the diagnostics, A/E/R/B and RONt against the date, and optionally a plot (what ballbar users compare
 between services). The date of a result is its test conditions' date (``--date``) when given, else the
-file's modification time."""
+file's modification time. A trend is one machine's (``--machine``) and, for a circular test, one plane's, for a
+positioning test one axis' (``--axis``): results of different machines, planes or axes in one folder are separate
+trends (pooled, an X axis and a Y axis of two machines read as one axis drifting)."""
 from __future__ import annotations
 
 import datetime as _dt
@@ -29,6 +31,30 @@ COLUMNS = {
                   (("references", "mici", "RONt"), "RONt MICI", 1e3, "µm"),
                   (("references", "mcci", "RONt"), "RONt MCCI", 1e3, "µm")],
 }
+
+
+#: what separates one trend from another besides the test and the machine: (key in the JSON trend, conditions key)
+SERIES = {"circular-test": ("plane", "plane"), "positioning": ("axis", "axis"), "roundness": None}
+
+
+def series_of(kind: str, d: dict) -> tuple:
+    """(test, machine, plane or axis) of the result ``d``: its trend; '' where the result does not say (no machine
+    given, a positioning result written before the axis was recorded)."""
+    details = d.get("details")
+    cond = details.get("conditions") if isinstance(details, dict) else None
+    cond = cond if isinstance(cond, dict) else {}
+    extra = SERIES[kind]
+    where = cond.get(extra[1]) if extra else ""
+    return kind, str(cond.get("machine") or "").strip(), str(where or "").strip()
+
+
+def series_title(key) -> str:
+    """The trend's name: e.g. positioning, machine M2, axis Y (a plain test name: that test)."""
+    if not isinstance(key, tuple):
+        return key
+    kind, machine, where = key
+    extra = SERIES.get(kind)
+    return f"{kind}, machine {machine or 'not given'}" + (f", {extra[0]} {where or 'not recorded'}" if extra else "")
 
 
 def kind_of(d: dict) -> str | None:
@@ -90,7 +116,8 @@ def _load(path: Path):
 
 
 def collect(folder, warn=None) -> dict:
-    """{test: [(date, file, {column: value})]} from the JSON results in ``folder``, oldest first. A ``*.json``
+    """{(test, machine, plane or axis): [(date, file, {column: value})]} (:func:`series_of`, one trend each) from
+    the JSON results in ``folder``, oldest first, the trends ordered by test, machine, plane or axis. A ``*.json``
     that is not a result (unreadable, not JSON, another JSON, a test date that is not a date) is skipped and
     told to ``warn`` (a function taking one line; default :func:`fitbench.cli.options.warn`)."""
     warn = warn or _warn
@@ -109,18 +136,25 @@ def collect(folder, warn=None) -> dict:
             warn(f"{exc}; skipped")
             continue
         row = {name: (None if (v := _get(d, p)) is None else v * f) for p, name, f, _ in COLUMNS[kind]}
-        out.setdefault(kind, []).append((date, path.name, row))
+        out.setdefault(series_of(kind, d), []).append((date, path.name, row))
     if not out:
         raise InvalidInputError(f"{folder}: no JSON results of circular-test, positioning or roundness found "
                                 "(save them with: fitbench circular-test ... --json > DIR/2026-11-25.json)")
-    return {k: sorted(v, key=lambda r: (r[0], r[1])) for k, v in out.items()}
+    order = {k: i for i, k in enumerate(COLUMNS)}
+    keys = sorted(out, key=lambda k: (order[k[0]], k[1], k[2]))
+    return {k: sorted(out[k], key=lambda r: (r[0], r[1])) for k in keys}
+
+
+def _kind(key) -> str:
+    """The test of a trend's key (a plain test name is one trend of that test)."""
+    return key[0] if isinstance(key, tuple) else key
 
 
 def table(history: dict) -> str:
     lines = []
-    for kind, rows in history.items():
-        cols = COLUMNS[kind]
-        lines.append(f"{kind}: {len(rows)} test(s)")
+    for key, rows in history.items():
+        cols = COLUMNS[_kind(key)]
+        lines.append(f"{series_title(key)}: {len(rows)} test(s)")
         head = f"  {'date':<16} {'file':<28} " + " ".join(f"{f'{n} [{u}]':>18}" for _, n, _, u in cols)
         lines += [head, "  " + "-" * (len(head) - 2)]
         for date, name, row in rows:
@@ -130,16 +164,35 @@ def table(history: dict) -> str:
     return "\n".join(lines).rstrip()
 
 
+def as_json(history: dict) -> dict:
+    """{test: {units, trends: [{machine, plane or axis, tests}], tests: every test of it (each with its machine and
+    plane or axis), by date}}, the values in the printed units."""
+    out: dict = {}
+    for key, rows in history.items():
+        kind, machine, where = key if isinstance(key, tuple) else (key, "", "")
+        extra = SERIES.get(kind)
+        labels = {"machine": machine, **({extra[0]: where} if extra else {})}
+        tests = [{"date": d.isoformat(timespec="minutes"), "file": f, **labels, **row} for d, f, row in rows]
+        entry = out.setdefault(kind, {"units": {n: u for _, n, _, u in COLUMNS[kind]}, "trends": [], "tests": []})
+        entry["trends"].append({**labels, "tests": tests})
+        entry["tests"].extend(tests)
+    for entry in out.values():
+        entry["tests"].sort(key=lambda t: (t["date"], t["file"]))
+    return out
+
+
 def plot(history: dict, path, save) -> None:
     """The trend plot (:func:`fitbench.plots.history.plot`)."""
     from fitbench.plots.history import plot as draw
-    draw(history, COLUMNS, path, save)
+    draw(history, COLUMNS, path, save, titles={k: series_title(k) for k in history})
 
 
 def add_parser(sub):
-    p = sub.add_parser("history", help="trend of one machine's tests over time from their saved --json results")
+    p = sub.add_parser("history", help="trends of each machine's tests (per plane or axis) over time from their "
+                                       "saved --json results")
     p.add_argument("folder", metavar="DIR", help="folder of JSON results (fitbench circular-test|positioning|roundness --json)")
-    p.add_argument("--json", action="store_true", help="print the trend as one JSON object (values in the printed units)")
+    p.add_argument("--json", action="store_true", help="print the trends as one JSON object (values in the printed "
+                   "units; per test its 'trends', one per machine and plane or axis, and all its 'tests')")
     p.add_argument("--plot", metavar="FILE", help="write the trend plot (.png, .pdf, .svg)")
     p.set_defaults(func=run)
     return p
@@ -151,9 +204,7 @@ def run(args) -> int:
     if plot_path:
         plot(history, plot_path, save_figure)
     if args.json:
-        print(json.dumps({kind: {"units": {n: u for _, n, _, u in COLUMNS[kind]},
-                                 "tests": [{"date": d.isoformat(timespec="minutes"), "file": f, **row}
-                                           for d, f, row in rows]} for kind, rows in history.items()}))
+        print(json.dumps(as_json(history)))
         return 0
     print(table(history))
     return 0

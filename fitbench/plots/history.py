@@ -18,22 +18,25 @@ def date_limits(dates) -> tuple[_dt.datetime, _dt.datetime]:
     return lo - pad, hi + pad
 
 
-def plot(history: dict, columns: dict, path, save=None, into=None) -> None:
-    """``history`` = {test: [(date, file, {column: value})]} (:func:`fitbench.cli.history.collect`) drawn with
-    ``columns`` = {test: [(JSON path, name, factor, unit)]}; written by ``save(fig, path)``."""
+def plot(history: dict, columns: dict, path, save=None, into=None, titles: dict | None = None) -> None:
+    """``history`` = {(test, machine, plane or axis): [(date, file, {column: value})]}, one panel per trend
+    (:func:`fitbench.cli.history.collect`; a plain test name as the key: one trend of that test), drawn with
+    ``columns`` = {test: [(JSON path, name, factor, unit)]}, each panel named by ``titles`` (key -> name; default
+    the test); written by ``save(fig, path)``."""
     import matplotlib.dates as mdates
     with report_figure(path, dpi=120, save=save, into=into, figsize=(10, 3.4 * len(history))) as fig:
         axes = fig.subplots(len(history), 1, squeeze=False, sharex=True)[:, 0]
         every = [r[0] for rows in history.values() for r in rows]
         locator = mdates.AutoDateLocator(minticks=3, maxticks=8)
-        for ax, (kind, rows) in zip(axes, history.items()):
+        for ax, (key, rows) in zip(axes, history.items()):
+            kind = key[0] if isinstance(key, tuple) else key
             dates = [r[0] for r in rows]
             for _, name, _, unit in columns[kind]:
                 vals = [r[2][name] for r in rows]
                 if any(v is not None for v in vals):
                     ax.plot(dates, [float("nan") if v is None else v for v in vals], "o-", ms=3, lw=1,
                             label=f"{name} [{unit}]")
-            ax.set_title(f"{kind}: trend over {len(rows)} test(s)", fontsize=9)
+            ax.set_title(f"{(titles or {}).get(key, kind)}: trend over {len(rows)} test(s)", fontsize=9)
             ax.legend(fontsize=7, ncol=2)
             ax.grid(alpha=0.3)
             ax.xaxis.set_major_locator(locator)

@@ -57,13 +57,23 @@ window.addEventListener('load', function () { setTimeout(function () {
   var box = document.querySelector('#ranking-1 input[data-method="0"]');
   box.checked = false; box.dispatchEvent(new Event('change'));
   out.methods = r.methods;
-  out.axes = explorer.data.map(function (d, k) {   // every axis of a cost names its unit
+  out.axes = explorer.data.map(function (d, k) {   // every axis of a cost names its unit (one per panel)
     var rt = document.getElementById('runtime-' + (k + 1));
-    return {profile: document.getElementById('profile-' + (k + 1)).layout.title.text,
-            runtime: rt.layout ? [rt.layout.xaxis.title.text, rt.layout.yaxis.title.text] : null};
+    return {profile: document.getElementById('profile-' + (k + 1)).layout.title.text, metric: d.metric,
+            runtime: rt.layout ? Object.keys(rt.layout).filter(function (a) { return /^[xy]axis\d*$/.test(a); })
+                                       .map(function (a) { return rt.layout[a].title.text; }) : null};
   });
-  out.visible = explorer.figures[0].map(function (id) {
-    return document.getElementById(id).data.map(function (t) { return t.visible === undefined ? true : t.visible; });
+  out.visible = explorer.figures[0].map(function (id) {   // [method index, visible] of every trace
+    return document.getElementById(id).data.map(function (t) {
+      return [t.meta, t.visible === undefined ? true : t.visible]; });
+  });
+  out.covered = [];                                 // a plot's title under its mode bar
+  document.querySelectorAll('.js-plotly-plot').forEach(function (plot) {
+    var bar = plot.querySelector('.modebar'), title = plot.querySelector('.gtitle');
+    if (!bar || !title) { return; }
+    var a = bar.getBoundingClientRect(), b = title.getBoundingClientRect();
+    if (a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom) {
+      out.covered.push(plot.id + ': ' + title.textContent); }
   });
   var p = Object.keys(r.fits)[0], m = Object.keys(r.fits[p].methods)[0];
   document.getElementById('map-1').emit('plotly_click', {points: [{pointNumber: [r.problems.indexOf(p),
@@ -102,10 +112,12 @@ def test_explorer_toggles_sorts_filters_and_draws_a_fit_offline(built):
     assert out["ready"] == "ready" and out["plotly"] == "object" and out["external"] == 0
     for axes in out["axes"]:   # readable names with units, never a bare column name such as form_error
         assert "_" not in axes["profile"], axes
-        if axes["runtime"]:
-            assert all(re.search(r"\[[^]]+\]$", t) and "_" not in t for t in axes["runtime"]), axes
-    for figure in out["visible"]:          # method 0 hidden in every plot of the ranking, the others shown
-        assert figure[0] == "legendonly" and all(v is True for v in figure[1:])
+        if axes["runtime"]:    # one unit per axis (never "mm (published) or R (noise)")
+            assert all(re.search(r"\[[^]]+\]$", t) and "_" not in t and " or " not in t for t in axes["runtime"]), axes
+        assert axes["runtime"] is None or axes["metric"] != "time_median_s", axes   # no runtime against itself
+    assert out["covered"] == []
+    for figure in out["visible"]:          # method 0 hidden in every plot (and panel) of the ranking, the others shown
+        assert all((v == "legendonly") if j == 0 else (v is True) for j, v in figure), figure
     assert out["fit"]["problem"] == out["fit"]["asked"][0] and out["fit"]["method"] == out["fit"]["asked"][1]
     points, curve, residuals = out["fit"]["traces"]
     assert points >= 10 and curve > 50 and residuals == points

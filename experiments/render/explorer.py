@@ -2,8 +2,9 @@
 JavaScript is embedded; no server, no network), built by ``experiments.report`` from the same declarations.
 
 - every ranking the studies declare (``[[rankings]]``): Dolan–Moré performance profiles and the metric against
-  the runtime, one Plotly trace per method (a checkbox per method, or a click on the legend, shows or hides it
-  in every plot of the ranking), and the problems x methods map coloured by the ratio to the best method of the
+  the runtime (one panel per unit when the pooled studies measure it in different units, mm and R; none when the
+  metric is the runtime itself), one Plotly trace per method and panel (a checkbox per method, or a click on the
+  legend, shows or hides it in every plot of the ranking), and the problems x methods map coloured by the ratio to the best method of the
   problem; a click on a cell draws that problem's points with the method's fitted circle or ellipse, and its
   residuals against the angle;
 - every declared table of every study, sortable (click a header) and filterable (type in the box), coloured
@@ -24,6 +25,7 @@ from markupsafe import Markup
 
 MAX_PROBLEMS_WITH_FITS = 20   #: problems per ranking whose points and fits are embedded (the page stays small)
 MAX_POINTS = 200              #: points per problem drawn (evenly subsampled)
+TIME_COLUMN = "time_median_s"  #: the runtime a ranking's metric is plotted against
 
 
 def _r(v, sig: int = 7):
@@ -135,12 +137,26 @@ def ranking_data(name: str, r, folders: dict[str, Path], metas: dict[str, dict])
             continue
         rows["_label"] = [method_label(m, p) for m, p in zip(rows["method"], rows.get("params", [None] * len(rows)))]
         rows_by_study[study] = rows
-        if "time_median_s" in rows:
+        if TIME_COLUMN in rows:
             keys = (study + " | " + rows["dataset"].astype(str) + " | " + rows["data_stream"].astype(str) + " | "
                     + rows["repetition"].astype(str))
-            times.update({(k, lab): _r(t) for k, lab, t in zip(keys, rows["_label"], rows["time_median_s"])})
-    if times:
+            times.update({(k, lab): _r(t) for k, lab, t in zip(keys, rows["_label"], rows[TIME_COLUMN])})
+    if r.metric == TIME_COLUMN:    # the cost is the runtime: against itself it would be a diagonal
+        data["no_time"] = (f"This ranking's cost is the runtime ({readable(r.metric)}): the problems map and the "
+                           "profile compare it; against itself it would be a diagonal.")
+    elif times:
         data["time"] = [[times.get((p, m)) for m in methods] for p in data["problems"]]
+        # the metric against the runtime: one panel per unit (costs in mm and in R never share an axis), of the
+        # problems timed; the studies whose fits were not timed are named
+        panels: dict = {}
+        for i, (u, ts, cs) in enumerate(zip(data["units"], data["time"], data["cost"])):
+            if any(t is not None and c is not None for t, c in zip(ts, cs)):
+                panels.setdefault(u, []).append(i)
+        data["panels"] = [{"unit": u, "problems": rows} for u, rows in panels.items()]
+        timed = {i for rows in panels.values() for i in rows}
+        data["untimed"] = sorted({p.split(" | ")[0] for i, p in enumerate(problems) if i not in timed})
+        if not panels:
+            data["time"] = None
     for p in data["problems"][:MAX_PROBLEMS_WITH_FITS]:
         parts = p.split(" | ")
         if len(parts) < 4 or parts[0] not in rows_by_study:

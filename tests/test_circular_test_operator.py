@@ -178,3 +178,31 @@ def test_the_json_model_is_in_the_json_units(tmp_path, capsys):
     assert got["spike_decay"] == pytest.approx(np.radians(1.0), rel=0.05)
     assert got["residual_rms"] == pytest.approx(m["residual_rms_um"] * 1e-3, rel=1e-9)
     assert got["points"] == len(cw) + len(ccw) and got["converged"] is True
+
+
+def write_polar(path, runs, R):
+    """A ballbar-style file: direction, angle (deg), radial deviation written as µm numbers without a unit."""
+    rows = ["dir,angle (deg),dr"]
+    for tag, pts in zip(("G02", "G03"), runs):
+        q = pts - (400.0, 250.0)
+        ang, dr = np.degrees(np.arctan2(q[:, 1], q[:, 0])), (np.hypot(*q.T) - R) * 1e3
+        rows += [f"{tag},{a:.6f},{d:.5f}" for a, d in zip(ang, dr)]
+    path.write_text("\n".join(rows) + "\n")
+    return str(path)
+
+
+def test_polar_deviations_in_um_read_as_mm_name_the_unit(tmp_path, capsys):
+    """docs/cli.md promised that a circular test far from its nominal radius warns naming the likely unit; a ballbar
+    file whose deviations (µm) were read as mm got warnings about the centre and the radius only."""
+    small = hand_built_runs(squareness=10e-6, scale_x=5e-6, lag_x=0.0, backlash_x=0.002, spike_y=0.0, offset=(0, 0))
+    path = write_polar(tmp_path / "small.csv", small, 150.0)
+    assert cli_main(["circular-test", path, "--nominal-radius", "150"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: radial deviations up to" in err and "are implausible for a circular test" in err
+    assert "is the deviation column in µm? (--unit um)" in err
+    assert cli_main(["circular-test", path, "--nominal-radius", "150", "--unit", "um"]) == 0
+    assert "implausible" not in capsys.readouterr().err
+    big = write_polar(tmp_path / "big.csv", hand_built_runs(), 150.0)     # deviations beyond 5 % of R as mm: refused
+    assert cli_main(["circular-test", big, "--nominal-radius", "150"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "error: radial deviations up to" in err[0] and "(--unit um)" in err[0]

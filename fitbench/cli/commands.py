@@ -252,6 +252,29 @@ def _read_circular_runs(args):
     return {"cw": runs[0][1], "ccw": runs[1][1]}, files[0], False  # labels from the point order
 
 
+#: radial deviations of a circular test beyond this are a unit mistake (a ballbar measures within +-1 mm)
+CIRCULAR_DEVIATION_LIMIT_MM = 1.0
+
+
+def _check_polar_deviations(runs, R, nominal_center, unit) -> None:
+    """An angle + radial-deviation file whose deviations exceed ``CIRCULAR_DEVIATION_LIMIT_MM``: a warning naming the
+    likely unit of the deviation column (µm read as mm: 3.1 became 3.1 mm), or that line as the error when the data
+    would be refused as far from the nominal radius anyway."""
+    from methods.circular_test.evaluation import RADIUS_TOLERANCE
+    from methods.units import likely_unit
+    c = np.asarray(nominal_center if nominal_center is not None else (0.0, 0.0), float)
+    dev = max(float(np.max(np.abs(np.hypot(*(np.asarray(p) - c).T) - R))) for p in runs.values())
+    if not dev > CIRCULAR_DEVIATION_LIMIT_MM:
+        return
+    guess = likely_unit(dev, 0.01)
+    hint = f"; is the deviation column in {guess}? (--unit {guess.replace('µ', 'u')})" if guess else "; check --unit"
+    msg = (f"radial deviations up to {dev:.4g} mm (read as {canonical(unit)}) are implausible for a circular test (a "
+           f"ballbar measures within ±{CIRCULAR_DEVIATION_LIMIT_MM:g} mm){hint}")
+    if dev > RADIUS_TOLERANCE * R:
+        raise InvalidInputError(msg)
+    warn(msg)
+
+
 def cmd_circular_test(args) -> int:
     from methods.circular_test import diagnose, evaluate
     from fitbench.plots.circular_test import FIGSIZE as POLAR_FIGSIZE, diagnostics_json, model_json, polar_plot, text
@@ -268,6 +291,8 @@ def cmd_circular_test(args) -> int:
     tolerances = parse_tolerances(args.tolerance, ("G", "G_cw", "G_ccw", "G_b", "H"))
     runs, first, labelled = _read_circular_runs(args)
     args.unit = first.unit
+    if first.kind == "polar":
+        _check_polar_deviations(runs, R, args.nominal_center, args.unit)
     polar_centre = first.kind == "polar" and args.nominal_center is None
     if polar_centre:  # angle + radial deviation: the reader placed the points about the nominal centre (0, 0) itself
         args.nominal_center = [0.0, 0.0]

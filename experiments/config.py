@@ -116,6 +116,33 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> StudyCon
     return cfg
 
 
+def plugin_notes(cfg: StudyConfig) -> list[str]:
+    """One line per ``[[methods]]`` wildcard (``circle.*``) that takes methods of installed plugins: which methods of
+    which distribution join the study (``python -m experiments.run`` prints them first). A shipped study's committed
+    results were made without plugins: the line says how to reproduce them (docs/experiments.md)."""
+    import methods
+    from methods.plugins import distributions_of
+    notes = []
+    for entry in cfg.get("methods", []):
+        mid = entry if isinstance(entry, str) else entry.get("id", "")
+        if not isinstance(mid, str) or not mid.endswith(".*"):
+            continue
+        plugins = [s for s in methods.list_methods(mid[:-2]) if not s.builtin]
+        if not plugins:
+            continue
+        by_dist: dict[str, list[str]] = {}
+        for spec in plugins:
+            dist = ", ".join(f"{d} {v}" for d, v in distributions_of([spec.module]).items()) or f"module {spec.module}"
+            by_dist.setdefault(dist, []).append(spec.id)
+        joined = "; ".join(f"{', '.join(ids)} of {dist}" for dist, ids in by_dist.items())
+        shipped = cfg.folder.resolve() == CONFIG_DIR
+        notes.append(f"{cfg['name']}: {len(plugins)} plugin method{'s join' if len(plugins) > 1 else ' joins'} "
+                     f"{mid} ({joined})" + ("; the committed results were made without plugins: to reproduce them "
+                                            "exactly, run in an environment without plugins (docs/experiments.md)"
+                                            if shipped else ""))
+    return list(dict.fromkeys(notes))
+
+
 def check_rows(cfg: StudyConfig, n_rows: int, max_rows: int) -> None:
     if n_rows > max_rows:
         raise ConfigError(f"{cfg.where}: the grid has {n_rows:,} rows, more than the limit of {max_rows:,}; "

@@ -47,6 +47,8 @@ def default_studies() -> list[str]:
 
 #: what an interrupt message names: the row store of the study that was running
 _CURRENT: dict = {}
+#: one line per study of the run none of whose rows has a result (``study.failed_rows``): the run exits 1
+_FAILED: list = []
 DEFAULT_OUT = Path("results")  # relative to the working directory, never inside the installed package
 
 
@@ -164,6 +166,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     n_rows = None if force else engine.up_to_date(cfg, make, target)
     if n_rows is not None:  # the same rows analysed by the same code: the outputs there are this run's
         log(f"   {n_rows} rows: {n_rows} already stored, 0 to run; results.csv, tables and figures up to date")
+        _FAILED.extend(filter(None, [contract.failed_rows(cfg, target / "results.csv")]))
         return target
     start_kept_workers()  # rows may run: workers (of a run on several) import while this study prepares
     store = engine.RowStore(target / "rows.sqlite", log=log)
@@ -181,6 +184,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     failure = environment_failure(cfg, df)
     if failure is not None:
         raise failure
+    _FAILED.extend(filter(None, [contract.failed_rows(cfg, df)]))
     used = counts.pop("used")
     remove_leftover_tmp(target)
     # results.csv is made by the run's idle workers (if any) while this process analyses the rows
@@ -387,6 +391,7 @@ def _main(argv=None) -> int:
 
 
 def _run(args) -> int:
+    _FAILED.clear()
     try:
         if args.list:
             try:
@@ -411,6 +416,8 @@ def _run(args) -> int:
         names = args.names or default_studies()
         for name in names:  # validate every config, its size and its data before running any
             cfg = configs.load(name, quick=args.quick, seed=args.seed)
+            for note in configs.plugin_notes(cfg):   # plugin methods a family wildcard takes: said first
+                print(f"experiments.run: note: {note}", file=sys.stderr)
             check_ready(cfg, args.max_rows)
             confined(args.out, cfg["name"])
         check_out(args.out)
@@ -443,6 +450,10 @@ def _run(args) -> int:
             build(args.out, paper)
             raise_if_signalled()
             print(f"report done ({time.perf_counter() - t1:.0f} s)")
+        for line in _FAILED:
+            print(f"experiments.run: error: {line}", file=sys.stderr)
+        if _FAILED:
+            return 1
     except InvalidInputError as exc:
         print(f"experiments.run: error: {exc}", file=sys.stderr)
         return 2

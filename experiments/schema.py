@@ -394,13 +394,31 @@ def source_parameters(source) -> dict[str, dict]:
         schemas = {}
         for name, (kind, _) in source.parameter_types().items():
             try:
-                schemas[name] = _plain(_inline(TypeAdapter(kind).json_schema()))
+                schemas[name] = _bounded(_plain(_inline(TypeAdapter(kind).json_schema())))
             except PydanticSchemaGenerationError:
                 raise ValueError(f"data source {source.name!r}: parameter {name!r} is annotated {kind!r}, a type no "
                                  f"TOML value has; annotate it with int, float, str, bool, list[...], tuple[...] or "
                                  f"Literal[...]") from None
         _SOURCE_SCHEMAS[memo] = schemas
     return _SOURCE_SCHEMAS[memo]
+
+
+#: the largest value of a data source's integer parameter that declares no bound of its own (a count of points,
+#: targets, runs: every row holds its data set in memory, and n = 10^9 points of a circle would be 16 GB); a source
+#: declares a larger one by annotation (``n: Annotated[int, Field(ge=1, le=10**8)]``)
+MAX_COUNT = 10_000_000
+
+
+def _bounded(schema):
+    """``schema`` with :data:`MAX_COUNT` as the maximum of every integer in it that declares none."""
+    if isinstance(schema, list):
+        return [_bounded(v) for v in schema]
+    if not isinstance(schema, dict):
+        return schema
+    out = {k: _bounded(v) for k, v in schema.items()}
+    if out.get("type") == "integer" and "maximum" not in out and "exclusiveMaximum" not in out:
+        out["maximum"] = MAX_COUNT
+    return out
 
 
 _BOUNDS = (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="), ("exclusiveMaximum", "<"))
@@ -462,8 +480,11 @@ def check_source_params(name: str, params: dict, grid: dict, what: str = "data s
     values = [(f"params.{k}", k, v) for k, v in params.items()]
     values += [(f"grid.{k}", k, v) for k, vs in grid.items() for v in (vs if isinstance(vs, list) else [vs])]
     for label, key, value in values:
-        if next(_Validator(schemas[key]).iter_errors(value), None) is not None:
-            raise ValueError(f"{label} = {value!r} must be {describe(schemas[key])}")
+        error = next(_Validator(schemas[key]).iter_errors(value), None)
+        if error is not None:
+            why = (f" (the bound of a data source's integer parameters that declare none: every row holds its data "
+                   f"in memory)" if error.validator == "maximum" and error.validator_value == MAX_COUNT else "")
+            raise ValueError(f"{label} = {value!r} must be {describe(schemas[key])}{why}")
 
 
 def _check_generator(entry: dict) -> None:

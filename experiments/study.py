@@ -629,6 +629,31 @@ def render_findings(template: str, values: dict) -> str:
     return text if len(text) <= MAX_FINDINGS else text[:MAX_FINDINGS - 1] + "…"
 
 
+#: the statuses of a row that has a result: the method returned one and the gate accepted it (``docs/results.md``)
+RESULT_STATUSES = ("ok", "not converged")
+
+
+def failed_rows(cfg: dict, rows) -> str | None:
+    """The one line of a study none of whose rows has a result (every row ``error``, ``invalid``, ``skipped``,
+    ``timeout``, ...: ``python -m experiments.run`` then exits 1), naming the most frequent reason; None when a row
+    has a result. ``rows``: the rows (``status`` and ``message``), or the study's ``results.csv``."""
+    if not isinstance(rows, pd.DataFrame):
+        try:
+            rows = pd.read_csv(rows, usecols=["status", "message"], keep_default_na=False, dtype=str)
+        except (OSError, ValueError):
+            return None
+    if not len(rows) or rows["status"].isin(RESULT_STATUSES).any():
+        return None
+    counts = ", ".join(f"{n:,} {status}" for status, n in rows["status"].value_counts().items())
+    reasons = rows.groupby(["status", "message"], sort=False, dropna=False).size().sort_values(ascending=False,
+                                                                                                kind="stable")
+    (status, message), n = reasons.index[0], int(reasons.iloc[0])
+    message = " ".join(str(message).split())
+    message = message if len(message) <= 200 else message[:199] + "…"
+    return (f"{cfg.where}: {len(rows):,} of {len(rows):,} rows failed ({counts}), none has a result; most often "
+            f"{status}: {message} ({n:,} row{'s' if n > 1 else ''}); the rows and their messages are in results.csv")
+
+
 def _where(df, cond):
     for k, v in (cond or {}).items():
         df = df[df[k].isin(v if isinstance(v, list) else [v])]

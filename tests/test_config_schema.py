@@ -2,10 +2,11 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 import pytest
+from pydantic import Field
 
 from experiments import config as configs
 from experiments import run as runner
@@ -434,3 +435,56 @@ def test_a_ranking_declaration_is_checked_before_any_row(tmp_path, capsys, old, 
     assert code == 2 and "\n" not in err and f"study.toml: {problem}" in err, err
     assert not (tmp_path / "out" / "study" / "rows.sqlite").exists()
     assert configs.load(str(write(tmp_path, RANKED)))["rankings"][0]["metric"] == "radius_error"   # as written: fine
+
+
+def test_a_data_source_count_is_bounded_with_the_config(tmp_path, capsys):
+    """n = 10^9 points tried to allocate 16 GB in the row (a MemoryError row, exit 0): a data source's integer
+    parameter without a declared bound is at most MAX_COUNT, checked with the config; a source declares a larger
+    bound by annotation."""
+    from datasets import sources
+    from experiments import schema
+    path = write(tmp_path, SOURCE_STUDY.format(source="circle", params="radius = 5.0, noise = 0.01", grid=(
+        f"grid = {{ n = [30, {schema.MAX_COUNT + 1}] }}")))
+    code = runner.main([str(path), "--out", str(tmp_path / "out"), "--jobs", "1", "--no-report"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err, err
+    assert (f"study.toml: datasets[0] (source 'circle'): grid.n = {schema.MAX_COUNT + 1} must be an integer >= 1 and "
+            f"<= {schema.MAX_COUNT} (the bound of a data source's integer parameters that declare none") in err, err
+    assert not (tmp_path / "out" / "study" / "rows.sqlite").exists()
+    configs.load(str(write(tmp_path, SOURCE_STUDY.format(source="circle", params=f"n = {schema.MAX_COUNT}", grid=""))))
+
+    def big(rng, *, n: Annotated[int, Field(ge=1, le=10 ** 9)] = 10, k=3):
+        return np.zeros((n, 2)), None
+    try:
+        sources.register_source("test_big", random=True, summary="plugin test", gives=np.ndarray)(big)
+        configs.load(str(write(tmp_path, SOURCE_STUDY.format(source="test_big", params="n = 100000000", grid=""))))
+        with pytest.raises(ConfigError, match=r"params.k = 100000000 must be an integer <= 10000000 \(the bound"):
+            configs.load(str(write(tmp_path, SOURCE_STUDY.format(source="test_big", params="k = 100000000", grid=""))))
+    finally:
+        sources._REGISTRY.pop("test_big", None)
+
+
+def _collinear_study(folder, extra=""):
+    (folder / "line.csv").write_text("x,y\n" + "".join(f"{i},{2 * i}\n" for i in range(10)))
+    arc = "".join(f"{np.cos(t):.17g},{np.sin(t):.17g}\n" for t in np.linspace(0, 3, 9))
+    (folder / "arc.csv").write_text("x,y\n" + arc)
+    return write(folder, 'name = "study"\ntitle = "t"\nseed = 1\n[[datasets]]\nfile = "line.csv"\n' + extra +
+                 '[[methods]]\nid = "circle.kasa"\n[[methods]]\nid = "circle.gauss_newton"\n')
+
+
+def test_a_study_none_of_whose_rows_has_a_result_exits_1(tmp_path, capsys):
+    """Every row failed (here skipped: the points of the file lie on a line): the outputs are written, the run ends
+    with one line naming the count, the statuses and the most frequent reason, exit 1 (it exited 0), also when
+    the rows are served from the store; one row with a result is a run that worked (exit 0)."""
+    path = _collinear_study(tmp_path)
+    args = [str(path), "--out", str(tmp_path / "out"), "--jobs", "1", "--no-report"]
+    for _ in range(2):   # run, then served from the store
+        code = runner.main(args)
+        err = capsys.readouterr().err.strip()
+        assert code == 1 and "\n" not in err and "Traceback" not in err, err
+        assert err.startswith("experiments.run: error: study.toml: 2 of 2 rows failed (2 skipped), none has a result; "
+                              "most often skipped: circle."), err
+        assert "lie on one straight line" in err and err.endswith("the rows and their messages are in results.csv")
+        assert (tmp_path / "out" / "study" / "results.csv").is_file()
+    path = _collinear_study(tmp_path, '[[datasets]]\nfile = "arc.csv"\n')
+    assert runner.main(args) == 0 and capsys.readouterr().err == ""

@@ -195,3 +195,51 @@ def test_analyse_tables_have_captions_units_and_generated_findings(tmp_path):
     assert f"σ = {v['sigma']:g} R" in manifest["findings"]
     for arc, ok in v["within_10_percent_by_arc"].items():      # per arc: how many reach the bound, or none
         assert (f"{len(ok)} of" if ok else "none on the") in manifest["findings"] and arc in manifest["findings"]
+
+
+JOINER = '''
+import numpy as np
+from methods import register
+from methods.results import circle_result
+
+
+@register("circle.joiner_median", kind="closed form", summary="centroid and median distance (plugin test)",
+          reference="fitbench plugin test")
+def joiner_median(points):
+    c = np.median(points, axis=0)
+    return circle_result(points, c, float(np.median(np.hypot(*(points - c).T))), converged=True, message="closed form")
+'''
+
+
+@pytest.mark.slow
+def test_plugin_methods_a_family_wildcard_takes_are_named_first(tmp_path):
+    """An installed plugin's circle method joins every study naming ``circle.*`` (the default noise study grew from
+    28,800 to 50,400 rows with a reviewer's plugin, silently): the run's first line says which methods of which
+    distribution join which study; for a shipped study, how to reproduce its committed results. Which methods run is
+    unchanged."""
+    site = install_plugin(tmp_path, "fitbench-joiner", {"fitbench_joiner": JOINER},
+                          {"fitbench.methods": {"joiner": "fitbench_joiner"}}, version="0.2.0")
+    study = tmp_path / "wild.toml"
+    study.write_text(textwrap.dedent('''
+        name = "wild"
+        title = "Every circle method"
+        seed = 2
+        [[datasets]]
+        source = "circle"
+        params = { n = 12, noise = 0.01 }
+        [[methods]]
+        id = "circle.*"
+    '''))
+    proc = run([str(study), "--out", str(tmp_path / "out"), "--jobs", "1", "--no-report"], cwd=REPO, path_first=[site])
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.splitlines()[0] == ("experiments.run: note: wild: 1 plugin method joins circle.* "
+                                           "(circle.joiner_median of fitbench-joiner 0.2.0)"), proc.stderr
+    assert "circle.joiner_median" in set(pd.read_csv(tmp_path / "out" / "wild" / "results.csv")["method"])
+    shipped = run_python("-c", "from experiments import config\nfor n in ('noise', 'convergence'):\n"
+                               "    print(config.plugin_notes(config.load(n)))", cwd=REPO, path_first=[site])
+    assert shipped.returncode == 0, shipped.stderr
+    noise, convergence = shipped.stdout.splitlines()
+    assert noise == str(["noise: 1 plugin method joins circle.* (circle.joiner_median of fitbench-joiner 0.2.0); the "
+                         "committed results were made without plugins: to reproduce them exactly, run in an "
+                         "environment without plugins (docs/experiments.md)"]), shipped.stdout
+    assert convergence == "[]"   # names its methods: nothing joins

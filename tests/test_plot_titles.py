@@ -59,3 +59,24 @@ def test_the_report_page_wraps_a_long_line_instead_of_shrinking_its_text():
 
     one_page("unused.pdf", title="t", lines=lines, draw=lambda sub: None, save=save)
     assert seen
+
+
+def test_the_report_page_never_wraps_a_table_row():
+    """A table wider than the page at 8 pt (the roundness report's 137-character rows) keeps its rows whole: the text
+    is set in the font that fits the widest row, and only prose lines are wrapped to that width."""
+    from matplotlib.text import Text
+    from fitbench.plots.report_page import one_page
+    row = "least-squares circle (LSCI)  " + "  ".join(f"{v:10.4f}" for v in range(10))
+    note = "note: " + "a long explanation of the data " * 8
+    seen = []
+
+    def save(fig, path):
+        block = [t for t in fig.findobj(Text) if t.get_text().startswith("note")][0]
+        text = block.get_text().splitlines()
+        assert row in text and len(row) > 110
+        assert max(map(len, text)) == len(row) and len(text) > 2         # the note wrapped to the row's width
+        assert block.get_fontsize() < 8.0
+        seen.append(text)
+
+    one_page("unused.pdf", title="t", lines=[note, row], draw=lambda sub: None, save=save)
+    assert seen

@@ -5,6 +5,7 @@ command's own plot function (vector graphics in the PDF)."""
 from __future__ import annotations
 
 import datetime as _dt
+import re
 import textwrap
 
 from fitbench import __version__
@@ -21,12 +22,15 @@ def one_page(path, *, title: str, lines: list[str], draw, aspect: float = 0.6, s
     height) in the upper part; ``draw(subfigure)`` draws the test's plot below (a matplotlib SubFigure: the
     plot functions' ``into``), ``aspect`` = its height / width."""
     width_pt = (_RIGHT - _LEFT) * A4_INCHES[0] * 72
-    chars = int(width_pt / (_CHAR_WIDTH * _FONT_PT))
-    # a line longer than the page is wide at 8 pt is wrapped (its continuation indented), not set in a smaller font:
-    # one long heading made the whole block about 4 pt
-    text = [part for block in lines for ln in str(block).splitlines()
-            for part in (textwrap.wrap(ln, chars, subsequent_indent=" " * (len(ln) - len(ln.lstrip()) + 4),
-                                       break_on_hyphens=False, break_long_words=True) or [""])] or [""]
+    raw = [ln for block in lines for ln in str(block).splitlines()] or [""]
+    # a table's row (fields apart by two spaces or more) is never wrapped: the text is set in the font that fits the
+    # widest row, at most 8 pt; a line of prose longer than that is wrapped (its continuation indented), not set in
+    # a smaller font (one long heading made the whole block about 4 pt)
+    rows = [ln for ln in raw if re.search(r"\S {2,}\S", ln.strip())]
+    chars = max([int(width_pt / (_CHAR_WIDTH * _FONT_PT)), *map(len, rows)])
+    text = [part for ln in raw for part in
+            ([ln] if ln in rows else textwrap.wrap(ln, chars, subsequent_indent=" " * (len(ln) - len(ln.lstrip()) + 4),
+                                                   break_on_hyphens=False, break_long_words=True) or [""])]
     longest = max(len(ln) for ln in text)
     size = min(_FONT_PT, width_pt / (_CHAR_WIDTH * max(longest, 1)), 0.5 * A4_INCHES[1] * 72 / (1.2 * len(text)))
     with report_figure(path, dpi=150, save=save, figsize=A4_INCHES, layout="constrained") as fig:

@@ -638,6 +638,12 @@ def failed_rows(cfg: dict, rows) -> str | None:
     ``timeout``, ...: ``python -m experiments.run`` then exits 1), naming the most frequent reason; None when a row
     has a result. ``rows``: the rows (``status`` and ``message``), or the study's ``results.csv``."""
     if not isinstance(rows, pd.DataFrame):
+        try:   # meta.json's counts: a study with a result is not read again
+            counts = json.loads((Path(rows).parent / "meta.json").read_text(encoding="utf-8")).get("status_counts")
+            if any(counts.get(s) for s in RESULT_STATUSES):
+                return None
+        except (OSError, ValueError, AttributeError):
+            pass
         try:
             rows = pd.read_csv(rows, usecols=["status", "message"], keep_default_na=False, dtype=str)
         except (OSError, ValueError):

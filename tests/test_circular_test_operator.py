@@ -206,3 +206,13 @@ def test_polar_deviations_in_um_read_as_mm_name_the_unit(tmp_path, capsys):
     assert cli_main(["circular-test", big, "--nominal-radius", "150"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "error: radial deviations up to" in err[0] and "(--unit um)" in err[0]
+
+
+def test_repeated_samples_of_a_file_without_direction_labels_name_the_run_by_its_order(runs, tmp_path, capsys):
+    """One file with a run column 1, 2 (no CW/CCW): the warning names the run by its place, not a guessed label."""
+    cw, ccw = runs
+    dwell = np.vstack([np.repeat(cw[:1], 5, axis=0), cw])
+    path = tmp_path / "both.csv"
+    path.write_text("run,x,y\n" + "".join(f"{k},{x:.9f},{y:.9f}\n" for k, pts in ((1, dwell), (2, ccw)) for x, y in pts))
+    assert cli_main(["circular-test", str(path), "--nominal-radius", "150", "--nominal-center", "300", "200"]) == 0
+    assert "warning: first run: 5 repeated sample(s) dropped: samples 1-6" in capsys.readouterr().err

@@ -305,7 +305,8 @@ def cmd_circular_test(args) -> int:
     notes = ["angle + radial deviation: points placed about the nominal centre (0, 0), which the diagnostics use"] \
         if polar_centre else []
     for name in ("cw", "ccw"):
-        runs[name], repeats, said = drop_repeated(runs[name], center0, name.upper())  # a dwell is no contour point
+        label = name.upper() if labelled else ('first', 'second')[name == 'ccw']   # runs told apart by order
+        runs[name], repeats, said = drop_repeated(runs[name], center0, label)  # a dwell is no contour point
         if said:
             warn(said)
             notes.append(said)

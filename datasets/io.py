@@ -57,6 +57,11 @@ class DataFileError(InvalidInputError):
     """A points file that cannot be read; the message names the file and line."""
 
 
+class NumberFormatError(DataFileError):
+    """A field whose shape says why it is not a number (digit grouping, a Unicode minus, two decimal marks):
+    the message says what to export instead, and no preamble hint (--skip-rows) is added to it."""
+
+
 def _is_number(token: str) -> bool:
     """``token`` is a number of the readers' grammar (:data:`NUMBER`, or a nan/inf word refused later as not finite)."""
     return NUMBER.fullmatch(token) is not None or token.lower() in _NON_FINITE
@@ -67,6 +72,92 @@ def _number(token: str) -> float:
     if not _is_number(token):
         raise ValueError(token)
     return float(token)
+
+
+#: a number written with a decimal comma (``1,5``, ``-0,25e-3``)
+_COMMA_NUMBER = re.compile(r"[+-]?[0-9]*,[0-9]+(?:[eE][+-]?[0-9]+)?")
+#: a number with ',' digit grouping, as English locales display it (``1,000``, ``12,345.5``, ``1,234,567``)
+_COMMA_GROUPED = re.compile(r"[+-]?[1-9][0-9]{0,2}(?:,[0-9]{3})+(?:\.[0-9]*)?")
+#: a number with '.', space, no-break space (U+00A0), narrow no-break space (U+202F), thin space (U+2009) or
+#: apostrophe grouping (German, French, Swiss locales: ``1.045,9``, ``1 045,9``, ``1'045.9``)
+_OTHER_GROUPED = re.compile("[+-]?[1-9][0-9]{0,2}(?P<g>[. \u00a0\u202f\u2009'\u2019])[0-9]{3}(?:(?P=g)[0-9]{3})*"
+                            "(?:[.,][0-9]*)?")
+_GROUP_NAMES = {",": "','", ".": "'.'", " ": "a space", "\u00a0": "a no-break space (U+00A0)",
+                "\u202f": "a narrow no-break space (U+202F)", "\u2009": "a thin space (U+2009)", "'": "an apostrophe",
+                "\u2019": "an apostrophe (U+2019)"}
+#: integers an export with digit grouping writes without a separator (below 1000), zero excluded
+_SMALL_INTEGER = re.compile(r"[+-]?0*[1-9][0-9]{0,2}")
+
+
+def number_problem(token: str, decimal_comma: bool = False) -> str | None:
+    """Why ``token``, outside the grammar (:data:`NUMBER`), is not read as a number, when its shape says it:
+    digit grouping (a thousands separator: ``1,000``, ``1.045,9``, ``1 045,9``, ``1'045.9``), a Unicode minus
+    sign (U+2212, which fitbench does not read as '-': the one grammar of every reader, pandas' C parser
+    included, is ASCII), or a decimal point in a file of decimal commas. None when the shape says nothing."""
+    t = str(token).strip()
+    if "\u2212" in t:
+        return (f"{token!r} is written with the Unicode minus sign '\u2212' (U+2212), not the ASCII '-'; export "
+                "without typographic signs (or replace '\u2212' by '-')")
+    m = _COMMA_GROUPED.fullmatch(t)
+    g = "," if m else None
+    if not m:
+        m = _OTHER_GROUPED.fullmatch(t)
+        g = m.group("g") if m else None
+    if m and not (g == "." and _is_number(t)):
+        return (f"{token!r} looks like a number with a thousands separator ({_GROUP_NAMES[g]}); export without "
+                "digit grouping")
+    if decimal_comma and _is_number(t) and "." in t:
+        return (f"{token!r} has a decimal point where the file's numbers have decimal commas; a file uses one "
+                "decimal mark: export it again with one")
+    return None
+
+
+def decimal_marks(name, rows) -> bool | None:
+    """The decimal mark of a file's numbers, from its data fields ``rows`` ((line number, tokens) pairs): True
+    for decimal commas, False for decimal points, None when no field has either.
+
+    One mark per file. A field with a comma between digits is a decimal comma (``1500,0000``) unless the file
+    also writes decimal points (``3.7308``): no export mixes the two marks, so then the comma is digit grouping
+    (``1,000`` beside ``3.7308``: Excel's "Text (Tab delimited)" writes numbers as displayed) and the file is
+    refused, naming the line and the field. Without decimal points, a column whose comma fields all look like
+    grouping (one to three digits, not starting with 0, then groups of exactly three: ``2,908``, ``-1,140``)
+    and which also holds integers from 1 to 999 without a comma (``25``, ``-80``) is refused as ambiguous:
+    a grouped export writes numbers below 1000 that way, a fixed-decimals export would write ``25,000``.
+    A column whose every field is ``d,ddd`` is read as decimal commas (nothing in the file can tell)."""
+    first_comma = first_point = None
+    columns: dict = {}   # column -> [all comma fields grouping-shaped, first comma field, first small integer]
+    for lineno, toks in rows:
+        for j, t in enumerate(toks):
+            if "," in t and _COMMA_GROUPED.fullmatch(t) and ("." in t or t.count(",") > 1):
+                raise NumberFormatError(f"{name} line {lineno}: {number_problem(t)}")
+            if _COMMA_NUMBER.fullmatch(t):
+                first_comma = first_comma or (lineno, t)
+                col = columns.setdefault(j, [True, None, None])
+                col[1] = col[1] or (lineno, t)
+                col[0] = col[0] and _COMMA_GROUPED.fullmatch(t) is not None
+            elif NUMBER.fullmatch(t):
+                if "." in t:
+                    first_point = first_point or (lineno, t)
+                elif _SMALL_INTEGER.fullmatch(t):
+                    columns.setdefault(j, [True, None, None])
+                    if columns[j][2] is None:
+                        columns[j][2] = (lineno, t)
+    if first_comma is None:
+        return None if first_point is None else False
+    lineno, t = first_comma
+    if first_point is not None:
+        if _COMMA_GROUPED.fullmatch(t):
+            raise NumberFormatError(f"{name} line {lineno}: {t!r} looks like a thousands separator (line {first_point[0]} "
+                                f"writes {first_point[1]!r} with a decimal point); export without digit grouping")
+        raise NumberFormatError(f"{name} line {lineno}: {t!r} has a decimal comma but line {first_point[0]} writes "
+                            f"{first_point[1]!r} with a decimal point; a file uses one decimal mark: export it again "
+                            "with one")
+    for grouped, comma, small in columns.values():
+        if grouped and comma is not None and small is not None:
+            raise NumberFormatError(f"{name} line {comma[0]}: {comma[1]!r} looks like a thousands separator (every comma "
+                                f"number of its column has three digits after the comma, and line {small[0]} writes "
+                                f"{small[1]!r} without one); export without digit grouping")
+    return True
 
 
 #: the encoding decided per file (path, size, modification time): :func:`file_encoding`
@@ -284,13 +375,13 @@ ROLES = {"x": "x", "y": "y", "z": "z",
 
 
 def parse_name(name: str) -> tuple[str, str | None]:
-    """(key, unit) of a header name: the unit in ``()`` or ``[]``, after ``/``, or as a ``_um``-style suffix
+    """(key, unit) of a header name: the unit in ``()``, ``[]`` or ``{}``, after ``/``, or as a ``_um``-style suffix
     (``Radial deviation (um)``, ``angle[deg]``, ``dr/µm``, ``radial_deviation_um`` -> ``radialdeviation``,
     ``µm``); the key in lower case without spaces, ``_``, ``-`` or ``.``. The unit is canonical (``µm``,
     ``deg``) when fitbench knows it, else as written."""
     n = str(name).strip().lower().replace("μ", "µ")
     unit = None
-    m = re.fullmatch(r"(.*?)\s*[(\[]\s*([^)\]]*?)\s*[)\]]", n) or re.fullmatch(r"(.*?)\s*/\s*([^/\s]+)", n)
+    m = re.fullmatch(r"(.*?)\s*[(\[{]\s*([^)\]}]*?)\s*[)\]}]", n) or re.fullmatch(r"(.*?)\s*/\s*([^/\s]+)", n)
     if m and m.group(1):
         n, unit = m.group(1), m.group(2)
     else:
@@ -310,6 +401,9 @@ def column_unit(layout, k: int, kind: str) -> str | None:
         return None
     key, unit = parse_name(layout.header[k])
     if unit is None:
+        if re.search(r"[\[\](){}<>|µμ°]", key):   # a unit fitbench cannot take apart: never read the column as mm
+            raise DataFileError(f"{layout.name}: cannot tell the unit of column {layout.header[k]!r}; write it as "
+                                "'NAME [UNIT]' (x [µm])")
         return None
     known = LENGTH_UNITS if kind == "length" else ANGLE_UNITS
     if unit in known.values():
@@ -347,6 +441,8 @@ class Layout:
     ncol: int
     comment: str                    # the comment character the C parser skips
     preamble: list = field(default_factory=list)  # non-comment lines skipped with skip_rows
+    sample: list = field(default_factory=list)    # (line number, line) of the first data lines read by sniff
+    units_line: int = 0             # 1-based line of a units row under the header (0: none)
 
     def index(self, names, default=(0, 1)) -> list[int]:
         """Column indices of ``names`` (case-insensitive header names or 0-based integers)."""
@@ -411,15 +507,94 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     head = _split(first, sep)
     numeric = all(_is_number(t.replace(",", ".") if decimal_comma else t) for t in head)
     if numeric:
-        return Layout(name, sep, decimal_comma, None, 0, body[0][0], len(head), comment, preamble)
+        decimal_comma = _marks(name, body, sep, decimal_comma)
+        return Layout(name, sep, decimal_comma, None, 0, body[0][0], len(head), comment, preamble, body)
+    if _units_row(head) is not None:
+        above = _names_above(skip_rows)
+        raise DataFileError(f"{name} line {body[0][0]}: the header {first!r} names units, not columns; put the "
+                            f"units into the names (X [µm];Y [µm]){above}")
     if _numeric_fields(first) is not None and len(body) > 1 and _numeric_fields(body[1][1]) is not None:
         # numbers and a label ('CW;1,250;2,2597') above more of them: data where the header should be
         what = ((f"if --skip-rows {skip_rows} skipped the header line, give fewer; else " if skip_rows else "")
                 + "add a header line naming the columns (e.g. direction;angle [deg];radial deviation [um])")
         raise DataFileError(f"{name} line {body[0][0]}: {first!r} is a row of data where the header should be; {what}")
+    units_line = 0
+    if len(body) > 1 and (units := _units_row(_split(body[1][1], sep))) is not None:
+        head, units_line = _with_units(name, head, units, body[1][0]), body[1][0]
+        body = [body[0]] + body[2:]
     if len(body) < 2:
         raise DataFileError(f"{name}: a header but no data lines")
-    return Layout(name, sep, decimal_comma, head, body[0][0], body[1][0], len(head), comment, preamble)
+    widths = {len(_split(ln, sep)) for _, ln in body[1:]}
+    if max(widths) < len(head):       # every row shorter than the header: said before any column is looked up
+        lineno, ln = body[1]
+        k = len(_split(ln, sep))
+        raise DataFileError(f"{name} line {lineno}: {k} field{'s' if k != 1 else ''} where the header (line "
+                            f"{body[0][0]}) has {len(head)}: {ln!r}{preamble_hint(name, body[0][0], lineno)}")
+    decimal_comma = _marks(name, body[1:], sep, decimal_comma)
+    return Layout(name, sep, decimal_comma, head, body[0][0], body[1][0], len(head), comment, preamble, body[1:],
+                  units_line)
+
+
+def _marks(name, body, sep, decimal_comma: bool) -> bool:
+    """The decimal mark of the data lines ``body`` (:func:`decimal_marks`; rows of at least two numbers, a
+    label allowed, :func:`_numeric_fields`), else the separator's guess ``decimal_comma``."""
+    rows = []
+    for lineno, ln in body:
+        toks = _split(ln, sep)
+        words = [t for t in toks if t and not (_is_number(t) or _COMMA_NUMBER.fullmatch(t) or _COMMA_GROUPED.fullmatch(t))]
+        if len(toks) - len(words) >= 2 and (not words or (len(words) == 1 and _ROW_LABEL.fullmatch(words[0]))):
+            rows.append((lineno, toks))
+    got = decimal_marks(name, rows)
+    return decimal_comma if got is None else got
+
+
+def _names_above(skip_rows: int) -> str:
+    """The advice for a header of units read after ``skip_rows`` skipped lines: skip one line fewer."""
+    if not skip_rows:
+        return ""
+    return ("; if the names are on the line above, drop --skip-rows" if skip_rows == 1 else
+            f"; if the names are on the line above, give --skip-rows {skip_rows - 1}")
+
+
+#: units a units row or a header may name that fitbench does not read: refused by name, never taken as a column
+OTHER_UNITS = {"cm", "dm", "km", "mil", "mils", "thou", "ft", "gon", "grad", "mrad", "µrad", "urad", "arcsec", "arcmin",
+               "ms", "min", "%", "ppm", "µm/m", "um/m", "mm/min", "°c", "hz"}
+
+
+def _unit_word(token: str) -> str | None:
+    """The unit a field of a units row names (``µm``, ``[mm]``, ``(deg)``), canonical when fitbench reads it,
+    else as written when it is a unit it does not read (:data:`OTHER_UNITS`); None when it is no unit."""
+    t = str(token).strip().lower().replace("μ", "µ")
+    t = re.sub(r"^[\[({]\s*(.*?)\s*[\])}]$", r"\1", t)
+    return LENGTH_UNITS.get(t, ANGLE_UNITS.get(t, t if t in OTHER_UNITS else None))
+
+
+def _units_row(tokens) -> list | None:
+    """The units of a units row (``µm;µm``, ``;deg;µm``: one per field, None for an empty field), or None when
+    ``tokens`` is not one (every non-empty field a unit, at least one)."""
+    units = [_unit_word(t) if t.strip() else None for t in tokens]
+    if not any(units) or any(u is None and t.strip() for u, t in zip(units, tokens)):
+        return None
+    return units
+
+
+def _with_units(name, header: list, units: list, lineno: int) -> list:
+    """The header names with the units of the units row under them (line ``lineno``) as ``NAME [UNIT]``; a name
+    that carries another unit already is refused."""
+    if len(units) > len(header):
+        raise DataFileError(f"{name} line {lineno}: a units row of {len(units)} fields under a header of "
+                            f"{len(header)}; give one unit per column")
+    out = list(header)
+    for k, u in enumerate(units):
+        if u is None:
+            continue
+        had = parse_name(header[k])[1]
+        if had is not None and had != u:
+            raise DataFileError(f"{name} line {lineno}: the units row says {u} for column {header[k]!r}, whose name "
+                                f"says {had}; correct one of them")
+        if had is None:
+            out[k] = f"{header[k]} [{u}]"
+    return out
 
 
 def _diagnose(layout: Layout, idx, skip_rows: int):
@@ -434,16 +609,110 @@ def _diagnose(layout: Layout, idx, skip_rows: int):
                                 "UTF-32 text, save it as UTF-8 (or with a byte-order mark)")
         toks = _split(ln, layout.sep)
         if len(toks) != layout.ncol:
-            raise DataFileError(f"{name} line {lineno}: {len(toks)} fields where the first line has {layout.ncol}: {ln!r}"
-                                f"{skip_rows_hint(layout, before=lineno)}")
+            where = f"the header (line {layout.header_line})" if layout.header else "the first line"
+            raise DataFileError(f"{name} line {lineno}: {len(toks)} field{'s' if len(toks) != 1 else ''} where {where} "
+                                f"has {layout.ncol}: {ln!r}{skip_rows_hint(layout, before=lineno)}")
         for j in idx:
             tok = toks[j].replace(",", ".") if layout.decimal_comma else toks[j]
-            if not _is_number(tok):
+            if not _is_number(tok) or (layout.decimal_comma and "." in toks[j]):
+                why = number_problem(toks[j], layout.decimal_comma)
+                if why:
+                    raise NumberFormatError(f"{name} line {lineno}: {why}")
                 raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a number"
                                     f"{skip_rows_hint(layout, before=lineno)}")
             if not np.isfinite(_number(tok)):
                 raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a finite number; remove or repair the point")
     raise DataFileError(f"{name}: could not be parsed (unexpected format); use one row of numbers per line")
+
+
+def _field_number(token: str, decimal_comma: bool) -> float:
+    """A field as a number of the grammar, its comma read as the decimal mark in a file of decimal commas (where
+    a decimal point is refused: one mark per file, :func:`decimal_marks`); ValueError otherwise."""
+    if decimal_comma:
+        if "." in token:
+            raise ValueError(token)
+        token = token.replace(",", ".")
+    return _number(token)
+
+
+def unterminated_last_line(path) -> tuple[int, str] | None:
+    """(line number, text) of the last line of ``path`` when the file does not end with a line end (LF or CR),
+    else None. Reads the last byte; only a file without a final line end is read again, counting its lines
+    over 4 MiB blocks (UTF-16/32 files are decoded)."""
+    name = os.fspath(path)
+    enc = file_encoding(name)
+    if enc in CODE_UNIT_BYTES:
+        last = None
+        with _open_text(name) as fh:
+            for last in iter_lines(fh, name):
+                pass
+        return None if last is None or last[1].endswith(("\n", "\r")) else (last[0], last[1])
+    lf = cr = 0
+    tail = b""
+    with open_regular(name, encoding=None) as fh:
+        size = fh.seek(0, os.SEEK_END)
+        fh.seek(max(size - 1, 0))
+        if fh.read(1) in (b"", b"\n", b"\r"):
+            return None                          # the usual case: ends with a line end, no pass over the file
+        fh.seek(0)
+        while block := fh.read(1 << 22):
+            lf += block.count(b"\n")
+            cr += block.count(b"\r")
+            tail = (tail + block)[-(4 * MAX_LINE_CHARS):]
+    if not tail or tail.endswith((b"\n", b"\r")):
+        return None
+    text = re.split(r"\r\n|\r|\n", tail.decode(enc, errors="replace"))[-1]
+    return (lf if lf else cr) + 1, text
+
+
+def _decimals(token: str) -> int | None:
+    """Digits after the decimal mark ('.' or ',') of a number written without an exponent (0 without a mark);
+    None for anything else."""
+    t = token.strip()
+    if not re.fullmatch(r"[+-]?[0-9]*(?:[.,][0-9]*)?", t) or not re.search(r"[0-9]", t):
+        return None
+    return len(re.split(r"[.,]", t, maxsplit=1)[1]) if re.search(r"[.,]", t) else 0
+
+
+#: a column's numbers compared with a last line that has no line end (at least this many, all alike)
+CUT_REFERENCE_ROWS = 3
+
+
+def refuse_cut_last_line(name, last, rows, columns) -> None:
+    """Refuse a file whose last line has no line end (``last``: its line number and fields, or None) and, in
+    one of ``columns``, fewer digits after the decimal mark than every other number of that column in ``rows``
+    (token lists of the file's first data lines): the file was cut in the middle of that number (an interrupted
+    copy, transfer or export). An exporter writes a column with a fixed number of decimals; the last number alone
+    with fewer, where the file stops without a line end, is a cut and not a measurement: reading it would move
+    the figures (one cut circular-test point tripled G). A last line without a line end whose numbers look like
+    the others' is read."""
+    if last is None:
+        return
+    lineno, text = last
+    cut = None
+    for k in columns:
+        ref = {_decimals(r[k]) for r in rows if k < len(r)}
+        if len(rows) < CUT_REFERENCE_ROWS or len(ref) != 1:
+            continue
+        want = ref.pop()
+        got = _decimals(text[k]) if k < len(text) else None
+        if want is not None and got is not None and got < want:
+            cut = (text[k], got, want)
+            break
+    if cut is not None:
+        raise DataFileError(f"{name} line {lineno}: the file ends without a line end in {cut[0]!r}, which has {cut[1]} "
+                            f"digit(s) after the decimal mark where the column's other numbers have {cut[2]}: the "
+                            "file looks cut (truncated); copy or export it again, or delete that line")
+
+
+def _check_last_line(layout: Layout, idx) -> None:
+    """:func:`refuse_cut_last_line` for a file read by :func:`read_columns` (the reference: the sniffed data rows)."""
+    last = unterminated_last_line(layout.name)
+    if last is None:
+        return
+    toks = _split(last[1].strip(), layout.sep)
+    rows = [_split(ln, layout.sep) for n, ln in layout.sample if n != last[0]]
+    refuse_cut_last_line(layout.name, (last[0], toks), [r for r in rows if len(r) == layout.ncol], idx)
 
 
 #: files up to this size are parsed without pandas (whose import costs ~0.3 s: fast start-up)
@@ -471,7 +740,7 @@ def _read_small(layout: Layout, usecols: list[int]) -> dict | None:
         if len(tokens) != layout.ncol:
             return None
         try:
-            rows.append([_number(tokens[k].replace(",", ".") if layout.decimal_comma else tokens[k]) for k in usecols])
+            rows.append([_field_number(tokens[k], layout.decimal_comma) for k in usecols])
         except ValueError:
             _diagnose(layout, usecols, 0)
     if not rows:
@@ -487,6 +756,7 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
     if small is not None:
         if not all(np.isfinite(small[k]).all() for k in idx):
             _diagnose(layout, idx, skip_rows)
+        _check_last_line(layout, idx)
         return small
     check_line_lengths(layout.name)
     dtype = {k: (object if k in strings else np.float64) for k in usecols}
@@ -500,12 +770,13 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
         cols = {k: frame[k].to_numpy() for k in usecols}
         del frame
         ok = all(np.isfinite(cols[k]).all() for k in idx)
-    except (ValueError, pd.errors.ParserError, UnicodeDecodeError):
-        ok = False
+    except (ValueError, KeyError, pd.errors.ParserError, UnicodeDecodeError):
+        ok = False   # KeyError: every row shorter than the header
     if not ok:
         _diagnose(layout, idx, skip_rows)
     if not all(len(cols[k]) for k in usecols):
         raise DataFileError(f"{layout.name}: a header but no data lines")
+    _check_last_line(layout, idx)
     return cols
 
 
@@ -606,7 +877,9 @@ def preamble_hint(name, header_line: int = 1, before: int | None = None) -> str:
                 got = _numeric_fields(ln)
                 if got is not None:
                     n = lineno - 1
-                    if previous is not None and previous[0] == lineno - 1 and len(_split(previous[1], got[0])) == got[1]:
+                    if previous is not None and previous[0] == lineno - 1 and _units_row(_split(previous[1], got[0])):
+                        n = lineno - 3                  # keep the header and the units row under it (read as units)
+                    elif previous is not None and previous[0] == lineno - 1 and len(_split(previous[1], got[0])) == got[1]:
                         n = lineno - 2                                  # keep the header line above the numbers
                     if n < header_line or (before is not None and lineno <= before):
                         return ""
@@ -828,11 +1101,28 @@ def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, sk
     if len(kept) < 2:
         raise DataFileError(f"{path}: no data lines{f' ({no_data_hint})' if no_data_hint else ''}")
     sep, decimal_comma = _separator([ln.strip() for ln in kept])
+    header = _split(kept[0].strip(), sep)
+    if _units_row(header) is not None:
+        raise DataFileError(f"{path} line {lines[0]}: the header {kept[0].strip()!r} names units, not columns; put "
+                            "the units into the names (Target [mm], Run 1 + [µm])"
+                            + _names_above(skip_rows))
     try:
         df = pd.read_csv(io.StringIO("\n".join(kept)), sep=r"\s+" if sep is None else sep, engine="python", dtype=str,
                          keep_default_na=keep_default_na)
     except pd.errors.ParserError as exc:
         raise DataFileError(f"{path}: malformed table ({str(exc).splitlines()[0]})") from None
+    units = _units_row(df.iloc[0].fillna("").astype(str).tolist()) if len(df) else None
+    if units is not None:                     # a units row under the header: into the names, as NAME [UNIT]
+        df.columns = _with_units(path, [str(c) for c in df.columns], units, lines[1])
+        df, lines = df.iloc[1:].reset_index(drop=True), lines[:1] + lines[2:]
+        if not len(df):
+            raise DataFileError(f"{path}: no data lines{f' ({no_data_hint})' if no_data_hint else ''}")
+    cells = df.fillna("").astype(str).apply(lambda c: c.str.strip()).values.tolist()
+    marks = decimal_marks(path, zip(lines[1:], cells))
+    decimal_comma = decimal_comma if marks is None else marks
+    last = unterminated_last_line(path)
+    if last is not None and last[0] == lines[-1]:
+        refuse_cut_last_line(path, (last[0], cells[-1]), cells[:-1][:SNIFF_LINES], range(len(df.columns)))
     if decimal_comma:
         df = df.apply(lambda col: col.str.replace(r"^\s*([+-]?[0-9]*),([0-9]+(?:[eE][+-]?[0-9]+)?)\s*$", r"\1.\2",
                                                   regex=True)
@@ -853,6 +1143,9 @@ def _numeric_column(col, what: str, name, lines) -> np.ndarray:
         tok = str(col.iloc[k]).strip()
         if tok.lower() in _NON_FINITE:
             raise DataFileError(f"{name} line {lines[k]}: {what} {tok!r} is not a finite number; remove or repair the point")
+        why = number_problem(tok)
+        if why:
+            raise NumberFormatError(f"{name} line {lines[k]}: {what} {why}")
         raise DataFileError(f"{name} line {lines[k]}: {what} {col.iloc[k]!r} is not a finite number")
     return values
 
@@ -927,7 +1220,8 @@ def read_positioning(path, *, unit: str | None = None, deviation_unit: str | Non
 def _add_preamble_hint(exc: InvalidInputError, path, skip_rows: int) -> None:
     """Append :func:`preamble_hint` to the message of ``exc`` (a file read without --skip-rows whose data
     rows start below a preamble: its first line was taken as the header)."""
-    if skip_rows == 0 and len(exc.args) == 1 and "--skip-rows" not in str(exc.args[0]):
+    if skip_rows == 0 and len(exc.args) == 1 and "--skip-rows" not in str(exc.args[0]) and \
+            not isinstance(exc, NumberFormatError):
         hint = preamble_hint(path)
         if hint:
             exc.args = (f"{exc.args[0]}{hint}",)
@@ -969,13 +1263,31 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units):
     return (data, unit, deviation_unit) if with_units else data
 
 
-def _multilateration_table(path, need: tuple[str, ...], optional: tuple[str, ...] = (), skip_rows: int = 0):
+def _multilateration_table(path, need: tuple[str, ...], optional: tuple[str, ...] = (), skip_rows: int = 0,
+                           unit: str | None = None):
+    """(stations, {column: values in mm}, line numbers, {column: unit}) of a multilateration table. Header names
+    are read like every reader's (:func:`parse_name`: ``x [mm]``, ``length [m]``, ``L (mm)``); a column's unit
+    is its header's, else ``unit`` (--unit), else mm; a header unit contradicting ``unit`` is an error."""
     df, line_of = read_table(path, keep_default_na=False, skip_rows=skip_rows,
                              no_data_hint=f"need a header {','.join(need)} and one row per measurement")
-    df.columns = [str(c).strip().lower() if str(c).strip().lower() != "l" else "L" for c in df.columns]
+    names, units = [], {}
+    for c in df.columns:
+        key, u = parse_name(c)
+        key = "L" if key == "l" else key
+        names.append(key)
+        if u is not None and key in need[1:] + optional:
+            if u not in LENGTH_UNITS.values():
+                raise DataFileError(f"{path}: column {str(c).strip()!r} carries the unit {u!r}; expected a length unit "
+                                    "(nm, µm, mm, m, in)")
+            if unit is not None and canonical(unit) != u:
+                raise DataFileError(f"{path}: the header says column {str(c).strip()!r} is in {u} but --unit says "
+                                    f"{canonical(unit)}; drop --unit or correct the header")
+            units[key] = u
+    df.columns = names
     missing = [c for c in need if c not in df.columns]
     if missing:
-        raise DataFileError(f"{path}: missing column(s) {', '.join(missing)}; the header must name {', '.join(need)}")
+        raise DataFileError(f"{path}: missing column(s) {', '.join(missing)}; the header must name {', '.join(need)}"
+                            " (units in brackets allowed: x [mm])")
     empty = (df[list(need)].isna() | (df[list(need)].apply(lambda c: c.str.strip()) == "")).any(axis=1).to_numpy()
     if empty.any():
         k = int(np.flatnonzero(empty)[0])
@@ -985,37 +1297,34 @@ def _multilateration_table(path, need: tuple[str, ...], optional: tuple[str, ...
     present = [c for c in optional if c in df.columns]
     if present and len(present) != len(optional):
         raise DataFileError(f"{path}: give all of {', '.join(optional)} or none (found {', '.join(present)})")
+    default = canonical(unit) if unit is not None else "mm"
     for c in list(need[1:]) + present:
-        numeric[c] = _numeric_column(df[c], c, path, line_of)
-    return df["station"].astype(str).str.strip().to_numpy(), numeric, line_of
+        units.setdefault(c, default)
+        numeric[c] = to_mm(_numeric_column(df[c], c, path, line_of), units[c])
+    return df["station"].astype(str).str.strip().to_numpy(), numeric, line_of, units
 
 
-
-
-def read_multilateration(path, stations_path=None, *, unit: str = "mm", skip_rows: int = 0):
+def read_multilateration(path, stations_path=None, *, unit: str | None = None, skip_rows: int = 0,
+                         with_units: bool = False):
     """Multilateration lengths: a measurements table (station, x, y, z, length; optionally xp, yp, zp) and,
     optionally, a stations table (station, x, y, z, L), as :class:`methods.multilateration.MultilaterationData`
-    (``from_frame``). ``unit``: the files' length unit (returned in mm)."""
+    (``from_frame``). Lengths in mm from each column's header unit (``x [mm]``, ``length [m]``), else ``unit``
+    (the files' length unit, --unit), else mm. ``with_units``: also return {column: unit} of the measurements."""
     from methods.multilateration import from_frame
-    from methods.units import mm_per
-    f = mm_per(unit)
-    st, num, lines = _multilateration_table(path, ("station", "x", "y", "z", "length"), optional=("xp", "yp", "zp"),
-                                 skip_rows=skip_rows)
-    if f != 1.0:
-        num = {k: v * f for k, v in num.items()}
+    st, num, lines, units = _multilateration_table(path, ("station", "x", "y", "z", "length"),
+                                                   optional=("xp", "yp", "zp"), skip_rows=skip_rows, unit=unit)
     df = pd.DataFrame({"station": st, **num})
     data = from_frame(df, str(path), lines=lines)
-    if stations_path is None:
-        return data
-    sst, snum, slines = _multilateration_table(stations_path, ("station", "x", "y", "z", "L"), skip_rows=skip_rows)
-    if f != 1.0:
-        snum = {k: v * f for k, v in snum.items()}
-    pos = {}
-    for r, s in enumerate(sst):
-        if s in pos:
-            raise DataFileError(f"{stations_path} line {slines[r]}: station {s} appears twice")
-        pos[s] = [snum["x"][r], snum["y"][r], snum["z"][r], snum["L"][r]]
-    absent = [s for s in data.stations if s not in pos]
-    if absent:
-        raise DataFileError(f"{stations_path}: no position for station(s) {', '.join(absent)} of {path}")
-    return data.with_stations([pos[s] for s in data.stations])
+    if stations_path is not None:
+        sst, snum, slines, _ = _multilateration_table(stations_path, ("station", "x", "y", "z", "L"),
+                                                      skip_rows=skip_rows, unit=unit)
+        pos = {}
+        for r, s in enumerate(sst):
+            if s in pos:
+                raise DataFileError(f"{stations_path} line {slines[r]}: station {s} appears twice")
+            pos[s] = [snum["x"][r], snum["y"][r], snum["z"][r], snum["L"][r]]
+        absent = [s for s in data.stations if s not in pos]
+        if absent:
+            raise DataFileError(f"{stations_path}: no position for station(s) {', '.join(absent)} of {path}")
+        data = data.with_stations([pos[s] for s in data.stations])
+    return (data, units) if with_units else data

@@ -641,12 +641,13 @@ def cmd_multilaterate(args) -> int:
     if args.degree < 1:
         raise InvalidInputError(f"--degree must be a positive integer (the component errors' polynomial degree), "
                                 f"got {args.degree}")
-    args.unit = args.unit or "mm"
     if args.errors_csv and not args.identify:
         raise InvalidInputError("--errors-csv needs --identify (the 21 errors come from the identification)")
-    data = read_multilateration(args.file, args.stations, unit=args.unit, skip_rows=args.skip_rows)
+    data, units = read_multilateration(args.file, args.stations, unit=args.unit, skip_rows=args.skip_rows,
+                                       with_units=True)
+    args.unit = units["x"] if len(set(units.values())) == 1 else args.unit or "mm"  # the header's, else --unit / mm
     # tracking interferometers measure up to ~15-20 m: longer lengths are a unit mistake
-    warn_implausible("measured lengths", float(np.nanmax(data.lengths)), 50_000.0, args.unit, typical_mm=2000.0)
+    warn_implausible("measured lengths", float(np.nanmax(data.lengths)), 50_000.0, units["length"], typical_mm=2000.0)
     method = args.method if "." in args.method else f"multilateration.{args.method}"
     spec = methods.get(method)
     if spec.family != "multilateration":
@@ -659,7 +660,7 @@ def cmd_multilaterate(args) -> int:
         write_text_atomic(args.errors_csv, errors_csv(ident))
     if args.json:
         d = res.to_dict(residuals=not args.no_residuals)
-        d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(args.unit)}
+        d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(args.unit), "input_units": units}
         d["nominal_points"] = _jsonable(data.points)
         d["stations_given"] = data.known_stations is not None
         if ident is not None:
@@ -671,7 +672,8 @@ def cmd_multilaterate(args) -> int:
         return 0 if res.converged else 1
     vol = np.linalg.norm(res.volumetric_errors, axis=1)
     known = data.known_stations is not None
-    print(header_line("multilaterate", args.unit, "; station coordinates in mm"))
+    mixed = ", ".join(f"{c} {u}" for c, u in units.items() if u != canonical(args.unit))
+    print(header_line("multilaterate", args.unit, "; station coordinates in mm" + (f"; header units: {mixed}" if mixed else "")))
     print(f"method       {res.method} ({res.message})")
     print(f"data         {args.file}: {len(data.stations)} stations, {len(data.points)} points, "
           f"{int(data.mask.sum())} lengths; stations {'given' if known else 'located (step 1)'}")

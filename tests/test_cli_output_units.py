@@ -86,3 +86,13 @@ def test_history_plot_has_a_panel_per_trend(tmp_path):
     history.plot(trends, None, save)
     assert titles == ["positioning, machine M1, axis X: trend over 2 test(s)",
                       "positioning, machine M1, axis Y: trend over 1 test(s)"]
+
+
+def test_roundness_json_names_its_units_as_the_other_commands_do(circle_file, capsys):
+    """roundness --json said units {lengths, angles} with input_unit outside them, where fit, circular-test and
+    positioning say units {length, angle, input_unit}: a script reading units.length failed on it."""
+    assert main(["roundness", circle_file, "--json"]) == 0
+    units = json.loads(capsys.readouterr().out)["units"]
+    assert units["length"] == "mm" and units["angle"] == "rad" and units["input_unit"] == "mm"
+    assert main(["fit", "circle.kasa", circle_file, "--json"]) == 0
+    assert {"length", "angle", "input_unit"} <= set(json.loads(capsys.readouterr().out)["units"])

@@ -6,6 +6,8 @@ import warnings
 
 import numpy as np
 
+from methods.units import JSON_UNITS, canonical
+
 from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
@@ -66,7 +68,9 @@ def run(args) -> int:
         if check:
             d["verdict"] = check
         d.update(source=source, input_unit=unit, notes=notes,
-                 units={"lengths": "mm", "angles": "rad", "cutoff_upr": "undulations per revolution",
+                 # the keys every command's JSON has (length, angle, input_unit), and the older lengths/angles
+                 units={**JSON_UNITS, "input_unit": canonical(unit), "lengths": "mm", "angles": "rad",
+                        "cutoff_upr": "undulations per revolution",
                         "spectrum.amplitude": "mm", "spectrum.phase": "rad"})
         d.pop("extra", None)
         d["details"] = {"conditions": test_conditions(args, files=[source])}

@@ -99,6 +99,12 @@ _CALL = "call"  # the first item of a message that asks a worker for func(*args)
 def _worker_main(conn, parent_pid: int, progress) -> None:
     """A local worker: receive chunks, send back their rows as columns, until told to stop."""
     _die_with_parent(parent_pid)  # first: a run killed while this worker imports takes it along
+    import warnings
+
+    from methods.plugins import PluginLoadWarning
+    # a plugin that fails to load is reported once, by the run (which loads the plugins before any row): a worker,
+    # started perhaps before the run found it, loads the same plugins again and says nothing of it
+    warnings.simplefilter("ignore", PluginLoadWarning)
     from experiments.rows import run_chunk  # the rows' code: imported here, in the worker
     while True:
         try:

@@ -525,7 +525,8 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     if len(body) < 2:
         raise DataFileError(f"{name}: a header but no data lines")
     widths = {len(_split(ln, sep)) for _, ln in body[1:]}
-    if max(widths) < len(head):       # every row shorter than the header: said before any column is looked up
+    named = len(head) - next((k for k, h in enumerate(reversed(head)) if h), len(head))  # 'X;Y;': two names
+    if max(widths) < named:           # every row shorter than the header: said before any column is looked up
         lineno, ln = body[1]
         k = len(_split(ln, sep))
         raise DataFileError(f"{name} line {lineno}: {k} field{'s' if k != 1 else ''} where the header (line "

@@ -223,6 +223,14 @@ def test_rows_shorter_than_the_header_are_one_line(tmp_path, text):
     one_error_line(cli("fit", "circle.kasa", path), "line 2: 1 field where the header")
 
 
+@pytest.mark.parametrize("sep", [";", ","])
+def test_a_header_with_a_trailing_separator_is_still_read(tmp_path, sep):
+    path = tmp_path / "trail.csv"
+    path.write_text(f"X{sep}Y{sep}\n" + "\n".join(f"{x:.6f}{sep}{y:.6f}" for x, y in circle(50)) + "\n",
+                    encoding="utf-8")
+    np.testing.assert_array_equal(read_points(path), np.round(circle(50), 6))
+
+
 def test_rows_shorter_than_the_header_in_a_study_are_one_line(tmp_path, capsys):
     from experiments import run as runner
     (tmp_path / "r15.txt").write_text("x,y\n1\n2\n3\n4\n", encoding="utf-8")

@@ -214,6 +214,23 @@ def test_report_tex_includes_fragments_and_figures_and_compiles(tmp_path):
     assert (tmp_path / "report.toc").read_text().count("contentsline") >= 4
 
 
+@needs_pdflatex
+def test_prose_listing_method_ids_stays_inside_the_margins(tmp_path):
+    """The committed noise findings list method ids (circle.levenberg_marquardt, ...), which TeX cannot hyphenate:
+    in the abstract they ran 54 pt into the right margin, in the study's findings 30 pt. Abstract, findings and
+    notes may break after an id's dots and underscores."""
+    from experiments.render.document import render_report_tex
+    findings = json.loads((REPO / "results" / "noise" / "report.json").read_text(encoding="utf-8"))["findings"]
+    assert "circle.levenberg_marquardt" in findings
+    src = render_report_tex([{"title": "Noise", "studies": [{"title": "Noise", "findings": findings, "notes": [findings],
+                                                             "items": []}]}],
+                            abstract="11 studies compare the fitting methods. Noise: " + findings, date="2026-01-01")
+    result = compile_pdf(src, tmp_path, name="prose", runs=1)
+    assert result["ok"], result["errors"][:3]
+    wide = [(pt, line) for kind, pt, line in result["overfull"] if kind == "h" and pt > MAX_OVERFULL_PT]
+    assert not wide, wide[:3]
+
+
 def test_report_tex_refuses_missing_files_and_captionless_figures(tmp_path):
     from experiments.render.document import render_report_tex, write_report_tex
     with pytest.raises(FileNotFoundError, match="missing"):

@@ -19,7 +19,7 @@ from pathlib import Path
 import jinja2
 
 from experiments.render.latex import PREAMBLE
-from experiments.render.text import heading_tex, tex
+from experiments.render.text import breakable, heading_tex, tex
 
 TEMPLATE = Path(__file__).with_name("templates") / "report.tex.j2"
 
@@ -47,12 +47,13 @@ def render_report_tex(sections: list[dict], *, title: str = "fitbench: compariso
                     raise ValueError(f"figure {it.get('file')!r} has no caption: say what is shown, on what data, "
                                      "in which units and what to look for")
                 items.append({**it, "caption": tex(it.get("caption", "")), "width": it.get("width")})
-            studies.append({"title": heading_tex(st["title"]), "findings": tex(st.get("findings") or ""), "items": items,
-                            "notes": [tex(n) for n in st.get("notes", [])]})
+            studies.append({"title": heading_tex(st["title"]), "findings": breakable(tex(st.get("findings") or "")),
+                            "items": items, "notes": [breakable(tex(n)) for n in st.get("notes", [])]})
         clean.append({"title": heading_tex(s["title"]), "label": s.get("label"), "studies": studies})
     return _environment().get_template(TEMPLATE.name).render(
         preamble=PREAMBLE, title=tex(title), date=tex(date or _dt.date.today().isoformat()), sections=clean,
-        provenance=tex(provenance) if provenance else None, abstract=tex(abstract) if abstract else None,
+        provenance=breakable(tex(provenance)) if provenance else None,
+        abstract=breakable(tex(abstract)) if abstract else None,
         note=tex(note) if note else None, author=tex(author))
 
 

@@ -185,6 +185,16 @@ def tex(s: str) -> str:
                    else escape_text(p) for p in parts)
 
 
+_IDENTIFIER_BREAK = re.compile(r"(?<=[A-Za-z0-9])\\_(?=[A-Za-z0-9])")
+
+
+def breakable(tex_text: str) -> str:
+    """Escaped prose (``tex``) whose identifiers may break across lines after their underscores
+    (``circle.levenberg\\_marquardt``: ``\\hspace{0pt}``, robust in moving arguments), which TeX cannot
+    hyphenate, so that a paragraph listing methods does not run into the margin."""
+    return _IDENTIFIER_BREAK.sub(lambda m: m.group(0) + r"\hspace{0pt}", tex_text)
+
+
 def joined(words) -> str:
     """'a', 'a and b', 'a, b and c'."""
     words = [str(w) for w in words]

@@ -123,7 +123,10 @@ def decimal_marks(name, rows) -> bool | None:
     grouping (one to three digits, not starting with 0, then groups of exactly three: ``2,908``, ``-1,140``)
     and which also holds integers from 1 to 999 without a comma (``25``, ``-80``) is refused as ambiguous:
     a grouped export writes numbers below 1000 that way, a fixed-decimals export would write ``25,000``.
-    A column whose every field is ``d,ddd`` is read as decimal commas (nothing in the file can tell)."""
+    A column whose every field is ``d,ddd`` is read as decimal commas (nothing in the file can tell).
+    Checked on every line of a small file (:data:`SMALL_FILE_BYTES`), of a positioning or multilateration
+    table, and on the first :data:`SNIFF_LINES` data lines of a larger file (whose parser then refuses any
+    field with the other mark)."""
     first_comma = first_point = None
     columns: dict = {}   # column -> [all comma fields grouping-shaped, first comma field, first small integer]
     for lineno, toks in rows:
@@ -730,7 +733,7 @@ def _read_small(layout: Layout, usecols: list[int]) -> dict | None:
             return None
     except OSError:
         return None
-    rows = []
+    rows, fields = [], []
     for lineno, raw in enumerate(read_lines(layout.name), start=1):
         ln = raw.strip()
         if lineno < layout.first_data_line or not ln or ln.startswith(layout.comment):
@@ -744,8 +747,12 @@ def _read_small(layout: Layout, usecols: list[int]) -> dict | None:
             rows.append([_field_number(tokens[k], layout.decimal_comma) for k in usecols])
         except ValueError:
             _diagnose(layout, usecols, 0)
+        if layout.decimal_comma:
+            fields.append((lineno, [tokens[k] for k in usecols]))
     if not rows:
         return None
+    if fields:
+        decimal_marks(layout.name, fields)   # every line, not only the sniffed ones: '2,908' beside a later '25'
     table = np.array(rows, dtype=np.float64)
     return {k: table[:, j].copy() for j, k in enumerate(usecols)}
 

@@ -83,6 +83,17 @@ def test_a_grouped_coordinate_in_a_points_file_is_refused_at_any_size(tmp_path, 
         read_points(path)
 
 
+def test_grouped_numbers_whose_small_integers_come_late_are_refused(tmp_path):
+    """The first 200 lines (the sniffed ones) hold only '1,234'-shaped numbers; an integer below 1000 comes
+    later: every line of a small file is checked."""
+    lines = ["x;y"] + [f"{1000 + 7 * k:,};{2000 + 3 * k:,}" for k in range(300)] + ["25;-80"]
+    path = tmp_path / "late.csv"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    assert path.stat().st_size <= SMALL_FILE_BYTES
+    with pytest.raises(DataFileError, match="line 2: '1,000' looks like a thousands separator.*line 302 writes '25'"):
+        read_points(path)
+
+
 def test_decimal_points_and_decimal_commas_in_one_file_are_refused(tmp_path):
     path = tmp_path / "mixed.csv"
     path.write_text("x;y\n1,5;2,25\n3.5;4,75\n5,5;6,25\n", encoding="utf-8")

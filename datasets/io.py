@@ -533,7 +533,7 @@ def sniff(path, skip_rows: int = 0) -> Layout:
         lineno, ln = body[1]
         k = len(_split(ln, sep))
         raise DataFileError(f"{name} line {lineno}: {k} field{'s' if k != 1 else ''} where the header (line "
-                            f"{body[0][0]}) has {len(head)}: {ln!r}{preamble_hint(name, body[0][0], lineno)}")
+                            f"{body[0][0]}) has {len(head)}: {ln!r}{preamble_hint(name, body[0][0])}")
     decimal_comma = _marks(name, body[1:], sep, decimal_comma)
     return Layout(name, sep, decimal_comma, head, body[0][0], body[1][0], len(head), comment, preamble, body[1:],
                   units_line)

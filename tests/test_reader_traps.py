@@ -234,6 +234,14 @@ def test_rows_shorter_than_the_header_are_one_line(tmp_path, text):
     one_error_line(cli("fit", "circle.kasa", path), "line 2: 1 field where the header")
 
 
+def test_a_one_line_preamble_over_shorter_rows_still_gets_the_skip_rows_hint(tmp_path):
+    path = tmp_path / "pre.txt"
+    path.write_text("Ballbar export 2026\n" + "\n".join(f"{x:.4f} {y:.4f}" for x, y in circle(20)) + "\n",
+                    encoding="utf-8")
+    one_error_line(cli("fit", "circle.kasa", path), "line 2: 2 fields where the header (line 1) has 3",
+                   "give --skip-rows 1 ")
+
+
 @pytest.mark.parametrize("sep", [";", ","])
 def test_a_header_with_a_trailing_separator_is_still_read(tmp_path, sep):
     path = tmp_path / "trail.csv"

@@ -7,6 +7,10 @@ too); UTF-8, UTF-16 or UTF-32 (with a BOM or without), else Windows-1252 (:func:
 drops a preamble (instrument software writes test conditions above the table). Every reader takes the
 file's length unit (``unit``, default mm) and returns millimetres.
 
+One decimal mark per file (:func:`decimal_marks`: digit grouping such as ``1,000`` beside ``3.7308`` is refused,
+never read as a decimal comma); a units row under the header (``X;Y`` / ``µm;µm``) gives the columns' units; a
+last line cut in its number (no line end, fewer decimals than its column) is refused (:func:`refuse_cut_last_line`).
+
 One number grammar for every file and size (:data:`NUMBER`: optional sign, digits with an optional
 decimal point, optional exponent; ``nan``/``inf`` are read and then refused as not finite): Python's
 ``float('117_677670')`` would accept what a person reads as two numbers. Only regular files are read (a
@@ -150,16 +154,17 @@ def decimal_marks(name, rows) -> bool | None:
     lineno, t = first_comma
     if first_point is not None:
         if _COMMA_GROUPED.fullmatch(t):
-            raise NumberFormatError(f"{name} line {lineno}: {t!r} looks like a thousands separator (line {first_point[0]} "
-                                f"writes {first_point[1]!r} with a decimal point); export without digit grouping")
+            raise NumberFormatError(f"{name} line {lineno}: {t!r} looks like a thousands separator (line "
+                                    f"{first_point[0]} writes {first_point[1]!r} with a decimal point); export "
+                                    "without digit grouping")
         raise NumberFormatError(f"{name} line {lineno}: {t!r} has a decimal comma but line {first_point[0]} writes "
-                            f"{first_point[1]!r} with a decimal point; a file uses one decimal mark: export it again "
-                            "with one")
+                                f"{first_point[1]!r} with a decimal point; a file uses one decimal mark: export it "
+                                "again with one")
     for grouped, comma, small in columns.values():
         if grouped and comma is not None and small is not None:
-            raise NumberFormatError(f"{name} line {comma[0]}: {comma[1]!r} looks like a thousands separator (every comma "
-                                f"number of its column has three digits after the comma, and line {small[0]} writes "
-                                f"{small[1]!r} without one); export without digit grouping")
+            raise NumberFormatError(f"{name} line {comma[0]}: {comma[1]!r} looks like a thousands separator (every "
+                                    f"comma number of its column has three digits after the comma, and line "
+                                    f"{small[0]} writes {small[1]!r} without one); export without digit grouping")
     return True
 
 
@@ -545,7 +550,8 @@ def _marks(name, body, sep, decimal_comma: bool) -> bool:
     rows = []
     for lineno, ln in body:
         toks = _split(ln, sep)
-        words = [t for t in toks if t and not (_is_number(t) or _COMMA_NUMBER.fullmatch(t) or _COMMA_GROUPED.fullmatch(t))]
+        words = [t for t in toks
+                 if t and not (_is_number(t) or _COMMA_NUMBER.fullmatch(t) or _COMMA_GROUPED.fullmatch(t))]
         if len(toks) - len(words) >= 2 and (not words or (len(words) == 1 and _ROW_LABEL.fullmatch(words[0]))):
             rows.append((lineno, toks))
     got = decimal_marks(name, rows)

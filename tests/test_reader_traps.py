@@ -329,3 +329,15 @@ def test_a_unit_in_braces_is_read_and_an_unparsed_one_is_refused(tmp_path):
     np.testing.assert_allclose(read_points(brace), pts * 1e-3, rtol=0, atol=1e-9)   # mm
     with pytest.raises(DataFileError, match="cannot tell the unit of column 'X <µm>'"):
         read_points(angle)
+
+
+def test_a_small_pin_in_um_read_as_mm_is_warned_about_by_roundness(tmp_path):
+    """A 6 mm pin in µm under a header without units: 3000 'mm' passed the 5 m profile limit silently (RONt
+    982 µm instead of 0.98 µm); roundness warns above a 1 m half-width, naming µm; fit keeps the 5 m limit."""
+    pts = circle(720, r=3000.0, cx=1500.0, cy=-700.0)
+    path = tmp_path / "pin.csv"
+    path.write_text("X;Y\n" + "\n".join(f"{x:.4f};{y:.4f}".replace(".", ",") for x, y in pts) + "\n",
+                    encoding="utf-8")
+    out = cli("roundness", path)
+    assert out.returncode == 0 and "profile half-widths up to 3000" in out.stderr and "--unit um" in out.stderr
+    assert "implausible" not in cli("fit", "circle.kasa", path).stderr

@@ -205,12 +205,16 @@ def verdict_title(v: dict | None) -> str:
 
 #: a profile (fit, roundness) whose half extent exceeds this is implausible for its declared unit: a 10 m part
 PROFILE_LIMIT_MM = 5000.0
+#: a roundness profile whose half extent exceeds this is implausible: roundness instruments take parts well below
+#: 2 m in diameter, so a 6 mm pin in µm read as mm (3000 "mm") is warned about, naming µm
+ROUNDNESS_LIMIT_MM = 1000.0
 
 
-def read_profile_args(args):
+def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM):
     """(source, points in mm, length unit used, notes, names of the two coordinates) of ``fit`` and ``roundness``: a file in any instrument
     layout (x, y or angle + radial deviation, :func:`datasets.io.read_profile`) or a published data set's
-    name; sizes implausible for the unit are warned about, naming the likely unit."""
+    name; sizes implausible for the unit are warned about, naming the likely unit (profile half-widths above
+    ``limit_mm``: :data:`PROFILE_LIMIT_MM`, or :data:`ROUNDNESS_LIMIT_MM` for ``roundness``)."""
     from datasets import points_from
     from datasets.io import read_profile
     nominal = finite("--nominal-radius", getattr(args, "nominal_radius", None), positive=True)
@@ -230,7 +234,7 @@ def read_profile_args(args):
             warn_implausible("radial deviations spanning", span, 10.0, unit, typical_mm=0.01)
         else:
             half = float(np.max(np.ptp(points, axis=0))) / 2
-            warn_implausible("profile half-widths", half, PROFILE_LIMIT_MM, unit, typical_mm=25.0)
+            warn_implausible("profile half-widths", half, limit_mm, unit, typical_mm=25.0)
             if got is not None and got.kind == "polar" and nominal:
                 dev = float(np.max(np.abs(np.hypot(*points.T) - nominal)))
                 warn_implausible("radial deviations", dev, 0.05 * nominal, unit, typical_mm=0.01)

@@ -11,7 +11,7 @@ from methods.units import JSON_UNITS, canonical
 from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
-                                  add_tolerance_option, check_plot_path, parse_tolerances, test_conditions, read_profile_args, save_figure, verdict, verdict_lines,
+                                  ROUNDNESS_LIMIT_MM, add_tolerance_option, check_plot_path, parse_tolerances, test_conditions, read_profile_args, save_figure, verdict, verdict_lines,
                                   verdict_title, warn, write_report)
 
 
@@ -46,7 +46,7 @@ def run(args) -> int:
     plot_path = check_plot_path(args.plot)
     report_path = check_plot_path(args.report, "--report")
     tolerances = parse_tolerances(args.tolerance, ("RONt", "RONp", "RONv", "RONq"))
-    source, points, unit, notes, axes = read_profile_args(args)
+    source, points, unit, notes, axes = read_profile_args(args, limit_mm=ROUNDNESS_LIMIT_MM)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UndersampledWarning)
         res = methods.fit("roundness.iso12181", points, cutoff_upr=cutoff, reference=args.reference)

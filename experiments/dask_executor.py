@@ -417,12 +417,21 @@ def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> Non
                 client = connect_dask(scheduler)
                 where = f"the Dask cluster at {scheduler.strip()}"
             else:
-                with _one_blas_thread_per_worker(), _ctrl_c_held(), _main_module_not_imported_by_workers():
-                    cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
-                                           dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
-                                           silence_logs=50,  # its HTTP server on a free local port, no dashboard
-                                           preload=[__name__])  # dask_setup below: Ctrl-C is the run's alone
-                client = Client(cluster)
+                try:
+                    with _one_blas_thread_per_worker(), _ctrl_c_held(), _main_module_not_imported_by_workers():
+                        cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
+                                               dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
+                                               silence_logs=50,  # its HTTP server on a free local port, no dashboard
+                                               preload=[__name__])  # dask_setup below: Ctrl-C is the run's alone
+                    client = Client(cluster)
+                except Exception as exc:  # distributed gives a thread 10 s to start its event loop (an assert)
+                    if interrupted.is_set():  # the user's Ctrl-C, held while the cluster started, came first
+                        raise KeyboardInterrupt from None
+                    from methods import InvalidInputError
+                    raise InvalidInputError(
+                        f"the local Dask cluster did not start ({type(exc).__name__}: {str(exc) or 'no message'}; "
+                        f"a machine too busy to start it in distributed's time limits?); run the same command again, "
+                        f"or with --executor local") from None
                 where = "the local Dask cluster"
             _drive(client, where, work, chunks, store, bar, row_timeout, limit_s, interrupted, finished, pending)
     except BaseException:

@@ -295,3 +295,30 @@ def test_a_worker_with_other_code_or_environment_is_refused():
         dask_executor.check_code([task], ([(0, {**reps[0][1], "method": "0" * 16})], env))
     with pytest.raises(dask_executor.WorkerCodeError, match="another environment than this run"):
         dask_executor.check_code([task], (reps, {**env, "kernels": "elsewhere"}))
+
+
+@pytest.mark.parametrize("interrupted", [False, True], ids=["busy-machine", "ctrl-c-while-it-starts"])
+def test_a_local_cluster_that_does_not_start_is_one_line(tmp_path, monkeypatch, capsys, interrupted):
+    """distributed gives the thread of its event loop 10 s to start, then fails an ``assert`` (seen in a test at load
+    7): the run said nothing but a traceback, exit 1. Now one line, exit 2; and when the user's Ctrl-C (held while
+    the cluster started) came first, the run's own interrupt line, exit 130."""
+    import distributed
+
+    from experiments import run as run_module
+
+    def not_starting(*args, **kwargs):
+        if interrupted:
+            os.kill(os.getpid(), signal.SIGINT)  # held in this thread while the cluster starts: the run's handler
+        raise AssertionError
+
+    monkeypatch.setattr(distributed, "LocalCluster", not_starting)
+    study = write_study(tmp_path, name="dk0", reps=2)
+    code = run_module.main([str(study), "--executor", "dask", "--jobs", "1", "--no-report", "--out",
+                            str(tmp_path / "out")])
+    err = capsys.readouterr().err.strip().splitlines()
+    if interrupted:
+        assert code == 130 and len(err) == 1 and "interrupted" in err[0], err
+    else:
+        assert code == 2 and len(err) == 1, err
+        assert "the local Dask cluster did not start (AssertionError: no message" in err[0]
+        assert "--executor local" in err[0]

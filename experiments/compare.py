@@ -107,7 +107,7 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
         if tolerance(col, study) is not None:
             problems.append({"column": col, "n_rows": int(len(b)), "problem": "column missing in the committed results",
                              "worst": []})
-    methods = a["method"] if "method" in a else pd.Series([""] * len(a), index=a.index)
+    methods = _method_kinds(a["method"] if "method" in a else pd.Series([""] * len(a), index=a.index))
     for col in committed.columns:
         if col.startswith("_") or (col in ident and col in fresh.columns):
             continue
@@ -145,11 +145,17 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
             "not_converged_values": not_compared}
 
 
-def _compared_rows(study: str, col: str, methods: pd.Series, stopped: np.ndarray):
+def _method_kinds(methods: pd.Series) -> tuple[list, np.ndarray]:
+    """(the distinct methods, each row's index among them): made once for all the columns of a table."""
+    row_kind, kinds = pd.factorize(methods.astype(str).to_numpy())
+    return list(kinds), row_kind
+
+
+def _compared_rows(study: str, col: str, method_kinds: tuple[list, np.ndarray], stopped: np.ndarray):
     """(each row's tolerance, which rows are compared, how many values of rows that stopped in both runs are not, each
-    row's (rtol, atol)) of one column: one tolerance per distinct method, spread to the rows (not one lookup per row
-    and column)."""
-    kinds, row_kind = np.unique(methods.astype(str).to_numpy(), return_inverse=True)
+    row's (rtol, atol)) of one column: one tolerance per distinct method (:func:`_method_kinds`), spread to the rows
+    (not one lookup per row and column)."""
+    kinds, row_kind = method_kinds
     tol_of = [tolerance(col, study, m) for m in kinds]
     tols = [tol_of[k] for k in row_kind]
     keep = np.array([t is not None for t in tol_of], dtype=bool)[row_kind]
@@ -174,10 +180,11 @@ def self_comparison(study: str, folder: Path) -> dict:
     stopped = np.asarray(df["status"].to_numpy() != "ok", dtype=bool)
     ident = identity_columns(pd.DataFrame(columns=header))
     compared = not_compared = 0
+    methods = _method_kinds(df["method"])
     for col in header:
         if col.startswith("_") or col in ident:
             continue
-        _, keep, skipped, _ = _compared_rows(study, col, df["method"], stopped)
+        _, keep, skipped, _ = _compared_rows(study, col, methods, stopped)
         not_compared += skipped
         compared += bool(keep.any())
     return {"study": study, "rows": int(len(df)), "columns": compared, "agree": True, "problems": [],

@@ -188,7 +188,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     used = counts.pop("used")
     remove_leftover_tmp(target)
     # results.csv is made by the run's idle workers (if any) while this process analyses the rows
-    texts = map_in_idle_workers(csv_text, blocks(df, 10_000))
+    texts = map_in_idle_workers(csv_text, blocks(df))
     try:
         t0 = time.perf_counter()
         log("   analysis, tables and figures ...")

@@ -389,6 +389,16 @@ def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path,
     return refs
 
 
+def _fingerprint(folder: Path) -> str | None:
+    """The fingerprint ``meta.json`` records for a study's outputs (its rows' keys, config and the code that analyses
+    them, this module included: ``experiments.engine.fingerprint``), None when there is none."""
+    try:
+        value = json.loads((Path(folder) / "meta.json").read_text(encoding="utf-8")).get("fingerprint")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return value if isinstance(value, str) else None
+
+
 def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=print) -> dict:
     """After ``experiments.run``: compare each fresh study in ``out`` with its reference (``reference_snapshot``)
     and record the verdicts in ``out/verify.json`` (other studies' entries are kept; each names the SHA-256 of
@@ -397,7 +407,7 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
     old = last_verdict(out) or {}
     entries = {s["study"]: s for s in old.get("studies", []) if isinstance(s, dict) and isinstance(s.get("study"), str)}
     for name in names:
-        entries.pop(name, None)
+        before = entries.pop(name, None)
         ref = refs.get(name)
         if ref is None:
             log(f"verify: {name}: no committed results to compare with (results/{name} of the same grid)")
@@ -405,17 +415,23 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
         if "other" in ref:
             log(f"verify: {name}: not compared: {ref['other']}; other rows by design")
             continue
-        try:
-            fresh_sha = results_sha256(Path(out) / name)
-            if fresh_sha is not None and fresh_sha == results_sha256(ref["folder"] / name):
-                r = self_comparison(name, Path(out))  # the same bytes: the verdict of a table on itself, cheaply
-            else:
-                r = compare_study(name, _read(ref["folder"], name, "reference"), _read(Path(out), name, "--out"))
-        except InvalidInputError as exc:
-            log(f"verify: {name}: not compared ({exc})")
-            continue
-        entries[name] = {**r, "date": date, "results_sha256": results_sha256(Path(out) / name),
-                         "reference": ref["reference"]}
+        fresh_sha, ref_sha = results_sha256(Path(out) / name), results_sha256(ref["folder"] / name)
+        judged = {"results_sha256": fresh_sha, "reference_sha256": ref_sha, "reference": ref["reference"],
+                  "fingerprint": _fingerprint(Path(out) / name)}
+        if (isinstance(before, dict) and judged["fingerprint"] and fresh_sha
+                and all(before.get(k) == v for k, v in judged.items())):
+            r = before  # the same two tables judged by the same code (the study's fingerprint): the same verdict
+        else:
+            try:
+                if fresh_sha is not None and fresh_sha == ref_sha:
+                    r = self_comparison(name, Path(out))  # the same bytes: the verdict of a table on itself, cheaply
+                else:
+                    r = compare_study(name, _read(ref["folder"], name, "reference"), _read(Path(out), name, "--out"))
+            except InvalidInputError as exc:
+                log(f"verify: {name}: not compared ({exc})")
+                continue
+            r = {**r, "date": date, **judged}
+        entries[name] = r
         log(f"verify: {name}: " + ("reproduces " + ref["reference"] if r["agree"] else
                                    f"DIFFERS from {ref['reference']} in: "
                                    + ", ".join(dict.fromkeys(f"{p['n_rows']} {p['problem'].replace('row ', 'rows ', 1)}"

@@ -456,3 +456,26 @@ def test_verify_refuses_runs_of_another_config_in_one_line(committed, tmp_path, 
     meta_path.write_text(json.dumps(meta), encoding="utf-8")
     assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 2
     assert "seed 5, now 8" in capsys.readouterr().err
+
+
+def test_the_run_s_verdict_of_unchanged_tables_is_kept_and_judged_again_when_a_key_changes(tmp_path):
+    """A re-run of an up-to-date study judged the same two tables again (reading results.csv, 0.1 s of a 0.8 s re-run
+    of 40,000 rows): the verdict is kept when the fresh table, the reference and the study's fingerprint (its config
+    and the code that analyses and judges it) are those it was made of, and made again when any of them changed."""
+    cfg = tmp_path / "vstudy.toml"
+    cfg.write_text(STUDY, encoding="utf-8")
+    args = [str(cfg), "--jobs", "1", "--no-report", "--out", str(tmp_path / "out")]
+    assert runner.main(args) == 0
+    assert runner.main(args) == 0  # judged against the previous run's table
+    first = json.loads((tmp_path / "out" / verify.VERDICT_FILE).read_text())["studies"][0]
+    assert first["agree"] and first["fingerprint"] and first["reference_sha256"] == first["results_sha256"]
+    assert runner.main(args) == 0
+    kept = json.loads((tmp_path / "out" / verify.VERDICT_FILE).read_text())["studies"][0]
+    assert kept == first  # the same verdict, its date included: not judged again
+    tampered = json.loads((tmp_path / "out" / verify.VERDICT_FILE).read_text())
+    tampered["studies"][0]["fingerprint"] = "0" * 32  # as if the code that judges had changed
+    tampered["studies"][0]["date"] = "2000-01-01T00:00:00+00:00"
+    (tmp_path / "out" / verify.VERDICT_FILE).write_text(json.dumps(tampered))
+    assert runner.main(args) == 0
+    again = json.loads((tmp_path / "out" / verify.VERDICT_FILE).read_text())["studies"][0]
+    assert again["date"] != "2000-01-01T00:00:00+00:00" and again["fingerprint"] == first["fingerprint"]

@@ -4,31 +4,14 @@ number, a header with more names than the rows have fields, grouped numbers and 
 of the multilateration reader, a unit in braces. Every file is small and written here."""
 from __future__ import annotations
 
-import contextlib
-import io
 import json
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from datasets.io import (SMALL_FILE_BYTES, DataFileError, read_multilateration, read_points, read_positioning,
                          read_profile)
-from fitbench.cli import main
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
-
-
-def one_error_line(out, *words):
-    assert out.returncode == 2, (out.stdout, out.stderr)
-    assert "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
-    for w in words:
-        assert w in out.stderr, out.stderr
+from test_cli_inputs import cli, one_error_line  # the CLI in this process, and its one-line error
 
 
 def circle(n, r=20.0, cx=0.0, cy=0.0):

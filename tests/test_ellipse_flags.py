@@ -268,3 +268,43 @@ def test_blocked_noise_bound_is_the_formula():
         dr1 = 4 * eps * 2.0
         assert _checks.sum_of_squares_noise(r, 2.0) == pytest.approx(2 * np.sum(np.abs(r)) * dr1 + n * dr1 * dr1,
                                                                         rel=1e-12)
+
+
+def test_a_converged_claim_with_a_nan_ellipse_is_an_invalid_row():
+    """A method building its result with ``ellipse_result`` from a NaN ellipse and claiming converged=True broke its
+    promise: the row is ``invalid`` with the gate's reason, as for circles (tests/test_result_gate.py); the builder
+    downgraded it to "not converged" ("no valid ellipse"). An ellipse that is infinite without NaN (a fit
+    overflowing float64 in data units) is still downgraded, saying so and keeping the method's own words."""
+    from experiments.rows import fit_row
+    from methods._registry import _REGISTRY
+    from methods.results import ellipse_result
+
+    nan, inf = float("nan"), float("inf")
+    claims = {"all": [nan] * 5, "semi_axis_b": [3.0, -2.0, 2.0, nan, 0.3], "center_x": [nan, -2.0, 2.0, 1.0, 0.3],
+              "overflow": [inf, -2.0, 2.0, 1.0, 0.3]}
+
+    @methods.register("ellipse.test_gate_nan", kind="closed form", summary="a NaN ellipse, converged",
+                      reference="gate test")
+    def nan_ellipse(points, *, which="all"):
+        return ellipse_result(points, claims[which], converged=True, message="closed form")
+
+    pts = ellipse_points((3.0, -2.0), (2.0, 1.0), 0.3, 40)
+    task = {"study": "gate", "dataset": {"label": "ellipse"}, "repetition": 0, "seed": 1, "stream": (0,),
+            "method": "ellipse.test_gate_nan", "params": {}}
+    truth = {"center": (3.0, -2.0), "semi_axes": (2.0, 1.0), "angle": 0.3}
+    try:
+        for which, reason in (("all", "center_x = nan is not finite in a converged result"),
+                              ("semi_axis_b", "semi_axis_b = nan is not finite in a converged result"),
+                              ("center_x", "center_x = nan is not finite in a converged result")):
+            res = methods.get("ellipse.test_gate_nan").unchecked(pts, which=which)
+            assert res.converged and reason in methods.check_result(res, pts)
+            row = fit_row({**task, "params": {"which": which}}, pts, truth)
+            assert row["status"] == "invalid" and reason in row["message"], row
+        res = methods.get("ellipse.test_gate_nan").unchecked(pts, which="overflow")
+        assert not res.converged and methods.check_result(res, pts) is None
+        assert "not representable in float64" in res.message and "centre (inf, -2)" in res.message
+        assert res.message.endswith("the method said: closed form")
+        row = fit_row({**task, "params": {"which": "overflow"}}, pts, truth)
+        assert row["status"] == "not converged" and "float64" in row["message"], row
+    finally:
+        _REGISTRY.pop("ellipse.test_gate_nan", None)

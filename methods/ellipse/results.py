@@ -93,10 +93,24 @@ def ellipse_result(points, params, *, converged: bool, message: str, iterations=
                    history=None, extra=None, residuals=None) -> EllipseFit:
     """An :class:`EllipseFit` from (xc, yc, a, b, theta) in data units; residuals are the signed
     orthogonal distances of every point (closest points solved in the ellipse's frame), or ``residuals``
-    when the method already has them for this ellipse."""
+    when the method already has them for this ellipse.
+
+    As :func:`methods.circle.results.circle_result`: a converged claim about a NaN centre, semi-axis or angle is
+    kept, so the result gate refuses it (an ``invalid`` row: NaN is no answer); an ellipse that is infinite
+    without NaN or has a zero semi-axis (a finite fit over- or underflowing float64 in data units) is downgraded to
+    not converged, with that reason and the method's own message."""
     p = canonical(params)
     if not (np.isfinite(p).all() and p[3] > 0):
-        return failed(points, f"no valid ellipse: parameters {p.tolist()}", iterations=iterations, nfev=nfev)
+        if converged and np.isnan(p).any():
+            return _nan_claim(points, p, message=message, iterations=iterations, nfev=nfev, history=history,
+                              extra=extra, residuals=residuals)
+        why = (f"the ellipse is not representable in float64 (centre ({p[0]:.6g}, {p[1]:.6g}), semi-axes "
+               f"({p[2]:.6g}, {p[3]:.6g}), angle {p[4]:.6g} rad: a fit over- or underflowing float64 in data units)"
+               if not np.isnan(p).any() else f"no valid ellipse: parameters {p.tolist()}")
+        if converged:
+            why += ", so no fit is claimed"
+        return failed(points, f"{why}; the method said: {message}" if message else why,
+                      iterations=iterations, nfev=nfev)
     if residuals is None:
         residuals, _ = orthogonal_residuals(points[:, 0], points[:, 1], p, with_phi=False)
     d = residuals
@@ -124,6 +138,15 @@ def history_to_data(history, scale: float, power: int):
     if not (np.isfinite(factor) and factor > 0):
         return None
     return [float(h * factor) for h in history]
+
+
+def _nan_claim(points, p, *, message, iterations, nfev, history, extra, residuals) -> EllipseFit:
+    """A converged claim about an ellipse with NaN parameters, kept as it was made (the gate refuses it)."""
+    nan = float("nan")
+    d = np.full(len(points), nan) if residuals is None else residuals
+    return EllipseFit(center=(float(p[0]), float(p[1])), semi_axes=(float(p[2]), float(p[3])), angle=float(p[4]),
+                      conic=(nan,) * 6, form_error=nan, residuals=d, converged=True, iterations=iterations,
+                      nfev=nfev, history=list(history or []), message=message, extra=dict(extra or {}))
 
 
 def failed(points, message: str, **kw) -> EllipseFit:

@@ -95,6 +95,36 @@ def _flush_c_stdio() -> None:
         pass   # no C library to reach (Windows): Python's prints are redirected all the same
 
 
+#: the variables BLAS and OpenMP libraries read their thread count from when they load (as the engine's workers)
+BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+@contextlib.contextmanager
+def one_blas_thread():
+    """One BLAS/OpenMP thread while a subcommand computes, unless the user chose a count (one of
+    :data:`BLAS_THREAD_VARS` set): its linear algebra is small (solves of a few unknowns, QR of N x 6), where a
+    second thread only waits, spinning. Libraries loaded already are limited through threadpoolctl; those loaded
+    during the command (SciPy's OpenBLAS) read the variables, set to 1 in the block (docs/cli.md: the
+    figures)."""
+    saved = {v: os.environ.get(v) for v in BLAS_THREAD_VARS}
+    chosen = any(v is not None for v in saved.values())
+    for v in BLAS_THREAD_VARS:
+        os.environ.setdefault(v, "1")
+    try:
+        if chosen:
+            yield
+        else:
+            from threadpoolctl import threadpool_limits
+            with threadpool_limits(limits=1):
+                yield
+    finally:
+        for v, val in saved.items():
+            if val is None:
+                os.environ.pop(v, None)
+            else:
+                os.environ[v] = val
+
+
 @contextlib.contextmanager
 def stdout_to_stderr():
     """Send what is printed to stdout to stderr inside the block: Python's prints (``sys.stdout``) and, when
@@ -802,7 +832,8 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
                     raise InvalidInputError(f"'{argv[0]}' is a subcommand of fitbench, not of {prog}: use "
                                             f"'fitbench {argv[0]} ...' or 'python -m experiments.{argv[0]} ...'")
                 args = build_parser(prog, extra_commands).parse_args(argv)
-                return args.func(args)
+                with one_blas_thread():
+                    return args.func(args)
             finally:
                 for w in caught:
                     if issubclass(w.category, UserWarning):

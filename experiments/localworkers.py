@@ -105,7 +105,10 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
     # a plugin that fails to load is reported once, by the run (which loads the plugins before any row): a worker,
     # started perhaps before the run found it, loads the same plugins again and says nothing of it
     warnings.simplefilter("ignore", PluginLoadWarning)
-    from experiments.rows import run_chunk  # the rows' code: imported here, in the worker
+    import gc
+
+    from experiments.rows import ROW_GC_THRESHOLD, run_chunk  # the rows' code: imported here, in the worker
+    gc.set_threshold(ROW_GC_THRESHOLD, *gc.get_threshold()[1:])  # a worker only makes rows (experiments.rows)
     while True:
         try:
             msg = conn.recv()

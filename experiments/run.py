@@ -34,7 +34,7 @@ from experiments.csvtext import blocks, csv_text, write_results
 from experiments.executors import kept_workers, last_study, map_in_idle_workers, start_kept_workers, workers_done
 from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
-from experiments.rows import Terminated, clear_signal, note_signal, raise_if_signalled, signalled
+from experiments.rows import Terminated, clear_signal, fewer_collections, note_signal, raise_if_signalled, signalled
 from experiments.summary import summarise, summary_units, to_markdown
 from fitbench import __version__
 import methods
@@ -355,7 +355,7 @@ def main(argv=None) -> int:
     returns, however it ends, so a second call in the same process can write to the same folder."""
     held = len(_LOCKS)
     try:
-        with plugin_warnings_once():
+        with plugin_warnings_once(), fewer_collections():
             return _main(argv)
     finally:
         release_locks(held)

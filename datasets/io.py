@@ -13,7 +13,10 @@ last line cut in its number (no line end, fewer decimals than its column) is ref
 
 One number grammar for every file and size (:data:`NUMBER`: optional sign, digits with an optional
 decimal point, optional exponent; ``nan``/``inf`` are read and then refused as not finite): Python's
-``float('117_677670')`` would accept what a person reads as two numbers. Only regular files are read (a
+``float('117_677670')`` would accept what a person reads as two numbers. The Unicode minus sign ``−``
+(U+2212, as spreadsheets and instrument software export negative numbers) is read as ``-``
+(:func:`ascii_minus`); dashes that only look like one (en dash U+2013, hyphens, :data:`DASHES`) and digit grouping
+(``1,000``, ``1 045,9`` with a space, U+00A0 or U+202F) are refused by name (:func:`number_problem`). Only regular files are read (a
 FIFO or a device is refused without blocking, :func:`methods.files.open_regular`) and no line may exceed
 :data:`MAX_LINE_CHARS`. Large numeric files are parsed by pandas' C parser straight from the file with a
 float64 dtype and only the columns used (peak memory within 3x the returned array). Malformed input is
@@ -92,16 +95,51 @@ _GROUP_NAMES = {",": "','", ".": "'.'", " ": "a space", "\u00a0": "a no-break sp
 #: integers an export with digit grouping writes without a separator (below 1000), zero excluded
 _SMALL_INTEGER = re.compile(r"[+-]?0*[1-9][0-9]{0,2}")
 
+#: the Unicode minus sign (U+2212) before a number, as spreadsheets and instrument software export negative numbers
+_UNICODE_MINUS = re.compile("\u2212(?=[0-9.,])")
+#: dashes that look like a minus sign but are punctuation: refused by name (:func:`number_problem`), never read
+DASHES = {"\u2010": "a hyphen '\u2010' (U+2010)", "\u2011": "a non-breaking hyphen '\u2011' (U+2011)",
+          "\u2012": "a figure dash '\u2012' (U+2012)", "\u2013": "an en dash '\u2013' (U+2013)",
+          "\u2014": "an em dash '\u2014' (U+2014)", "\ufe63": "a small hyphen-minus '\ufe63' (U+FE63)",
+          "\uff0d": "a fullwidth hyphen-minus '\uff0d' (U+FF0D)"}
+
+
+def ascii_minus(text: str) -> str:
+    """``text`` with each Unicode minus sign (U+2212) before a digit, '.' or ',' written as the ASCII '-': every
+    reader reads it as a minus sign (a header's ``x \u2212 x0`` is left as it is)."""
+    return _UNICODE_MINUS.sub("-", text) if "\u2212" in text else text
+
+
+class _AsciiMinus:
+    """A text file whose reads give :func:`ascii_minus` of its text (for pandas' C parser, which reads ASCII
+    signs only); a read ending in U+2212 takes the next character too (the digit after it decides)."""
+
+    def __init__(self, fh):
+        self._fh = fh
+
+    def read(self, size: int = -1) -> str:
+        text = self._fh.read(size)
+        while text.endswith("\u2212") and size is not None and size > 0:
+            more = self._fh.read(1)
+            if not more:
+                break
+            text += more
+        return ascii_minus(text)
+
+    def __iter__(self):
+        return (ascii_minus(line) for line in self._fh)
+
 
 def number_problem(token: str, decimal_comma: bool = False) -> str | None:
     """Why ``token``, outside the grammar (:data:`NUMBER`), is not read as a number, when its shape says it:
-    digit grouping (a thousands separator: ``1,000``, ``1.045,9``, ``1 045,9``, ``1'045.9``), a Unicode minus
-    sign (U+2212, which fitbench does not read as '-': the one grammar of every reader, pandas' C parser
-    included, is ASCII), or a decimal point in a file of decimal commas. None when the shape says nothing."""
-    t = str(token).strip()
-    if "\u2212" in t:
-        return (f"{token!r} is written with the Unicode minus sign '\u2212' (U+2212), not the ASCII '-'; export "
-                "without typographic signs (or replace '\u2212' by '-')")
+    digit grouping (a thousands separator: ``1,000``, ``1.045,9``, ``1 045,9``, ``1'045.9``), a dash that is not
+    a minus sign (:data:`DASHES`: an en dash ``\u20130,5``), or a decimal point in a file of decimal commas. None when
+    the shape says nothing. (The Unicode minus sign U+2212 is read as '-': :func:`ascii_minus`.)"""
+    t = ascii_minus(str(token).strip())
+    if t[:1] in DASHES and (_is_number("-" + t[1:]) or _COMMA_NUMBER.fullmatch("-" + t[1:])):
+        return (f"{token!r} starts with {DASHES[t[:1]]}, not a minus sign; fitbench reads '-' and the Unicode minus "
+                "'\u2212' (U+2212) as minus, never a dash (a dash also marks ranges and empty cells); export without "
+                "typographic dashes (or replace it by '-')")
     m = _COMMA_GROUPED.fullmatch(t)
     g = "," if m else None
     if not m:
@@ -271,7 +309,8 @@ def _too_long(name, lineno) -> DataFileError:
 
 
 def iter_lines(fh, name):
-    """(line number, line) of an open text file, each line at most :data:`MAX_LINE_CHARS` characters."""
+    """(line number, line) of an open text file, each line at most :data:`MAX_LINE_CHARS` characters, its Unicode
+    minus signs written as '-' (:func:`ascii_minus`)."""
     lineno = 0
     while True:
         try:
@@ -283,7 +322,7 @@ def iter_lines(fh, name):
         lineno += 1
         if len(line.rstrip("\r\n")) > MAX_LINE_CHARS:
             raise _too_long(name, lineno)
-        yield lineno, line
+        yield lineno, ascii_minus(line)
 
 
 def read_lines(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'") -> list[str]:
@@ -671,7 +710,7 @@ def unterminated_last_line(path) -> tuple[int, str] | None:
             tail = (tail + block)[-(4 * MAX_LINE_CHARS):]
     if not tail or tail.endswith((b"\n", b"\r")):
         return None
-    text = re.split(r"\r\n|\r|\n", tail.decode(enc, errors="replace"))[-1]
+    text = ascii_minus(re.split(r"\r\n|\r|\n", tail.decode(enc, errors="replace"))[-1])
     return (lf if lf else cr) + 1, text
 
 
@@ -774,24 +813,40 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
         return small
     check_line_lengths(layout.name)
     dtype = {k: (object if k in strings else np.float64) for k in usecols}
-    try:
-        frame = pd.read_csv(layout.name, sep=r"\s+" if layout.sep is None else layout.sep, header=None,
-                            skiprows=layout.first_data_line - 1, dtype=dtype,
-                            usecols=None if len(usecols) == layout.ncol else usecols,
-                            decimal="," if layout.decimal_comma else ".", comment=layout.comment,
-                            skip_blank_lines=True, engine="c",
-                            encoding=file_encoding(layout.name), keep_default_na=True)
-        cols = {k: frame[k].to_numpy() for k in usecols}
-        del frame
-        ok = all(np.isfinite(cols[k]).all() for k in idx)
-    except (ValueError, KeyError, pd.errors.ParserError, UnicodeDecodeError):
-        ok = False   # KeyError: every row shorter than the header
+
+    def parse(source):
+        try:
+            frame = pd.read_csv(source, sep=r"\s+" if layout.sep is None else layout.sep, header=None,
+                                skiprows=layout.first_data_line - 1, dtype=dtype,
+                                usecols=None if len(usecols) == layout.ncol else usecols,
+                                decimal="," if layout.decimal_comma else ".", comment=layout.comment,
+                                skip_blank_lines=True, engine="c",
+                                encoding=file_encoding(layout.name), keep_default_na=True)
+            cols = {k: frame[k].to_numpy() for k in usecols}
+            del frame
+            return cols, all(np.isfinite(cols[k]).all() for k in idx)
+        except (ValueError, KeyError, pd.errors.ParserError, UnicodeDecodeError):
+            return None, False   # KeyError: every row shorter than the header
+
+    cols, ok = parse(layout.name)
+    if not ok and _holds_unicode_minus(layout.name):   # parsed again, its minus signs in ASCII
+        with _open_text(layout.name) as fh:
+            cols, ok = parse(_AsciiMinus(fh))
     if not ok:
         _diagnose(layout, idx, skip_rows)
     if not all(len(cols[k]) for k in usecols):
         raise DataFileError(f"{layout.name}: a header but no data lines")
     _check_last_line(layout, idx)
     return cols
+
+
+def _holds_unicode_minus(path) -> bool:
+    """Whether the text of ``path`` holds a Unicode minus sign (U+2212), read in blocks of 4 Mi characters."""
+    with _open_text(path) as fh:
+        while block := fh.read(1 << 22):
+            if "\u2212" in block:
+                return True
+    return False
 
 
 @dataclass

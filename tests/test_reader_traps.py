@@ -4,6 +4,7 @@ number, a header with more names than the rows have fields, grouped numbers and 
 of the multilateration reader, a unit in braces. Every file is small and written here."""
 from __future__ import annotations
 
+import io
 import json
 
 import numpy as np
@@ -244,16 +245,19 @@ def test_rows_shorter_than_the_header_in_a_study_are_one_line(tmp_path, capsys):
     assert code == 2 and "line 2: 1 field where the header (line 1) has 2" in err and "\n" not in err, err
 
 
-# ------------------------------------------------------------------ grouped numbers and a Unicode minus
+# ------------------------------------------------------------------ grouped numbers, dashes and the Unicode minus
 @pytest.mark.parametrize("token, says", [("1.045,933304", "thousands separator ('.')"),
                                          ("1\u00a0045,933304", "no-break space (U+00A0)"),
                                          ("1\u202f045,933304", "narrow no-break space (U+202F)"),
                                          ("1 045,933304", "thousands separator (a space)"),
                                          ("1'045,933304", "thousands separator (an apostrophe)"),
-                                         ("\u2212154,066696", "Unicode minus sign")])
+                                         ("\u2013154,066696", "an en dash '\u2013' (U+2013), not a minus sign"),
+                                         ("\u2012154,066696", "a figure dash '\u2012' (U+2012), not a minus sign"),
+                                         ("\uff0d154,066696", "a fullwidth hyphen-minus '\uff0d' (U+FF0D)")])
 @pytest.mark.parametrize("n", [150, 3000])
-def test_grouped_numbers_and_a_unicode_minus_are_named_without_a_skip_rows_hint(tmp_path, token, says, n):
-    """x > 1000 mm written with grouping: the hint was '--skip-rows 103' (the first ungrouped row)."""
+def test_grouped_numbers_and_dashes_are_named_without_a_skip_rows_hint(tmp_path, token, says, n):
+    """x > 1000 mm written with grouping: the hint was '--skip-rows 103' (the first ungrouped row). A dash is not
+    read as a minus sign (it also marks ranges and empty cells): it is named."""
     pts = circle(n, r=300.0, cx=700.0)
     lines = ["X;Y"] + [f"{x:.6f};{y:.6f}".replace(".", ",") for x, y in pts]
     lines[1] = f"{token};393,728548"
@@ -264,14 +268,47 @@ def test_grouped_numbers_and_a_unicode_minus_are_named_without_a_skip_rows_hint(
     assert "--skip-rows" not in out.stderr
 
 
-def test_a_unicode_minus_in_a_positioning_table_is_named(tmp_path):
-    lines = wide_positioning(range(0, 501, 100), sep=";")
-    lines[3] = lines[3].replace(";", ";\u2212", 1)
+@pytest.mark.parametrize("n", [150, 3000])                  # small files and pandas' C parser
+@pytest.mark.parametrize("encoding", ["utf-8", "utf-16"])
+@pytest.mark.parametrize("mark", [",", "."])
+def test_the_unicode_minus_sign_is_read_as_a_minus(tmp_path, n, encoding, mark):
+    """U+2212, as spreadsheets and instrument software write negative numbers, reads as '-' (it was refused)."""
+    pts = circle(n, r=300.0, cx=-700.0, cy=-20.0)
+    sep = ";" if mark == "," else ","
+    text = "\n".join(["X" + sep + "Y"] + [f"{x:.6f}{sep}{y:.6f}".replace(".", mark).replace("-", "\u2212")
+                                          for x, y in pts]) + "\n"
+    assert text.count("\u2212") > n
     path = tmp_path / "m.csv"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    out = cli("positioning", path)
-    one_error_line(out, "line 4", "Unicode minus sign")
-    assert "--skip-rows" not in out.stderr
+    path.write_text(text, encoding=encoding)
+    np.testing.assert_array_equal(read_points(path), np.round(pts, 6))
+    ascii_path = tmp_path / "a.csv"
+    ascii_path.write_text(text.replace("\u2212", "-"), encoding=encoding)
+    np.testing.assert_array_equal(read_points(path), read_points(ascii_path))
+
+
+def test_a_unicode_minus_at_the_end_of_a_read_of_the_c_parser_waits_for_its_digit():
+    from datasets.io import _AsciiMinus
+    text = "1;\u22122\n\u22123;4\n"
+    for size in range(1, len(text) + 1):
+        reader, got = _AsciiMinus(io.StringIO(text)), ""
+        while chunk := reader.read(size):
+            got += chunk
+        assert got == "1;-2\n-3;4\n", size
+
+
+def test_a_unicode_minus_in_a_positioning_table_is_read_as_a_minus(tmp_path):
+    lines = wide_positioning(range(0, 501, 100), sep=";")
+    minus = [*lines[:3], lines[3].replace(";", ";\u2212", 1), *lines[4:]]
+    ascii_ = [*lines[:3], lines[3].replace(";", ";-", 1), *lines[4:]]
+    got = []
+    for name, rows in (("m.csv", minus), ("a.csv", ascii_)):
+        path = tmp_path / name
+        path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+        out = cli("positioning", path, "--json")
+        assert out.returncode == 0, out.stderr
+        got.append(json.loads(out.stdout))
+        assert got[-1]["details"]["conditions"].pop("files") == [str(path)]
+    assert got[0] == got[1]
 
 
 # ------------------------------------------------------------------ header units of multilateration files

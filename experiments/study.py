@@ -222,6 +222,12 @@ class Study:
         """Whether this kind builds its own rows (its own :meth:`tasks` or :meth:`execute`)."""
         return self.own_tasks or type(self).execute is not Study.execute
 
+    @property
+    def generic_rows(self) -> bool:
+        """Whether its rows are the generic fit's (it does not define its own :meth:`execute`): the engine then runs
+        a chunk's rows in batches, each step of them one loop (``experiments.rows``)."""
+        return type(self).execute is Study.execute
+
     def tasks(self, cfg: dict):
         """The tasks (plain picklable dicts, one row each; see ``experiments.engine``), an iterable read lazily.
         Default: data sets x repetitions x methods (x their grids)."""

@@ -983,3 +983,73 @@ def test_the_run_collects_garbage_less_often_and_gives_the_caller_its_thresholds
         assert gc.get_threshold() == (500, 7, 9)
     finally:
         gc.set_threshold(*before)
+
+
+def test_batched_generic_rows_are_the_rows_of_one_task_at_a_time(monkeypatch):
+    """Without a time limit a chunk's generic fit rows run in batches (its data, then its fits, then its gates and
+    metrics): every outcome is the row run_task gives the task alone, in task order: a good fit, a method refusing its
+    input (skipped), raising (error), raising ImportError inside the fit (error: the method's own), SystemExit and
+    KeyboardInterrupt (crashed), a result the gate refuses (invalid), a result whose metrics raise (error), a data
+    source that raises (error) or cannot import a module (unavailable). Batches are cut by task count and by bytes."""
+    import methods
+    from datasets import sources
+    from experiments import rows
+    from methods import results as mres
+    from methods._registry import _REGISTRY
+
+    class BrokenGeometry(mres.CircleFit):
+        def geometry(self):
+            raise RuntimeError("geometry broke")
+
+    def method(points, *, how="good"):
+        c = points.mean(axis=0)
+        res = mres.circle_result(points, c, float(np.hypot(*(points - c).T).mean()), converged=True, message="mean")
+        if how == "skip":
+            raise methods.InvalidInputError("too few points")
+        if how == "bug":
+            return 1 / 0
+        if how == "import":
+            import no_such_module_here  # noqa: F401
+        if how in ("exit", "ctrl_c"):
+            raise SystemExit(3) if how == "exit" else KeyboardInterrupt()
+        if how == "lie":
+            res.form_error += 1.0
+        if how == "metrics":
+            res.__class__ = BrokenGeometry
+        return res
+
+    def source(rng, *, n=12, fail=""):
+        if fail == "bug":
+            raise ValueError("source broke")
+        if fail == "import":
+            import no_such_module_either  # noqa: F401
+        t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        pts = np.column_stack([np.cos(t), np.sin(t)]) * 3.0 + rng.normal(0.0, 0.01, (n, 2))
+        return pts, {"center": (0.0, 0.0), "radius": 3.0}
+
+    methods.register("circle.test_batch", kind="closed form", summary="batch test", reference="test")(method)
+    sources.register_source("test_batch", random=True, summary="batch test", gives=np.ndarray)(source)
+    try:
+        tasks = []
+        for d, fail in enumerate(["", "bug", "import", ""]):
+            spec = {"label": f"d{d}", "source": "test_batch", "params": {"n": 12 + d, "fail": fail}}
+            for r in range(3):
+                for how in ["good", "skip", "bug", "import", "exit", "ctrl_c", "lie", "metrics"]:
+                    tasks.append({"study": "b", "kind": "grid", "dataset": spec, "repetition": r, "stream": [d, 0, r],
+                                  "seed": 5, "method": "circle.test_batch", "params": {"how": how}, "timing": None,
+                                  "index": len(tasks)})
+        one_by_one = [rows.run_task(t) for t in tasks]
+        statuses = {r["status"] for r in one_by_one}
+        assert statuses == {"ok", "skipped", "error", "crashed", "invalid", "unavailable"}, statuses
+        for cut in ({}, {"BATCH_TASKS": 5}, {"BATCH_BYTES": 1}):
+            for name, value in cut.items():
+                monkeypatch.setattr(rows, name, value)
+            rows._LAST_DATA[:] = [None] * 4
+            batched = rows._generic_rows(tasks, 0, None)
+            assert batched == one_by_one
+            chunk = rows.run_chunk(tasks)["columns"]
+            assert chunk["row"] == [rows.row_json(r) for r in one_by_one]
+            monkeypatch.undo()
+    finally:
+        _REGISTRY.pop("circle.test_batch", None)
+        sources._REGISTRY.pop("test_batch", None)

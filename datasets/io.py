@@ -26,6 +26,7 @@ refused with the file name and line number (a :class:`DataFileError`, one kind o
 from __future__ import annotations
 
 import codecs
+import contextlib
 import csv
 import importlib
 import os
@@ -166,9 +167,9 @@ def decimal_marks(name, rows) -> bool | None:
     and which also holds integers from 1 to 999 without a comma (``25``, ``-80``) is refused as ambiguous:
     a grouped export writes numbers below 1000 that way, a fixed-decimals export would write ``25,000``.
     A column whose every field is ``d,ddd`` is read as decimal commas (nothing in the file can tell).
-    Checked on every line of a small file (:data:`SMALL_FILE_BYTES`), of a positioning or multilateration
-    table, and on the first :data:`SNIFF_LINES` data lines of a larger file (whose parser then refuses any
-    field with the other mark)."""
+    Checked on every line of every file: a small file (:data:`SMALL_FILE_BYTES`), a positioning or multilateration
+    table line by line; a larger file on its first :data:`SNIFF_LINES` data lines, then (its parser refusing any
+    field with the other mark) on all of them without a Python loop over the lines (:func:`_check_grouping`)."""
     first_comma = first_point = None
     columns: dict = {}   # column -> [all comma fields grouping-shaped, first comma field, first small integer]
     for lineno, toks in rows:
@@ -814,30 +815,83 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
     check_line_lengths(layout.name)
     dtype = {k: (object if k in strings else np.float64) for k in usecols}
 
-    def parse(source):
+    def parse(usecols=usecols, *, decimal="," if layout.decimal_comma else ".", thousands=None, minus=False):
+        """The columns ``usecols`` by pandas' C parser (``minus``: from a stream writing U+2212 as '-')."""
         try:
-            frame = pd.read_csv(source, sep=r"\s+" if layout.sep is None else layout.sep, header=None,
-                                skiprows=layout.first_data_line - 1, dtype=dtype,
-                                usecols=None if len(usecols) == layout.ncol else usecols,
-                                decimal="," if layout.decimal_comma else ".", comment=layout.comment,
-                                skip_blank_lines=True, engine="c",
-                                encoding=file_encoding(layout.name), keep_default_na=True)
+            with contextlib.ExitStack() as stack:
+                source = _AsciiMinus(stack.enter_context(_open_text(layout.name))) if minus else layout.name
+                frame = pd.read_csv(source, sep=r"\s+" if layout.sep is None else layout.sep, header=None,
+                                    skiprows=layout.first_data_line - 1, dtype={k: dtype[k] for k in usecols},
+                                    usecols=None if len(usecols) == layout.ncol else usecols, decimal=decimal,
+                                    thousands=thousands, comment=layout.comment, skip_blank_lines=True, engine="c",
+                                    encoding=file_encoding(layout.name), keep_default_na=True)
             cols = {k: frame[k].to_numpy() for k in usecols}
             del frame
-            return cols, all(np.isfinite(cols[k]).all() for k in idx)
+            return cols, all(np.isfinite(cols[k]).all() for k in idx if k in cols)
         except (ValueError, KeyError, pd.errors.ParserError, UnicodeDecodeError):
             return None, False   # KeyError: every row shorter than the header
 
-    cols, ok = parse(layout.name)
+    minus = False
+    cols, ok = parse()
     if not ok and _holds_unicode_minus(layout.name):   # parsed again, its minus signs in ASCII
-        with _open_text(layout.name) as fh:
-            cols, ok = parse(_AsciiMinus(fh))
+        minus = True
+        cols, ok = parse(minus=True)
     if not ok:
         _diagnose(layout, idx, skip_rows)
     if not all(len(cols[k]) for k in usecols):
         raise DataFileError(f"{layout.name}: a header but no data lines")
+    if layout.decimal_comma:
+        _check_grouping(layout, idx, cols, lambda columns: parse(columns, decimal=".", thousands=",", minus=minus))
     _check_last_line(layout, idx)
     return cols
+
+
+def _grouping_suspects(layout: Layout, idx) -> list[int]:
+    """The columns of ``idx`` whose comma numbers in the sniffed lines all look like digit grouping (``2,908``) or
+    which hold none there: only in those can a later line make the file one :func:`decimal_marks` refuses."""
+    rows = [_split(ln, layout.sep) for _, ln in layout.sample]
+    return [k for k in idx
+            if all(_COMMA_GROUPED.fullmatch(r[k]) for r in rows if k < len(r) and _COMMA_NUMBER.fullmatch(r[k]))]
+
+
+def _check_grouping(layout: Layout, idx, cols: dict, parse_grouped) -> None:
+    """:func:`decimal_marks` over every line of a large file of decimal commas (:func:`sniff` saw its first
+    :data:`SNIFF_LINES`; a column of ``2,908`` there and ``25`` further down was read as 2.908 and 25), decided
+    without a Python loop over the lines: the columns it could refuse (:func:`_grouping_suspects`) are parsed a
+    second time by the C parser with ',' as the thousands separator, giving t beside the decimal-comma value d. A
+    field without a comma has t = d; ``d,ddd`` (k digits after the comma) has t = 1000 d in [1000, 10^6). A column
+    with a comma field, every one of them of that kind, and an integer from 1 to 999 with t = d is what the rule
+    refuses (or, for contrived fields such as ``2,908e0``, may): the lines are then checked one by one, by the same
+    function as a small file's, which refuses it naming the lines."""
+    suspects = _grouping_suspects(layout, idx)
+    if not suspects:
+        return
+    grouped_cols, ok = parse_grouped(suspects)
+    maybe = not ok   # a field the second parse cannot read (',5'): the lines decide
+    for k in suspects if ok else ():
+        d, t = cols[k], grouped_cols[k]
+        with np.errstate(invalid="ignore", over="ignore"):
+            comma = t != d
+            grouped = (np.abs(t) >= 1000) & (np.abs(t) < 1e6) & (t == np.rint(t)) & (np.abs(1000 * d - t) <= 1e-9 * np.abs(t))
+            small = ~comma & (d == np.rint(d)) & (np.abs(d) >= 1) & (np.abs(d) <= 999)
+        if comma.any() and small.any() and not (comma & ~grouped).any():
+            maybe = True
+            break
+    if maybe:
+        decimal_marks(layout.name, _data_fields(layout, idx))
+
+
+def _data_fields(layout: Layout, columns) -> list:
+    """(line number, fields ``columns``) of every data line of ``layout``'s file (an inline comment cut off)."""
+    out = []
+    for lineno, raw in enumerate(read_lines(layout.name), start=1):
+        ln = raw.split(layout.comment, 1)[0].strip()
+        if lineno < layout.first_data_line or not ln:
+            continue
+        toks = _split(ln, layout.sep)
+        if len(toks) == layout.ncol:
+            out.append((lineno, [toks[k] for k in columns]))
+    return out
 
 
 def _holds_unicode_minus(path) -> bool:

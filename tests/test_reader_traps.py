@@ -10,8 +10,8 @@ import json
 import numpy as np
 import pytest
 
-from datasets.io import (SMALL_FILE_BYTES, DataFileError, read_multilateration, read_points, read_positioning,
-                         read_profile)
+from datasets.io import (SMALL_FILE_BYTES, DataFileError, decimal_marks, read_multilateration, read_points,
+                         read_positioning, read_profile)
 from test_cli_inputs import cli, one_error_line  # the CLI in this process, and its one-line error
 
 
@@ -76,6 +76,56 @@ def test_grouped_numbers_whose_small_integers_come_late_are_refused(tmp_path):
     assert path.stat().st_size <= SMALL_FILE_BYTES
     with pytest.raises(DataFileError, match="line 2: '1,000' looks like a thousands separator.*line 302 writes '25'"):
         read_points(path)
+
+
+def grouped_then(tmp_path, tail, head=None, n=6000):
+    """A 'x;y' file of ``n`` lines (> SMALL_FILE_BYTES: pandas' C parser reads it) whose x are ``head`` (default
+    '1,234'-shaped numbers, >= 1000 with ',' grouping) and then ``tail`` (x fields placed in its last lines)."""
+    head = head or [f"{1000 + 7 * k:,}" for k in range(n - len(tail))]
+    xs = [*head[:n - len(tail)], *tail]
+    lines = ["x;y"] + [f"{x};{k},{k % 97:04d}" for k, x in enumerate(xs)]
+    path = tmp_path / "late_big.csv"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    assert path.stat().st_size > SMALL_FILE_BYTES
+    return path, lines
+
+
+def test_grouped_numbers_whose_small_integers_come_late_are_refused_in_a_large_file(tmp_path):
+    """The same as above past the small-file size: the sniffed lines alone decided, and '1,000' was read as 1.0
+    (and '25' as 25) without a word."""
+    path, lines = grouped_then(tmp_path, ["25"])
+    with pytest.raises(DataFileError, match=f"line 2: '1,000' looks like a thousands separator.*line {len(lines)} "
+                                            "writes '25'"):
+        read_points(path)
+    one_error_line(cli("fit", "circle.kasa", path), "line 2:", "thousands separator", f"line {len(lines)} writes '25'")
+    path, lines = grouped_then(tmp_path, ["2,908"], head=["25", "-80", "7"] * 2000)   # integers first, grouping later
+    with pytest.raises(DataFileError, match=f"line {len(lines)}: '2,908' looks like a thousands separator.*line 2 "
+                                            "writes '25'"):
+        read_points(path)
+
+
+@pytest.mark.parametrize("tail", [["12,5", "25"],          # a comma field that is no grouping: decimal commas
+                                  ["2,908e0", "25"],       # an exponent: not grouping (checked line by line)
+                                  [",5", "25"],            # unreadable with ',' as thousands separator
+                                  ["0,000", "25"],         # a zero with decimals: the column is not grouping
+                                  ["25"], ["2,908", "-7"], ["1,234", "0", "999"]])
+def test_a_large_file_is_judged_as_a_small_one(tmp_path, tail):
+    """Every line of a large file of decimal commas is judged by the rule of the small files
+    (datasets.io.decimal_marks over all its lines): refused or read alike."""
+    path, lines = grouped_then(tmp_path, tail)
+    rows = [(k, ln.split(";")[:1]) for k, ln in enumerate(lines[1:], start=2)]
+    try:
+        decimal_marks(str(path), rows)
+        want = None
+    except DataFileError as exc:
+        want = str(exc)
+    if want is None:
+        got = read_points(path)
+        np.testing.assert_array_equal(got[:, 0], [float(ln.split(";")[0].replace(",", ".")) for ln in lines[1:]])
+    else:
+        with pytest.raises(DataFileError) as exc:
+            read_points(path)
+        assert str(exc.value) == want
 
 
 def test_decimal_points_and_decimal_commas_in_one_file_are_refused(tmp_path):

@@ -115,7 +115,7 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
             if tolerance(col, study) is not None:
                 problems.append({"column": col, "n_rows": int(len(a)), "problem": "column missing in this run", "worst": []})
             continue
-        tols, keep, skipped, (rtol, atol) = _compared_rows(study, col, methods, stopped)
+        tol_of, keep, skipped, (rtol, atol) = _compared_rows(study, col, methods, stopped)
         not_compared += skipped
         if not keep.any():
             continue
@@ -135,7 +135,7 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
         if bad.any():
             order = np.argsort(-excess[bad], kind="stable")[:WORST_ROWS]
             idx = np.flatnonzero(bad)[order]
-            t = tols[idx[0]]
+            t = tol_of[methods[1][idx[0]]]   # the worst row's method's tolerance
             problems.append({
                 "column": col, "n_rows": int(bad.sum()),
                 "problem": "differs" if t.rtol == t.atol == 0 else f"outside rtol={t.rtol:g}, atol={t.atol:g}",
@@ -152,17 +152,16 @@ def _method_kinds(methods: pd.Series) -> tuple[list, np.ndarray]:
 
 
 def _compared_rows(study: str, col: str, method_kinds: tuple[list, np.ndarray], stopped: np.ndarray):
-    """(each row's tolerance, which rows are compared, how many values of rows that stopped in both runs are not, each
-    row's (rtol, atol)) of one column: one tolerance per distinct method (:func:`_method_kinds`), spread to the rows
-    (not one lookup per row and column)."""
+    """(each distinct method's tolerance, which rows are compared, how many values of rows that stopped in both runs
+    are not, each row's (rtol, atol)) of one column: one tolerance per distinct method (:func:`_method_kinds`; row i's
+    is ``tol_of[row_kind[i]]``), spread to the rows as arrays (not one lookup or list entry per row and column)."""
     kinds, row_kind = method_kinds
     tol_of = [tolerance(col, study, m) for m in kinds]
-    tols = [tol_of[k] for k in row_kind]
     keep = np.array([t is not None for t in tol_of], dtype=bool)[row_kind]
     inexact = np.array([t is not None and (t.rtol, t.atol) != (0.0, 0.0) for t in tol_of], dtype=bool)[row_kind]
     skipped = int((keep & inexact & stopped).sum())
     bounds = (np.array([t.rtol if t else 0.0 for t in tol_of])[row_kind], np.array([t.atol if t else 0.0 for t in tol_of])[row_kind])
-    return tols, keep & ~(inexact & stopped), skipped, bounds
+    return tol_of, keep & ~(inexact & stopped), skipped, bounds
 
 
 def self_comparison(study: str, folder: Path) -> dict:

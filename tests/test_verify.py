@@ -326,6 +326,35 @@ def test_a_table_compared_with_itself_gives_the_full_comparisons_verdict_cheaply
     assert compare.self_comparison(study, root) == compare.compare_study(study, df, df.copy())
 
 
+def test_a_difference_is_judged_and_named_by_the_tolerance_of_its_rows_method(monkeypatch):
+    """Tolerances are looked up once per distinct method of a table, never listed per row (self_comparison built
+    and dropped a list of one per row and column: ~20 ms of its 40,000-row verdict), and the worst row of a
+    column that differs is named with its own method's tolerance."""
+    from experiments import compare, metrics
+    from methods.result_base import Tolerance
+
+    monkeypatch.setitem(metrics.CHAOTIC, ("vstudy", "circle.nelder_mead", "radius"), Tolerance(1e-3, 0.0, "test"))
+    methods = ["circle.kasa", "circle.nelder_mead"] * 20_000
+    committed = pd.DataFrame({"study": "vstudy", "dataset": "d", "repetition": [str(k) for k in range(len(methods))],
+                              "method": methods, "status": "ok", "radius": "299.0"})
+    kinds = compare._method_kinds(committed["method"])
+    tol_of, keep, skipped, (rtol, atol) = compare._compared_rows("vstudy", "radius", kinds, np.zeros(len(methods), bool))
+    assert len(tol_of) == 2 and keep.all() and skipped == 0
+    assert set(rtol[kinds[1] == kinds[0].index("circle.nelder_mead")]) == {1e-3}
+    fresh = committed.copy()
+    fresh.loc[1, "radius"] = "302.0"                             # a Nelder-Mead row: 3 mm, 10 x its 1e-3 (0.3 mm)
+    fresh.loc[2, "radius"] = "299.000001"                        # a Kasa row: 1 nm, 3 x its 1e-9 (0.3 nm)
+    got = compare.compare_study("vstudy", committed, fresh)
+    (problem,) = got["problems"]
+    assert problem["n_rows"] == 2 and problem["problem"] == "outside rtol=0.001, atol=0"   # the worst: Nelder-Mead's
+    assert problem["worst"][0]["row"].startswith("dataset=d, repetition=1, method=circle.nelder_mead")
+    fresh.loc[1, "radius"] = "299.0"
+    (problem,) = compare.compare_study("vstudy", committed, fresh)["problems"]
+    kasa = compare.tolerance("radius", "vstudy", "circle.kasa")
+    assert problem["n_rows"] == 1 and problem["problem"] == f"outside rtol={kasa.rtol:g}, atol={kasa.atol:g}"
+    assert kasa.rtol != 1e-3 and problem["worst"][0]["row"].startswith("dataset=d, repetition=2, method=circle.kasa")
+
+
 def test_the_runs_verdicts_are_committed_with_the_results_and_name_no_folder_of_this_machine(tmp_path, monkeypatch):
     """The verdicts a run earned (RESULTS/verify.json) are outputs of that run, committed with its results, so that
     `python -m experiments.report` on a fresh checkout keeps each study's "Reproducibility. Verdict ..." line

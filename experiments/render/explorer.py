@@ -111,15 +111,9 @@ def ranking_data(name: str, r, folders: dict[str, Path], metas: dict[str, dict])
     from experiments.render.text import human_unit
     from experiments.study import readable
     problems = list(map(str, table.index))
-    # every number carries its unit: one for the ranking, or each study's ("mm (published, scaling) or R (noise)")
-    by_unit: dict = {}
-    for study, u in r.units.items():
-        by_unit.setdefault(human_unit(u), []).append(study)
-    if r.unit or len(by_unit) <= 1:
-        axis_unit = human_unit(r.unit) or next(iter(by_unit), "")
-    else:
-        axis_unit = " or ".join(f"{u or 'no unit'} ({', '.join(st)})" for u, st in by_unit.items())
-    data = {"name": name, "metric": r.metric, "label": readable(r.metric), "unit": r.unit, "axis_unit": axis_unit,
+    # every number carries its unit: each problem's (its study's: "mm" for published, "R" for noise), which the
+    # hovers name and the runtime panels group by
+    data = {"name": name, "metric": r.metric, "label": readable(r.metric), "unit": r.unit,
             "units": [human_unit(r.units.get(p.split(" | ")[0], r.unit)) for p in problems],
             "methods": methods, "problems": problems,
             "cost": [[_r(v) for v in row] for row in table.to_numpy(float)],

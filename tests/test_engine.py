@@ -990,7 +990,8 @@ def test_batched_generic_rows_are_the_rows_of_one_task_at_a_time(monkeypatch):
     metrics): every outcome is the row run_task gives the task alone, in task order: a good fit, a method refusing its
     input (skipped), raising (error), raising ImportError inside the fit (error: the method's own), SystemExit and
     KeyboardInterrupt (crashed), a result the gate refuses (invalid), a result whose metrics raise (error), a data
-    source that raises (error) or cannot import a module (unavailable). Batches are cut by task count and by bytes."""
+    source that raises (error) or cannot import a module (unavailable). Batches are cut by task count and by bytes;
+    the fits of a batch run a method's together (two methods here), the rows stay in task order."""
     import methods
     from datasets import sources
     from experiments import rows
@@ -1028,6 +1029,7 @@ def test_batched_generic_rows_are_the_rows_of_one_task_at_a_time(monkeypatch):
         return pts, {"center": (0.0, 0.0), "radius": 3.0}
 
     methods.register("circle.test_batch", kind="closed form", summary="batch test", reference="test")(method)
+    methods.register("circle.test_batch_b", kind="closed form", summary="batch test", reference="test")(method)
     sources.register_source("test_batch", random=True, summary="batch test", gives=np.ndarray)(source)
     try:
         tasks = []
@@ -1036,7 +1038,8 @@ def test_batched_generic_rows_are_the_rows_of_one_task_at_a_time(monkeypatch):
             for r in range(3):
                 for how in ["good", "skip", "bug", "import", "exit", "ctrl_c", "lie", "metrics"]:
                     tasks.append({"study": "b", "kind": "grid", "dataset": spec, "repetition": r, "stream": [d, 0, r],
-                                  "seed": 5, "method": "circle.test_batch", "params": {"how": how}, "timing": None,
+                                  "seed": 5, "params": {"how": how},
+                                  "method": "circle.test_batch_b" if how in ("good", "lie") else "circle.test_batch", "timing": None,
                                   "index": len(tasks)})
         one_by_one = [rows.run_task(t) for t in tasks]
         statuses = {r["status"] for r in one_by_one}
@@ -1052,4 +1055,5 @@ def test_batched_generic_rows_are_the_rows_of_one_task_at_a_time(monkeypatch):
             monkeypatch.undo()
     finally:
         _REGISTRY.pop("circle.test_batch", None)
+        _REGISTRY.pop("circle.test_batch_b", None)
         sources._REGISTRY.pop("test_batch", None)

@@ -378,7 +378,8 @@ def _separator(lines: list[str]) -> tuple[str | None, bool]:
         for cand in ("\t", None):
             fields = _split(first, cand)
             if len(fields) >= 2 and (cand is None or "\t" in first) and \
-                    all(dec.fullmatch(f) or _is_number(f) for f in fields) and any(dec.fullmatch(f) for f in fields):
+                    all(dec.fullmatch(f) or _is_number(f) or _OTHER_GROUPED.fullmatch(f) for f in fields) and \
+                    any(dec.fullmatch(f) or _OTHER_GROUPED.fullmatch(f) for f in fields):
                 sep = cand
                 break
     elif "\t" in first:
@@ -393,13 +394,18 @@ def _separator(lines: list[str]) -> tuple[str | None, bool]:
     return sep, decimal_comma
 
 
+#: what separates the fields of a whitespace table: spaces and tabs, as for pandas' C parser (``str.split()`` would
+#: also split at a no-break space, U+00A0 or U+202F, which French exports write as digit grouping: '1 045,9')
+_FIELD_SPACE = re.compile(r"[ \t]+")
+
+
 def _split(line: str, sep: str | None) -> list[str]:
     """The fields of ``line``; a field in double quotes (``"1,5"``, as spreadsheets export) is read without its
-    quotes and may hold the separator."""
+    quotes and may hold the separator. Whitespace (``sep`` None) is spaces and tabs (:data:`_FIELD_SPACE`)."""
     if '"' not in line:
-        return [t.strip() for t in (line.split(sep) if sep else line.split())]
+        return [t.strip() for t in (line.split(sep) if sep else _FIELD_SPACE.split(line.strip()))]
     if sep is None:
-        return [t.strip().strip('"').strip() for t in line.split()]
+        return [t.strip().strip('"').strip() for t in _FIELD_SPACE.split(line.strip())]
     return [t.strip() for t in next(csv.reader([line], delimiter=sep, skipinitialspace=True))]
 
 
@@ -554,6 +560,11 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     sep, decimal_comma = _separator([ln for _, ln in body])
     head = _split(first, sep)
     numeric = all(_is_number(t.replace(",", ".") if decimal_comma else t) for t in head)
+    if not numeric:   # numbers some written as no reader reads them (1 045,9; an en dash): no header, named
+        odd = [t for t in head if not _is_number(t.replace(",", ".") if decimal_comma else t)]
+        why = [number_problem(t, decimal_comma) for t in odd]
+        if all(why):
+            raise NumberFormatError(f"{name} line {body[0][0]}: {why[0]}")
     if numeric:
         decimal_comma = _marks(name, body, sep, decimal_comma)
         return Layout(name, sep, decimal_comma, None, 0, body[0][0], len(head), comment, preamble, body)
@@ -1224,6 +1235,13 @@ def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, sk
     if len(kept) < 2:
         raise DataFileError(f"{path}: no data lines{f' ({no_data_hint})' if no_data_hint else ''}")
     sep, decimal_comma = _separator([ln.strip() for ln in kept])
+    if sep is None:   # the parser below splits at any Unicode space: '1 000' grouped with U+00A0/U+202F is named
+        for k, line in zip(lines, kept):
+            if "\u00a0" in line or "\u202f" in line:
+                why = next(filter(None, (number_problem(t) for t in _split(line, None)
+                                         if "\u00a0" in t or "\u202f" in t)), None)
+                if why:
+                    raise NumberFormatError(f"{path} line {k}: {why}")
     header = _split(kept[0].strip(), sep)
     if _units_row(header) is not None:
         raise DataFileError(f"{path} line {lines[0]}: the header {kept[0].strip()!r} names units, not columns; put "

@@ -318,6 +318,31 @@ def test_grouped_numbers_and_dashes_are_named_without_a_skip_rows_hint(tmp_path,
     assert "--skip-rows" not in out.stderr
 
 
+@pytest.mark.parametrize("space, says", [("\u00a0", "a no-break space (U+00A0)"),
+                                         ("\u202f", "a narrow no-break space (U+202F)")])
+@pytest.mark.parametrize("n", [150, 3000])
+@pytest.mark.parametrize("header", [True, False])
+def test_french_grouping_in_a_whitespace_table_is_named_not_split(tmp_path, space, says, n, header):
+    """Python's str.split() split '1 045,9' (no-break space grouping) into '1' and '045,9': a header-less file read
+    with --columns 0 1 gave x = 1 and y = 45.9 without a word (pandas' C parser, above the small-file size, kept
+    the field whole and failed elsewhere). Fields of a whitespace table are split at spaces and tabs only."""
+    pts = circle(n, r=300.0, cx=1200.0, cy=1650.0)
+    rows = [f"{x:,.6f} {y:,.6f}".replace(",", space).replace(".", ",") for x, y in pts]
+    path = tmp_path / "fr.txt"
+    path.write_text("\n".join((["X Y"] if header else []) + rows) + "\n", encoding="utf-8")
+    out = cli("fit", "circle.kasa", path, *([] if header else ["--columns", "0", "1"]))
+    one_error_line(out, f"line {2 if header else 1}:", says, "thousands separator", "export without digit grouping")
+
+
+def test_french_grouping_in_a_whitespace_positioning_table_is_named(tmp_path):
+    lines = wide_positioning(range(0, 2001, 250), sep=" ", fmt=lambda v: f"{v:.4f}".replace(".", ","),
+                             tfmt=lambda t: f"{t:,}".replace(",", "\u00a0"),
+                             header=" ".join(["Target"] + [f"R{k}F" for k in range(1, 6)] + [f"R{k}R" for k in range(1, 6)]))
+    path = tmp_path / "fr.txt"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    one_error_line(cli("positioning", path), "line 6:", "'1\\xa0000'", "a no-break space (U+00A0)")
+
+
 @pytest.mark.parametrize("n", [150, 3000])                  # small files and pandas' C parser
 @pytest.mark.parametrize("encoding", ["utf-8", "utf-16"])
 @pytest.mark.parametrize("mark", [",", "."])

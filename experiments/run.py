@@ -471,5 +471,6 @@ def _run(args) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":  # the command ends once its outputs are written, without the interpreter's teardown
+    from experiments.localworkers import exit_now
+    exit_now(main(), as_python_does=True)

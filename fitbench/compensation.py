@@ -41,6 +41,15 @@ from methods.positioning.model import evaluate_band
 NM = 1e-6                 # grid positions are whole multiples of 1e-6 mm (printed exactly with 6 decimals)
 AUTO_QUANTUM = 1000       # an automatic step is a multiple of 0.001 mm (1000 x 1e-6 mm)
 MAX_POINTS = 100_000      # a generic table longer than this is certainly a mistaken --interval
+#: a compensation value beyond this share of the measured travel (and beyond VALUE_FLOOR_MM) is not a machine
+#: axis' pitch error but a unit mistake: the positioning reader's plausibility bound (0.1 % of the travel, at
+#: least 0.1 mm). Real pitch errors are tens of µm per metre; even a transport-class rolled ball screw deviates
+#: by about 0.2 mm per 300 mm, while µm read as mm is 1000 times the error.
+VALUE_PER_TRAVEL = 1e-3
+VALUE_FLOOR_MM = 0.1
+#: a backlash entry beyond this is not a drive to compensate but one to repair (ball-screw drives have a few
+#: µm to tens of µm of lost motion); µm read as mm turns 4 µm into 4 mm
+BACKLASH_LIMIT_MM = 0.5
 AXIS = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
 
 
@@ -325,13 +334,42 @@ def write_fanuc_pitch(table, axis: str = "X", detection_unit_mm: float = 0.001, 
 WRITERS = {"csv": write_csv, "siemens-eec": write_siemens_eec, "fanuc-pitch": write_fanuc_pitch}
 
 
-def write_tables(res, data, requests, *, interval=None, source="model", axis="X1", write, reference_mm=None):
+def magnitude_problem(table) -> str | None:
+    """What makes the table implausible for a machine axis (a unit mistake), or None: a value (relative to
+    the reference point) beyond max(VALUE_FLOOR_MM, VALUE_PER_TRAVEL x travel) or a backlash entry beyond
+    BACKLASH_LIMIT_MM."""
+    first, last = table.attrs["measured_mm"]
+    limit = max(VALUE_FLOOR_MM, VALUE_PER_TRAVEL * (last - first))
+    peak = float(np.max(np.abs(table.compensation_mm.to_numpy())))
+    backlash = abs(float(table.attrs["backlash_mm"]))
+    found = []
+    if peak > limit:
+        found.append(f"values up to {peak:.4g} mm (more than {limit:g} mm, {VALUE_PER_TRAVEL * 100:g} % of the "
+                     f"{last - first:g} mm travel)")
+    if np.isfinite(backlash) and backlash > BACKLASH_LIMIT_MM:
+        found.append(f"a backlash of {backlash:.4g} mm (more than {BACKLASH_LIMIT_MM:g} mm)")
+    return " and ".join(found) or None
+
+
+def write_tables(res, data, requests, *, interval=None, source="model", axis="X1", write, reference_mm=None,
+                 unit_confirmed: bool = False, unit_option: str = "--deviation-unit", on_confirmed=None):
     """Build the table once and write it in every requested ``(format, path)`` with ``write(path, text)``;
-    every format is checked (name, axis, limits) before any file is written. Returns the table."""
+    every format is checked (name, axis, limits) before any file is written. A table implausible for a
+    machine axis (:func:`magnitude_problem`: µm read as mm) is refused unless ``unit_confirmed`` (the
+    deviations' unit given explicitly, ``unit_option`` on the command line); then ``on_confirmed(text)`` is
+    told. Returns the table."""
     for fmt, _ in requests:
         if fmt not in WRITERS:
             raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
     table = compensation_table(res, data, interval=interval, source=source, reference_mm=reference_mm)
+    problem = magnitude_problem(table)
+    if problem and not unit_confirmed:
+        raise CompensationError(f"not writing {', '.join(str(p) for _, p in requests)}: the table would hold {problem}, "
+                                f"not a machine axis' error but likely µm read as mm; give the deviations' unit: "
+                                f"{unit_option} um if they are in µm (or {unit_option} mm to confirm mm)")
+    if problem and on_confirmed is not None:
+        on_confirmed(f"the compensation table holds {problem}, written as {unit_option} confirms the unit: "
+                     "check it before loading it")
     texts = [(path, WRITERS[fmt](table, axis=axis)) for fmt, path in requests]
     for path, text in texts:
         write(path, text)

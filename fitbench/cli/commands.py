@@ -497,8 +497,21 @@ def cmd_positioning(args) -> int:
     if temperature is not None and not -50.0 <= temperature <= 100.0:
         raise InvalidInputError(f"--material-temperature {temperature:g} °C is not a workshop temperature; give °C")
     given_deviation_unit = args.deviation_unit
-    data, args.unit, args.deviation_unit = read_positioning(args.file, unit=args.unit, deviation_unit=args.deviation_unit,
-                                                            skip_rows=args.skip_rows, with_units=True)
+    with warnings.catch_warnings(record=True) as read_warnings:
+        warnings.simplefilter("always")
+        data, args.unit, args.deviation_unit = read_positioning(args.file, unit=args.unit,
+                                                                deviation_unit=args.deviation_unit,
+                                                                skip_rows=args.skip_rows, with_units=True)
+    from methods.units import UnitWarning
+    unit_warnings = [str(w.message) for w in read_warnings if issubclass(w.category, UnitWarning)]
+    if args.compensation and unit_warnings and given_deviation_unit is None:
+        # a controller file from values the reader itself finds implausible: nothing is written (one line)
+        from fitbench.compensation import CompensationError
+        raise CompensationError(f"not writing {', '.join(p for _, p in args.compensation)}: {unit_warnings[0]}; a "
+                                "controller table from them would be wrong by the same factor: give the deviations' "
+                                "unit with --deviation-unit (or --deviation-unit mm to confirm mm)")
+    for w in read_warnings:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if given_deviation_unit is None and args.deviation_unit == args.unit:
         args.deviation_unit = None  # printed as one unit, as before
     _check_instrument("--instrument-u", args.instrument_u, instrument_u, u_explicit, data)
@@ -523,7 +536,8 @@ def cmd_positioning(args) -> int:
         from fitbench.compensation import write_tables
         comp = write_tables(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
                             source=args.compensation_from, axis=args.axis or "X1", write=write_text_atomic,
-                            reference_mm=finite("--reference", args.reference))
+                            reference_mm=finite("--reference", args.reference),
+                            unit_confirmed=given_deviation_unit is not None, on_confirmed=warn)
     missing = [n for n in tolerances if n not in res.figures]
     if missing:
         raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "

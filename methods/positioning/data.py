@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from methods._errors import InvalidInputError
-from methods.units import canonical, to_mm, warn_implausible
+from methods.units import UnitWarning, canonical, to_mm, warn_implausible
 from methods._lazy import lazy_module
 
 pd = lazy_module("pandas")
@@ -101,7 +101,7 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
         if 0 < peak < 1e-5:
             import warnings
             warnings.warn(f"positioning deviations of at most {peak * 1e6:.3g} nm (read as {canonical(dev_unit)}) are "
-                          f"implausibly small; are they in mm? ({option} mm)", UserWarning, stacklevel=2)
+                          f"implausibly small; are they in mm? ({option} mm)", UnitWarning, stacklevel=2)
     dirs = [_direction(v, lines[k], name) for k, v in enumerate(df[cols["direction"]])]
     table = pd.DataFrame({"target": numeric["target"], "direction": dirs, "run": numeric["run"], "dev": dev})
     dup = table.duplicated(["target", "direction", "run"])

@@ -6,6 +6,8 @@ format, one row per run; timing columns start with ``time_``), ``meta.json`` (pr
 findings), ``summary.csv``/``summary.md`` and the study's figures. Rows are stored as they finish
 in ``OUT/NAME/rows.sqlite``: an interrupted run resumes; ``--force`` recomputes. One run at a time writes
 into an ``--out`` folder (a lock; a second run says so in one line). At the end the report is rebuilt (``paper/`` for the default ``results/``, else ``OUT/paper``; ``python -m experiments.report``).
+Without ``--out`` a study that is not one of the project's (its TOML outside ``experiments/configs/``) writes into
+``results/user/`` (its report ``results/user/paper/``), never into the committed ``results/`` and ``paper/``.
 """
 from __future__ import annotations
 
@@ -235,6 +237,48 @@ def usable_jobs(jobs: int, log=print) -> int:
     return jobs
 
 
+#: where studies that are not the project's own go when no --out is given (``results/`` and ``paper/`` hold the
+#: project's committed studies and report: a personal study never joins them unasked)
+USER_OUT = DEFAULT_OUT / "user"
+
+
+def is_project_study(cfg) -> bool:
+    """Whether a loaded study is one of the project's own (its TOML in ``experiments/configs/``)."""
+    return Path(cfg.folder).resolve() == configs.CONFIG_DIR
+
+
+def output_folder(out: str | None, cfgs: list, quick: bool) -> tuple[Path, str | None]:
+    """(the run's output folder, a note to print or None). ``--out`` when given (an empty one is refused: an unset
+    shell variable would be the current folder, and the report would overwrite ``paper/`` there); else ``results/``
+    (``results/quick/`` with ``--quick``) for the project's studies, and ``results/user/`` (``results/user/quick/``)
+    when a study is not one of them: ``results/`` and ``paper/`` are the committed results and report, which a
+    personal study must not join (it would renumber the report's tables). The project's results folders given as
+    ``--out`` with such a study are refused for the same reason."""
+    foreign = [c for c in cfgs if not is_project_study(c)]
+    if out is not None:
+        out = os.fspath(out)
+        if not out.strip():
+            raise InvalidInputError("--out is empty (an unset shell variable?); give a folder, or leave --out out "
+                                    "for the default (results/)")
+        if foreign:
+            from experiments.report import is_default_results
+            if is_default_results(Path(out)):
+                c = foreign[0]
+                raise InvalidInputError(
+                    f"--out {out} holds the project's committed results, from which the report paper/ is rebuilt; "
+                    f"{c['name']} ({c.where}) is not one of the project's studies (experiments/configs/): leave "
+                    f"--out out (its outputs then go to {USER_OUT / 'quick' if quick else USER_OUT}/) or give "
+                    f"another folder")
+        return Path(out), None
+    if not foreign:
+        return (DEFAULT_OUT / "quick" if quick else DEFAULT_OUT), None   # a quick grid never joins the full results
+    folder = USER_OUT / "quick" if quick else USER_OUT
+    names = ", ".join(c["name"] for c in foreign)
+    return folder, (f"{names} {'is' if len(foreign) == 1 else 'are'} not one of the project's studies "
+                    f"(experiments/configs/): this run writes into {folder}/ and its report into {folder / 'paper'}/, "
+                    f"not into results/ and paper/ (--out DIR to choose)")
+
+
 def check_out(out: Path) -> None:
     """--out must be a folder we can write into (created when missing)."""
     try:
@@ -372,8 +416,9 @@ def _main(argv=None) -> int:
     parser.add_argument("--executor", choices=("local", "dask"), default="local",
                         help="local processes, or Dask distributed (a LocalCluster unless --scheduler)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
-    parser.add_argument("--out", type=Path, default=None,
-                        help="output folder (default: results/ in the current folder, results/quick/ with --quick)")
+    parser.add_argument("--out", default=None,
+                        help="output folder (default: results/ in the current folder, results/quick/ with --quick; "
+                             "results/user/ for a study that is not one of the project's)")
     parser.add_argument("--force", action="store_true", help="recompute rows that are already stored")
     parser.add_argument("--seed", type=int, help="override the studies' base seed")
     parser.add_argument("--max-rows", type=int, default=configs.MAX_ROWS,
@@ -383,8 +428,6 @@ def _main(argv=None) -> int:
                              "(default: the study's row_timeout, else none)")
     parser.add_argument("--no-report", action="store_true", help="do not rebuild the report after the studies")
     args = parser.parse_args(argv)
-    if args.out is None:  # a quick grid never lands in the folder of the full results
-        args.out = DEFAULT_OUT / "quick" if args.quick else DEFAULT_OUT
     clear_signal()
     with _interrupts_are_the_run_s():
         return _run(args)
@@ -414,11 +457,17 @@ def _run(args) -> int:
             raise InvalidInputError("--scheduler is empty; give an address such as tcp://host:8786, "
                                     "or leave it out for a local Dask cluster")
         names = args.names or default_studies()
+        checked = []
         for name in names:  # validate every config, its size and its data before running any
             cfg = configs.load(name, quick=args.quick, seed=args.seed)
             for note in configs.plugin_notes(cfg):   # plugin methods a family wildcard takes: said first
                 print(f"experiments.run: note: {note}", file=sys.stderr)
             check_ready(cfg, args.max_rows)
+            checked.append(cfg)
+        args.out, note = output_folder(args.out, checked, args.quick)
+        if note:
+            print(f"experiments.run: note: {note}", file=sys.stderr)
+        for cfg in checked:
             confined(args.out, cfg["name"])
         check_out(args.out)
         lock_out(args.out)

@@ -600,7 +600,9 @@ def test_fitbench_run_and_report_default_folders_are_relative_to_the_cwd(monkeyp
     monkeypatch.setitem(sys.modules, "fake_experiments", fake)
     monkeypatch.setitem(fc.DELEGATED, "run", ("fake_experiments", "x"))
     monkeypatch.setitem(fc.DELEGATED, "report", ("fake_experiments", "x"))
-    assert fc.main(["run", "published"]) == 0 and seen.pop("argv") == ["published", "--out", "results"]
+    # run's own default is relative to the cwd and depends on --quick and on the study (results/quick/, results/user/)
+    assert fc.main(["run", "published"]) == 0 and seen.pop("argv") == ["published"]
+    assert fc.main(["run", "--quick"]) == 0 and seen.pop("argv") == ["--quick"]
     assert fc.main(["run", "published", "--out=X"]) == 0 and seen.pop("argv") == ["published", "--out=X"]
     assert fc.main(["report"]) == 0 and seen.pop("argv") == ["--results", "results", "--out", "paper"]
 

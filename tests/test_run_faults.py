@@ -227,11 +227,11 @@ def test_row_order_does_not_depend_on_history(tmp_path):
 
 def test_jobs_capped_out_checked_and_default_out_in_cwd(tmp_path):
     cfg = study(tmp_path, reps=1, ns="[10]")
-    res = run([cfg, "--jobs", "64"], tmp_path)  # no --out: results/ in the working directory
+    res = run([cfg, "--jobs", "64"], tmp_path)  # no --out: results/user/ in the working directory (not the project's)
     assert res.returncode == 0, res.stderr
     capped = [ln for ln in res.stdout.splitlines() if "capped" in ln]
     assert len(capped) == 1 and "--jobs 64" in capped[0]
-    assert (tmp_path / "results" / "faults" / "results.csv").is_file()
+    assert (tmp_path / "results" / "user" / "faults" / "results.csv").is_file()
     afile = tmp_path / "a_file"
     afile.write_text("x")
     for out in (afile, afile / "below"):

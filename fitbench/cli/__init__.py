@@ -18,7 +18,9 @@ import sys
 from fitbench import __version__
 
 #: folders a delegated subcommand gets relative to the current directory unless given: name -> [(option, folder)]
-CWD_DEFAULTS = {"run": [("--out", "results")], "report": [("--results", "results"), ("--out", "paper")]}
+#: (``run`` chooses its own: results/, results/quick/ with --quick, results/user/ for a study not the project's,
+#: all relative to the current directory)
+CWD_DEFAULTS = {"report": [("--results", "results"), ("--out", "paper")]}
 
 #: subcommands delegated to the experiment modules: name -> (module, one-line help)
 DELEGATED = {"run": ("experiments.run", "run studies (python -m experiments.run)"),

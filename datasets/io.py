@@ -1077,6 +1077,26 @@ def polar_to_points(angles_rad, values_mm, polar_value: str, nominal_radius: flo
     return np.column_stack([cx + r * np.cos(angles_rad), cy + r * np.sin(angles_rad)]), note
 
 
+#: radial deviations (of an angle + deviation file) read as mm because neither the header nor ``--unit`` gives a
+#: unit, beyond which µm is the likelier unit: roundness and ballbar traces deviate by tens of µm, and an
+#: instrument exporting µm without a unit (±0.8 µm read as ±0.8 mm) would turn RONt or G into mm
+ASSUMED_DEVIATION_LIMIT_MM = 0.1
+
+
+def _unit_assumed(layout: Layout, k: int, values) -> str:
+    """The note saying a unit-less deviation column was read as mm; a :class:`~methods.units.UnitWarning` too
+    when its deviations exceed :data:`ASSUMED_DEVIATION_LIMIT_MM` (the likely unit and the options named)."""
+    from methods.units import UnitWarning
+    col = repr(layout.header[k]) if layout.header else f"{k} (0-based)"
+    v = np.abs(np.asarray(values, dtype=float))
+    largest = float(np.max(v[np.isfinite(v)])) if np.isfinite(v).any() else 0.0
+    if largest > ASSUMED_DEVIATION_LIMIT_MM:
+        warnings.warn(f"radial deviations up to {largest:.6g} mm in {layout.name} (read as mm: the column {col} names "
+                      f"no unit) are implausible for a circular test or a roundness trace (tens of µm); is the deviation "
+                      f"column in µm? (--unit um), or give --unit mm to keep mm", UnitWarning, stacklevel=4)
+    return f"the deviation column {col} names no unit: read as mm (give --unit um if it is in µm)"
+
+
 @dataclass
 class CircularRuns:
     """The runs read from one file: a list of (label, (N, 2) points in mm, in the file's order)."""
@@ -1088,6 +1108,7 @@ class CircularRuns:
     notes: list = field(default_factory=list)
     angle_unit: str | None = None
     axes: tuple = ("x", "y")   # names of the two coordinates: the header's names of x, y columns, else x, y
+    unit_assumed: bool = False  # no unit in the header nor given: ``unit`` is mm by default
 
 
 def _axes(layout: Layout, res: Resolved) -> tuple:
@@ -1122,13 +1143,17 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         if nominal_radius is None and need_nominal_radius and res.polar_value == "deviation":
             raise DataFileError(f"{name}: an angle + radial-deviation file needs --nominal-radius to place the points")
         lu = length_unit(layout, [res.idx[1]], unit)
+        assumed = unit is None and column_unit(layout, res.idx[1], "length") is None
     else:
         lu = length_unit(layout, res.idx, unit)
+        assumed = unit is None and all(column_unit(layout, k, "length") is None for k in res.idx)
     strings = (res.direction,) if res.direction is not None else ()
     cols = read_columns(layout, res.idx, skip_rows=skip_rows, strings=strings)
     f = to_mm(1.0, lu)
     if res.kind == "polar":
         ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
+        if assumed and res.polar_value == "deviation":
+            notes.append(_unit_assumed(layout, res.idx[1], cols[res.idx[1]]))
         pts, note = polar_to_points(ang, cols[res.idx[1]] * f, res.polar_value, nominal_radius, nominal_center,
                                     name=name)
         if note:
@@ -1140,7 +1165,7 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
             pts *= f
     axes = _axes(layout, res)
     if res.direction is None:
-        return CircularRuns([("file", pts)], name, res.kind, lu, notes, au, axes)
+        return CircularRuns([("file", pts)], name, res.kind, lu, notes, au, axes, assumed)
     labels = pd.Series(cols[res.direction]).astype(str).str.strip()
     runs = []
     for lab in pd.unique(labels):
@@ -1152,7 +1177,8 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         raise DataFileError(f"{name}: {len(runs)} runs in the direction/run column ({', '.join(l for l, _ in runs)}); "
                             "a circular test has two (CW and CCW)")
     return CircularRuns(runs, name, res.kind, lu,
-                        notes + [f"{len(runs)} run(s) read from the column {layout.header[res.direction]!r}"], au, axes)
+                        notes + [f"{len(runs)} run(s) read from the column {layout.header[res.direction]!r}"], au, axes,
+                        assumed)
 
 
 def read_profile(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,

@@ -286,10 +286,11 @@ def _read_circular_runs(args):
 CIRCULAR_DEVIATION_LIMIT_MM = 1.0
 
 
-def _check_polar_deviations(runs, R, nominal_center, unit) -> None:
+def _check_polar_deviations(runs, R, nominal_center, unit, assumed: bool = False) -> None:
     """An angle + radial-deviation file whose deviations exceed ``CIRCULAR_DEVIATION_LIMIT_MM``: a warning naming the
     likely unit of the deviation column (µm read as mm: 3.1 became 3.1 mm), or that line as the error when the data
-    would be refused as far from the nominal radius anyway."""
+    would be refused as far from the nominal radius anyway; no warning of its own when the unit was ``assumed``
+    (the reader warned already, :data:`datasets.io.ASSUMED_DEVIATION_LIMIT_MM`)."""
     from methods.circular_test.evaluation import RADIUS_TOLERANCE
     from methods.units import likely_unit
     c = np.asarray(nominal_center if nominal_center is not None else (0.0, 0.0), float)
@@ -302,7 +303,8 @@ def _check_polar_deviations(runs, R, nominal_center, unit) -> None:
            f"ballbar measures within ±{CIRCULAR_DEVIATION_LIMIT_MM:g} mm){hint}")
     if dev > RADIUS_TOLERANCE * R:
         raise InvalidInputError(msg)
-    warn(msg)
+    if not assumed:
+        warn(msg)
 
 
 def cmd_circular_test(args) -> int:
@@ -322,7 +324,7 @@ def cmd_circular_test(args) -> int:
     runs, first, labelled = _read_circular_runs(args)
     args.unit = first.unit
     if first.kind == "polar":
-        _check_polar_deviations(runs, R, args.nominal_center, args.unit)
+        _check_polar_deviations(runs, R, args.nominal_center, args.unit, first.unit_assumed)
     polar_centre = first.kind == "polar" and args.nominal_center is None
     if polar_centre:  # angle + radial deviation: the reader placed the points about the nominal centre (0, 0) itself
         args.nominal_center = [0.0, 0.0]
@@ -841,6 +843,7 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", category=UserWarning)
+            failed = None
             try:
                 if argv and argv[0] in EXPERIMENT_SUBCOMMANDS and argv[0] not in (extra_commands or {}):
                     raise InvalidInputError(f"'{argv[0]}' is a subcommand of fitbench, not of {prog}: use "
@@ -848,9 +851,15 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
                 args = build_parser(prog, extra_commands).parse_args(argv)
                 with one_blas_thread():
                     return args.func(args)
+            except InvalidInputError as exc:
+                failed = str(exc)
+                raise
             finally:
+                from methods.units import UnitWarning
                 for w in caught:
-                    if issubclass(w.category, UserWarning):
+                    # an error naming the unit to give (--unit ...) says what a unit warning before it said
+                    if issubclass(w.category, UserWarning) and not (
+                            failed and issubclass(w.category, UnitWarning) and "--unit" in failed):
                         warn(str(w.message))
     except InvalidInputError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)

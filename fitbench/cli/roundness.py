@@ -10,7 +10,7 @@ from methods.units import JSON_UNITS, canonical
 
 from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff
-from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
+from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options, header_line,
                                   ROUNDNESS_LIMIT_MM, add_tolerance_option, check_plot_path, parse_tolerances, test_conditions, read_profile_args, save_figure, verdict, verdict_lines,
                                   verdict_title, warn, write_report)
 
@@ -57,7 +57,8 @@ def run(args) -> int:
                     {f"{name} {kind.upper()}": tol for kind in res.references for name, tol in tolerances.items()})
     if plot_path:
         plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))
-    lines = [f"note: {n}" for n in notes] + [report(res, source, axes)] + verdict_lines(check)
+    lines = [header_line("roundness", unit, "; centre and radius in mm")]
+    lines += [f"note: {n}" for n in notes] + [report(res, source, axes)] + verdict_lines(check)
     if report_path:
         write_report(report_path, f"ISO 12181 roundness{': ' + args.machine if args.machine else ''}",
                      [f"date         {args.date or '-'}", *lines], lambda sub: plot(res, None, title=source, into=sub),

@@ -1,0 +1,90 @@
+"""What a reader must not decide silently: the unit of a deviation column that names none, which two of three
+coordinate columns to take, whether a spreadsheet is text. Each case through the command a user runs (in this
+process, as tests/test_frontdoor.py does) and, where the reader decides, through the API."""
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import re
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from fitbench.cli.commands import main
+
+
+def cli(*args):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in args])
+    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
+
+
+def polar_file(path, dev_um, header="Angle [deg],Deviation", sep=","):
+    """An angle + radial-deviation export whose deviation column names no unit (values in µm, as written)."""
+    theta = np.arange(len(dev_um)) * 360.0 / len(dev_um)
+    path.write_text(header + "\n" + "\n".join(f"{a:.4f}{sep}{d:.4f}" for a, d in zip(theta, dev_um)) + "\n")
+    return path
+
+
+def lobed(n=720):
+    t = np.arange(n) * 2 * np.pi / n
+    return 1.5 * np.cos(3 * t) + 0.6 * np.cos(2 * t)   # µm: RONt (unfiltered) about 4 µm
+
+
+# ------------------------------------------------------------------------ a deviation column without a unit
+def test_roundness_says_its_input_unit_and_warns_about_unitless_micrometres(tmp_path):
+    p = polar_file(tmp_path / "polar_nounit.csv", lobed())
+    got = cli("roundness", p, "--cutoff", "none", "--reference", "lsci")
+    assert got.returncode == 0, got.stderr
+    first = got.stdout.splitlines()[0]
+    assert "roundness: input unit mm" in first, first
+    assert "'Deviation' names no unit: read as mm" in got.stdout
+    warning = [ln for ln in got.stderr.splitlines() if "warning" in ln]
+    assert len(warning) == 1 and "names no unit" in warning[0] and "--unit um" in warning[0] and "2.1 mm" in warning[0], got.stderr
+    # declared: no warning, the µm figures (RONt of 1.5 cos 3t + 0.6 cos 2t: about 3.9 µm, not 3900)
+    um = cli("roundness", p, "--cutoff", "none", "--reference", "lsci", "--unit", "um", "--json")
+    assert um.returncode == 0 and "warning" not in um.stderr, um.stderr
+    d = json.loads(um.stdout)
+    assert d["input_unit"] == "µm" and 3.5e-3 < d["references"]["lsci"]["RONt"] < 4.5e-3
+    assert "warning" not in cli("roundness", p, "--unit", "mm").stderr          # mm confirmed
+    # a column that names its unit is read in it without a note
+    named = polar_file(tmp_path / "polar_um.csv", lobed(), header="Angle [deg],Deviation [um]")
+    got = cli("roundness", named, "--cutoff", "none")
+    assert "input unit µm (converted to mm)" in got.stdout.splitlines()[0] and "names no unit" not in got.stdout
+    assert "warning" not in got.stderr
+
+
+def test_plausible_unitless_deviations_are_noted_not_warned(tmp_path):
+    p = polar_file(tmp_path / "mm.csv", lobed() * 1e-3)          # 0.0021 mm: plausible as mm
+    got = cli("roundness", p)
+    assert got.returncode == 0 and "warning" not in got.stderr, got.stderr
+    assert "names no unit: read as mm" in got.stdout
+
+
+def test_circular_test_warns_about_unitless_ballbar_deviations(tmp_path):
+    t = np.arange(720) * 0.5
+    dev = 0.8 * np.cos(np.radians(2 * t)) + 0.1   # µm, as the ballbar wrote them, no unit in the header
+    cw = tmp_path / "bbn_cw.txt"
+    ccw = tmp_path / "bbn_ccw.txt"
+    for path, angles in ((cw, t[::-1]), (ccw, t)):
+        path.write_text("Angle [deg]\tDeviation\n" + "\n".join(f"{a:.4f}\t{d:.4f}" for a, d in zip(angles, dev)) + "\n")
+    got = cli("circular-test", cw, ccw, "--nominal-radius", 150)
+    assert "input unit mm" in got.stdout.splitlines()[0]
+    lines = [ln for ln in got.stderr.splitlines() if "names no unit" in ln]
+    assert len(lines) == 2 and all("--unit um" in ln for ln in lines), got.stderr
+    um = cli("circular-test", cw, ccw, "--nominal-radius", 150, "--unit", "um", "--json")
+    assert um.returncode == 0 and "names no unit" not in um.stderr
+    assert json.loads(um.stdout)["G_cw"] == pytest.approx(1.6e-3, rel=1e-3)   # 1.6 µm, not 1.6 mm
+
+
+def test_reader_api_flags_the_assumed_unit(tmp_path):
+    from datasets.io import read_profile
+    from methods.units import UnitWarning
+    p = polar_file(tmp_path / "p.csv", lobed())
+    with pytest.warns(UnitWarning, match="names no unit"):
+        got = read_profile(p)
+    assert got.unit == "mm" and got.unit_assumed
+    assert not read_profile(p, unit="um").unit_assumed

@@ -2,8 +2,11 @@
 a test that starts another Python (a CLI, a study run, a Dask worker) gives it :func:`subprocess_env`, and
 a test that needs a third-party plugin builds one offline with :func:`install_plugin`, and a test that
 interrupts a run among its rows does it through :func:`while_storing_rows` (not after a poll that a loaded
-machine makes late)."""
+machine makes late), and a test that only reads the rows of a default study's quick grid takes them from
+:func:`quick_study` (one run per test session, not one per test)."""
+import fcntl
 import os
+import shutil
 import signal
 import sqlite3
 import subprocess
@@ -107,6 +110,34 @@ def while_storing_rows(proc: subprocess.Popen, db: Path, at_least: int, total: i
                 pass
         time.sleep(0.02)
     raise AssertionError(f"the run stored fewer than {at_least} rows in {timeout:.0f} s")
+
+
+def once_per_session(tmp_path_factory, name: str, make) -> Path:
+    """The folder ``name`` of this test session, filled by ``make(folder)`` once: the pytest-xdist workers whose tests
+    need it share it (the first fills it under a file lock in the session's temporary folder, the others wait for
+    it). Its users only read it."""
+    base = tmp_path_factory.getbasetemp()
+    worker = os.environ.get("PYTEST_XDIST_WORKER")  # set in each pytest-xdist worker
+    shared = (base.parent if worker else base) / name  # the session's folder, above each worker's own
+    shared.parent.mkdir(parents=True, exist_ok=True)
+    with open(shared.parent / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (shared / ".done").exists():
+            shutil.rmtree(shared, ignore_errors=True)
+            shared.mkdir()
+            make(shared)
+            (shared / ".done").write_text("")
+    return shared
+
+
+def quick_study(tmp_path_factory, name: str) -> Path:
+    """The folder of the shipped study ``name`` run on its quick grid with one job in this process
+    (``run_study(name, OUT, quick=True, jobs=1)``), once per test session (:func:`once_per_session`); read only."""
+    from experiments.run import run_study
+    def make(folder):
+        run_study(name, folder / "results", quick=True, jobs=1, log=lambda *a: None)
+    shared = once_per_session(tmp_path_factory, f"quick-{name}", make)
+    return shared / "results" / name
 
 
 def install_plugin(workdir: Path, name: str, modules: dict, entry_points: dict, version: str = "0.0.1") -> Path:

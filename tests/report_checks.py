@@ -8,15 +8,15 @@ contents' links and whether each anchor target exists.
 """
 from __future__ import annotations
 
-import fcntl
 import json
-import os
 import re
 import shutil
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from conftest import once_per_session
 
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync",
@@ -45,23 +45,14 @@ window.addEventListener('load', function () {
 
 
 def run_once_per_session(tmp_path_factory, name: str, args, cwd: Path) -> Path:
-    """The results folder of ``python -m experiments.run ARGS --out RESULTS``, run once per test session: the
-    pytest-xdist workers whose tests need it share one run (the first makes it under a file lock in the session's
-    temporary folder, the others wait for it). Its users only read it."""
-    base = tmp_path_factory.getbasetemp()
-    worker = os.environ.get("PYTEST_XDIST_WORKER")  # set in each pytest-xdist worker
-    shared = (base.parent if worker else base) / name  # the session's folder, above each worker's own
-    results = shared / "results"
-    shared.parent.mkdir(parents=True, exist_ok=True)
-    with open(shared.parent / f"{name}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not (shared / "done").exists():
-            shutil.rmtree(shared, ignore_errors=True)
-            proc = subprocess.run([sys.executable, "-m", "experiments.run", *args, "--out", str(results)], cwd=cwd,
-                                  capture_output=True, text=True, timeout=1800)
-            assert proc.returncode == 0, proc.stderr[-2000:]
-            (shared / "done").write_text("")
-    return results
+    """The results folder of ``python -m experiments.run ARGS --out RESULTS``, run once per test session
+    (:func:`conftest.once_per_session`: the pytest-xdist workers whose tests need it share one run). Its users only
+    read it."""
+    def make(folder):
+        proc = subprocess.run([sys.executable, "-m", "experiments.run", *args, "--out", str(folder / "results")],
+                              cwd=cwd, capture_output=True, text=True, timeout=1800)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+    return once_per_session(tmp_path_factory, name, make) / "results"
 
 
 def chromium() -> str | None:

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 import methods
-from conftest import REPO, while_storing_rows
+from conftest import REPO, quick_study, while_storing_rows
 from experiments import config as configs
 from experiments.engine import ConfigError
 from experiments.run import main, run_study
@@ -315,14 +315,16 @@ def test_main_releases_its_out_lock_when_it_returns(tmp_path, capsys):
     assert main(args) == 0
 
 
-# The quick studies run with one job, in this process: the same rows as with --jobs 2 (the executors' equality is
-# test_two_runs_identical_and_rows_complete's and test_engine's; every default quick study with --jobs 2 is
-# tests/test_cpu_independence.py's, compared with results/quick), without two more processes importing fitbench.
+# The quick studies run with one job, in this process, once per test session (conftest.quick_study; the report's,
+# the multilateration and the study contract's tests read the same runs): the same rows as with --jobs 2 (the
+# executors' equality is test_two_runs_identical_and_rows_complete's and test_engine's; every default quick study
+# with --jobs 2 is tests/test_cpu_independence.py's, compared with results/quick), without two more processes
+# importing fitbench.
 @pytest.mark.slow
-def test_quick_published_study(tmp_path):
-    run_study("published", tmp_path, quick=True, jobs=1, log=lambda *a: None)
-    rows = pd.read_csv(tmp_path / "published" / "results.csv")
-    meta = json.loads((tmp_path / "published" / "meta.json").read_text())
+def test_quick_published_study(tmp_path_factory):
+    target = quick_study(tmp_path_factory, "published")
+    rows = pd.read_csv(target / "results.csv")
+    meta = json.loads((target / "meta.json").read_text())
     assert set(rows["status"]) == {"ok"}
     gn = rows[(rows.dataset == "roundness_set2") & (rows.method == "circle.gauss_newton")]
     assert round(float(gn.form_error.iloc[0]), 4) == 1.7487
@@ -341,8 +343,8 @@ def test_quick_published_study(tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["noise", "convergence", "ellipse_angle", "scaling", "circular_test", "positioning",
                                   "magnification", "multilateration"])
-def test_quick_default_studies_run(tmp_path, name):
-    target = run_study(name, tmp_path, quick=True, jobs=1, log=lambda *a: None)
+def test_quick_default_studies_run(tmp_path_factory, name):
+    target = quick_study(tmp_path_factory, name)
     meta = json.loads((target / "meta.json").read_text())
     assert meta["n_rows"] > 0 and meta["findings"] and meta["quick"] is True
     manifest = json.loads((target / "report.json").read_text())  # what the report renders (the study contract)

@@ -318,8 +318,8 @@ def test_dataframe_input_and_parameters():
 
 @pytest.fixture(scope="module")
 def study(tmp_path_factory):
-    from experiments.run import run_study
-    target = run_study("multilateration", tmp_path_factory.mktemp("ml"), quick=True, jobs=1, log=lambda *a: None)
+    from conftest import quick_study
+    target = quick_study(tmp_path_factory, "multilateration")
     return target, pd.read_csv(target / "results.csv"), json.loads((target / "meta.json").read_text())
 
 

@@ -11,6 +11,7 @@ import pytest
 
 from experiments.report import build
 from experiments.run import run_study
+from conftest import quick_study
 
 
 @pytest.fixture(scope="module")
@@ -18,7 +19,7 @@ def built(tmp_path_factory):
     root = tmp_path_factory.mktemp("report")
     results = root / "results"
     for name in ("published", "magnification", "ellipse_angle"):
-        run_study(name, results, quick=True, jobs=1, log=lambda *a: None)
+        shutil.copytree(quick_study(tmp_path_factory, name), results / name)
     # a study whose rows failed: flip the status counts of a copy
     shutil.copytree(results / "ellipse_angle", results / "broken_study")
     meta = json.loads((results / "broken_study" / "meta.json").read_text())

@@ -182,13 +182,13 @@ def test_every_default_study_declares_tables_with_captions_and_findings():
         assert cfg.get("report", {}).get("findings"), name
 
 
-def test_analyse_tables_have_captions_units_and_generated_findings(tmp_path):
+def test_analyse_tables_have_captions_units_and_generated_findings(tmp_path_factory):
     """An ``analyse`` study run end to end on quick rows (noise: the smallest): each returned table has a caption
     naming its data, the findings quote numbers of the named values."""
     import json
 
-    from experiments.run import run_study
-    target = run_study("noise", tmp_path, quick=True, jobs=1, log=lambda *a: None)
+    from conftest import quick_study
+    target = quick_study(tmp_path_factory, "noise")
     manifest = json.loads((target / "report.json").read_text())
     assert manifest["tables"] and all("synthetic" in t["caption"] for t in manifest["tables"])
     v = manifest["values"]

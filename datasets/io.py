@@ -1336,16 +1336,44 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.
         runs[k] = (int(m.group(1)), m.group(2))
     if not runs:
         return None
+    # 'Forward'/'Reverse' ('Hin'/'Rück') are the laser software's run order, not the axis direction (ISO 230-2: ↑ is
+    # an approach in the + direction): the forward runs pass the targets in the order the file lists them
+    from methods.positioning.data import RUN_ORDER_TAGS, RunOrderNote
+    order = {k: RUN_ORDER_TAGS[tag.lower()] for k, (_, tag) in runs.items() if tag and tag.lower() in RUN_ORDER_TAGS}
+    forward = None
+    if order and d_col is None:
+        targets = _numeric_column(df.iloc[:, t], "target", name, lines)
+        step = np.diff(targets)
+        forward = "+" if step.size and np.all(step > 0) else "-" if step.size and np.all(step < 0) else None
+        named = "/".join(repr(cols[next(k for k, v in order.items() if v == w)]) for w in ("forward", "reverse")
+                         if w in order.values())
+        if forward is None:
+            text = (f"{name}: columns {named} ... name the run order (the laser software's forward and reverse runs), "
+                    "not the axis direction, and the targets are neither increasing nor decreasing in the file, so "
+                    "which way the forward runs moved is unknown: give --forward-direction + or - (or name the "
+                    "directions in the headers: Run 1 +, Run 1 -)")
+        else:
+            text = (f"columns {named} ... name the run order, not the axis direction; the targets are listed "
+                    f"{'increasing' if forward == '+' else 'decreasing'} ({targets[0]:g} to {targets[-1]:g}), so the "
+                    f"forward runs are read as approaches in the {'+ (↑)' if forward == '+' else '− (↓)'} direction and "
+                    f"the reverse runs as {'− (↓)' if forward == '+' else '+ (↑)'} (--forward-direction "
+                    f"{'-' if forward == '+' else '+'} if the forward runs moved the other way)")
+        warnings.warn(RunOrderNote(text, forward), stacklevel=4)
+    other = {"+": "-", "-": "+"}
     rows = []
     for k, (run, tag) in runs.items():
         if d_col is not None:
             if tag:
                 raise DataFileError(f"{name}: column {cols[k]!r} names a direction and the file has a direction column")
             direction = df.iloc[:, d_col].to_numpy()
+        elif k in order:
+            # ambiguous order: + provisionally, the note says so (fitbench positioning refuses it without
+            # --forward-direction)
+            fwd = forward or "+"
+            direction = np.full(len(df), fwd if order[k] == "forward" else other[fwd])
         else:
             # no direction anywhere: a unidirectional test approached in the + direction
-            direction = np.full(len(df), "+" if tag is None or tag.lower() in ("+", "up", "u", "fwd", "forward", "pos",
-                                                                                "↑", "hin") else "-")
+            direction = np.full(len(df), "+" if tag is None or tag.lower() in ("+", "up", "u", "pos", "↑") else "-")
         rows.append(pd.DataFrame({"target": df.iloc[:, t].to_numpy(), "direction": direction, "run": run,
                                   "deviation": df.iloc[:, k].to_numpy(), "_line": lines}))
     long = pd.concat(rows, ignore_index=True)

@@ -512,8 +512,27 @@ def cmd_positioning(args) -> int:
         raise CompensationError(f"not writing {', '.join(p for _, p in args.compensation)}: {unit_warnings[0]}; a "
                                 "controller table from them would be wrong by the same factor: give the deviations' "
                                 "unit with --deviation-unit (or --deviation-unit mm to confirm mm)")
+    from methods.positioning.data import RunOrderNote, swap_directions
+    run_order = [w.message for w in read_warnings if issubclass(w.category, RunOrderNote)]
     for w in read_warnings:
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        if not issubclass(w.category, RunOrderNote):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    notes = []
+    if args.forward_direction is not None and not run_order:
+        raise InvalidInputError(f"--forward-direction applies to a wide export whose runs are named Forward/Reverse "
+                                f"(or Hin/Rück); {args.file} names its directions (or has none): drop the option")
+    if run_order:
+        found = run_order[0].forward
+        if args.forward_direction is None and found is None:
+            raise InvalidInputError(str(run_order[0]))
+        if args.forward_direction is not None:
+            if args.forward_direction != (found or "+"):
+                data = swap_directions(data)
+            word = "+ (↑)" if args.forward_direction == "+" else "− (↓)"
+            notes.append(f"the Forward/Reverse runs are run order, not direction: forward runs read as approaches in the "
+                         f"{word} direction, as --forward-direction {args.forward_direction} says")
+        else:
+            notes.append(str(run_order[0]))
     if given_deviation_unit is None and args.deviation_unit == args.unit:
         args.deviation_unit = None  # printed as one unit, as before
     _check_instrument("--instrument-u", args.instrument_u, instrument_u, u_explicit, data)
@@ -550,6 +569,7 @@ def cmd_positioning(args) -> int:
         title += verdict_title(check)
         plot(res, plot_path, title=title, data=data, save=save_figure)
     lines = [header_line("positioning", args.unit, deviation_unit=args.deviation_unit)]
+    lines += [f"note: {n}" for n in notes]
     lines += ([thermal_text] if thermal else []) + [text(res, degree=args.degree)] + verdict_lines(check)
     if report_path:
         write_report(report_path, f"ISO 230-2 positioning test{': ' + args.machine if args.machine else ''}",
@@ -569,6 +589,7 @@ def cmd_positioning(args) -> int:
                                  "degree": p["degree"], "U_at_targets": p["U_at_targets"], "k": p["k"]}
                              for d, p in res.polynomial.items()}
         out["u_delta"] = res.extra["u_delta"]
+        out["notes"] = notes
         # the axis as given (--axis; '' if not): fitbench history keeps each machine's axes apart
         out["details"] = {"conditions": test_conditions(args, axis=args.axis or "", files=[str(args.file)])}
         print(json.dumps(_jsonable(out)))
@@ -601,6 +622,9 @@ def add_positioning(sub):
                          "corrected to 20 °C by the nominal differential expansion (needs --expansion-coefficient)")
     pp.add_argument("--expansion-coefficient", type=float, metavar="UM_PER_M_K",
                     help="its thermal expansion coefficient in µm/(m·K) (steel about 11.5)")
+    pp.add_argument("--forward-direction", choices=("+", "-"), default=None,
+                    help="wide exports with Forward/Reverse (Hin/Rück) runs: the axis direction the forward runs "
+                         "moved in (default: from the order of the targets in the file, + when increasing)")
     pp.add_argument("--deviation-unit", choices=UNIT_CHOICES,
                     help="unit of the deviation columns when it differs from --unit (laser exports: targets in mm, "
                          "errors in µm)")

@@ -4,7 +4,8 @@ Files are read by :func:`datasets.io.read_positioning`, which accepts these layo
 * long format, one measurement per row: ``target, direction, run, deviation`` (or ``actual``), the
   layout of ISO 230-2's own data tables (a value per target, approach direction and run);
 * wide format, one column per run as laser-interferometer software exports it: ``target`` then
-  ``run 1 +``, ``run 1 -``, ... (also ``run1_up/run1_down``, ``Run 1 Forward/Reverse``, ``1↑/1↓``), or
+  ``run 1 +``, ``run 1 -``, ... (also ``run1_up/run1_down``, ``1↑/1↓``, and ``Run 1 Forward/Reverse`` or
+  ``Hin/Rück``, the run order, mapped to ↑/↓ by the order of the targets in the file: :class:`RunOrderNote`), or
   ``target, direction, run 1, run 2, ...`` with a row per target and direction. This follows the
   tabular exports of Renishaw LaserXL/CARTO (a column of deviations per run and direction beside the
   target positions, errors often in µm) as shown in public calibration reports; the exact column titles
@@ -33,6 +34,26 @@ pd = lazy_module("pandas")
 MAX_ABS_DEVIATION_MM = 1e6     # larger deviations are not measurements (and overflow the statistics)
 UP = {"+", "up", "u", "positive", "pos", "↑"}
 DOWN = {"-", "down", "d", "negative", "neg", "↓"}
+
+
+#: column words of wide laser exports that name the run order (the first and second run of a pair), not the axis
+#: direction: what a forward run is depends on where the test started
+RUN_ORDER_TAGS = {"fwd": "forward", "forward": "forward", "hin": "forward",
+                  "rev": "reverse", "reverse": "reverse", "rück": "reverse", "rueck": "reverse"}
+
+
+class RunOrderNote(UserWarning):
+    """How a wide export's Forward/Reverse (Hin/Rück) runs were mapped to the ISO 230-2 directions ↑/↓ (by the
+    order of the targets in the file); ``forward`` is '+', '-' or None (order ambiguous, read as '+')."""
+
+    def __init__(self, message: str, forward: str | None = None):
+        super().__init__(message)
+        self.forward = forward
+
+
+def swap_directions(data: "PositioningData") -> "PositioningData":
+    """The test with its ↑ and ↓ runs exchanged (a run-order mapping corrected by the user)."""
+    return PositioningData(targets=data.targets, up=data.down, down=data.up, unit=data.unit)
 
 
 @dataclass(frozen=True)

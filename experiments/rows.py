@@ -36,15 +36,51 @@ def source_of(spec: dict) -> str:
     return spec.get("source") or spec["generator"]
 
 
+class DataSourceError(Exception):
+    """A data source gave data that break its contract (points that are not an (N, 2) array of finite real numbers):
+    the source is at fault, not the methods, so its rows are 'error' naming the data set and the source (a method's
+    'skipped' means the method refused good data)."""
+
+
 def load_data(spec: dict, seed: int, stream: list[int]):
     """Data and truth of a data set spec, from its registered source (random sources draw from the
-    spec's own seed stream)."""
+    spec's own seed stream); points are checked once here (:func:`points_problem`), :class:`DataSourceError` if bad."""
+    name = source_of(spec)
+    source = sources.get_source(name)
     if "published" in spec:
-        return sources.get_source("published").load(None, name=spec["published"], variant=spec.get("variant"))
-    if "file" in spec:
-        return sources.get_source("file").load(None, path=spec["file"], truth=spec.get("truth"), **spec.get("read", {}))
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=tuple(stream)))
-    return sources.get_source(source_of(spec)).load(rng, **spec["params"])
+        data, truth = source.load(None, name=spec["published"], variant=spec.get("variant"))
+    elif "file" in spec:
+        data, truth = source.load(None, path=spec["file"], truth=spec.get("truth"), **spec.get("read", {}))
+    else:
+        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=tuple(stream)))
+        data, truth = source.load(rng, **spec["params"])
+    if source.gives is np.ndarray or (source.gives is None and isinstance(data, np.ndarray)):
+        problem = points_problem(data)
+        if problem:
+            raise DataSourceError(f"data set {spec.get('label', name)!r} (source {name!r}) {problem}; the data "
+                                  f"source is at fault, not the methods")
+    return data, truth
+
+
+def points_problem(data) -> str | None:
+    """What is wrong with the points a data source gave (the contract of ``gives=numpy.ndarray``, and of an undeclared
+    source giving an array: an (N, 2) array of finite real numbers, N >= 1), or None. One pass over the points."""
+    if not isinstance(data, np.ndarray):
+        return f"gave a {type(data).__name__}, not an (N, 2) numpy array of points"
+    if data.dtype.kind not in "fiu":
+        return f"gave points of dtype {data.dtype}, not real numbers"
+    if data.ndim != 2 or data.shape[1] != 2:
+        return f"gave points of shape {data.shape}, not an (N, 2) array of x, y"
+    if not len(data):
+        return "gave no points"
+    if data.dtype.kind == "f":
+        with np.errstate(over="ignore", invalid="ignore"):
+            total = data.sum()
+        if not np.isfinite(total):   # one cheap sweep; the elementwise test only when it fails
+            bad = np.flatnonzero(~np.isfinite(data).all(axis=1))
+            if bad.size:
+                return f"gave {bad.size} of {len(data)} points with NaN or inf (first at index {bad[0]})"
+    return None
 
 
 _COLUMNS_OF: dict = {}

@@ -7,9 +7,10 @@ The table (``compensation_table``) is one equally spaced grid for every format:
   its first point is at or before the first target, its last point at or after the last target. Without
   ``interval`` the step is chosen so that the longer side of the travel from R is a whole number of steps
   (within 0.001 mm, the step being a multiple of 0.001 mm, no coarser than the smallest target spacing);
-  with ``interval`` the table goes on to the first grid point at or beyond each end. Beyond the targets
-  the values come from the model (``source='model'``) or are held at the end targets' means
-  (``source='mean'``); the header of every file says what range it covers and how far it was extended.
+  with ``interval`` the table goes on to the first grid point at or beyond each end, and must reproduce the
+  curve at the targets as the controller interpolates it (``_check_represents``: a coarser step is refused).
+  Beyond the targets the values are held at those of the end targets (the model is never extrapolated); the
+  header of every file says what range it covers and how far it was extended.
 * values are the mean bidirectional deviation x(P) (ISO 230-2: deviation = reached - target; the mean of
   the up and down curves, from the GLS polynomials or linearly interpolated between the mean deviations
   at the targets) **relative to its value at R**, so that every format holds 0 at the reference point
@@ -116,15 +117,12 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     pos_q = ref_q + step_q * np.arange(k_lo, k_hi + 1, dtype=np.int64)
     pos = pos_q * NM
     dirs = data.directions
-    curves = {}
-    for d in dirs:
-        if source == "model":
-            curves[d] = evaluate_band(res.polynomial[d], pos)[0]
-        else:
-            curves[d] = np.interp(pos, P, res.per_target[f"mean_{d}"])
+    curves = _curves(res, data, source, pos)
     up = curves.get("up", np.full_like(pos, np.nan))
     down = curves.get("down", np.full_like(pos, np.nan))
     mean = np.mean([curves[d] for d in dirs], axis=0)
+    if interval is not None:
+        _check_represents(res, data, source, pos, mean, step_q * NM, ref_q, lo_q, hi_q)
     at_ref = float(mean[-k_lo])
     table = pd.DataFrame({"position_mm": pos, "deviation_mm": mean, "deviation_up_mm": up,
                           "deviation_down_mm": down, "compensation_mm": -(mean - at_ref)})
@@ -135,6 +133,63 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     return table
 
 
+#: a table given by --interval must reproduce the curve at the targets, interpolated linearly between its points
+#: as the SINUMERIK does, within this share of the curve's span (or REPRESENT_FLOOR_MM): the default table does
+REPRESENT_SHARE = 0.1
+REPRESENT_FLOOR_MM = 0.0005
+
+
+def _curves(res, data, source: str, pos) -> dict:
+    """{direction: deviation at ``pos``} from the model or the means at the targets, never extrapolated: beyond
+    the first / last target the value there is held (a cubic extrapolated 4.6 m gave 7.4 mm)."""
+    P = np.asarray(data.targets, float)
+    x = np.clip(pos, P[0], P[-1])
+    if source == "model":
+        return {d: evaluate_band(res.polynomial[d], x)[0] for d in data.directions}
+    return {d: np.interp(x, P, res.per_target[f"mean_{d}"]) for d in data.directions}
+
+
+def _miss(res, data, source: str, pos, mean) -> tuple[float, float]:
+    """(largest miss at the targets of the table interpolated linearly between its points, the span of the
+    curve there), mm."""
+    P = np.asarray(data.targets, float)
+    curves = _curves(res, data, source, P)
+    truth = np.mean([curves[d] for d in data.directions], axis=0)
+    return float(np.max(np.abs(np.interp(P, pos, mean) - truth))), float(np.ptp(truth))
+
+
+def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q) -> None:
+    """Refuse an ``--interval`` whose table, as the controller interpolates it, misses the measured curve at the
+    targets by more than REPRESENT_SHARE of its span (a coarse step: --interval 700 left 15.6 of 22.6 µm),
+    naming the coarsest step of the form travel / k that would do."""
+    P = np.asarray(data.targets, float)
+    miss, span = _miss(res, data, source, pos, mean)
+    tol = max(REPRESENT_SHARE * span, REPRESENT_FLOOR_MM)
+    travel = float(P[-1] - P[0])
+    if miss <= tol and step <= travel:
+        return
+    spacing = np.diff(P)
+    ok = None
+    for k in range(1, 4 * P.size + 1):        # candidate steps, coarse to fine (a few dozen tables of few points)
+        q = int(travel / k / NM) // AUTO_QUANTUM * AUTO_QUANTUM
+        if q <= 0 or q * NM >= step:
+            continue
+        grid_q = ref_q + q * np.arange(-_ceil_div(ref_q - lo_q, q), _ceil_div(hi_q - ref_q, q) + 1, dtype=np.int64)
+        g = grid_q * NM
+        m = np.mean(list(_curves(res, data, source, g).values()), axis=0)
+        if _miss(res, data, source, g, m)[0] <= tol:
+            ok = q * NM
+            break
+    what = "the model" if source == "model" else "the means"
+    why = (f"longer than the measured travel ({travel:g} mm)" if step > travel else
+           f"too coarse: the table, interpolated between its points as the controller does, misses {what} at the "
+           f"targets by up to {miss * 1e3:.3g} µm of the {span * 1e3:.3g} µm the curve spans (at most "
+           f"{tol * 1e3:.3g} µm, {REPRESENT_SHARE:.0%})")
+    advice = (f"give --interval {ok:g} or finer" if ok else "give a finer --interval")
+    raise CompensationError(f"--interval {step:g} mm is {why}; {advice} (the targets are {spacing.min():g} to "
+                            f"{spacing.max():g} mm apart), or leave it out for a table at the target spacing")
+
+
 # --------------------------------------------------------------------------------------------- header
 def _header(table, axis: str, values: str) -> list[str]:
     """The lines every format carries (ASCII, without the comment mark): what the table covers, the
@@ -143,7 +198,8 @@ def _header(table, axis: str, values: str) -> list[str]:
     first, last = a["measured_mm"]
     lo, hi = a["first_q"] * NM, a["last_q"] * NM
     ext = (f"values beyond the targets, {first - lo:.6g} mm before the first and {hi - last:.6g} mm after the last, "
-           + ("from the model" if a["source"] == "model" else "held at the end targets' means")
+           + ("held at the model's values at the end targets" if a["source"] == "model"
+              else "held at the end targets' means")
            if (lo < first - 1e-9 or hi > last + 1e-9) else "no point beyond the targets")
     what = ("mean bidirectional deviation" if len(a["directions"]) == 2
             else f"deviation of the one direction measured, {a['directions'][0]},")

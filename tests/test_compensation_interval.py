@@ -1,0 +1,75 @@
+"""``--interval`` of a compensation table: the table covers the measured travel, never extrapolates the model
+beyond it, and an interval too coarse to represent the measured curve (or longer than the travel) is refused,
+naming one that does. Before: --interval 5000 on a -400..600 mm axis wrote -5000, 0, 5000 mm holding the cubic
+extrapolated 4.4 m (7.47 mm), exit 0; --interval 700 left 15.6 of 22.6 µm in the simulated controller."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+import methods
+from compensation_controllers import READERS, remeasure
+from datasets.positioning import axis_test, to_frame
+from fitbench.compensation import REPRESENT_SHARE, WRITERS, CompensationError, compensation_table
+from methods.positioning.model import evaluate_band
+from test_cli_inputs import cli, one_error_line
+
+KW = {"travel": (-400.0, 600.0), "pitch": (0.0, 0.060, -0.090, 0.045), "reversal": -0.004, "repeatability": 0.0004,
+      "irregular": 0.3}
+
+
+def axis(seed=4):
+    data, truth = axis_test(rng=np.random.default_rng(seed), **KW)
+    return data, truth, methods.fit("positioning.gls_polynomial", data)
+
+
+@pytest.mark.parametrize("interval, why", [("5000", "longer than the measured travel (1000 mm)"),
+                                           ("700", "too coarse")])
+@pytest.mark.parametrize("fmt", list(WRITERS))
+def test_a_coarse_interval_writes_nothing_and_names_one_that_works(tmp_path, interval, why, fmt):
+    data, truth, res = axis()
+    to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
+    out = cli("positioning", tmp_path / "a.csv", "--interval", interval, "--compensation", fmt, tmp_path / "t.txt")
+    one_error_line(out, f"--interval {interval} mm is {why}", "or finer", "leave it out")
+    assert not (tmp_path / "t.txt").exists()
+    ok = float(re.search(r"give --interval (\S+) or finer", out.stderr).group(1))
+    assert ok < 1000.0
+    # the interval the message names works, and the controller applying it halves the error
+    good = cli("positioning", tmp_path / "a.csv", "--interval", ok, "--compensation", fmt, tmp_path / "t.txt")
+    assert good.returncode == 0, good.stderr
+    before = methods.fit("positioning.iso230_2", data).figures
+    encoder, _ = READERS[fmt]((tmp_path / "t.txt").read_text())
+    after = methods.fit("positioning.iso230_2", remeasure(data, truth, encoder, np.random.default_rng(9))).figures
+    assert after["M"] <= 0.5 * before["M"], (before["M"], after["M"])
+
+
+@pytest.mark.parametrize("source", ["model", "mean"])
+def test_values_beyond_the_targets_are_the_end_targets_values(source):
+    """A table reaching a step beyond the travel holds the end targets' values there (the model is never
+    extrapolated), and every table it passes reproduces the curve at the targets within the bound."""
+    data, _, res = axis()
+    res_iso = methods.fit("positioning.iso230_2", data) if source == "mean" else res
+    t = compensation_table(res_iso, data, interval=70.0, source=source)   # -420 ... 630 mm
+    P = data.targets
+    assert t.position_mm.iloc[0] < P[0] and t.position_mm.iloc[-1] > P[-1]       # covers the travel, beyond it
+    if source == "model":
+        ends = np.mean([evaluate_band(res.polynomial[d], P[[0, -1]])[0] for d in ("up", "down")], axis=0)
+    else:
+        ends = res_iso.per_target["mean_bidirectional"][[0, -1]]
+    before, after = t.position_mm < P[0], t.position_mm > P[-1]
+    np.testing.assert_allclose(t.deviation_mm[before], ends[0], atol=1e-15)
+    np.testing.assert_allclose(t.deviation_mm[after], ends[-1], atol=1e-15)
+    assert "held at" in WRITERS["csv"](t)
+
+
+def test_the_bound_is_what_the_refusal_says():
+    """The refusal's figures: the miss at the targets of the table interpolated linearly, against
+    REPRESENT_SHARE of the curve's span."""
+    data, _, res = axis()
+    with pytest.raises(CompensationError) as err:
+        compensation_table(res, data, interval=700.0)
+    miss, span, tol = (float(v) for v in re.search(r"by up to (\S+) µm of the (\S+) µm the curve spans \(at most (\S+) µm",
+                                                   str(err.value)).groups())
+    assert miss > tol == pytest.approx(REPRESENT_SHARE * span, rel=2e-3)

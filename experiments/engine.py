@@ -477,9 +477,10 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     used = set()
     keys = hashlib.sha256((outputs or "").encode())
     to_run = bytearray()  # one flag per task, in task order
+    look_up = not force and not store.empty()
     for block in _blocks(make(), 2000):
         block_keys = [t["key"] for t in block]
-        status = {} if force else store.done(block_keys)
+        status = store.done(block_keys) if look_up else {}
         counts["tasks"] += len(block)
         keys.update("".join(k + "\n" for k in block_keys).encode())
         seen = {}  # (method, data set spec) pairs of the block: their source is looked up once

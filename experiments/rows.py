@@ -358,14 +358,17 @@ def _generic_rows(tasks: list[dict], first: int, progress) -> list[dict]:
             except BaseException as exc:
                 got = _failure(task, exc)
             if got is not last and type(got) is tuple:
-                size += sum(getattr(x, "nbytes", 0) for x in got)
+                size += getattr(got[0], "nbytes", 0)  # the points (the truth is a few numbers)
                 last = got
             batch.append(task)
             data.append(got)
             if size >= BATCH_BYTES:
                 break
         fits = [None] * len(batch)
-        for i in sorted(range(len(batch)), key=lambda i: batch[i]["method"]):  # 2. the fits, a method's together
+        order = range(len(batch))
+        if len({task["method"] for task in batch}) > 1:
+            order = sorted(order, key=lambda i: batch[i]["method"])
+        for i in order:  # 2. the fits, a method's together
             task, got = batch[i], data[i]
             if type(got) is not tuple:
                 fits[i] = (None, got)

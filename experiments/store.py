@@ -123,6 +123,10 @@ class RowStore:
                 raise
             raise _io_error(self.path, exc) from None
 
+    def empty(self) -> bool:
+        """Whether the store holds no row (a new one: nothing to look up)."""
+        return self._guard(lambda: self.db.execute("SELECT 1 FROM rows LIMIT 1").fetchone()) is None
+
     def done(self, keys: list[str]) -> dict[str, str]:
         """Status of the stored rows among ``keys``."""
         out = {}

@@ -959,6 +959,8 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
     v = next((roles.index(r) for r in ("deviation", "radius") if r in roles), None)
     if a is not None and v is not None:
         return Resolved("polar", [a, v], roles[v], d_col)
+    if "x" in roles and "y" in roles and "z" in roles:
+        raise DataFileError(_which_plane(layout, [roles.index(c) for c in "xyz"]))
     if "x" in roles and "y" in roles:
         return Resolved("xy", [roles.index("x"), roles.index("y")], None, d_col)
     if a is not None:
@@ -973,6 +975,28 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
         return Resolved("xy", others, None, d_col)
     raise DataFileError(f"{name}: which two columns? the header has {', '.join(layout.header)}; "
                         f"give --columns NAME NAME or --plane xy|yz|zx{skip_rows_hint(layout)}")
+
+
+def _which_plane(layout: Layout, idx: list) -> str:
+    """The refusal of a file with x, y and z columns and no choice: a CMM, tracker or 3-D ballbar export of a
+    circle in any plane. Names the columns, the spread of each in the first data lines (:attr:`Layout.sample`)
+    and the ``--plane`` of the two that spread most; reading x, y of a ZX-plane circle gave a 3.77 km radius."""
+    names = ", ".join(layout.header[k] for k in idx)
+    hint = ""
+    rows = [_split(ln.split(layout.comment, 1)[0].strip(), layout.sep) for _, ln in layout.sample]
+    try:
+        vals = np.array([[_field_number(r[k], layout.decimal_comma) for k in idx] for r in rows if len(r) == layout.ncol],
+                        dtype=float)
+    except (ValueError, IndexError, InvalidInputError):
+        vals = np.empty((0, 3))
+    if len(vals) >= 3 and np.isfinite(vals).all():
+        spread = np.ptp(vals, axis=0)
+        flat = int(np.argmin(spread))
+        plane = {0: "yz", 1: "zx", 2: "xy"}[flat]
+        hint = (f"; in its first {len(vals)} data lines {', '.join(f'{c} spans {v:.6g}' for c, v in zip('xyz', spread))}"
+                f" (the file's unit): the points lie in the {plane.upper()} plane, give --plane {plane}")
+    return (f"{layout.name}: the header has three coordinate columns ({names}); which plane is the circle in? give "
+            f"--plane xy|yz|zx or --columns A B (fitbench does not guess){hint}")
 
 
 #: a label a data row may carry beside its numbers (a direction or run column: CW, ccw, +, up, run1, G02)
@@ -1193,7 +1217,7 @@ def read_profile(path, *, columns=None, plane=None, unit: str | None = None, ski
     return got
 
 
-def points_unit(path, columns=("x", "y"), *, plane: str | None = None, unit: str | None = None,
+def points_unit(path, columns=None, *, plane: str | None = None, unit: str | None = None,
                 skip_rows: int = 0) -> str:
     """The length unit :func:`read_points` reads ``path`` in (the header's, ``unit``, or mm)."""
     layout = sniff(path, skip_rows)
@@ -1209,14 +1233,15 @@ def _xy(layout: Layout, columns, plane) -> Resolved:
     return res
 
 
-def read_points(path, columns=("x", "y"), *, plane: str | None = None, unit: str | None = None,
+def read_points(path, columns=None, *, plane: str | None = None, unit: str | None = None,
                 skip_rows: int = 0) -> np.ndarray:
     """Read an (N, 2) float array of x, y (mm) from a text file.
 
     ``columns``: two header names (case and spaces ignored; units in the header allowed) or 0-based
-    indices; ``plane`` ('xy', 'yz', 'zx') picks the named columns of that plane. Without a header the file
-    must have exactly two columns (or ``columns`` as indices); with a header lacking the names, the first
-    two columns are used only when the file has exactly two, else the error lists the columns. A file whose
+    indices (default: x, y from the header); ``plane`` ('xy', 'yz', 'zx') picks the named columns of that plane.
+    Without a header the file must have exactly two columns (or ``columns`` as indices); with a header lacking
+    the names, the first two columns are used only when the file has exactly two, else the error lists the
+    columns; a header naming x, y and z needs ``plane`` or ``columns`` (:func:`_which_plane`). A file whose
     header names an angle is refused (it is not x, y; :func:`read_profile` reads it). ``unit``: the file's
     length unit (default: the header's, else mm; a contradiction with the header is an error)."""
     layout = sniff(path, skip_rows)

@@ -88,3 +88,43 @@ def test_reader_api_flags_the_assumed_unit(tmp_path):
         got = read_profile(p)
     assert got.unit == "mm" and got.unit_assumed
     assert not read_profile(p, unit="um").unit_assumed
+
+
+# ------------------------------------------------------------------------ three coordinate columns
+def zx_circle(path, rng, sign=1.0):
+    """A R 150 mm circle in the ZX plane written with all three coordinates (y = 25 mm within instrument noise),
+    as a CMM / tracker export of a vertical-plane test writes it."""
+    t = sign * np.arange(720) * 2 * np.pi / 720
+    x, z = 150 * np.sin(t), 150 * np.cos(t) + 0.005 * np.cos(2 * t)
+    y = 25 + rng.normal(0, 1e-4, t.size)
+    path.write_text("x,y,z\n" + "\n".join(f"{a:.6f},{b:.6f},{c:.6f}" for a, b, c in zip(x, y, z)) + "\n")
+    return path
+
+
+def test_xyz_file_is_never_read_as_xy_without_a_choice(tmp_path, rng):
+    from datasets.io import DataFileError, read_points, read_profile
+    ccw, cw = zx_circle(tmp_path / "zx_ccw.csv", rng), zx_circle(tmp_path / "zx_cw.csv", rng, -1.0)
+    for got in (cli("fit", "circle.gauss_newton", ccw), cli("roundness", ccw),
+                cli("circular-test", cw, ccw, "--nominal-radius", 150), cli("magnify", cw, ccw, "--eta", 10)):
+        assert got.returncode == 2 and "Traceback" not in got.stderr, (got.stdout, got.stderr)
+        err = got.stderr.strip().splitlines()
+        assert len(err) == 1 and "three coordinate columns (x, y, z)" in err[0] and "give --plane zx" in err[0], err
+    for read in (read_points, read_profile):
+        with pytest.raises(DataFileError, match="three coordinate columns"):
+            read(ccw)
+    # the user's choice is read as given: the ZX circle is the circle
+    d = json.loads(cli("fit", "circle.gauss_newton", ccw, "--plane", "zx", "--json").stdout)
+    assert d["radius"] == pytest.approx(150.0, abs=1e-3)
+    assert read_points(ccw, ("z", "x")).shape == (720, 2)
+
+
+def test_two_columns_that_are_not_the_plane_are_named_not_blamed_on_the_unit(tmp_path, rng):
+    ccw, cw = zx_circle(tmp_path / "zx_ccw.csv", rng), zx_circle(tmp_path / "zx_cw.csv", rng, -1.0)
+    for got in (cli("roundness", ccw, "--columns", "x", "y"),
+                cli("circular-test", cw, ccw, "--nominal-radius", 150, "--columns", "x", "y")):
+        assert got.returncode == 2, got.stderr
+        err = got.stderr.strip().splitlines()[-1]
+        assert "lie on a straight line" in err and "--plane" in err, err
+        assert "µm" not in err and "same polar angle" not in err
+    fit = cli("fit", "circle.gauss_newton", ccw, "--columns", "x", "y")
+    assert re.search(r"warning: .*lie on a straight line", fit.stderr), fit.stderr

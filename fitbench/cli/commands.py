@@ -264,6 +264,10 @@ def _read_circular_runs(args):
     if len(args.files) > 2:
         raise InvalidInputError(f"give one file holding both runs or two files (CW then CCW), got {len(args.files)}")
     files = [read_runs(f, **kw) for f in args.files]
+    for f in files:   # two columns that are not the circle's plane: said before any radius or unit is blamed
+        for _, pts in f.runs:
+            if (flat := cli_options.flat_points(pts, f.axes)) is not None:
+                raise InvalidInputError(f"{f.source}: {flat}")
     if len(files) == 2:
         for f in files:
             if len(f.runs) != 1:
@@ -651,7 +655,7 @@ def cmd_magnify(args) -> int:
 
     eta = finite("--eta", args.eta, positive=True, allow_none=False)
     plot_path = check_plot_path(args.plot)
-    cols = tuple(args.columns) if args.columns else ("x", "y")
+    cols = tuple(args.columns) if args.columns else None   # x, y from the header (x, y, z: --plane or --columns)
     from datasets.io import points_unit
     units = {points_unit(f, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows)
              for f in (args.reference, args.measured)}

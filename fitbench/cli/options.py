@@ -210,11 +210,35 @@ PROFILE_LIMIT_MM = 5000.0
 ROUNDNESS_LIMIT_MM = 1000.0
 
 
-def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM):
+#: points whose smaller principal extent is below this fraction of the larger lie on a line for a circle's
+#: purposes (an arc under about 0.5°): the two columns read are not the circle's plane
+FLAT_RATIO = 1e-3
+
+
+def flat_points(points, axes=("x", "y")) -> str | None:
+    """What is wrong when ``points`` (N, 2, mm) lie on a straight line to :data:`FLAT_RATIO` of their extent: the
+    two columns read are likely not the plane of the circle (x, y of a ZX-plane circle: its y is constant, and
+    the fits then gave a 3.77 km radius, 'two points at the same polar angle' or 'is the file in µm?'); None
+    otherwise."""
+    p = np.asarray(points, dtype=float)
+    if p.ndim != 2 or p.shape[0] < 3 or not np.isfinite(p).all():
+        return None
+    q = p - p.mean(axis=0)
+    _, _, vt = np.linalg.svd(q, full_matrices=False)
+    extent = np.ptp(q @ vt.T, axis=0)
+    if not (extent[0] > 0 and extent[1] <= FLAT_RATIO * extent[0]):
+        return None
+    return (f"the points read as ({axes[0]}, {axes[1]}) lie on a straight line to within {extent[1]:.3g} mm over "
+            f"{extent[0]:.6g} mm: no circle in these two columns; if the file holds another coordinate the circle "
+            "is in another plane (give --plane or --columns)")
+
+
+def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: bool = False):
     """(source, points in mm, length unit used, notes, names of the two coordinates) of ``fit`` and ``roundness``: a file in any instrument
     layout (x, y or angle + radial deviation, :func:`datasets.io.read_profile`) or a published data set's
     name; sizes implausible for the unit are warned about, naming the likely unit (profile half-widths above
-    ``limit_mm``: :data:`PROFILE_LIMIT_MM`, or :data:`ROUNDNESS_LIMIT_MM` for ``roundness``)."""
+    ``limit_mm``: :data:`PROFILE_LIMIT_MM`, or :data:`ROUNDNESS_LIMIT_MM` for ``roundness``); points on a straight
+    line (:func:`flat_points`) are warned about, or refused with ``refuse_flat``."""
     from datasets import points_from
     from datasets.io import read_profile
     nominal = finite("--nominal-radius", getattr(args, "nominal_radius", None), positive=True)
@@ -228,6 +252,10 @@ def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM):
         (source, points), unit, notes, polar_alone, axes = points_from(args.file), "mm", [], False, ("x", "y")
         got = None
     points = np.asarray(points, dtype=float)
+    if (flat := flat_points(points, axes)) is not None:
+        if refuse_flat:
+            raise InvalidInputError(f"{source}: {flat}")
+        warn(f"{source}: {flat}")
     if points.ndim == 2 and points.shape[0] and np.isfinite(points).all():
         if polar_alone:
             span = float(np.ptp(np.hypot(*(points - points.mean(axis=0)).T)))

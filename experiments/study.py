@@ -303,7 +303,7 @@ def lines(df, ax, *, x, y, by=None, aggregate="mean", logx=False, logy=False, xl
     groups = df.groupby(by, sort=False) if by else [(y, df)]
     for label, g in groups:
         s = _aggregate(g, x, y, aggregate).sort_index()
-        ax.plot(s.index, s.values, marker="o", ms=3, label=str(label))
+        ax.plot(s.index, s.values, marker="o", ms=3, label=_legend(by, label))
     ax.set_xscale("log" if logx else "linear")
     ax.set_yscale("log" if logy else "linear")
     ax.set_xlabel(xlabel or x)
@@ -312,12 +312,20 @@ def lines(df, ax, *, x, y, by=None, aggregate="mean", logx=False, logy=False, xl
         ax.legend(fontsize=8, loc="best")
 
 
+def _legend(by, label) -> str:
+    """A line's label: its value of ``by``; of several columns 'circle.kasa, n = 20' (the first column's value, then
+    each other as name = value)."""
+    if isinstance(by, str) or not isinstance(label, tuple):
+        return str(label)
+    return ", ".join(str(v) if i == 0 else f"{readable(c)} = {v}" for i, (c, v) in enumerate(zip(by, label)))
+
+
 @register_plot("bars")
 def bars(df, ax, *, x, y, aggregate="mean", logy=False, xlabel=None, ylabel=None):
     """One bar per value of ``x``: ``aggregate`` of ``y``."""
     s = _aggregate(df, x, y, aggregate)
     ax.bar(range(len(s)), s.values)
-    ax.set_xticks(range(len(s)), [str(v) for v in s.index], rotation=30, ha="right", fontsize=8)
+    ax.set_xticks(range(len(s)), [_legend(x, v) for v in s.index], rotation=30, ha="right", fontsize=8)
     ax.set_yscale("log" if logy else "linear")
     ax.set_xlabel(xlabel or x)
     ax.set_ylabel(ylabel or f"{aggregate} of {y}")
@@ -836,10 +844,54 @@ def analyse(study: Study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tup
     return findings, analysis
 
 
+#: data sources whose lengths are in mm (published coordinates, files read into mm, the machine-tool simulators); a
+#: generator's lengths are in the unit of its own parameters (a radius of 1 is a unit circle), a plugin's are unknown
+MM_SOURCES = frozenset({"published", "file", "circular_test", "positioning", "contouring", "multilateration"})
+#: the unit a default table or figure gives a length whose unit the study does not declare (``length_unit``)
+DATA_UNITS = "data units"
+
+
+def _length_unit(cfg: dict, metric: str) -> tuple[str, str]:
+    """(the unit of ``metric`` in a default table or figure, a sentence for the caption or ''). A length is in the
+    study's declared ``length_unit``, else in mm when every data set comes from a source whose lengths are mm
+    (:data:`MM_SOURCES`), else in the data's own unit (:data:`DATA_UNITS`), which the caption says how to name."""
+    from experiments.summary import length_unit
+    unit = column_unit(metric)
+    if unit not in _LENGTH_UNITS:
+        return unit, ""
+    declared = length_unit(cfg)
+    if declared:
+        return declared, ""
+    used = {"published" if "published" in d else "file" if "file" in d else d.get("source") or d.get("generator")
+            for d in cfg.get("datasets") or []}
+    if used and used <= MM_SOURCES:
+        return unit, ""
+    return DATA_UNITS, (" Lengths are in the unit of the data (a generator's are those of its radius and noise); "
+                        "length_unit in the study's TOML names it.")
+
+
+def _varying(df: pd.DataFrame) -> tuple[list[str], list[str]]:
+    """(the numeric data parameters that vary, in the rows' order; every other varying grouping key: a text data
+    parameter, the method's params, the data set)."""
+    numeric, other = [], []
+    for c in df.columns:
+        if c.startswith("data_") and c != "data_stream" and df[c].nunique() > 1:
+            (numeric if pd.api.types.is_numeric_dtype(df[c]) else other).append(c)
+    other += [c for c in ("params", "dataset") if c in df and df[c].nunique() > 1]
+    return numeric, other
+
+
+def _and(words: list[str]) -> str:
+    """'a', 'a and b', 'a, b and c'."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+
+
 def default_declarations(cfg: dict, df: pd.DataFrame) -> tuple[dict | None, dict | None]:
     """The table and figure of a study that declares none, chosen from its metrics: the first error against the
     truth its rows have (RMSE), else the form error (median); per method, against the first data parameter that
-    varies (else per data set). Units come from the metric declarations (``methods.results``)."""
+    varies (else per data set), and per value of every other parameter that varies (nothing pooled silently: a
+    table row and a figure line each). Units come from the metric declarations (``methods.results``); a length is in
+    the study's ``length_unit``, else mm for the machine-tool data, else the data's own unit (:func:`_length_unit`)."""
     ok = (df["status"] == "ok").to_numpy() if "status" in df else slice(None)  # a mask: no copy of the rows
     errors = results.truth_error_columns()
     metric = next((c for c in (*errors, "form_error")
@@ -848,23 +900,27 @@ def default_declarations(cfg: dict, df: pd.DataFrame) -> tuple[dict | None, dict
     if metric is None:
         return None, None
     how = "rmse" if metric in errors else "median"
-    unit = column_unit(metric)
-    varying = [c for c in df.columns if c.startswith("data_") and c != "data_stream"
-               and pd.api.types.is_numeric_dtype(df[c]) and df[c].nunique() > 1]
-    across = varying[0] if varying else ("dataset" if df["dataset"].nunique() > 1 else None)
-    rows = ["method"] + (["params"] if "params" in df and df["params"].nunique() > 1 else [])
+    unit, unit_note = _length_unit(cfg, metric)
+    numeric, other = _varying(df)
+    across = numeric[0] if numeric else ("dataset" if "dataset" in other else None)
+    keys = [c for c in (*numeric[1:], *other) if c != across]   # every other varying parameter: its own rows
+    rows = ["method"] + keys
     what = _aggregate_words(how, metric)
     shown = f"{what} [{unit}]" if unit else what
     n_ok = len(df) if isinstance(ok, slice) else int(ok.sum())
     over = f"{len(df)} rows" if n_ok == len(df) else f"the {n_ok} ok rows of {len(df)}"  # the others are not in it
-    table = {"caption": f"{what} per method{f' and {across}' if across else ''} over {over} of "
-                        f"{cfg['name']} (the default table of a study that declares none)",
+    per = _and([readable(c) for c in (*rows, *([across] if across else []))])
+    table = {"caption": f"{what} per {per} over {over} of {cfg['name']} (the default table of a study that declares "
+                        f"none).{unit_note}",
              "rows": rows, "values": metric, "aggregate": how, "unit": unit, "digits": 4, "colour": "lower_is_better",
              **({"columns": across} if across else {})}
-    if varying:
-        figure = {"plot": "lines", "x": varying[0], "y": metric, "by": "method", "aggregate": how,
-                  "caption": f"{shown} against {readable(varying[0])}, one line per method"}
+    by = ["method", *keys] if keys else "method"
+    lines_of = "one line per " + _and([readable(c) for c in ("method", *keys)])
+    if numeric:
+        figure = {"plot": "lines", "x": numeric[0], "y": metric, "by": by, "aggregate": how, "ylabel": shown,
+                  "caption": f"{shown} against {readable(numeric[0])}, {lines_of}.{unit_note}"}
     else:
-        figure = {"plot": "bars", "x": "method", "y": metric, "aggregate": how,
-                  "caption": f"{shown} per method over all data sets"}
+        figure = {"plot": "bars", "x": by, "y": metric, "aggregate": how, "ylabel": shown,
+                  **({} if isinstance(by, str) else {"xlabel": ", ".join(readable(c) for c in by)}),
+                  "caption": f"{shown} per {_and([readable(c) for c in rows])}.{unit_note}"}
     return table, figure

@@ -125,7 +125,11 @@ def test_an_undeclared_toml_study_gets_a_table_and_a_figure_with_units(tmp_path)
     _, analysis = contract.analyse(study, rows_of_a_toml_only_study(), cfg, tmp_path, log=lambda *a: None)
     assert len(analysis.tables) == 1 and len(analysis.figures) == 1
     table = analysis.tables[0]
-    assert table.unit == "mm" and "center error" in table.caption and "center_error" not in table.caption
+    # a generator's lengths are in the unit of its own parameters: the data's unit, mm only when declared
+    assert table.unit == contract.DATA_UNITS and "center error" in table.caption and "center_error" not in table.caption
+    declared = dict(cfg)
+    declared["length_unit"] = "mm"
+    assert contract.default_declarations(declared, rows_of_a_toml_only_study())[0]["unit"] == "mm"
     # the degree column is a key named with its own unit: the table's mm never labels it
     # and a pivot's column names carry the key's unit, not the table's (read as 'arc 360 °', never 'arc [mm]')
     assert list(table.data.columns) == ["method", "arc = 360 °", "arc = 90 °", "arc = 22.5 °"]

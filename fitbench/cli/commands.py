@@ -159,13 +159,15 @@ def run_method(spec, data, **params):
             return spec(data, **params)
     except InvalidInputError:
         raise
-    except Exception as exc:
+    except (Exception, SystemExit, GeneratorExit) as exc:   # a method's sys.exit() is no success (nor a silent end)
         text = " ".join(str(exc).split()) or "(no message)"
         hint = ("a bug in fitbench: please report it" if spec.builtin else
                 f"an error inside the method (module {spec.module}), not in the data: report it to its author")
         if isinstance(exc, ValueError) and "read-only" in text:
             hint += "; a method gets read-only points and must copy them (points.copy()) before writing"
-        raise MethodFailed(f"{spec.id} failed: {type(exc).__name__}: {text[:300]} ({hint})") from None
+        what = (f"{type(exc).__name__}: {text[:300]}" if isinstance(exc, Exception) else
+                f"it raised {type(exc).__name__}({', '.join(map(repr, exc.args))[:300]})")
+        raise MethodFailed(f"{spec.id} failed: {what} ({hint})") from None
 
 
 def _fmt(v) -> str:

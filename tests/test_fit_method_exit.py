@@ -1,0 +1,38 @@
+"""A method that raises SystemExit (sys.exit() in a plugin) ends `fitbench fit` with one line naming the method and
+a non-zero status, never with nothing printed and exit 0 (a script reading --json got an empty output and success)."""
+import numpy as np
+import pytest
+
+from fitbench.cli.commands import EXIT_METHOD_FAILED, main
+from methods import register
+
+
+@register("circle.test_exit_zero", kind="closed form", summary="raises SystemExit(0) (test)", reference="a test")
+def _exit_zero(points):
+    raise SystemExit(0)
+
+
+@register("circle.test_exit_none", kind="closed form", summary="calls sys.exit() (test)", reference="a test")
+def _exit_none(points):
+    import sys
+    sys.exit()
+
+
+@pytest.fixture
+def circle_file(tmp_path):
+    t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    path = tmp_path / "circle.csv"
+    np.savetxt(path, np.c_[10 + 5 * np.cos(t), -3 + 5 * np.sin(t)], delimiter=",", header="x,y", comments="")
+    return path
+
+
+@pytest.mark.parametrize("method, raised", [("circle.test_exit_zero", "SystemExit(0)"),
+                                            ("circle.test_exit_none", "SystemExit()")])
+@pytest.mark.parametrize("json", [False, True])
+def test_a_method_exiting_is_an_error_naming_it(circle_file, capsys, method, raised, json):
+    code = main(["fit", method, str(circle_file), *(["--json"] if json else [])])
+    out, err = capsys.readouterr()
+    assert code == EXIT_METHOD_FAILED and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and f"{method} failed: it raised {raised}" in lines[0], err
+    assert "Traceback" not in err

@@ -709,6 +709,15 @@ def add_magnify(sub):
 
 
 # ----------------------------------------------------------------------------------------- multilateration
+#: the default method by whether the stations are given: the joint adjustment when they are located from the same
+#: lengths (the two-step schemes are biased by the machine's errors there, docs/multilateration.md), Case A
+#: (eq. 7) with known stations (the joint adjustment is then identical to it, and slower)
+DEFAULT_MULTILATERATION = {False: "joint", True: "case_a_distance"}
+#: the paper's two-step schemes: step 1 fits the stations to the nominal points
+TWO_STEP_MULTILATERATION = tuple(f"multilateration.{m}" for m in ("case_a_distance", "case_a_squared", "case_b_linear",
+                                                                   "case_b_taylor", "case_b_centred"))
+
+
 def cmd_multilaterate(args) -> int:
     from datasets.io import read_multilateration
 
@@ -724,11 +733,22 @@ def cmd_multilaterate(args) -> int:
     args.unit = units["x"] if len(set(units.values())) == 1 else args.unit or "mm"  # the header's, else --unit / mm
     # tracking interferometers measure up to ~15-20 m: longer lengths are a unit mistake
     warn_implausible("measured lengths", float(np.nanmax(data.lengths)), 50_000.0, units["length"], typical_mm=2000.0)
-    method = args.method if "." in args.method else f"multilateration.{args.method}"
+    known = data.known_stations is not None
+    chosen = args.method or (DEFAULT_MULTILATERATION[known])
+    method = chosen if "." in chosen else f"multilateration.{chosen}"
     spec = methods.get(method)
     if spec.family != "multilateration":
         raise InvalidInputError(f"{method} is not a multilateration method; "
                                 f"'python -m methods list --family multilateration' lists them")
+    notes = []
+    if not known:
+        if method in TWO_STEP_MULTILATERATION:
+            warn(f"{method} locates the stations from the nominal points while the lengths go to the actual ones: the "
+                 "stations absorb the machine's errors and the volumetric errors come out biased (docs/multilateration.md: "
+                 "14-22 µm RMS of 32 µm); --method joint adjusts stations and points together, or give --stations")
+        notes.append("stations located from the same lengths: the volumetric errors are determined up to a rigid-body "
+                     "motion, which self-located stations cannot observe (the points are aligned to the nominal ones; "
+                     "a rigid part of the machine's errors does not appear)")
     res = run_method(spec, data, **({"max_iter": args.max_iter} if args.max_iter is not None and "max_iter" in spec.defaults else {}))
     ident = _identify(data, res, args.degree) if args.identify else None
     if ident is not None and args.errors_csv:
@@ -739,6 +759,7 @@ def cmd_multilaterate(args) -> int:
         d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(args.unit), "input_units": units}
         d["nominal_points"] = _jsonable(data.points)
         d["stations_given"] = data.known_stations is not None
+        d["notes"] = notes
         if ident is not None:
             d["geometric_errors"] = {"degree": ident.model.degree, "travel": list(ident.model.travel),
                                      "basis": "coefficient of (axis position / travel)^j; E[XYZ]* and T* in mm, "
@@ -747,12 +768,13 @@ def cmd_multilaterate(args) -> int:
         print(json.dumps(_jsonable(d)))
         return 0 if res.converged else 1
     vol = np.linalg.norm(res.volumetric_errors, axis=1)
-    known = data.known_stations is not None
     mixed = ", ".join(f"{c} {u}" for c, u in units.items() if u != canonical(args.unit))
     print(header_line("multilaterate", args.unit, "; station coordinates in mm" + (f"; header units: {mixed}" if mixed else "")))
     print(f"method       {res.method} ({res.message})")
+    for n in notes:
+        print(f"note: {n}")
     print(f"data         {args.file}: {len(data.stations)} stations, {len(data.points)} points, "
-          f"{int(data.mask.sum())} lengths; stations {'given' if known else 'located (step 1)'}")
+          f"{int(data.mask.sum())} lengths; stations {'given' if known else 'located (step 1)' if method in TWO_STEP_MULTILATERATION else 'located with the points'}")
     print(f"{'station':<10} {'x [mm]':>14} {'y [mm]':>14} {'z [mm]':>14} {'L [mm]':>12}")
     for sid, st in zip(res.station_ids, res.stations):
         print(f"{sid:<10} {st[0]:14.6f} {st[1]:14.6f} {st[2]:14.6f} {st[3]:12.6f}")
@@ -780,8 +802,10 @@ def cmd_multilaterate(args) -> int:
 def add_multilaterate(sub):
     pu = sub.add_parser("multilaterate", help="stations, actual points and volumetric errors from tracking-interferometer lengths")
     pu.add_argument("file", metavar="MEASUREMENTS.csv", help="columns station, x, y, z (nominal point), length")
-    pu.add_argument("--method", default="case_a_distance", metavar="ID",
-                    help="multilateration method id or its short name (default case_a_distance, the paper's eq. 7)")
+    pu.add_argument("--method", default=None, metavar="ID",
+                    help="multilateration method id or its short name (default: joint, stations and points adjusted "
+                         "together, when the stations are located from the data; case_a_distance, the paper's eq. 7, "
+                         "with --stations)")
     pu.add_argument("--stations", metavar="FILE", help="known stations: columns station, x, y, z, L (skips step 1)")
     pu.add_argument("--max-iter", type=int, metavar="N", help="iteration limit of the iterative methods (>= 1)")
     pu.add_argument("--identify", action="store_true",

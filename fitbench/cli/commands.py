@@ -555,6 +555,13 @@ def cmd_positioning(args) -> int:
                         f"{temperature:g} °C, expansion coefficient {alpha:g} µm/(m·K): deviations corrected by "
                         f"{-alpha * (temperature - 20.0):+.4g} µm/m x target position, to 20 °C")
     res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
+    lacks = []
+    if args.standard.startswith("iso230-2"):
+        from methods.positioning.iso230_2 import conformity
+        lacks = conformity(data)
+        if lacks:
+            notes.append(f"not an ISO 230-2 test: {'; '.join(lacks)}; the figures below are computed by its "
+                         "formulas but are not the standard's (not for acceptance)")
     if args.standard != "iso230-2:2014" or len(data.directions) == 1:
         other = methods.fit("positioning.iso230_2", data, standard=args.standard)
         res.figures, res.per_target = other.figures, other.per_target
@@ -596,6 +603,8 @@ def cmd_positioning(args) -> int:
                              for d, p in res.polynomial.items()}
         out["u_delta"] = res.extra["u_delta"]
         out["notes"] = notes
+        if args.standard.startswith("iso230-2"):
+            out["iso230_2_conformity"] = {"meets_minimum": not lacks, "lacks": lacks}
         # the axis as given (--axis; '' if not): fitbench history keeps each machine's axes apart
         out["details"] = {"conditions": test_conditions(args, axis=args.axis or "", files=[str(args.file)])}
         print(json.dumps(_jsonable(out)))

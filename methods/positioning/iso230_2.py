@@ -66,6 +66,34 @@ def _unidirectional(data: PositioningData, standard: str, k: float) -> tuple[dic
     return fig, per
 
 
+#: ISO 230-2 (1997-2014 editions) sec. 5.3.2-5.3.4 as we read them: linear axes up to 2000 mm need at least five
+#: target positions per metre and five overall, each approached five times in each direction; longer axes are
+#: tested by one approach in each direction to targets 250 mm apart on average
+TARGETS_PER_METRE, MIN_TARGETS, MIN_RUNS, LONG_AXIS_MM, LONG_AXIS_INTERVAL_MM = 5, 5, 5, 2000.0, 250.0
+
+
+def conformity(data: PositioningData) -> list[str]:
+    """What a test lacks to be an ISO 230-2 test (an empty list when it has the standard's targets and runs):
+    the figures are still computed by the standard's formulas, but a 2-run s (1 degree of freedom) times
+    k = 2 is not the standard's R, nor 2 targets its E. Travel = last - first target (mm)."""
+    P = np.asarray(data.targets, float)
+    travel = float(P[-1] - P[0])
+    lacks = []
+    if travel <= LONG_AXIS_MM:
+        need = max(MIN_TARGETS, int(np.ceil(TARGETS_PER_METRE * travel / 1000.0 - 1e-9)))
+        if P.size < need:
+            lacks.append(f"{P.size} targets on a {travel:g} mm travel ({need} needed: at least {TARGETS_PER_METRE} "
+                         f"per metre and {MIN_TARGETS} overall)")
+        if data.runs < MIN_RUNS:
+            lacks.append(f"{data.runs} runs per direction ({MIN_RUNS} needed)")
+    else:
+        need = int(np.ceil(travel / LONG_AXIS_INTERVAL_MM - 1e-9)) + 1
+        if P.size < need:
+            lacks.append(f"{P.size} targets on a {travel:g} mm travel ({need} needed: an axis over "
+                         f"{LONG_AXIS_MM:g} mm has targets {LONG_AXIS_INTERVAL_MM:g} mm apart on average)")
+    return lacks
+
+
 @register("positioning.iso230_2", kind="closed form", validator=validate,
           summary="ISO 230-2 positioning figures: A, E, M, R, B per direction (k = 2; 1988 and VDI 3441 options)",
           reference="ISO 230-2:2014 (1997) sec. 2-3; positioning paper (Kureková et al.) sec. 2-3")

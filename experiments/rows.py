@@ -256,7 +256,7 @@ class _time_limit:
 
 def failed_row(task: dict, status: str, message: str) -> dict:
     """The row of a task that produced no result (time-out, crash, ...), with its identity columns."""
-    return {**base_row(task), "status": status, "message": message, "task_index": task.get("index")}
+    return {**base_row(task), "status": status, "message": bounded_message(message), "task_index": task.get("index")}
 
 
 #: the data of the last generic row: (its data set spec, seed, stream, (points, truth))
@@ -307,11 +307,26 @@ def _failure(task: dict, exc: BaseException) -> dict:
     return {**base_row(task), "status": status, "message": f"{type(exc).__name__}: {exc}"}
 
 
+#: the most characters of a row's message that are kept (:func:`bounded_message`): a method's message of a solver's
+#: whole log (10^5 lines) made results.csv unreadable by Python's csv module (fields above 131,072 characters)
+MESSAGE_CHARS = 2000
+
+
+def bounded_message(message):
+    """``message`` cut to its first :data:`MESSAGE_CHARS` characters with a marker saying how long it was."""
+    if type(message) is str and len(message) > MESSAGE_CHARS:
+        return f"{message[:MESSAGE_CHARS]} ... [message cut: {len(message):,} characters in all]"
+    return message
+
+
 def _finished(row: dict, task: dict) -> dict:
-    """A task's row as it is stored: a compiled kernel that was not built is 'unavailable', the task's index,
-    JSON's values (:func:`_plain`)."""
+    """A task's row as it is stored: a compiled kernel that was not built is 'unavailable', the message bounded
+    (:func:`bounded_message`), the task's index, JSON's values (:func:`_plain`)."""
     if row.get("status") == "skipped" and str(row.get("message", "")).startswith(_NOT_BUILT):
         row["status"] = "unavailable"
+    message = row.get("message")
+    if type(message) is str and len(message) > MESSAGE_CHARS:
+        row["message"] = bounded_message(message)
     row["task_index"] = task.get("index")
     return _plain(row)
 

@@ -130,6 +130,34 @@ def once_per_session(tmp_path_factory, name: str, make) -> Path:
     return shared
 
 
+def run_once_per_session(tmp_path_factory, name: str, args, cwd: Path = REPO, **variables) -> Path:
+    """The results folder of ``python -m experiments.run ARGS --out RESULTS`` (in ``cwd``, with
+    :func:`subprocess_env` and ``variables``), run once per test session (:func:`once_per_session`); what the run
+    printed is in ``stdout.txt`` beside that folder. Its users only read it."""
+    def make(folder):
+        proc = subprocess.run([sys.executable, "-m", "experiments.run", *map(str, args), "--out", str(folder / "results")],
+                              cwd=cwd, capture_output=True, text=True, timeout=1800, env=subprocess_env(**variables))
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        (folder / "stdout.txt").write_text(proc.stdout, encoding="utf-8")
+    return once_per_session(tmp_path_factory, name, make) / "results"
+
+
+#: two machines for the reproduction tests: an AVX2 machine (OpenBLAS's Haswell kernels, NumPy's loops limited to AVX2
+#: + FMA) and this CPU's NumPy loops with OpenBLAS's Sandybridge kernels (AVX, no FMA); tests/test_cpu_independence.py
+MACHINES = {
+    "avx2_fma": {"OPENBLAS_CORETYPE": "Haswell", "NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR"},
+    "other_blas": {"OPENBLAS_CORETYPE": "Sandybridge"},
+}
+
+
+def quick_run_on(tmp_path_factory, machine: str) -> Path:
+    """The results folder of ``python -m experiments.run --quick --jobs 2`` from the repository (every default
+    study's quick grid, compared with results/quick, and its report in ``paper/``) on the simulated ``machine`` of
+    :data:`MACHINES`, once per test session (:func:`run_once_per_session`). Its users only read it."""
+    return run_once_per_session(tmp_path_factory, f"quick-{machine}", ["--quick", "--jobs", "2"], cwd=REPO,
+                                OPENBLAS_NUM_THREADS="1", **MACHINES[machine])
+
+
 def quick_study(tmp_path_factory, name: str) -> Path:
     """The folder of the shipped study ``name`` run on its quick grid with one job in this process
     (``run_study(name, OUT, quick=True, jobs=1)``), once per test session (:func:`once_per_session`); read only."""

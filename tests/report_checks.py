@@ -12,11 +12,10 @@ import json
 import re
 import shutil
 import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
-from conftest import once_per_session
+from conftest import REPO, run_once_per_session
 
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync",
@@ -44,15 +43,15 @@ window.addEventListener('load', function () {
 </script>"""
 
 
-def run_once_per_session(tmp_path_factory, name: str, args, cwd: Path) -> Path:
-    """The results folder of ``python -m experiments.run ARGS --out RESULTS``, run once per test session
-    (:func:`conftest.once_per_session`: the pytest-xdist workers whose tests need it share one run). Its users only
-    read it."""
-    def make(folder):
-        proc = subprocess.run([sys.executable, "-m", "experiments.run", *args, "--out", str(folder / "results")],
-                              cwd=cwd, capture_output=True, text=True, timeout=1800)
-        assert proc.returncode == 0, proc.stderr[-2000:]
-    return once_per_session(tmp_path_factory, name, make) / "results"
+#: the studies that declare rankings: the report of their quick run is what tests/test_report_paper.py and
+#: tests/test_explorer.py check
+RANKED_STUDIES = ("published", "noise", "scaling")
+
+
+def ranked_quick_run(tmp_path_factory) -> Path:
+    """The results folder (its report in ``paper/``) of ``python -m experiments.run published noise scaling --quick``,
+    run once per test session for the report and explorer tests; read only."""
+    return run_once_per_session(tmp_path_factory, "ranked-quick", [*RANKED_STUDIES, "--quick"], cwd=REPO)
 
 
 def chromium() -> str | None:

@@ -2,7 +2,8 @@
 network disabled: a method is toggled off in every plot of its ranking, a table is sorted and filtered, a click
 on a problems-map cell draws that problem's fit and residuals; no table, caption or figure of report.html
 reaches past the right edge of a 1280 px window (measured with the DOM's widths; a wide table scrolls inside
-its box). The report is built from a quick run of the ranked studies (published, noise; about half a minute)."""
+its box). The report is that of the quick run of the ranked studies (published, noise, scaling; about half a
+minute) that tests/test_report_paper.py checks too (tests.report_checks.ranked_quick_run: one run for both)."""
 from __future__ import annotations
 
 import json
@@ -16,11 +17,10 @@ import numpy as np
 import pytest
 
 from experiments import report
-from tests.report_checks import chromium, run_once_per_session
+from tests.report_checks import chromium, ranked_quick_run
 
-REPO = Path(__file__).resolve().parents[1]
 needs_chromium = pytest.mark.skipif(chromium() is None, reason="no chromium on PATH (.ci/run installs Debian's chromium)")
-pytestmark = pytest.mark.system   # a quick run of two studies and three Chromium loads: about a minute
+pytestmark = pytest.mark.system   # a quick run of three studies and three Chromium loads: about a minute
 OFFLINE = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking", "--no-first-run",
            "--disable-component-update", "--disable-sync", "--host-resolver-rules=MAP * ~NOTFOUND",
            "--proxy-server=127.0.0.1:9", "--virtual-time-budget=15000"]
@@ -28,9 +28,7 @@ OFFLINE = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
-    results = run_once_per_session(tmp_path_factory, "explorer-quick", ["published", "noise", "--quick", "--jobs", "1"],
-                                   cwd=REPO)
-    return results / "paper"
+    return ranked_quick_run(tmp_path_factory) / "paper"
 
 
 def run_in_chromium(page: Path, script: str, width: int = 1280) -> dict:
@@ -145,7 +143,7 @@ window.addEventListener('load', function () {
 @needs_chromium
 def test_no_table_or_caption_of_the_report_overflows_at_1280_px(built):
     out = run_in_chromium(built / "report.html", OVERFLOW, width=1280)
-    assert out["checked"] > 40 and out["bad"] == [], out["bad"][:5]   # two studies and their rankings
+    assert out["checked"] > 40 and out["bad"] == [], out["bad"][:5]   # three studies and their rankings
     assert out["scroll"] <= out["width"]
 
 

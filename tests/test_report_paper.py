@@ -22,7 +22,7 @@ from experiments import report
 from experiments.render.latex import compile_pdf, standalone_document
 from experiments.render.rankings import collect
 from experiments.render.report_tables import html_table, latex_fragments
-from tests.report_checks import check_html_report, chromium, run_once_per_session
+from tests.report_checks import check_html_report, chromium, ranked_quick_run
 
 pytestmark = pytest.mark.system  # builds the report of a quick run, compiles it with TeX, renders it in Chromium
 
@@ -32,14 +32,12 @@ needs_pdflatex = pytest.mark.skipif(PDFLATEX is None, reason="pdflatex is not in
                                     "texlive-latex-base texlive-latex-recommended texlive-latex-extra texlive-science lmodern)")
 needs_chromium = pytest.mark.skipif(chromium() is None, reason="no chromium/chromium-browser on PATH")
 MAX_OVERFULL_PT = 1.0
-RANKED_STUDIES = ("published", "noise", "scaling")
 
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
     given = os.environ.get("FITBENCH_REPORT_RESULTS")
-    results = Path(given) if given else run_once_per_session(
-        tmp_path_factory, "report-paper-quick", [*RANKED_STUDIES, "--quick"], cwd=REPO)
+    results = Path(given) if given else ranked_quick_run(tmp_path_factory)
     out = tmp_path_factory.mktemp("paper")
     report.build(results, out, log=lambda *a: None)
     return out

@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import quick_run_on
 from experiments import run as runner
 from experiments import verify
 from experiments.metrics import TOLERANCES, tolerance
@@ -226,19 +227,16 @@ def test_every_run_ends_with_a_verdict_the_report_shows(tmp_path, capsys):
 
 
 @pytest.mark.system  # every default study's quick grid, as .ci/run's last step does
-def test_a_quick_run_of_the_default_studies_reports_a_verdict_for_each(tmp_path):
+def test_a_quick_run_of_the_default_studies_reports_a_verdict_for_each(tmp_path_factory):
     """`python -m experiments.run --quick` from the repository compares every default study with the committed
-    results/quick and the report carries one verdict per default study (CI runs the same command)."""
-    import subprocess
-    import sys
-    out = tmp_path / "results"
-    proc = subprocess.run([sys.executable, "-m", "experiments.run", "--quick", "--jobs", "1", "--out", str(out)],
-                          cwd=REPO, capture_output=True, text=True, timeout=1800)
-    assert proc.returncode == 0, proc.stderr[-2000:]
+    results/quick and the report carries one verdict per default study (CI runs the same command). The run is the
+    simulated AVX2 machine's of tests/test_cpu_independence.py (conftest.quick_run_on: one run for both tests)."""
+    out = quick_run_on(tmp_path_factory, "avx2_fma")
+    stdout = (out.parent / "stdout.txt").read_text(encoding="utf-8")
     defaults = [n for n in runner.configs.available() if runner.configs.load(n).get("default")]
     md = (out / "paper" / "report.md").read_text(encoding="utf-8")
     for name in defaults:
-        assert f"verify: {name}: " in proc.stdout, name
+        assert f"verify: {name}: " in stdout, name
         section = md.split(f"(`{name}`)")[1].split("### ")[0]
         assert "**Reproducibility" in section and "the committed tables (results/quick/" in section, name
 

@@ -183,7 +183,7 @@ def cmd_list(args) -> int:
 
     specs = describe_methods(args.family)
     if args.json:
-        print(json.dumps([{"id": s.id, "family": s.family, "kind": s.kind, "summary": s.summary,
+        cli_options.print_json(json.dumps([{"id": s.id, "family": s.family, "kind": s.kind, "summary": s.summary,
                            "reference": s.reference, "defaults": {k: _jsonable(v) for k, v in s.defaults.items()}}
                           for s in specs], indent=1))
         return 0
@@ -235,7 +235,7 @@ def cmd_fit(args) -> int:
         d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(unit)}
         if notes:
             d["notes"] = notes
-        print(json.dumps(d))
+        cli_options.print_json(json.dumps(d))
         return 0
     print(f"input unit {canonical(unit)}{' (converted to mm)' if canonical(unit) != 'mm' else ''}; "
           "lengths below in mm")
@@ -413,7 +413,7 @@ def cmd_circular_test(args) -> int:
             out["verdict"] = check
         if dg:
             out["details"]["diagnostics_model"] = model_json(dg["_model"], conditions["plane"])
-        print(json.dumps(_jsonable(out)))
+        cli_options.print_json(json.dumps(_jsonable(out)))
         return 0
     print("\n".join(lines))
     return 0
@@ -607,7 +607,7 @@ def cmd_positioning(args) -> int:
             out["iso230_2_conformity"] = {"meets_minimum": not lacks, "lacks": lacks}
         # the axis as given (--axis; '' if not): fitbench history keeps each machine's axes apart
         out["details"] = {"conditions": test_conditions(args, axis=args.axis or "", files=[str(args.file)])}
-        print(json.dumps(_jsonable(out)))
+        cli_options.print_json(json.dumps(_jsonable(out)))
         return 0
     print("\n".join(lines))
     if comp is not None:
@@ -691,7 +691,7 @@ def cmd_magnify(args) -> int:
     if args.json:
         d = res.to_dict(residuals=not args.no_residuals)
         d["units"] = {"length": "mm", "input_unit": canonical(args.unit)}
-        print(json.dumps(d))
+        cli_options.print_json(json.dumps(d))
         return 0
     print(header_line("magnify", args.unit))
     print(f"method       {res.method} ({res.message})")
@@ -774,7 +774,7 @@ def cmd_multilaterate(args) -> int:
                                      "basis": "coefficient of (axis position / travel)^j; E[XYZ]* and T* in mm, "
                                               "E[ABC]*, squareness and R* in rad",
                                      "parameters": ident.as_table(), "residual_rms": ident.residual_rms}
-        print(json.dumps(_jsonable(d)))
+        cli_options.print_json(json.dumps(_jsonable(d)))
         return 0 if res.converged else 1
     vol = np.linalg.norm(res.volumetric_errors, axis=1)
     mixed = ", ".join(f"{c} {u}" for c, u in units.items() if u != canonical(args.unit))
@@ -898,6 +898,22 @@ def build_parser(prog: str = PROG, extra_commands: dict | None = None) -> argpar
     return p
 
 
+def _json_only(args) -> int:
+    """Run a ``--json`` command with everything printed to stdout sent to stderr (:func:`stdout_to_stderr`: a
+    plugin printing when it is imported, compiled code writing to descriptor 1) and print the command's JSON
+    (:func:`fitbench.cli.options.print_json`) once stdout is restored: stdout carries the JSON object alone."""
+    saved, cli_options.JSON_PENDING = cli_options.JSON_PENDING, []
+    pending = cli_options.JSON_PENDING
+    try:
+        with stdout_to_stderr():
+            code = args.func(args)
+    finally:
+        cli_options.JSON_PENDING = saved
+    for text in pending:
+        print(text)
+    return code
+
+
 def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) -> int:
     """The command ``prog`` (``fitbench``, or ``python -m methods`` without the experiment subcommands): error
     and warning lines start with ``prog`` (:data:`fitbench.cli.options.PROGRAM`)."""
@@ -913,7 +929,9 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
                                             f"'fitbench {argv[0]} ...' or 'python -m experiments.{argv[0]} ...'")
                 args = build_parser(prog, extra_commands).parse_args(argv)
                 with one_blas_thread():
-                    return args.func(args)
+                    if not getattr(args, "json", False):
+                        return args.func(args)
+                    return _json_only(args)
             except InvalidInputError as exc:
                 failed = str(exc)
                 raise

@@ -7,6 +7,8 @@ positioning test one axis' (``--axis``): results of different machines, planes o
 trends (pooled, an X axis and a Y axis of two machines read as one axis drifting)."""
 from __future__ import annotations
 
+import fitbench.cli.options as cli_options
+
 import datetime as _dt
 import json
 from pathlib import Path
@@ -204,7 +206,7 @@ def run(args) -> int:
     if plot_path:
         plot(history, plot_path, save_figure)
     if args.json:
-        print(json.dumps(as_json(history)))
+        cli_options.print_json(json.dumps(as_json(history)))
         return 0
     print(table(history))
     return 0

@@ -31,6 +31,20 @@ def warn(message: str) -> None:
     print(f"{PROGRAM}: warning: {message}", file=sys.stderr)
 
 
+#: the JSON a ``--json`` command printed while :func:`fitbench.cli.commands.main` keeps stdout for it alone (what
+#: anything else prints meanwhile, e.g. a plugin when it is imported, goes to stderr); None: printed at once
+JSON_PENDING: list | None = None
+
+
+def print_json(text: str) -> None:
+    """Print a command's JSON object: held until the command ends when its stdout is guarded (``--json``, see
+    :data:`JSON_PENDING`), so that stdout carries the JSON alone, else printed now."""
+    if JSON_PENDING is not None:
+        JSON_PENDING.append(text)
+    else:
+        print(text)
+
+
 def finite(name: str, value, *, positive: bool = False, allow_none: bool = True):
     """A command-line number: finite (and > 0 with ``positive``), else a one-line error."""
     if value is None and allow_none:

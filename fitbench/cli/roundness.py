@@ -1,6 +1,8 @@
 """``fitbench roundness FILE``: an ISO 12181 roundness report (table, JSON, polar and spectrum plot)."""
 from __future__ import annotations
 
+import fitbench.cli.options as cli_options
+
 import json
 import warnings
 
@@ -75,7 +77,7 @@ def run(args) -> int:
                         "spectrum.amplitude": "mm", "spectrum.phase": "rad"})
         d.pop("extra", None)
         d["details"] = {"conditions": test_conditions(args, files=[source])}
-        print(json.dumps(d))
+        cli_options.print_json(json.dumps(d))
         return 0 if res.converged else 1
     print("\n".join(lines))
     return 0 if res.converged else 1

@@ -309,8 +309,9 @@ def test_a_quick_run_without_out_writes_beside_the_full_results_never_into_them(
     cfg = tmp_path / "vstudy.toml"
     cfg.write_text(STUDY, encoding="utf-8")
     assert runner.main([str(cfg), "--quick", "--jobs", "1", "--no-report"]) == 0
-    assert (tmp_path / "results" / "quick" / "vstudy" / "results.csv").is_file()
-    assert not (tmp_path / "results" / "vstudy").exists()
+    # a study of one's own (its TOML outside experiments/configs/) goes to results/user/, quick: results/user/quick/
+    assert (tmp_path / "results" / "user" / "quick" / "vstudy" / "results.csv").is_file()
+    assert not (tmp_path / "results" / "user" / "vstudy").exists() and not (tmp_path / "results" / "vstudy").exists()
 
 
 @pytest.mark.parametrize("study", ["convergence", "noise", "roundness", "circular_test"])

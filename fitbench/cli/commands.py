@@ -313,6 +313,11 @@ def _check_polar_deviations(runs, R, nominal_center, unit, assumed: bool = False
         warn(msg)
 
 
+#: a circular test's feed below this (mm/min) is a unit mistake (m/min read as mm/min): ballbar tests run at
+#: hundreds to thousands of mm/min
+FEED_MIN_MM_MIN = 10.0
+
+
 def cmd_circular_test(args) -> int:
     from methods.circular_test import diagnose, evaluate
     from fitbench.plots.circular_test import FIGSIZE as POLAR_FIGSIZE, diagnostics_json, model_json, polar_plot, text
@@ -322,6 +327,10 @@ def cmd_circular_test(args) -> int:
     if args.nominal_center is not None:
         args.nominal_center = [finite("--nominal-center", v) for v in args.nominal_center]
     feed = finite("--feed", args.feed, positive=True)
+    if feed is not None and feed < FEED_MIN_MM_MIN:
+        hours = 2 * math.pi * R / feed / 60.0
+        warn(f"--feed {feed:g} mm/min: one revolution of the R {R:g} mm circle would take {hours:.3g} h; the feed is "
+             f"in mm/min (is it m/min? --feed {feed * 1000:g})")
     pitch = finite("--cyclic-pitch", args.cyclic_pitch, positive=True)
     arc = finite("--arc", args.arc, positive=True)
     plot_path = check_plot_path(args.plot)
@@ -487,6 +496,65 @@ def _check_instrument(option: str, text, value_mm: float | None, explicit: bool,
          f"(largest |deviation| {largest * 1e3:.3g} µm): {hint} (or {option} {text}mm to keep mm)")
 
 
+_NUMBER_UNIT = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S*?)\s*"
+#: --expansion-coefficient units -> factor to µm/(m·K) (bare: µm/(m·K), as handbooks tabulate it x 1e-6 /K)
+EXPANSION_UNITS = {"": 1.0, "um/(m*k)": 1.0, "um/(m.k)": 1.0, "um/m/k": 1.0, "ppm/k": 1.0, "/k": 1e6, "1/k": 1e6,
+                   "k^-1": 1e6, "k-1": 1e6}
+#: no material of a machine axis or workpiece expands less than this (Zerodur scales: about 0.01-0.1 µm/(m·K)) or
+#: more than EXPANSION_WARN (aluminium 23, magnesium 26 µm/(m·K))
+EXPANSION_MIN, EXPANSION_WARN = 1e-3, 30.0
+#: a bare --material-temperature outside this range (°C) asks for its unit: ISO 230-2 tests run near 20 °C
+WORKSHOP_C = (10.0, 40.0)
+
+
+def expansion_coefficient(text) -> float | None:
+    """``--expansion-coefficient`` in µm/(m·K): a bare number (11.5 for steel), or with its unit (11.5e-6/K,
+    11.5ppm/K, 11.5um/(m*K)); a bare value no material has (11.5e-6: 1/K read as µm/(m·K), which silently applied
+    no correction) is refused naming the likely unit, one above EXPANSION_WARN warned about."""
+    import re
+    if text is None:
+        return None
+    m = re.fullmatch(_NUMBER_UNIT, str(text))
+    unit = (m.group(2) if m else "").lower().replace("µ", "u").replace("μ", "u").replace("·", "*").replace(" ", "")
+    if not m or unit not in EXPANSION_UNITS:
+        raise InvalidInputError(f"--expansion-coefficient {text!r}: give µm/(m·K) as a bare number (11.5 for steel) "
+                                "or the value with its unit (11.5e-6/K, 11.5ppm/K)")
+    value = finite("--expansion-coefficient", m.group(1)) * EXPANSION_UNITS[unit]
+    if unit == "" and 0 < abs(value) < EXPANSION_MIN:
+        raise InvalidInputError(f"--expansion-coefficient {text} is read as {value:g} µm/(m·K), less than any material "
+                                f"expands (Zerodur about 0.01 µm/(m·K)); {text} looks like 1/K: give {value * 1e6:g} "
+                                f"(µm/(m·K)) or {text}/K")
+    if abs(value) > EXPANSION_WARN:
+        warn(f"--expansion-coefficient {value:g} µm/(m·K) is more than the metals of machine axes expand (steel 11.5, "
+             f"aluminium 23); check its unit (a bare number is µm/(m·K))")
+    return value
+
+
+def material_temperature(text) -> tuple[float | None, str]:
+    """(°C, how it was given) of ``--material-temperature``: a bare number in °C within WORKSHOP_C, or with its
+    unit (26C, 79F, 299.15K); a bare number outside the workshop range is refused naming °F when that fits
+    (79 read as °C gave A = 661 µm)."""
+    import re
+    if text is None:
+        return None, ""
+    m = re.fullmatch(_NUMBER_UNIT, str(text))
+    unit = (m.group(2) if m else "").upper().replace("°", "").replace("DEG", "")
+    if not m or unit not in ("", "C", "F", "K"):
+        raise InvalidInputError(f"--material-temperature {text!r}: give °C as a bare number (26) or the value with "
+                                "its unit (26C, 79F, 299.15K)")
+    v = finite("--material-temperature", m.group(1))
+    c = {"": v, "C": v, "F": (v - 32.0) * 5.0 / 9.0, "K": v - 273.15}[unit]
+    if unit == "" and not WORKSHOP_C[0] <= c <= WORKSHOP_C[1]:
+        f_as_c = (v - 32.0) * 5.0 / 9.0
+        guess = (f"is it °F ({f_as_c:.1f} °C)? give {text}F, or " if WORKSHOP_C[0] <= f_as_c <= WORKSHOP_C[1]
+                 else "give ")
+        raise InvalidInputError(f"--material-temperature {text} °C is outside a workshop's {WORKSHOP_C[0]:g} to "
+                                f"{WORKSHOP_C[1]:g} °C; {guess}{text}C to confirm °C")
+    if not -50.0 <= c <= 100.0:
+        raise InvalidInputError(f"--material-temperature {text} ({c:g} °C) is not a workshop temperature")
+    return c, ("" if unit in ("", "C") else f" ({text.strip()})")
+
+
 def cmd_positioning(args) -> int:
     from datasets.io import read_positioning
     from fitbench.plots.positioning import plot, text
@@ -497,13 +565,11 @@ def cmd_positioning(args) -> int:
     mpe, mpe_explicit = instrument_length("--mpe", args.mpe)
     if args.degree < 0:
         raise InvalidInputError(f"--degree must be >= 0, got {args.degree}")
-    temperature = finite("--material-temperature", args.material_temperature)
-    alpha = finite("--expansion-coefficient", args.expansion_coefficient)
+    temperature, given_as = material_temperature(args.material_temperature)
+    alpha = expansion_coefficient(args.expansion_coefficient)
     if (temperature is None) != (alpha is None):
         raise InvalidInputError("the temperature correction needs both --material-temperature (°C) and "
                                 "--expansion-coefficient (µm/(m·K), e.g. 11.5 for steel)")
-    if temperature is not None and not -50.0 <= temperature <= 100.0:
-        raise InvalidInputError(f"--material-temperature {temperature:g} °C is not a workshop temperature; give °C")
     given_deviation_unit = args.deviation_unit
     with warnings.catch_warnings(record=True) as read_warnings:
         warnings.simplefilter("always")
@@ -552,7 +618,7 @@ def cmd_positioning(args) -> int:
         thermal = {"material_temperature_c": temperature, "expansion_coefficient_um_per_m_k": alpha,
                    "correction_um_per_m": -alpha * (temperature - 20.0)}
         thermal_text = (f"temperature correction (ISO 230-2 nominal differential expansion): material at "
-                        f"{temperature:g} °C, expansion coefficient {alpha:g} µm/(m·K): deviations corrected by "
+                        f"{temperature:.4g} °C{given_as}, expansion coefficient {alpha:g} µm/(m·K): deviations corrected by "
                         f"{-alpha * (temperature - 20.0):+.4g} µm/m x target position, to 20 °C")
     res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
     lacks = []
@@ -632,11 +698,13 @@ def add_positioning(sub):
     add_tolerance_option(pp, "A, E, R, B, M, A_up, ...")
     add_report_option(pp)
     add_test_identity_options(pp)
-    pp.add_argument("--material-temperature", type=float, metavar="DEG_C",
-                    help="temperature of the axis scale / workpiece during the test (°C): the deviations are "
-                         "corrected to 20 °C by the nominal differential expansion (needs --expansion-coefficient)")
-    pp.add_argument("--expansion-coefficient", type=float, metavar="UM_PER_M_K",
-                    help="its thermal expansion coefficient in µm/(m·K) (steel about 11.5)")
+    pp.add_argument("--material-temperature", metavar="DEG_C",
+                    help="temperature of the axis scale / workpiece during the test: °C as a bare number (10 to 40), "
+                         "or with its unit (26C, 79F, 299.15K); the deviations are corrected to 20 °C by the nominal "
+                         "differential expansion (needs --expansion-coefficient)")
+    pp.add_argument("--expansion-coefficient", metavar="UM_PER_M_K",
+                    help="its thermal expansion coefficient: µm/(m·K) as a bare number (steel about 11.5), or with "
+                         "its unit (11.5e-6/K, 11.5ppm/K)")
     pp.add_argument("--forward-direction", choices=("+", "-"), default=None,
                     help="wide exports with Forward/Reverse (Hin/Rück) runs: the axis direction the forward runs "
                          "moved in (default: from the order of the targets in the file, + when increasing)")

@@ -290,10 +290,48 @@ def note_encoding(path) -> None:
                       EncodingNote, stacklevel=3)
 
 
+#: the first bytes of files that are not text tables, what they are and what to do (a spreadsheet read as
+#: cp1252 text gave "not UTF-8; read as Windows-1252" and "a header but no data lines")
+NOT_TEXT = ((b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1", "an Excel 97-2003 workbook (an OLE2 compound file)",
+             "save it as CSV (UTF-8) or text (tab delimited) from the spreadsheet program"),
+            (b"PK\x03\x04", "a zip archive", "unpack it, or read the table it holds"),
+            (b"PK\x05\x06", "an empty zip archive", "give the measurement file itself"),
+            (b"\x1f\x8b", "a gzip-compressed file", "decompress it first (gunzip)"),
+            (b"%PDF", "a PDF document", "export the measurements from the instrument software as CSV or text"),
+            (b"\x89PNG", "a PNG image", "give the measurement file, not a picture of it"))
+#: a zip archive by its name: what a spreadsheet program saved
+ZIP_SPREADSHEETS = {".xlsx": "an Excel workbook", ".xlsm": "an Excel workbook", ".xltx": "an Excel template",
+                    ".ods": "an OpenDocument spreadsheet", ".numbers": "a Numbers spreadsheet"}
+
+
+def not_text(path) -> str | None:
+    """What is wrong when ``path`` is a spreadsheet, an archive, a PDF or an image rather than a text table (its
+    first bytes, :data:`NOT_TEXT`): 'x.xlsx is an Excel workbook (a zip archive), not a text table: save it as
+    CSV ...'; None for anything else (also when it cannot be opened: the reader then says why)."""
+    name = os.fspath(path)
+    try:
+        with open_regular(name, encoding=None) as fh:
+            head = fh.read(8)
+    except (OSError, InvalidInputError):
+        return None
+    for magic, what, todo in NOT_TEXT:
+        if head.startswith(magic):
+            if magic == b"PK\x03\x04":
+                sheet = ZIP_SPREADSHEETS.get(os.path.splitext(name)[1].lower())
+                if sheet:
+                    what, todo = f"{sheet} (a zip archive)", ("save it as CSV (UTF-8) from the spreadsheet program "
+                                                              "(Excel: File > Save As > CSV UTF-8) and give that file")
+            return f"{name} is {what}, not a text table: {todo}"
+    return None
+
+
 def _open_text(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'"):
     """``path`` opened as text in its encoding (:func:`file_encoding`: UTF-8 with or without BOM, UTF-16 with
-    BOM, else Windows-1252), refusing a FIFO or a device; errors are one line."""
+    BOM, else Windows-1252), refusing a FIFO or a device, a spreadsheet, an archive or a PDF (:func:`not_text`);
+    errors are one line."""
     name = os.fspath(path)
+    if (why := not_text(name)) is not None:
+        raise DataFileError(why)
     try:
         return open_regular(name, encoding=file_encoding(name))
     except FileNotFoundError:

@@ -128,3 +128,32 @@ def test_two_columns_that_are_not_the_plane_are_named_not_blamed_on_the_unit(tmp
         assert "µm" not in err and "same polar angle" not in err
     fit = cli("fit", "circle.gauss_newton", ccw, "--columns", "x", "y")
     assert re.search(r"warning: .*lie on a straight line", fit.stderr), fit.stderr
+
+
+# ------------------------------------------------------------------------ spreadsheets and other binary files
+def test_spreadsheets_archives_and_pdfs_are_named_not_read_as_cp1252(tmp_path):
+    import gzip
+    import zipfile
+    from datasets.io import DataFileError, read_points
+    xlsx = tmp_path / "ccw.xlsx"
+    with zipfile.ZipFile(xlsx, "w") as z:     # what Excel saves: a zip of XML parts
+        z.writestr("[Content_Types].xml", "<Types/>")
+        z.writestr("xl/worksheets/sheet1.xml", "<worksheet><sheetData><row><c t='inlineStr'><is><t>x</t></is></c>"
+                                               "</row></sheetData></worksheet>")
+    xls = tmp_path / "ccw.xls"
+    xls.write_bytes(b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1" + bytes(504) + "x;y µ°".encode("cp1252") * 20)
+    gz = tmp_path / "ccw.csv.gz"
+    gz.write_bytes(gzip.compress(b"x,y\n1,2\n3,4\n5,7\n"))
+    pdf = tmp_path / "report.pdf"
+    pdf.write_bytes(b"%PDF-1.7\n%\xe2\xe3\xcf\xd3\n1 0 obj\n")
+    cases = {xlsx: "an Excel workbook (a zip archive), not a text table: save it as CSV",
+             xls: "an Excel 97-2003 workbook", gz: "gzip-compressed", pdf: "a PDF document"}
+    for path, said in cases.items():
+        for command in (("fit", "circle.kasa", path), ("roundness", path), ("positioning", path),
+                        ("multilaterate", path), ("circular-test", path, path, "--nominal-radius", 150)):
+            got = cli(*command)
+            err = got.stderr.strip().splitlines()
+            assert got.returncode == 2 and len(err) == 1, (command, got.stderr)
+            assert said in err[0] and "cp1252" not in err[0] and "no data lines" not in err[0], err
+        with pytest.raises(DataFileError, match="not a text table"):
+            read_points(path)

@@ -50,10 +50,15 @@ def for_plane(text: str, plane: str | None) -> str:
     return re.sub(r"\b([XY])\b", lambda m: a if m.group(1) == "X" else b, text)
 
 
-def meaning(name: str, value, u=None, plane: str | None = None) -> str:
-    """What ``value`` of the diagnostic ``name`` means, in a few words; '' when its sign is not resolved (within
-    2 u of 0, or 0)."""
-    if name not in SHORT or value is None or value == 0 or (u is not None and abs(value) <= 2 * u):
+def meaning(name: str, value, u=None, plane: str | None = None, contribution: float | None = None) -> str:
+    """What ``value`` of the diagnostic ``name`` means, in a few words; 'none at this resolution' when the value
+    prints as 0.000 in its unit or its ``contribution`` to the circle as 0.00 µm (a sign of nm-level rounding
+    noise is no finding); '' when its sign is not resolved (within 2 u of 0)."""
+    if name not in SHORT or value is None:
+        return ""
+    if round(value, 3) == 0 or (contribution is not None and round(contribution, 2) == 0):
+        return "none at this resolution"
+    if u is not None and abs(value) <= 2 * u:
         return ""
     return for_plane(SHORT[name][0 if value > 0 else 1], plane)
 
@@ -154,8 +159,9 @@ def text(ev, dg: dict | None) -> str:
                 lines.append(f"  {label:<22}  {item.get('note', 'not estimated')}")
             else:
                 unit = HUMAN_UNIT.get(item["unit"], item["unit"])
-                lines.append((f"  {label:<22}  {item['value']:+10.3f} +- {item['u']:.3f} {unit:<5}  "
-                              f"contribution {contrib:7.2f} µm  {meaning(name, item['value'], item['u'], plane)}").rstrip())
+                v = item["value"] if round(item["value"], 3) != 0 else 0.0     # never -0.000
+                lines.append((f"  {label:<22}  {v:+10.3f} +- {item['u']:.3f} {unit:<5}  "
+                              f"contribution {contrib:7.2f} µm  {meaning(name, item['value'], item['u'], plane, contrib)}").rstrip())
         m = dg["_model"]
         fit = f"fit converged in {m['iterations']} iterations" if m["converged"] else "fit NOT converged (below)"
         lines.append(f"  residual RMS {m['residual_rms_um']:.2f} µm; spike decay {m['spike_decay_deg']:.2f}°; {fit}")

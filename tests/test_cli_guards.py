@@ -48,3 +48,71 @@ def test_json_stdout_is_the_json_alone_when_a_plugin_prints_at_import(chatty_sit
     assert out.returncode == 0, out.stderr
     json.loads(out.stdout)                                   # the whole of stdout is one JSON document
     assert "chatty plugin imported" in out.stderr and "descriptor 1" in out.stderr
+
+
+# ------------------------------------------------------------------------ Ctrl-C
+SLEEPY = '''
+import sys
+import time
+
+from methods import register
+from methods.results import circle_result
+
+
+@register("circle.sleepy", kind="closed form", summary="waits to be interrupted", reference="fitbench test")
+def sleepy(points):
+    print("sleepy: started", file=sys.stderr, flush=True)
+    time.sleep(60)
+    return circle_result(points, points[0], 1.0, converged=True, message="closed form")
+'''
+
+
+@pytest.fixture(scope="module")
+def sleepy_site(tmp_path_factory):
+    return install_plugin(tmp_path_factory.mktemp("sleepy"), "fitbench-sleepy-plugin", {"fitbench_sleepy": SLEEPY},
+                          {"fitbench.methods": {"sleepy": "fitbench_sleepy"}})
+
+
+@pytest.mark.parametrize("json_out", [False, True])
+def test_ctrl_c_is_one_line_and_status_130(sleepy_site, profile, json_out):
+    import signal
+    import subprocess
+    import sys
+    from conftest import REPO, subprocess_env
+    cmd = [sys.executable, "-m", "fitbench", "fit", "circle.sleepy", str(profile), *(["--json"] if json_out else [])]
+    proc = subprocess.Popen(cmd, cwd=REPO, env=subprocess_env(sleepy_site), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stderr.readline().strip() == "sleepy: started"    # the method runs: interrupt it there
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert err.strip() == "fitbench: interrupted" and out == "", (out, err)
+
+
+def test_ctrl_c_in_every_subcommand(monkeypatch, profile, capsys):
+    """Wherever a subcommand is when Ctrl-C arrives (here: as it starts computing), one line, status 130."""
+    import contextlib
+    import fitbench.cli
+    import fitbench.cli.commands as commands
+
+    @contextlib.contextmanager
+    def interrupted():
+        raise KeyboardInterrupt
+        yield
+
+    monkeypatch.setattr(commands, "one_blas_thread", interrupted)
+    for argv in (["list"], ["fit", "circle.kasa", str(profile)], ["roundness", str(profile)],
+                 ["circular-test", str(profile), str(profile), "--nominal-radius", "10"], ["positioning", str(profile)],
+                 ["magnify", str(profile), str(profile), "--eta", "10"], ["multilaterate", str(profile)],
+                 ["history", str(profile.parent)]):
+        for main in (commands.main, fitbench.cli.main):
+            try:
+                code = main(argv)
+            except KeyboardInterrupt:
+                pytest.fail(f"{argv}: Ctrl-C escaped the command (a traceback)")
+            assert code == 130, argv
+            err = capsys.readouterr().err.strip().splitlines()
+            assert err == ["fitbench: interrupted"], (argv, err)

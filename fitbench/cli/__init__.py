@@ -29,6 +29,15 @@ DELEGATED = {"run": ("experiments.run", "run studies (python -m experiments.run)
 
 
 def main(argv=None) -> int:
+    """The ``fitbench`` command (``argv``: its arguments); Ctrl-C ends any subcommand with one line and status 130."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print("\nfitbench: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] in DELEGATED:
         name, rest = argv[0], argv[1:]

@@ -37,6 +37,8 @@ EXIT_BAD_INPUT = 2
 EXPERIMENT_SUBCOMMANDS = ("run", "report", "verify")
 #: a method raised an exception of its own (a bug in the method, not bad input): one line, this status
 EXIT_METHOD_FAILED = 3
+#: Ctrl-C (SIGINT): 128 + 2, what a shell reports for a process SIGINT ended
+EXIT_INTERRUPTED = 130
 
 
 PROG = "python -m methods"
@@ -1018,5 +1020,8 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
         return EXIT_METHOD_FAILED
     except BrokenPipeError:
         return 0
+    except KeyboardInterrupt:   # Ctrl-C: one line and the shell's status for SIGINT, as experiments.run ends
+        print(f"\n{prog}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     finally:
         cli_options.PROGRAM = saved

@@ -7,7 +7,6 @@ one common error delta per test (uniform within +-MPE, the paper's model of the 
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 
 from methods.positioning.data import PositioningData
 
@@ -50,6 +49,7 @@ def axis_test(*, travel=(0.0, 1000.0), targets=11, runs=5, pitch=(0.0, 0.004, -0
 
 def to_frame(data: PositioningData, *, actual=True) -> pd.DataFrame:
     """The long table of a test (columns target, direction, run, actual or deviation)."""
+    import pandas as pd  # here: a study's workers import this module (the simulator) and need no pandas
     rows = []
     for d, arr in (("+", data.up), ("-", data.down)):
         for i, t in enumerate(data.targets):

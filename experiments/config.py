@@ -51,7 +51,7 @@ def _read(path: Path, where: str) -> dict:
     if path.is_dir():
         raise ConfigError(f"{where}: is a directory, not a TOML file")
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = path.read_bytes().decode("utf-8-sig")   # a byte-order mark (Windows editors' "UTF-8 with BOM") is no TOML
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{where}: not UTF-8 text (byte {exc.start}); save the config as UTF-8") from None
     except OSError as exc:

@@ -73,3 +73,19 @@ def test_the_bound_is_what_the_refusal_says():
     miss, span, tol = (float(v) for v in re.search(r"by up to (\S+) µm of the (\S+) µm the curve spans \(at most (\S+) µm",
                                                    str(err.value)).groups())
     assert miss > tol == pytest.approx(REPRESENT_SHARE * span, rel=2e-3)
+
+
+def test_a_default_table_that_misses_the_means_is_warned_about():
+    """Means at irregular targets with a 2 µm periodic error are a broken line an equally spaced grid cannot pass
+    through: the default table (no --interval asked for) is written, with a warning giving the miss; the model's
+    default table of the same axis, and a regular axis' mean table, are not warned about."""
+    data, _ = axis_test(rng=np.random.default_rng(0), irregular=0.4, periodic_amplitude=0.002, periodic_period=130)
+    iso = methods.fit("positioning.iso230_2", data)
+    with pytest.warns(UserWarning, match=r"misses the means at the targets by up to \S+ µm of the \S+ µm"):
+        compensation_table(iso, data, source="mean")
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        compensation_table(methods.fit("positioning.gls_polynomial", data), data)
+        regular, _ = axis_test(rng=np.random.default_rng(0))
+        compensation_table(methods.fit("positioning.iso230_2", regular), regular, source="mean")

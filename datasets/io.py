@@ -1417,8 +1417,8 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.
                     "directions in the headers: Run 1 +, Run 1 -)")
         else:
             text = (f"columns {named} ... name the run order, not the axis direction; the targets are listed "
-                    f"{'increasing' if forward == '+' else 'decreasing'} ({targets[0]:g} to {targets[-1]:g} in the file's unit), so the "
-                    f"forward runs are read as approaches in the {'+ (↑)' if forward == '+' else '− (↓)'} direction and "
+                    f"{'increasing' if forward == '+' else 'decreasing'} ({targets[0]:g} to {targets[-1]:g} in the file's "
+                    f"unit), so the forward runs are read as approaches in the {'+ (↑)' if forward == '+' else '− (↓)'} direction and "
                     f"the reverse runs as {'− (↓)' if forward == '+' else '+ (↑)'} (--forward-direction "
                     f"{'-' if forward == '+' else '+'} if the forward runs moved the other way)")
         warnings.warn(RunOrderNote(text, forward), stacklevel=4)

@@ -22,11 +22,15 @@ def _as_array(points, who: str) -> np.ndarray:
     * a NumPy masked array: rows with a masked coordinate are dropped (the fit sees only unmasked
       points; residuals follow the kept points in their order);
     * a pandas DataFrame (or anything with ``columns``) with columns named x and y (any case): used
-      by name, whatever their order; otherwise its columns by position;
+      by name, whatever their order (refused when it also has a z column that varies: the points are then not
+      in the x, y plane, and which two coordinates hold the curve is the caller's choice); otherwise its columns
+      by position;
     * complex numbers are refused (their imaginary part would be silently lost)."""
     if hasattr(points, "columns") and hasattr(points, "to_numpy"):
         names = [str(c).strip().lower() for c in points.columns]
         if "x" in names and "y" in names:
+            if "z" in names:
+                _refuse_varying_z(points, names, who)
             points = points.iloc[:, [names.index("x"), names.index("y")]]
         points = points.to_numpy()
     if isinstance(points, np.ma.MaskedArray):
@@ -49,6 +53,21 @@ def _as_array(points, who: str) -> np.ndarray:
         return np.asarray(raw, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(f"{who}points are not numeric ({exc}); pass an (N, 2) array of x, y") from None
+
+
+def _refuse_varying_z(frame, names: list[str], who: str) -> None:
+    """Refuse x, y, z columns whose z varies by more than 1e-9 of the x, y extent (a curve in another plane, or
+    tilted: its x, y projection is not the curve); a constant z (a circle measured at one height) is ignored."""
+    try:
+        xyz = frame.iloc[:, [names.index("x"), names.index("y"), names.index("z")]].to_numpy(dtype=np.float64)
+    except (TypeError, ValueError):
+        return  # not numbers: the conversion below says so
+    with np.errstate(invalid="ignore", over="ignore"):
+        spread = np.nanmax(xyz, axis=0) - np.nanmin(xyz, axis=0) if len(xyz) else np.zeros(3)
+    if np.isfinite(spread).all() and spread[2] > 1e-9 * max(spread[0], spread[1]):
+        raise InvalidInputError(f"{who}the points have x, y and z columns and z varies ({spread[2]:.6g} against "
+                                f"{spread[0]:.6g} in x and {spread[1]:.6g} in y): they are not in the x, y plane; "
+                                "pass the two coordinates of the curve's plane, e.g. points[['x', 'z']]")
 
 
 def validate_points(points, *, min_points: int = 3, method: str = "") -> np.ndarray:

@@ -199,6 +199,21 @@ def test_dataframe_columns_are_used_by_name():
     assert np.allclose(res.center, (10.0, -4.0), atol=1e-9)
 
 
+def test_x_y_z_columns_with_a_varying_z_are_refused_not_read_as_x_y():
+    """A circle measured in the z, x plane (a CMM's x, y, z export) was fitted in x, y without a word: a radius of
+    3.77 km, converged. Now refused, naming the spreads and the way out; a constant z (one height) is ignored, and
+    the two columns of the plane fit the circle."""
+    pd = pytest.importorskip("pandas")
+    pts = circle_points((10.0, -4.0), 3.0, 40)
+    zx = pd.DataFrame({"x": pts[:, 0], "y": np.full(40, 2.5), "z": pts[:, 1]})
+    with pytest.raises(InvalidInputError, match=r"x, y and z columns and z varies .* points\[\['x', 'z'\]\]"):
+        methods.fit("circle.kasa", zx)
+    res = methods.fit("circle.kasa", zx[["x", "z"]])
+    assert np.allclose(res.center, (10.0, -4.0), atol=1e-9)
+    flat = pd.DataFrame({"X": pts[:, 0], "Y": pts[:, 1], "Z": np.full(40, 125.0)})
+    assert np.allclose(methods.fit("circle.kasa", flat).center, (10.0, -4.0), atol=1e-9)
+
+
 @pytest.mark.parametrize("points", [np.array([[1 + 1j, 0], [0, 1], [-1, 0]]), [[1j, 0], [0, 1], [-1, 0]],
                                     np.array([1, 1j, -1, -1j, 0.5 + 0.5j])])
 def test_complex_input_is_refused(points):

@@ -465,6 +465,23 @@ _LENGTH_UNITS = {"mm", "µm", "um", "nm", "m", "cm"}
 _ANGLE_UNITS = {"rad", "µrad", "urad", "mrad", "deg", "°", "arcsec"}
 
 
+#: the units of lengths
+LENGTH_UNITS = {"mm", "µm", "um", "nm", "m", "cm"}
+
+
+def length_unit(cfg: dict | None) -> str | None:
+    """The unit a study declares for its lengths: its ``length_unit`` ('R' for data on a unit circle), else the
+    ``unit`` of its ``[[rankings]]`` of a length metric when that differs from the metric's declared unit, else
+    None (the result classes' declared units)."""
+    if (cfg or {}).get("length_unit"):
+        return str(cfg["length_unit"])
+    for decl in (cfg or {}).get("rankings") or []:
+        unit, own = decl.get("unit"), column_unit(str(decl.get("metric", "")))
+        if unit and own in LENGTH_UNITS and unit != own:
+            return str(unit)
+    return None
+
+
 def column_unit(name: str) -> str:
     """The unit of a row column: declared by the result classes (``methods.results``: lengths in the data's
     unit, mm for the machine-tool data; angles in rad), timing in s, else read from the name's suffix."""
@@ -855,7 +872,6 @@ def _length_unit(cfg: dict, metric: str) -> tuple[str, str]:
     """(the unit of ``metric`` in a default table or figure, a sentence for the caption or ''). A length is in the
     study's declared ``length_unit``, else in mm when every data set comes from a source whose lengths are mm
     (:data:`MM_SOURCES`), else in the data's own unit (:data:`DATA_UNITS`), which the caption says how to name."""
-    from experiments.summary import length_unit
     unit = column_unit(metric)
     if unit not in _LENGTH_UNITS:
         return unit, ""

@@ -61,29 +61,14 @@ def summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
 
 #: the generators' parameters that are lengths (``datasets.synthetic``: lengths in the unit of the data)
 DATA_LENGTHS = ("data_center", "data_radius", "data_semi_axes", "data_noise")
-_LENGTHS = {"mm", "µm", "um", "nm", "m", "cm"}
-
-
-def length_unit(cfg: dict | None) -> str | None:
-    """The unit a study declares for its lengths: its ``length_unit`` ('R' for data on a unit circle), else the
-    ``unit`` of its ``[[rankings]]`` of a length metric when that differs from the metric's declared unit, else
-    None (the result classes' declared units)."""
-    from experiments.study import column_unit
-    if (cfg or {}).get("length_unit"):
-        return str(cfg["length_unit"])
-    for decl in (cfg or {}).get("rankings") or []:
-        unit, own = decl.get("unit"), column_unit(str(decl.get("metric", "")))
-        if unit and own in _LENGTHS and unit != own:
-            return str(unit)
-    return None
 
 
 def summary_units(summary: pd.DataFrame, cfg: dict | None = None) -> dict[str, str]:
     """{column: unit} of a :func:`summarise` table ('' for counts and shares): each statistic of a row column
     takes that column's declared unit (``experiments.study.column_unit``: the result classes' declarations, s for
     timings, a unit suffix such as ``_deg``); lengths in the study's own length unit where it declares one
-    (:func:`length_unit`)."""
-    from experiments.study import column_unit
+    (``experiments.study.length_unit``)."""
+    from experiments.study import LENGTH_UNITS, column_unit, length_unit
     lengths = length_unit(cfg)
     source = {"form_error_median": "form_error", "iterations_median": "iterations", "time_median_s": "time_median_s"}
     for col in result_base.truth_error_columns():
@@ -95,7 +80,7 @@ def summary_units(summary: pd.DataFrame, cfg: dict | None = None) -> dict[str, s
             units[c] = ""
             continue
         unit = column_unit(source.get(c, c))
-        if lengths and (unit in _LENGTHS or (c in DATA_LENGTHS and not unit)):
+        if lengths and (unit in LENGTH_UNITS or (c in DATA_LENGTHS and not unit)):
             unit = lengths
         elif c in DATA_LENGTHS and not unit:
             unit = column_unit("form_error")     # a length of the data: the declared length unit

@@ -173,10 +173,11 @@ def _register_builtins():
 
     @register_source("file", random=False, summary="points read from a file (CSV, whitespace, ...)",
                      files=lambda path, **reading: [path], gives=np.ndarray)
-    def file(rng=None, *, path, truth=None, columns=("x", "y"), plane=None, unit=None, skip_rows=0):
-        """Points of ``path`` (any format ``datasets.read_points`` reads, with its options), with an optional truth
-        table."""
-        return read_points(path, tuple(columns), plane=plane, unit=unit, skip_rows=skip_rows), truth
+    def file(rng=None, *, path, truth=None, columns=None, plane=None, unit=None, skip_rows=0):
+        """Points of ``path`` (any format ``datasets.read_points`` reads, with its options: by default x, y from the
+        header, and a header naming x, y and z needs ``plane`` or ``columns``), with an optional truth table."""
+        return read_points(path, None if columns is None else tuple(columns), plane=plane, unit=unit,
+                           skip_rows=skip_rows), truth
 
     def _nist_files(name):
         folder = nist_folder()

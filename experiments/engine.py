@@ -26,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import re
 import time
 from pathlib import Path
 
@@ -166,9 +167,10 @@ _CONFIG_WORDS = (("--columns NAME NAME", 'columns = ["X", "Y"]'), ("--columns 0 
 
 
 def _in_config_words(text: str) -> str:
+    """A reader's message in the words of a study's TOML (its options are keys of the data set there)."""
     for option, key in _CONFIG_WORDS:
         text = text.replace(option, key)
-    return text
+    return re.sub(r"--plane (xy|yz|zx)\b", r'plane = "\1"', text)
 
 
 def expand_methods(cfg: dict, where: str) -> list[tuple[str, dict]]:

@@ -1074,3 +1074,21 @@ def test_the_command_ends_without_teardown_but_as_python_would_for_its_threads_a
     assert out.returncode == 3, out.stderr
     assert out.stdout == "x" * 100_000 and out.stderr == ""
     assert (tmp_path / "atexit").read_text() == "ran" and (tmp_path / "thread").read_text() == "done"
+
+
+def test_a_file_data_set_with_x_y_z_columns_needs_its_plane(tmp_path):
+    """A study's file data set took columns x, y by default, so a circle measured in the z, x plane (x, y, z columns)
+    was fitted in x, y without a word. The file source now reads as the CLI does: refused in one line that names the
+    plane in the TOML's words (plane = "zx"), and read right with it."""
+    t = np.linspace(0.0, 2 * np.pi, 40, endpoint=False)
+    (tmp_path / "zx.csv").write_text("x,y,z\n" + "".join(f"{5 * np.cos(a):.6f},2.5,{5 * np.sin(a):.6f}\n" for a in t))
+    body = 'title = "t"\nkind = "grid"\nseed = 1\n[[datasets]]\nfile = "zx.csv"\n{}\n[[methods]]\nid = "circle.kasa"\n'
+    (tmp_path / "guess.toml").write_text('name = "guess"\n' + body.format(""))
+    (tmp_path / "plane.toml").write_text('name = "plane"\n' + body.format('plane = "zx"'))
+    out = subprocess.run([sys.executable, "-m", "experiments.run", str(tmp_path / "guess.toml"), "--out",
+                          str(tmp_path / "o"), "--no-report", "--jobs", "1"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 2 and "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1
+    assert "three coordinate columns (x, y, z)" in out.stderr and 'give plane = "zx"' in out.stderr, out.stderr
+    assert run.main([str(tmp_path / "plane.toml"), "--out", str(tmp_path / "o"), "--no-report", "--jobs", "1"]) == 0
+    df = pd.read_csv(tmp_path / "o" / "plane" / "results.csv")
+    assert df["status"].tolist() == ["ok"] and df["radius"][0] == pytest.approx(5.0, rel=1e-6)

@@ -9,7 +9,6 @@ from experiments.rows import points_problem
 from experiments.run import main as run_main
 
 
-@register_source("test_contract_nan", random=True, summary="a circle with one NaN point (contract test)")
 def _nan_source(rng, *, n: int = 20):
     t = np.linspace(0, 2 * np.pi, n, endpoint=False)
     p = np.c_[np.cos(t), np.sin(t)]
@@ -17,12 +16,10 @@ def _nan_source(rng, *, n: int = 20):
     return p, {"center": (0.0, 0.0), "radius": 1.0}
 
 
-@register_source("test_contract_3d", random=True, summary="(N, 3) points (contract test)")
 def _three_source(rng, *, n: int = 20):
     return rng.normal(size=(n, 3)), None
 
 
-@register_source("test_contract_good", random=True, summary="a noisy unit circle (contract test)")
 def _good_source(rng, *, n: int = 20):
     t = np.linspace(0, 2 * np.pi, n, endpoint=False)
     return np.c_[np.cos(t), np.sin(t)] + rng.normal(0, 0.01, (n, 2)), {"center": (0.0, 0.0), "radius": 1.0}
@@ -45,7 +42,21 @@ id = "circle.gauss_newton"
 """
 
 
-def test_broken_sources_give_error_rows_naming_the_source(tmp_path):
+@pytest.fixture
+def contract_sources():
+    """Data sources of a plugin, registered from this module for one test only."""
+    from datasets import sources
+    named = {"test_contract_nan": (_nan_source, "a circle with one NaN point (contract test)"),
+             "test_contract_3d": (_three_source, "(N, 3) points (contract test)"),
+             "test_contract_good": (_good_source, "a noisy unit circle (contract test)")}
+    for name, (func, summary) in named.items():
+        register_source(name, random=True, summary=summary)(func)
+    yield
+    for name in named:
+        sources._REGISTRY.pop(name, None)
+
+
+def test_broken_sources_give_error_rows_naming_the_source(tmp_path, contract_sources):
     cfg = tmp_path / "contract.toml"
     cfg.write_text(STUDY, encoding="utf-8")
     assert run_main([str(cfg), "--jobs", "1", "--no-report", "--out", str(tmp_path / "out")]) == 0

@@ -7,15 +7,25 @@ from fitbench.cli.commands import EXIT_METHOD_FAILED, main
 from methods import register
 
 
-@register("circle.test_exit_zero", kind="closed form", summary="raises SystemExit(0) (test)", reference="a test")
 def _exit_zero(points):
     raise SystemExit(0)
 
 
-@register("circle.test_exit_none", kind="closed form", summary="calls sys.exit() (test)", reference="a test")
 def _exit_none(points):
     import sys
     sys.exit()
+
+
+@pytest.fixture
+def exiting_methods():
+    """The methods of a plugin, registered from this module (not methods.*) for one test only."""
+    from methods import _registry
+    ids = {"circle.test_exit_zero": _exit_zero, "circle.test_exit_none": _exit_none}
+    for mid, func in ids.items():
+        register(mid, kind="closed form", summary="exits (test)", reference="a test")(func)
+    yield
+    for mid in ids:
+        _registry._REGISTRY.pop(mid, None)
 
 
 @pytest.fixture
@@ -29,7 +39,7 @@ def circle_file(tmp_path):
 @pytest.mark.parametrize("method, raised", [("circle.test_exit_zero", "SystemExit(0)"),
                                             ("circle.test_exit_none", "SystemExit()")])
 @pytest.mark.parametrize("json", [False, True])
-def test_a_method_exiting_is_an_error_naming_it(circle_file, capsys, method, raised, json):
+def test_a_method_exiting_is_an_error_naming_it(circle_file, capsys, exiting_methods, method, raised, json):
     code = main(["fit", method, str(circle_file), *(["--json"] if json else [])])
     out, err = capsys.readouterr()
     assert code == EXIT_METHOD_FAILED and out == ""

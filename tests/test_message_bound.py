@@ -3,6 +3,7 @@ message made results.csv unreadable by Python's csv module (a field above 131,07
 import csv
 
 import numpy as np
+import pytest
 
 from experiments.rows import MESSAGE_CHARS, bounded_message, failed_row
 from experiments.run import main as run_main
@@ -10,8 +11,6 @@ from methods import register
 from methods.results import circle_result
 
 
-@register("circle.test_chatty", kind="closed form", summary="a fit whose message is a huge log (test)",
-          reference="a test")
 def _chatty(points):
     c = points.mean(axis=0)
     return circle_result(points, c, float(np.hypot(*(points - c).T).mean()), converged=True,
@@ -22,7 +21,17 @@ STUDY = ('name = "chatty"\ntitle = "a chatty method"\nseed = 1\nrepetitions = 2\
          'params = { radius = 5.0, noise = 0.01, n = 30 }\n[[methods]]\nid = "circle.test_chatty"\n')
 
 
-def test_results_csv_with_a_huge_message_reads_with_the_csv_module(tmp_path):
+@pytest.fixture
+def chatty():
+    """A plugin's method, registered from this module for one test only."""
+    from methods import _registry
+    register("circle.test_chatty", kind="closed form", summary="a fit whose message is a huge log (test)",
+             reference="a test")(_chatty)
+    yield
+    _registry._REGISTRY.pop("circle.test_chatty", None)
+
+
+def test_results_csv_with_a_huge_message_reads_with_the_csv_module(tmp_path, chatty):
     cfg = tmp_path / "chatty.toml"
     cfg.write_text(STUDY, encoding="utf-8")
     assert run_main([str(cfg), "--jobs", "1", "--no-report", "--out", str(tmp_path / "out")]) == 0

@@ -398,6 +398,27 @@ def _value_problem(name: str, v, check: str, converged: bool) -> str | None:
     return None
 
 
+def _undeclared_family(family: str) -> str:
+    return (f"no result class declares FAMILY = {family!r}: a method of a new family returns a result class of its "
+            f"own declaring it (docs/plugins.md), whose columns and checks the gate applies")
+
+
+def _certificate_problem(method: str, claim) -> str | None:
+    """A plugin's claim of a certificate (``extra['certified']`` "global" or "local"): refused. Only fitbench's own
+    methods set it, each after checking its certificate (docs/certificates.md); the gate cannot check a claim of an
+    objective it does not know (a zone fit's width, an inscribed or circumscribed radius)."""
+    if claim is None or claim is False:
+        return None
+    from methods._registry import BUILTIN_IDS, builtins_loaded, load_builtins
+    if not builtins_loaded():
+        load_builtins()
+    if method in BUILTIN_IDS:
+        return None
+    return (f"extra['certified'] = {_describe(claim)} is a certificate only fitbench's own methods give (each checks "
+            f"it before setting it); a plugin's claim cannot be checked here: leave 'certified' out (or False) and "
+            f"say in the message what the method verified")
+
+
 def _shape_problem(name: str, value, shape: tuple, n: int | None) -> str | None:
     t = type(value)
     if t is np.ndarray and value.dtype.kind in "fiu":
@@ -516,7 +537,9 @@ def check_result(result, data=None) -> str | None:
         method = str(method)
     family = method.partition(".")[0]
     cls = contract(family)
-    if cls is not None and not isinstance(result, cls):
+    if cls is None:
+        return _undeclared_family(family)
+    if not isinstance(result, cls):
         return f"a {family} method must return a {cls.__name__}, got a {type(result).__name__}"
     converged = result.converged
     if converged is not True and converged is not False:
@@ -544,6 +567,11 @@ def check_result(result, data=None) -> str | None:
             json.dumps(jsonable(extra), allow_nan=False)
         except (TypeError, ValueError) as exc:
             return f"extra is not JSON-serialisable ({type(exc).__name__}: {str(exc)[:80]})"
+    claim = extra.get("certified")
+    if claim is not None and claim is not False:
+        problem = _certificate_problem(method, claim)
+        if problem:
+            return problem
     n = None
     if isinstance(data, np.ndarray) and data.ndim == 2:
         n = data.shape[0]
@@ -578,9 +606,18 @@ def check_result(result, data=None) -> str | None:
     if rules.MISSING_RESIDUALS and residuals.dtype.kind == "f":
         residuals = residuals[~np.isnan(residuals)]
     size = residuals.size
-    if size and not (np.count_nonzero(np.isfinite(residuals)) == size if type(residuals) is np.ndarray
-                     else np.isfinite(residuals).all()):
-        return "residuals are not finite in a converged result"
+    if size:
+        # one pass: a finite sum of squares means finite residuals and a finite residual RMS (the row's column);
+        # NaN, inf or an overflow (|r| beyond ~1e154) is told apart below
+        squares = residuals.dot(residuals) if residuals.ndim == 1 and residuals.dtype.kind == "f" else None
+        if squares is None or not math.isfinite(squares):
+            if not np.isfinite(residuals).all():
+                return "residuals are not finite in a converged result"
+            with np.errstate(over="ignore"):
+                total = float(np.add.reduce(np.square(residuals, dtype=np.float64), axis=None))
+            if not math.isfinite(total):
+                return (f"the residual RMS overflows float64 (residuals up to {float(np.abs(residuals).max()):.3g}) "
+                        f"in a converged result; rescale the data (e.g. to another unit)")
     if n:
         return rules.consistency(result, data)
     return None

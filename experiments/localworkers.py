@@ -1,6 +1,6 @@
 """Local worker processes (spawned, one BLAS thread each, SIGINT ignored): started, told to stop, ended.
 
-Light to import (the standard library only): ``python -m experiments.run`` starts its workers with :func:`start_early`
+Light to import (the standard library and fitbench.threads): ``python -m experiments.run`` starts its workers with :func:`start_early`
 before it imports its own modules (pandas, the report's code: 0.4 s), so that both import at once; a worker imports
 the rows' code (:mod:`experiments.rows`) itself. :mod:`experiments.executors` runs chunks on them.
 """
@@ -14,27 +14,17 @@ import sys
 import threading
 import time
 
-
-BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+from fitbench.threads import BLAS_THREAD_VARS, one_thread_environment  # noqa: F401 (BLAS_THREAD_VARS: re-exported)
 
 
 @contextlib.contextmanager
 def _one_blas_thread_per_worker():
     """Workers inherit the environment when they start (lazily, at the first submit): one BLAS thread each,
-    unless the user chose otherwise. With several workers, multi-threaded BLAS on small matrices
-    oversubscribes the cores (the multilateration study ran 3x slower with 2 workers x 2 OpenBLAS threads
-    on 2 cores)."""
-    saved = {v: os.environ.get(v) for v in BLAS_THREAD_VARS}
-    for var in BLAS_THREAD_VARS:
-        os.environ.setdefault(var, "1")
-    try:
+    unless the user chose otherwise (:func:`fitbench.threads.one_thread_environment`). With several workers,
+    multi-threaded BLAS on small matrices oversubscribes the cores (the multilateration study ran 3x slower with
+    2 workers x 2 OpenBLAS threads on 2 cores)."""
+    with one_thread_environment():
         yield
-    finally:
-        for v, val in saved.items():
-            if val is None:
-                os.environ.pop(v, None)
-            else:
-                os.environ[v] = val
 
 
 @contextlib.contextmanager

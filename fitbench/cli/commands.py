@@ -22,6 +22,7 @@ import warnings
 import numpy as np
 
 import fitbench.cli.options as cli_options
+from fitbench.threads import one_thread_environment
 import methods
 from methods import InvalidInputError
 from methods.units import JSON_UNITS, UNIT_CHOICES, canonical, warn_implausible
@@ -98,33 +99,19 @@ def _flush_c_stdio() -> None:
 
 
 #: the variables BLAS and OpenMP libraries read their thread count from when they load (as the engine's workers)
-BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
-
-
 @contextlib.contextmanager
 def one_blas_thread():
-    """One BLAS/OpenMP thread while a subcommand computes, unless the user chose a count (one of
-    :data:`BLAS_THREAD_VARS` set): its linear algebra is small (solves of a few unknowns, QR of N x 6), where a
-    second thread only waits, spinning. Libraries loaded already are limited through threadpoolctl; those loaded
-    during the command (SciPy's OpenBLAS) read the variables, set to 1 in the block (docs/cli.md: the
+    """One BLAS/OpenMP thread while a subcommand computes, unless the user chose a count
+    (:func:`fitbench.threads.one_thread_environment`): libraries loaded already are limited through threadpoolctl;
+    those loaded during the command (SciPy's OpenBLAS) read the variables, set to 1 in the block (docs/cli.md: the
     figures)."""
-    saved = {v: os.environ.get(v) for v in BLAS_THREAD_VARS}
-    chosen = any(v is not None for v in saved.values())
-    for v in BLAS_THREAD_VARS:
-        os.environ.setdefault(v, "1")
-    try:
+    with one_thread_environment() as chosen:
         if chosen:
             yield
         else:
             from threadpoolctl import threadpool_limits
             with threadpool_limits(limits=1):
                 yield
-    finally:
-        for v, val in saved.items():
-            if val is None:
-                os.environ.pop(v, None)
-            else:
-                os.environ[v] = val
 
 
 @contextlib.contextmanager

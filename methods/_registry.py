@@ -292,8 +292,13 @@ def load_plugins() -> None:
 
 
 def get(method_id: str) -> MethodSpec:
-    """The :class:`MethodSpec` of ``method_id``; unknown ids raise with close suggestions."""
+    """The :class:`MethodSpec` of ``method_id``; unknown ids raise with close suggestions. A built-in method's id
+    needs no plugin loaded (a plugin cannot take a registered id): a command fitting only built-in methods imports
+    no plugin and is not held up, or told about, an unrelated one."""
     load_builtins()
+    spec = _REGISTRY.get(method_id)
+    if spec is not None and spec.builtin:
+        return spec
     load_plugins()
     try:
         return _REGISTRY[method_id]

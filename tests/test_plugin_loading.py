@@ -219,3 +219,18 @@ def test_experiments_run_reports_a_broken_plugin_once_in_one_line(broken_site, t
     assert len(lines) == 2, out.stderr          # the method group and the data-source group, once each
     assert all(line.startswith("fitbench: warning: ") for line in lines), out.stderr
     assert "PluginLoadWarning" not in out.stderr and "load_plugins()" not in out.stderr
+
+
+def test_a_built_in_method_needs_no_plugin_loaded(broken_site):
+    """Fitting with a built-in method (what fitbench circular-test or positioning do) imports no plugin: a broken or
+    slow one unrelated to it neither warns nor delays; a plugin's method id still loads the plugins."""
+    code = ("import numpy as np, methods\n"
+            "t = np.linspace(0, 6, 30)\n"
+            "print(methods.fit('circle.kasa', np.column_stack([np.cos(t), np.sin(t)])).radius)\n"
+            "import sys; print(sorted(m for m in sys.modules if m.startswith('fitbench_')))\n"
+            "print(methods.get('circle.first_point').id)\n")
+    out = run_python("-c", code, path_first=[broken_site])
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert float(lines[0]) == pytest.approx(1.0) and lines[1] == "[]" and lines[2] == "circle.first_point"
+    assert len(plugin_lines(out.stderr)) == 1  # the broken plugin is met only when the plugins load

@@ -461,12 +461,8 @@ def _check_where(cond, columns, key: str) -> None:
 
 #: units read from a column name's suffix (data and study columns: ``data_arc_deg``, ``station_error_um``)
 SUFFIX_UNITS = {"_deg": "°", "_rad": "rad", "_urad": "µrad", "_um": "µm", "_mm": "mm", "_nm": "nm", "_s": "s"}
-_LENGTH_UNITS = {"mm", "µm", "um", "nm", "m", "cm"}
-_ANGLE_UNITS = {"rad", "µrad", "urad", "mrad", "deg", "°", "arcsec"}
-
-
-#: the units of lengths
 LENGTH_UNITS = {"mm", "µm", "um", "nm", "m", "cm"}
+_ANGLE_UNITS = {"rad", "µrad", "urad", "mrad", "deg", "°", "arcsec"}
 
 
 def length_unit(cfg: dict | None) -> str | None:
@@ -515,7 +511,7 @@ def _unit_problem(column: str, unit: str, how: str) -> str | None:
     if not unit or how in ("count", "ok_share"):
         return None
     own = column_unit(column)
-    for group, what in ((_LENGTH_UNITS, "a length"), (_ANGLE_UNITS, "an angle")):
+    for group, what in ((LENGTH_UNITS, "a length"), (_ANGLE_UNITS, "an angle")):
         if own in group and unit not in group:
             return f"{column!r} is {what} in {own}, not in {unit!r}"
         if unit in group and own and own not in group:
@@ -868,20 +864,28 @@ MM_SOURCES = frozenset({"published", "file", "circular_test", "positioning", "co
 DATA_UNITS = "data units"
 
 
+def data_length_unit(cfg: dict | None) -> str | None:
+    """The unit of a study's lengths: its declared ``length_unit`` (:func:`length_unit`), else None (the columns'
+    declared mm) when every data set comes from a source whose lengths are mm (:data:`MM_SOURCES`), else
+    :data:`DATA_UNITS` (a generator's lengths are those of its own parameters)."""
+    declared = length_unit(cfg)
+    if declared:
+        return declared
+    used = {"published" if "published" in d else "file" if "file" in d else d.get("source") or d.get("generator")
+            for d in (cfg or {}).get("datasets") or []}
+    return None if not used or used <= MM_SOURCES else DATA_UNITS
+
+
 def _length_unit(cfg: dict, metric: str) -> tuple[str, str]:
     """(the unit of ``metric`` in a default table or figure, a sentence for the caption or ''). A length is in the
     study's declared ``length_unit``, else in mm when every data set comes from a source whose lengths are mm
     (:data:`MM_SOURCES`), else in the data's own unit (:data:`DATA_UNITS`), which the caption says how to name."""
     unit = column_unit(metric)
-    if unit not in _LENGTH_UNITS:
+    if unit not in LENGTH_UNITS:
         return unit, ""
-    declared = length_unit(cfg)
-    if declared:
-        return declared, ""
-    used = {"published" if "published" in d else "file" if "file" in d else d.get("source") or d.get("generator")
-            for d in cfg.get("datasets") or []}
-    if used and used <= MM_SOURCES:
-        return unit, ""
+    lengths = data_length_unit(cfg)
+    if lengths != DATA_UNITS:
+        return lengths or unit, ""
     return DATA_UNITS, (" Lengths are in the unit of the data (a generator's are those of its radius and noise); "
                         "length_unit in the study's TOML names it.")
 

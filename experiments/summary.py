@@ -67,9 +67,9 @@ def summary_units(summary: pd.DataFrame, cfg: dict | None = None) -> dict[str, s
     """{column: unit} of a :func:`summarise` table ('' for counts and shares): each statistic of a row column
     takes that column's declared unit (``experiments.study.column_unit``: the result classes' declarations, s for
     timings, a unit suffix such as ``_deg``); lengths in the study's own length unit where it declares one
-    (``experiments.study.length_unit``)."""
-    from experiments.study import LENGTH_UNITS, column_unit, length_unit
-    lengths = length_unit(cfg)
+    (``experiments.study.data_length_unit``: else mm for the machine-tool data, else the data's own units)."""
+    from experiments.study import LENGTH_UNITS, column_unit, data_length_unit
+    lengths = data_length_unit(cfg)
     source = {"form_error_median": "form_error", "iterations_median": "iterations", "time_median_s": "time_median_s"}
     for col in result_base.truth_error_columns():
         name = col.replace("_error", "")

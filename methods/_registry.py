@@ -21,6 +21,7 @@ from methods._errors import InvalidInputError, ResultContractError, UnknownMetho
 from methods._families import import_method_modules
 from methods.plugins import add_entry, load_entry_points, own_entries
 from methods._validation import validate_points
+from methods import result_base
 from methods.result_base import FitResult, check_result
 
 ENTRY_POINT_GROUP = "fitbench.methods"
@@ -283,6 +284,15 @@ def load_builtins() -> None:
 
 def builtins_loaded() -> bool:
     return _builtins_loaded
+
+
+def is_builtin(method_id: str) -> bool:
+    """Whether ``method_id`` is one of fitbench's own methods (the built-ins are loaded first)."""
+    load_builtins()
+    return method_id in BUILTIN_IDS
+
+
+result_base._builtin_method[0] = is_builtin  # the gate asks it of a certificate's claim (result_base imports no registry)
 
 
 def load_plugins() -> None:

@@ -403,16 +403,18 @@ def _undeclared_family(family: str) -> str:
             f"own declaring it (docs/plugins.md), whose columns and checks the gate applies")
 
 
+#: whether a method id is one of fitbench's own: set by ``methods._registry``, which knows them (this module, below the
+#: registry, imports none of it); until then no id is
+_builtin_method: list = [lambda method: False]
+
+
 def _certificate_problem(method: str, claim) -> str | None:
     """A plugin's claim of a certificate (``extra['certified']`` "global" or "local"): refused. Only fitbench's own
     methods set it, each after checking its certificate (docs/certificates.md); the gate cannot check a claim of an
     objective it does not know (a zone fit's width, an inscribed or circumscribed radius)."""
     if claim is None or claim is False:
         return None
-    from methods._registry import BUILTIN_IDS, builtins_loaded, load_builtins
-    if not builtins_loaded():
-        load_builtins()
-    if method in BUILTIN_IDS:
+    if _builtin_method[0](method):
         return None
     return (f"extra['certified'] = {_describe(claim)} is a certificate only fitbench's own methods give (each checks "
             f"it before setting it); a plugin's claim cannot be checked here: leave 'certified' out (or False) and "

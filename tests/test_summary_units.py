@@ -23,8 +23,15 @@ def _header(md: str) -> list[str]:
 
 
 def test_summary_md_headers_carry_the_declared_units(tmp_path):
+    """Lengths of a generator's data are in the data's own units unless the study names them (length_unit), as in
+    its default table and figure; declared, they carry that unit."""
     cfg = tmp_path / "ustudy.toml"
     cfg.write_text(STUDY, encoding="utf-8")
+    run_study(str(cfg), tmp_path / "out", quick=False, jobs=1, log=lambda *a: None)
+    head = _header((tmp_path / "out" / "ustudy" / "summary.md").read_text(encoding="utf-8"))
+    assert "form error median [data units]" in head and "center rmse [data units]" in head
+    assert "radius bias [data units]" in head and "radius [data units]" in head
+    cfg.write_text(STUDY.replace('kind = "grid"', 'kind = "grid"\nlength_unit = "mm"'), encoding="utf-8")
     run_study(str(cfg), tmp_path / "out", quick=False, jobs=1, log=lambda *a: None)
     head = _header((tmp_path / "out" / "ustudy" / "summary.md").read_text(encoding="utf-8"))
     assert "form error median [mm]" in head and "center rmse [mm]" in head and "radius bias [mm]" in head

@@ -1,6 +1,7 @@
 """Run faults and the fault-injection test: kills, interrupts, a corrupt row store, history-
 independent row order, --jobs and --out checks, a bad Dask scheduler. The runs are subprocesses started in
-another folder than the repository (PYTHONPATH points at this checkout)."""
+another folder than the repository (PYTHONPATH points at this checkout), but for those whose process is not what is
+tested (the row store, the row order, --jobs and --out): ``experiments.run.main`` in this process, in that folder."""
 from __future__ import annotations
 
 import os
@@ -10,6 +11,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import pandas as pd
 import pytest
@@ -47,6 +49,17 @@ def study(folder: Path, name="faults", reps=3, ns="[10, 20]") -> Path:
 def run(args, cwd, timeout=300, **variables):
     return subprocess.run([sys.executable, "-m", "experiments.run", *map(str, args)], cwd=cwd,
                           env=subprocess_env(**variables), capture_output=True, text=True, timeout=timeout)
+
+
+def run_here(args, cwd, monkeypatch, capsys):
+    """``python -m experiments.run ARGS`` in ``cwd`` as a call of ``experiments.run.main`` in this process: its exit
+    status and what it printed."""
+    from experiments.run import main
+    monkeypatch.chdir(cwd)
+    capsys.readouterr()
+    code = main([str(a) for a in args])
+    printed = capsys.readouterr()
+    return SimpleNamespace(returncode=code, stdout=printed.out, stderr=printed.err)
 
 
 def start(args, cwd):
@@ -187,17 +200,17 @@ def test_fault_injection_sigkill_at_random_moments_then_rerun_reproduces(tmp_pat
 
 
 @pytest.mark.parametrize("damage", ["garbage", "truncated"])
-def test_corrupt_row_store_is_moved_aside_and_recomputed(tmp_path, damage):
+def test_corrupt_row_store_is_moved_aside_and_recomputed(tmp_path, damage, monkeypatch, capsys):
     cfg = study(tmp_path, reps=1)
     out = tmp_path / "out"
-    first = run([cfg, "--jobs", "1", "--out", out], tmp_path)
+    first = run_here([cfg, "--jobs", "1", "--out", out], tmp_path, monkeypatch, capsys)
     assert first.returncode == 0, first.stderr
     expected = non_timing(out / "faults" / "results.csv")
     db = out / "faults" / "rows.sqlite"
     data = db.read_bytes()
     db.write_bytes(b"this is not SQLite " * 200 if damage == "garbage" else data[: len(data) // 2])
     for extra in ([], ["--force"]):
-        again = run([cfg, "--jobs", "1", "--out", out, *extra], tmp_path)
+        again = run_here([cfg, "--jobs", "1", "--out", out, *extra], tmp_path, monkeypatch, capsys)
         assert again.returncode == 0, again.stderr
         assert "Traceback" not in again.stderr
         if not extra:
@@ -208,16 +221,16 @@ def test_corrupt_row_store_is_moved_aside_and_recomputed(tmp_path, damage):
         db.write_bytes(b"\x00garbage" * 500)  # and --force on a corrupt store
 
 
-def test_row_order_does_not_depend_on_history(tmp_path):
+def test_row_order_does_not_depend_on_history(tmp_path, monkeypatch, capsys):
     old = study(tmp_path, reps=1, ns="[10, 20]")
     resumed = tmp_path / "resumed"
-    assert run([old, "--jobs", "1", "--out", resumed], tmp_path).returncode == 0
+    assert run_here([old, "--jobs", "1", "--out", resumed], tmp_path, monkeypatch, capsys).returncode == 0
     new_dir = tmp_path / "new"
     new_dir.mkdir()
     new = study(new_dir, reps=1, ns="[30, 20, 10]")  # reordered and extended grid: cached rows are reused
-    second = run([new, "--jobs", "1", "--out", resumed], tmp_path)
+    second = run_here([new, "--jobs", "1", "--out", resumed], tmp_path, monkeypatch, capsys)
     assert second.returncode == 0 and "already stored" in second.stdout
-    fresh = run([new, "--jobs", "1", "--out", tmp_path / "fresh"], tmp_path)
+    fresh = run_here([new, "--jobs", "1", "--out", tmp_path / "fresh"], tmp_path, monkeypatch, capsys)
     assert fresh.returncode == 0
     a = non_timing(resumed / "faults" / "results.csv")
     b = non_timing(tmp_path / "fresh" / "faults" / "results.csv")
@@ -225,9 +238,10 @@ def test_row_order_does_not_depend_on_history(tmp_path):
     pd.testing.assert_frame_equal(a, b)
 
 
-def test_jobs_capped_out_checked_and_default_out_in_cwd(tmp_path):
+def test_jobs_capped_out_checked_and_default_out_in_cwd(tmp_path, monkeypatch, capsys):
     cfg = study(tmp_path, reps=1, ns="[10]")
-    res = run([cfg, "--jobs", "64"], tmp_path)  # no --out: results/user/ in the working directory (not the project's)
+    res = run_here([cfg, "--jobs", "64"], tmp_path, monkeypatch, capsys)  # no --out: results/user/ in the working
+    # directory (not the project's)
     assert res.returncode == 0, res.stderr
     capped = [ln for ln in res.stdout.splitlines() if "capped" in ln]
     assert len(capped) == 1 and "--jobs 64" in capped[0]
@@ -235,7 +249,7 @@ def test_jobs_capped_out_checked_and_default_out_in_cwd(tmp_path):
     afile = tmp_path / "a_file"
     afile.write_text("x")
     for out in (afile, afile / "below"):
-        res = run([cfg, "--out", out], tmp_path)
+        res = run_here([cfg, "--out", out], tmp_path, monkeypatch, capsys)
         assert res.returncode == 2 and "Traceback" not in res.stderr
         assert len(res.stderr.strip().splitlines()) == 1 and "--out" in res.stderr
 

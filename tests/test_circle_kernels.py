@@ -208,3 +208,43 @@ def test_stationarity_pseudo_inverse_matches_lstsq():
     # exactly rank-deficient: the null direction is dropped, as lstsq drops it
     a = np.diag([2.0, 1.0, 0.0])
     assert ck.psd_decrease(tuple(a.ravel()), (2.0, 1.0, 5.0)) == pytest.approx(2.0 * 2.0 / 2.0 + 1.0)
+
+
+def test_each_kernel_carries_the_sha256_of_the_source_it_was_built_from():
+    """setup.py builds the SHA-256 of each C source into its kernel (``source_sha256``): the rows' cache keys hash
+    that source, so the binary that runs must be the one built from it."""
+    import hashlib
+    from pathlib import Path
+
+    from methods._compiled import kernels
+    for module in ("methods.circle._ckernels", "methods.ellipse._ckernels"):
+        mod = kernels(module)
+        source = Path(mod.__file__).with_name("_ckernels.c")
+        assert mod.source_sha256 == hashlib.sha256(source.read_bytes()).hexdigest(), module
+
+
+def test_a_kernel_built_from_another_version_of_its_source_is_refused(tmp_path, monkeypatch):
+    """A C kernel edited (or pulled) but not rebuilt ran the old binary under the new source's cache keys: rows of the
+    old code were stored as the new code's and served as current after the rebuild. Now the kernel is refused, with
+    the rebuild command, as a kernel not built is (rows 'unavailable', recomputed by the next run)."""
+    import hashlib
+    import sys
+    import types
+
+    from methods import _compiled
+    source = tmp_path / "_ckernels.c"
+    source.write_text("/* version 2 */\n")
+    fake = types.ModuleType("fitbench_test_pkg._ckernels")
+    fake.__file__ = str(tmp_path / "_ckernels.cpython-311-x86_64-linux-gnu.so")
+    fake.source_sha256 = hashlib.sha256(b"/* version 1 */\n").hexdigest()
+    monkeypatch.setitem(sys.modules, "fitbench_test_pkg._ckernels", fake)
+    monkeypatch.setattr(_compiled, "_CHECKED", {})
+    with pytest.raises(_compiled.KernelsNotBuiltError, match=r"compiled kernel fitbench_test_pkg\._ckernels is stale: .*"
+                                                              r"build_ext --inplace"):
+        _compiled.kernels("fitbench_test_pkg._ckernels")
+    fake.source_sha256 = hashlib.sha256(source.read_bytes()).hexdigest()   # rebuilt from the source beside it
+    assert _compiled.kernels("fitbench_test_pkg._ckernels") is fake
+    source.unlink()   # an installed package without its sources: nothing to be stale against
+    monkeypatch.setattr(_compiled, "_CHECKED", {})
+    fake.source_sha256 = ""
+    assert _compiled.kernels("fitbench_test_pkg._ckernels") is fake

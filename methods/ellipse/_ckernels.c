@@ -744,4 +744,17 @@ static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_ckernels",
                                     "Compiled kernel of the ellipse fits; see the C source header.",
                                     -1, Methods};
 
-PyMODINIT_FUNC PyInit__ckernels(void) { return PyModule_Create(&module); }
+/* the SHA-256 of this file as setup.py built it (methods/_compiled.py compares it with the file beside the module:
+   a kernel built from another version of its source is refused, not run under the new source's cache keys) */
+#ifndef FITBENCH_SOURCE_SHA256
+#define FITBENCH_SOURCE_SHA256 ""
+#endif
+
+PyMODINIT_FUNC PyInit__ckernels(void) {
+    PyObject *m = PyModule_Create(&module);
+    if (m != NULL && PyModule_AddStringConstant(m, "source_sha256", FITBENCH_SOURCE_SHA256) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
+}

@@ -1,11 +1,13 @@
 """The subcommands compute with one BLAS thread (their solves are small: a second thread only waits, spinning;
 ``fitbench circular-test`` used 3-4 x the CPU of one thread on 2 cores), unless the user chose a count."""
+import os
+
 import numpy as np
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
 from datasets.circular_test import circular_test, lola_hbg130
-from fitbench.cli import commands
+from fitbench.cli import circular_test as circular_test_cli, commands
 
 VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")  # what BLAS and OpenMP libraries read
 
@@ -24,15 +26,15 @@ def run_files(tmp_path_factory):
 def circular_test_seeing_threads(monkeypatch, capsys, run_files):
     """Run ``circular-test`` with BLAS at 2 threads outside; what the command saw: (threads per library, env)."""
     seen = {}
-    real = commands.cmd_circular_test
+    real = circular_test_cli.run   # the function the parser's circular-test calls (fitbench/cli/circular_test.py)
 
     def spy(args):
         code = real(args)
         seen["threads"] = {i["filepath"]: i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
-        seen["env"] = {v: commands.os.environ.get(v) for v in VARS}
+        seen["env"] = {v: os.environ.get(v) for v in VARS}
         return code
 
-    monkeypatch.setattr(commands, "cmd_circular_test", spy)
+    monkeypatch.setattr(circular_test_cli, "run", spy)
     with threadpool_limits(limits=2, user_api="blas"):
         outside = {i["filepath"]: i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
         assert commands.main(["circular-test", *run_files, "--nominal-radius", "298.997",
@@ -50,7 +52,7 @@ def test_a_subcommand_computes_with_one_blas_thread_and_restores_the_pools(monke
     assert seen["threads"] and set(seen["threads"].values()) == {1}, seen
     assert seen["env"] == dict.fromkeys(VARS, "1")            # libraries loaded during the command read these
     assert {k: after[k] for k in outside} == outside             # the pools loaded before are as they were
-    assert all(v not in commands.os.environ for v in VARS)      # and the environment too
+    assert all(v not in os.environ for v in VARS)               # and the environment too
 
 
 def test_a_thread_count_the_user_chose_is_kept(monkeypatch, capsys, run_files):

@@ -3,7 +3,8 @@ is the same command without the experiment subcommands).
 
 ``run``, ``report`` and ``verify`` hand their arguments to ``experiments.run.main``,
 ``experiments.report.main`` and ``experiments.verify.main`` (imported only when used, by module name);
-every other subcommand is in :mod:`fitbench.cli.commands` (one argparse tree, :func:`build_parser`).
+every other subcommand is in :mod:`fitbench.cli.commands` (one argparse tree, :func:`build_parser`; each
+subcommand in its own module, ``fitbench/cli/NAME.py``).
 ``--version`` works everywhere.
 
 Output folders not given on the command line are relative to the current directory (``results/`` for

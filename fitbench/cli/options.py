@@ -1,5 +1,5 @@
-"""The helpers the ``fitbench`` subcommands share (:mod:`fitbench.cli.commands`, :mod:`fitbench.cli.roundness`,
-:mod:`fitbench.cli.history`): the reader, tolerance and report options, reading a profile, checking and writing
+"""The helpers the ``fitbench`` subcommands share (each one's module: :mod:`fitbench.cli.fit`,
+:mod:`fitbench.cli.roundness`, :mod:`fitbench.cli.history`, ...): the reader, tolerance and report options, reading a profile, checking and writing
 output files, the PASS/FAIL verdict. Below the subcommand modules: it imports none of them.
 
 Bad input is an :class:`~methods.InvalidInputError` (one line on stderr, exit status 2, in

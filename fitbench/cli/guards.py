@@ -1,0 +1,93 @@
+"""The guards a ``fitbench`` subcommand runs under (:func:`fitbench.cli.commands.main` sets them up; the subcommand
+modules call :func:`run_method`): one BLAS/OpenMP thread, what is printed to stdout sent to stderr (a method's
+prints, a ``--json`` command's stray output), a method's own exception turned into one line (:class:`MethodFailed`),
+and results turned into JSON-ready values (:func:`jsonable`)."""
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+
+from fitbench.threads import one_thread_environment
+from methods import InvalidInputError
+
+
+class MethodFailed(Exception):
+    """A method raised an exception other than :class:`~methods.InvalidInputError` (its own bug, e.g. a
+    plugin writing into its read-only input): printed as one line, exit status
+    :data:`fitbench.cli.commands.EXIT_METHOD_FAILED`."""
+
+
+def _flush_c_stdio() -> None:
+    """Flush the C library's stdio buffers (what compiled code printed with printf is still in them)."""
+    try:
+        import ctypes
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError, TypeError):
+        pass   # no C library to reach (Windows): Python's prints are redirected all the same
+
+
+#: the variables BLAS and OpenMP libraries read their thread count from when they load (as the engine's workers)
+@contextlib.contextmanager
+def one_blas_thread():
+    """One BLAS/OpenMP thread while a subcommand computes, unless the user chose a count
+    (:func:`fitbench.threads.one_thread_environment`): libraries loaded already are limited through threadpoolctl;
+    those loaded during the command (SciPy's OpenBLAS) read the variables, set to 1 in the block (docs/cli.md: the
+    figures)."""
+    with one_thread_environment() as chosen:
+        if chosen:
+            yield
+        else:
+            from threadpoolctl import threadpool_limits
+            with threadpool_limits(limits=1):
+                yield
+
+
+@contextlib.contextmanager
+def stdout_to_stderr():
+    """Send what is printed to stdout to stderr inside the block: Python's prints (``sys.stdout``) and, when
+    stdout is a real file descriptor, what compiled code writes to descriptor 1 (a Fortran or C solver's
+    iteration log), whose C buffers are flushed before descriptor 1 is restored."""
+    with contextlib.redirect_stdout(sys.stderr):
+        try:
+            out_fd, err_fd = sys.__stdout__.fileno(), sys.__stderr__.fileno()
+        except (AttributeError, OSError, ValueError):
+            out_fd = None
+        if out_fd is None or out_fd == err_fd:
+            yield
+            return
+        sys.__stdout__.flush()
+        _flush_c_stdio()
+        saved = os.dup(out_fd)
+        try:
+            os.dup2(err_fd, out_fd)
+            yield
+        finally:
+            _flush_c_stdio()
+            os.dup2(saved, out_fd)
+            os.close(saved)
+
+
+def run_method(spec, data, **params):
+    """``spec(data, **params)`` with the method's prints sent to stderr (stdout carries the command's output
+    alone: ``--json`` stays one JSON object) and its own exceptions turned into one line naming it
+    (:class:`MethodFailed`); bad input (:class:`~methods.InvalidInputError`, the result gate's refusal) passes."""
+    try:
+        with stdout_to_stderr():
+            return spec(data, **params)
+    except InvalidInputError:
+        raise
+    except (Exception, SystemExit, GeneratorExit) as exc:   # a method's sys.exit() is no success (nor a silent end)
+        text = " ".join(str(exc).split()) or "(no message)"
+        hint = ("a bug in fitbench: please report it" if spec.builtin else
+                f"an error inside the method (module {spec.module}), not in the data: report it to its author")
+        if isinstance(exc, ValueError) and "read-only" in text:
+            hint += "; a method gets read-only points and must copy them (points.copy()) before writing"
+        what = (f"{type(exc).__name__}: {text[:300]}" if isinstance(exc, Exception) else
+                f"it raised {type(exc).__name__}({', '.join(map(repr, exc.args))[:300]})")
+        raise MethodFailed(f"{spec.id} failed: {what} ({hint})") from None
+
+
+def jsonable(v):
+    from methods.result_base import jsonable as j
+    return j(v)

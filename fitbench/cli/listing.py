@@ -1,0 +1,29 @@
+"""``fitbench list``: one line per registered method (id, kind, reference), or the listing with defaults as JSON."""
+from __future__ import annotations
+
+import json
+
+import fitbench.cli.options as cli_options
+from fitbench.cli.guards import jsonable
+
+
+def add_parser(sub):
+    pl = sub.add_parser("list", help="one line per registered method: id, kind, reference")
+    pl.add_argument("--family", help="only this family (e.g. circle)")
+    pl.add_argument("--json", action="store_true", help="machine-readable listing with defaults")
+    pl.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from methods import describe_methods  # the built-in methods without importing their families
+
+    specs = describe_methods(args.family)
+    if args.json:
+        cli_options.print_json(json.dumps([{"id": s.id, "family": s.family, "kind": s.kind, "summary": s.summary,
+                           "reference": s.reference, "defaults": {k: jsonable(v) for k, v in s.defaults.items()}}
+                          for s in specs], indent=1))
+        return 0
+    width = max((len(s.id) for s in specs), default=10)
+    for s in specs:
+        print(f"{s.id:<{width}}  {s.kind:<14}  {s.reference}")
+    return 0

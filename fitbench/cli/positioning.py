@@ -1,0 +1,291 @@
+"""``fitbench positioning FILE``: the ISO 230-2 (or VDI 3441) positioning figures of one axis and the GLS
+polynomial model with its uncertainty, the temperature correction to 20 °C, and the controller compensation tables
+(:mod:`fitbench.compensation`); options with their units (:func:`instrument_length`, :func:`expansion_coefficient`,
+:func:`material_temperature`)."""
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+
+import fitbench.cli.options as cli_options
+import methods
+from fitbench.cli.guards import jsonable
+from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
+                                  add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances,
+                                  save_figure, test_conditions, verdict, verdict_lines, verdict_title, warn,
+                                  write_report, write_text_atomic)
+from methods import InvalidInputError
+from methods.units import JSON_UNITS, UNIT_CHOICES, canonical
+
+
+def add_parser(sub):
+    pp = sub.add_parser("positioning", help="ISO 230-2 positioning figures and the GLS polynomial model")
+    pp.add_argument("file", metavar="FILE",
+                    help="long table (target, direction, run, actual or deviation) or a wide laser export "
+                         "(target, then one column per run: run1 / run1+ run1- / ...)")
+    pp.add_argument("--degree", type=int, default=3, help="degree of the polynomial (default 3)")
+    g = pp.add_mutually_exclusive_group()
+    g.add_argument("--instrument-u", metavar="U", help="standard uncertainty of the instrument: a length with its unit "
+                   "(0.5um, 0.0005mm); a bare number is mm (unlike --tolerance, in µm)")
+    g.add_argument("--mpe", metavar="MPE", help="the instrument's maximum permissible error (rectangular, u = MPE/√3): a "
+                   "length with its unit (2um, 0.002mm); a bare number is mm (unlike --tolerance, in µm)")
+    pp.add_argument("--standard", choices=("iso230-2:2014", "iso230-2:1988", "vdi3441"), default="iso230-2:2014")
+    add_tolerance_option(pp, "A, E, R, B, M, A_up, ...")
+    add_report_option(pp)
+    add_test_identity_options(pp)
+    pp.add_argument("--material-temperature", metavar="DEG_C",
+                    help="temperature of the axis scale / workpiece during the test: °C as a bare number (10 to 40), "
+                         "or with its unit (26C, 79F, 299.15K); the deviations are corrected to 20 °C by the nominal "
+                         "differential expansion (needs --expansion-coefficient)")
+    pp.add_argument("--expansion-coefficient", metavar="UM_PER_M_K",
+                    help="its thermal expansion coefficient: µm/(m·K) as a bare number (steel about 11.5), or with "
+                         "its unit (11.5e-6/K, 11.5ppm/K)")
+    pp.add_argument("--forward-direction", choices=("+", "-"), default=None,
+                    help="wide exports with Forward/Reverse (Hin/Rück) runs: the axis direction the forward runs "
+                         "moved in (default: from the order of the targets in the file, + when increasing)")
+    pp.add_argument("--deviation-unit", choices=UNIT_CHOICES,
+                    help="unit of the deviation columns when it differs from --unit (laser exports: targets in mm, "
+                         "errors in µm)")
+    add_reader_options(pp, columns=False)
+    pp.add_argument("--compensation", nargs=2, action="append", metavar=("FORMAT", "FILE"),
+                    help="write a compensation table: FORMAT csv, siemens-eec or fanuc-pitch (repeatable)")
+    pp.add_argument("--interval", type=float, default=None, metavar="MM",
+                    help="compensation point spacing (mm; default: the target spacing)")
+    pp.add_argument("--compensation-from", choices=("model", "mean"), default="model",
+                    help="compensation values from the GLS polynomial (default) or the mean deviations at the targets")
+    pp.add_argument("--axis", default=None, help="the axis tested: recorded in the JSON result (fitbench history trends "
+                    "each machine's axes apart) and its name in the controller's table (default X1)")
+    pp.add_argument("--reference", type=float, metavar="MM", help="the machine's reference point, where the table "
+                    "holds 0 (mm; default 0 if the travel contains it, else the nearer end)")
+    pp.add_argument("--json", action="store_true", help="print one JSON object (mm; see its 'units')")
+    pp.add_argument("--plot", metavar="FILE", help="write the plot (.png, .pdf, .svg)")
+    pp.set_defaults(func=run)
+
+
+def instrument_length(option: str, text) -> tuple[float | None, bool]:
+    """(mm, unit given?) of ``--mpe`` / ``--instrument-u``: a length with its unit (``2um``, ``2 µm``, ``0.5nm``,
+    ``0.002mm``) or a bare number in mm (as before units were accepted); a one-line error otherwise."""
+    import re
+    from methods.units import mm_per
+    if text is None:
+        return None, False
+    m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s.+-][^\s]*)?\s*", str(text))
+    if not m:
+        raise InvalidInputError(f"{option} {text!r}: give a length with its unit, e.g. {option} 2um (or a bare number in mm)")
+    unit = m.group(2)
+    if unit is not None:
+        try:
+            factor = mm_per(unit)
+        except InvalidInputError:
+            raise InvalidInputError(f"{option} {text!r}: unknown unit {unit!r}; use um (µm), nm or mm, e.g. {option} 2um") from None
+    value = finite(option, m.group(1)) * (factor if unit is not None else 1.0)
+    if value < 0:
+        raise InvalidInputError(f"{option} {text!r} must not be negative")
+    return value, unit is not None
+
+
+def _check_instrument(option: str, text, value_mm: float | None, explicit: bool, data) -> None:
+    """Warn when a bare-number (mm) ``--mpe`` / ``--instrument-u`` exceeds every deviation of the axis: the
+    option is in mm while ``--tolerance`` and the printout are in µm, and 2 (meant as µm) gave U = 2309 µm."""
+    if value_mm is None or explicit or value_mm == 0:
+        return
+    devs = np.concatenate([np.ravel(a) for a in (data.up, data.down) if a is not None])
+    devs = devs[np.isfinite(devs)]
+    largest = float(np.max(np.abs(devs))) if len(devs) else 0.0
+    if value_mm <= largest:
+        return
+    from methods.units import likely_unit
+    guess = likely_unit(value_mm, max(largest, 1e-6))
+    hint = (f"is it in {guess}? give {option} {text}{guess.replace('µ', 'u')}" if guess else
+            f"give its unit, e.g. {option} {text}um")
+    warn(f"{option} {text} is read as {value_mm:g} mm (a bare number is mm), larger than every deviation of this axis "
+         f"(largest |deviation| {largest * 1e3:.3g} µm): {hint} (or {option} {text}mm to keep mm)")
+
+
+_NUMBER_UNIT = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S*?)\s*"
+#: --expansion-coefficient units -> factor to µm/(m·K) (bare: µm/(m·K), as handbooks tabulate it x 1e-6 /K)
+EXPANSION_UNITS = {"": 1.0, "um/(m*k)": 1.0, "um/(m.k)": 1.0, "um/m/k": 1.0, "ppm/k": 1.0, "/k": 1e6, "1/k": 1e6,
+                   "k^-1": 1e6, "k-1": 1e6}
+#: no material of a machine axis or workpiece expands less than this (Zerodur scales: about 0.01-0.1 µm/(m·K)) or
+#: more than EXPANSION_WARN (aluminium 23, magnesium 26 µm/(m·K))
+EXPANSION_MIN, EXPANSION_WARN = 1e-3, 30.0
+#: a bare --material-temperature outside this range (°C) asks for its unit: ISO 230-2 tests run near 20 °C
+WORKSHOP_C = (10.0, 40.0)
+
+
+def expansion_coefficient(text) -> float | None:
+    """``--expansion-coefficient`` in µm/(m·K): a bare number (11.5 for steel), or with its unit (11.5e-6/K,
+    11.5ppm/K, 11.5um/(m*K)); a bare value no material has (11.5e-6: 1/K read as µm/(m·K), which silently applied
+    no correction) is refused naming the likely unit, one above EXPANSION_WARN warned about."""
+    import re
+    if text is None:
+        return None
+    m = re.fullmatch(_NUMBER_UNIT, str(text))
+    unit = (m.group(2) if m else "").lower().replace("µ", "u").replace("μ", "u").replace("·", "*").replace(" ", "")
+    if not m or unit not in EXPANSION_UNITS:
+        raise InvalidInputError(f"--expansion-coefficient {text!r}: give µm/(m·K) as a bare number (11.5 for steel) "
+                                "or the value with its unit (11.5e-6/K, 11.5ppm/K)")
+    value = finite("--expansion-coefficient", m.group(1)) * EXPANSION_UNITS[unit]
+    if unit == "" and 0 < abs(value) < EXPANSION_MIN:
+        raise InvalidInputError(f"--expansion-coefficient {text} is read as {value:g} µm/(m·K), less than any material "
+                                f"expands (Zerodur about 0.01 µm/(m·K)); {text} looks like 1/K: give {value * 1e6:g} "
+                                f"(µm/(m·K)) or {text}/K")
+    if abs(value) > EXPANSION_WARN:
+        warn(f"--expansion-coefficient {value:g} µm/(m·K) is more than the metals of machine axes expand (steel 11.5, "
+             f"aluminium 23); check its unit (a bare number is µm/(m·K))")
+    return value
+
+
+def material_temperature(text) -> tuple[float | None, str]:
+    """(°C, how it was given) of ``--material-temperature``: a bare number in °C within WORKSHOP_C, or with its
+    unit (26C, 79F, 299.15K); a bare number outside the workshop range is refused naming °F when that fits
+    (79 read as °C gave A = 661 µm)."""
+    import re
+    if text is None:
+        return None, ""
+    m = re.fullmatch(_NUMBER_UNIT, str(text))
+    unit = (m.group(2) if m else "").upper().replace("°", "").replace("DEG", "")
+    if not m or unit not in ("", "C", "F", "K"):
+        raise InvalidInputError(f"--material-temperature {text!r}: give °C as a bare number (26) or the value with "
+                                "its unit (26C, 79F, 299.15K)")
+    v = finite("--material-temperature", m.group(1))
+    c = {"": v, "C": v, "F": (v - 32.0) * 5.0 / 9.0, "K": v - 273.15}[unit]
+    if unit == "" and not WORKSHOP_C[0] <= c <= WORKSHOP_C[1]:
+        f_as_c = (v - 32.0) * 5.0 / 9.0
+        guess = (f"is it °F ({f_as_c:.1f} °C)? give {text}F, or " if WORKSHOP_C[0] <= f_as_c <= WORKSHOP_C[1]
+                 else "give ")
+        raise InvalidInputError(f"--material-temperature {text} °C is outside a workshop's {WORKSHOP_C[0]:g} to "
+                                f"{WORKSHOP_C[1]:g} °C; {guess}{text}C to confirm °C")
+    if not -50.0 <= c <= 100.0:
+        raise InvalidInputError(f"--material-temperature {text} ({c:g} °C) is not a workshop temperature")
+    return c, ("" if unit in ("", "C") else f" ({text.strip()})")
+
+
+def run(args) -> int:
+    from datasets.io import read_positioning
+    from fitbench.plots.positioning import plot, text
+
+    plot_path = check_plot_path(args.plot)
+    report_path = check_plot_path(args.report, "--report")
+    instrument_u, u_explicit = instrument_length("--instrument-u", args.instrument_u)
+    mpe, mpe_explicit = instrument_length("--mpe", args.mpe)
+    if args.degree < 0:
+        raise InvalidInputError(f"--degree must be >= 0, got {args.degree}")
+    temperature, given_as = material_temperature(args.material_temperature)
+    alpha = expansion_coefficient(args.expansion_coefficient)
+    if (temperature is None) != (alpha is None):
+        raise InvalidInputError("the temperature correction needs both --material-temperature (°C) and "
+                                "--expansion-coefficient (µm/(m·K), e.g. 11.5 for steel)")
+    given_deviation_unit = args.deviation_unit
+    with warnings.catch_warnings(record=True) as read_warnings:
+        warnings.simplefilter("always")
+        data, args.unit, args.deviation_unit = read_positioning(args.file, unit=args.unit,
+                                                                deviation_unit=args.deviation_unit,
+                                                                skip_rows=args.skip_rows, with_units=True)
+    from methods.units import UnitWarning
+    unit_warnings = [str(w.message) for w in read_warnings if issubclass(w.category, UnitWarning)]
+    if args.compensation and unit_warnings and given_deviation_unit is None:
+        # a controller file from values the reader itself finds implausible: nothing is written (one line)
+        from fitbench.compensation import CompensationError
+        raise CompensationError(f"not writing {', '.join(p for _, p in args.compensation)}: {unit_warnings[0]}; a "
+                                "controller table from them would be wrong by the same factor: give the deviations' "
+                                "unit with --deviation-unit (or --deviation-unit mm to confirm mm)")
+    from methods.positioning.data import RunOrderNote, swap_directions
+    run_order = [w.message for w in read_warnings if issubclass(w.category, RunOrderNote)]
+    for w in read_warnings:
+        if not issubclass(w.category, RunOrderNote):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    notes = []
+    if args.forward_direction is not None and not run_order:
+        raise InvalidInputError(f"--forward-direction applies to a wide export whose runs are named Forward/Reverse "
+                                f"(or Hin/Rück); {args.file} names its directions (or has none): drop the option")
+    if run_order:
+        found = run_order[0].forward
+        if args.forward_direction is None and found is None:
+            raise InvalidInputError(str(run_order[0]))
+        if args.forward_direction is not None:
+            if args.forward_direction != (found or "+"):
+                data = swap_directions(data)
+            word = "+ (↑)" if args.forward_direction == "+" else "− (↓)"
+            notes.append(f"the Forward/Reverse runs are run order, not direction: forward runs read as approaches in the "
+                         f"{word} direction, as --forward-direction {args.forward_direction} says")
+        else:
+            notes.append(str(run_order[0]))
+    if given_deviation_unit is None and args.deviation_unit == args.unit:
+        args.deviation_unit = None  # printed as one unit, as before
+    _check_instrument("--instrument-u", args.instrument_u, instrument_u, u_explicit, data)
+    _check_instrument("--mpe", args.mpe, mpe, mpe_explicit, data)
+    POS_FIGURES = ("A", "E", "R", "B", "M", "A_up", "A_down", "E_up", "E_down", "R_up", "R_down", "B_mean")
+    tolerances = parse_tolerances(args.tolerance, POS_FIGURES)
+    thermal = None
+    if temperature is not None:
+        from methods.positioning.data import thermal_correction
+        data = thermal_correction(data, temperature, alpha)
+        thermal = {"material_temperature_c": temperature, "expansion_coefficient_um_per_m_k": alpha,
+                   "correction_um_per_m": -alpha * (temperature - 20.0)}
+        thermal_text = (f"temperature correction (ISO 230-2 nominal differential expansion): material at "
+                        f"{temperature:.4g} °C{given_as}, expansion coefficient {alpha:g} µm/(m·K): deviations corrected by "
+                        f"{-alpha * (temperature - 20.0):+.4g} µm/m x target position, to 20 °C")
+    res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
+    lacks = []
+    if args.standard.startswith("iso230-2"):
+        from methods.positioning.iso230_2 import conformity
+        lacks = conformity(data)
+        if lacks:
+            notes.append(f"not an ISO 230-2 test: {'; '.join(lacks)}; the figures below are computed by its "
+                         "formulas but are not the standard's (not for acceptance)")
+    if args.standard != "iso230-2:2014" or len(data.directions) == 1:
+        other = methods.fit("positioning.iso230_2", data, standard=args.standard)
+        res.figures, res.per_target = other.figures, other.per_target
+    comp = None
+    if args.compensation:
+        from fitbench.compensation import write_tables
+        comp = write_tables(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
+                            source=args.compensation_from, axis=args.axis or "X1", write=write_text_atomic,
+                            reference_mm=finite("--reference", args.reference),
+                            unit_confirmed=given_deviation_unit is not None, on_confirmed=warn)
+    missing = [n for n in tolerances if n not in res.figures]
+    if missing:
+        raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "
+                                f"({res.figures.get('directions', 'bidirectional')}, {args.standard})")
+    check = verdict({n: abs(res.figures[n]) for n in tolerances}, tolerances)
+    if plot_path:
+        title = str(args.file) + (f"; corrected to 20 °C from {temperature:g} °C, {alpha:g} µm/(m·K)" if thermal else "")
+        title += verdict_title(check)
+        plot(res, plot_path, title=title, data=data, save=save_figure)
+    lines = [header_line("positioning", args.unit, deviation_unit=args.deviation_unit)]
+    lines += [f"note: {n}" for n in notes]
+    lines += ([thermal_text] if thermal else []) + [text(res, degree=args.degree)] + verdict_lines(check)
+    if report_path:
+        write_report(report_path, f"ISO 230-2 positioning test{': ' + args.machine if args.machine else ''}",
+                     [f"file         {args.file}", f"date         {args.date or '-'}", *lines],
+                     lambda sub: plot(res, None, title=str(args.file), data=data, into=sub), aspect=5 / 13)
+    if args.json:
+        out = dict(res.figures)
+        if thermal:
+            out["temperature_correction"] = dict(thermal, correction_unit="µm/m of target position (to 20 °C)")
+        if check:
+            out["verdict"] = check
+        out["units"] = dict(JSON_UNITS, input_unit=canonical(args.unit),
+                            input_deviation_unit=canonical(args.deviation_unit or args.unit),
+                            polynomial="coefficients of increasing powers of the position P in mm: mm / mm^k")
+        out["per_target"] = {k: v for k, v in res.per_target.items()}
+        out["polynomial"] = {d: {"coefficients": p["coefficients"], "covariance": p["covariance"],
+                                 "degree": p["degree"], "U_at_targets": p["U_at_targets"], "k": p["k"]}
+                             for d, p in res.polynomial.items()}
+        out["u_delta"] = res.extra["u_delta"]
+        out["notes"] = notes
+        if args.standard.startswith("iso230-2"):
+            out["iso230_2_conformity"] = {"meets_minimum": not lacks, "lacks": lacks}
+        # the axis as given (--axis; '' if not): fitbench history keeps each machine's axes apart
+        out["details"] = {"conditions": test_conditions(args, axis=args.axis or "", files=[str(args.file)])}
+        cli_options.print_json(json.dumps(jsonable(out)))
+        return 0
+    print("\n".join(lines))
+    if comp is not None:
+        for fmt, path in args.compensation:
+            print(f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
+                  f"to {comp.position_mm.iloc[-1]:g} mm, from the {args.compensation_from}) written to {path}")
+    return 0

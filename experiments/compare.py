@@ -29,6 +29,11 @@ from methods import InvalidInputError
 #: columns that identify a row (those present are used; data_* and param_* columns are added)
 IDENTITY = ("study", "dataset", "data_stream", "repetition", "seed", "method", "params")
 WORST_ROWS = 3
+#: the columns that say where an iteration stopped: its status and flags, and its counts
+STOPPING = frozenset({"status", "converged", "success", "iterations", "nfev"})
+BACKEND_WHY = ("an iterative method whose path runs near its stopping test stops at another iteration, or on the "
+               "other side of the test (a run-away start converging or not), when its sums differ in the last bits, "
+               "as the compiled kernels' and NumPy's do (docs/speed.md)")
 
 
 def tolerance(column: str, study: str = "", method: str = ""):
@@ -79,8 +84,16 @@ def _number(values: pd.Series) -> np.ndarray | None:
         return None
 
 
-def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> dict:
-    """Every column outside its tolerance, with its worst rows: {study, rows, columns, problems: [...]}."""
+def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame,
+                  kernels: tuple[str, str] | None = None) -> dict:
+    """Every column outside its tolerance, with its worst rows: {study, rows, columns, problems: [...]}.
+
+    ``kernels``: the kernel backends (``meta.json`` ``kernels``) of the committed run and of this one. When they
+    differ (compiled against ``FITBENCH_KERNELS=numpy``), the differences that backend explains are listed apart,
+    in ``kernel_differences``, not in ``problems``: of an iterative method, its status, flags and counts
+    (:data:`STOPPING`), and every value of a row whose status differs between the runs (:data:`BACKEND_WHY`). A
+    value of a row that has the same status in both runs, a closed-form or convex method, a missing row or column
+    stays a problem; with one backend on both sides nothing is set apart."""
     ident = identity_columns(committed)
     a, b = _keyed(committed, ident), _keyed(fresh, [c for c in ident if c in fresh.columns])
     problems = []
@@ -108,6 +121,12 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
             problems.append({"column": col, "n_rows": int(len(b)), "problem": "column missing in the committed results",
                              "worst": []})
     methods = _method_kinds(a["method"] if "method" in a else pd.Series([""] * len(a), index=a.index))
+    other_backend = bool(kernels) and kernels[0] != kernels[1]
+    if other_backend:
+        iterative = np.array([_iterative(m) for m in methods[0]], dtype=bool)[methods[1]]
+        flipped = (np.asarray(a["status"].astype(str).to_numpy() != b["status"].astype(str).to_numpy(), dtype=bool)
+                   if "status" in a and "status" in b else np.zeros(len(a), dtype=bool))
+    explained_problems, explained_rows = [], np.zeros(len(a), dtype=bool)
     for col in committed.columns:
         if col.startswith("_") or (col in ident and col in fresh.columns):
             continue
@@ -132,17 +151,37 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame) -> d
             excess = np.where(ok, 0.0, np.inf)
             diff = None
         bad = ~ok & keep
-        if bad.any():
-            order = np.argsort(-excess[bad], kind="stable")[:WORST_ROWS]
-            idx = np.flatnonzero(bad)[order]
-            t = tol_of[methods[1][idx[0]]]   # the worst row's method's tolerance
-            problems.append({
-                "column": col, "n_rows": int(bad.sum()),
-                "problem": "differs" if t.rtol == t.atol == 0 else f"outside rtol={t.rtol:g}, atol={t.atol:g}",
-                "worst": [{"row": a.index[i], "committed": old.iloc[i], "this_run": new.iloc[i],
-                           "difference": "" if diff is None else f"{diff[i]:.3g}"} for i in idx]})
-    return {"study": study, "rows": int(len(committed)), "columns": compared, "agree": not problems, "problems": problems,
-            "not_converged_values": not_compared}
+        explained = np.zeros(len(bad), dtype=bool)
+        if other_backend:
+            explained = bad & iterative & (flipped | (col in STOPPING))
+            explained_rows |= explained
+        for rows, into in ((bad & ~explained, problems), (explained, explained_problems)):
+            if rows.any():
+                order = np.argsort(-excess[rows], kind="stable")[:WORST_ROWS]
+                idx = np.flatnonzero(rows)[order]
+                t = tol_of[methods[1][idx[0]]]   # the worst row's method's tolerance
+                into.append({
+                    "column": col, "n_rows": int(rows.sum()),
+                    "problem": "differs" if t.rtol == t.atol == 0 else f"outside rtol={t.rtol:g}, atol={t.atol:g}",
+                    "worst": [{"row": a.index[i], "committed": old.iloc[i], "this_run": new.iloc[i],
+                               "difference": "" if diff is None else f"{diff[i]:.3g}"} for i in idx]})
+    out = {"study": study, "rows": int(len(committed)), "columns": compared, "agree": not problems,
+           "problems": problems, "not_converged_values": not_compared}
+    if other_backend:
+        out["kernels"] = {"committed": kernels[0], "this_run": kernels[1]}
+        out["kernel_differences"] = explained_problems
+        out["kernel_rows"] = int(explained_rows.sum())
+        out["kernel_methods"] = sorted({methods[0][k] for k in methods[1][explained_rows]})
+    return out
+
+
+def _iterative(method_id: str) -> bool:
+    """Whether ``method_id`` is registered as iterative (an unknown id is not: its differences stay problems)."""
+    from methods import UnknownMethodError, get
+    try:
+        return get(method_id).kind == "iterative"
+    except (UnknownMethodError, ValueError):
+        return False
 
 
 def _method_kinds(methods: pd.Series) -> tuple[list, np.ndarray]:
@@ -223,6 +262,31 @@ def _meta(folder: Path) -> dict | None:
     return meta if isinstance(meta, dict) else None
 
 
+def _kernels(committed: Path, fresh: Path) -> tuple[str, str] | None:
+    """(committed, this run) kernel backends as their ``meta.json`` record them (``environment.kernels``), None when either
+    does not say."""
+    pair = tuple(((m or {}).get("environment") or {}).get("kernels") if isinstance((m or {}).get("environment"), dict)
+                 else None for m in (_meta(committed), _meta(fresh)))
+    return pair if all(isinstance(k, str) and k for k in pair) else None
+
+
+def kernel_note(report: dict) -> str:
+    """What a study's verdict adds when the two runs used other kernel backends ('' when they used one): which
+    differences that explains (or that none remain)."""
+    k = report.get("kernels")
+    if not k:
+        return ""
+    head = f"; committed with the {k['committed']} kernels, this run with the {k['this_run']} kernels"
+    diffs = report.get("kernel_differences") or []
+    if not diffs:
+        return head + ": no value differs between them"
+    n = sum(p["n_rows"] for p in diffs)
+    cols = ", ".join(dict.fromkeys(p["column"] for p in diffs))
+    return (f"{head}: besides, {n} value(s) in {report.get('kernel_rows', '?')} row(s) of the iterative "
+            f"{', '.join(report.get('kernel_methods', []))} differ ({cols}) where the backends' last bits move an "
+            f"iteration near its stopping test (listed below; expected between backends, never within one)")
+
+
 def _same_inputs(committed: Path, fresh: Path) -> None:
     """Refuse (one line) to compare two runs of a study whose ``meta.json`` record other inputs (another seed,
     other repetitions or grid, edited data): their rows differ by design, not by the code."""
@@ -247,7 +311,7 @@ def verify(studies: list[str], results: Path, against: Path, log=print, write: b
         committed = _read(results, study, "--results")
         fresh = _read(against, study, "--against")
         _same_inputs(results / study, against / study)
-        reports.append({**compare_study(study, committed, fresh), "date": date,
+        reports.append({**compare_study(study, committed, fresh, _kernels(results / study, against / study)), "date": date,
                         "results_sha256": results_sha256(results / study),   # what this verdict judged
                         "against_sha256": results_sha256(against / study),
                         "reference": against_name or f"the run in {_shown(against / study)}"})
@@ -255,13 +319,22 @@ def verify(studies: list[str], results: Path, against: Path, log=print, write: b
         n_bad = sum(p["n_rows"] for p in r["problems"])
         skipped = (f"; {r['not_converged_values']} value(s) of rows that did not converge in both runs not compared "
                    "(their status and counts are)") if r["not_converged_values"] else ""
-        log(f"{r['study']}: " + (f"agree ({r['rows']} rows, {r['columns']} columns within their tolerances{skipped})"
+        log(f"{r['study']}: " + ((f"agree except where the kernel backends part ({r['rows']} rows, {r['columns']} "
+                                   f"columns; every other value within its tolerance{skipped})")
+                                  if r["agree"] and r.get("kernel_differences") else
+                                  f"agree ({r['rows']} rows, {r['columns']} columns within their tolerances{skipped})"
                                   if r["agree"] else
-                                  f"DIFFER: {len(r['problems'])} column(s) outside tolerance, {n_bad} value(s){skipped}"))
+                                  f"DIFFER: {len(r['problems'])} column(s) outside tolerance, {n_bad} value(s){skipped}")
+            + kernel_note(r))
     bad = [(r["study"], p) for r in reports for p in r["problems"]]
     if bad:
         log("")
         log(_table(bad))
+    by_kernels = [(r["study"], p) for r in reports for p in r.get("kernel_differences", [])]
+    if by_kernels:
+        log("")
+        log(f"Differences the other kernel backend explains (not counted above; why: {BACKEND_WHY}):")
+        log(_table(by_kernels))
     if CHAOTIC:
         by_reason: dict[str, list[str]] = {}
         for (s, m, c), t in CHAOTIC.items():
@@ -382,6 +455,7 @@ def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path,
             (into / name / "results.csv").write_bytes(csv.read_bytes())
             commit = str(meta.get("git_commit") or "?")[:10]
             what = "the committed tables" if _committed(csv) else "the previous results"
+            (into / name / "meta.json").write_bytes(meta_path.read_bytes())  # its kernel backend, for the verdict
             refs[name] = {"folder": into,
                           "reference": f"{what} ({_shown(folder)}, commit {commit}, {meta.get('date', '?')})"}
             break
@@ -425,13 +499,14 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
                 if fresh_sha is not None and fresh_sha == ref_sha:
                     r = self_comparison(name, Path(out))  # the same bytes: the verdict of a table on itself, cheaply
                 else:
-                    r = compare_study(name, _read(ref["folder"], name, "reference"), _read(Path(out), name, "--out"))
+                    r = compare_study(name, _read(ref["folder"], name, "reference"), _read(Path(out), name, "--out"),
+                                      _kernels(ref["folder"] / name, Path(out) / name))
             except InvalidInputError as exc:
                 log(f"verify: {name}: not compared ({exc})")
                 continue
             r = {**r, "date": date, **judged}
         entries[name] = r
-        log(f"verify: {name}: " + ("reproduces " + ref["reference"] if r["agree"] else
+        log(f"verify: {name}: " + ("reproduces " + ref["reference"] + kernel_note(r) if r["agree"] else
                                    f"DIFFERS from {ref['reference']} in: "
                                    + ", ".join(dict.fromkeys(f"{p['n_rows']} {p['problem'].replace('row ', 'rows ', 1)}"
                                                              if p["column"] == "(rows)" else p["column"]

@@ -60,6 +60,15 @@ def study_sentence(entry: dict) -> str:
     """One sentence (plain text) for a current verdict: reproduces, or which columns differ."""
     ref = entry.get("reference") or "the committed tables"
     when = entry.get("date") or "?"
+    kernels, by_kernels = entry.get("kernels"), entry.get("kernel_differences") or []
+    if entry.get("agree") and isinstance(kernels, dict) and by_kernels:
+        cols = ", ".join(dict.fromkeys(str(p.get("column")) for p in by_kernels if isinstance(p, dict)))
+        return (f"Verdict ({when}): this run reproduces {ref} within the declared tolerances "
+                f"({entry.get('rows', '?')} rows, {entry.get('columns', '?')} columns) except where the kernel "
+                f"backends part: {ref} used the {kernels.get('committed', '?')} kernels, this run the "
+                f"{kernels.get('this_run', '?')} kernels, and {entry.get('kernel_rows', '?')} row(s) of the iterative "
+                f"{', '.join(map(str, entry.get('kernel_methods', [])))} differ in {cols} (an iteration near its "
+                f"stopping test; details: verify.json).")
     if entry.get("agree"):
         return (f"Verdict ({when}): this run reproduces {ref} within the declared tolerances "
                 f"({entry.get('rows', '?')} rows, {entry.get('columns', '?')} columns).")

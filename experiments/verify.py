@@ -6,7 +6,9 @@ and compares every non-timing column of each ``results.csv`` with the committed 
 (``experiments.metrics.TOLERANCES``: exact for ids, statuses and counts; relative + absolute per metric).
 Rows are matched by their identity (study, data set, data stream, repetition, seed, method, parameters).
 A row with the same status other than "ok" in both runs (an iteration that did not converge) is compared by
-its status and counts only: its values are where the iteration stopped, not a result.
+its status and counts only: its values are where the iteration stopped, not a result. When the two runs used
+other kernel backends (``meta.json``: compiled, or ``FITBENCH_KERNELS=numpy``), an iterative method's statuses and
+counts, and the values of a row whose status differs, are listed apart as what the backend explains.
 
 Prints one line per study and a table of the columns outside tolerance with their worst rows. A check modifies
 neither folder: only with ``--write-verdict`` is the verdict recorded (atomically) in ``RESULTS/verify.json``,

@@ -507,3 +507,49 @@ def test_the_run_s_verdict_of_unchanged_tables_is_kept_and_judged_again_when_a_k
     assert runner.main(args) == 0
     again = json.loads((tmp_path / "out" / verify.VERDICT_FILE).read_text())["studies"][0]
     assert again["date"] != "2000-01-01T00:00:00+00:00" and again["fingerprint"] == first["fingerprint"]
+
+
+def _set_kernels(folder: Path, backend: str) -> None:
+    path = folder / "vstudy" / "meta.json"
+    meta = json.loads(path.read_text())
+    meta["environment"]["kernels"] = backend
+    path.write_text(json.dumps(meta))
+
+
+def test_differences_the_other_kernel_backend_explains_are_named_apart_never_within_one_backend(committed, tmp_path,
+                                                                                                 capsys):
+    """Results committed with the compiled kernels, checked with FITBENCH_KERNELS=numpy: an iterative method near its
+    stopping test may stop an iteration later or flip its status (the convergence study's run-away starts). verify
+    says so and lists those values apart; with one backend on both sides the same edit stays a difference, and a
+    value of a row with one status in both runs, or of a closed-form method, stays one whatever the backends."""
+    fresh = copy_run(committed, tmp_path / "a")
+    assert edit(fresh, 3, "iterations", lambda v: str(int(v) + 1)) == "circle.gauss_newton"
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 1      # one backend: differs
+    assert capsys.readouterr().out.startswith("vstudy: DIFFER")
+    _set_kernels(fresh, "numpy")
+    assert verify.main(["--results", str(committed), "--against", str(fresh), "--write-verdict"]) == 0
+    out = capsys.readouterr().out
+    first = out.splitlines()[0]
+    assert first.startswith("vstudy: agree except where the kernel backends part") and "compiled" in first \
+        and "numpy" in first and "circle.gauss_newton" in first and "(iterations)" in first, out
+    assert "Differences the other kernel backend explains" in out and " iterations " in out
+    entry = json.loads((committed / verify.VERDICT_FILE).read_text())["studies"][0]
+    assert entry["kernels"] == {"committed": "compiled", "this_run": "numpy"} and entry["kernel_rows"] == 1
+    from experiments.verdict import study_verdicts
+    sentence = study_verdicts(committed, ["vstudy"])["vstudy"][0][1]
+    assert "except where the kernel backends part" in sentence and "iterations" in sentence
+    # a status flip: every value of that row is where the iteration stopped in one run
+    edit(fresh, 3, "status", lambda v: "not converged")
+    edit(fresh, 3, "radius", lambda v: repr(float(v) * 3))
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 0, capsys.readouterr().out
+    capsys.readouterr()
+    # real differences stay differences: a value of a row that is ok in both runs, and any column of a closed form
+    for row, column in ((1, "radius"), (0, "iterations")):
+        other = copy_run(committed, tmp_path / f"b{row}")
+        _set_kernels(other, "numpy")
+        change = (lambda v: repr(float(v) * 1.001)) if column == "radius" else (lambda v: str(int(float(v or 0)) + 1))
+        method = edit(other, row, column, change)
+        assert (method == "circle.gauss_newton") == (column == "radius")
+        assert verify.main(["--results", str(committed), "--against", str(other)]) == 1
+        out = capsys.readouterr().out
+        assert out.startswith("vstudy: DIFFER") and f" {column} " in out.split("Differences the other")[0]

@@ -381,3 +381,69 @@ def test_cli_identify_needs_tool_offsets(tmp_path, capsys):
     clash.to_csv(tmp_path / "clash.csv", index=False)
     assert main(["multilaterate", str(tmp_path / "clash.csv")]) == 2
     assert "two different tool offsets" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- the most accurate scheme: ties named
+
+def _acc(values: dict, scenario="s", stations="known"):
+    return pd.DataFrame([{"dataset": scenario, "stations": stations, "method": m, "aligned_error_rms_um": v}
+                         for m, v in values.items()])
+
+
+def _tol():
+    from experiments.studies.multilateration import MultilaterationStudy
+    return MultilaterationStudy.tolerances["aligned_error_rms_um"]
+
+
+def test_winner_names_ties_whatever_the_row_order():
+    """Medians identical to 9 digits (known stations: case_a_distance = joint, case_b_taylor 1e-7 above) are a
+    tie, named by name; the row order decides nothing (it used to decide the 'winner')."""
+    from experiments.studies.multilateration import winner
+    vals = {"joint": 0.619022342, "case_a_squared": 0.807911323, "case_a_distance": 0.619022342,
+            "case_b_taylor": 0.619022445, "case_b_linear": 1.09522023}
+    outs = [winner(_acc(dict(order)), _tol()) for order in (vals.items(), reversed(vals.items()),
+                                                            sorted(vals.items()))]
+    for w in outs:
+        pd.testing.assert_frame_equal(w, outs[0])
+    w = outs[0].iloc[0]
+    assert w["best"] == "case_a_distance, case_b_taylor, joint" and w["tied"] == 3
+    assert w["runner_up"] == "case_a_squared" and w["best_rms_um"] == pytest.approx(0.619022342)
+
+
+def test_winner_exact_lengths_are_a_tie_of_all():
+    """On exact lengths every scheme is within rounding (1e-10 µm) of the truth: no scheme 'wins' by its last bits."""
+    from experiments.studies.multilateration import winner, winner_text
+    acc = _acc({"case_a_distance": 2.37842244e-10, "joint": 2.37842244e-10, "case_b_taylor": 2.27376024e-10,
+                "case_b_linear": 3.42744944e-09})
+    w = winner(acc, _tol())
+    assert w.loc[0, "tied"] == 4 and w.loc[0, "runner_up"] == "" and np.isnan(w.loc[0, "runner_up_rms_um"])
+    assert winner_text(w, 4) == "all 4 (tied) in 1"
+
+
+def test_winner_claim_holds_for_every_machine_verify_calls_agreeing():
+    """Move every median anywhere within verify's declared tolerance (atol + rtol |x|; the extremes included): the
+    scheme most accurate there is always one of those named here, and a lone winner stays the lone winner."""
+    from experiments.studies.multilateration import winner
+    tol = _tol()
+    vals = {"case_a_distance": 0.612594162, "case_a_squared": 0.795896556, "case_b_taylor": 0.617371871,
+            "joint": 0.631038825, "case_b_linear": 1.09012674, "case_b_centred": 1.09012674}
+    acc = _acc(vals)
+    named = set(winner(acc, tol).loc[0, "best"].split(", "))
+    lone = winner(_acc({"joint": 0.637595371, "case_a_distance": 14.179279, "case_b_taylor": 18.351342}), tol)
+    assert lone.loc[0, "best"] == "joint"
+    rng = np.random.default_rng(0)
+    x = acc["aligned_error_rms_um"].to_numpy()
+    band = tol.atol + tol.rtol * x
+    for s in [*rng.uniform(-1, 1, (500, len(x))), *rng.choice([-1.0, 1.0], (500, len(x)))]:
+        moved = acc.assign(aligned_error_rms_um=x + s * band)
+        assert moved.loc[moved["aligned_error_rms_um"].idxmin(), "method"] in named
+        y = lone.loc[0, "best_rms_um"]
+        other = _acc({"joint": y + s[0] * (tol.atol + tol.rtol * y), "case_a_distance": 14.179279 * (1 - tol.rtol) - tol.atol})
+        assert winner(other, tol).loc[0, "best"] == "joint"
+
+
+def test_winner_text_counts_tie_sets():
+    from experiments.studies.multilateration import winner, winner_text
+    acc = pd.concat([_acc({"a": 1.0, "b": 1.0, "c": 2.0}, scenario="s1"), _acc({"a": 1.0, "b": 5.0, "c": 2.0}, scenario="s2"),
+                     _acc({"a": 3.0, "b": 5.0, "c": 1.0}, scenario="s3"), _acc({"a": 1e-10, "b": 2e-10, "c": 3e-10}, scenario="s4")])
+    assert winner_text(winner(acc, _tol()), 3) == "a in 1; a and b (tied) in 1; all 3 (tied) in 1; c in 1"

@@ -167,16 +167,54 @@ def stations_table(df, cfg):
     return s["label"], pd.DataFrame(rows)
 
 
-def winner(acc):
-    """The most accurate scheme per scenario and mode (median aligned volumetric-error RMS)."""
+def _tie_band(tol: Tolerance):
+    """The largest amount a median may move on another machine while verify says "agree": every row within
+    ``atol + rtol |x|`` of its value (experiments.compare), so their median within ``atol + rtol |median|``
+    (x - atol - rtol |x| is increasing in x for rtol < 1)."""
+    return lambda x: tol.atol + tol.rtol * np.abs(x)
+
+
+def winner(acc, tol: Tolerance, column: str = "aligned_error_rms_um"):
+    """The most accurate schemes per scenario and mode (median ``column``), ties named.
+
+    Schemes whose medians could swap order on a machine whose rows agree within ``tol`` (verify's declared
+    tolerance of the column) tie: ``m_i - m_min <= band(m_i) + band(m_min)``, band(x) = atol + rtol |x|. So the
+    scheme that is the most accurate on any such machine is one of those named here, and the exact-length
+    scenarios (every scheme within rounding of the truth, far below atol) are a tie of all. Row order and
+    sort algorithm decide nothing: schemes are ordered by (median, name) with a stable sort, tied ones listed by name.
+    Columns: best (tied schemes, ", "-joined), tied (their number), best_rms_um (the lowest median), runner_up
+    and runner_up_rms_um (the most accurate scheme outside the tie; empty when all tie)."""
+    band = _tie_band(tol)
     out = []
     for (scen, mode), g in acc.groupby(["dataset", "stations"], sort=False):
-        g = g.sort_values("aligned_error_rms_um")
-        best, second = g.iloc[0], g.iloc[1]
-        out.append({"scenario": scen, "stations": mode, "best": best["method"],
-                    "best_rms_um": float(best["aligned_error_rms_um"]), "runner_up": second["method"],
-                    "runner_up_rms_um": float(second["aligned_error_rms_um"])})
+        g = g.sort_values([column, "method"], kind="mergesort")
+        v = g[column].to_numpy(float)
+        tied = (v - v[0]) <= band(v) + band(v[0])
+        best, rest = g[tied], g[~tied]
+        out.append({"scenario": scen, "stations": mode, "best": ", ".join(sorted(best["method"])), "tied": int(tied.sum()),
+                    "best_rms_um": float(v[0]),
+                    "runner_up": rest["method"].iloc[0] if len(rest) else "",
+                    "runner_up_rms_um": float(rest[column].iloc[0]) if len(rest) else float("nan")})
     return pd.DataFrame(out)
+
+
+def winner_counts(win) -> pd.Series:
+    """How often each (set of tied) most accurate scheme(s) occurs: most frequent first, then by name."""
+    counts = win.groupby("best").size()
+    order = sorted(counts.index, key=lambda k: (-counts[k], k))
+    return counts[order]
+
+
+def winner_text(win, n_methods: int) -> str:
+    """'joint in 4; case_a_distance, case_b_taylor and joint (tied) in 4; all 6 (tied) in 1' from :func:`winner`."""
+    def name(best):
+        ms = best.split(", ")
+        if len(ms) == 1:
+            return ms[0]
+        if len(ms) == n_methods:
+            return f"all {n_methods} (tied)"
+        return ", ".join(ms[:-1]) + f" and {ms[-1]} (tied)"
+    return "; ".join(f"{name(b)} in {n}" for b, n in winner_counts(win).items())
 
 
 def figure_axis_line(cfg, target):
@@ -327,7 +365,8 @@ class MultilaterationStudy(Study):
                 f"aligned {r.aligned_error_rms_um:8.3f} µm")
         scen_label, st = stations_table(df, cfg)
         save_csv(st, target / "stations_table.csv", index=False, float_format="%.6f")
-        win = winner(acc)
+        tol = self.tolerances["aligned_error_rms_um"]
+        win = winner(acc, tol)
         conditioning_figure(acc, target / "multilateration.png")
         figure_axis_line(cfg, target)
         runs = int(acc["runs"].max())
@@ -349,8 +388,12 @@ class MultilaterationStudy(Study):
         tables.append(Table(caption=f"Median condition numbers (2-norm by SVD, and Theorem 1's lower estimate) of step 1 "
                                     f"(stations) and step 2 (points) over {runs} simulated campaigns per scenario "
                                     "(dimensionless)", data=acc[["dataset", "stations", "method"] + kap], digits=3))
-        tables.append(Table(caption=f"Most accurate scheme per scenario and mode: median RMS volumetric-error error after "
-                                    f"alignment over {runs} simulated campaigns", data=win.round(3), unit="µm"))
+        tie = f"{tol.rtol:g} relative + {tol.atol * 1e3:g} nm"
+        tables.append(Table(caption=f"Most accurate scheme per scenario and mode: median RMS error of the volumetric errors "
+                                    f"after alignment over {runs} simulated campaigns; schemes whose medians lie within "
+                                    f"verify's tolerance ({tie} each) of the lowest tie and are named together (by name), "
+                                    "the runner-up is the most accurate scheme outside the tie",
+                            data=win.round(3), unit="µm"))
         if len(check):
             chk = check[["dataset", "stations", "published_vs_centred_um", "kappa_points_published", "kappa_points_centred",
                          "case_b_vs_truth_um", "case_a_vs_truth_um"]]
@@ -358,12 +401,13 @@ class MultilaterationStudy(Study):
                                         "in double precision (its points against the centred solution of the same "
                                         "equations) and its error against the truth [µm]; condition numbers dimensionless",
                                 data=chk, unit="µm", digits=3))
-        counts = win.groupby("best").size().sort_values(ascending=False)
+        counts = winner_counts(win)
         values = {"winners": win.to_dict(orient="records"), "best_counts": counts.to_dict(),
-                  "accuracy": acc.to_dict(orient="records")}
+                  "tie_tolerance": {"rtol": tol.rtol, "atol_um": tol.atol}, "accuracy": acc.to_dict(orient="records")}
         findings = (f"Over {len(win)} scenario/mode combinations ({runs} simulated campaigns each), the most accurate scheme "
-                    "(median volumetric-error RMS after alignment) is " + "; ".join(f"{m} in {n}" for m, n in counts.items())
-                    + ".")
+                    f"(median volumetric-error RMS after alignment; medians within verify's tolerance, {tie} each, of "
+                    "the lowest tie: their order could swap on another machine) is "
+                    + winner_text(win, acc["method"].nunique()) + ".")
         if len(check):
             findings += (f" On exact lengths the published Case B departs from the centred solution of the same equations "
                          f"by up to {check['published_vs_centred_um'].max():.3g} µm (condition number up to "

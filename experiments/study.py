@@ -300,7 +300,7 @@ def _aggregate(df, by, y, how):
 @register_plot("lines")
 def lines(df, ax, *, x, y, by=None, aggregate="mean", logx=False, logy=False, xlabel=None, ylabel=None):
     """One line per value of ``by``: ``aggregate`` of ``y`` against ``x``."""
-    groups = df.groupby(by, sort=False) if by else [(y, df)]
+    groups = df.groupby(by, sort=False, dropna=False) if by else [(y, df)]  # a data set without a by key: 'none'
     for label, g in groups:
         s = _aggregate(g, x, y, aggregate).sort_index()
         ax.plot(s.index, s.values, marker="o", ms=3, label=_legend(by, label))
@@ -315,9 +315,11 @@ def lines(df, ax, *, x, y, by=None, aggregate="mean", logx=False, logy=False, xl
 def _legend(by, label) -> str:
     """A line's label: its value of ``by``; of several columns 'circle.kasa, n = 20' (the first column's value, then
     each other as name = value)."""
+    def text(v):
+        return NO_VALUE if v is None or v != v else str(v)  # the data sets without that parameter
     if isinstance(by, str) or not isinstance(label, tuple):
-        return str(label)
-    return ", ".join(str(v) if i == 0 else f"{readable(c)} = {v}" for i, (c, v) in enumerate(zip(by, label)))
+        return text(label)
+    return ", ".join(text(v) if i == 0 else f"{readable(c)} = {text(v)}" for i, (c, v) in enumerate(zip(by, label)))
 
 
 @register_plot("bars")
@@ -720,21 +722,48 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
         if c not in data.columns:
             raise ConfigError(f"table {t['caption'][:40]!r}: no column {c!r} in the rows{_no_result(df)} "
                               f"(columns: {', '.join(df.columns)})")
+    # a key some rows lack (a data parameter of one data set, not of another) keeps those rows under NO_VALUE: the
+    # groupby keeps NaN keys (pivot_table drops them, and every group whose value is NaN: rows nobody would see)
+    lacking = [c for c in rows + ([t["columns"]] if t.get("columns") else []) if data[c].isna().any()]
+    numeric_keys = {c for c in rows if pd.api.types.is_numeric_dtype(data[c])}
     if t.get("columns"):
-        out = data.pivot_table(index=rows, columns=t["columns"], values=value, aggfunc=AGGREGATES[how], sort=False)
-        key_unit = column_unit(t["columns"])  # a pivot column names its key with the key's own unit: 'data_arc_deg = 90 °'
-        key = readable(t["columns"])
-        out.columns = [f"{key} = {c:g}{' ' + key_unit if key_unit else ''}" if isinstance(c, (int, float))
+        col = t["columns"]
+        out = data.groupby([*rows, col], sort=False, dropna=False)[value].agg(AGGREGATES[how]).unstack(col)
+        key_unit = column_unit(col)  # a pivot column names its key with the key's own unit: 'data_arc_deg = 90 °'
+        key = readable(col)
+        out.columns = [f"{key} = {NO_VALUE}" if c is None or c != c else
+                       f"{key} = {c:g}{' ' + key_unit if key_unit else ''}" if isinstance(c, (int, float))
                        else f"{key} = {c}" for c in out.columns]
         out = out.reset_index()
     else:
         out = data.groupby(rows, sort=False, dropna=False)[value].agg(AGGREGATES[how]).reset_index()
         out = out.rename(columns={value: _aggregate_words(how, t["values"])})
+    for c in rows:
+        if c in lacking:
+            out[c] = out[c].astype(object).where(out[c].notna(), NO_VALUE)
     # a numeric key column carries its own unit in its name, so the table's unit never labels it
     out = out.rename(columns={c: f"{readable(c)} [{column_unit(c)}]" for c in rows
-                              if column_unit(c) and pd.api.types.is_numeric_dtype(out[c])})
-    return Table(caption=t["caption"], data=out, unit=t.get("unit", ""), digits=t.get("digits", 4),  # significant digits
-                 colour=t.get("colour", ""))  # significant digits
+                              if column_unit(c) and c in numeric_keys})
+    caption = t["caption"] + _lacking_note(df, lacking)
+    return Table(caption=caption, data=out, unit=t.get("unit", ""), digits=t.get("digits", 4),  # significant digits
+                 colour=t.get("colour", ""))
+
+
+#: the key of the rows of the data sets that lack a table's key parameter ('share = none'), the legend of their line
+NO_VALUE = "none"
+
+
+def _lacking_note(df: pd.DataFrame, lacking: list[str], drawn: bool = True) -> str:
+    """A caption's sentence naming the data sets that lack a key parameter of a table (their rows are under
+    :data:`NO_VALUE`), or of a figure's x axis (``drawn=False``: their rows cannot be placed), '' for none."""
+    notes = []
+    for c in lacking:
+        sets = list(dict.fromkeys(df.loc[df[c].isna(), "dataset"].astype(str))) if "dataset" in df else []
+        named = f" ({', '.join(sets[:5])}{', ...' if len(sets) > 5 else ''})" if sets else ""
+        notes.append(f" The data sets without {readable(c)}{named} are under '{NO_VALUE}'." if drawn else
+                     f" Not drawn: the {int(df[c].isna().sum()):,} of {len(df):,} ok rows of the data sets without "
+                     f"{readable(c)}{named}.")
+    return "".join(notes)
 
 
 def load_plotting_in_background() -> None:
@@ -773,14 +802,20 @@ def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Fig
     if plot in (lines, bars):  # these read only the columns their arguments name: select the rows of those alone
         named = [c for a in PLOT_COLUMNS[f["plot"]][0] for c in
                  ([args[a]] if isinstance(args.get(a), str) else list(args.get(a) or ()))]
-        df = df[[c for c in dict.fromkeys([*named, "status", *(f.get("where") or {})]) if c in df.columns]]
-    plot(_where(df[df["status"] == "ok"], f.get("where")), ax, **args)
+        df = df[[c for c in dict.fromkeys([*named, "status", "dataset", *(f.get("where") or {})]) if c in df.columns]]
+    shown = _where(df[df["status"] == "ok"], f.get("where"))
+    note = ""
+    if plot is lines and isinstance(args.get("x"), str) and args["x"] in shown and shown[args["x"]].isna().any():
+        # rows of data sets without the x parameter have no place on the axis: left out, and the caption says so
+        note = _lacking_note(shown, [args["x"]], drawn=False)
+        shown = shown[shown[args["x"]].notna()]
+    plot(shown, ax, **args)
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     name = f"figure_{number}_{f['plot']}.png"
     save_figure(fig, target / name)
     plt.close(fig)
-    return Figure(caption=f["caption"], file=name)
+    return Figure(caption=f["caption"] + note, file=name)
 
 
 def save_figure(fig, path: Path, dpi: float = 110) -> None:

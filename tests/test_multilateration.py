@@ -417,7 +417,7 @@ def test_winner_exact_lengths_are_a_tie_of_all():
                 "case_b_linear": 3.42744944e-09})
     w = winner(acc, _tol())
     assert w.loc[0, "tied"] == 4 and w.loc[0, "runner_up"] == "" and np.isnan(w.loc[0, "runner_up_rms_um"])
-    assert winner_text(w, 4) == "all 4 (tied) in 1"
+    assert winner_text(w, 4) == "all 4 tied in 1"
 
 
 def test_winner_claim_holds_for_every_machine_verify_calls_agreeing():
@@ -446,4 +446,6 @@ def test_winner_text_counts_tie_sets():
     from experiments.studies.multilateration import winner, winner_text
     acc = pd.concat([_acc({"a": 1.0, "b": 1.0, "c": 2.0}, scenario="s1"), _acc({"a": 1.0, "b": 5.0, "c": 2.0}, scenario="s2"),
                      _acc({"a": 3.0, "b": 5.0, "c": 1.0}, scenario="s3"), _acc({"a": 1e-10, "b": 2e-10, "c": 3e-10}, scenario="s4")])
-    assert winner_text(winner(acc, _tol()), 3) == "a in 1; a and b (tied) in 1; all 3 (tied) in 1; c in 1"
+    text = winner_text(winner(acc, _tol()), 3)
+    assert text == "a alone in 1, a = b (tied) in 1, all 3 tied in 1, c alone in 1"
+    assert "; " not in text and ". " not in text          # the abstract keeps a finding up to its first '; ' or '. '

@@ -206,15 +206,14 @@ def winner_counts(win) -> pd.Series:
 
 
 def winner_text(win, n_methods: int) -> str:
-    """'joint in 4; case_a_distance, case_b_taylor and joint (tied) in 4; all 6 (tied) in 1' from :func:`winner`."""
+    """'case_a_distance = case_b_taylor = joint (tied) in 4, joint alone in 4, all 6 tied in 1' from :func:`winner`:
+    commas only (the abstract cuts a finding at its first '; ' or '. ')."""
     def name(best):
         ms = best.split(", ")
         if len(ms) == 1:
-            return ms[0]
-        if len(ms) == n_methods:
-            return f"all {n_methods} (tied)"
-        return ", ".join(ms[:-1]) + f" and {ms[-1]} (tied)"
-    return "; ".join(f"{name(b)} in {n}" for b, n in winner_counts(win).items())
+            return f"{ms[0]} alone"
+        return f"all {n_methods} tied" if len(ms) == n_methods else " = ".join(ms) + " (tied)"
+    return ", ".join(f"{name(b)} in {n}" for b, n in winner_counts(win).items())
 
 
 def figure_axis_line(cfg, target):
@@ -393,7 +392,9 @@ class MultilaterationStudy(Study):
                                     f"after alignment over {runs} simulated campaigns; schemes whose medians lie within "
                                     f"verify's tolerance ({tie} each) of the lowest tie and are named together (by name), "
                                     "the runner-up is the most accurate scheme outside the tie",
-                            data=win.round(3), unit="µm"))
+                            data=win.round(3).rename(columns={"best": "most accurate", "tied": "n tied", "best_rms_um": "median RMS [µm]",
+                                                     "runner_up": "runner-up", "runner_up_rms_um": "runner-up RMS [µm]"}),
+                            unit="µm", digits=3))
         if len(check):
             chk = check[["dataset", "stations", "published_vs_centred_um", "kappa_points_published", "kappa_points_centred",
                          "case_b_vs_truth_um", "case_a_vs_truth_um"]]
@@ -405,8 +406,8 @@ class MultilaterationStudy(Study):
         values = {"winners": win.to_dict(orient="records"), "best_counts": counts.to_dict(),
                   "tie_tolerance": {"rtol": tol.rtol, "atol_um": tol.atol}, "accuracy": acc.to_dict(orient="records")}
         findings = (f"Over {len(win)} scenario/mode combinations ({runs} simulated campaigns each), the most accurate scheme "
-                    f"(median volumetric-error RMS after alignment; medians within verify's tolerance, {tie} each, of "
-                    "the lowest tie: their order could swap on another machine) is "
+                    f"(median volumetric-error RMS after alignment, medians within verify's tolerance of the lowest, {tie} "
+                    "each, counted as a tie since their order could swap on another machine) is "
                     + winner_text(win, acc["method"].nunique()) + ".")
         if len(check):
             findings += (f" On exact lengths the published Case B departs from the centred solution of the same equations "

@@ -78,9 +78,9 @@ def test_small_file_reader_agrees_with_the_pandas_reader(tmp_path, monkeypatch, 
         def __getattr__(self, attr):
             raise AssertionError("the small-file reader used pandas")
     with monkeypatch.context() as m:
-        m.setattr(dio, "pd", NoPandas())
+        m.setattr(dio.columns, "pd", NoPandas())
         fast = dio.read_points(path)
-    monkeypatch.setattr(dio, "SMALL_FILE_BYTES", -1)  # force the pandas path
+    monkeypatch.setattr(dio.columns, "SMALL_FILE_BYTES", -1)  # force the pandas path
     slow = dio.read_points(path)
     np.testing.assert_array_equal(fast, slow)
     np.testing.assert_array_equal(fast, [[1.5, 2.25], [-3e-3, 4.0], [5.0, 6.125]])
@@ -100,5 +100,5 @@ def test_small_file_reader_leaves_unusual_files_to_the_pandas_reader(tmp_path, m
         except dio.DataFileError as exc:
             return str(exc)
     fast = outcome()
-    monkeypatch.setattr(dio, "SMALL_FILE_BYTES", -1)
+    monkeypatch.setattr(dio.columns, "SMALL_FILE_BYTES", -1)
     assert fast == outcome()

@@ -1,0 +1,197 @@
+"""Numeric columns of a sniffed file as float64 arrays (:func:`read_columns`).
+
+A small file (:data:`SMALL_FILE_BYTES`) is read without pandas by Python's float after the grammar check
+(:func:`_read_small`); a larger one by pandas' C parser straight from the file with a float64 dtype and only the
+columns used (peak memory within 3x the returned array), again through a stream writing U+2212 as '-' when it holds
+one. The line-by-line diagnosis (:func:`_diagnose`: file name, line number, what is wrong) runs only after the fast
+parser failed; digit grouping is checked over every line of a large file of decimal commas (:func:`_check_grouping`)."""
+from __future__ import annotations
+
+import contextlib
+import os
+
+import numpy as np
+
+from datasets.io._pandas import pd
+from datasets.io.delimiters import COMMENT_PREFIXES, _split
+from datasets.io.layout import Layout, skip_rows_hint
+from datasets.io.numbers import (_COMMA_GROUPED, _COMMA_NUMBER, DataFileError, NumberFormatError, _AsciiMinus,
+                                 _field_number, _is_number, _number, decimal_marks, number_problem)
+from datasets.io.textfile import (_open_text, check_line_lengths, file_encoding, read_lines, refuse_cut_last_line,
+                                  unterminated_last_line)
+
+
+def _diagnose(layout: Layout, idx, skip_rows: int):
+    """Locate the first bad line (runs only after the fast parser failed)."""
+    name = layout.name
+    for lineno, ln in enumerate(read_lines(name), start=1):
+        ln = ln.strip()
+        if lineno < layout.first_data_line or not ln or ln.startswith(COMMENT_PREFIXES):
+            continue
+        if "\x00" in ln:
+            raise DataFileError(f"{name} line {lineno}: holds NUL bytes, so it is not a text table; if it is UTF-16 or "
+                                "UTF-32 text, save it as UTF-8 (or with a byte-order mark)")
+        toks = _split(ln, layout.sep)
+        if len(toks) != layout.ncol:
+            where = f"the header (line {layout.header_line})" if layout.header else "the first line"
+            raise DataFileError(f"{name} line {lineno}: {len(toks)} field{'s' if len(toks) != 1 else ''} where {where} "
+                                f"has {layout.ncol}: {ln!r}{skip_rows_hint(layout, before=lineno)}")
+        for j in idx:
+            tok = toks[j].replace(",", ".") if layout.decimal_comma else toks[j]
+            if not _is_number(tok) or (layout.decimal_comma and "." in toks[j]):
+                why = number_problem(toks[j], layout.decimal_comma)
+                if why:
+                    raise NumberFormatError(f"{name} line {lineno}: {why}")
+                raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a number"
+                                    f"{skip_rows_hint(layout, before=lineno)}")
+            if not np.isfinite(_number(tok)):
+                raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a finite number; remove or repair the point")
+    raise DataFileError(f"{name}: could not be parsed (unexpected format); use one row of numbers per line")
+
+
+def _check_last_line(layout: Layout, idx) -> None:
+    """:func:`refuse_cut_last_line` for a file read by :func:`read_columns` (the reference: the sniffed data rows)."""
+    last = unterminated_last_line(layout.name)
+    if last is None:
+        return
+    toks = _split(last[1].strip(), layout.sep)
+    rows = [_split(ln, layout.sep) for n, ln in layout.sample if n != last[0]]
+    refuse_cut_last_line(layout.name, (last[0], toks), [r for r in rows if len(r) == layout.ncol], idx)
+
+
+#: files up to this size are parsed without pandas (whose import costs ~0.3 s: fast start-up)
+SMALL_FILE_BYTES = 1 << 16
+
+
+def _read_small(layout: Layout, usecols: list[int]) -> dict | None:
+    """The float columns ``usecols`` of a small, plain numeric file, read with Python's float (correctly
+    rounded) after the grammar check (:data:`NUMBER`); None when the file is large or unusual (an inline
+    comment, a short row), and the pandas reader below decides (and explains). A token outside the
+    grammar is explained by the same diagnosis as in a large file."""
+    try:
+        if os.path.getsize(layout.name) > SMALL_FILE_BYTES:
+            return None
+    except OSError:
+        return None
+    rows, fields = [], []
+    for lineno, raw in enumerate(read_lines(layout.name), start=1):
+        ln = raw.strip()
+        if lineno < layout.first_data_line or not ln or ln.startswith(layout.comment):
+            continue
+        if layout.comment in ln:
+            return None
+        tokens = _split(ln, layout.sep)
+        if len(tokens) != layout.ncol:
+            return None
+        try:
+            rows.append([_field_number(tokens[k], layout.decimal_comma) for k in usecols])
+        except ValueError:
+            _diagnose(layout, usecols, 0)
+        if layout.decimal_comma:
+            fields.append((lineno, [tokens[k] for k in usecols]))
+    if not rows:
+        return None
+    if fields:
+        decimal_marks(layout.name, fields)   # every line, not only the sniffed ones: '2,908' beside a later '25'
+    table = np.array(rows, dtype=np.float64)
+    return {k: table[:, j].copy() for j, k in enumerate(usecols)}
+
+
+def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings: tuple[int, ...] = ()) -> dict:
+    """The columns ``idx`` as float64 arrays (and ``strings`` as object arrays), straight from the file."""
+    usecols = sorted(set(idx) | set(strings))
+    small = None if strings else _read_small(layout, usecols)
+    if small is not None:
+        if not all(np.isfinite(small[k]).all() for k in idx):
+            _diagnose(layout, idx, skip_rows)
+        _check_last_line(layout, idx)
+        return small
+    check_line_lengths(layout.name)
+    dtype = {k: (object if k in strings else np.float64) for k in usecols}
+
+    def parse(usecols=usecols, *, decimal="," if layout.decimal_comma else ".", thousands=None, minus=False):
+        """The columns ``usecols`` by pandas' C parser (``minus``: from a stream writing U+2212 as '-')."""
+        try:
+            with contextlib.ExitStack() as stack:
+                source = _AsciiMinus(stack.enter_context(_open_text(layout.name))) if minus else layout.name
+                frame = pd.read_csv(source, sep=r"\s+" if layout.sep is None else layout.sep, header=None,
+                                    skiprows=layout.first_data_line - 1, dtype={k: dtype[k] for k in usecols},
+                                    usecols=None if len(usecols) == layout.ncol else usecols, decimal=decimal,
+                                    thousands=thousands, comment=layout.comment, skip_blank_lines=True, engine="c",
+                                    encoding=file_encoding(layout.name), keep_default_na=True)
+            cols = {k: frame[k].to_numpy() for k in usecols}
+            del frame
+            return cols, all(np.isfinite(cols[k]).all() for k in idx if k in cols)
+        except (ValueError, KeyError, pd.errors.ParserError, UnicodeDecodeError):
+            return None, False   # KeyError: every row shorter than the header
+
+    minus = False
+    cols, ok = parse()
+    if not ok and _holds_unicode_minus(layout.name):   # parsed again, its minus signs in ASCII
+        minus = True
+        cols, ok = parse(minus=True)
+    if not ok:
+        _diagnose(layout, idx, skip_rows)
+    if not all(len(cols[k]) for k in usecols):
+        raise DataFileError(f"{layout.name}: a header but no data lines")
+    if layout.decimal_comma:
+        _check_grouping(layout, idx, cols, lambda columns: parse(columns, decimal=".", thousands=",", minus=minus))
+    _check_last_line(layout, idx)
+    return cols
+
+
+def _grouping_suspects(layout: Layout, idx) -> list[int]:
+    """The columns of ``idx`` whose comma numbers in the sniffed lines all look like digit grouping (``2,908``) or
+    which hold none there: only in those can a later line make the file one :func:`decimal_marks` refuses."""
+    rows = [_split(ln, layout.sep) for _, ln in layout.sample]
+    return [k for k in idx
+            if all(_COMMA_GROUPED.fullmatch(r[k]) for r in rows if k < len(r) and _COMMA_NUMBER.fullmatch(r[k]))]
+
+
+def _check_grouping(layout: Layout, idx, cols: dict, parse_grouped) -> None:
+    """:func:`decimal_marks` over every line of a large file of decimal commas (:func:`sniff` saw its first
+    :data:`SNIFF_LINES`; a column of ``2,908`` there and ``25`` further down was read as 2.908 and 25), decided
+    without a Python loop over the lines: the columns it could refuse (:func:`_grouping_suspects`) are parsed a
+    second time by the C parser with ',' as the thousands separator, giving t beside the decimal-comma value d. A
+    field without a comma has t = d; ``d,ddd`` (k digits after the comma) has t = 1000 d in [1000, 10^6). A column
+    with a comma field, every one of them of that kind, and an integer from 1 to 999 with t = d is what the rule
+    refuses (or, for contrived fields such as ``2,908e0``, may): the lines are then checked one by one, by the same
+    function as a small file's, which refuses it naming the lines."""
+    suspects = _grouping_suspects(layout, idx)
+    if not suspects:
+        return
+    grouped_cols, ok = parse_grouped(suspects)
+    maybe = not ok   # a field the second parse cannot read (',5'): the lines decide
+    for k in suspects if ok else ():
+        d, t = cols[k], grouped_cols[k]
+        with np.errstate(invalid="ignore", over="ignore"):
+            comma = t != d
+            grouped = (np.abs(t) >= 1000) & (np.abs(t) < 1e6) & (t == np.rint(t)) & (np.abs(1000 * d - t) <= 1e-9 * np.abs(t))
+            small = ~comma & (d == np.rint(d)) & (np.abs(d) >= 1) & (np.abs(d) <= 999)
+        if comma.any() and small.any() and not (comma & ~grouped).any():
+            maybe = True
+            break
+    if maybe:
+        decimal_marks(layout.name, _data_fields(layout, idx))
+
+
+def _data_fields(layout: Layout, columns) -> list:
+    """(line number, fields ``columns``) of every data line of ``layout``'s file (an inline comment cut off)."""
+    out = []
+    for lineno, raw in enumerate(read_lines(layout.name), start=1):
+        ln = raw.split(layout.comment, 1)[0].strip()
+        if lineno < layout.first_data_line or not ln:
+            continue
+        toks = _split(ln, layout.sep)
+        if len(toks) == layout.ncol:
+            out.append((lineno, [toks[k] for k in columns]))
+    return out
+
+
+def _holds_unicode_minus(path) -> bool:
+    """Whether the text of ``path`` holds a Unicode minus sign (U+2212), read in blocks of 4 Mi characters."""
+    with _open_text(path) as fh:
+        while block := fh.read(1 << 22):
+            if "\u2212" in block:
+                return True
+    return False

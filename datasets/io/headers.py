@@ -1,0 +1,122 @@
+"""Header names and their units.
+
+A name taken apart into key and unit (:func:`parse_name`: ``Radial deviation (um)``, ``angle[deg]``, ``dr/µm``,
+``radial_deviation_um``); a units row under the header (``X;Y`` / ``µm;µm``, :func:`_units_row`, folded into the
+names as ``NAME [UNIT]``); the length unit of columns from the header or ``--unit``, a contradiction refused
+(:func:`column_unit`, :func:`length_unit`); units fitbench does not read are refused by name (:data:`OTHER_UNITS`)."""
+from __future__ import annotations
+
+import re
+
+from datasets.io.numbers import DataFileError
+from methods.units import canonical
+
+
+#: units a header may carry, to their canonical names
+LENGTH_UNITS = {"nm": "nm", "µm": "µm", "um": "µm", "micron": "µm", "microns": "µm", "mm": "mm", "m": "m",
+                "in": "in", "inch": "in"}
+ANGLE_UNITS = {"deg": "deg", "degree": "deg", "degrees": "deg", "°": "deg", "rad": "rad", "radian": "rad",
+               "radians": "rad"}
+
+
+def parse_name(name: str) -> tuple[str, str | None]:
+    """(key, unit) of a header name: the unit in ``()``, ``[]`` or ``{}``, after ``/``, or as a ``_um``-style suffix
+    (``Radial deviation (um)``, ``angle[deg]``, ``dr/µm``, ``radial_deviation_um`` -> ``radialdeviation``,
+    ``µm``); the key in lower case without spaces, ``_``, ``-`` or ``.``. The unit is canonical (``µm``,
+    ``deg``) when fitbench knows it, else as written."""
+    n = str(name).strip().lower().replace("μ", "µ")
+    unit = None
+    m = re.fullmatch(r"(.*?)\s*[(\[{]\s*([^)\]}]*?)\s*[)\]}]", n) or re.fullmatch(r"(.*?)\s*/\s*([^/\s]+)", n)
+    if m and m.group(1):
+        n, unit = m.group(1), m.group(2)
+    else:
+        m = re.fullmatch(r"(.*?)[\s_\-]+([a-zµ°]+)", n)
+        if m and m.group(1) and (m.group(2) in LENGTH_UNITS or m.group(2) in ANGLE_UNITS):
+            n, unit = m.group(1), m.group(2)
+    key = re.sub(r"[\s_\-.]+", "", n)
+    if unit is not None:
+        unit = LENGTH_UNITS.get(unit, ANGLE_UNITS.get(unit, unit))
+    return key, unit
+
+
+def column_unit(layout, k: int, kind: str) -> str | None:
+    """The unit the header gives column ``k`` ('length' or 'angle'), None when it gives none; a unit of the
+    other kind or an unknown one is refused in one line."""
+    if not layout.header:
+        return None
+    key, unit = parse_name(layout.header[k])
+    if unit is None:
+        if re.search(r"[\[\](){}<>|µμ°]", key):   # a unit fitbench cannot take apart: never read the column as mm
+            raise DataFileError(f"{layout.name}: cannot tell the unit of column {layout.header[k]!r}; write it as "
+                                "'NAME [UNIT]' (x [µm])")
+        return None
+    known = LENGTH_UNITS if kind == "length" else ANGLE_UNITS
+    if unit in known.values():
+        return unit
+    want = "a length unit (nm, µm, mm, m, in)" if kind == "length" else "an angle unit (deg, rad)"
+    raise DataFileError(f"{layout.name}: column {layout.header[k]!r} carries the unit {unit!r}; expected {want}")
+
+
+def length_unit(layout, idx, unit: str | None) -> str:
+    """The length unit of the columns ``idx``: the header's, the declared ``unit`` (--unit), or mm. A header
+    unit that contradicts ``unit``, or two columns in different units, is an error."""
+    found = {layout.header[k]: column_unit(layout, k, "length") for k in idx} if layout.header else {}
+    given = {c: u for c, u in found.items() if u is not None}
+    if len(set(given.values())) > 1:
+        raise DataFileError(f"{layout.name}: the columns {', '.join(given)} are in different units "
+                            f"({', '.join(sorted(set(given.values())))}); convert them to one unit")
+    header = next(iter(given.values()), None)
+    if unit is not None and header is not None and canonical(unit) != header:
+        col = next(iter(given))
+        raise DataFileError(f"{layout.name}: the header says column {col!r} is in {header} but --unit says "
+                            f"{canonical(unit)}; drop --unit or correct the header")
+    return header or (canonical(unit) if unit is not None else "mm")
+
+
+def _names_above(skip_rows: int) -> str:
+    """The advice for a header of units read after ``skip_rows`` skipped lines: skip one line fewer."""
+    if not skip_rows:
+        return ""
+    return ("; if the names are on the line above, drop --skip-rows" if skip_rows == 1 else
+            f"; if the names are on the line above, give --skip-rows {skip_rows - 1}")
+
+
+#: units a units row or a header may name that fitbench does not read: refused by name, never taken as a column
+OTHER_UNITS = {"cm", "dm", "km", "mil", "mils", "thou", "ft", "gon", "grad", "mrad", "µrad", "urad", "arcsec", "arcmin",
+               "ms", "min", "%", "ppm", "µm/m", "um/m", "mm/min", "°c", "hz"}
+
+
+def _unit_word(token: str) -> str | None:
+    """The unit a field of a units row names (``µm``, ``[mm]``, ``(deg)``), canonical when fitbench reads it,
+    else as written when it is a unit it does not read (:data:`OTHER_UNITS`); None when it is no unit."""
+    t = str(token).strip().lower().replace("μ", "µ")
+    t = re.sub(r"^[\[({]\s*(.*?)\s*[\])}]$", r"\1", t)
+    return LENGTH_UNITS.get(t, ANGLE_UNITS.get(t, t if t in OTHER_UNITS else None))
+
+
+def _units_row(tokens) -> list | None:
+    """The units of a units row (``µm;µm``, ``;deg;µm``: one per field, None for an empty field), or None when
+    ``tokens`` is not one (every non-empty field a unit, at least one)."""
+    units = [_unit_word(t) if t.strip() else None for t in tokens]
+    if not any(units) or any(u is None and t.strip() for u, t in zip(units, tokens)):
+        return None
+    return units
+
+
+def _with_units(name, header: list, units: list, lineno: int) -> list:
+    """The header names with the units of the units row under them (line ``lineno``) as ``NAME [UNIT]``; a name
+    that carries another unit already is refused."""
+    if len(units) > len(header):
+        raise DataFileError(f"{name} line {lineno}: a units row of {len(units)} fields under a header of "
+                            f"{len(header)}; give one unit per column")
+    out = list(header)
+    for k, u in enumerate(units):
+        if u is None:
+            continue
+        had = parse_name(header[k])[1]
+        if had is not None and had != u:
+            raise DataFileError(f"{name} line {lineno}: the units row says {u} for column {header[k]!r}, whose name "
+                                f"says {had}; correct one of them")
+        if had is None:
+            out[k] = f"{header[k]} [{u}]"
+    return out

@@ -1,0 +1,83 @@
+"""Angle + radial deviation (or radius) as x, y points (:func:`polar_to_points`): deviations without a
+nominal radius are placed about a circle :data:`DEVIATION_ALONE_RADIUS_FACTOR` times their span (the limaçon
+evaluation of roundness instruments, ISO 12181-1 clause 3); the angle column's unit (:func:`angle_unit_of`); a
+deviation column without a unit is read as mm, with a warning beyond :data:`ASSUMED_DEVIATION_LIMIT_MM`."""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from datasets.io.headers import column_unit
+from datasets.io.layout import Layout
+from datasets.io.numbers import DataFileError
+
+
+def angle_unit_of(layout: Layout, k: int, angle_unit: str | None) -> str:
+    """'deg' or 'rad' for the angle column ``k``: the header's unit or ``angle_unit`` (--angle-unit); a
+    contradiction, or neither, is an error."""
+    header = column_unit(layout, k, "angle")
+    if angle_unit is not None and angle_unit not in ("deg", "rad"):
+        raise DataFileError(f"--angle-unit must be deg or rad, got {angle_unit!r}")
+    if header is not None and angle_unit is not None and header != angle_unit:
+        raise DataFileError(f"{layout.name}: the header says column {layout.header[k]!r} is in {header} but "
+                            f"--angle-unit says {angle_unit}; drop --angle-unit or correct the header")
+    au = header or angle_unit
+    if au is None:
+        raise DataFileError(f"{layout.name}: is the angle column {layout.header[k] if layout.header else k!r} in "
+                            "degrees or radians? name it 'angle [deg]' / 'angle [rad]' or give --angle-unit deg|rad")
+    return au
+
+
+#: deviations alone (no nominal radius) are placed about a radius this many times their span: the circle's
+#: curvature then changes the RON parameters by about 1 / this factor (the limaçon approximation of
+#: roundness instruments, ISO 12181-1 clause 3)
+DEVIATION_ALONE_RADIUS_FACTOR = 1e6
+
+
+def polar_to_points(angles_rad, values_mm, polar_value: str, nominal_radius: float | None,
+                    nominal_center=(0.0, 0.0), name: str = "data") -> tuple[np.ndarray, str | None]:
+    """Angle + radial deviation (about ``nominal_radius``) or radius, as x, y about ``nominal_center`` (mm),
+    and a note when the deviations had no nominal radius. A radius (nominal + deviation) <= 0 is refused: the
+    point would be placed on the opposite side of the centre and every form figure would be wrong."""
+    note = None
+    if polar_value == "radius":
+        r = values_mm
+    else:
+        if nominal_radius is None:
+            span = float(np.ptp(values_mm)) if values_mm.size else 0.0
+            nominal_radius = max(DEVIATION_ALONE_RADIUS_FACTOR * span, 1.0)
+            note = (f"radial deviations without a nominal radius: placed about a circle of {nominal_radius:.6g} mm "
+                    f"({DEVIATION_ALONE_RADIUS_FACTOR:g} x their span; form parameters as an instrument's limaçon "
+                    "evaluation; centre and radius are not the part's)")
+        r = float(nominal_radius) + values_mm
+    bad = np.flatnonzero(~(r > 0))
+    if bad.size:
+        k = int(np.argmin(r))
+        if polar_value == "radius":
+            raise DataFileError(f"{name}: a radius of {r[k]:.6g} mm (point {k + 1}); radii must be > 0")
+        raise DataFileError(f"{name}: the nominal radius {float(nominal_radius):g} mm + the radial deviation "
+                            f"{values_mm[k] * 1e3:.6g} µm (point {k + 1}) is {r[k]:.6g} mm <= 0; give the part's "
+                            "nominal radius in mm (--nominal-radius)")
+    cx, cy = (float(v) for v in nominal_center)
+    return np.column_stack([cx + r * np.cos(angles_rad), cy + r * np.sin(angles_rad)]), note
+
+
+#: radial deviations (of an angle + deviation file) read as mm because neither the header nor ``--unit`` gives a
+#: unit, beyond which µm is the likelier unit: roundness and ballbar traces deviate by tens of µm, and an
+#: instrument exporting µm without a unit (±0.8 µm read as ±0.8 mm) would turn RONt or G into mm
+ASSUMED_DEVIATION_LIMIT_MM = 0.1
+
+
+def _unit_assumed(layout: Layout, k: int, values) -> str:
+    """The note saying a unit-less deviation column was read as mm; a :class:`~methods.units.UnitWarning` too
+    when its deviations exceed :data:`ASSUMED_DEVIATION_LIMIT_MM` (the likely unit and the options named)."""
+    from methods.units import UnitWarning
+    col = repr(layout.header[k]) if layout.header else f"{k} (0-based)"
+    v = np.abs(np.asarray(values, dtype=float))
+    largest = float(np.max(v[np.isfinite(v)])) if np.isfinite(v).any() else 0.0
+    if largest > ASSUMED_DEVIATION_LIMIT_MM:
+        warnings.warn(f"radial deviations up to {largest:.6g} mm in {layout.name} (read as mm: the column {col} names "
+                      f"no unit) are implausible for a circular test or a roundness trace (tens of µm); is the deviation "
+                      f"column in µm? (--unit um), or give --unit mm to keep mm", UnitWarning, stacklevel=4)
+    return f"the deviation column {col} names no unit: read as mm (give --unit um if it is in µm)"

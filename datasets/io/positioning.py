@@ -1,0 +1,168 @@
+"""ISO 230-2 positioning tables (:func:`read_positioning`) as
+:class:`methods.positioning.PositioningData` in mm: the long layout (target, direction, run, deviation or actual,
+as ISO 230-2's own data tables) and the wide exports of laser-interferometer software (one column per run and
+direction beside the targets, as Renishaw LaserXL/CARTO tabular exports show it: ``Run 1 +``, ``run1_up``,
+``Lauf 2``, ``Run 1 Forward``/``Reverse`` in the run order, :func:`_wide_to_long`); units from the header, else
+``--unit`` and ``--deviation-unit``."""
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+
+from datasets.io._pandas import pd
+from datasets.io.headers import LENGTH_UNITS, parse_name
+from datasets.io.layout import preamble_hint
+from datasets.io.numbers import DataFileError, NumberFormatError
+from datasets.io.tables import _numeric_column, read_table
+from methods import InvalidInputError
+from methods.units import canonical
+
+
+TARGET_NAMES = ("target", "position", "target position", "target [mm]", "target (mm)", "target position (mm)",
+                "target position [mm]", "position [mm]", "position (mm)", "nominal", "soll", "sollposition")
+RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[]*"
+                  r"(\+|-|up|down|u|d|fwd|rev|forward|reverse|pos|neg|↑|↓|hin|rück|rueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
+                  re.IGNORECASE)
+
+
+def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.ndarray] | None:
+    """A wide export (one column per run) as the long table; None when ``df`` is not wide."""
+    cols = [str(c).strip() for c in df.columns]
+    low = [c.lower() for c in cols]
+    t = next((low.index(n) for n in TARGET_NAMES if n in low), None)
+    if t is None or "run" in low:
+        return None
+    d_col = low.index("direction") if "direction" in low else None
+    runs = {}
+    for k, c in enumerate(cols):
+        if k in (t, d_col):
+            continue
+        m = RUN_COLUMN.match(c)
+        if not m:
+            raise DataFileError(f"{name}: column {c!r} is neither the target, a direction nor a run "
+                                    "(wide layout: target, run 1 +, run 1 -, ... or target, direction, run 1, run 2, ...)")
+        runs[k] = (int(m.group(1)), m.group(2))
+    if not runs:
+        return None
+    # 'Forward'/'Reverse' ('Hin'/'Rück') are the laser software's run order, not the axis direction (ISO 230-2: ↑ is
+    # an approach in the + direction): the forward runs pass the targets in the order the file lists them
+    from methods.positioning.data import RUN_ORDER_TAGS, RunOrderNote
+    order = {k: RUN_ORDER_TAGS[tag.lower()] for k, (_, tag) in runs.items() if tag and tag.lower() in RUN_ORDER_TAGS}
+    forward = None
+    if order and d_col is None:
+        targets = _numeric_column(df.iloc[:, t], "target", name, lines)
+        step = np.diff(targets)
+        forward = "+" if step.size and np.all(step > 0) else "-" if step.size and np.all(step < 0) else None
+        named = "/".join(repr(cols[next(k for k, v in order.items() if v == w)]) for w in ("forward", "reverse")
+                         if w in order.values())
+        if forward is None:
+            text = (f"{name}: columns {named} ... name the run order (the laser software's forward and reverse runs), "
+                    "not the axis direction, and the targets are neither increasing nor decreasing in the file, so "
+                    "which way the forward runs moved is unknown: give --forward-direction + or - (or name the "
+                    "directions in the headers: Run 1 +, Run 1 -)")
+        else:
+            text = (f"columns {named} ... name the run order, not the axis direction; the targets are listed "
+                    f"{'increasing' if forward == '+' else 'decreasing'} ({targets[0]:g} to {targets[-1]:g} in the file's "
+                    f"unit), so the forward runs are read as approaches in the {'+ (↑)' if forward == '+' else '− (↓)'} direction and "
+                    f"the reverse runs as {'− (↓)' if forward == '+' else '+ (↑)'} (--forward-direction "
+                    f"{'-' if forward == '+' else '+'} if the forward runs moved the other way)")
+        warnings.warn(RunOrderNote(text, forward), stacklevel=4)
+    other = {"+": "-", "-": "+"}
+    rows = []
+    for k, (run, tag) in runs.items():
+        if d_col is not None:
+            if tag:
+                raise DataFileError(f"{name}: column {cols[k]!r} names a direction and the file has a direction column")
+            direction = df.iloc[:, d_col].to_numpy()
+        elif k in order:
+            # ambiguous order: + provisionally, the note says so (fitbench positioning refuses it without
+            # --forward-direction)
+            fwd = forward or "+"
+            direction = np.full(len(df), fwd if order[k] == "forward" else other[fwd])
+        else:
+            # no direction anywhere: a unidirectional test approached in the + direction
+            direction = np.full(len(df), "+" if tag is None or tag.lower() in ("+", "up", "u", "pos", "↑") else "-")
+        rows.append(pd.DataFrame({"target": df.iloc[:, t].to_numpy(), "direction": direction, "run": run,
+                                  "deviation": df.iloc[:, k].to_numpy(), "_line": lines}))
+    long = pd.concat(rows, ignore_index=True)
+    return long.drop(columns="_line"), long["_line"].to_numpy()
+
+
+
+def _header_unit(found: dict, given: str | None, option: str, name) -> str | None:
+    """The one unit the header gives columns ``found`` ({column: unit}), checked against the option's value."""
+    units = set(found.values())
+    if len(units) > 1:
+        raise DataFileError(f"{name}: the columns {', '.join(found)} are in different units "
+                            f"({', '.join(sorted(units))}); convert them to one unit")
+    header = units.pop() if units else None
+    if header is not None and header not in LENGTH_UNITS.values():
+        raise DataFileError(f"{name}: column {next(iter(found))!r} carries the unit {header!r}; expected a length "
+                            "unit (nm, µm, mm, m, in)")
+    if header is not None and given is not None and canonical(given) != header:
+        raise DataFileError(f"{name}: the header says column {next(iter(found))!r} is in {header} but {option} says "
+                            f"{canonical(given)}; drop {option} or correct the header")
+    return header or (canonical(given) if given is not None else None)
+
+
+def read_positioning(path, *, unit: str | None = None, deviation_unit: str | None = None, skip_rows: int = 0,
+                     with_units: bool = False):
+    """An ISO 230-2 positioning file, long or wide layout (:mod:`methods.positioning.data` describes them), as
+    :class:`methods.positioning.PositioningData`. Header names are read like every reader's (:func:`parse_name`:
+    ``Target (mm)``, ``Deviation [µm]``, ``Run 1 + (um)``); lengths are converted to mm from the header's units,
+    else ``unit`` (targets, actual positions; default mm) and ``deviation_unit`` (deviations; default the
+    targets' unit); a header unit contradicting them is an error. ``with_units``: also return the two units."""
+    try:
+        return _read_positioning(path, unit=unit, deviation_unit=deviation_unit, skip_rows=skip_rows,
+                                 with_units=with_units)
+    except InvalidInputError as exc:
+        _add_preamble_hint(exc, path, skip_rows)
+        raise
+
+
+def _add_preamble_hint(exc: InvalidInputError, path, skip_rows: int) -> None:
+    """Append :func:`preamble_hint` to the message of ``exc`` (a file read without --skip-rows whose data
+    rows start below a preamble: its first line was taken as the header)."""
+    if skip_rows == 0 and len(exc.args) == 1 and "--skip-rows" not in str(exc.args[0]) and \
+            not isinstance(exc, NumberFormatError):
+        hint = preamble_hint(path)
+        if hint:
+            exc.args = (f"{exc.args[0]}{hint}",)
+
+
+def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units):
+    from methods.positioning import from_frame
+
+    # 'nan' and 'inf' stay text here and are refused as not finite by _numeric_column, like every reader
+    df, lines = read_table(path, skip_rows=skip_rows, keep_default_na=False)
+    empty = (df.isna() | df.apply(lambda c: c.astype(str).str.strip() == "")).any(axis=1).to_numpy()
+    if empty.any():
+        k = int(np.flatnonzero(empty)[0])
+        raise DataFileError(f"{path} line {lines[k]}: missing field(s)")
+    lines = np.array(lines)
+    target_keys = {parse_name(n)[0] for n in TARGET_NAMES}
+    renamed, lengths, deviations = {}, {}, {}
+    for c in df.columns:
+        key, u = parse_name(c)
+        role = key if key in ("target", "direction", "run", "deviation", "actual") else \
+            "target" if key in target_keys else None
+        if role is not None and role not in renamed.values():
+            renamed[c] = role
+        if u is not None and role in ("target", "actual"):
+            lengths[str(c)] = u
+        elif u is not None and (role == "deviation" or (role is None and RUN_COLUMN.match(str(c)))):
+            deviations[str(c)] = u
+    unit = _header_unit(lengths, unit, "--unit", path) or "mm"
+    deviation_unit = _header_unit(deviations, deviation_unit, "--deviation-unit", path) or unit
+    df = df.rename(columns=renamed)
+    wide = _wide_to_long(df, str(path), lines)
+    if wide is not None:
+        df, lines = wide
+    cols = {str(c).lower().strip(): c for c in df.columns}
+    for key in ("target", "run", "deviation", "actual"):
+        if key in cols:
+            df[cols[key]] = _numeric_column(df[cols[key]], key, path, lines)
+    data = from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit)
+    return (data, unit, deviation_unit) if with_units else data

@@ -1,0 +1,119 @@
+"""Circular-test runs and roundness profiles (:func:`read_runs`, :func:`read_profile`): one file in any
+instrument layout (:func:`datasets.io.roles.resolve`), x, y or angle + radial deviation / radius (the data view of
+ballbar and roundness software, e.g. the Renishaw Ballbar 20 text export), holding one run or both directions of an
+ISO 230-4 circular test (a direction or run column: CW/CCW, G02/G03, :data:`CW_WORDS`), as :class:`CircularRuns` in
+mm."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from datasets.io._pandas import pd
+from datasets.io.columns import read_columns
+from datasets.io.headers import column_unit, length_unit
+from datasets.io.layout import Layout, sniff
+from datasets.io.numbers import DataFileError
+from datasets.io.polar import _unit_assumed, angle_unit_of, polar_to_points
+from datasets.io.roles import Resolved, resolve
+from methods.units import to_mm
+
+
+@dataclass
+class CircularRuns:
+    """The runs read from one file: a list of (label, (N, 2) points in mm, in the file's order)."""
+
+    runs: list
+    source: str
+    kind: str          # 'xy' or 'polar'
+    unit: str
+    notes: list = field(default_factory=list)
+    angle_unit: str | None = None
+    axes: tuple = ("x", "y")   # names of the two coordinates: the header's names of x, y columns, else x, y
+    unit_assumed: bool = False  # no unit in the header nor given: ``unit`` is mm by default
+
+
+def _axes(layout: Layout, res: Resolved) -> tuple:
+    """Names of the two coordinates read: the header's keys of an x, y layout (``z``, ``x`` for a z-x plane),
+    else ``x``, ``y`` (angle + deviation files are placed in an x, y plane; header-less files have no names)."""
+    keys = [k for k, _ in layout.fields()]
+    if res.kind != "xy" or not keys:
+        return ("x", "y")
+    return tuple(keys[i] or f"column {i}" for i in res.idx)
+
+
+def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
+              angle_unit: str | None = None, nominal_radius: float | None = None, nominal_center=(0.0, 0.0),
+              need_nominal_radius: bool = True) -> CircularRuns:
+    """One measurement file in any instrument layout (:func:`resolve`): x, y columns or angle + radial
+    deviation / radius, holding one run or both directions (a ``direction`` or ``run`` column; rows of each
+    run in the order measured). Lengths in the header's unit or ``unit`` (a contradiction is an error),
+    returned in mm; angle + deviation are placed about ``nominal_center`` with ``nominal_radius`` (mm; with
+    ``need_nominal_radius`` false the deviations alone are evaluated, :func:`polar_to_points`).
+
+    The angle + deviation layout follows what ballbar and roundness software lists as its data (sample angle
+    and radial deviation per point, e.g. the Renishaw Ballbar 20 "data" view and its text export); we found
+    no public specification of those exports, so the column names accepted are ours (:data:`ROLES`;
+    confidence: low for byte-for-byte compatibility, high for the content)."""
+    layout = sniff(path, skip_rows)
+    name = layout.name
+    res = resolve(layout, columns, plane)
+    notes = []
+    au = None
+    if res.kind == "polar":
+        au = angle_unit_of(layout, res.idx[0], angle_unit)
+        if nominal_radius is None and need_nominal_radius and res.polar_value == "deviation":
+            raise DataFileError(f"{name}: an angle + radial-deviation file needs --nominal-radius to place the points")
+        lu = length_unit(layout, [res.idx[1]], unit)
+        assumed = unit is None and column_unit(layout, res.idx[1], "length") is None
+    else:
+        lu = length_unit(layout, res.idx, unit)
+        assumed = unit is None and all(column_unit(layout, k, "length") is None for k in res.idx)
+    strings = (res.direction,) if res.direction is not None else ()
+    cols = read_columns(layout, res.idx, skip_rows=skip_rows, strings=strings)
+    f = to_mm(1.0, lu)
+    if res.kind == "polar":
+        ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
+        if assumed and res.polar_value == "deviation":
+            notes.append(_unit_assumed(layout, res.idx[1], cols[res.idx[1]]))
+        pts, note = polar_to_points(ang, cols[res.idx[1]] * f, res.polar_value, nominal_radius, nominal_center,
+                                    name=name)
+        if note:
+            notes.append(note)
+    else:
+        pts = np.empty((len(cols[res.idx[0]]), 2), dtype=np.float64)
+        pts[:, 0], pts[:, 1] = cols[res.idx[0]], cols[res.idx[1]]
+        if f != 1.0:
+            pts *= f
+    axes = _axes(layout, res)
+    if res.direction is None:
+        return CircularRuns([("file", pts)], name, res.kind, lu, notes, au, axes, assumed)
+    labels = pd.Series(cols[res.direction]).astype(str).str.strip()
+    runs = []
+    for lab in pd.unique(labels):
+        mask = (labels == lab).to_numpy()
+        low = lab.lower()
+        tag = "cw" if low in CW_WORDS else "ccw" if low in CCW_WORDS else lab
+        runs.append((tag, pts[mask]))
+    if len(runs) > 2:
+        raise DataFileError(f"{name}: {len(runs)} runs in the direction/run column ({', '.join(l for l, _ in runs)}); "
+                            "a circular test has two (CW and CCW)")
+    return CircularRuns(runs, name, res.kind, lu,
+                        notes + [f"{len(runs)} run(s) read from the column {layout.header[res.direction]!r}"], au, axes,
+                        assumed)
+
+
+def read_profile(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
+                 angle_unit: str | None = None, nominal_radius: float | None = None) -> CircularRuns:
+    """One closed profile (roundness, a fit) in any instrument layout (:func:`read_runs`); deviations without
+    ``nominal_radius`` are evaluated alone. A file holding two runs is refused (one profile is needed)."""
+    got = read_runs(path, columns=columns, plane=plane, unit=unit, skip_rows=skip_rows, angle_unit=angle_unit,
+                    nominal_radius=nominal_radius, need_nominal_radius=False)
+    if len(got.runs) != 1:
+        raise DataFileError(f"{got.source}: holds {len(got.runs)} runs ({', '.join(l for l, _ in got.runs)}); "
+                            "give a file with one profile")
+    return got
+
+
+CW_WORDS = {"cw", "g02", "g2", "clockwise", "-", "-1"}
+CCW_WORDS = {"ccw", "g03", "g3", "counterclockwise", "counter-clockwise", "anticlockwise", "+", "+1", "1"}

@@ -66,7 +66,8 @@ ROW_CODE = ["experiments/metrics.py", "experiments/rows.py", "datasets/synthetic
 
 def test_editing_code_a_row_depends_on_recomputes_it(repo_copy, tmp_path):
     """One copy of the repository, edited one file at a time: after each edit the resumed run recomputes both rows
-    (and stores them under the new key), so each file is checked on its own."""
+    (and stores them under the new key), so each file is checked on its own. An edited C kernel source is refused
+    until its kernel is rebuilt (rows of the old binary would be stored under the new source's key)."""
     study = tmp_path / "keyed.toml"
     study.write_text(STUDY.format(kind="grid", method="circle.kasa"))
     out = tmp_path / "out"
@@ -75,7 +76,15 @@ def test_editing_code_a_row_depends_on_recomputes_it(repo_copy, tmp_path):
     append(repo_copy / "experiments/report.py")  # not code of any row
     assert run(repo_copy, study, out) == (2, 0)
     for edited in ROW_CODE:
-        append(repo_copy / edited)
+        if edited.endswith(".c"):   # a kernel's source: its binary is refused until rebuilt, then the rows recomputed
+            append(repo_copy / edited, "\n/* edited by the cache-key test */\n")
+            stale = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report",
+                               cwd=repo_copy, repo=repo_copy, timeout=300)
+            assert stale.returncode == 2 and "is stale" in stale.stderr and "Traceback" not in stale.stderr, stale.stderr
+            built = run_python("setup.py", "build_ext", "--inplace", "-q", cwd=repo_copy, repo=repo_copy, timeout=600)
+            assert built.returncode == 0, built.stderr
+        else:
+            append(repo_copy / edited)
         assert run(repo_copy, study, out) == (2, 2), f"editing {edited} must recompute the rows"
 
 

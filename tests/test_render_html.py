@@ -133,7 +133,7 @@ def test_declared_unit_is_not_doubled_nor_put_on_counts():
     out = html_table(df, caption="c", unit="mm")
     assert "largest error [mm]</th>" in out and "[mm] [mm]" not in out
     assert "sets &gt; 1e-9 mm</th>" in out and ">27<" in out and "27.0" not in out
-    assert ">not_converged</th>" in out            # a count of fits: no unit
+    assert ">not converged</th>" in out            # a count of fits: no unit (the field name as words)
     assert "radius [mm]</th>" in out
     tex = "".join(latex_fragments(df, caption="c", label="t", unit="mm"))
     assert tex.count(r"\si{\milli\metre}") == 1 and r"radius \\ {}[\si{\milli\metre}]" in tex

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from experiments.render.numbers import NumberFormat, column_format
-from experiments.render.report_tables import html_table, text_frame
+from experiments.render.report_tables import html_table, latex_fragments, text_frame
 from experiments.report import _with_unit
 
 REPO = Path(__file__).resolve().parents[1]
@@ -176,3 +176,45 @@ def test_a_declaration_naming_no_number_column_is_refused():
         Table(caption="c", data=pd.DataFrame({"m": ["a"], "R [mm]": [1.0]}), decimals={"R": 4})
     with pytest.raises(ValueError, match="number columns"):
         Table(caption="c", data=pd.DataFrame({"m": ["a"], "R [mm]": [1.0]}), exact=("m",))
+
+
+# ---------------------------------------------------------------- ordinary numbers read as ordinary numbers
+def test_a_column_of_ordinary_numbers_with_a_few_tiny_ones_prints_each_with_the_same_significant_digits():
+    """The multilateration table's station column: 43.3 µm, not 4.32834×10¹ (6 digits to keep scenarios apart
+    beside its neighbours' 3); an exact-data row's 4.3×10⁻¹⁰ µm stays scientific."""
+    values = [43.2834, 43.2839, 53.2508, 80.8983, 0.421997, 4.31037e-10, 1500.4]
+    fmt = column_format(values, 3)
+    assert [fmt.text(v) for v in values] == ["43.3", "43.3", "53.3", "80.9", "0.422", "4.31×10⁻¹⁰", "1500"]
+    tiny = [6.93e-14, 3.66e-11, 1.67e-7, 1.24e-7, 0.46]        # mostly tiny: every cell scientific, as before
+    assert all("×10" in column_format(tiny, 3).text(v) for v in tiny[:-1])
+    df = pd.DataFrame({"method": list("abcdefg"), "station": values, "vol. RMS": [28.5, 33.4, 25.4, 30.5, 0.638,
+                                                                                   2.72e-10, 1.2]})
+    html = html_table(df, caption="c", unit="µm", digits=3)
+    tex_ = "".join(latex_fragments(df, caption="c", label="t", unit="µm", digits=3))
+    assert "43.3<" in html and "4.32834" not in html and "×10¹<" not in html
+    assert " 43.3 " in tex_ and "4.31e-10" in tex_ and "e1 " not in tex_
+
+
+def test_field_names_are_shown_without_their_unit_suffix_and_underscores_and_with_the_unit_once():
+    df = pd.DataFrame({"method": ["circle.kasa", "joint"], "dx_um": [1.5, 2.5], "best_rms_um": [0.6, 0.7],
+                       "kappa_stations": [70.9, 5.51], "circle.gauss_newton": [1.0, 2.0]})
+    assert list(text_frame(df, unit="µm").columns) == ["method", "dx [µm]", "best rms [µm]", "kappa stations [µm]",
+                                                       "circle.gauss_newton [µm]"]
+    assert list(text_frame(df, unit="").columns) == ["method", "dx [µm]", "best rms [µm]", "kappa stations",
+                                                     "circle.gauss_newton"]
+    html = html_table(df, caption="c")
+    assert "dx_um" not in html and "best rms [µm]" in html and "[µm] [µm]" not in html
+
+
+def test_published_values_print_as_published_and_a_rows_unit_column_gives_its_numbers_one_resolution():
+    iso = pd.DataFrame({"figure": ["G_cw", "H", "F_max"], "synthetic scenario": [25.3112, 5.2511, 35.7631],
+                        "published": [27.0, 9.0, np.nan]})
+    shown = text_frame(iso, unit="µm")
+    assert list(shown["published [µm]"]) == ["27", "9", "–"]
+    assert " 27 " in "".join(latex_fragments(iso, caption="c", label="t", unit="µm"))
+    sources = pd.DataFrame({"source": ["squareness", "servo", "spike"], "estimate": [66.46181, 0.00079, 4.31172],
+                            "u": [0.0731, 0.00405, 0.2269], "unit": ["urad", "ms", "um"],
+                            "injected": [66.4784, 0.0, 4.0]})
+    shown = text_frame(sources)
+    decimals = {len(t.split(".")[1]) for c in ("estimate", "u", "injected") for t in shown[c]}
+    assert len(decimals) == 1 and shown["injected"][0] == "66.47840"

@@ -125,7 +125,7 @@ def _format_numbers(values: np.ndarray, col: Column) -> tuple[list[str | None], 
     if integer:
         strs = [None if not np.isfinite(v) else f"{int(round(v))}" for v in values]
     elif col.exact:
-        strs = [None if not np.isfinite(v) else repr(float(v)) for v in values]
+        strs = [None if not np.isfinite(v) else np.format_float_positional(float(v), trim="-") for v in values]
     elif col.decimals is not None and not col.exponent:
         strs = [None if not np.isfinite(v) else f"{v:.{col.decimals}f}" for v in values]
     else:

@@ -5,9 +5,12 @@ HTML, Markdown and LaTeX renderings.
 ``column_format(values, digits)``: whole numbers as integers; otherwise ``digits`` significant digits of the
 column's largest magnitude, with more decimals (up to 6 more) while two values that differ by more than a
 relative ``MATTERS`` (1e-6) of that magnitude would print alike, and at least as many as keep two significant
-digits of the smallest value (16.6470 and 0.0080 in one column); scientific notation (one exponent per cell, one
-mantissa width per column) when the largest magnitude is >= 1e5 or below 1e-3, or when the smallest value would
-need more than ``MAX_FIXED_DECIMALS`` decimals. Never ×10⁰: a mantissa whose exponent is 0 prints alone (as
+digits of the smallest value (16.6470 and 0.0080 in one column). A column spanning more decades than that (the
+largest magnitude >= 1e5, or the smallest value needing more than ``MAX_FIXED_DECIMALS`` decimals) prints each
+number with ``digits`` significant digits ("significant": 43.3, 0.422 and 4.31×10⁻¹⁰ in one column, as siunitx
+prints a cell without a fixed format), in plain notation between 1e-3 and 1e5 and scientific beyond, unless most of
+its values lie beyond: then every cell is scientific (one exponent per cell, one mantissa width per column), as
+when the largest magnitude is below 1e-3. Never ×10⁰: a mantissa whose exponent is 0 prints alone (as
 siunitx prints ``2.229e0`` in the PDF), which only a column spanning more than about six decades can show. ``table_formats`` chooses the
 format jointly for the columns that share a unit (semi-axes a and b of 299.024 and 299.002 mm stay apart even
 though each column alone has no spread) and gives every one of them that format.
@@ -28,10 +31,13 @@ MAX_EXTRA_DECIMALS = 6
 MAX_FIXED_DECIMALS = 5   #: a column whose smallest value needs more decimals than this is printed in scientific notation
 
 
+PLAIN = (1e-3, 1e5)   #: magnitudes printed in plain notation by a "significant" format
+
+
 @dataclass(frozen=True)
 class NumberFormat:
-    kind: str            #: "integer" | "fixed" | "exponent" | "exact" (each number as given: published values)
-    decimals: int = 0    #: decimals (fixed) or mantissa decimals (exponent)
+    kind: str            #: "integer" | "fixed" | "exponent" | "significant" | "exact" (each number as given)
+    decimals: int = 0    #: decimals (fixed) or mantissa decimals (exponent, significant: digits - 1)
 
     def text(self, v: float) -> str:
         """Plain text (HTML, Markdown): 2080, 0.0123, 4.07×10⁸; "exact": the shortest decimal that gives back
@@ -48,6 +54,9 @@ class NumberFormat:
             return s[1:] if s.startswith("-") and float(s) == 0 else s
         if v == 0:
             return "0"
+        if self.kind == "significant" and PLAIN[0] <= abs(v) < PLAIN[1]:
+            s = f"{v:.{max(0, self.decimals - math.floor(math.log10(abs(v))))}f}"
+            return s[1:] if s.startswith("-") and float(s) == 0 else s
         m, e = f"{v:.{self.decimals}e}".split("e")
         if int(e) == 0:             # never ×10⁰ (as siunitx prints 2.229e0 in the PDF: 2.229)
             return m
@@ -81,7 +90,12 @@ def column_format(values, digits: int = 3) -> NumberFormat:
     fixed = max(0, digits - 1 - math.floor(math.log10(top)))
     two_digits = 1 - math.floor(math.log10(low))      # decimals that keep two significant digits of the smallest
     if top >= 1e5 or top < 1e-3 or two_digits > MAX_FIXED_DECIMALS:
-        # huge, tiny, or so spread that plain decimals would not keep two digits of the smallest: 4.07×10⁸
+        # so spread that plain decimals would not keep two digits of the smallest: each number with its own
+        # significant digits (43.3 beside 4.31×10⁻¹⁰), not 4.33×10¹ for an ordinary number
+        nonzero = np.abs(v[v != 0])
+        if np.mean((nonzero >= PLAIN[0]) & (nonzero < PLAIN[1])) >= 0.5:
+            return NumberFormat("significant", digits - 1)
+        # huge or tiny: 4.07×10⁸
         d = digits - 1
         while d < digits - 1 + MAX_EXTRA_DECIMALS and len({f"{x:.{d}e}" for x in v}) < need:
             d += 1
@@ -143,15 +157,37 @@ def human_unit_text(value):
     return _UNIT_WORDS.get(value, value) if isinstance(value, str) else value
 
 
+#: a field name (snake_case, no spaces or dots: ``best_rms_um``, ``kappa_stations``) and its unit suffix
+_FIELD = re.compile(r"^[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)+$")
+_SUFFIX_UNITS = {"um": "µm", "mm": "mm", "nm": "nm", "urad": "µrad", "deg": "°", "ms": "ms", "us": "µs", "pct": "%"}
+
+
+def _suffix_unit(name) -> str:
+    """The unit a field name ends with ('best_rms_um' -> 'µm'), or ''."""
+    text = str(name)
+    if not _FIELD.match(text):
+        return ""
+    return _SUFFIX_UNITS.get(text.rsplit("_", 1)[1], "")
+
+
 def header_unit(name) -> str:
-    """The unit a header names in brackets ('R [mm]' -> 'mm'), or ''."""
+    """The unit a header names: in brackets ('R [mm]' -> 'mm') or as a field name's suffix ('dx_um' -> 'µm');
+    else ''."""
     m = re.search(r"\[([^\]]+)\]\s*$", str(name))
-    return human_unit_text(m.group(1).strip()) if m else ""
+    return human_unit_text(m.group(1).strip()) if m else _suffix_unit(name)
 
 
 def human_header(name) -> str:
     """A column header as a person reads it: ASCII unit spellings inside [...] or (...) become µm, µrad, µs
-    (``x_c - nominal [um]`` -> ``x_c - nominal [µm]``)."""
+    (``x_c - nominal [um]`` -> ``x_c - nominal [µm]``); a field name loses its unit suffix (the unit is shown
+    once, in brackets: :func:`header_unit`) and its underscores (``best_rms_um`` -> ``best rms``,
+    ``kappa_points_published`` -> ``kappa points published``); a method id (``circle.kasa``) is kept."""
+    text = str(name)
+    if _FIELD.match(text):
+        if _suffix_unit(text):
+            text = text.rsplit("_", 1)[0]
+        return text.replace("_", " ")
+
     def fix(m):
         inner = re.sub(r"(?<![A-Za-z])(um/m|um|urad|us|μm|μrad|μs|deg)(?![A-Za-z])",
                        lambda w: _UNIT_WORDS[w.group(1)], m.group(2))

@@ -7,6 +7,8 @@ even with one number column becomes a note pointing to its CSV.
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pandas as pd
 
@@ -42,18 +44,27 @@ def column_unit(name, s: pd.Series, unit: str) -> str:
     """The table's unit for this column's header: none for a column whose name already carries one
     ("error [mm]") or that counts something (runs, iterations, ...: ``numbers.is_count``); every other number
     column carries it, whole-numbered or not (a share of 100 % is a percentage like 87.5 %)."""
-    if not unit or "[" in str(name) or is_count(name):
+    if "[" in str(name) or is_count(name):
         return ""
-    return unit
+    return header_unit(name) or unit or ""
+
+
+#: a column of published values (``published``, ``published [µm]``): each number as the source printed it
+PUBLISHED = re.compile(r"^\s*published\s*(\[[^\]]*\])?\s*$", re.I)
 
 
 def _formats(df: pd.DataFrame, values, unit: str, digits: int, decimals: dict | None = None, exact=()) -> dict:
     """One format per number column (``numbers.table_formats``): the declared ones (``decimals``: {column: n}
     fixed decimals; ``exact``: as given) as declared; of the others, columns with the same unit, from their header
     or the table's, share one; counts are formatted alone."""
-    units = {c: (None if is_count(c) else (header_unit(c) or unit or None)) for c in values}
+    # a table with a unit column gives each row's numbers in that row's unit: its columns share one format
+    # (an estimate and the injected value it is compared with, at one resolution)
+    per_row = "the row's unit" if any(str(c).strip().lower() in ("unit", "units") for c in df.columns) else None
+    units = {c: (None if is_count(c) else (header_unit(c) or unit or per_row)) for c in values}
+    # published values are printed as published (27, not 27.00), unless declared otherwise
+    published = [c for c in values if c not in (decimals or {}) and PUBLISHED.match(str(c))]
     return table_formats(df, values, units, max(1, min(int(digits or 3), MAX_DIGITS)),
-                         declared=declared_format(decimals, exact))
+                         declared=declared_format(decimals, tuple(exact or ()) + tuple(published)))
 
 
 def _humanised(df: pd.DataFrame) -> pd.DataFrame:
@@ -94,8 +105,9 @@ def _columns(df: pd.DataFrame, keys, values, unit: str, digits: int, decimals: d
             cols.append(Column(str(c), header=header, unit=u, kind="integer"))
         elif fmt.kind == "fixed":
             cols.append(Column(str(c), header=header, unit=u, kind="number", decimals=fmt.decimals, exponent=False))
-        else:
-            cols.append(Column(str(c), header=header, unit=u, kind="number", digits=fmt.decimals + 1, exponent=True))
+        else:   # exponent: every cell 4.07e8; significant: plain between 1e-3 and 1e5, as NumberFormat.text
+            cols.append(Column(str(c), header=header, unit=u, kind="number", digits=fmt.decimals + 1,
+                               exponent=True if fmt.kind == "exponent" else None))
     return cols
 
 

@@ -351,6 +351,7 @@ def fewer_collections():
     finally:
         gc.set_threshold(*old)
 
+
 #: the most tasks, and the most bytes of their data, of one batch of :func:`_generic_rows`
 BATCH_TASKS, BATCH_BYTES = 256, 16 << 20
 

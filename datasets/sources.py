@@ -13,7 +13,8 @@ gets one repetition. Adding a source::
 
     from datasets.sources import register_source
 
-    @register_source("outliers", random=True, summary="circle with 10 % gross outliers", gives=np.ndarray)
+    @register_source("outliers", random=True, summary="circle with 10 % gross outliers", gives=np.ndarray,
+                     family="circle")
     def outliers(rng, *, n=100, share=0.1):
         ...
         return points, {"family": "circle", "center": (0.0, 0.0), "radius": 1.0}
@@ -27,7 +28,11 @@ no default or None: anything). A study's values are checked against them before 
 A source declares what its data are with ``gives`` (a type: ``numpy.ndarray`` for an (N, 2) array of points, the
 default of none: not declared): a study pairing it with a method that takes other data (the type its family's
 validator returns, ``methods.register(validator=...)``; a method without one takes points) is refused when the
-config is loaded (``experiments.schema.check_data_kinds``), never run into ``skipped`` rows.
+config is loaded (``experiments.schema.check_data_kinds``), never run into ``skipped`` rows. A source whose truth
+names a shape (``truth["family"]``) declares it with ``family`` (``"circle"``): a study pairing it with a method of
+another family (a circle fit on a square outline) is refused the same way, unless the method's entry says
+``any_family = true``; whatever is declared, a row never gets errors against a truth of another family
+(``experiments.rows``: its message says so).
 
 Third-party packages register sources through the entry-point group ``fitbench.datasets`` (the entry
 point names a module that registers on import); the engine loads them before it checks any config.
@@ -66,6 +71,8 @@ class DataSource:
     files: Callable[..., list] | None = field(default=None, repr=False)
     #: the type of the data it gives (``numpy.ndarray``: an (N, 2) array of points); None: not declared
     gives: type | None = None
+    #: the family of the shape its data are drawn from, as its truth names it (``truth["family"]``); None: not declared
+    family: str | None = None
 
     def load(self, rng, **params):
         data, truth = self.func(rng, **params)
@@ -116,17 +123,21 @@ _REGISTRY: dict[str, DataSource] = {}
 
 
 def register_source(name: str, *, random: bool, summary: str, files: Callable | None = None,
-                    gives: type | None = None):
+                    gives: type | None = None, family: str | None = None):
     """Register ``func(rng, **params) -> (data, truth)`` as data source ``name``; ``gives``: the type of its data
-    (``numpy.ndarray`` for points), checked against the methods a study pairs it with before any row runs."""
+    (``numpy.ndarray`` for points), ``family``: the family its truth names (``"circle"``), both checked against the
+    methods a study pairs it with before any row runs."""
     if gives is not None and not isinstance(gives, type):
         raise ValueError(f"data source {name!r}: gives must be a type (numpy.ndarray for points), got {gives!r}")
+    if family is not None and (not isinstance(family, str) or not family.isidentifier()):
+        raise ValueError(f"data source {name!r}: family must be a family name as methods' ids begin with it "
+                         f"('circle'), got {family!r}")
 
     def deco(func):
         if name in _REGISTRY and _REGISTRY[name].func is not func:
             raise ValueError(f"data source {name!r} is already registered (by {_REGISTRY[name].module})")
         add_entry(_REGISTRY, name, DataSource(name=name, func=func, random=random, summary=summary,
-                                              module=func.__module__, files=files, gives=gives))
+                                              module=func.__module__, files=files, gives=gives, family=family))
         return func
     return deco
 
@@ -157,9 +168,9 @@ def _register_builtins():
     from datasets.io import read_points
     from datasets.synthetic import GENERATORS
 
-    for gen_name, gen in GENERATORS.items():
+    for gen_name, gen in GENERATORS.items():  # each draws the shape it is named after (its truth's family)
         register_source(gen_name, random=True, summary=(gen.__doc__ or "").strip().splitlines()[0],
-                        gives=np.ndarray)(gen)
+                        gives=np.ndarray, family={"circle": "circle", "ellipse": "ellipse"}.get(gen_name))(gen)
 
     def _published_files(name, variant=None):
         return [datasets.PUBLISHED_DIR / f"{name}.csv", datasets.PUBLISHED_DIR / f"{name}.json"]
@@ -184,7 +195,7 @@ def _register_builtins():
         return [folder / f"{name}.csv", folder / f"{name}.json"]
 
     @register_source("nist", random=False, summary="a NIST Circle2d set (FITBENCH_NIST_DIR)", files=_nist_files,
-                     gives=np.ndarray)
+                     gives=np.ndarray, family="circle")
     def nist(rng=None, *, name: str):
         """Points of NIST set ``name``; truth = NIST's reference least-squares circle (certified digits)."""
         folder = nist_folder()

@@ -181,7 +181,7 @@ def expand_methods(cfg: dict, where: str) -> list[tuple[str, dict]]:
             entry = {"id": entry}
         if not isinstance(entry, dict) or "id" not in entry:
             raise ConfigError(f"{here}: each method is an id or a table with 'id', got {entry!r}")
-        unknown = set(entry) - {"id", "params", "grid", "max_n", "on"}
+        unknown = set(entry) - {"id", "params", "grid", "max_n", "on", "any_family"}
         if unknown:
             raise ConfigError(f"{here}: unknown key(s) {', '.join(sorted(unknown))}")
         mid = entry["id"]

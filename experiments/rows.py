@@ -152,6 +152,11 @@ def _measured_row(task: dict, res, points, truth) -> dict:
     row["converged"] = converged
     row["iterations"] = res.iterations
     row["nfev"] = res.nfev
+    other = _other_family(truth, task["method"])
+    if other:  # a circle's centre error against a square's centre means nothing: no truth errors, and the row says so
+        row["message"] = f"{res.message}; no errors against the truth: the data are of family {other[0]!r}, " \
+                         f"{task['method']} of {other[1]!r}"
+        truth = None
     row.update(metrics(res, truth))
     if task.get("timing"):
         t = task["timing"]
@@ -159,6 +164,16 @@ def _measured_row(task: dict, res, points, truth) -> dict:
         row.update(time_call(lambda: spec.unchecked(points, **task["params"]),
                              min_time_s=t.get("min_time_s", 0.02), rounds=t.get("rounds", 5)))
     return row
+
+
+def _other_family(truth, method: str) -> tuple[str, str] | None:
+    """(the family the data's truth names, the method's) when they differ (``truth["family"]``: a data source's truth
+    says what shape the data are), else None."""
+    family = truth.get("family") if isinstance(truth, dict) else None
+    if family is None:
+        return None
+    own = methods.get(method).family
+    return None if family == own else (str(family), own)
 
 
 #: statuses the environment causes (not the method): never served from the cache, recomputed on the next run

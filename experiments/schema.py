@@ -92,6 +92,8 @@ class MethodEntry(_Table):
     grid: Grid = None
     max_n: PositiveInt = None
     on: list[str] = None
+    any_family: Annotated[bool, Field(description="run on data sets whose source declares another family's shape "
+                                                  "too (no errors against their truth)")] = None
 
 
 class Timing(_Table):
@@ -579,21 +581,28 @@ def check_data_kinds(cfg: dict, where: str) -> None:
     """Refuse a method paired with a data set whose data it cannot take (a positioning method on the points of
     ``source = "circle"``): the type the data source declares it gives (``datasets.sources.register_source(gives=
     ...)``) against the type the method takes (:func:`method_takes`), for every data set the method runs on (all,
-    or those its ``on`` names). Nothing is checked where either side declares no type."""
+    or those its ``on`` names). Nothing is checked where either side declares no type. Likewise a method of one
+    family paired with a source whose data are another family's shape (``register_source(family=...)``, or the
+    ``family`` of a file's truth table): a circle fit on a square outline, unless its entry says ``any_family = true``
+    (its rows then carry no errors against that truth: ``experiments.rows``)."""
     from experiments.engine import ConfigError
     from datasets import sources
     import methods
     if not cfg.get("datasets") or not cfg.get("methods"):
         return
-    data = []
+    data, shapes = [], []
     for j, entry in enumerate(cfg["datasets"]):
         name, label = _entry_source(entry)
         try:
-            gives = sources.get_source(name).gives
+            source = sources.get_source(name)
         except KeyError:
             continue
-        if gives is not None:
-            data.append((j, name, label, gives))
+        if source.gives is not None:
+            data.append((j, name, label, source.gives))
+        truth = entry.get("truth") if "file" in entry else None  # a file's truth table may name its shape
+        family = truth.get("family") if isinstance(truth, dict) else source.family
+        if isinstance(family, str):
+            shapes.append((j, name, label, family))
     for i, entry in enumerate(cfg["methods"]):
         entry = {"id": entry} if isinstance(entry, str) else entry
         mid = entry["id"]
@@ -611,3 +620,14 @@ def check_data_kinds(cfg: dict, where: str) -> None:
                         f"{where}: methods[{i}]{f' ({mid})' if mid != spec.id else ''}: {spec.id} cannot take the data "
                         f"of datasets[{j}] (source {name!r}): the source gives {data_words(gives)}, {spec.id} takes "
                         f"{data_words(takes)}; remove the method, or name the data sets it takes in its on = [...]")
+        if entry.get("any_family"):
+            continue
+        for spec in specs:
+            for j, name, label, family in shapes:
+                if (on is None or label in on) and family != spec.family:
+                    raise ConfigError(
+                        f"{where}: methods[{i}]{f' ({mid})' if mid != spec.id else ''}: {spec.id} (family "
+                        f"{spec.family!r}) would fit datasets[{j}] (source {name!r}), whose points and truth are of "
+                        f"family {family!r}; remove the method, name the data sets it fits in its on = [...], or set "
+                        f"any_family = true in its [[methods]] entry to fit them anyway (no errors against the truth "
+                        f"of another family)")

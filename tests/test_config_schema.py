@@ -325,6 +325,7 @@ on = ["circle"]
 [[methods]]
 id = "ellipse.fitzgibbon"
 on = ["circle"]
+any_family = true   # an ellipse fit on a circle's points: asked for (tests/test_family_pairing.py)
 [[methods]]
 id = "positioning.iso230_2"
 """
@@ -378,10 +379,10 @@ def test_a_plugin_data_source_declares_what_it_gives(tmp_path):
 
 
 @pytest.mark.parametrize("where, key, problem", [
-    ("methods", 'summary_by = ["method"]', "methods[1]: unknown key 'summary_by' (known: grid, id, max_n, on, params); "
+    ("methods", 'summary_by = ["method"]', "methods[1]: unknown key 'summary_by' (known: any_family, grid, id, max_n, on, params); "
      "'summary_by' is a top-level key, and a key written after [[methods]] belongs to that table in TOML: move it "
      "above the first [...] or [[...]]"),
-    ("methods", "repetitons = 3", "methods[1]: unknown key 'repetitons' (known: grid, id, max_n, on, params); did you "
+    ("methods", "repetitons = 3", "methods[1]: unknown key 'repetitons' (known: any_family, grid, id, max_n, on, params); did you "
      "mean the top-level key 'repetitions'? a key written after [[methods]]"),
     ("datasets", "seed = 4", "datasets[0]: unknown key 'seed' (known: generator, grid, label, params); 'seed' is a "
      "top-level key, and a key written after [[datasets]] belongs to that table"),

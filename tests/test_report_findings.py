@@ -25,9 +25,15 @@ def first_sentence(findings):          # what the abstract quotes (experiments.r
 def test_noise_findings_per_arc(tmp_path):
     a = analysed("noise", tmp_path)
     head = first_sentence(a.findings)
-    by_arc = a.values["within_10_percent_by_arc"]
-    assert by_arc["360°"] and "circle.gauss_newton" in by_arc["90°"] and not by_arc["45°"]
-    assert f"{len(by_arc['360°'])} of 8 on the 360°" in head and "none on the 45° arc" in head
+    v = a.values
+    by_arc, beyond, undecided = v["within_10_percent_by_arc"], v["beyond_10_percent_by_arc"], v["undecided_by_arc"]
+    # classified with the Monte-Carlo standard error (about 7 % at 100 repetitions): every least-squares estimator
+    # on every arc is within, beyond or undecided; 1.02 x the bound is not "within 10 %", 3.7 x is beyond
+    for arc in by_arc:
+        assert len(by_arc[arc]) + len(beyond[arc]) + len(undecided[arc]) == 8 and arc in head
+        assert (f"{len(by_arc[arc])} of 8" if by_arc[arc] else "none on the") in head
+    assert "circle.gauss_newton" in undecided["90°"] and "circle.powell_hybrid" in beyond["90°"]
+    assert "by more than 2 standard errors" in head
     assert "every arc (none)" not in a.findings
 
 

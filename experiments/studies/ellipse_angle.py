@@ -59,28 +59,40 @@ def consistency_text(m, ratio, se, a_minus_b_mm) -> str:
 
 
 def figure(table, target, sigma, n, reps=None):
+    """RMS angle error and the prediction against a − b (top); RMS / prediction with ± 2 Monte-Carlo standard errors
+    (bottom: the scatter the log scale above hides)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from experiments.render import style
     diffs = table["a_minus_b_mm"].to_numpy() * 1e3
+    keys = [k for k in table.columns if k.startswith("rms_error_deg")]
     with style.figure_style():
-        fig, ax = plt.subplots(figsize=style.size(0.8, 0.6))
+        fig, (ax, rx) = plt.subplots(2, 1, figsize=style.size(0.8, 0.95), sharex=True, height_ratios=[2, 1])
         ax.loglog(diffs, table["predicted_sd_deg"], "k-", label="first order: σ·sqrt([(JᵀJ)⁻¹]θθ)")
+        rx.axhline(1.0, color="k", lw=1)
         if reps:
             band = 2 * float(ratio_standard_error(reps))
-            ax.fill_between(diffs, table["predicted_sd_deg"] * (1 - band), table["predicted_sd_deg"] * (1 + band),
-                            color="0.85", lw=0, label=f"± 2 standard errors of an RMS of {reps}")
-        for key in [k for k in table.columns if k.startswith("rms_error_deg")]:
+            rx.axhspan(1 - band, 1 + band, color="0.88", lw=0, label=f"1 ± 2 standard errors ({reps} copies)")
+        for j, key in enumerate(keys):
             m = key.split(" ", 1)[1]
             kw = style.method_style(m)
             ax.loglog(diffs, table[key], marker=kw["marker"], color=kw["color"], linestyle="none", mfc="none",
                       label=f"{kw['label']} (RMS)")
-        ax.axvline(22.1, color="0.6", ls=":", label="paper's ellipse (22.1 µm)")
-        ax.set_xlabel(f"a − b [µm]  (N = {n}, σ = {sigma * 1e3:g} µm)")
+            ratio = table[key] / table["predicted_sd_deg"]
+            err = 2 * ratio_standard_error(table[f"n_ok {m}"]) if f"n_ok {m}" in table else None
+            shift = 1.0 + 0.06 * (j - (len(keys) - 1) / 2)     # side by side, not on top of each other
+            rx.errorbar(diffs * shift, ratio, yerr=err, marker=kw["marker"], color=kw["color"], linestyle="none",
+                        mfc="none", capsize=2)
+        for a in (ax, rx):
+            a.axvline(22.1, color="0.6", ls=":", label="paper's ellipse (22.1 µm)" if a is ax else None)
+        rx.set_xscale("log")
+        rx.set_xlabel(f"a − b [µm]  (N = {n}, σ = {sigma * 1e3:g} µm)")
         ax.set_ylabel("angle error [°]")
+        rx.set_ylabel("RMS / prediction")
         style.plain_log_ticks(ax, "both")
+        style.plain_log_ticks(rx, "x")
         style.legend_outside(fig, ncol=2)
         style.save(fig, target / "angle_conditioning.png")
         plt.close(fig)
@@ -130,8 +142,9 @@ class EllipseAngleStudy(Study):
                    f"sigma = {params['noise'] * 1e3:g} µm per coordinate, {reps} repetitions; the ratio RMS / prediction "
                    "with its Monte-Carlo standard error 1/sqrt(2 n) over n converged fits (dimensionless)")
         fig = Figure(caption="RMS error of the fitted axis angle [°] against a − b [µm] on synthetic near-circular "
-                             "ellipses, with the first-order prediction and its ± 2 Monte-Carlo standard errors (grey) "
-                             f"for an RMS of {reps} copies: the angle of a near-circle is ill-conditioned",
+                             "ellipses, with the first-order prediction: the angle of a near-circle is ill-conditioned "
+                             f"(top); RMS / prediction with ± 2 Monte-Carlo standard errors of an RMS of {reps} copies "
+                             "(bottom: error bars, and the grey band around 1)",
                      file="angle_conditioning.png")
         # ratios to 0.01 (their standard error is a few %), standard errors to 0.001; angles to 1e-5° (three digits
         # of the smallest, 0.0014° at a - b = 1 mm)

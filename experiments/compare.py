@@ -313,6 +313,8 @@ def verify(studies: list[str], results: Path, against: Path, log=print, write: b
         _same_inputs(results / study, against / study)
         reports.append({**compare_study(study, committed, fresh, _kernels(results / study, against / study)), "date": date,
                         "results_sha256": results_sha256(results / study),   # what this verdict judged
+                        "fingerprint": _fingerprint(results / study),
+                        "reference_fingerprint": _fingerprint(against / study),
                         "against_sha256": results_sha256(against / study),
                         "reference": against_name or f"the run in {_shown(against / study)}"})
     for r in reports:
@@ -462,6 +464,16 @@ def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path,
     return refs
 
 
+OTHER_CODE = (", computed by other code or config (the study's fingerprint changed since: what changed may "
+              "explain it; a reproducibility verdict compares runs of one code)")
+
+
+def other_code(entry: dict) -> bool:
+    """Whether a verdict compared results of other code or config (both fingerprints recorded, and they differ)."""
+    a, b = entry.get("fingerprint"), entry.get("reference_fingerprint")
+    return isinstance(a, str) and isinstance(b, str) and a != b
+
+
 def _fingerprint(folder: Path) -> str | None:
     """The fingerprint ``meta.json`` records for a study's outputs (its rows' keys, config and the code that analyses
     them, this module included: ``experiments.engine.fingerprint``), None when there is none."""
@@ -490,7 +502,8 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
             continue
         fresh_sha, ref_sha = results_sha256(Path(out) / name), results_sha256(ref["folder"] / name)
         judged = {"results_sha256": fresh_sha, "reference_sha256": ref_sha, "reference": ref["reference"],
-                  "fingerprint": _fingerprint(Path(out) / name)}
+                  "fingerprint": _fingerprint(Path(out) / name),
+                  "reference_fingerprint": _fingerprint(ref["folder"] / name)}
         if (isinstance(before, dict) and judged["fingerprint"] and fresh_sha
                 and all(before.get(k) == v for k, v in judged.items())):
             r = before  # the same two tables judged by the same code (the study's fingerprint): the same verdict
@@ -507,7 +520,7 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
             r = {**r, "date": date, **judged}
         entries[name] = r
         log(f"verify: {name}: " + ("reproduces " + ref["reference"] + kernel_note(r) if r["agree"] else
-                                   f"DIFFERS from {ref['reference']} in: "
+                                   f"DIFFERS from {ref['reference']}{OTHER_CODE if other_code(r) else ''} in: "
                                    + ", ".join(dict.fromkeys(f"{p['n_rows']} {p['problem'].replace('row ', 'rows ', 1)}"
                                                              if p["column"] == "(rows)" else p["column"]
                                                              for p in r["problems"]))))

@@ -49,10 +49,40 @@ def export_figure(png: Path, out_dir: Path, stem: str) -> tuple[Path, Path]:
 # ---------------------------------------------------------------- assembly
 
 def _shown(path: Path) -> str:
-    try:
-        return str(Path(path).resolve().relative_to(REPO))
-    except ValueError:
-        return str(path)
+    """A folder as a report names it (the report is shared: no folder of this machine): relative to the checkout
+    or the current folder when inside one, else ``.../`` and its last part."""
+    p = Path(path).resolve()
+    for base in (REPO, Path.cwd().resolve()):
+        try:
+            return p.relative_to(base).as_posix() or "."
+        except ValueError:
+            continue
+    return ".../" + p.name
+
+
+def _command_folder(path: Path) -> str:
+    """A folder as a command in the report names it: :func:`_shown`, or its name alone when outside the checkout
+    and the current folder (``--out r7plug_out``: run where that folder is, or name another)."""
+    shown = _shown(path)
+    return Path(path).resolve().name if shown.startswith(".../") else shown
+
+
+def _reproduce(names: list[str], known: dict, quick: bool, folder_arg: str) -> str:
+    """The command(s) that reproduce the studies of this report (Markdown): the default studies' own command when
+    the report holds just them in their folder, else one per study: a known study by name, a user's study by its
+    TOML file (named after the study; ``meta.json`` records the config it ran)."""
+    from experiments.render.page import md_escape
+    q, out = (" --quick" if quick else ""), (f" --out{folder_arg}" if folder_arg else "")
+    defaults = {n for n, c in known.items() if c.get("default")}
+    every_default = bool(defaults) and defaults <= set(names)
+    rest = [n for n in names if not (every_default and n in defaults)]
+    commands = [f"`python -m experiments.run{q}{out}` (the default studies)"] if every_default else []
+    if rest:
+        commands.append(f"`python -m experiments.run {' '.join(n if n in known else n + '.toml' for n in rest)}{q}{out}`")
+    own = [n for n in names if n not in known]
+    note = (f" ({', '.join(f'{n}.toml' for n in own)}: the study's TOML file, wherever it is; the config it ran "
+            f"is recorded in {'its' if len(own) == 1 else 'each'} `meta.json`)") if own else ""
+    return f"reproduce {'it' if len(names) == 1 else 'them'} with " + " and ".join(commands) + md_escape(note)
 
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -301,20 +331,21 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     verdicts = study_verdicts(results, [e[2] for e in entries if e[4] is not None],
                               {n: "not a default study" for n in present if not known.get(n, {}).get("default")},
                               quick={e[2]: bool(e[4].get("quick")) for e in entries if e[4] is not None},
-                              shown=_shown(results))
+                              shown=_command_folder(results))
 
     # the command that fills a missing study into this folder: its --quick grid when the folder's studies are
     # quick runs, and this folder as --out unless it is the grid's default (results/, results/quick/)
     folder_quick = any(e[4] and e[4].get("quick") for e in entries)
     from experiments.verdict import grid_options
-    quick_flag, folder_arg = grid_options(results, folder_quick, _shown(results))
+    quick_flag, folder_arg = grid_options(results, folder_quick, _command_folder(results))
     missing_args = quick_flag + (f" --out{folder_arg}" if folder_arg else "")
 
     doc = Document()
     doc.heading(1, "fitbench: comparison report")
-    doc.prose(f"Built from `{md_escape(_shown(results))}` by `python -m experiments.report`; reproduce everything with "
-              "`python -m experiments.run` (the default studies; a study that is not default: "
-              "`python -m experiments.run NAME`). Interactive explorer (offline): [explorer.html](explorer.html).")
+    done_names = [e[2] for e in entries if e[4] is not None]
+    doc.prose(f"Built from `{md_escape(_shown(results))}` by `python -m experiments.report`; "
+              f"{_reproduce(done_names, known, folder_quick, folder_arg)}. "
+              "Interactive explorer (offline): [explorer.html](explorer.html).")
     abstract_at = len(doc.parts)
     from experiments.verdict import verdict_markdown
     doc.prose(" ".join(verdict_markdown(results)))
@@ -488,10 +519,14 @@ def _abstract(entries, verdicts) -> str:
             parts.append(f"{e[3].split(':')[0].strip()}: {first}.")
     judged = {k: lines[0][0] for k, lines in verdicts.items() if lines[0][0].startswith("Reproducibility")
               and not lines[0][0].endswith("out of date")}
+    changed = [k for k, lines in verdicts.items() if lines[0][0].startswith("Changed since")]
     if judged:
         differ = [k for k, label in judged.items() if label.endswith("differs")]
         parts.append(f"Reproduced: {len(judged) - len(differ)} of {len(judged)} studies with a current verdict"
                      + (f" (differ: {', '.join(differ)})" if differ else "") + ".")
+    if changed:
+        parts.append(f"Changed since the results compared with (other code or config, not a reproducibility check): "
+                     f"{', '.join(changed)}.")
     return " ".join(parts)
 
 

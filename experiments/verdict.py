@@ -72,7 +72,18 @@ def study_sentence(entry: dict) -> str:
     if entry.get("agree"):
         return (f"Verdict ({when}): this run reproduces {ref} within the declared tolerances "
                 f"({entry.get('rows', '?')} rows, {entry.get('columns', '?')} columns).")
+    if _other_code(entry):
+        return (f"Verdict ({when}): this run differs from {ref} in: {_columns(entry)}; those results were computed "
+                f"by other code or another config (the study's fingerprint changed since), so the change may "
+                f"explain the difference: this is not a reproducibility check (details: verify.json).")
     return f"Verdict ({when}): this run differs from {ref} in: {_columns(entry)} (details: verify.json)."
+
+
+def _other_code(entry: dict) -> bool:
+    """A verdict between results of other code or config (``experiments.compare.other_code``; read here without
+    importing the comparison)."""
+    a, b = entry.get("fingerprint"), entry.get("reference_fingerprint")
+    return isinstance(a, str) and isinstance(b, str) and a != b
 
 
 def grid_options(results: Path, quick: bool, shown: str | None = None) -> tuple[str, str]:
@@ -102,7 +113,9 @@ def study_verdicts(results: Path, studies: list[str], reasons: dict[str, str] | 
         q, folder = grid_options(results, bool((quick or {}).get(name)), shown)
         if name in current:
             e = current[name]
-            lines.append(("Reproducibility" if e.get("agree") else "Reproducibility: differs", study_sentence(e)))
+            lines.append(("Reproducibility" if e.get("agree") else
+                          "Changed since the compared results" if _other_code(e) else "Reproducibility: differs",
+                          study_sentence(e)))
         elif name in stale:
             lines.append(("Reproducibility: out of date",
                           f"The last verification ({stale[name].get('date', '?')}) judged other results than these "
@@ -126,11 +139,18 @@ def verdict_markdown(results: Path) -> list[str]:
         return ["No current reproducibility verdict: run `python -m experiments.verify --write-verdict`"
                 + (f" (the last one judged other results for {len(stale)} "
                    f"{'study' if len(stale) == 1 else 'studies'})" if stale else "") + "."]
+    changed = [k for k, e in current.items() if not e.get("agree") and _other_code(e)]
+    current = {k: e for k, e in current.items() if k not in changed}
     differ = [k for k, e in current.items() if not e.get("agree")]
     tail = f" ({len(stale)} older verdicts are out of date and not counted)" if stale else ""
+    head = [f"{md_escape(', '.join(changed))} {'differs' if len(changed) == 1 else 'differ'} from the results "
+            f"{'it was' if len(changed) == 1 else 'they were'} compared with, which other code or another config "
+            f"computed (not a reproducibility check; see `verify.json`)."] if changed else []
+    if not current:
+        return head
     if not differ:
         return [f"Reproducibility: all {len(current)} verified {'study agrees' if len(current) == 1 else 'studies agree'} "
                 f"with these results within the declared "
-                f"tolerances{tail}."]
+                f"tolerances{tail}."] + head
     return [f"Reproducibility: {len(differ)} of {len(current)} verified studies differ beyond the declared tolerances "
-            f"({md_escape(', '.join(differ))}); see `verify.json`{tail}."]
+            f"({md_escape(', '.join(differ))}); see `verify.json`{tail}."] + head

@@ -553,3 +553,36 @@ def test_differences_the_other_kernel_backend_explains_are_named_apart_never_wit
         assert verify.main(["--results", str(committed), "--against", str(other)]) == 1
         out = capsys.readouterr().out
         assert out.startswith("vstudy: DIFFER") and f" {column} " in out.split("Differences the other")[0]
+
+
+def test_the_report_of_a_users_study_names_no_folder_of_this_machine_its_own_command_and_what_a_verdict_compared(
+        tmp_path, capsys):
+    """A user's TOML study run into its own folder: the report names that folder without the machine's path, gives
+    the command that reruns THAT study, and after the study's code changed (its fingerprint) a difference from the
+    previous run is said to be a change, not a failure to reproduce."""
+    toml = tmp_path / "vuser.toml"
+    toml.write_text(STUDY.replace('name = "vstudy"', 'name = "vuser"'), encoding="utf-8")
+    out = tmp_path / "my results"
+    assert runner.main([str(toml), "--jobs", "1", "--out", str(out)]) == 0
+    md = (out / "paper" / "report.md").read_text(encoding="utf-8")
+    header = md.splitlines()[2]
+    assert str(tmp_path) not in md and "`.../my results`" in header, header
+    assert "`python -m experiments.run vuser.toml --out 'my results'`" in header and "default studies" not in header
+    # the plugin author edits the study's code: the previous results were computed by other code
+    meta_path = out / "vuser" / "meta.json"
+    meta = json.loads(meta_path.read_text())
+    meta["fingerprint"] = "0" * 32
+    meta_path.write_text(json.dumps(meta))
+    edit_path = out / "vuser" / "results.csv"
+    df = pd.read_csv(edit_path, dtype=str, keep_default_na=False)
+    df.loc[0, "radius"] = repr(float(df.loc[0, "radius"]) * 2)
+    df.to_csv(edit_path, index=False)
+    capsys.readouterr()
+    assert runner.main([str(toml), "--jobs", "1", "--out", str(out)]) == 0
+    assert "computed by other code or config" in capsys.readouterr().out
+    md = (out / "paper" / "report.md").read_text(encoding="utf-8")
+    abstract = md.split("**Abstract.**")[1].split("\n")[0]
+    assert "Reproduced: 0 of 1" not in md and "Changed since the results compared with" in abstract, abstract
+    section = md.split("(`vuser`)")[1]
+    assert "**Changed since the compared results.**" in section and "not a reproducibility check" in section
+    assert "differ beyond the declared tolerances" not in md

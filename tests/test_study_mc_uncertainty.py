@@ -105,6 +105,10 @@ def test_noise_findings_classify_with_the_standard_error_and_table_has_one_resol
     assert "within 10 % by more than 2 standard errors: none on the 360° and 90° arcs" in f
     assert "beyond 10 % by more than 2 standard errors: 1 of 3 on the 360° and 90° arcs (circle.kasa)" in f
     assert "Undecided (the ratio ± 2 standard errors straddles 1.1): 2 of 3 on the 360° and 90° arcs" in f
+    assert "the others undecided at 100 repetitions" in f
+    decided = NoiseStudy().analyse(pd.DataFrame(rows)[lambda d: d["method"] == "circle.kasa"], {}, tmp_path,
+                                   lambda s: None).findings
+    assert "(circle.kasa)." in decided and "undecided" not in decided.lower()
     assert an.values["within_10_percent"] == [] and an.values["undecided_by_arc"]["360°"] == ["circle.gauss_newton", "circle.hyper"]
     t = an.tables[0]
     assert list(t.data.columns) == ["method", "360° arc", "360° s.e.", "90° arc", "90° s.e."]

@@ -82,7 +82,7 @@ def below_bound_text(table: pd.DataFrame) -> str:
     names = ", ".join(f"{r.method} {r.arc_deg:g}° σ = {r.noise:g} R N = {int(r.n)} ({zi:.1f} s.e.)"
                       for r, zi in zip(far.itertuples(), z[z > 3]))
     return text + (f": {len(low) - len(far)} within 3 standard errors of 1 (Monte-Carlo scatter), beyond 3: {names}, "
-                   "where the first-order bound does not hold.")
+                   "beyond the Monte-Carlo scatter.")
 
 
 class NoiseStudy(Study):
@@ -129,8 +129,8 @@ class NoiseStudy(Study):
         findings = (f"At σ = {sigma:g} R and N = {n} ({reps} repetitions, one Monte-Carlo standard error of a ratio {se_text} "
                     f"of it), least-squares estimators reaching the KCR bound on the radius within 10 % by more than 2 "
                     f"standard errors: {counts_by_group(by['within'], len(lsq), 'arc')}, beyond 10 % by more than 2 "
-                    f"standard errors: {counts_by_group(by['beyond'], len(lsq), 'arc')}, the others undecided at "
-                    f"{reps} repetitions.")
+                    f"standard errors: {counts_by_group(by['beyond'], len(lsq), 'arc')}"
+                    + (f", the others undecided at {reps} repetitions." if any(by["undecided"].values()) else "."))
         if any(by["undecided"].values()):
             findings += (f" Undecided (the ratio ± 2 standard errors straddles 1.1): "
                          f"{counts_by_group(by['undecided'], len(lsq), 'arc', names=False)}.")
@@ -149,7 +149,7 @@ class NoiseStudy(Study):
                    f"isotropic noise, N = {n}, {int(worst['runs'].max())} repetitions")
         fig_caption = ("Radius RMSE / KCR bound (top) and radius bias / σ (bottom) of the least-squares estimators "
                        "against the noise σ / R on synthetic unit circles and arcs; dashed: closed-form (algebraic) fits; "
-                       f"a ratio's Monte-Carlo standard error is about {se_text} of it (kcr.csv)")
+                       f"each ratio's Monte-Carlo standard error is in kcr.csv ({se_text} of it at σ = {sigma:g} R, N = {n})")
         # one resolution for every column (a ratio known to a few % needs 2 decimals; 21.18 beside 2.708 misled)
         decimals = {c: 2 for c in shown.columns if c != "method"}
         return Analysis(tables=[Table(caption=caption, data=shown, unit="", decimals=decimals)],

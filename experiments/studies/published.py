@@ -1,5 +1,6 @@
 """Study ``published``: every circle method on the roundness paper's published profiles, and its
-table 1 (LSQ, Voronoi minimum zone, MIC, MCC) published against reproduced. Where a figure is not
+table 1 (LSQ, Rapidform 2004, Voronoi minimum zone, MIC, MCC) published against reproduced: every figure the
+data sets' ``published`` values hold (``published_columns`` names the method that reproduces each). Where a figure is not
 reproduced, coordinates consistent with the printed digits (uniform within half a unit of the last
 printed decimal) are refitted to measure the spread that the rounding alone allows: one engine task
 per (data set, table column), so the Monte Carlo is cached, resumable and parallel like every row."""

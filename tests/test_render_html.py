@@ -151,3 +151,24 @@ def test_markdown_table_keeps_every_value_in_its_cell():
     assert html.count("<td ") == 6 and html.count("<th ") == 3 and "<b>" not in html
     assert ">p|q</td>" in html and ">1.235</td>" in html and 'style="text-align:right">4</td>' in html
     assert html.count('style="text-align:right"></td>') == 1            # NaN: an empty cell
+
+
+def test_profile_curves_carry_their_methods_markers_along_them_staggered():
+    """13 methods share a 12-colour palette (kasa and pratt are both pinks): each curve carries its method's marker
+    at several places, staggered between methods, and the legend shows line and marker together."""
+    import matplotlib.pyplot as plt
+    from experiments.render import style
+    from experiments.render.profiles import MARKS
+    fig = plot_profiles({"error": _table()})
+    try:
+        ax = fig.axes[0]
+        methods = list(_table().columns)
+        marked = [ln for ln in ax.get_lines() if ln.get_linestyle() in ("None", "") and len(ln.get_xdata()) == MARKS]
+        assert len(marked) == len(methods) >= 2
+        assert {ln.get_marker() for ln in marked} == {style.method_style(m)["marker"] for m in methods}
+        starts = [float(ln.get_xdata()[0]) for ln in marked]
+        assert len(set(starts)) == len(starts)                       # staggered: no two methods' marks coincide
+        handles = fig.legends[0].legend_handles if hasattr(fig.legends[0], "legend_handles") else fig.legends[0].legendHandles
+        assert all(h.get_marker() not in (None, "None", "") for h in handles)
+    finally:
+        plt.close(fig)

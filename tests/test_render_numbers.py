@@ -218,3 +218,11 @@ def test_published_values_print_as_published_and_a_rows_unit_column_gives_its_nu
     shown = text_frame(sources)
     decimals = {len(t.split(".")[1]) for c in ("estimate", "u", "injected") for t in shown[c]}
     assert len(decimals) == 1 and shown["injected"][0] == "66.47840"
+
+
+def test_a_column_whose_smallest_value_would_force_digits_onto_its_largest_prints_significant_digits():
+    """Table 18's RONt: 1748.66665 µm (0.01 nm) beside 0.00013 µm; with 4 digits: 1749 and 1.300×10⁻⁴."""
+    values = [1748.66665, 8810.80693, 0.40167, 29.15919, 0.00013, 2.25971]
+    fmt = column_format(values, 4)
+    assert [fmt.text(v) for v in values] == ["1749", "8811", "0.4017", "29.16", "1.300×10⁻⁴", "2.260"]
+    assert column_format(RUNTIMES, 4).kind == "fixed"     # 16.647 beside 0.008: one number of decimals still

@@ -80,3 +80,19 @@ def test_every_published_figure_of_the_roundness_paper_is_a_column_of_its_table(
     n = sum(v is not None for name in ("roundness_set1", "roundness_set2", "roundness_set3")
             for v in datasets.load(name).published.values())
     assert n == 11
+
+
+def test_roundness_leads_with_the_excess_over_the_minimum_zone_not_its_definition(tmp_path):
+    """'MZCI gives the smallest RONt in 77 of 77' is the minimum zone's definition (ISO 12181-1): the finding leads
+    with how far the other circles exceed it and states the definition as a check; the ranking table names the
+    circles as the RONt table does (LSCI, MZCI, ...)."""
+    a = analysed("roundness", tmp_path)
+    head = first_sentence(a.findings)
+    assert "exceeds the minimum zone's" in head and "MZCI gives the smallest" not in a.findings
+    assert "definition requires (ISO 12181-1)" in a.findings or "forbids" in a.findings
+    assert set(a.tables[1].data["reference"]) == {"LSCI", "MZCI", "MICI", "MCCI"}
+
+
+def test_the_published_figure_says_its_axis_is_symmetric_logarithmic(tmp_path):
+    a = analysed("published", tmp_path)
+    assert "symmetric logarithmic (linear within ±1 µm" in a.figures[0].caption

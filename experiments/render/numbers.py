@@ -6,7 +6,8 @@ HTML, Markdown and LaTeX renderings.
 column's largest magnitude, with more decimals (up to 6 more) while two values that differ by more than a
 relative ``MATTERS`` (1e-6) of that magnitude would print alike, and at least as many as keep two significant
 digits of the smallest value (16.6470 and 0.0080 in one column). A column spanning more decades than that (the
-largest magnitude >= 1e5, or the smallest value needing more than ``MAX_FIXED_DECIMALS`` decimals) prints each
+largest magnitude >= 1e5, the smallest value needing more than ``MAX_FIXED_DECIMALS`` decimals, or so many that
+the largest would print more than 3 significant digits beyond ``digits``) prints each
 number with ``digits`` significant digits ("significant": 43.3, 0.422 and 4.31×10⁻¹⁰ in one column, as siunitx
 prints a cell without a fixed format), in plain notation between 1e-3 and 1e5 and scientific beyond, unless most of
 its values lie beyond: then every cell is scientific (one exponent per cell, one mantissa width per column), as
@@ -89,7 +90,10 @@ def column_format(values, digits: int = 3) -> NumberFormat:
     low = float(np.min(np.abs(v[v != 0]))) if np.any(v != 0) else top
     fixed = max(0, digits - 1 - math.floor(math.log10(top)))
     two_digits = 1 - math.floor(math.log10(low))      # decimals that keep two significant digits of the smallest
-    if top >= 1e5 or top < 1e-3 or two_digits > MAX_FIXED_DECIMALS:
+    # decimals that keep two digits of the smallest value would print the largest with more than 3 significant
+    # digits beyond the table's (RONt 1748.66665 µm beside 0.00013 µm): too spread for one number of decimals
+    overshoot = math.floor(math.log10(top)) + 1 + two_digits > digits + 3
+    if top >= 1e5 or top < 1e-3 or two_digits > MAX_FIXED_DECIMALS or (two_digits > fixed and overshoot):
         # so spread that plain decimals would not keep two digits of the smallest: each number with its own
         # significant digits (43.3 beside 4.31×10⁻¹⁰), not 4.33×10¹ for an ordinary number
         nonzero = np.abs(v[v != 0])

@@ -102,6 +102,10 @@ def profile(table: pd.DataFrame, taus=None, rtol: float = TIE_RTOL) -> pd.DataFr
     return pd.DataFrame(out, index=pd.Index(taus, name="tau"))
 
 
+#: markers drawn along each profile curve
+MARKS = 4
+
+
 def plot_profiles(tables: dict[str, pd.DataFrame], path=None, *, tau_max: float | None = None, title=None):
     """One panel per table (e.g. {'accuracy': ..., 'runtime': ...}): rho_s(tau) against log2(tau) as step
     curves, a method's colour/marker from ``style.method_style``, one legend outside the panels. Returns the
@@ -120,14 +124,21 @@ def plot_profiles(tables: dict[str, pd.DataFrame], path=None, *, tau_max: float 
             top = tau_max or min(2.0 ** 12, max(2.0, float(np.nanmax(fin)) * 1.2 if len(fin) else 2.0))
             prof = profile(table)
             x_end = np.log2(top)
-            for m in sorted(prof.columns):
+            shown = sorted(prof.columns)
+            for i, m in enumerate(shown):
                 taus = prof.index.to_numpy()
                 keep = taus <= top
                 xs = np.concatenate([np.log2(taus[keep]), [x_end]])
                 ys = np.concatenate([prof[m].to_numpy()[keep], [prof[m].to_numpy()[keep][-1]]])
                 kw = style.method_style(m)
-                ax.step(xs, ys, where="post", color=kw["color"], linestyle=kw["linestyle"], label=kw["label"], lw=1.3)
-                ax.plot(xs[:1], ys[:1], kw["marker"], color=kw["color"], ms=4)
+                ax.step(xs, ys, where="post", color=kw["color"], linestyle=kw["linestyle"], lw=1.3)
+                # the method's marker along its curve, staggered between methods: curves of like colours that
+                # cross or overlap stay apart by their markers (13 methods share a 12-colour palette)
+                at = x_end * (np.arange(MARKS) + (i + 0.5) / len(shown)) / MARKS
+                on = ys[np.clip(np.searchsorted(xs, at, side="right") - 1, 0, len(ys) - 1)]
+                ax.plot(at, on, kw["marker"], color=kw["color"], ms=3.8, mec="white", mew=0.4)
+                ax.plot([], [], color=kw["color"], linestyle=kw["linestyle"], marker=kw["marker"], ms=4,
+                        label=kw["label"], lw=1.3)   # the legend's entry: line and marker together
             ax.set_xlim(0, x_end)
             ax.set_ylim(-0.02, 1.02)
             ax.set_xlabel(r"$\log_2\,\tau$ (cost / best cost)")

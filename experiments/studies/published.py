@@ -161,7 +161,9 @@ class PublishedStudy(Study):
                    "against reproduced from the printed coordinates, and where not reproduced the 99 % range that "
                    f"coordinates consistent with the printed digits give ({values['rounding_samples']} fits each) [mm]")
         fig = Figure(caption="Published profiles of the roundness paper: reproduced circularity and the 99 % range the "
-                             "printed digits allow, relative to the published value [µm]", file="published.png")
+                             "printed digits allow, relative to the published value [µm]; the axis is symmetric "
+                             "logarithmic (linear within ±1 µm, logarithmic beyond: equal steps are 1, 3, 10 µm)",
+                     file="published.png")
         # the paper's values as printed (0.029807, not 0.0298); reproduced and difference to the 7 decimals they are
         # rounded to, so that published - reproduced reads as the difference column says
         table = Table(caption=caption, data=shown, unit="mm", exact=("published",),
@@ -179,7 +181,9 @@ def circularity_figure(rows: pd.DataFrame, path):
     from experiments.render import style
     import matplotlib.pyplot as plt
     r = rows.reset_index(drop=True)
-    labels = [f"{d.replace('roundness_', '')}{'*' if v != 'as published' else ''}\n{c.split(' ')[0]}"
+    short = {"Rapidform": "RF"}   # the tick labels stay apart; the legend says what RF is
+    labels = [f"{d.replace('roundness_', '')}{'*' if v != 'as published' else ''}\n"
+              f"{short.get(c.split(' ')[0], c.split(' ')[0])}"
               for d, v, c in zip(r["dataset"], r["variant"], r["column"])]
     x = np.arange(len(r))
     to_um = lambda col: (r[col] - r["published"]) * 1e3     # noqa: E731
@@ -192,12 +196,13 @@ def circularity_figure(rows: pd.DataFrame, path):
         ax.axhline(0.0, color=style.PALETTE[1], lw=1.0, label="published value")
         ax.set_xticks(x, labels)
         ax.set_xlim(-0.6, len(x) - 0.4)
-        ax.set_ylabel("circularity − published [µm]")
+        ax.set_ylabel("circularity − published [µm]\n(symmetric log: linear within ±1 µm)")
         ax.grid(axis="x", visible=False)
         ax.set_yscale("symlog", linthresh=1.0)
         top = float(np.nanmax(np.abs(np.concatenate([lo, hi]))))
         ticks = [t for t in (1, 3, 10, 30, 100, 300, 1000) if t <= top * 1.2]
         ax.set_yticks([-t for t in ticks[::-1]] + [0] + ticks)
         style.plain_log_ticks(ax, "y")
-        style.legend_outside(fig, ncol=2, title="*: repeated closing point dropped")
+        rf = any(c.startswith("Rapidform") for c in r["column"])
+        style.legend_outside(fig, ncol=2, title="*: repeated closing point dropped" + ("; RF: Rapidform 2004" if rf else ""))
         return style.save(fig, path)

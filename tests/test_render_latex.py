@@ -295,3 +295,16 @@ def test_headings_with_superscripts_make_clean_pdf_bookmarks(tmp_path):
     assert result["ok"], result["errors"]
     assert "Token not allowed" not in result["log"]
     assert _bookmarks(tmp_path / "report.out") == ["Speed: 10⁶ points", title]
+
+
+def test_the_no_value_note_blames_a_method_only_in_a_table_of_methods():
+    """Table 9's unestimated error source (cyclic_error: all '–') read 'the method did not run there or failed'."""
+    import numpy as np
+    import pandas as pd
+    from experiments.render.report_tables import latex_fragments
+    sources = pd.DataFrame({"source": ["squareness", "cyclic_error"], "estimate": [66.46, np.nan], "unit": ["urad", "um"]})
+    tex = "".join(latex_fragments(sources, caption="c", label="t"))
+    assert "no value" in tex and "method" not in tex
+    fits = pd.DataFrame({"method": ["circle.kasa", "circle.pratt"], "error": [0.1, np.nan]})
+    shown = "".join(latex_fragments(fits, caption="c", label="t", unit="mm"))
+    assert "does not apply there, or the method did not run or failed" in shown

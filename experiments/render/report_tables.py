@@ -117,7 +117,12 @@ def latex_fragments(df: pd.DataFrame, *, caption: str, label: str, unit: str = "
     n}) and ``exact`` (columns) are the table's declared formats (``study.Table``), the same in every rendering."""
     df = _humanised(df)
     keys, values = split_columns(df)
-    notes = ["-- : no value (the method did not run there or failed)"] if df.isna().any().any() else None
+    # a table of methods: a value may not apply there (a station error with known stations) or the method did
+    # not run or failed; a table of other rows (an error source the test does not estimate) blames no method
+    methods_rows = any(str(c).strip().lower() in ("method", "methods") for c in keys) or \
+        any(str(c).startswith(("circle.", "ellipse.")) for c in values)
+    notes = ([f"-- : no value{' (it does not apply there, or the method did not run or failed)' if methods_rows else ''}"]
+             if df.isna().any().any() else None)
 
     def attempt(vals, cap, lab):
         return latex_table(df[keys + vals], _columns(df, keys, vals, unit, digits, decimals, exact), caption=cap,

@@ -425,12 +425,25 @@ def _generic_rows(tasks: list[dict], first: int, progress) -> list[dict]:
     return rows
 
 
+def _loaded_before_rows() -> None:
+    """Import what the rows import on first use (the built-in methods, the installed plugins' methods and data
+    sources; each loader runs once a process), so that a row's time limit measures the row, not the imports of a
+    worker that has just started: under load they took more than a 1 s limit and a row that crashed was labelled
+    'timeout'. The run itself imported them all before its first row (a plugin that hangs on import stops it there)."""
+    from methods._registry import load_builtins, load_plugins
+    load_builtins()
+    load_plugins()
+    sources.load_plugins()
+
+
 def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None) -> dict:
     """Run a chunk of tasks in a worker; the rows come back encoded for the store and as the columns of the run's frame
     (:func:`encode_rows`). ``progress``
     (a shared array of two doubles) receives the start time and position of the running row, so that
     the parent can end a row stuck in compiled code. Without a time limit the generic fit rows run in batches
     (:func:`_generic_rows`)."""
+    if row_timeout:
+        _loaded_before_rows()
     rows = []
     t0 = time.perf_counter()
     start = 0

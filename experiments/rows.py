@@ -431,9 +431,7 @@ def _loaded_before_rows() -> None:
     sources; each loader runs once a process), so that a row's time limit measures the row, not the imports of a
     worker that has just started: under load they took more than a 1 s limit and a row that crashed was labelled
     'timeout'. The run itself imported them all before its first row (a plugin that hangs on import stops it there)."""
-    from methods._registry import load_builtins, load_plugins
-    load_builtins()
-    load_plugins()
+    methods.list_methods()   # loads the built-in methods, then the installed plugins' (once a process)
     sources.load_plugins()
 
 

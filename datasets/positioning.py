@@ -6,9 +6,14 @@ one common error delta per test (uniform within +-MPE, the paper's model of the 
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from methods.positioning.data import PositioningData
+
+if TYPE_CHECKING:  # the annotation's name only: pandas is imported where a frame is made
+    import pandas as pd
 
 
 def pitch_curve(P, coefficients):

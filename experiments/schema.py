@@ -484,8 +484,8 @@ def check_source_params(name: str, params: dict, grid: dict, what: str = "data s
     for label, key, value in values:
         error = next(_Validator(schemas[key]).iter_errors(value), None)
         if error is not None:
-            why = (f" (the bound of a data source's integer parameters that declare none: every row holds its data "
-                   f"in memory)" if error.validator == "maximum" and error.validator_value == MAX_COUNT else "")
+            why = (" (the bound of a data source's integer parameters that declare none: every row holds its data "
+                   "in memory)" if error.validator == "maximum" and error.validator_value == MAX_COUNT else "")
             raise ValueError(f"{label} = {value!r} must be {describe(schemas[key])}{why}")
 
 

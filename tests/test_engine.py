@@ -114,7 +114,7 @@ def _rows_of_every_kind():
 def test_frame_of_parts_is_the_frame_of_all_rows(order, size):
     """Chunks of rows finish in any order (several workers, rows run again after a crash) and a block where every row
     failed holds None where others hold floats, ints or bools: the frame of the parts must equal the frame of all rows
-    in task order (else results.csv writes repr() floats, not %.17g, or puts the columns in another order)."""
+    in task order (else results.csv writes a float column as ints, or puts the columns in another order)."""
     rows = _rows_of_every_kind()
     whole = pd.DataFrame([{k: v for k, v in r.items() if k != "task_index"} for r in rows])
     chunks = [rows[i:i + size] for i in range(0, 60, size)]
@@ -690,10 +690,25 @@ def test_a_script_without_the_main_guard_runs_on_several_workers(tmp_path):
     assert set(pd.read_csv(tmp_path / "o" / "eng" / "results.csv")["status"]) == {"ok"}
 
 
+def _shortest_json_text(value: float) -> str:
+    """The reference for results.csv's floats, from Python's shortest round-trip ``repr`` (not from orjson): the same
+    digits in orjson's style: positional from 1e-5 on (``0.00001234``), a negative exponent without a leading zero, a
+    whole number without ``.0``."""
+    text = repr(float(value))
+    if "e" not in text:
+        return text[:-2] if text.endswith(".0") else text  # a whole number as an integer
+    mantissa, exponent = text.split("e")
+    if int(exponent) == -5:  # Python writes 1e-05 to 1e-04 with an exponent, JSON's shortest text positionally
+        sign, digits = ("-", mantissa[1:]) if mantissa.startswith("-") else ("", mantissa)
+        return f"{sign}0.0000{digits.replace('.', '')}"
+    return f"{mantissa}e{exponent[0]}{int(exponent[1:])}"
+
+
 def test_results_csv_text_is_pandas_to_csv_byte_for_byte():
-    """The column-by-column CSV writer gives the bytes of DataFrame.to_csv(index=False, float_format='%.17g'): floats
-    of every magnitude, NaN, infinities, -0.0, ints, bools, text needing quotes, missing text, object columns mixing
-    types, and a dtype it leaves to pandas."""
+    """The column-by-column CSV writer gives the bytes of DataFrame.to_csv(index=False) with each float as the shortest
+    text that reads back as the same double (the reference above, from Python's repr): floats of every magnitude, NaN,
+    infinities, -0.0, ints, bools, text needing quotes, missing text, object columns mixing types, and a dtype it
+    leaves to pandas."""
     import io
 
     from experiments.csvtext import write_csv
@@ -701,7 +716,10 @@ def test_results_csv_text_is_pandas_to_csv_byte_for_byte():
     n = 3000
     df = pd.DataFrame({
         "f": np.where(rng.random(n) < 0.1, np.nan, rng.normal(size=n) * 10.0 ** rng.integers(-300, 300, n)),
-        "special": np.resize([0.0, -0.0, np.inf, -np.inf, 5e-324, 1.7976931348623157e308, 0.1], n),
+        "g": rng.normal(size=n) * 10.0 ** rng.integers(-7, 18, n),  # around the two ends of positional text
+        "bits": rng.integers(0, 2**63, n, dtype=np.uint64).view(np.float64),  # any double (NaN among them)
+        "special": np.resize([0.0, -0.0, np.inf, -np.inf, 5e-324, 1.7976931348623157e308, 0.1, 1e-5, 1e-4, 1e16,
+                              9999999999999998.0, -1.2345e-5], n),
         "i": rng.integers(-10**12, 10**12, n), "b": rng.random(n) < 0.5,
         "s": pd.Series(rng.choice(["a,b", 'q"uote', "new\nline", "cr\rhere", None, "", " sp ", "plain", "é ü", '"'], n),
                        dtype="str"),
@@ -712,12 +730,24 @@ def test_results_csv_text_is_pandas_to_csv_byte_for_byte():
         "e": pd.Series(np.resize(np.array([False, 0, 0.0, "0", None, 1, True], dtype=object), n), dtype=object),
         "t": pd.Series(np.resize(["a", None, "a,b", "", "a"], n), dtype=object)})
     odd_names = df.rename(columns={"f": "a,b", "i": 'q"n'})
-    for frame in (df, df.iloc[:0], df[["s"]], df[["s", "o"]], odd_names,
+    for frame in (df, df.iloc[:0], df[["s"]], df[["s", "o"]], odd_names, df.iloc[::-7],
                   df.assign(cat=pd.Categorical(rng.choice(["u", "v"], n)))):
         for header in (True, False):
             ours = io.StringIO()
             write_csv(frame, ours, header=header)
-            assert ours.getvalue() == frame.to_csv(index=False, header=header, float_format="%.17g")
+            assert ours.getvalue() == frame.to_csv(index=False, header=header, float_format=_shortest_json_text)
+    back = pd.read_csv(io.StringIO(write_csv_text(df[["f", "g", "bits", "special"]])), engine="python")
+    for c in ("f", "g", "bits", "special"):  # every double reads back as itself
+        assert np.array_equal(back[c].to_numpy().view(np.int64)[df[c].notna()], df[c].to_numpy().view(np.int64)[df[c].notna()])
+
+
+def write_csv_text(frame) -> str:
+    import io
+
+    from experiments.csvtext import write_csv
+    out = io.StringIO()
+    write_csv(frame, out)
+    return out.getvalue()
 
 
 # ---------------------------------------------------------------- a file data set read with the reader's options

@@ -69,10 +69,24 @@ def _keyed(df: pd.DataFrame, ident: list[str]) -> pd.DataFrame:
     shown = [c for c in ident if c != "study"]
     key = pd.Series([""] * len(df), index=df.index)
     for k, c in enumerate(shown):  # "a=1, b=2": column by column, not a Python join per row
-        key = key + (", " if k else "") + c + "=" + df[c].astype(str)
+        key = key + (", " if k else "") + c + "=" + _identity_text(df[c].astype(str))
     df["_occurrence"] = key.groupby(key).cumcount()  # rows with one identity: matched in order
     df["_key"] = key + " #" + df["_occurrence"].astype(str)
     return df.set_index("_key")
+
+
+def _identity_text(values: pd.Series) -> pd.Series:
+    """An identity column's texts with each float in the text ``results.csv`` writes now
+    (:func:`experiments.csvtext.float_texts`: ``0.005``), also from a file of an earlier format (``%.17g``:
+    ``0.0050000000000000001``), so that the same parameter is the same identity; integers and other texts as they are
+    (a seed beyond 2**53 stays exact)."""
+    floats = values.str.fullmatch(r"[-+]?(\d+\.\d*|\.\d+|\d+(\.\d*)?[eE][-+]?\d+)")
+    if not floats.any():
+        return values
+    from experiments.csvtext import float_texts
+    out = values.copy()
+    out[floats] = float_texts(values[floats].astype(float).to_numpy())
+    return out
 
 
 def _number(values: pd.Series) -> np.ndarray | None:

@@ -25,7 +25,7 @@ repetitions = 2
 
 [[datasets]]
 generator = "circle"
-params = { center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }
+params = { center = [1.0, 2.0], radius = 5.0, noise = 0.005, n = 12 }
 
 [[methods]]
 id = "circle.kasa"
@@ -89,6 +89,23 @@ def test_perturbation_beyond_tolerance_fails_naming_study_column_row(committed, 
     assert len(bad) == 1 and f" {column} " in bad[0] and f"method={method}" in bad[0] and "repetition=1" in bad[0]
     verdict = json.loads((committed / verify.VERDICT_FILE).read_text())
     assert verdict["agree"] is False and verdict["studies"][0]["problems"][0]["column"] == column
+
+
+def test_results_written_with_17_digits_match_rows_of_the_shortest_text(committed, tmp_path, capsys):
+    """results.csv of an earlier format wrote every float with %.17g (noise 0.005 as 0.0050000000000000001): its rows
+    are the same identities as this format's (0.005), so it verifies against a run of this format."""
+    old = copy_run(committed, tmp_path)
+    path = old / "vstudy" / "results.csv"
+    df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    floats = [c for c in df.columns if c.startswith("data_") and df[c].str.contains(".", regex=False).all()
+              and pd.to_numeric(df[c], errors="coerce").notna().all()]
+    assert "data_noise" in floats
+    for c in floats + ["radius", "center_error"]:
+        df[c] = [f"{float(v):.17g}" for v in df[c]]
+    assert (df["data_noise"] == "0.005").sum() == 0  # the identity's text differs
+    df.to_csv(path, index=False)
+    assert verify.main(["--results", str(old), "--against", str(committed)]) == 0, capsys.readouterr().out
+    assert capsys.readouterr().out.startswith("vstudy: agree")
 
 
 def test_missing_row_is_a_difference(committed, tmp_path, capsys):

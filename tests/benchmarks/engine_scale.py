@@ -5,7 +5,10 @@ peak memory at 40,000 and 160,000 rows (``engine_160k.toml``). Measured, printed
 live here, not in the tests; docs/engine.md lists the figures).
 
 Run from the repository root (about 2 minutes on 2 cores):
-    python tests/benchmarks/engine_scale.py [--skip-160k] [--dask]
+    python tests/benchmarks/engine_scale.py [--skip-160k] [--dask] [--repeat N]
+
+The fits alone, the start-up, ``--jobs 1``, ``--jobs 2`` and the re-run are measured in ``--repeat`` (3) interleaved
+rounds; the medians and each round's ratios are printed (one round's figures move by 0.1-0.2 s on a shared machine).
 
 Each run is a fresh interpreter (``python -m experiments.run STUDY --out TMP``); its peak memory is the
 largest resident set of the run and its workers (``os.wait4``'s ``ru_maxrss``). The project's modules are compiled to
@@ -15,10 +18,10 @@ from __future__ import annotations
 
 import argparse
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -60,7 +63,7 @@ def run_peak(cmd: list, env) -> tuple[float, float, float]:
              "sys.stderr.write(p.stderr[-800:] if p.returncode else ''); "
              "u = resource.getrusage(resource.RUSAGE_CHILDREN); "
              "print(f'{w:.3f} {u.ru_maxrss / 1024:.1f} {p.returncode} {u.ru_utime + u.ru_stime:.3f}')")
-    out = subprocess.run([sys.executable, "-c", probe, *map(str, cmd)], cwd=ROOT, env=env, capture_output=True,
+    out = subprocess.run([sys.executable, "-c", probe, *map(str, cmd)], cwd=ROOT, env=env, capture_output=True, check=False,
                          text=True)
     wall, peak, rc, cpu = out.stdout.split()
     if rc != "0":
@@ -68,10 +71,16 @@ def run_peak(cmd: list, env) -> tuple[float, float, float]:
     return float(wall), float(peak), float(cpu)
 
 
+def _median(values):
+    return statistics.median(values)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--skip-160k", action="store_true")
     ap.add_argument("--dask", action="store_true", help="also the Dask LocalCluster with 2 workers")
+    ap.add_argument("--repeat", type=int, default=3, help="rounds of the fits, start-up, --jobs 1, --jobs 2 and "
+                                                           "re-run measurements, interleaved; medians are quoted")
     args = ap.parse_args(argv)
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
     # the project's modules as an installed package has them, compiled to bytecode once (else every process of the
@@ -80,34 +89,52 @@ def main(argv=None) -> int:
     subprocess.run([sys.executable, "-m", "compileall", "-q", *(str(ROOT / p) for p in PACKAGES)], cwd=ROOT, env=env,
                    check=True)
     study = HERE / "engine_40k.toml"
-    out = subprocess.run([sys.executable, "-c", FITS_ALONE, str(study)], cwd=ROOT, env=env, capture_output=True,
-                         text=True, check=True).stdout.split()
-    fits, gen, fits_cpu = float(out[0]), float(out[1]), float(out[2])
-    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the start")
-    start, _, start_cpu = run_peak([sys.executable, "-c", "import experiments.run, methods.circle"], env)
-    print(f"fits alone (40,000 fits, data made beforehand): {fits:.2f} s wall, {fits_cpu:.2f} s CPU; "
-          f"making the data: {gen:.2f} s; "
-          f"start-up (imports): {start:.2f} s wall, {start_cpu:.2f} s CPU")
-    rows = {}
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the start; "
+          f"{args.repeat} interleaved rounds, medians quoted (each round's value in brackets)")
+    m = {k: [] for k in ("fits", "fits_cpu", "gen", "start", "j1", "j2", "again")}
+    peaks = {1: [], 2: []}
+    cpus = {1: [], 2: [], "again": []}
+    run = [sys.executable, "-m", "experiments.run", study] + NO_REPORT
     with tempfile.TemporaryDirectory() as tmp:
-        run = [sys.executable, "-m", "experiments.run", study] + NO_REPORT
+        for r in range(args.repeat):
+            out = subprocess.run([sys.executable, "-c", FITS_ALONE, str(study)], cwd=ROOT, env=env,
+                                 capture_output=True, text=True, check=True).stdout.split()
+            m["fits"].append(float(out[0]))
+            m["gen"].append(float(out[1]))
+            m["fits_cpu"].append(float(out[2]))
+            m["start"].append(run_peak([sys.executable, "-c", "import experiments.run, methods.circle"], env)[0])
+            for jobs in (1, 2):
+                wall, peak, cpu = run_peak(run + ["--jobs", jobs, "--out", Path(tmp) / f"j{jobs}-{r}"], env)
+                m[f"j{jobs}"].append(wall)
+                peaks[jobs].append(peak)
+                cpus[jobs].append(cpu)
+            wall, _, cpu = run_peak(run + ["--jobs", 2, "--out", Path(tmp) / f"j2-{r}"], env)
+            m["again"].append(wall)
+            cpus["again"].append(cpu)
+        med = {k: _median(v) for k, v in m.items()}
+        each = {k: " ".join(f"{x:.2f}" for x in v) for k, v in m.items()}
+        print(f"fits alone (40,000 fits, data made beforehand): {med['fits']:.2f} s wall [{each['fits']}], "
+              f"{_median(m['fits_cpu']):.2f} s CPU; making the data: {med['gen']:.2f} s; "
+              f"start-up (imports): {med['start']:.2f} s [{each['start']}]")
         for jobs in (1, 2):
-            o = Path(tmp) / f"j{jobs}"
-            rows[jobs] = run_peak(run + ["--jobs", jobs, "--out", o], env)
-            print(f"--jobs {jobs}: {rows[jobs][0]:.2f} s wall, {rows[jobs][2]:.2f} s CPU, peak {rows[jobs][1]:.0f} MB")
-        again = run_peak(run + ["--jobs", 2, "--out", Path(tmp) / "j2"], env)
-        print(f"re-run, every row cached (--jobs 2): {again[0]:.2f} s = {again[0] / rows[2][0]:.0%} of the first run "
-              f"({again[2]:.2f} s CPU)")
+            print(f"--jobs {jobs}: {med[f'j{jobs}']:.2f} s wall [{each[f'j{jobs}']}], {_median(cpus[jobs]):.2f} s CPU, "
+                  f"peak {_median(peaks[jobs]):.0f} MB")
+        again = [a / b for a, b in zip(m["again"], m["j2"])]
+        print(f"re-run, every row cached (--jobs 2): {med['again']:.2f} s = {_median(again):.0%} of the first run "
+              f"[{' '.join(f'{x:.0%}' for x in again)}] ({_median(cpus['again']):.2f} s CPU)")
         if args.dask:
             d = run_peak(run + ["--jobs", 2, "--executor", "dask", "--out", Path(tmp) / "dask"], env)
             print(f"--executor dask (LocalCluster, 2 workers): {d[0]:.2f} s wall, {d[2]:.2f} s CPU, peak {d[1]:.0f} MB")
-        print(f"ratios: --jobs 1 / (fits + start-up) = {rows[1][0] / (fits + start):.2f}; "
-              f"--jobs 2 / --jobs 1 = {rows[2][0] / rows[1][0]:.2f}")
+        r1 = [j / (f + s) for j, f, s in zip(m["j1"], m["fits"], m["start"])]
+        r2 = [b / a for a, b in zip(m["j1"], m["j2"])]
+        print(f"ratios (medians; each round's in brackets): --jobs 1 / (fits + start-up) = {_median(r1):.2f} "
+              f"[{' '.join(f'{x:.2f}' for x in r1)}]; --jobs 2 / --jobs 1 = {_median(r2):.2f} "
+              f"[{' '.join(f'{x:.2f}' for x in r2)}]")
         if not args.skip_160k:
             big = run_peak([sys.executable, "-m", "experiments.run", HERE / "engine_160k.toml", *NO_REPORT,
                             "--jobs", 2, "--out", Path(tmp) / "big"], env)
             print(f"160,000 rows (--jobs 2): {big[0]:.2f} s wall, {big[2]:.2f} s CPU, peak {big[1]:.0f} MB = "
-                  f"{big[1] / rows[2][1]:.2f} x the 40,000-row peak")
+                  f"{big[1] / _median(peaks[2]):.2f} x the 40,000-row peak")
     print(f"load average {os.getloadavg()[0]:.1f} at the end")
     return 0
 

@@ -1,7 +1,7 @@
 """The rows of a run as one DataFrame in task order, gathered from columnar parts.
 
-A worker turns the rows of its chunk into a *part* (:func:`part_of`: one Series per column, the task index of
-each row, where each column first appears), so the run's process never holds a row's values as Python objects;
+A worker turns the rows of its chunk into a *part* (:func:`part_of`: one NumPy array per column, of the type a
+Series of the column would have, the task index of each row, where each column first appears), so the run's process never holds a row's values as Python objects;
 it writes each part's numbers into the frame's arrays as the chunk arrives and keeps its other columns
 (:class:`RowFrame`), joined at the end in task order, whatever order the chunks finished in. The rows served from
 the row store (cached) are decoded into parts of their own.
@@ -36,8 +36,8 @@ def part_of(rows: list[dict]) -> dict | None:
         index, kinds = at.pop("task_index", (None, None))
         if index is None or kinds != {int}:  # a row made outside a run (no task index): no place in a frame
             return None
-        return {"task_index": np.array(index, dtype=np.int64), "first": dict.fromkeys(at, 0),
-                "columns": {name: _series(column, kinds) for name, (column, kinds) in at.items()}}
+        return _shipped(np.array(index, dtype=np.int64), dict.fromkeys(at, 0),
+                        {name: _series(column, kinds) for name, (column, kinds) in at.items()})
     first: dict = {}
     plain = PLAIN
     for pos, row in enumerate(rows):
@@ -60,25 +60,43 @@ def _part(rows: list[dict], first: dict) -> dict:
 
 def _columns(index: np.ndarray, first: dict, values: dict) -> dict:
     import pandas as pd
+    return _shipped(index, first, {name: pd.Series(column) for name, column in values.items()})
+
+
+def _shipped(index: np.ndarray, first: dict, series: dict) -> dict:
+    """A part as it travels from a worker: each column as a NumPy array, float64 and int64 as they are, any other
+    type as an object array of the Series' values, and the names of the columns whose Series was of pandas' text type
+    (a pickled Series cost 0.35 ms to unpickle whatever its length: 4 us a row in the run's process)."""
+    import pandas as pd
+    columns, texts = {}, []
+    for name, col in series.items():
+        if type(col) is np.ndarray:  # made without a Series (:func:`_series`)
+            columns[name] = col if col.dtype in DENSE else col.astype(object)
+        elif col.dtype in DENSE:
+            columns[name] = col.to_numpy()
+        else:
+            columns[name] = col.to_numpy(dtype=object)
+            if isinstance(col.dtype, pd.StringDtype):
+                texts.append(name)
     return {"task_index": index,
             "first": first,  # column -> position of the first row that has it (dict order: first appearance)
-            "columns": {name: pd.Series(column) for name, column in values.items()}}
+            "columns": columns, "texts": texts}
 
 
 _DTYPE_OF = {float: np.float64, bool: np.bool_}
 
 
 def _series(values: tuple, kinds: set):
-    """``pd.Series(list(values))``; a column of one number type (``kinds``: the types of its values) made without
-    pandas' inference (the same dtype and values)."""
+    """``pd.Series(list(values))``, or for a column of one number type (``kinds``: the types of its values) the NumPy
+    array of that Series, made without pandas' inference (the same dtype and values)."""
     import pandas as pd
     if len(kinds) == 1:
         (kind,) = kinds
         if kind in _DTYPE_OF:
-            return pd.Series(np.array(values, dtype=_DTYPE_OF[kind]))
+            return np.array(values, dtype=_DTYPE_OF[kind])
         if kind is int:
             try:
-                return pd.Series(np.array(values, dtype=np.int64))
+                return np.array(values, dtype=np.int64)
             except OverflowError:  # beyond 64 bits: pandas' own choice (uint64 or object)
                 pass
     return pd.Series(list(values))
@@ -124,11 +142,12 @@ class RowFrame:
                 for _, present in held.values():
                     present[again] = False
         self.arrived[index] = True
+        texts = part["texts"]
         for name, values in part["columns"].items():
             if values.dtype in DENSE:
-                self._numbers(name, index, values.to_numpy())
+                self._numbers(name, index, values)
             else:
-                self._objects(name, index, values)
+                self._objects(name, index, values, name in texts)
 
     def _numbers(self, name: str, index, values) -> None:
         held = self.numbers.get(name)
@@ -139,19 +158,18 @@ class RowFrame:
         held[0][index] = values
         held[1][index] = True
 
-    def _objects(self, name: str, index, values) -> None:
+    def _objects(self, name: str, index, values, text: bool) -> None:
         held = self.objects.get(name)
         if held is None:
             held = self.objects[name] = (np.empty(self.n, dtype=object), np.zeros(self.n, dtype=bool))
-        held[0][index] = self._one_object_per_text(name, values)
+        held[0][index] = self._one_object_per_text(name, values, text)
         held[1][index] = True
 
-    def _one_object_per_text(self, name: str, values):
-        """``values`` as an object array in which equal texts are one object (see :data:`SHARE_RATIO`)."""
+    def _one_object_per_text(self, name: str, array, text: bool):
+        """The object array ``array`` (the part's own: written into) with equal texts as one object (see
+        :data:`SHARE_RATIO`); ``text``: the column was of pandas' text type in its part."""
         import pandas as pd
-        array = values.to_numpy(dtype=object)
-        if not (isinstance(values.dtype, pd.StringDtype)
-                or pd.api.types.infer_dtype(array, skipna=True) == "string"):
+        if not (text or pd.api.types.infer_dtype(array, skipna=True) == "string"):
             return array  # numbers, booleans, None among them: left as they are (True == 1 to a hash table)
         codes, uniques = pd.factorize(array)  # a missing value (None, NaN) has code -1 and stays as it is
         seen = self.shared.setdefault(name, {})

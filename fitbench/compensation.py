@@ -220,7 +220,8 @@ def _header(table, axis: str, values: str) -> list[str]:
            if (lo < first - 1e-9 or hi > last + 1e-9) else "no point beyond the targets")
     what = ("mean bidirectional deviation" if len(a["directions"]) == 2
             else f"deviation of the one direction measured, {a['directions'][0]},")
-    return [f"fitbench pitch-error compensation table, axis {axis}, from the {a['source']} of the {what}",
+    return ([a["warning"]] if a.get("warning") else []) + [
+            f"fitbench pitch-error compensation table, axis {axis}, from the {a['source']} of the {what}",
             f"covers {_exact(a['first_q'])} to {_exact(a['last_q'])} mm: {len(table)} points every "
             f"{_exact(a['step_q'])} mm; measured travel {first:.6g} to {last:.6g} mm; {ext}",
             f"reference point at {_exact(a['reference_q'])} mm holds 0: deviations taken relative to the "
@@ -424,17 +425,49 @@ def magnitude_problem(table) -> str | None:
     return " and ".join(found) or None
 
 
+def model_misfit(res) -> str | None:
+    """What the lack-of-fit test (:func:`methods.positioning.model.lack_of_fit`: weighted chi-square of the model
+    against the means at the targets, u(x_i) = s_i / sqrt(n)) says against the polynomial of ``res``, or None when
+    no direction's model is rejected."""
+    arrow = {"up": "up", "down": "down"}
+    bad = [(d, p) for d, p in (getattr(res, "polynomial", None) or {}).items()
+           if (p.get("lack_of_fit") or {}).get("rejected")]
+    if not bad:
+        return None
+    degree = bad[0][1]["degree"]
+    name = {1: "straight line", 2: "parabola", 3: "cubic"}.get(int(degree), f"degree-{degree} polynomial")
+    parts = ", ".join(f"{arrow.get(d, d)} chi2/nu {p['lack_of_fit']['chi2_per_dof']:.3g} > "
+                      f"{p['lack_of_fit']['critical']:.3g}, misses the means by up to "
+                      f"{p['lack_of_fit']['max_abs_residual'] * 1e3:.3g} um" for d, p in bad)
+    return f"the {name} is rejected by its lack of fit ({parts})"
+
+
 def write_tables(res, data, requests, *, interval=None, source="model", axis="X1", write, reference_mm=None,
-                 unit_confirmed: bool = False, unit_option: str = "--deviation-unit", on_confirmed=None):
+                 unit_confirmed: bool = False, unit_option: str = "--deviation-unit", on_confirmed=None,
+                 model_confirmed: bool = False):
     """Build the table once and write it in every requested ``(format, path)`` with ``write(path, text)``;
     every format is checked (name, axis, limits) before any file is written. A table implausible for a
     machine axis (:func:`magnitude_problem`: µm read as mm) is refused unless ``unit_confirmed`` (the
     deviations' unit given explicitly, ``unit_option`` on the command line); then ``on_confirmed(text)`` is
-    told. Returns the table."""
+    told. A table from a model its lack-of-fit test rejects (:func:`model_misfit`: it would leave the measured
+    misfit out of the machine) is refused unless ``model_confirmed`` (the model chosen explicitly); then
+    ``on_confirmed`` is told and every file's header says so. Returns the table."""
     for fmt, _ in requests:
         if fmt not in WRITERS:
             raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
+    misfit = model_misfit(res) if source == "model" else None
+    if misfit and not model_confirmed:
+        raise CompensationError(f"not writing {', '.join(str(p) for _, p in requests)}: {misfit}; a table from it "
+                                "would leave that misfit in the machine: give --compensation-from mean (the measured "
+                                "means at the targets) or another --degree, or --compensation-from model to write the "
+                                "model's table anyway")
     table = compensation_table(res, data, interval=interval, source=source, reference_mm=reference_mm)
+    if misfit:
+        table.attrs["warning"] = (f"WARNING: {misfit}; written from the model as asked: the table leaves that misfit "
+                                  "uncompensated (--compensation-from mean follows the measured means)")
+        if on_confirmed is not None:
+            on_confirmed(f"{misfit}; the compensation table is written from it as --compensation-from model asks and "
+                         "leaves that misfit uncompensated (--compensation-from mean follows the measured means)")
     problem = magnitude_problem(table)
     if problem and not unit_confirmed:
         raise CompensationError(f"not writing {', '.join(str(p) for _, p in requests)}: the table would hold {problem}, "

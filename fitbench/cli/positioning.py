@@ -53,8 +53,9 @@ def add_parser(sub):
                     help="write a compensation table: FORMAT csv, siemens-eec or fanuc-pitch (repeatable)")
     pp.add_argument("--interval", type=float, default=None, metavar="MM",
                     help="compensation point spacing (mm; default: the target spacing)")
-    pp.add_argument("--compensation-from", choices=("model", "mean"), default="model",
-                    help="compensation values from the GLS polynomial (default) or the mean deviations at the targets")
+    pp.add_argument("--compensation-from", choices=("model", "mean"), default=None,
+                    help="compensation values from the GLS polynomial (default; refused when its lack-of-fit test "
+                         "rejects it unless given explicitly) or the mean deviations at the targets")
     pp.add_argument("--axis", default=None, help="the axis tested: recorded in the JSON result (fitbench history trends "
                     "each machine's axes apart) and its name in the controller's table (default X1)")
     pp.add_argument("--reference", type=float, metavar="MM", help="the machine's reference point, where the table "
@@ -229,6 +230,11 @@ def run(args) -> int:
                         f"{temperature:.4g} °C{given_as}, expansion coefficient {alpha:g} µm/(m·K): deviations corrected by "
                         f"{-alpha * (temperature - 20.0):+.4g} µm/m x target position, to 20 °C")
     res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
+    from fitbench.compensation import model_misfit
+    misfit = model_misfit(res)
+    if misfit:
+        notes.append(f"{misfit.replace(' um', ' µm')}: its U(P) is not the uncertainty of the deviation between the "
+                     "targets and is not given; the mean deviations at the targets are the measurement")
     lacks = []
     if args.standard.startswith("iso230-2"):
         from methods.positioning.iso230_2 import conformity
@@ -243,9 +249,10 @@ def run(args) -> int:
     if args.compensation:
         from fitbench.compensation import write_tables
         comp = write_tables(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
-                            source=args.compensation_from, axis=args.axis or "X1", write=write_text_atomic,
+                            source=args.compensation_from or "model", axis=args.axis or "X1", write=write_text_atomic,
                             reference_mm=finite("--reference", args.reference),
-                            unit_confirmed=given_deviation_unit is not None, on_confirmed=warn)
+                            unit_confirmed=given_deviation_unit is not None, on_confirmed=warn,
+                            model_confirmed=args.compensation_from == "model")
     missing = [n for n in tolerances if n not in res.figures]
     if missing:
         raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "
@@ -272,8 +279,11 @@ def run(args) -> int:
                             input_deviation_unit=canonical(args.deviation_unit or args.unit),
                             polynomial="coefficients of increasing powers of the position P in mm: mm / mm^k")
         out["per_target"] = {k: v for k, v in res.per_target.items()}
+        # a model its lack-of-fit test rejects has no U(P): null, and lack_of_fit says why
         out["polynomial"] = {d: {"coefficients": p["coefficients"], "covariance": p["covariance"],
-                                 "degree": p["degree"], "U_at_targets": p["U_at_targets"], "k": p["k"]}
+                                 "degree": p["degree"], "k": p["k"],
+                                 "U_at_targets": None if p["lack_of_fit"]["rejected"] else p["U_at_targets"],
+                                 "lack_of_fit": p["lack_of_fit"]}
                              for d, p in res.polynomial.items()}
         out["u_delta"] = res.extra["u_delta"]
         out["notes"] = notes
@@ -287,5 +297,5 @@ def run(args) -> int:
     if comp is not None:
         for fmt, path in args.compensation:
             print(f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
-                  f"to {comp.position_mm.iloc[-1]:g} mm, from the {args.compensation_from}) written to {path}")
+                  f"to {comp.position_mm.iloc[-1]:g} mm, from the {comp.attrs['source']}) written to {path}")
     return 0

@@ -67,9 +67,45 @@ def text(res, degree: int | None = None) -> str:
                      "in µm per m^k (P in m)")
         for d, p in res.polynomial.items():
             coefs = ", ".join(f"{c:+.4g} {u}" for _, c, u in coefficients_readable(p))
-            lines.append(f"  {ARROW.get(d, d)} {coefs}; max U(P_i) = {p['U_at_targets'].max() * um:.3f} µm "
-                         f"(k = {p['k']:g})")
+            lof = p.get("lack_of_fit") or {}
+            band = (f"U(P) not given: the model is rejected by its lack of fit" if lof.get("rejected") else
+                    f"max U(P_i) = {p['U_at_targets'].max() * um:.3f} µm (k = {p['k']:g})")
+            lines.append(f"  {ARROW.get(d, d)} {coefs}; {band}")
+        lines += lack_of_fit_lines(res.polynomial)
     return "\n".join(lines)
+
+
+def model_name(degree: int) -> str:
+    return {1: "straight line", 2: "parabola", 3: "cubic"}.get(int(degree), f"degree-{int(degree)} polynomial")
+
+
+def rejected_directions(polynomial: dict) -> list[str]:
+    """The directions whose model the lack-of-fit test rejects (:func:`methods.positioning.model.lack_of_fit`)."""
+    return [d for d, p in (polynomial or {}).items() if (p.get("lack_of_fit") or {}).get("rejected")]
+
+
+def lack_of_fit_lines(polynomial: dict) -> list[str]:
+    """One line per direction: the model's weighted chi-square against the means at the targets (u(x_i) =
+    s_i / sqrt(n), the paper's eq. 10), its limit and what a rejection means for U(P) and a compensation table."""
+    out = []
+    for d, p in (polynomial or {}).items():
+        lof = p.get("lack_of_fit")
+        if not lof:
+            continue
+        miss = f"largest |mean - model| at a target {lof['max_abs_residual'] * 1e3:.3f} µm"
+        if not lof["tested"]:
+            out.append(f"  lack of fit {ARROW.get(d, d)}: not tested ({lof['reason']}); {miss}; U(P) assumes the "
+                       f"{model_name(p['degree'])} holds")
+            continue
+        head = (f"  lack of fit {ARROW.get(d, d)}: χ²/ν = {lof['chi2_per_dof']:.3g} (χ² = {lof['chi2']:.4g}, "
+                f"ν = {lof['dof']}; {lof['level']:.0%} limit {lof['critical']:.3g} from {lof['reference']}), {miss}")
+        if lof["rejected"]:
+            out.append(f"{head}: the {model_name(p['degree'])} is REJECTED: U(P) is not the uncertainty of the "
+                       f"deviation between the targets; use the means at the targets (--compensation-from mean) or "
+                       f"another --degree")
+        else:
+            out.append(f"{head}: not rejected; U(P) holds between the targets as far as the targets can tell")
+    return out
 
 
 def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> dict:
@@ -108,15 +144,27 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
         ax.set_title(f"{TITLES.get(figs.get('standard'), figs.get('standard'))}: {figs['targets']} targets x "
                      f"{figs['runs']} runs", fontsize=10)
         grid = np.linspace(P.min(), P.max(), 400)
+        rejected = rejected_directions(result.polynomial)
         for d in dirs:
             axes[1].plot(P, per[f"mean_{d}"] * um, "o", color=colours[d], ms=4)
             if d in (result.polynomial or {}):
                 v, U = evaluate_band(result.polynomial[d], grid, result.polynomial[d]["k"])
                 axes[1].plot(grid, v * um, color=colours[d],
                              label=f"degree-{result.polynomial[d]['degree']} fit {ARROW[d]}")
-                axes[1].fill_between(grid, (v - U) * um, (v + U) * um, color=colours[d], alpha=0.2,
-                                     label=f"U(P), k = {result.polynomial[d]['k']:g}")
-        axes[1].set_title("model: fitted curve and expanded uncertainty\nanywhere on the travel", fontsize=10)
+                if d not in rejected:     # a rejected model's U(P) is not the uncertainty of the deviation
+                    axes[1].fill_between(grid, (v - U) * um, (v + U) * um, color=colours[d], alpha=0.2,
+                                         label=f"U(P), k = {result.polynomial[d]['k']:g}")
+        lofs = {d: p["lack_of_fit"] for d, p in (result.polynomial or {}).items() if p.get("lack_of_fit")}
+        chi = ", ".join(f"{lof['chi2_per_dof']:.3g} {ARROW[d]}" for d, lof in lofs.items() if lof["tested"])
+        if rejected:
+            limit = max(lofs[d]["critical"] for d in rejected)
+            axes[1].set_title(f"model REJECTED by its lack of fit:\nχ²/ν {chi} > {limit:.3g}; no U(P) band",
+                              fontsize=10, color="tab:red")
+        elif chi:
+            axes[1].set_title(f"model: fitted curve and expanded uncertainty U(P)\nlack of fit χ²/ν {chi}: not rejected",
+                              fontsize=10)
+        else:
+            axes[1].set_title("model: fitted curve and expanded uncertainty U(P)\nlack of fit not tested", fontsize=10)
         for a in axes:
             a.set_xlabel("target position P [mm]")
             a.grid(alpha=0.3)
@@ -128,5 +176,6 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
         if title:
             fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
         tight(fig)
-        labels = {"x": axes[0].get_xlabel(), "y": axes[0].get_ylabel(), "notes": notes}
+        labels = {"x": axes[0].get_xlabel(), "y": axes[0].get_ylabel(), "notes": notes,
+                  "model_title": axes[1].get_title(), "model_labels": axes[1].get_legend_handles_labels()[1]}
         return labels

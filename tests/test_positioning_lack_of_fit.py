@@ -1,0 +1,112 @@
+"""Lack of fit of the positioning model: the cubic's U(P) (positioning paper eq. 8-10) holds between the targets only
+if the cubic describes the axis. Before: a ball-screw axis with a 1.5 µm periodic error of period 130 mm, which
+the cubic misses by 2.46 µm (weighted chi-square per degree of freedom 155), was printed with "max U(P_i) = 0.167 µm
+(k = 2)", plotted as "expanded uncertainty anywhere on the travel", and its compensation table written from the
+cubic without a word. The statistic is checked against an independent weighted polynomial fit (numpy.polyfit)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import methods
+from datasets.positioning import axis_test
+from methods.positioning.model import lack_of_fit
+from test_cli_inputs import cli, one_error_line
+
+
+def periodic_file(path):
+    """A 1000 mm ball-screw axis, 21 irregular targets, 5 runs per direction: 10 µm/m linear - 12 µm/m² and a
+    1.5 µm periodic error of period 130 mm, ±1.5 µm reversal, 0.3 µm noise (the review's recipe)."""
+    rng = np.random.default_rng(21)
+    T = np.sort(np.r_[0, 1000, rng.uniform(20, 980, 19)]).round(1)
+
+    def err(p):
+        return 1e-3 * (10 * (p / 1000) - 12 * (p / 1000) ** 2 + 1.5 * np.sin(2 * np.pi * p / 130))
+    rows = []
+    for r in range(1, 6):
+        for d, off in (("+", 0.0015), ("-", -0.0015)):
+            for t in (T if d == "+" else T[::-1]):
+                rows.append((t, d, r, err(t) + off + rng.normal(0, 0.0003)))
+    path.write_text("target,direction,run,deviation\n" + "".join(f"{t},{d},{r},{e:.6f}\n" for t, d, r, e in rows))
+    return path
+
+
+def independent_chi2(targets, runs):
+    """Weighted cubic by numpy.polyfit (weights 1/u, u = s/sqrt(n)): chi-square, largest |residual| (mm)."""
+    x, s = runs.mean(axis=1), runs.std(axis=1, ddof=1)
+    u = s / np.sqrt(runs.shape[1])
+    c = np.polyfit(targets / 1000.0, x, 3, w=1.0 / u)
+    r = x - np.polyval(c, targets / 1000.0)
+    return float(np.sum((r / u) ** 2)), float(np.max(np.abs(r)))
+
+
+def test_a_rejected_cubic_is_said_so_and_gives_no_uncertainty(tmp_path):
+    f = periodic_file(tmp_path / "periodic.csv")
+    out = cli("positioning", f, "--json")
+    assert out.returncode == 0, out.stderr
+    j = json.loads(out.stdout)
+    import pandas as pd
+    df = pd.read_csv(f)
+    for d, sign, review in (("up", "+", 155), ("down", "-", 72)):
+        piv = df[df.direction == sign].pivot(index="target", columns="run", values="deviation")
+        chi2, miss = independent_chi2(piv.index.to_numpy(float), piv.to_numpy(float))
+        lof = j["polynomial"][d]["lack_of_fit"]
+        assert lof["chi2"] == pytest.approx(chi2, rel=1e-6) and lof["dof"] == 21 - 4
+        assert lof["max_abs_residual"] == pytest.approx(miss, rel=1e-6)
+        assert lof["chi2_per_dof"] == pytest.approx(review, rel=0.01)       # the reviewer's own computation
+        assert lof["rejected"] and lof["p_value"] < 0.05
+        assert j["polynomial"][d]["U_at_targets"] is None                    # withheld, not "anywhere on the travel"
+    assert any("rejected by its lack of fit" in n for n in j["notes"])
+    text = cli("positioning", f).stdout
+    assert "max U(P_i)" not in text and text.count("U(P) not given") == 2 and "REJECTED" in text
+    assert "χ²/ν = 155" in text and "2.458 µm" in text
+
+
+def test_a_rejected_model_is_plotted_without_a_band(tmp_path):
+    from fitbench.plots.positioning import plot
+    from datasets.io import read_positioning
+    data = read_positioning(periodic_file(tmp_path / "p.csv"))
+    res = methods.fit("positioning.gls_polynomial", data)
+    labels = plot(res, tmp_path / "p.png", data=data)
+    assert "REJECTED" in labels["model_title"] and "anywhere" not in labels["model_title"]
+    assert not any(lab.startswith("U(P)") for lab in labels["model_labels"])
+
+
+def test_no_table_from_a_rejected_model_unless_asked(tmp_path):
+    f = periodic_file(tmp_path / "periodic.csv")
+    table = tmp_path / "per.mpf"
+    out = cli("positioning", f, "--compensation", "siemens-eec", table, "--axis", "X1", "--interval", "10")
+    one_error_line(out, "rejected by its lack of fit", "2.46 um", "--compensation-from mean", "--compensation-from model")
+    assert not table.exists()
+    out = cli("positioning", f, "--compensation", "siemens-eec", table, "--axis", "X1", "--interval", "10",
+              "--compensation-from", "mean")
+    assert out.returncode == 0 and table.exists() and "WARNING" not in table.read_text()
+    out = cli("positioning", f, "--compensation", "siemens-eec", table, "--axis", "X1", "--interval", "10",
+              "--compensation-from", "model")
+    assert out.returncode == 0 and "leaves that misfit uncompensated" in out.stderr
+    assert table.read_text().splitlines()[1].startswith("; WARNING: the cubic is rejected by its lack of fit")
+
+
+def test_a_correct_cubic_is_not_rejected_and_the_instrument_error_does_not_count():
+    """200 simulated axes whose error is a cubic (5 runs, 11 targets): the F(nu, n - 1) limit rejects at most 5 %
+    of them; the chi-square quantile (the variances being estimated from 5 runs) would reject far more."""
+    from scipy import stats
+    rejected, chi_rule = 0, 0
+    for seed in range(200):
+        data, _ = axis_test(rng=np.random.default_rng(seed), repeatability=0.001)
+        lof = methods.fit("positioning.gls_polynomial", data).polynomial["up"]["lack_of_fit"]
+        rejected += lof["rejected"]
+        chi_rule += lof["chi2"] > stats.chi2.ppf(0.95, lof["dof"])
+    assert rejected <= 10 and chi_rule > 2 * max(rejected, 5)
+    data, _ = axis_test(rng=np.random.default_rng(1), periodic_amplitude=0.002, periodic_period=130.0)
+    a = methods.fit("positioning.gls_polynomial", data).polynomial["up"]["lack_of_fit"]
+    b = methods.fit("positioning.gls_polynomial", data, mpe=0.005).polynomial["up"]["lack_of_fit"]
+    assert a["rejected"] and b["chi2"] == pytest.approx(a["chi2"], rel=1e-9)
+
+
+def test_not_testable_is_said():
+    assert "no degree of freedom" in lack_of_fit(np.zeros(4), np.ones(4), 5, np.zeros(4), 4)["reason"]
+    got = lack_of_fit(np.zeros(6), np.r_[0.0, np.ones(5)], 5, np.zeros(6), 4)
+    assert not got["tested"] and not got["rejected"] and "zero scatter" in got["reason"]

@@ -9,7 +9,7 @@ from datasets.io.columns import read_columns
 from datasets.io.headers import length_unit
 from datasets.io.layout import Layout, sniff
 from datasets.io.numbers import DataFileError
-from datasets.io.roles import Resolved, resolve
+from datasets.io.roles import Resolved, read_offsets, resolve
 from methods.units import to_mm
 
 
@@ -39,13 +39,18 @@ def read_points(path, columns=None, *, plane: str | None = None, unit: str | Non
     the names, the first two columns are used only when the file has exactly two, else the error lists the
     columns; a header naming x, y and z needs ``plane`` or ``columns`` (:func:`_which_plane`). A file whose
     header names an angle is refused (it is not x, y; :func:`read_profile` reads it). ``unit``: the file's
-    length unit (default: the header's, else mm; a contradiction with the header is an error)."""
+    length unit (default: the header's, else mm; a contradiction with the header is an error). A header with
+    actual columns besides the nominal ones (``X, Y, X act, Y act``) is read from the actual ones, one with deviation
+    columns (``X [mm];Y [mm];dX [µm];dY [µm]``) as nominal + deviation; further numeric columns are refused
+    (:func:`datasets.io.roles.resolve`)."""
     layout = sniff(path, skip_rows)
     res = _xy(layout, columns, plane)
     lu = length_unit(layout, res.idx, unit)
-    cols = read_columns(layout, res.idx, skip_rows=skip_rows)
+    cols = read_columns(layout, res.idx + (res.offsets or []), skip_rows=skip_rows)
     out = np.empty((len(cols[res.idx[0]]), 2), dtype=np.float64)
     out[:, 0], out[:, 1] = cols[res.idx[0]], cols[res.idx[1]]
     if lu != "mm":
         out *= to_mm(1.0, lu)
+    if (dev := read_offsets(layout, res, cols)) is not None:
+        out += dev
     return out

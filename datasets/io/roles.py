@@ -4,14 +4,17 @@ and a direction or run column; ``plane`` (:data:`PLANES`) picks two of x, y, z, 
 export naming all three without a choice is refused with the plane its points lie in (:func:`_which_plane`)."""
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from datasets.io.delimiters import _split
+from datasets.io.headers import LENGTH_UNITS, column_unit
 from datasets.io.layout import Layout, skip_rows_hint
 from datasets.io.numbers import DataFileError, _field_number
 from methods import InvalidInputError
+from methods.units import to_mm
 
 
 PLANES = {"xy": ("x", "y"), "yz": ("y", "z"), "zx": ("z", "x"), "xz": ("x", "z"), "yx": ("y", "x"), "zy": ("z", "y")}
@@ -35,6 +38,33 @@ class Resolved:
     idx: list
     polar_value: str | None = None
     direction: int | None = None
+    offsets: list | None = None   # x, y layouts: the columns of the deviations added to idx (dX, dY), else None
+    note: str | None = None       # which columns were read, when the header held more than the pair
+
+
+#: header keys of columns that say nothing about the points (a point number, a time stamp): never a coordinate
+ANCILLARY = {"point", "pt", "pnt", "no", "nr", "number", "n", "index", "idx", "id", "i", "sample", "samples", "punkt",
+             "time", "t", "timestamp", "zeit", "line", "row"}
+_AXIS = "(x|y|z)"
+_ACT = "(?:act|actual|meas|measured|m|ist|mess|real)"
+_NOM = "(?:nom|nominal|n|soll|set|target|cmd|command|ref)"
+_DEV = "(?:d|delta|dev|deviation|err|error|abw|abweichung)"
+_COMPANION = [(re.compile(f"{_AXIS}{_ACT}|{_ACT}{_AXIS}"), "actual"),
+              (re.compile(f"{_AXIS}{_NOM}|{_NOM}{_AXIS}"), "nominal"),
+              (re.compile(f"{_DEV}{_AXIS}|{_AXIS}{_DEV}"), "deviation")]
+
+
+def coordinate_kind(key: str) -> tuple[str, str] | None:
+    """(axis, kind) of a header key naming a coordinate: ``x`` -> ('x', 'plain'); ``X act``, ``Xm``, ``Ist X``
+    -> 'actual'; ``X nominal``, ``Xsoll`` -> 'nominal'; ``dX``, ``X dev`` -> 'deviation' (the measured point is the
+    nominal plus it, as grid-encoder and CMM exports list a circle); None for any other key."""
+    if key in ("x", "y", "z"):
+        return key, "plain"
+    for rx, kind in _COMPANION:
+        m = rx.fullmatch(key)
+        if m:
+            return next(g for g in m.groups() if g), kind
+    return None
 
 
 def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
@@ -51,6 +81,8 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
     if plane is not None:
         if plane.lower() not in PLANES:
             raise DataFileError(f"unknown plane {plane!r}; use one of {', '.join(PLANES)}")
+        if layout.header is not None and (got := _pair(layout, PLANES[plane.lower()], d_col)) is not None:
+            return got
         return Resolved("xy", layout.index(PLANES[plane.lower()]), None, d_col)
     if columns is not None:
         idx = layout.index(columns)
@@ -70,11 +102,12 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
     a = roles.index("angle") if "angle" in roles else None
     v = next((roles.index(r) for r in ("deviation", "radius") if r in roles), None)
     if a is not None and v is not None:
+        _refuse_other_lengths(layout, [a, v], roles, d_col)
         return Resolved("polar", [a, v], roles[v], d_col)
     if "x" in roles and "y" in roles and "z" in roles:
         raise DataFileError(_which_plane(layout, [roles.index(c) for c in "xyz"]))
-    if "x" in roles and "y" in roles:
-        return Resolved("xy", [roles.index("x"), roles.index("y")], None, d_col)
+    if (got := _pair(layout, ("x", "y"), d_col)) is not None:
+        return got
     if a is not None:
         raise DataFileError(f"{name}: the column {layout.header[a]!r} is an angle but no radial deviation or radius "
                             f"column was found (columns: {', '.join(layout.header)}); name it e.g. 'radial deviation "
@@ -87,6 +120,98 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
         return Resolved("xy", others, None, d_col)
     raise DataFileError(f"{name}: which two columns? the header has {', '.join(layout.header)}; "
                         f"give --columns NAME NAME or --plane xy|yz|zx{skip_rows_hint(layout)}")
+
+
+def _numeric_column(layout: Layout, k: int) -> bool:
+    """Whether column ``k`` holds numbers in the first data lines (:attr:`Layout.sample`)."""
+    rows = [_split(ln.split(layout.comment, 1)[0].strip(), layout.sep) for _, ln in layout.sample]
+    vals = [r[k] for r in rows if len(r) == layout.ncol and r[k].strip()]
+    try:
+        return bool(vals) and all(np.isfinite(_field_number(t, layout.decimal_comma)) for t in vals)
+    except (ValueError, IndexError, InvalidInputError):
+        return False
+
+
+def _pair(layout: Layout, axes: tuple, d_col) -> Resolved | None:
+    """The x, y reading of a header naming the coordinates ``axes`` (plain, nominal, actual or deviation columns,
+    :func:`coordinate_kind`), or None when it names no such pair. The actual columns are read when the header has
+    them (``X, Y, X act, Y act``); deviation columns are added to the nominal ones (``X [mm];Y [mm];dX [µm];dY
+    [µm]``, as grid-encoder and CMM exports list a measured circle); a header with further numeric columns that
+    fitbench cannot place is refused naming them (reading the nominal path of such a file gave a 0.11 µm
+    circular deviation for a 7 µm trace)."""
+    name = layout.name
+    kinds = [coordinate_kind(k) for k, _ in layout.fields()]
+    found = {}
+    for k, c in enumerate(kinds):
+        if c is not None and c[0] in axes:
+            found.setdefault(c, []).append(k)
+    if any(len(v) > 1 for v in found.values()):
+        dup = next(v for v in found.values() if len(v) > 1)
+        raise DataFileError(f"{name}: the columns {', '.join(layout.header[k] for k in dup)} name the same coordinate; "
+                            "give --columns NAME NAME")
+
+    def col(axis, *kinds_):
+        return next((found[(axis, kd)][0] for kd in kinds_ if (axis, kd) in found), None)
+
+    base = [col(ax, "plain", "nominal") for ax in axes]
+    act = [col(ax, "actual") for ax in axes]
+    dev = [col(ax, "deviation") for ax in axes]
+    if all(k is None for k in base + act) or (all(k is None for k in act + dev) and None in base):
+        return None    # no pair named: decided by the caller (which two columns?)
+    h = layout.header
+    if all(k is not None for k in act):
+        idx, offsets = act, None
+        skipped = [k for k in base + dev if k is not None]
+        note = (f"read the actual columns {h[act[0]]!r}, {h[act[1]]!r}"
+                + (f" (not the nominal {', '.join(repr(h[k]) for k in skipped)})" if skipped else ""))
+    elif all(k is not None for k in base) and all(k is not None for k in dev):
+        idx, offsets = base, dev
+        note = (f"the points are {h[base[0]]!r} + {h[dev[0]]!r}, {h[base[1]]!r} + {h[dev[1]]!r} (nominal plus "
+                "deviation)")
+        for k in dev:
+            if column_unit(layout, k, "length") is None:
+                raise DataFileError(f"{name}: the deviation column {h[k]!r} names no unit; write it in the header "
+                                    f"({axes[0].upper()} [mm];{axes[1].upper()} [mm];d{axes[0].upper()} [µm];"
+                                    f"d{axes[1].upper()} [µm])")
+    elif all(k is not None for k in base) and not any(k is not None for k in act + dev):
+        idx, offsets, note = base, None, None
+    else:
+        have = [k for k in base + act + dev if k is not None]
+        raise DataFileError(f"{name}: the columns {', '.join(repr(h[k]) for k in have)} do not give both coordinates "
+                            f"of one kind (nominal + deviation, or actual); give --columns NAME NAME")
+    used = set(idx) | set(offsets or ()) | {k for k in base + act + dev if k is not None}
+    extra = [k for k, (key, _) in enumerate(layout.fields())
+             if k not in used and k != d_col and key not in ANCILLARY and h[k].strip()
+             and not (kinds[k] is not None and kinds[k][0] not in axes) and _numeric_column(layout, k)]
+    if extra:
+        raise DataFileError(f"{name}: besides {h[idx[0]]!r}, {h[idx[1]]!r} the header has the numeric column(s) "
+                            f"{', '.join(repr(h[k]) for k in extra)}, and fitbench does not guess what they hold (a "
+                            "measured position? a deviation?); give --columns NAME NAME for the two coordinates to "
+                            "evaluate, or delete the other columns")
+    return Resolved("xy", idx, None, d_col, offsets, note)
+
+
+def _refuse_other_lengths(layout: Layout, idx: list, roles: list, d_col) -> None:
+    """Refuse an angle + deviation file with a further length column (``Deviation filtered (um)``, ``Probe (um)``)
+    besides the one chosen and a radius: which one holds the profile is the user's choice (--columns)."""
+    extra = [k for k, (key, unit) in enumerate(layout.fields())
+             if k not in idx and k != d_col and roles[k] != "radius" and unit in LENGTH_UNITS.values()]
+    if extra:
+        h = layout.header
+        raise DataFileError(f"{layout.name}: besides {h[idx[1]]!r} the header has the length column(s) "
+                            f"{', '.join(repr(h[k]) for k in extra)}; give --columns ANGLE DEVIATION naming the "
+                            "profile to evaluate")
+
+
+def read_offsets(layout: Layout, res: Resolved, cols: dict) -> np.ndarray | None:
+    """The (N, 2) deviations in mm of an x, y layout with deviation columns (``res.offsets``, each in its header's
+    unit, :func:`_pair`) from the columns read ``cols``; None when it has none."""
+    if not res.offsets:
+        return None
+    out = np.empty((len(cols[res.offsets[0]]), 2), dtype=np.float64)
+    for j, k in enumerate(res.offsets):
+        out[:, j] = cols[k] * to_mm(1.0, column_unit(layout, k, "length"))
+    return out
 
 
 def _which_plane(layout: Layout, idx: list) -> str:

@@ -15,7 +15,7 @@ from datasets.io.headers import column_unit, length_unit
 from datasets.io.layout import Layout, sniff
 from datasets.io.numbers import DataFileError
 from datasets.io.polar import _unit_assumed, angle_unit_of, polar_to_points
-from datasets.io.roles import Resolved, resolve
+from datasets.io.roles import Resolved, coordinate_kind, read_offsets, resolve
 from methods.units import to_mm
 
 
@@ -31,6 +31,7 @@ class CircularRuns:
     angle_unit: str | None = None
     axes: tuple = ("x", "y")   # names of the two coordinates: the header's names of x, y columns, else x, y
     unit_assumed: bool = False  # no unit in the header nor given: ``unit`` is mm by default
+    columns_note: str | None = None  # which columns were read when the header held more than x, y (actual, deviation)
 
 
 def _axes(layout: Layout, res: Resolved) -> tuple:
@@ -39,7 +40,8 @@ def _axes(layout: Layout, res: Resolved) -> tuple:
     keys = [k for k, _ in layout.fields()]
     if res.kind != "xy" or not keys:
         return ("x", "y")
-    return tuple(keys[i] or f"column {i}" for i in res.idx)
+    named = [coordinate_kind(keys[i]) for i in res.idx]   # 'X act' is the coordinate x
+    return tuple(c[0] if c else keys[i] or f"column {i}" for i, c in zip(res.idx, named))
 
 
 def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
@@ -58,7 +60,7 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
     layout = sniff(path, skip_rows)
     name = layout.name
     res = resolve(layout, columns, plane)
-    notes = []
+    notes = [res.note] if res.note else []
     au = None
     if res.kind == "polar":
         au = angle_unit_of(layout, res.idx[0], angle_unit)
@@ -70,7 +72,7 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         lu = length_unit(layout, res.idx, unit)
         assumed = unit is None and all(column_unit(layout, k, "length") is None for k in res.idx)
     strings = (res.direction,) if res.direction is not None else ()
-    cols = read_columns(layout, res.idx, skip_rows=skip_rows, strings=strings)
+    cols = read_columns(layout, res.idx + (res.offsets or []), skip_rows=skip_rows, strings=strings)
     f = to_mm(1.0, lu)
     if res.kind == "polar":
         ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
@@ -85,9 +87,11 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         pts[:, 0], pts[:, 1] = cols[res.idx[0]], cols[res.idx[1]]
         if f != 1.0:
             pts *= f
+        if (dev := read_offsets(layout, res, cols)) is not None:
+            pts += dev
     axes = _axes(layout, res)
     if res.direction is None:
-        return CircularRuns([("file", pts)], name, res.kind, lu, notes, au, axes, assumed)
+        return CircularRuns([("file", pts)], name, res.kind, lu, notes, au, axes, assumed, res.note)
     labels = pd.Series(cols[res.direction]).astype(str).str.strip()
     runs = []
     for lab in pd.unique(labels):
@@ -100,7 +104,7 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
                             "a circular test has two (CW and CCW)")
     return CircularRuns(runs, name, res.kind, lu,
                         notes + [f"{len(runs)} run(s) read from the column {layout.header[res.direction]!r}"], au, axes,
-                        assumed)
+                        assumed, res.note)
 
 
 def read_profile(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,

@@ -140,6 +140,7 @@ def run(args) -> int:
     trimmed = {}
     notes = ["angle + radial deviation: points placed about the nominal centre (0, 0), which the diagnostics use"] \
         if polar_centre else []
+    notes += [first.columns_note] if first.columns_note else []
     for name in ("cw", "ccw"):
         label = name.upper() if labelled else ('first', 'second')[name == 'ccw']   # runs told apart by order
         runs[name], repeats, said = drop_repeated(runs[name], center0, label)  # a dwell is no contour point

@@ -70,6 +70,7 @@ import difflib
 import inspect
 import io
 import json
+import math
 import re
 import string
 from dataclasses import dataclass, field
@@ -871,7 +872,7 @@ def write_manifest(target: Path, cfg: dict, analysis: Analysis, summary: pd.Data
                 "quick": cfg.quick, "tables": entries,
                 "figures": [{"caption": f.caption, "file": f.file} for f in analysis.figures],
                 "values": analysis.values, "findings": findings}
-    write_atomic(target / "report.json", json.dumps(manifest, indent=1, default=_plain) + "\n")
+    write_atomic(target / "report.json", json_text(manifest, indent=1) + "\n")
 
 
 def _plain(v):
@@ -880,12 +881,35 @@ def _plain(v):
     return str(v)
 
 
+#: how a value that is not a finite number is written in JSON: a text that Python's ``float()`` and JavaScript's
+#: ``Number()`` read back (JSON has no such number; the bare ``Infinity`` Python writes is refused by jq and JSON.parse)
+NON_FINITE = {math.inf: "Infinity", -math.inf: "-Infinity"}
+
+
+def _finite(v):
+    """``v`` with every float that is infinite or NaN (NumPy's too, in lists, tuples and dicts) as its text."""
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float):
+        return v if math.isfinite(v) else NON_FINITE.get(v, "NaN")
+    if isinstance(v, dict):
+        return {k: _finite(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_finite(x) for x in v]
+    return v
+
+
+def json_text(value, **kwargs) -> str:
+    """``value`` as strict JSON (RFC 8259): a study's values, named by its analysis, may be infinite or NaN."""
+    return json.dumps(_finite(value), default=_plain, allow_nan=False, **kwargs)
+
+
 def analyse(study: Study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tuple[dict, Analysis]:
     """Run a study's analysis (:meth:`Study.analyse`) and add the TOML's declared tables and figures; return
     (the named values for meta.json, Analysis)."""
     analysis = study.analyse(df, cfg, target, log)
     analysis.values = {"n_rows": len(df), "n_ok": int((df["status"] == "ok").sum()), **analysis.values}
-    findings = json.loads(json.dumps(analysis.values, default=_plain))  # what meta.json holds
+    findings = json.loads(json_text(analysis.values))  # what meta.json holds
     analysis.tables += [declared_table(df, t) for t in cfg.get("tables", [])]
     for f in cfg.get("figures", []):
         analysis.figures.append(declared_figure(df, f, target, len(analysis.figures) + 1))

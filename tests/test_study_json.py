@@ -1,0 +1,64 @@
+"""report.json and meta.json are JSON that any strict parser reads (jq, JavaScript's JSON.parse): a study's value that
+is infinite or not a number is written as the text "Infinity", "-Infinity" or "NaN" (which Python's float() and
+JavaScript's Number() read back), never as the bare literals Python's json module writes by default."""
+from __future__ import annotations
+
+import json
+import math
+import sys
+import types
+
+import numpy as np
+
+from experiments.run import run_study
+from experiments.study import Analysis, Study
+
+TOML = '''name = "nonfinite"
+title = "a study with infinite values"
+kind = "nonfinite_values"
+seed = 3
+repetitions = 2
+
+[[datasets]]
+source = "circle"
+params = {{ center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }}
+
+[[methods]]
+id = "circle.kasa"
+
+[report]
+findings = "the ratio is {{ratio:.3f}}, the spread {{spread}}"
+'''
+
+
+def strict(text: str):
+    def refuse(name):
+        raise ValueError(f"not JSON: {name}")
+    return json.loads(text, parse_constant=refuse)
+
+
+class NonFinite(Study):
+    values = ("ratio", "spread", "low", "f32", "series", "fine")
+
+    def analyse(self, rows, cfg, target, log):
+        return Analysis(values={"ratio": math.inf, "spread": float("nan"), "low": np.float64(-np.inf),
+                                "f32": np.float32(np.nan), "series": [1.5, math.inf, {"x": -math.inf}],
+                                "fine": 2.5})
+
+
+def test_infinite_values_are_written_as_json_texts(tmp_path, monkeypatch):
+    module = types.ModuleType("experiments.studies.nonfinite_values")
+    NonFinite.__module__ = module.__name__
+    module.NonFinite = NonFinite
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    path = tmp_path / "nonfinite.toml"
+    path.write_text(TOML.format(), encoding="utf-8")
+    target = run_study(str(path), tmp_path / "out", jobs=1, log=lambda *a: None)
+    report = strict((target / "report.json").read_text())
+    meta = strict((target / "meta.json").read_text())
+    for values in (report["values"], meta["findings"]):
+        assert values["ratio"] == "Infinity" and values["spread"] == "NaN" and values["low"] == "-Infinity"
+        assert values["f32"] == "NaN" and values["series"] == [1.5, "Infinity", {"x": "-Infinity"}]
+        assert values["fine"] == 2.5 and values["n_rows"] == 2
+        assert float(values["low"]) == -math.inf  # read back by float()
+    assert report["findings"] == "the ratio is inf, the spread nan"

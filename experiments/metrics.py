@@ -9,10 +9,16 @@ from methods import result_base
 from methods.result_base import EXACT, Tolerance
 
 
-def metrics(result, truth: dict | None) -> dict:
+def metrics(result, truth: dict | None, own: dict | None = None) -> dict:
     """Columns for one fit: form error, residual RMS, the fitted geometry and its errors against the truth
-    where known, all read through the result interface (``FitResult.geometry`` / ``truth_errors``)."""
+    where known, all read through the result interface (``FitResult.geometry`` / ``truth_errors``). ``result`` is one
+    of fitbench's own classes, or :func:`methods.result_base.family_copy` of a plugin's result (its class's code
+    computes them); ``own``: the columns a plugin's class adds (:func:`methods.result_base.own_columns`), after the
+    geometry."""
     row = {"form_error": result.form_error, "residual_rms": residual_rms(result.residuals), **result.geometry()}
+    if own:
+        for k, v in own.items():
+            row.setdefault(k, v)
     if truth:
         row.update(result.truth_errors(truth))
     return row

@@ -23,6 +23,7 @@ import importlib
 import json
 import math
 import pkgutil
+import sys
 import weakref
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
@@ -590,6 +591,10 @@ def check_result(result, data=None) -> str | None:
         geometry = result.geometry()
         if type(geometry) is not dict or "form_error" in geometry:  # as the dict display below orders them
             values, geometry = {"form_error": form_error, **geometry}, None
+        if own.geometry is not rules.geometry and not builtin_class(own):  # a plugin's class with its own geometry()
+            problem = _two_faced(result, values if geometry is None else geometry)
+            if problem:
+                return problem
     except Exception as exc:  # a geometry the class cannot even read out
         return f"the geometry cannot be read ({type(exc).__name__}: {str(exc)[:80]})"
     checks = _declared_checks(own.COLUMNS, rules.COLUMNS)
@@ -623,3 +628,125 @@ def check_result(result, data=None) -> str | None:
     if n:
         return rules.consistency(result, data)
     return None
+
+
+# ------------------------------------------------- fitbench's own classes: what a row's family columns are computed by
+
+
+_BUILTIN_CLASS: dict = {}
+
+
+def builtin_class(cls: type) -> bool:
+    """Whether ``cls`` is one of fitbench's own result classes (:class:`FitResult`, or a class a built-in family's
+    ``results`` module defines under its name), not a plugin's."""
+    hit = _BUILTIN_CLASS.get(cls)
+    if hit is None:
+        load_families()
+        name = getattr(cls, "__module__", None)
+        hit = (name == __name__ or name in family_modules()) and \
+            getattr(sys.modules.get(name), cls.__name__, None) is cls
+        if len(_BUILTIN_CLASS) > 4096:
+            _BUILTIN_CLASS.clear()
+        _BUILTIN_CLASS[cls] = hit
+    return hit
+
+
+def builtin_base(cls: type) -> type:
+    """The most derived of fitbench's own result classes that ``cls`` derives from (``cls`` itself for one of them):
+    its code computes the family's columns of a plugin's result."""
+    return next(c for c in cls.__mro__ if builtin_class(c))
+
+
+def trusted(result, method: str) -> bool:
+    """Whether a row of ``method`` giving ``result`` is fitbench's own code throughout: a built-in method returning one
+    of fitbench's own classes (its columns are computed by its class, quickly); any other result's family columns
+    are computed from :func:`family_copy`."""
+    return builtin_class(type(result)) and _builtin_method[0](method)
+
+
+def _two_faced(result, geometry) -> str | None:
+    """Where a plugin class's ``geometry()`` reports other values than fitbench's own class it derives from reads
+    from the result's fields (the values the gate checks against the data): a row reports what the gate checked,
+    and a result that tells two stories is a lie (None: they agree)."""
+    base = builtin_base(type(result))
+    for name, value in base.geometry(result).items():
+        if name not in geometry:
+            return (f"geometry() of {type(result).__name__} leaves out {name} (the result's {name} is "
+                    f"{number_text(_as_float(value))}): a row reports the values the gate checks against the data")
+        mine = geometry[name]
+        a, b = _as_float(mine), _as_float(value)
+        if not (a == b or (a != a and b != b)):
+            return (f"geometry() of {type(result).__name__} reports {name} = {number_text(a)} but the result's own "
+                    f"value, which the gate checks against the data, is {number_text(b)}: a row reports the values "
+                    f"the gate checked; a class of a plugin may add columns, not report others")
+    return None
+
+
+def _as_float(v) -> float:
+    try:
+        return float.__float__(v) if isinstance(v, float) else float(v)
+    except (TypeError, ValueError, OverflowError):
+        return float("nan")
+
+
+def _plain_value(v):
+    """``v`` in Python's and NumPy's own types (a float, int, bool or str subclass as the value it holds, an ndarray
+    subclass as a copy in ``np.ndarray``, containers rebuilt of such values): nothing a plugin defines can run when
+    the row reads it. Anything else is kept as it is (the gate refuses it where a number is due)."""
+    t = type(v)
+    if t is float or t is int or t is str or t is bool or v is None:
+        return v
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, float):
+        return float.__float__(v)  # the double it holds, whatever its class's __float__ says
+    if isinstance(v, np.floating):
+        return v.item() if t in (np.float64, np.float32, np.float16) else float(v)
+    if isinstance(v, int):
+        return int.__index__(v)
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, str):
+        return str.__str__(v)
+    if isinstance(v, np.ndarray):
+        return np.array(v)  # a copy, in np.ndarray itself
+    if isinstance(v, tuple):
+        return tuple(_plain_value(x) for x in v)
+    if isinstance(v, list):
+        return [_plain_value(x) for x in v]
+    if isinstance(v, dict):
+        return {_plain_value(k): _plain_value(x) for k, x in v.items()}
+    return v
+
+
+def family_copy(result):
+    """The result as the most derived of fitbench's own classes it derives from, its fields' values copied in plain
+    types (:func:`_plain_value`): the gate checks this copy against the data and the row's family columns and errors
+    against the truth are computed from it by that class's code, so a plugin's subclass cannot report other values
+    than those checked, nor compute its own errors against the truth. A result of a family a plugin declares (its
+    contract class is the plugin's) is returned as it is: its columns are its own."""
+    base = builtin_base(type(result))
+    if base is FitResult:
+        return result
+    values = {}
+    for f in fields(base):
+        values[f.name] = _plain_value(getattr(result, f.name))
+    copy = object.__new__(base)  # no __init__ or __post_init__: the values as they are
+    copy.__dict__.update(values)
+    return copy
+
+
+def own_columns(result, copy, truth: dict | None) -> dict:
+    """The columns a plugin's class adds to its family's (its ``geometry()`` and ``truth_errors()`` entries that its
+    family does not declare), as plain numbers; :class:`TypeError` for a value that is no number."""
+    if copy is result:
+        return {}
+    family = {c.name for c in type(copy).COLUMNS}
+    out = {}
+    for kind, values in (("geometry", result.geometry()), ("truth_errors", result.truth_errors(truth) if truth else {})):
+        for name, v in values.items():
+            if name not in family:
+                if not _is_real(v):
+                    raise TypeError(f"{kind}() of {type(result).__name__} gave {name} = {_describe(v)}, not a number")
+                out[name] = v
+    return {k: _plain_value(v) for k, v in out.items()}

@@ -131,7 +131,8 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     backlash = (float(np.mean(data.up.mean(axis=1) - data.down.mean(axis=1))) if len(dirs) == 2 else float("nan"))
     table.attrs.update(interval_mm=step_q * NM, step_q=int(step_q), first_q=int(pos_q[0]), last_q=int(pos_q[-1]),
                        reference_q=ref_q, reference_index=int(-k_lo), measured_mm=(first, last), source=source,
-                       deviation_at_reference_mm=at_ref, backlash_mm=backlash, directions=tuple(dirs))
+                       deviation_at_reference_mm=at_ref, backlash_mm=backlash, directions=tuple(dirs),
+                       direction_given=bool(getattr(data, "direction_given", True)))
     return table
 
 
@@ -219,7 +220,8 @@ def _header(table, axis: str, values: str) -> list[str]:
               else "held at the end targets' means")
            if (lo < first - 1e-9 or hi > last + 1e-9) else "no point beyond the targets")
     what = ("mean bidirectional deviation" if len(a["directions"]) == 2
-            else f"deviation of the one direction measured, {a['directions'][0]},")
+            else f"deviation of the one direction measured, "
+                 f"{a['directions'][0] if a.get('direction_given', True) else 'direction not given'},")
     return ([a["warning"]] if a.get("warning") else []) + [
             f"fitbench pitch-error compensation table, axis {axis}, from the {a['source']} of the {what}",
             f"covers {_exact(a['first_q'])} to {_exact(a['last_q'])} mm: {len(table)} points every "

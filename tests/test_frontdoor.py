@@ -223,7 +223,7 @@ def test_wide_laser_exports_match_the_long_format(tmp_path, direction_column):
 
 
 def test_unidirectional_wide_export_gives_the_unidirectional_figures(tmp_path):
-    """A wide export without directions is a unidirectional (+) test: A, E, R of that direction by their
+    """A wide export without directions is a unidirectional test (direction not given): A, E, R by their
     definitions (k = 2), no M or B; VDI 3441 refused; the model and the plot work on the one direction."""
     from datasets.io import read_positioning as read_csv
     p = tmp_path / "uni.csv"
@@ -236,12 +236,12 @@ def test_unidirectional_wide_export_gives_the_unidirectional_figures(tmp_path):
     f = res.figures
     assert f["A"] == pytest.approx(np.max(m + 2 * s) - np.min(m - 2 * s), abs=1e-15)
     assert f["E_up"] == pytest.approx(np.ptp(m)) and f["R"] == pytest.approx(4 * s.max())
-    assert "M" not in f and "B" not in f and f["directions"] == "unidirectional (up)"
+    assert "M" not in f and "B" not in f and f["directions"] == "unidirectional (direction not given)"
     assert set(res.polynomial) == {"up"}
     with pytest.raises(InvalidInputError, match="both approach directions"):
         methods.fit("positioning.iso230_2", data, standard="vdi3441")
     out = cli("positioning", p, "--deviation-unit", "um", "--degree", 2, "--plot", tmp_path / "u.png")
-    assert out.returncode == 0 and "unidirectional (up)" in out.stdout and (tmp_path / "u.png").stat().st_size > 5000
+    assert out.returncode == 0 and "unidirectional (direction not given)" in out.stdout and (tmp_path / "u.png").stat().st_size > 5000
 
 
 def test_decimal_commas_in_positioning_and_multilateration_readers(tmp_path):

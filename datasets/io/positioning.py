@@ -27,8 +27,36 @@ RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[
                   re.IGNORECASE)
 
 
-def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.ndarray] | None:
-    """A wide export (one column per run) as the long table; None when ``df`` is not wide."""
+#: run columns without directions whose odd and even runs differ by more than this Welch t-test on the runs' means
+#: over the targets allows (two-sided p) are two approach directions, not one
+ALTERNATING_P = 1e-3
+#: ``run_directions``: the approach direction of every run, or of the odd and the even runs (ISO 230-2 ↑ = +)
+RUN_DIRECTIONS = {"up": "+", "down": "-", "up,down": "+-", "down,up": "-+"}
+
+
+def alternating_runs(values: np.ndarray) -> tuple[float, float, float] | None:
+    """(mean odd - even difference, Welch t, two-sided p) of the runs' means over the targets, ``values`` (targets,
+    runs) in run order: a bidirectional test exported without direction labels alternates its two directions
+    (odd runs one way, even runs the other), whose means differ by the reversal value B at every target. Run means
+    (not single deviations) carry the run-to-run drift into the test's scatter, so a drifting unidirectional test
+    does not pass for two directions. None with fewer than two runs in a group."""
+    if values.shape[1] < 4:
+        return None
+    from scipy import stats
+    run_means = values.mean(axis=0)
+    odd, even = run_means[0::2], run_means[1::2]
+    t, p = stats.ttest_ind(odd, even, equal_var=False)
+    return float(odd.mean() - even.mean()), float(t), float(p)
+
+
+def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None = None, to_um: float = 1e3
+                  ) -> tuple[pd.DataFrame, np.ndarray, bool] | None:
+    """A wide export (one column per run) as the long table and whether the file gave the directions; None when
+    ``df`` is not wide. Run columns without any direction are read by ``run_directions`` ('+', '-', or '+-' / '-+':
+    odd runs in the first direction, even runs in the other), else as one direction that is not given, unless the
+    odd and even runs differ as two directions do (:func:`alternating_runs`): that is refused naming the option.
+    ``to_um``: µm per unit of the deviations (for the message)."""
+    pattern = RUN_DIRECTIONS.get(run_directions, run_directions)
     cols = [str(c).strip() for c in df.columns]
     low = [c.lower() for c in cols]
     t = next((low.index(n) for n in TARGET_NAMES if n in low), None)
@@ -70,6 +98,23 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.
                     f"{'-' if forward == '+' else '+'} if the forward runs moved the other way)")
         warnings.warn(RunOrderNote(text, forward), stacklevel=4)
     other = {"+": "-", "-": "+"}
+    unlabelled = d_col is None and all(tag is None for _, tag in runs.values())
+    if run_directions is not None and not unlabelled:
+        raise DataFileError(f"{name}: --run-directions is for run columns without directions; this file names its "
+                            "directions (in the column names or a direction column): drop the option")
+    given = not unlabelled or run_directions is not None
+    if unlabelled and run_directions is None:
+        order_k = sorted(runs, key=lambda k: runs[k][0])
+        values = np.column_stack([_numeric_column(df.iloc[:, k], cols[k], name, lines) for k in order_k])
+        alt = alternating_runs(values)
+        if alt is not None and alt[2] < ALTERNATING_P:
+            raise DataFileError(
+                f"{name}: the {len(runs)} run columns name no approach direction, and the odd runs differ from the "
+                f"even runs by {alt[0] * to_um:+.3g} µm on average (Welch t = {alt[1]:.3g} over the runs' means, "
+                f"p = {alt[2]:.2g}), as the two directions of a bidirectional test do: give --run-directions up,down "
+                "(odd runs approached in +, even runs in -) or down,up, or --run-directions up / down if all runs "
+                "approached one way (or name the columns Run N + / Run N -)")
+    seq = {k: i for i, k in enumerate(sorted(runs, key=lambda k: runs[k][0]))}
     rows = []
     for k, (run, tag) in runs.items():
         if d_col is not None:
@@ -81,13 +126,17 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines) -> tuple[pd.DataFrame, np.
             # --forward-direction)
             fwd = forward or "+"
             direction = np.full(len(df), fwd if order[k] == "forward" else other[fwd])
+        elif unlabelled:
+            # no direction anywhere: as --run-directions says (odd/even runs in the order of their numbers), else one
+            # direction, not given (held as '+', labelled 'direction not given')
+            signs = pattern or "+"
+            direction = np.full(len(df), signs[seq[k] % len(signs)])
         else:
-            # no direction anywhere: a unidirectional test approached in the + direction
             direction = np.full(len(df), "+" if tag is None or tag.lower() in ("+", "up", "u", "pos", "↑") else "-")
         rows.append(pd.DataFrame({"target": df.iloc[:, t].to_numpy(), "direction": direction, "run": run,
                                   "deviation": df.iloc[:, k].to_numpy(), "_line": lines}))
     long = pd.concat(rows, ignore_index=True)
-    return long.drop(columns="_line"), long["_line"].to_numpy()
+    return long.drop(columns="_line"), long["_line"].to_numpy(), given
 
 
 
@@ -108,15 +157,19 @@ def _header_unit(found: dict, given: str | None, option: str, name) -> str | Non
 
 
 def read_positioning(path, *, unit: str | None = None, deviation_unit: str | None = None, skip_rows: int = 0,
-                     with_units: bool = False):
+                     with_units: bool = False, run_directions: str | None = None):
     """An ISO 230-2 positioning file, long or wide layout (:mod:`methods.positioning.data` describes them), as
     :class:`methods.positioning.PositioningData`. Header names are read like every reader's (:func:`parse_name`:
     ``Target (mm)``, ``Deviation [µm]``, ``Run 1 + (um)``); lengths are converted to mm from the header's units,
     else ``unit`` (targets, actual positions; default mm) and ``deviation_unit`` (deviations; default the
-    targets' unit); a header unit contradicting them is an error. ``with_units``: also return the two units."""
+    targets' unit); a header unit contradicting them is an error. ``with_units``: also return the two units.
+    ``run_directions`` ('up', 'down', 'up,down', 'down,up'): the approach directions of run columns that name none
+    (odd runs first); without it such runs are one direction, not given, or refused when they alternate (:func:`_wide_to_long`)."""
+    if run_directions is not None and run_directions not in RUN_DIRECTIONS:
+        raise InvalidInputError(f"--run-directions {run_directions!r}: use one of {', '.join(RUN_DIRECTIONS)}")
     try:
         return _read_positioning(path, unit=unit, deviation_unit=deviation_unit, skip_rows=skip_rows,
-                                 with_units=with_units)
+                                 with_units=with_units, run_directions=run_directions)
     except InvalidInputError as exc:
         _add_preamble_hint(exc, path, skip_rows)
         raise
@@ -132,7 +185,7 @@ def _add_preamble_hint(exc: InvalidInputError, path, skip_rows: int) -> None:
             exc.args = (f"{exc.args[0]}{hint}",)
 
 
-def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units):
+def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_directions=None):
     from methods.positioning import from_frame
 
     # 'nan' and 'inf' stay text here and are refused as not finite by _numeric_column, like every reader
@@ -157,12 +210,17 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units):
     unit = _header_unit(lengths, unit, "--unit", path) or "mm"
     deviation_unit = _header_unit(deviations, deviation_unit, "--deviation-unit", path) or unit
     df = df.rename(columns=renamed)
-    wide = _wide_to_long(df, str(path), lines)
+    from methods.units import to_mm
+    wide = _wide_to_long(df, str(path), lines, run_directions, to_um=float(to_mm(1.0, deviation_unit)) * 1e3)
+    given = True
     if wide is not None:
-        df, lines = wide
+        df, lines, given = wide
+    elif run_directions is not None:
+        raise DataFileError(f"{path}: --run-directions is for a wide export whose run columns name no direction; "
+                            "this is a long table with a direction column: drop the option")
     cols = {str(c).lower().strip(): c for c in df.columns}
     for key in ("target", "run", "deviation", "actual"):
         if key in cols:
             df[cols[key]] = _numeric_column(df[cols[key]], key, path, lines)
-    data = from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit)
+    data = from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit, direction_given=given)
     return (data, unit, deviation_unit) if with_units else data

@@ -45,6 +45,11 @@ def add_parser(sub):
     pp.add_argument("--forward-direction", choices=("+", "-"), default=None,
                     help="wide exports with Forward/Reverse (Hin/Rück) runs: the axis direction the forward runs "
                          "moved in (default: from the order of the targets in the file, + when increasing)")
+    pp.add_argument("--run-directions", choices=("up", "down", "up,down", "down,up"), default=None,
+                    help="wide exports whose run columns name no direction (Run 1, Run 2, ...): up or down (every run "
+                         "approached in the + or - direction), up,down or down,up (alternating: odd runs in the first, "
+                         "even runs in the second, a bidirectional test exported without labels); default: one "
+                         "direction, not given, refused when the odd and even runs differ as two directions do")
     pp.add_argument("--deviation-unit", choices=UNIT_CHOICES,
                     help="unit of the deviation columns when it differs from --unit (laser exports: targets in mm, "
                          "errors in µm)")
@@ -184,7 +189,8 @@ def run(args) -> int:
         warnings.simplefilter("always")
         data, args.unit, args.deviation_unit = read_positioning(args.file, unit=args.unit,
                                                                 deviation_unit=args.deviation_unit,
-                                                                skip_rows=args.skip_rows, with_units=True)
+                                                                skip_rows=args.skip_rows, with_units=True,
+                                                                run_directions=args.run_directions)
     from methods.units import UnitWarning
     unit_warnings = [str(w.message) for w in read_warnings if issubclass(w.category, UnitWarning)]
     if args.compensation and unit_warnings and given_deviation_unit is None:
@@ -214,6 +220,17 @@ def run(args) -> int:
                          f"{word} direction, as --forward-direction {args.forward_direction} says")
         else:
             notes.append(str(run_order[0]))
+    if not data.direction_given:
+        notes.append("the run columns name no approach direction: evaluated as one direction, not given (shown as ?; "
+                     "in the JSON under the keys *_up); give --run-directions up or down to name it, up,down or down,up "
+                     "if the runs alternate")
+    elif args.run_directions is not None:
+        notes.append({"up": "every run read as approached in the + direction (↑), as --run-directions up says",
+                      "down": "every run read as approached in the − direction (↓), as --run-directions down says",
+                      "up,down": "odd runs read as approaches in the + direction (↑), even runs in − (↓), as "
+                                 "--run-directions up,down says",
+                      "down,up": "odd runs read as approaches in the − direction (↓), even runs in + (↑), as "
+                                 "--run-directions down,up says"}[args.run_directions])
     if given_deviation_unit is None and args.deviation_unit == args.unit:
         args.deviation_unit = None  # printed as one unit, as before
     _check_instrument("--instrument-u", args.instrument_u, instrument_u, u_explicit, data)

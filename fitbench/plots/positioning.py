@@ -29,8 +29,15 @@ def coefficients_readable(poly: dict) -> list[tuple[int, float, str]]:
     return out
 
 
+def arrows(figures: dict) -> dict:
+    """The direction marks: ↑ / ↓, or ? for a test whose file named no approach direction (ISO 230-2's ↑ is an
+    approach in the + direction, which nothing said)."""
+    return dict(ARROW, up="?") if "direction not given" in str(figures.get("directions", "")) else ARROW
+
+
 def text(res, degree: int | None = None) -> str:
     f, per = res.figures, res.per_target
+    ARROW = arrows(f)
     std = f["standard"]
     um = 1e3
     lines = [f"{TITLES.get(std, std)}: {f['targets']} targets x {f['runs']} runs, {f.get('directions', 'bidirectional')} "
@@ -47,10 +54,12 @@ def text(res, degree: int | None = None) -> str:
                  "R": "repeatability, bidirectional", "R_up": "repeatability ↑", "R_down": "repeatability ↓",
                  "B": "reversal value", "B_mean": "mean reversal value"}
         if f.get("directions", "bidirectional") != "bidirectional":
-            names = {k: v.replace(", bidirectional", f", {f['directions']}") for k, v in names.items()}
+            names = {k: v.replace(", bidirectional", f", {f['directions']}").replace("↑", ARROW["up"])
+                     for k, v in names.items()}
+        width = max([40] + [len(v) for key, v in names.items() if key in f])
         for key, label in names.items():
             if key in f:
-                lines.append(f"  {key:<7} {label:<40} {f[key] * um:10.3f}")
+                lines.append(f"  {key:<7} {label:<{width}} {f[key] * um:10.3f}")
     lines.append("per target (µm; target in mm)")
     cols = [(f"mean {ARROW[d]}", f"mean_{d}", 9) for d in ("up", "down") if f"mean_{d}" in per] + \
            [(f"s {ARROW[d]}", f"s_{d}", 7) for d in ("up", "down") if f"s_{d}" in per] + \
@@ -71,7 +80,7 @@ def text(res, degree: int | None = None) -> str:
             band = (f"U(P) not given: the model is rejected by its lack of fit" if lof.get("rejected") else
                     f"max U(P_i) = {p['U_at_targets'].max() * um:.3f} µm (k = {p['k']:g})")
             lines.append(f"  {ARROW.get(d, d)} {coefs}; {band}")
-        lines += lack_of_fit_lines(res.polynomial)
+        lines += lack_of_fit_lines(res.polynomial, ARROW)
     return "\n".join(lines)
 
 
@@ -84,7 +93,7 @@ def rejected_directions(polynomial: dict) -> list[str]:
     return [d for d, p in (polynomial or {}).items() if (p.get("lack_of_fit") or {}).get("rejected")]
 
 
-def lack_of_fit_lines(polynomial: dict) -> list[str]:
+def lack_of_fit_lines(polynomial: dict, ARROW: dict = ARROW) -> list[str]:
     """One line per direction: the model's weighted chi-square against the means at the targets (u(x_i) =
     s_i / sqrt(n), the paper's eq. 10), its limit and what a rejection means for U(P) and a compensation table."""
     out = []
@@ -114,6 +123,7 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
     labels (for tests)."""
     with report_figure(path, dpi=120, save=save, into=into, figsize=FIGSIZE) as fig:
         per, figs = result.per_target, result.figures
+        ARROW = arrows(figs)
         k = figs.get("k", 2.0)
         P = per["targets"]
         um = 1e3

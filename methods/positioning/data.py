@@ -53,17 +53,20 @@ class RunOrderNote(UserWarning):
 
 def swap_directions(data: "PositioningData") -> "PositioningData":
     """The test with its ↑ and ↓ runs exchanged (a run-order mapping corrected by the user)."""
-    return PositioningData(targets=data.targets, up=data.down, down=data.up, unit=data.unit)
+    return PositioningData(targets=data.targets, up=data.down, down=data.up, unit=data.unit,
+                           direction_given=data.direction_given)
 
 
 @dataclass(frozen=True)
 class PositioningData:
-    """Deviations x[i, j] (target i, run j) for each direction, in the input unit."""
+    """Deviations x[i, j] (target i, run j) for each direction, in the input unit. ``direction_given`` False: a
+    unidirectional test whose file names no approach direction (held in ``up``, labelled 'direction not given')."""
 
     targets: np.ndarray   # (m,)
     up: np.ndarray | None     # (m, n) deviations approaching in the + direction (None: unidirectional test, - only)
     down: np.ndarray | None   # (m, n) deviations approaching in the - direction (None: unidirectional test, + only)
     unit: str = ""
+    direction_given: bool = True
 
     @property
     def runs(self) -> int:
@@ -85,8 +88,9 @@ def _direction(value, lineno, name):
 
 
 def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = "mm",
-               deviation_unit: str | None = None) -> PositioningData:
-    """Validate a long table (columns target, direction, run, and actual or deviation); lengths to mm."""
+               deviation_unit: str | None = None, direction_given: bool = True) -> PositioningData:
+    """Validate a long table (columns target, direction, run, and actual or deviation); lengths to mm.
+    ``direction_given`` False: the direction column was not in the file (a unidirectional test read as '+')."""
     cols = {c.lower().strip(): c for c in df.columns}
     for need in ("target", "direction", "run"):
         if need not in cols:
@@ -151,7 +155,8 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
             raise InvalidInputError(f"{name}: unequal coverage: {runs} runs up but {piv.shape[1]} runs down")
         runs = piv.shape[1]
         arrays[d] = piv.to_numpy(dtype=float)
-    return PositioningData(targets=targets, up=arrays["up"], down=arrays["down"], unit="mm")
+    return PositioningData(targets=targets, up=arrays["up"], down=arrays["down"], unit="mm",
+                           direction_given=direction_given or arrays["down"] is not None)
 
 
 def thermal_correction(data: PositioningData, material_temperature_c: float,
@@ -164,7 +169,8 @@ def thermal_correction(data: PositioningData, material_temperature_c: float,
     slope = float(expansion_coefficient_um_per_m_k) * 1e-6 * (float(material_temperature_c) - 20.0)
     shift = slope * np.asarray(data.targets, dtype=float)[:, None]
     return PositioningData(targets=data.targets, up=None if data.up is None else data.up - shift,
-                           down=None if data.down is None else data.down - shift, unit=data.unit)
+                           down=None if data.down is None else data.down - shift, unit=data.unit,
+                           direction_given=data.direction_given)
 
 
 def validate(data, method_id="") -> PositioningData:

@@ -52,7 +52,8 @@ def figures(data: PositioningData, standard: str = "iso230-2:2014") -> tuple[dic
 
 def _unidirectional(data: PositioningData, standard: str, k: float) -> tuple[dict, dict]:
     """ISO 230-2 unidirectional figures of the one direction measured: A, E, R of that direction (and
-    the same values under the axis keys A, E, R); M and B need both directions and are absent."""
+    the same values under the axis keys A, E, R); M and B need both directions and are absent. A file that names
+    no direction is 'unidirectional (direction not given)' (its figures under the keys of 'up')."""
     if standard == "vdi3441":
         raise InvalidInputError("VDI/DGQ 3441 needs both approach directions; this test has one")
     d = data.directions[0]
@@ -61,8 +62,9 @@ def _unidirectional(data: PositioningData, standard: str, k: float) -> tuple[dic
     R_i = 2 * k * s
     per = {"targets": data.targets, f"mean_{d}": x, f"s_{d}": s, f"R_i_{d}": R_i}
     A, E, R = float(np.max(x + k * s) - np.min(x - k * s)), float(np.ptp(x)), float(R_i.max())
+    label = d if getattr(data, "direction_given", True) else "direction not given"
     fig = {f"A_{d}": A, f"E_{d}": E, f"R_{d}": R, "A": A, "E": E, "R": R, "k": k, "standard": standard,
-           "targets": len(data.targets), "runs": data.runs, "directions": f"unidirectional ({d})"}
+           "targets": len(data.targets), "runs": data.runs, "directions": f"unidirectional ({label})"}
     return fig, per
 
 

@@ -66,7 +66,8 @@ def float_text(value: float) -> str:
 
 
 def _text_field(value) -> str:
-    return _quoted([str(value)])[0]
+    text = str(value)
+    return _csv_field(text) if _SPECIAL.search(text) else text
 
 
 def _by_distinct(values: np.ndarray, field, missing: np.ndarray) -> list[str]:

@@ -462,6 +462,11 @@ class Landing:
         raise_if_signalled()  # an interrupt swallowed while the chunk landed (numpy's dtype comparison drops it)
 
 
+#: the most tasks :func:`run` keeps from its first pass over them (to count and key them) for the passes that run them
+#: and read the stored rows, instead of making them again (0.07 s for 40,000 tasks; 40,000 tasks hold about 35 MB)
+KEEP_TASKS = 65_536
+
+
 def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, scheduler: str | None,
         desc: str, log=print, row_timeout: float | None = None, chunk_rows: int | None = None,
         outputs: str | None = None, while_rows_run=None):
@@ -470,7 +475,7 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
 
     ``tasks`` is a list of prepared tasks or a function returning a fresh iterable of them (it is called once to
     count, once to run and, when some rows were stored before, once to read those): the tasks of a large study
-    are never all in memory. Rows go to the store as their chunk finishes; the frame is made from the columns the
+    are never all in memory (those of a study of at most :data:`KEEP_TASKS` are kept from the first pass). Rows go to the store as their chunk finishes; the frame is made from the columns the
     workers return, and from the store for the rows it already held. With ``outputs`` (:func:`outputs_code`) the
     counts hold the study's :func:`fingerprint`, and the store records that it holds every row of it when none is
     to be run again. ``while_rows_run`` is called (without arguments) just before rows are run, if any are."""
@@ -480,7 +485,12 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
     keys = hashlib.sha256((outputs or "").encode())
     to_run = bytearray()  # one flag per task, in task order
     look_up = not force and not store.empty()
+    kept: list | None = []  # the tasks of a small study, kept from this pass for the next (None: too many to keep)
     for block in _blocks(make(), 2000):
+        if kept is not None:
+            kept.extend(block)
+            if len(kept) > KEEP_TASKS:
+                kept = None
         block_keys = [t["key"] for t in block]
         status = store.done(block_keys) if look_up else {}
         counts["tasks"] += len(block)
@@ -500,6 +510,8 @@ def run(tasks, store: RowStore, *, force: bool, jobs: int, executor: str, schedu
             counts["to_run"] += again
             counts["retried_errors"] += again and s is not None
     counts["stored"] = counts["tasks"] - counts["to_run"]
+    if kept is not None:
+        make = lambda: kept  # noqa: E731 (the same tasks, not made again)
     isolate = runs_plugin_code(used)
     script = script_code(used) if counts["to_run"] else []
     if script and (jobs > 1 or executor == "dask" or row_timeout or isolate):

@@ -435,6 +435,24 @@ def _stationarity(J, res, R, at_bound=None) -> dict:
     return {"converged": ok, "gauss_newton_step_u": in_u, "check": what + held}
 
 
+def _off_reversals(cw, ccw, center):
+    """The runs without their samples whose measured angle about ``center`` is an axis reversal (0, 90, 180,
+    270 deg to ``REVERSAL_ZONE``: a round angle grid, as ballbar exports resampled to whole steps have) inside the
+    run, and how many were left out. At such a sample the sign of the axis' motion is undefined: the model puts it
+    midway (half the backlash) where the data show the step taken or not, and the reversal spike fitted that one
+    residual as a spike of about the full backlash (decay at its 0.1 deg bound, half the 0.2 deg sample step:
+    -2.9 um, beyond 2 u, for a clean 3 um step; or "NOT converged"). A run's first and last samples stay."""
+    kept, dropped = [], 0
+    for pts in (cw, ccw):
+        q = pts - center
+        phi = np.unwrap(np.arctan2(q[:, 1], q[:, 0]))
+        off = np.minimum(np.abs(np.sin(phi)), np.abs(np.cos(phi))) <= REVERSAL_ZONE
+        off[[0, -1]] = False
+        dropped += int(off.sum())
+        kept.append(pts[~off])
+    return kept[0], kept[1], dropped
+
+
 def diagnose(cw, ccw, nominal_radius: float, nominal_center, *, feed_mm_min: float | None = None,
              cyclic_pitch: float | None = None, partial: bool | None = None) -> dict:
     """Estimates of the error sources with standard uncertainties: name -> {value, unit, u} (or value and u
@@ -458,6 +476,7 @@ def diagnose(cw, ccw, nominal_radius: float, nominal_center, *, feed_mm_min: flo
             refuse_repeated(pts, name)
     R = float(nominal_radius)
     center = np.asarray(nominal_center, dtype=float)
+    cw, ccw, at_reversal = (*_off_reversals(cw, ccw, center),)
     pts = np.vstack([cw, ccw])
     d = np.concatenate([-np.ones(len(cw)), np.ones(len(ccw))])
     q = pts - center
@@ -544,6 +563,7 @@ def diagnose(cw, ccw, nominal_radius: float, nominal_center, *, feed_mm_min: flo
                      "radius_offset_um": {"cw": float((ms - 0.5 * dr) * 1e3), "ccw": float((ms + 0.5 * dr) * 1e3)},
                      "spike_decay_deg": float(np.degrees(phi_tau)),
                      "residual_rms_um": float(np.sqrt(rss / len(res)) * 1e3), "points": int(len(res)),
+                     "left_out_at_reversal": at_reversal,
                      "partial_arc": bool(partial), "not_identifiable": sorted(withheld),
                      "converged": status["converged"], "iterations": status["iterations"],
                      "gauss_newton_step_u": status["gauss_newton_step_u"], "message": status["message"]}

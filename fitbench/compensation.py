@@ -52,6 +52,7 @@ VALUE_FLOOR_MM = 0.1
 #: µm to tens of µm of lost motion); µm read as mm turns 4 µm into 4 mm
 BACKLASH_LIMIT_MM = 0.5
 AXIS = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
+NOT_GIVEN = "not given"      # the axis name in a CSV / FANUC header when none was given
 
 
 class CompensationError(InvalidInputError):
@@ -263,13 +264,13 @@ def check_axis(axis, fmt: str) -> str:
 
 
 # --------------------------------------------------------------------------------------------- writers
-def write_csv(table, axis: str = "X") -> str:
+def write_csv(table, axis: str | None = "X") -> str:
     """Generic CSV: ``#`` header lines, then one row per grid point with the columns position_mm,
     deviation_mm, deviation_up_mm, deviation_down_mm (ISO 230-2 deviations as measured; empty for a
     direction not measured) and compensation_mm = -(deviation_mm - deviation at the reference point), the
     value to **add to the commanded position** (a controller that adds it reaches the target). Numbers
-    with 6 decimals in mm, never -0.000000."""
-    axis = check_axis(axis, "csv")
+    with 6 decimals in mm, never -0.000000. ``axis`` None: the header says 'axis not given'."""
+    axis = NOT_GIVEN if axis is None else check_axis(axis, "csv")
     lines = ["# " + h for h in _header(table, axis, "compensation_mm is added to the commanded position; "
                                                     "it is minus the deviation relative to the reference point")]
     lines.append("position_mm,deviation_mm,deviation_up_mm,deviation_down_mm,compensation_mm")
@@ -329,7 +330,7 @@ FANUC_MAGNIFICATION = (1, 100)  # parameter 3623 (0 means 1)
 FANUC_INTERVAL_MAX = 99_999_999  # parameter 3624 (two-word, in the least input increment)
 
 
-def write_fanuc_pitch(table, axis: str = "X", detection_unit_mm: float = 0.001, increment_mm: float = 0.001,
+def write_fanuc_pitch(table, axis: str | None = "X", detection_unit_mm: float = 0.001, increment_mm: float = 0.001,
                       first_number: int = 0, magnification: int | None = None) -> str:
     """FANUC pitch-error compensation data in the parameter-tape format: ``%``, comments ``(...)``, one
     line ``N<10000 + point number> P<value>`` per compensation point, ``%`` (FANUC Series 0i-PB
@@ -350,8 +351,8 @@ def write_fanuc_pitch(table, axis: str = "X", detection_unit_mm: float = 0.001, 
     ``first_number`` (3621) and must end by 1023; 3624 = d / ``increment_mm`` (the least input increment,
     IS-B 0.001 mm) must be a whole number in 1 ... 99999999 (FANUC also requires d >= rapid traverse /
     7500, which the header states); 3623 in 1 ... 100, by default the smallest that keeps every value
-    within -128 ... 127. What does not fit is refused."""
-    label = check_axis(axis, "fanuc-pitch").upper()
+    within -128 ... 127. What does not fit is refused. ``axis`` None: the comments say 'axis not given'."""
+    label = NOT_GIVEN.upper() if axis is None else check_axis(axis, "fanuc-pitch").upper()
     a = table.attrs
     k0 = a["reference_index"]
     rel = -(table.deviation_mm.to_numpy() - a["deviation_at_reference_mm"])      # what to add, mm, 0 at R
@@ -444,19 +445,25 @@ def model_misfit(res) -> str | None:
     return f"the {name} is rejected by its lack of fit ({parts})"
 
 
-def write_tables(res, data, requests, *, interval=None, source="model", axis="X1", write, reference_mm=None,
+def write_tables(res, data, requests, *, interval=None, source="model", axis=None, write, reference_mm=None,
                  unit_confirmed: bool = False, unit_option: str = "--deviation-unit", on_confirmed=None,
-                 model_confirmed: bool = False):
+                 model_confirmed: bool = False, axis_hint: str = ""):
     """Build the table once and write it in every requested ``(format, path)`` with ``write(path, text)``;
     every format is checked (name, axis, limits) before any file is written. A table implausible for a
     machine axis (:func:`magnitude_problem`: µm read as mm) is refused unless ``unit_confirmed`` (the
     deviations' unit given explicitly, ``unit_option`` on the command line); then ``on_confirmed(text)`` is
     told. A table from a model its lack-of-fit test rejects (:func:`model_misfit`: it would leave the measured
     misfit out of the machine) is refused unless ``model_confirmed`` (the model chosen explicitly); then
-    ``on_confirmed`` is told and every file's header says so. Returns the table."""
+    ``on_confirmed`` is told and every file's header says so. ``axis`` None: a SINUMERIK table (whose entries name
+    the machine axis they compensate) is refused, naming ``axis_hint`` (what the file says); the other formats say
+    'axis not given' in their header. Returns the table."""
     for fmt, _ in requests:
         if fmt not in WRITERS:
             raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
+    if axis is None and any(fmt == "siemens-eec" for fmt, _ in requests):
+        raise CompensationError("siemens-eec: a SINUMERIK table names the machine axis it compensates "
+                                "($AA_ENC_COMP[0,N,AXIS], MD10000 $MN_AXCONF_MACHAX_NAME_TAB) and --axis is not given: "
+                                f"give --axis NAME, e.g. --axis X1{axis_hint}")
     misfit = model_misfit(res) if source == "model" else None
     if misfit and not model_confirmed:
         raise CompensationError(f"not writing {', '.join(str(p) for _, p in requests)}: {misfit}; a table from it "

@@ -43,7 +43,7 @@ def axis(seed=2, **kw):
 def test_compensation_tables(tmp_path):
     data, _ = axis_test(rng=np.random.default_rng(2), mpe=0.002)
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
-    out = cli("positioning", tmp_path / "a.csv", "--mpe", 0.002, "--interval", 25, "--compensation", "csv",
+    out = cli("positioning", tmp_path / "a.csv", "--mpe", 0.002, "--interval", 25, "--axis", "X1", "--compensation", "csv",
               tmp_path / "c.csv", "--compensation", "siemens-eec", tmp_path / "eec.mpf", "--compensation", "fanuc-pitch",
               tmp_path / "f.txt")
     assert out.returncode == 0, out.stderr
@@ -235,7 +235,7 @@ def test_header_backlash_is_the_iso_mean_reversal_value(tmp_path):
     for seed, reversal in ((0, -0.003), (1, -0.003), (2, 0.002)):
         data, _, res = axis(seed, reversal=reversal, irregular=0.3)
         to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
-        out = cli("positioning", tmp_path / "a.csv", "--compensation", "siemens-eec", tmp_path / "e.mpf")
+        out = cli("positioning", tmp_path / "a.csv", "--compensation", "siemens-eec", tmp_path / "e.mpf", "--axis", "X1")
         iso = re.search(r"mean reversal value\D*?(-?\d+\.\d{3})", out.stdout).group(1)
         text = (tmp_path / "e.mpf").read_text()
         assert re.search(rf"mean reversal value B = {iso} um", text), (iso, text[:800])
@@ -264,7 +264,7 @@ def test_reference_option_moves_the_zero_and_the_fanuc_reference_point(tmp_path)
     outside the measured travel is refused in one line."""
     data, truth, _ = axis(6, irregular=0.3)
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
-    out = cli("positioning", tmp_path / "a.csv", "--reference", 1000, "--compensation", "siemens-eec", tmp_path / "e.mpf",
+    out = cli("positioning", tmp_path / "a.csv", "--reference", 1000, "--axis", "X1", "--compensation", "siemens-eec", tmp_path / "e.mpf",
               "--compensation", "fanuc-pitch", tmp_path / "f.txt")
     assert out.returncode == 0, out.stderr
     _, sie = read_siemens((tmp_path / "e.mpf").read_text())

@@ -54,7 +54,7 @@ def test_confirming_mm_writes_with_a_warning(tmp_path):
     """--deviation-unit mm is the user's word that the values are mm: the table is written, and a warning says
     what it holds."""
     um_file(tmp_path / "a.csv")
-    out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--compensation", "siemens-eec",
+    out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--axis", "X1", "--compensation", "siemens-eec",
               tmp_path / "t.mpf")
     assert out.returncode == 0 and (tmp_path / "t.mpf").exists()
     assert "warning: the compensation table holds values up to" in out.stderr and "backlash of" in out.stderr
@@ -69,10 +69,10 @@ def test_a_backlash_beyond_the_bound_is_refused_without_the_unit(tmp_path):
     written = []
     with pytest.raises(CompensationError, match=r"not writing t\.mpf: .*backlash of 0\.8\d* mm \(more than "
                                                 rf"{BACKLASH_LIMIT_MM:g} mm\)"):
-        write_tables(res, data, [("siemens-eec", "t.mpf")], write=lambda p, t: written.append(p))
+        write_tables(res, data, [("siemens-eec", "t.mpf")], write=lambda p, t: written.append(p), axis="X1")
     assert written == []
     told = []
-    write_tables(res, data, [("siemens-eec", "t.mpf")], write=lambda p, t: written.append(p), unit_confirmed=True,
+    write_tables(res, data, [("siemens-eec", "t.mpf")], write=lambda p, t: written.append(p), axis="X1", unit_confirmed=True,
                  on_confirmed=told.append)
     assert written == ["t.mpf"] and "backlash" in told[0]
     ok, _ = axis_test(rng=np.random.default_rng(3), reversal=-0.004, repeatability=0.0005)

@@ -140,6 +140,23 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
 
 
 
+def preamble_axis(path, skip_rows: int) -> tuple[str, int, str] | None:
+    """(axis name, line number, the line) of a preamble line ``Axis;Z`` (``Axis: Z``, ``Achse<TAB>Z``) among the
+    ``skip_rows`` lines above the table, as laser software writes the test's identity there; None if there is none."""
+    if skip_rows <= 0:
+        return None
+    from itertools import islice
+    from datasets.io.textfile import _open_text, iter_lines
+    name = str(path)
+    with _open_text(name, "") as fh:
+        for lineno, line in islice(iter_lines(fh, name), skip_rows):
+            m = re.fullmatch(r"\s*(?:axis|achse|axe|asse)\s*(?:name)?\s*[;:,\t=]\s*\"?([^;,\t\"]+?)\"?\s*[;,\t]*\s*",
+                             line.lstrip("\ufeff").rstrip("\r\n"), re.IGNORECASE)
+            if m:
+                return m.group(1), lineno, line.strip().lstrip("\ufeff")
+    return None
+
+
 def _header_unit(found: dict, given: str | None, option: str, name) -> str | None:
     """The one unit the header gives columns ``found`` ({column: unit}), checked against the option's value."""
     units = set(found.values())

@@ -62,7 +62,8 @@ def add_parser(sub):
                     help="compensation values from the GLS polynomial (default; refused when its lack-of-fit test "
                          "rejects it unless given explicitly) or the mean deviations at the targets")
     pp.add_argument("--axis", default=None, help="the axis tested: recorded in the JSON result (fitbench history trends "
-                    "each machine's axes apart) and its name in the controller's table (default X1)")
+                    "each machine's axes apart) and its name in the controller's table (required for siemens-eec; "
+                    "csv and fanuc-pitch take it from an 'Axis;Z' line above the table, else say 'not given')")
     pp.add_argument("--reference", type=float, metavar="MM", help="the machine's reference point, where the table "
                     "holds 0 (mm; default 0 if the travel contains it, else the nearer end)")
     pp.add_argument("--json", action="store_true", help="print one JSON object (mm; see its 'units')")
@@ -263,10 +264,21 @@ def run(args) -> int:
         other = methods.fit("positioning.iso230_2", data, standard=args.standard)
         res.figures, res.per_target = other.figures, other.per_target
     comp = None
+    table_axis = args.axis
     if args.compensation:
-        from fitbench.compensation import write_tables
+        from datasets.io.positioning import preamble_axis
+        from fitbench.compensation import AXIS, write_tables
+        found = preamble_axis(args.file, args.skip_rows)
+        hint = (f" (line {found[1]} of {args.file} says {found[2]!r}: the SINUMERIK machine-axis name of that axis, "
+                f"e.g. {found[0]}1 or {found[0]})" if found else "")
+        if (table_axis is None and found and AXIS.fullmatch(found[0])
+                and not any(fmt == "siemens-eec" for fmt, _ in args.compensation)):
+            table_axis = found[0]
+            notes.append(f"compensation table for axis {table_axis!r}, from line {found[1]} of {args.file} "
+                         f"({found[2]!r}); --axis names another")
         comp = write_tables(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
-                            source=args.compensation_from or "model", axis=args.axis or "X1", write=write_text_atomic,
+                            source=args.compensation_from or "model", axis=table_axis, axis_hint=hint,
+                            write=write_text_atomic,
                             reference_mm=finite("--reference", args.reference),
                             unit_confirmed=given_deviation_unit is not None, on_confirmed=warn,
                             model_confirmed=args.compensation_from == "model")

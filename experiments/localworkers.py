@@ -99,6 +99,7 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
     import gc
 
     from experiments.rows import ROW_GC_THRESHOLD, run_chunk  # the rows' code: imported here, in the worker
+    from methods import exception_text
     gc.set_threshold(ROW_GC_THRESHOLD, *gc.get_threshold()[1:])  # a worker only makes rows (experiments.rows)
     while True:
         try:
@@ -112,13 +113,13 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
             try:
                 conn.send((True, func(*args)))
             except Exception as exc:
-                conn.send((False, f"{type(exc).__name__}: {exc}"))
+                conn.send((False, exception_text(exc)))
             continue
         chunk_id, tasks, row_timeout = msg
         try:
             out = run_chunk(tasks, row_timeout, progress)
         except BaseException as exc:  # a failure of the engine itself: reported, the chunk is retried alone
-            out = {"failed": f"{type(exc).__name__}: {exc}"}
+            out = {"failed": exception_text(exc)}
         progress[0] = 0.0
         conn.send((chunk_id, out))
 

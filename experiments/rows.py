@@ -24,7 +24,7 @@ from experiments.metrics import metrics
 from experiments.rowframe import part_of
 from experiments.studies import study_of
 from experiments.timing import time_call
-from methods import InvalidInputError, check_result, result_base
+from methods import InvalidInputError, check_result, exception_call, exception_text, result_base
 
 
 def source_of(spec: dict) -> str:
@@ -136,7 +136,7 @@ def _fitted(task: dict, points):
     except InvalidInputError as exc:
         return None, {**base_row(task), "status": "skipped", "message": str(exc)}
     except Exception as exc:
-        return None, {**base_row(task), "status": "error", "message": f"{type(exc).__name__}: {exc}"}
+        return None, {**base_row(task), "status": "error", "message": exception_text(exc)}
     return res, None
 
 
@@ -327,11 +327,11 @@ def _failure(task: dict, exc: BaseException) -> dict:
     if isinstance(exc, (KeyboardInterrupt, SystemExit, GeneratorExit)):
         if isinstance(exc, KeyboardInterrupt) and _SIGNALLED.is_set():
             raise exc  # the run was interrupted: stop
-        return failed_row(task, "crashed", f"the row raised {type(exc).__name__}({', '.join(map(repr, exc.args))})")
+        return failed_row(task, "crashed", f"the row raised {exception_call(exc)}")
     if not isinstance(exc, Exception):
         raise exc
     status = "unavailable" if isinstance(exc, ImportError) else "error"
-    return {**base_row(task), "status": status, "message": f"{type(exc).__name__}: {exc}"}
+    return {**base_row(task), "status": status, "message": exception_text(exc)}
 
 
 #: the most characters of a row's message that are kept (:func:`bounded_message`): a method's message of a solver's

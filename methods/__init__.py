@@ -4,7 +4,8 @@
 >>> res = methods.fit("circle.gauss_newton", points)      # doctest: +SKIP
 >>> res.center, res.radius, res.form_error                # doctest: +SKIP
 """
-from methods._errors import InvalidInputError, ResultContractError, UnknownMethodError
+from methods._errors import (InvalidInputError, ResultContractError, UnknownMethodError, exception_call,
+                             exception_text)
 from methods._registry import (ENTRY_POINT_GROUP, KINDS, MethodSpec, fit, get, immutable, list_methods,
                                load_plugins, register)
 from methods.result_base import FitResult, check_result
@@ -34,4 +35,5 @@ def __getattr__(name: str):
 
 __all__ = ["InvalidInputError", "UnknownMethodError", "MethodSpec", "register", "get", "list_methods",
            "fit", "ResultContractError", "immutable", "load_plugins", "results", "check_result", "FitResult", "CircleFit", "ZoneFit", "EllipseFit",
-           "validate_points", "describe_methods", "kernel_path", "ENTRY_POINT_GROUP", "KINDS"]
+           "validate_points", "describe_methods", "kernel_path", "ENTRY_POINT_GROUP", "KINDS", "exception_text",
+           "exception_call"]

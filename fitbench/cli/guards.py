@@ -9,7 +9,7 @@ import os
 import sys
 
 from fitbench.threads import one_thread_environment
-from methods import InvalidInputError
+from methods import InvalidInputError, exception_call, exception_text
 
 
 class MethodFailed(Exception):
@@ -75,16 +75,28 @@ def run_method(spec, data, **params):
     try:
         with stdout_to_stderr():
             return spec(data, **params)
-    except InvalidInputError:
+    except InvalidInputError as exc:   # bad input, said by the method: its message is the line (if it can be printed)
+        try:
+            str(exc)
+        except KeyboardInterrupt:
+            raise
+        except BaseException:
+            raise MethodFailed(f"{spec.id} failed: {' '.join(exception_text(exc).split())[:300]} (an error inside the "
+                               f"method (module {spec.module}): report it to its author)") from None
         raise
-    except (Exception, SystemExit, GeneratorExit) as exc:   # a method's sys.exit() is no success (nor a silent end)
-        text = " ".join(str(exc).split()) or "(no message)"
+    except KeyboardInterrupt:   # Ctrl-C: the command's own line and status
+        raise
+    except BaseException as exc:   # a method's sys.exit() is no success (nor a silent end); a plugin's own
+        # BaseException subclass and an exception whose str() raises are the method's failure too, named by their type
         hint = ("a bug in fitbench: please report it" if spec.builtin else
                 f"an error inside the method (module {spec.module}), not in the data: report it to its author")
-        if isinstance(exc, ValueError) and "read-only" in text:
-            hint += "; a method gets read-only points and must copy them (points.copy()) before writing"
-        what = (f"{type(exc).__name__}: {text[:300]}" if isinstance(exc, Exception) else
-                f"it raised {type(exc).__name__}({', '.join(map(repr, exc.args))[:300]})")
+        if isinstance(exc, Exception):
+            what = " ".join(exception_text(exc).split())
+            if isinstance(exc, ValueError) and "read-only" in what:
+                hint += "; a method gets read-only points and must copy them (points.copy()) before writing"
+            what = what[:300]
+        else:
+            what = f"it raised {' '.join(exception_call(exc).split())[:300]}"
         raise MethodFailed(f"{spec.id} failed: {what} ({hint})") from None
 
 

@@ -77,6 +77,26 @@ def _read_circular_runs(args):
     return {"cw": runs[0][1], "ccw": runs[1][1]}, files[0], False  # labels from the point order
 
 
+#: the machine planes in their right-handed order (first axis x right, second up, seen from the third's + side,
+#: where G02 turns clockwise: ISO 6983-1 / ISO 841), and the mirrored pairs that view them from the - side
+PLANE_AXES = {("x", "y"): "xy", ("y", "z"): "yz", ("z", "x"): "zx"}
+MIRRORED_AXES = {(b, a): p for (a, b), p in PLANE_AXES.items()}
+
+
+def _plane_of(axes: tuple, plane: str | None) -> tuple[str, str | None]:
+    """(the plane of the two coordinates read, a note when they are a mirrored pair). ``--columns x z`` puts X right
+    and Z up: the ZX plane seen from -Y, where a G02 (clockwise seen from +Y) turns counter-clockwise, so the runs
+    were called the wrong way round and the diagnostics named Z "Y". Such a pair is read in the plane's own order
+    (z, x), the note says so; the nominal centre given in the columns' order is turned with it."""
+    pair = tuple(str(a).lower() for a in axes)
+    if pair in MIRRORED_AXES:
+        p = MIRRORED_AXES[pair]
+        return p, (f"--columns {pair[0]} {pair[1]} views the {p.upper()} plane from -{'XYZ'['yzx'.index(p[0])]}; read "
+                   f"as {p[0]}, {p[1]} (the plane seen from +{'XYZ'['yzx'.index(p[0])]}, where G02 turns clockwise, "
+                   f"ISO 6983-1); centres are printed as ({p[0]}, {p[1]})")
+    return plane or PLANE_AXES.get(pair, "xy"), None
+
+
 #: radial deviations of a circular test beyond this are a unit mistake (a ballbar measures within +-1 mm)
 CIRCULAR_DEVIATION_LIMIT_MM = 1.0
 
@@ -127,6 +147,11 @@ def run(args) -> int:
     tolerances = parse_tolerances(args.tolerance, ("G", "G_cw", "G_ccw", "G_b", "H"))
     runs, first, labelled = _read_circular_runs(args)
     args.unit = first.unit
+    plane, plane_note = _plane_of(first.axes, args.plane)
+    if plane_note:   # a mirrored pair (--columns x z): read in the plane's own order, so G02 is CW as ISO 6983 says
+        runs = {k: np.ascontiguousarray(p[:, ::-1]) for k, p in runs.items()}
+        if args.nominal_center is not None:
+            args.nominal_center = args.nominal_center[::-1]
     if first.kind == "polar":
         _check_polar_deviations(runs, R, args.nominal_center, args.unit, first.unit_assumed)
     polar_centre = first.kind == "polar" and args.nominal_center is None
@@ -141,6 +166,7 @@ def run(args) -> int:
     notes = ["angle + radial deviation: points placed about the nominal centre (0, 0), which the diagnostics use"] \
         if polar_centre else []
     notes += [first.columns_note] if first.columns_note else []
+    notes += [plane_note] if plane_note else []
     for name in ("cw", "ccw"):
         label = name.upper() if labelled else ('first', 'second')[name == 'ccw']   # runs told apart by order
         runs[name], repeats, said = drop_repeated(runs[name], center0, label)  # a dwell is no contour point
@@ -168,7 +194,7 @@ def run(args) -> int:
     for w in pair_warnings:
         warn(w)
     center = tuple(args.nominal_center) if args.nominal_center else None
-    conditions = {"nominal_radius_mm": R, "nominal_center_mm": center, "feed_mm_min": feed, "plane": args.plane or "xy",
+    conditions = {"nominal_radius_mm": R, "nominal_center_mm": center, "feed_mm_min": feed, "plane": plane,
                   "machine": args.machine, "date": args.date, "files": [str(f) for f in args.files],
                   "centre_for_G": args.center, "input_unit": canonical(args.unit), "nominal_arc_deg": arc,
                   "trimming": trimmed}

@@ -43,7 +43,7 @@ def axis(seed=2, **kw):
 def test_compensation_tables(tmp_path):
     data, _ = axis_test(rng=np.random.default_rng(2), mpe=0.002)
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
-    out = cli("positioning", tmp_path / "a.csv", "--mpe", 0.002, "--interval", 25, "--axis", "X1", "--compensation", "csv",
+    out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--mpe", 0.002, "--interval", 25, "--axis", "X1", "--compensation", "csv",
               tmp_path / "c.csv", "--compensation", "siemens-eec", tmp_path / "eec.mpf", "--compensation", "fanuc-pitch",
               tmp_path / "f.txt")
     assert out.returncode == 0, out.stderr
@@ -173,7 +173,7 @@ def test_fanuc_refuses_what_does_not_fit_the_pitch_block(tmp_path):
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
     for interval, match in (("0.0105", r"do not fit the pitch block 0 \.\.\. 1023"),
                             ("10.0005", r"not a whole number .*parameter 3624")):
-        out = cli("positioning", tmp_path / "a.csv", "--interval", interval, "--compensation", "csv", tmp_path / "c.csv",
+        out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--interval", interval, "--compensation", "csv", tmp_path / "c.csv",
                   "--compensation", "fanuc-pitch", tmp_path / "f.txt")
         assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1 and re.search(match, out.stderr), out.stderr
         assert "Traceback" not in out.stderr and not (tmp_path / "f.txt").exists() and not (tmp_path / "c.csv").exists()
@@ -209,9 +209,9 @@ def test_axis_is_checked_against_the_grammar(fmt, bad):
 def test_bad_axis_on_the_command_line_writes_nothing(tmp_path):
     data, _ = axis_test(rng=np.random.default_rng(2))
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
-    out = cli("positioning", tmp_path / "a.csv", "--axis", "X1\nM30", "--compensation", "siemens-eec", tmp_path / "e.mpf")
+    out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--axis", "X1\nM30", "--compensation", "siemens-eec", tmp_path / "e.mpf")
     assert out.returncode == 2 and "not a valid axis name" in out.stderr and not (tmp_path / "e.mpf").exists()
-    good = cli("positioning", tmp_path / "a.csv", "--axis", "Z1", "--compensation", "fanuc-pitch", tmp_path / "f.txt")
+    good = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--axis", "Z1", "--compensation", "fanuc-pitch", tmp_path / "f.txt")
     assert good.returncode == 0, good.stderr
     read_fanuc((tmp_path / "f.txt").read_text())
 
@@ -235,7 +235,7 @@ def test_header_backlash_is_the_iso_mean_reversal_value(tmp_path):
     for seed, reversal in ((0, -0.003), (1, -0.003), (2, 0.002)):
         data, _, res = axis(seed, reversal=reversal, irregular=0.3)
         to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
-        out = cli("positioning", tmp_path / "a.csv", "--compensation", "siemens-eec", tmp_path / "e.mpf", "--axis", "X1")
+        out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--compensation", "siemens-eec", tmp_path / "e.mpf", "--axis", "X1")
         iso = re.search(r"mean reversal value\D*?(-?\d+\.\d{3})", out.stdout).group(1)
         text = (tmp_path / "e.mpf").read_text()
         assert re.search(rf"mean reversal value B = {iso} um", text), (iso, text[:800])
@@ -264,7 +264,7 @@ def test_reference_option_moves_the_zero_and_the_fanuc_reference_point(tmp_path)
     outside the measured travel is refused in one line."""
     data, truth, _ = axis(6, irregular=0.3)
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
-    out = cli("positioning", tmp_path / "a.csv", "--reference", 1000, "--axis", "X1", "--compensation", "siemens-eec", tmp_path / "e.mpf",
+    out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--reference", 1000, "--axis", "X1", "--compensation", "siemens-eec", tmp_path / "e.mpf",
               "--compensation", "fanuc-pitch", tmp_path / "f.txt")
     assert out.returncode == 0, out.stderr
     _, sie = read_siemens((tmp_path / "e.mpf").read_text())
@@ -274,7 +274,7 @@ def test_reference_option_moves_the_zero_and_the_fanuc_reference_point(tmp_path)
     assert "REFERENCE POSITION AT 1000.000000 MM" in ftext and fan["numbers"][-1] == fan["reference_number"] + 1
     after = methods.fit("positioning.iso230_2", remeasure(data, truth, enc, np.random.default_rng(1))).figures
     assert after["E"] <= 0.5 * methods.fit("positioning.iso230_2", data).figures["E"]
-    bad = cli("positioning", tmp_path / "a.csv", "--reference", 1200, "--compensation", "csv", tmp_path / "c.csv")
+    bad = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--reference", 1200, "--compensation", "csv", tmp_path / "c.csv")
     assert bad.returncode == 2 and "must lie within the measured travel" in bad.stderr and not (tmp_path / "c.csv").exists()
 
 

@@ -31,13 +31,13 @@ def axis(seed=4):
 def test_a_coarse_interval_writes_nothing_and_names_one_that_works(tmp_path, interval, why, fmt):
     data, truth, res = axis()
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
-    out = cli("positioning", tmp_path / "a.csv", "--interval", interval, "--axis", "X1", "--compensation", fmt, tmp_path / "t.txt")
+    out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--interval", interval, "--axis", "X1", "--compensation", fmt, tmp_path / "t.txt")
     one_error_line(out, f"--interval {interval} mm is {why}", "or finer", "leave it out")
     assert not (tmp_path / "t.txt").exists()
     ok = float(re.search(r"give --interval (\S+) or finer", out.stderr).group(1))
     assert ok < 1000.0
     # the interval the message names works, and the controller applying it halves the error
-    good = cli("positioning", tmp_path / "a.csv", "--interval", ok, "--axis", "X1", "--compensation", fmt, tmp_path / "t.txt")
+    good = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--interval", ok, "--axis", "X1", "--compensation", fmt, tmp_path / "t.txt")
     assert good.returncode == 0, good.stderr
     before = methods.fit("positioning.iso230_2", data).figures
     encoder, _ = READERS[fmt]((tmp_path / "t.txt").read_text())

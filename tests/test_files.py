@@ -164,7 +164,7 @@ def test_compensation_tables_onto_a_fifo_a_device_or_through_a_symlink(tmp_path)
     fifo = tmp_path / "table.mpf"
     os.mkfifo(fifo)
     for target, kind in ((fifo, "FIFO"), (os.devnull, "character device")):
-        code, _, err = cli("positioning", csv, "--mpe", 0.002, "--axis", "X1", "--compensation", "siemens-eec", target)
+        code, _, err = cli("positioning", csv, "--deviation-unit", "mm", "--mpe", 0.002, "--axis", "X1", "--compensation", "siemens-eec", target)
         assert code == 2 and kind in err and err.count("\n") == 1, err
     assert stat.S_ISFIFO(os.stat(fifo).st_mode) and stat.S_ISCHR(os.stat(os.devnull).st_mode)
     real = tmp_path / "real.csv"
@@ -172,7 +172,7 @@ def test_compensation_tables_onto_a_fifo_a_device_or_through_a_symlink(tmp_path)
     link = tmp_path / "link.csv"
     link.symlink_to(real)
     with umask(0o022):
-        code, _, err = cli("positioning", csv, "--mpe", 0.002, "--compensation", "csv", link,
+        code, _, err = cli("positioning", csv, "--deviation-unit", "mm", "--mpe", 0.002, "--compensation", "csv", link,
                            "--compensation", "fanuc-pitch", tmp_path / "new.txt")
     assert code == 0, err
     assert link.is_symlink() and "compensation" in real.read_text()

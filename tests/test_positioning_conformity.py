@@ -16,7 +16,7 @@ from test_cli_inputs import cli
 
 def axis_file(path, **kw):
     data, _ = axis_test(rng=np.random.default_rng(1), **kw)
-    to_frame(data, actual=False).to_csv(path, index=False)
+    to_frame(data, actual=False).rename(columns={"deviation": "deviation [mm]"}).to_csv(path, index=False)
     return path
 
 

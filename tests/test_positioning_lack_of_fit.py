@@ -77,13 +77,13 @@ def test_a_rejected_model_is_plotted_without_a_band(tmp_path):
 def test_no_table_from_a_rejected_model_unless_asked(tmp_path):
     f = periodic_file(tmp_path / "periodic.csv")
     table = tmp_path / "per.mpf"
-    out = cli("positioning", f, "--compensation", "siemens-eec", table, "--axis", "X1", "--interval", "10")
+    out = cli("positioning", f, "--deviation-unit", "mm", "--compensation", "siemens-eec", table, "--axis", "X1", "--interval", "10")
     one_error_line(out, "rejected by its lack of fit", "2.46 um", "--compensation-from mean", "--compensation-from model")
     assert not table.exists()
-    out = cli("positioning", f, "--compensation", "siemens-eec", table, "--axis", "X1", "--interval", "10",
+    out = cli("positioning", f, "--deviation-unit", "mm", "--compensation", "siemens-eec", table, "--axis", "X1", "--interval", "10",
               "--compensation-from", "mean")
     assert out.returncode == 0 and table.exists() and "WARNING" not in table.read_text()
-    out = cli("positioning", f, "--compensation", "siemens-eec", table, "--axis", "X1", "--interval", "10",
+    out = cli("positioning", f, "--deviation-unit", "mm", "--compensation", "siemens-eec", table, "--axis", "X1", "--interval", "10",
               "--compensation-from", "model")
     assert out.returncode == 0 and "leaves that misfit uncompensated" in out.stderr
     assert table.read_text().splitlines()[1].startswith("; WARNING: the cubic is rejected by its lack of fit")

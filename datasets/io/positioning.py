@@ -179,7 +179,9 @@ def read_positioning(path, *, unit: str | None = None, deviation_unit: str | Non
     :class:`methods.positioning.PositioningData`. Header names are read like every reader's (:func:`parse_name`:
     ``Target (mm)``, ``Deviation [µm]``, ``Run 1 + (um)``); lengths are converted to mm from the header's units,
     else ``unit`` (targets, actual positions; default mm) and ``deviation_unit`` (deviations; default the
-    targets' unit); a header unit contradicting them is an error. ``with_units``: also return the two units.
+    targets' unit); a header unit contradicting them is an error. ``with_units``: also return the two units, the
+    deviations' None when a deviation column's unit is stated neither in the header nor by ``deviation_unit`` (it
+    is then read in ``unit``: a guess no controller table may be written from).
     ``run_directions`` ('up', 'down', 'up,down', 'down,up'): the approach directions of run columns that name none
     (odd runs first); without it such runs are one direction, not given, or refused when they alternate (:func:`_wide_to_long`)."""
     if run_directions is not None and run_directions not in RUN_DIRECTIONS:
@@ -225,7 +227,8 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
         elif u is not None and (role == "deviation" or (role is None and RUN_COLUMN.match(str(c)))):
             deviations[str(c)] = u
     unit = _header_unit(lengths, unit, "--unit", path) or "mm"
-    deviation_unit = _header_unit(deviations, deviation_unit, "--deviation-unit", path) or unit
+    stated = _header_unit(deviations, deviation_unit, "--deviation-unit", path)
+    deviation_unit = stated or unit
     df = df.rename(columns=renamed)
     from methods.units import to_mm
     wide = _wide_to_long(df, str(path), lines, run_directions, to_um=float(to_mm(1.0, deviation_unit)) * 1e3)
@@ -240,4 +243,6 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
         if key in cols:
             df[cols[key]] = _numeric_column(df[cols[key]], key, path, lines)
     data = from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit, direction_given=given)
-    return (data, unit, deviation_unit) if with_units else data
+    # deviations from actual positions are in the positions' unit; a deviation column's unit is stated or not
+    stated = stated if "deviation" in cols else unit
+    return (data, unit, stated) if with_units else data

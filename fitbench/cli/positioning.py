@@ -200,12 +200,23 @@ def run(args) -> int:
         raise CompensationError(f"not writing {', '.join(p for _, p in args.compensation)}: {unit_warnings[0]}; a "
                                 "controller table from them would be wrong by the same factor: give the deviations' "
                                 "unit with --deviation-unit (or --deviation-unit mm to confirm mm)")
+    if args.compensation and args.deviation_unit is None:
+        # a controller applies the table as it is: no plausibility bound tells µm from mm on a good axis (±0.8 µm
+        # read as mm passes any limit a 1 m axis allows), so the deviations' unit must be stated
+        from fitbench.compensation import CompensationError
+        raise CompensationError(f"not writing {', '.join(p for _, p in args.compensation)}: the deviations' unit is "
+                                f"not stated in {args.file} (no unit in the header of its deviation columns); a "
+                                "controller table needs it: give --deviation-unit um (or --deviation-unit mm)")
     from methods.positioning.data import RunOrderNote, swap_directions
     run_order = [w.message for w in read_warnings if issubclass(w.category, RunOrderNote)]
     for w in read_warnings:
         if not issubclass(w.category, RunOrderNote):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     notes = []
+    if args.deviation_unit is None:
+        notes.append(f"the deviation columns name no unit: read as {canonical(args.unit)} (give --deviation-unit um if "
+                     "they are in µm); no compensation table is written without a stated unit")
+        args.deviation_unit = args.unit
     if args.forward_direction is not None and not run_order:
         raise InvalidInputError(f"--forward-direction applies to a wide export whose runs are named Forward/Reverse "
                                 f"(or Hin/Rück); {args.file} names its directions (or has none): drop the option")

@@ -33,7 +33,9 @@ def add_parser(subparsers):
     add_reader_options(p, polar=True)
     p.add_argument("--json", action="store_true", help="print one JSON object (lengths in mm)")
     p.add_argument("--plot", metavar="PNG", help="write the polar plot and the harmonic spectrum")
-    add_tolerance_option(p, "RONt, RONp, RONv, RONq: checked about each reference circle shown")
+    add_tolerance_option(p, "RONt, RONp, RONv, RONq: the verdict is judged about the minimum zone circle (MZCI, the "
+                            "reference of ISO 12181-2 and ISO 1101's tolerance zone) or the one --reference chooses; "
+                            "the other circles' figures are shown for information")
     add_report_option(p)
     add_test_identity_options(p)
     p.set_defaults(func=run)
@@ -55,12 +57,11 @@ def run(args) -> int:
     for w in caught:
         if issubclass(w.category, UndersampledWarning):
             warn(str(w.message))
-    check = verdict({f"{name} {kind.upper()}": r[name] for kind, r in res.references.items() for name in tolerances},
-                    {f"{name} {kind.upper()}": tol for kind in res.references for name, tol in tolerances.items()})
+    check = roundness_verdict(res.references, tolerances, chosen=args.reference != "all")
     if plot_path:
         plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))
     lines = [header_line("roundness", unit, "; centre and radius in mm")]
-    lines += [f"note: {n}" for n in notes] + [report(res, source, axes)] + verdict_lines(check)
+    lines += [f"note: {n}" for n in notes] + [report(res, source, axes)] + roundness_verdict_lines(check)
     if report_path:
         write_report(report_path, f"ISO 12181 roundness{': ' + args.machine if args.machine else ''}",
                      [f"date         {args.date or '-'}", *lines], lambda sub: plot(res, None, title=source, into=sub),
@@ -81,6 +82,46 @@ def run(args) -> int:
         return 0 if res.converged else 1
     print("\n".join(lines))
     return 0 if res.converged else 1
+
+
+#: the reference circle a roundness tolerance is checked with unless the user chooses one: ISO 1101 defines the
+#: roundness tolerance zone as two concentric circles t apart, i.e. the minimum zone, which is also ISO 12181-2's
+#: default reference (the MZCI)
+DEFAULT_VERDICT_REFERENCE = "mzci"
+
+
+def roundness_verdict(references: dict, tolerances: dict, chosen: bool = False) -> dict | None:
+    """PASS/FAIL of the figures about one reference circle (``verdict``'s checks and overall): the one ``--reference``
+    chose (``chosen``), else the MZCI (:data:`DEFAULT_VERDICT_REFERENCE`); with ``reference`` naming it and
+    ``information`` holding the same checks about the other circles shown, which do not decide the verdict. A part
+    whose minimum-zone RONt was 4.708 um for a 5 um tolerance read FAIL overall, because its LSCI RONt (5.051 um)
+    was also checked."""
+    if not tolerances:
+        return None
+    kind = next(iter(references)) if chosen else DEFAULT_VERDICT_REFERENCE
+    r = references[kind]
+    check = verdict({f"{name} {kind.upper()}": r[name] for name in tolerances},
+                    {f"{name} {kind.upper()}": tol for name, tol in tolerances.items()})
+    others = verdict({f"{name} {k.upper()}": o[name] for k, o in references.items() if k != kind for name in tolerances},
+                     {f"{name} {k.upper()}": tol for k in references if k != kind for name, tol in tolerances.items()})
+    check["reference"] = kind
+    check["reference_basis"] = ("chosen with --reference" if chosen else
+                                "minimum zone, the default of ISO 12181-2 and the tolerance zone of ISO 1101")
+    check["information"] = others["checks"] if others else []
+    return check
+
+
+def roundness_verdict_lines(v: dict | None) -> list[str]:
+    """:func:`verdict_lines` naming the reference that decides, then the other circles' checks for information."""
+    if not v:
+        return []
+    lines = verdict_lines(v)
+    lines[0] += f" (about the {v['reference'].upper()}: {v['reference_basis']})"
+    if v["information"]:
+        lines.append("  for information (not part of the verdict):")
+        lines += [f"  {c['figure']:<12} {c['value_mm'] * 1e3:10.3f} µm  tolerance {c['tolerance_mm'] * 1e3:g} µm  "
+                  f"{'within' if c['result'] == 'PASS' else 'beyond'}" for c in v["information"]]
+    return lines
 
 
 def report(res, source: str, axes: tuple = ("x", "y")) -> str:

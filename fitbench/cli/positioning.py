@@ -258,7 +258,20 @@ def run(args) -> int:
         thermal_text = (f"temperature correction (ISO 230-2 nominal differential expansion): material at "
                         f"{temperature:.4g} °C{given_as}, expansion coefficient {alpha:g} µm/(m·K): deviations corrected by "
                         f"{-alpha * (temperature - 20.0):+.4g} µm/m x target position, to 20 °C")
-    res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
+    if data.runs == 1:
+        # ISO 230-2's test of axes over 2000 mm: one approach per direction gives E, M, B, not s, R, A nor the model
+        from methods.positioning.iso230_2 import SINGLE_RUN_WITHOUT
+        res = methods.fit("positioning.iso230_2", data, standard=args.standard)
+        notes.append(f"one run per direction (ISO 230-2's procedure for axes over 2000 mm): E, M and B are evaluated; "
+                     f"{SINGLE_RUN_WITHOUT}, and so does the polynomial model's uncertainty (u(P_i), paper eq. 10): "
+                     "not given")
+        if args.compensation and args.compensation_from != "mean":
+            from fitbench.compensation import CompensationError
+            raise CompensationError(f"not writing {', '.join(p for _, p in args.compensation)}: the polynomial model "
+                                    "needs repeated runs and this test has one run per direction: give "
+                                    "--compensation-from mean (the measured deviations at the targets)")
+    else:
+        res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
     from fitbench.compensation import model_misfit
     misfit = model_misfit(res)
     if misfit:
@@ -325,7 +338,7 @@ def run(args) -> int:
                                  "U_at_targets": None if p["lack_of_fit"]["rejected"] else p["U_at_targets"],
                                  "lack_of_fit": p["lack_of_fit"]}
                              for d, p in res.polynomial.items()}
-        out["u_delta"] = res.extra["u_delta"]
+        out["u_delta"] = res.extra.get("u_delta")
         out["notes"] = notes
         if args.standard.startswith("iso230-2"):
             out["iso230_2_conformity"] = {"meets_minimum": not lacks, "lacks": lacks}

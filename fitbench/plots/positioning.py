@@ -40,7 +40,7 @@ def text(res, degree: int | None = None) -> str:
     ARROW = arrows(f)
     std = f["standard"]
     um = 1e3
-    lines = [f"{TITLES.get(std, std)}: {f['targets']} targets x {f['runs']} runs, {f.get('directions', 'bidirectional')} "
+    lines = [f"{TITLES.get(std, std)}: {f['targets']} targets x {f['runs']} run{'s' if f['runs'] != 1 else ''}, {f.get('directions', 'bidirectional')} "
              "(all values in µm)"]
     if std == "vdi3441":
         lines += [f"  P  (positional uncertainty)        {f['P'] * um:10.3f}",
@@ -138,10 +138,12 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
                     ax.plot(P, arr[:, j] * um, lw=0.5, alpha=0.5, color=colours[d],
                             label=f"runs {ARROW[d]}" if j == 0 else None)
         for d in dirs:
-            x, s = per[f"mean_{d}"], per[f"s_{d}"]
+            x = per[f"mean_{d}"]
             ax.plot(P, x * um, "o-", color=colours[d], ms=4, lw=1.4, label=f"mean {ARROW[d]}")
-            ax.fill_between(P, (x - k * s) * um, (x + k * s) * um, color=colours[d], alpha=0.15,
-                            label=f"±{k:g}s {ARROW[d]}")
+            if f"s_{d}" in per:      # one run per direction (ISO 230-2 over 2000 mm) has no s
+                s = per[f"s_{d}"]
+                ax.fill_between(P, (x - k * s) * um, (x + k * s) * um, color=colours[d], alpha=0.15,
+                                label=f"±{k:g}s {ARROW[d]}")
         if "mean_bidirectional" in per:
             ax.plot(P, per["mean_bidirectional"] * um, "k-", lw=1.2, label="mean bidirectional")
         if figs.get("standard") == "vdi3441":
@@ -152,7 +154,7 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
         ax.text(0.02, 0.98, "\n".join(notes), transform=ax.transAxes, va="top", ha="left", fontsize=9.5,
                 family="monospace", bbox=dict(boxstyle="round", fc="white", ec="0.6", alpha=0.9))
         ax.set_title(f"{TITLES.get(figs.get('standard'), figs.get('standard'))}: {figs['targets']} targets x "
-                     f"{figs['runs']} runs", fontsize=10)
+                     f"{figs['runs']} run{'s' if figs['runs'] != 1 else ''}", fontsize=10)
         grid = np.linspace(P.min(), P.max(), 400)
         rejected = rejected_directions(result.polynomial)
         for d in dirs:
@@ -170,6 +172,8 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
             limit = max(lofs[d]["critical"] for d in rejected)
             axes[1].set_title(f"model REJECTED by its lack of fit:\nχ²/ν {chi} > {limit:.3g}; no U(P) band",
                               fontsize=10, color="tab:red")
+        elif not result.polynomial:
+            axes[1].set_title("no model: its uncertainty needs repeated runs\n(one run per direction)", fontsize=10)
         elif chi:
             axes[1].set_title(f"model: fitted curve and expanded uncertainty U(P)\nlack of fit χ²/ν {chi}: not rejected",
                               fontsize=10)
@@ -178,10 +182,11 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
         for a in axes:
             a.set_xlabel("target position P [mm]")
             a.grid(alpha=0.3)
-            n = len(a.get_legend_handles_labels()[1])     # below the axes: inside, it hid the runs
-            a.legend(fontsize=MIN_FONT_PT, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=(n + 1) // 2,
-                     frameon=False, columnspacing=1.0, handlelength=1.6)
             a.tick_params(labelsize=9)
+            n = len(a.get_legend_handles_labels()[1])     # below the axes: inside, it hid the runs
+            if n:
+                a.legend(fontsize=MIN_FONT_PT, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=(n + 1) // 2,
+                         frameon=False, columnspacing=1.0, handlelength=1.6)
         axes[0].set_ylabel("positional deviation [µm]")
         if title:
             fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)

@@ -145,8 +145,10 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
         piv = sub.pivot(index="target", columns="run", values="dev").reindex(targets)
         for t, row in piv.iterrows():
             count = int(row.notna().sum())
-            if count < 2:
-                raise InvalidInputError(f"{name}: target {t:g} has {count} run(s) in the {d} direction; at least two are needed")
+            # one run per direction is ISO 230-2's procedure for axes over 2000 mm (E, M, B; no s, R, A)
+            if count < 2 and not (count == 1 and piv.shape[1] == 1):
+                raise InvalidInputError(f"{name}: target {t:g} has {count} run(s) in the {d} direction; at least two "
+                                        "are needed (or one run at every target, ISO 230-2's test of axes over 2000 mm)")
         if piv.isna().any().any():
             t = piv.index[piv.isna().any(axis=1)][0]
             raise InvalidInputError(f"{name}: unequal coverage: target {t:g} misses run(s) "

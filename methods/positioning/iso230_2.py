@@ -20,6 +20,8 @@ def figures(data: PositioningData, standard: str = "iso230-2:2014") -> tuple[dic
     E up = max - min of x_i up, E = max - min over both, M = max - min of (x_up + x_down)/2,
     A up = max(x_up + k s_up) - min(x_up - k s_up), A over both directions."""
     k = 3.0 if standard == "iso230-2:1988" else 2.0
+    if data.runs == 1:
+        return _single_run(data, standard, k)
     if len(data.directions) == 1:
         return _unidirectional(data, standard, k)
     xu, xd = data.up.mean(axis=1), data.down.mean(axis=1)
@@ -65,6 +67,34 @@ def _unidirectional(data: PositioningData, standard: str, k: float) -> tuple[dic
     label = d if getattr(data, "direction_given", True) else "direction not given"
     fig = {f"A_{d}": A, f"E_{d}": E, f"R_{d}": R, "A": A, "E": E, "R": R, "k": k, "standard": standard,
            "targets": len(data.targets), "runs": data.runs, "directions": f"unidirectional ({label})"}
+    return fig, per
+
+
+#: what one run per direction cannot give: the estimator s_i needs at least two approaches (ISO 230-2 sec. 2.15)
+SINGLE_RUN_WITHOUT = "A and R need the estimator s of repeated approaches (ISO 230-2: at least two per target)"
+
+
+def _single_run(data: PositioningData, standard: str, k: float) -> tuple[dict, dict]:
+    """One run per direction, ISO 230-2's test of linear axes over 2000 mm: the mean deviations are that run's
+    deviations, so E (per direction and bidirectional), M, B_i, B and B mean follow by their definitions; s, R and A
+    need repeated approaches and are absent (:data:`SINGLE_RUN_WITHOUT`)."""
+    if standard == "vdi3441":
+        raise InvalidInputError("VDI/DGQ 3441 needs the scatter of repeated runs; this test has one run per direction")
+    per = {"targets": data.targets}
+    fig = {"k": k, "standard": standard, "targets": len(data.targets), "runs": 1, "not_evaluated": SINGLE_RUN_WITHOUT}
+    for d in data.directions:
+        x = getattr(data, d)[:, 0]
+        per[f"mean_{d}"] = x
+        fig[f"E_{d}"] = float(np.ptp(x))
+    if len(data.directions) == 2:
+        xu, xd = per["mean_up"], per["mean_down"]
+        per.update(B_i=xu - xd, mean_bidirectional=0.5 * (xu + xd))
+        fig.update(E=float(max(xu.max(), xd.max()) - min(xu.min(), xd.min())), M=float(np.ptp(per["mean_bidirectional"])),
+                   B=float(np.max(np.abs(per["B_i"]))), B_mean=float(np.mean(per["B_i"])), directions="bidirectional")
+    else:
+        d = data.directions[0]
+        label = d if getattr(data, "direction_given", True) else "direction not given"
+        fig.update(E=fig[f"E_{d}"], directions=f"unidirectional ({label})")
     return fig, per
 
 

@@ -127,6 +127,9 @@ def evaluate_band(poly: dict, P, k=2.0):
 
 
 def _model(data: PositioningData, degree, u_delta, weighting, k):
+    if data.runs < 2:
+        raise InvalidInputError("the polynomial model needs repeated runs: u(P_i) (paper eq. 10) is the scatter of the "
+                                "approaches to each target, and this test has one run per direction")
     fig, per = figures(data)
     poly, residuals = {}, []
     for d in data.directions:

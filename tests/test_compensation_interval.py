@@ -89,3 +89,28 @@ def test_a_default_table_that_misses_the_means_is_warned_about():
         compensation_table(methods.fit("positioning.gls_polynomial", data), data)
         regular, _ = axis_test(rng=np.random.default_rng(0))
         compensation_table(methods.fit("positioning.iso230_2", regular), regular, source="mean")
+
+
+def test_the_default_table_of_irregular_targets_fits_the_sinumerik(tmp_path):
+    """ISO 230-2's irregular targets make the smallest spacing (the default step) far finer than the mean spacing:
+    21 targets on 1000 mm gave 272 points and the default siemens-eec table was refused (200 points). The default
+    is now the finest step that fits, said in the output, and the simulated controller halves M with it."""
+    from datasets.positioning import pitch_curve
+    from methods.positioning.data import PositioningData
+    rng = np.random.default_rng(21)
+    T = np.sort(np.r_[0, 1000, rng.uniform(20, 980, 19)]).round(1)         # the review's irregular targets
+    assert np.min(np.diff(T)) < 1000.0 / 199                                 # the smallest spacing gives > 200 points
+    truth = {"up": lambda x: pitch_curve(np.asarray(x) / 1000.0, KW["pitch"]) + KW["reversal"] / 2,
+             "down": lambda x: pitch_curve(np.asarray(x) / 1000.0, KW["pitch"]) - KW["reversal"] / 2, "delta": 0.0}
+    data = PositioningData(targets=T, up=truth["up"](T)[:, None] + rng.normal(0, KW["repeatability"], (21, 5)),
+                           down=truth["down"](T)[:, None] + rng.normal(0, KW["repeatability"], (21, 5)), unit="mm")
+    to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
+    out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--axis", "X1",
+              "--compensation", "siemens-eec", tmp_path / "t.mpf", "--compensation", "fanuc-pitch", tmp_path / "t.tap")
+    assert out.returncode == 0, out.stderr
+    step = float(re.search(r"every (\S+) mm, the finest step whose table fits siemens-eec's 200 points", out.stdout).group(1))
+    encoder, info = READERS["siemens-eec"]((tmp_path / "t.mpf").read_text())
+    assert len(info["values"]) <= 200 and abs(step * 199 - 1000.0) < 1.0           # 200 points, no coarser than needed
+    before = methods.fit("positioning.iso230_2", data).figures
+    after = methods.fit("positioning.iso230_2", remeasure(data, truth, encoder, np.random.default_rng(9))).figures
+    assert after["M"] <= 0.5 * before["M"], (before["M"], after["M"])

@@ -350,5 +350,6 @@ def run(args) -> int:
     if comp is not None:
         for fmt, path in args.compensation:
             print(f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
-                  f"to {comp.position_mm.iloc[-1]:g} mm, from the {comp.attrs['source']}) written to {path}")
+                  f"to {comp.position_mm.iloc[-1]:g} mm, from the {comp.attrs['source']}) written to {path}"
+                  + (f": {comp.attrs['chosen']}" if comp.attrs.get("chosen") else ""))
     return 0

@@ -82,7 +82,11 @@ class MethodSpec(MethodInfo):
         :class:`ResultContractError` (:func:`methods.check_result`). Built-in methods are held to the same
         contract by the test suite (every point-fitting built-in on a full circle and a short arc,
         tests/test_result_gate.py) and every benchmark row is gated by the engine; checking each API call again
-        would cost passes over the points (at 10^5 points, four times the algebraic fit itself)."""
+        would cost passes over the points (at 10^5 points, four times the algebraic fit itself). The parameters are
+        checked as a study's are (:meth:`check_params`: ``max_iter=2.5`` or ``xtol="1e-3"`` raise
+        :class:`InvalidInputError`, never a TypeError from inside the method or a silently changed fit)."""
+        if params:
+            self.check_params(params)
         return _run(self, points, params, gate=self.id not in BUILTIN_IDS)
 
     @property
@@ -96,8 +100,14 @@ class MethodSpec(MethodInfo):
         return _run(self, points, params)
 
 
+def _is_integer(v) -> bool:
+    """A Python or NumPy integer, not a bool (``True`` is no iteration count)."""
+    return isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+
+
 def _is_real(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
+    """A Python or NumPy integer or float, not a bool."""
+    return _is_integer(v) or isinstance(v, (float, np.floating))
 
 
 def _positive(v):
@@ -120,13 +130,23 @@ PARAM_CONVENTIONS: list[tuple[Callable[[str], bool], Callable]] = [
 def check_param(name: str, value, default, check: Callable | None = None) -> str | None:
     """The problem with ``value`` for a parameter whose default is ``default`` (None when fine): the value
     must have the default's type (bool, int, float accepting ints, str; a None default accepts anything),
-    be finite when numeric, and pass ``check(value) -> problem | None`` (declared at :func:`register`)
-    or the name convention of :data:`PARAM_CONVENTIONS`."""
+    be finite when numeric (NumPy's integer and float scalars count as int and float, a bool as neither), and
+    pass ``check(value) -> problem | None`` (declared at :func:`register`) or the name convention of
+    :data:`PARAM_CONVENTIONS`. A declared check speaks first, in the method's words, and alone on ``None`` (which
+    may mean "off": roundness.iso12181's ``cutoff_upr=None``, no filter)."""
+    judged = False
+    if check is not None:
+        try:
+            problem, judged = check(value), True
+        except (TypeError, ValueError):   # a check written for values of the default's type: the type check says it
+            problem = None
+        if problem or value is None:
+            return problem
     if isinstance(default, bool):
         if not isinstance(value, bool):
             return f"must be true or false (the default is {default!r})"
     elif isinstance(default, int):
-        if isinstance(value, bool) or not isinstance(value, int):
+        if not _is_integer(value):
             return f"must be an integer (the default is {default!r})"
     elif isinstance(default, float):
         if not _is_real(value):
@@ -135,7 +155,7 @@ def check_param(name: str, value, default, check: Callable | None = None) -> str
             return "must be finite"
     elif isinstance(default, str) and not isinstance(value, str):
         return f"must be a string (the default is {default!r})"
-    if value is None:
+    if value is None or judged:
         return None
     if check is None:
         check = next((c for match, c in PARAM_CONVENTIONS if match(name)), None)

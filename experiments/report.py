@@ -72,6 +72,8 @@ def _reproduce(names: list[str], known: dict, quick: bool, folder_arg: str) -> s
     the report holds just them in their folder, else one per study: a known study by name, a user's study by its
     TOML file (named after the study; ``meta.json`` records the config it ran)."""
     from experiments.render.page import md_escape
+    if not names:   # every study of the folder is broken or unfinished: no command made what is shown
+        return "no study in it is finished, so none can be reproduced from it (each study below says why)"
     q, out = (" --quick" if quick else ""), (f" --out{folder_arg}" if folder_arg else "")
     defaults = {n for n, c in known.items() if c.get("default")}
     every_default = bool(defaults) and defaults <= set(names)
@@ -80,9 +82,10 @@ def _reproduce(names: list[str], known: dict, quick: bool, folder_arg: str) -> s
     if rest:
         commands.append(f"`python -m experiments.run {' '.join(n if n in known else n + '.toml' for n in rest)}{q}{out}`")
     own = [n for n in names if n not in known]
-    note = (f" ({', '.join(f'{n}.toml' for n in own)}: the study's TOML file, wherever it is; the config it ran "
-            f"is recorded in {'its' if len(own) == 1 else 'each'} `meta.json`)") if own else ""
-    return f"reproduce {'it' if len(names) == 1 else 'them'} with " + " and ".join(commands) + md_escape(note)
+    # the files' names are user text (escaped); `meta.json` is the builder's own code span
+    note = (f" ({md_escape(', '.join(f'{n}.toml' for n in own))}: the study's TOML file, wherever it is; the config "
+            f"it ran is recorded in {'its' if len(own) == 1 else 'each'} `meta.json`)") if own else ""
+    return f"reproduce {'it' if len(names) == 1 else 'them'} with " + " and ".join(commands) + note
 
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -629,6 +632,17 @@ def main(argv=None) -> int:
         args.out = default_out(args.results)
     if not args.results.is_dir():
         print(f"experiments.report: error: no results folder {args.results}; run python -m experiments.run first",
+              file=sys.stderr)
+        return 2
+    try:
+        present = any(is_study_folder(p) for p in args.results.iterdir())
+    except OSError as exc:
+        print(f"experiments.report: error: cannot read the results folder {args.results}: "
+              f"{exc.strerror or exc}", file=sys.stderr)
+        return 2
+    if not present:   # a typo'd folder (results/quick/paper): no report of nothing, exit 0
+        print(f"experiments.report: error: no study in {args.results} (no folder holding a study's meta.json, "
+              f"results.csv or rows.sqlite); give --results the folder python -m experiments.run wrote (its --out)",
               file=sys.stderr)
         return 2
     build(args.results, args.out)

@@ -268,8 +268,9 @@ def test_the_report_goes_where_experiments_run_puts_it(tmp_path, monkeypatch):
     from experiments import report
     from experiments.run import main as run_main
     monkeypatch.chdir(tmp_path)
-    for folder in ("mine", "results", "results/quick"):
-        (tmp_path / folder).mkdir(parents=True, exist_ok=True)
+    for folder in ("mine", "results", "results/quick"):   # each holds a study (an unfinished one: shown as such)
+        (tmp_path / folder / "unfinished").mkdir(parents=True, exist_ok=True)
+        (tmp_path / folder / "unfinished" / "rows.sqlite").write_bytes(b"")
     assert report.main(["--results", "mine"]) == 0
     assert (tmp_path / "mine" / "paper" / "report.md").is_file() and not (tmp_path / "paper").exists()
     assert report.main(["--results", str(tmp_path / "results" / "quick")]) == 0

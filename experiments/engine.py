@@ -42,6 +42,7 @@ from experiments.rows import RERUN_STATUSES, raise_if_signalled, row_from_json, 
 from experiments.rows import ENVIRONMENT_STATUSES, base_row, fit_row, load_data, note_signal, task_data  # noqa: F401
 from experiments.store import RowStore
 from methods import InvalidInputError
+from methods.files import check_regular
 
 ENGINE_VERSION = 2
 REPO = Path(__file__).resolve().parents[1]
@@ -96,8 +97,12 @@ def expand_datasets(cfg: dict, where: str) -> list[dict]:
             if not isinstance(entry["file"], str) or not entry["file"]:
                 raise ConfigError(f"{here}: file must be a path (relative to the TOML), got {entry['file']!r}")
             path = (base_dir / entry["file"]).resolve()
-            if not path.is_file():
+            if not path.exists():
                 raise ConfigError(f"{here}: no data file {path} (file = {entry['file']!r} is relative to the TOML)")
+            try:   # a device, FIFO or folder: said so (not "no data file"), without opening it
+                check_regular(path)
+            except InvalidInputError as exc:
+                raise ConfigError(f"{here}: {exc}") from None
             truth = entry.get("truth")
             if truth is not None and not isinstance(truth, dict):
                 raise ConfigError(f"{here}: truth must be a table (e.g. {{ center = [0, 0], radius = 1 }})")

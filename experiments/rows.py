@@ -11,6 +11,7 @@ import contextlib
 import gc
 import json
 import math
+import os
 import signal
 import threading
 import time
@@ -131,13 +132,27 @@ def fit_row(task: dict, points, truth) -> dict:
 def _fitted(task: dict, points):
     """(the result of the task's method on ``points``, None), or (None, its row) when the method raised: 'skipped'
     for an input it refuses, 'error' for any other exception (a method's bug: recorded, retried on the next run)."""
+    pid = _getpid()
     try:
         res = methods.get(task["method"]).unchecked(points, **task["params"])  # gated by _measured_row
     except InvalidInputError as exc:
         return None, {**base_row(task), "status": "skipped", "message": str(exc)}
     except Exception as exc:
         return None, {**base_row(task), "status": "error", "message": exception_text(exc)}
+    finally:
+        end_if_forked(pid)
     return res, None
+
+
+_getpid = os.getpid
+
+
+def end_if_forked(pid: int) -> None:
+    """End this process at once if it is not process ``pid``: a method (or a study's code) that forked and returned
+    in the child. Only the process a chunk was given to makes its rows; the child would run on as a second worker on
+    its parent's pipe, and its rows would be stored in place of others (a duplicated row, a missing one)."""
+    if _getpid() != pid:
+        os._exit(0)
 
 
 def _measured_row(task: dict, res, points, truth) -> dict:
@@ -310,9 +325,13 @@ def run_task(task: dict, row_timeout: float | None = None) -> dict:
     runs longer than ``row_timeout`` seconds is ``timeout``; one that raises SystemExit or
     KeyboardInterrupt (not the run's own interrupt) is ``crashed``; a kernel or module that cannot be
     loaded makes it ``unavailable``."""
+    pid = _getpid()
     try:
         with (_time_limit(row_timeout) if row_timeout else _NO_LIMIT):
-            row = study_of(task["kind"]).execute(task)  # the generic fit unless the study kind has its own rows
+            try:
+                row = study_of(task["kind"]).execute(task)  # the generic fit unless the study kind has its own rows
+            finally:
+                end_if_forked(pid)
     except RowTimeout:
         row = failed_row(task, "timeout", f"the row ran longer than its limit of {row_timeout:g} s")
     except BaseException as exc:

@@ -131,3 +131,47 @@ def test_the_kernel_choice_follows_os_environ_in_process(monkeypatch):
     monkeypatch.setenv("FITBENCH_KERNELS", "cuda")
     with pytest.raises(ValueError, match="FITBENCH_KERNELS='cuda' is not one of"):
         _frame.point_kernels()
+
+
+FORKER = '''
+import os, sys
+import numpy as np
+import methods
+from methods.results import circle_result
+from experiments import config, rows
+from experiments.studies import study_of
+
+
+@methods.register("circle.test_forker", kind="closed form", summary="forks and returns in both processes",
+                  reference="test")
+def forker(points):
+    child = os.fork() == 0
+    c = points.mean(axis=0)
+    r = np.hypot(*(points - c).T).mean() * (2.0 if child else 1.0)
+    return circle_result(points, c, r, converged=True, message="child" if child else "parent")
+
+
+cfg = config.load(sys.argv[1])
+tasks = list(study_of(cfg["kind"]).prepared_tasks(cfg))
+out = rows.run_chunk(tasks)
+print("rows", os.getpid(), len(out["columns"]["row"]), sorted(set(r.split('"message":"')[1].split('"')[0][:6]
+                                                                   for r in out["columns"]["row"])), flush=True)
+'''
+
+
+def test_a_method_that_forks_and_returns_in_the_child_leaves_one_process_making_rows(tmp_path):
+    """A method that forks and returns in both processes (a library that forgets to end its child): the child ends
+    where the method returns, so only the process the chunk was given to makes rows (the child ran on as a second
+    worker and its rows, of twice the radius, were stored in place of others)."""
+    from conftest import run_python
+    study = tmp_path / "fork.toml"
+    study.write_text('name = "fork"\ntitle = "fork"\nkind = "grid"\nseed = 1\nrepetitions = 3\n'
+                     '[[datasets]]\ngenerator = "circle"\nparams = { radius = 5.0, noise = 0.01, n = 20 }\n'
+                     '[[methods]]\nid = "circle.test_forker"\n[[methods]]\nid = "circle.kasa"\n', encoding="utf-8")
+    script = tmp_path / "forker.py"
+    script.write_text(FORKER, encoding="utf-8")
+    out = run_python(script, study, timeout=120)
+    assert out.returncode == 0, out.stderr
+    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("rows ")]
+    assert len(lines) == 1, out.stdout  # one process made the rows: the children ended where the method returned
+    assert lines[0].split()[2] == "6" and "child" not in lines[0] and "parent" in lines[0]

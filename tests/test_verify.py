@@ -603,3 +603,23 @@ def test_the_report_of_a_users_study_names_no_folder_of_this_machine_its_own_com
     section = md.split("(`vuser`)")[1]
     assert "**Changed since the compared results.**" in section and "not a reproducibility check" in section
     assert "differ beyond the declared tolerances" not in md
+
+
+def test_a_helper_module_among_the_study_kinds_does_not_stop_verify(committed, tmp_path, capsys, monkeypatch):
+    """A module of experiments/studies/ that is not a study (a helper of one kind, without the leading underscore that
+    keeps it out of the kinds) stopped verify of every study; it is now no kind, and loading it as one says how to
+    name a helper."""
+    import sys
+    import types
+
+    from experiments import studies
+    kinds = studies.kinds()
+    helper = types.ModuleType("experiments.studies.zz_helper")
+    helper.V = 5.0
+    monkeypatch.setitem(sys.modules, "experiments.studies.zz_helper", helper)
+    monkeypatch.setattr(studies, "kinds", lambda: [*kinds, "zz_helper"])
+    monkeypatch.setattr(studies, "_TOLERANCES", {})
+    fresh = copy_run(committed, tmp_path)
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 0, capsys.readouterr()
+    with pytest.raises(studies.StudyKindError, match="leading underscore"):
+        studies.study_of("zz_helper")

@@ -40,7 +40,8 @@ def study_of(kind: str):
         why = (f"it has module-level {', '.join(old)}: a study is a class, class "
                f"{''.join(w.title() for w in kind.split('_'))}Study(experiments.study.Study), with these as its "
                "methods and attributes (docs/experiments.md)" if old and not classes
-               else f"it defines {len(classes)} (one module, one study)")
+               else f"it defines {len(classes)} (one module, one study; a helper module of the studies is named "
+                    f"with a leading underscore, _{kind}.py, and is no kind)")
         raise StudyKindError(f"kind: experiments/studies/{kind}.py must define one subclass of "
                              f"experiments.study.Study; {why}")
     study = classes[0]()
@@ -59,11 +60,17 @@ _TOLERANCES: dict = {}
 
 def tolerances() -> dict:
     """{column: Tolerance} of the columns the study kinds' own rows add (each class's ``tolerances``), for
-    ``python -m experiments.verify``; a column two kinds declare differently is an error."""
+    ``python -m experiments.verify``; a column two kinds declare differently is an error. A module of this package
+    that is not a study (a helper without a leading underscore) declares nothing: it does not stop the comparison of
+    the studies (a study of its kind says what is wrong with it when it is loaded)."""
     if not _TOLERANCES:
         merged: dict = {}
         for kind in kinds():
-            for column, tol in study_of(kind).tolerances.items():
+            try:
+                study = study_of(kind)
+            except StudyKindError:
+                continue
+            for column, tol in study.tolerances.items():
                 if column in merged and merged[column] != tol:
                     raise ValueError(f"the studies declare the column {column!r} with two tolerances")
                 merged[column] = tol

@@ -18,6 +18,14 @@ def test_list_one_line_per_method():
     assert any(l.startswith("circle.gauss_newton") and "iterative" in l and "eq." in l for l in lines)
 
 
+def test_list_of_a_family_that_does_not_exist_says_so():
+    out = run("list", "--family", "nosuch")
+    assert out.returncode == 2 and out.stdout == ""
+    assert out.stderr.strip().splitlines() == [out.stderr.strip()] and "no family 'nosuch'" in out.stderr
+    assert "circle, ellipse" in out.stderr and "Traceback" not in out.stderr
+    assert run("list", "--family", "ellipse").stdout.startswith("ellipse.")
+
+
 def test_fit_published_set_json():
     out = run("fit", "circle.gauss_newton", "roundness_set2", "--json")
     assert out.returncode == 0, out.stderr

@@ -18,6 +18,10 @@ def run(args) -> int:
     from methods import describe_methods  # the built-in methods without importing their families
 
     specs = describe_methods(args.family)
+    if not specs and args.family is not None:
+        from methods import InvalidInputError
+        families = sorted({s.family for s in describe_methods()})
+        raise InvalidInputError(f"no family {args.family!r}; the families: {', '.join(families)}")
     if args.json:
         cli_options.print_json(json.dumps([{"id": s.id, "family": s.family, "kind": s.kind, "summary": s.summary,
                            "reference": s.reference, "defaults": {k: jsonable(v) for k, v in s.defaults.items()}}

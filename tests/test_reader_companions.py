@@ -80,6 +80,14 @@ def test_unplaceable_numeric_columns_are_refused_and_columns_chooses(tmp_path):
     one_error_line(out, "'Xq', 'Yq'", "--columns")
 
 
+def test_point_numbers_times_and_angles_beside_x_y_are_not_unread_coordinates(tmp_path):
+    nom, act = trace(1)
+    path = tmp_path / "log.csv"
+    path.write_text("Point;Time [s];X [mm];Y [mm];Angle [deg]\n" + "\n".join(
+        f"{k};{0.01 * k:.2f};{a:.7f};{b:.7f};{np.degrees(np.arctan2(b, a)):.4f}" for k, (a, b) in enumerate(act)) + "\n")
+    np.testing.assert_allclose(read_points(path), act, atol=1e-9)
+
+
 def test_a_deviation_column_without_unit_is_refused(tmp_path):
     path, _ = kgm_file(tmp_path / "nounit.csv", dev_unit="")
     with pytest.raises(DataFileError, match=r"the deviation column 'dX' names no unit"):

@@ -42,7 +42,8 @@ class Resolved:
     note: str | None = None       # which columns were read, when the header held more than the pair
 
 
-#: header keys of columns that say nothing about the points (a point number, a time stamp): never a coordinate
+#: header keys of columns that say nothing more about the points (a point number, a time stamp; an angle column
+#: beside x, y is the points' own polar angle): never a coordinate, never refused as an unread column
 ANCILLARY = {"point", "pt", "pnt", "no", "nr", "number", "n", "index", "idx", "id", "i", "sample", "samples", "punkt",
              "time", "t", "timestamp", "zeit", "line", "row"}
 _AXIS = "(x|y|z)"
@@ -181,7 +182,7 @@ def _pair(layout: Layout, axes: tuple, d_col) -> Resolved | None:
                             f"of one kind (nominal + deviation, or actual); give --columns NAME NAME")
     used = set(idx) | set(offsets or ()) | {k for k in base + act + dev if k is not None}
     extra = [k for k, (key, _) in enumerate(layout.fields())
-             if k not in used and k != d_col and key not in ANCILLARY and h[k].strip()
+             if k not in used and k != d_col and key not in ANCILLARY and ROLES.get(key) != "angle" and h[k].strip()
              and not (kinds[k] is not None and kinds[k][0] not in axes) and _numeric_column(layout, k)]
     if extra:
         raise DataFileError(f"{name}: besides {h[idx[0]]!r}, {h[idx[1]]!r} the header has the numeric column(s) "

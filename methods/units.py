@@ -60,10 +60,12 @@ def likely_unit(size_mm: float, expected_mm: float) -> str | None:
 
 def warn_implausible(what: str, size_mm: float, limit_mm: float, declared: str, typical_mm: float | None = None,
                      option: str = "--unit"):
-    """Warn (``UnitWarning``) when ``size_mm`` exceeds ``limit_mm``, naming the likely unit and the command-line
+    """Warn (``UnitWarning``) when ``size_mm`` exceeds ``limit_mm``, naming the likely unit of the file's numbers
+    (``size_mm`` back in the ``declared`` unit, :func:`likely_unit`) and the command-line
     ``option`` that declares it (``--deviation-unit`` when the values are deviations read apart from the targets)."""
     if np.isfinite(size_mm) and size_mm > limit_mm:
-        guess = likely_unit(size_mm, typical_mm if typical_mm else limit_mm / 10)
+        # the unit the file's numbers (size_mm in the declared unit) are likely in: 236 mm read as µm is nm
+        guess = likely_unit(size_mm / mm_per(declared), typical_mm if typical_mm else limit_mm / 10)
         hint = f"; is the file in {guess}? ({option} {guess.replace('µ', 'u')})" if guess else ""
         warnings.warn(f"{what} up to {size_mm:.6g} mm (read as {canonical(declared)}) are implausible{hint}",
                       UnitWarning, stacklevel=3)

@@ -272,7 +272,9 @@ def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: boo
         warn(f"{source}: {flat}")
     if points.ndim == 2 and points.shape[0] and np.isfinite(points).all():
         if polar_alone:
-            span = float(np.ptp(np.hypot(*(points - points.mean(axis=0)).T)))
+            # the span of the deviations themselves: their radii about the centre they were placed about (0, 0),
+            # not about the points' centroid, which unequal angle steps move metres off a 236 km circle
+            span = float(np.ptp(np.hypot(*points.T)))
             warn_implausible("radial deviations spanning", span, 10.0, unit, typical_mm=0.01)
         else:
             half = float(np.max(np.ptp(points, axis=0))) / 2

@@ -57,6 +57,11 @@ def run(args) -> int:
     for w in caught:
         if issubclass(w.category, UndersampledWarning):
             warn(str(w.message))
+    offcentre = None
+    if args.nominal_radius is None and any("without a nominal radius" in n for n in notes):
+        offcentre = limacon_problem(float(np.hypot(*res.raw_lsci["center"])), res.form_error)
+        if offcentre:
+            warn(offcentre)
     check = roundness_verdict(res.references, tolerances, chosen=args.reference != "all")
     if plot_path:
         plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))
@@ -77,11 +82,39 @@ def run(args) -> int:
                         "cutoff_upr": "undulations per revolution",
                         "spectrum.amplitude": "mm", "spectrum.phase": "rad"})
         d.pop("extra", None)
+        if offcentre:
+            d["warnings"] = [*d.get("warnings", []), offcentre]
         d["details"] = {"conditions": test_conditions(args, files=[source])}
         cli_options.print_json(json.dumps(d))
         return 0 if res.converged else 1
     print("\n".join(lines))
     return 0 if res.converged else 1
+
+
+#: deviations alone are evaluated about a circle of unknown radius R (the limaçon approximation, ISO 12181-1:
+#: valid for an eccentricity e small against R): the radius from the spindle axis of a circle e off it is
+#: R + e cos(θ - φ) - e² sin²(θ - φ) / (2R) + ..., and the limaçon drops that last term, a second harmonic of
+#: peak-to-valley e² / (2R). An eccentricity whose term exceeds LIMACON_SHARE of RONt for some part radius above
+#: LIMACON_MIN_RADIUS_MM is warned about.
+LIMACON_SHARE = 0.05
+LIMACON_MIN_RADIUS_MM = 1.0
+
+
+def limacon_problem(eccentricity_mm: float, form_error_mm: float) -> str | None:
+    """What the limaçon evaluation of deviations alone may get wrong for a profile ``eccentricity_mm`` off the
+    centre it was measured about (the least-squares centre: the first harmonic of the deviations), or None when
+    e² / (2R) stays below :data:`LIMACON_SHARE` of RONt for every radius R above :data:`LIMACON_MIN_RADIUS_MM`."""
+    e, form = float(eccentricity_mm), float(form_error_mm)
+    if not (np.isfinite(e) and np.isfinite(form) and form > 0):
+        return None
+    below = e ** 2 / (2.0 * LIMACON_SHARE * form)    # the radius below which e²/(2R) > LIMACON_SHARE x RONt
+    if not below > LIMACON_MIN_RADIUS_MM:
+        return None
+    return (f"the profile is {e * 1e3:.4g} µm off centre ({e / form:.3g} x RONt {form * 1e3:.4g} µm; the first "
+            f"harmonic of the deviations): evaluated without the part's radius R (the limaçon approximation), the "
+            f"form figures carry a false 2 UPR term of up to e²/(2R) = {e * e * 1e3 / 2:.4g} µm·mm / R, more than "
+            f"{LIMACON_SHARE * 100:g} % of RONt for R below {below:.4g} mm; give --nominal-radius R_MM (the radius the "
+            "deviations are about) or centre the part")
 
 
 #: the reference circle a roundness tolerance is checked with unless the user chooses one: ISO 1101 defines the

@@ -473,7 +473,7 @@ def model_misfit(res) -> str | None:
 
 def write_tables(res, data, requests, *, interval=None, source="model", axis=None, write, reference_mm=None,
                  unit_confirmed: bool = False, unit_option: str = "--deviation-unit", on_confirmed=None,
-                 model_confirmed: bool = False, axis_hint: str = ""):
+                 model_confirmed: bool = False, axis_hint: str = "", fanuc_unit_mm: float = 0.001):
     """Build the table once and write it in every requested ``(format, path)`` with ``write(path, text)``;
     every format is checked (name, axis, limits) before any file is written. A table implausible for a
     machine axis (:func:`magnitude_problem`: µm read as mm) is refused unless ``unit_confirmed`` (the
@@ -482,7 +482,8 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     misfit out of the machine) is refused unless ``model_confirmed`` (the model chosen explicitly); then
     ``on_confirmed`` is told and every file's header says so. ``axis`` None: a SINUMERIK table (whose entries name
     the machine axis they compensate) is refused, naming ``axis_hint`` (what the file says); the other formats say
-    'axis not given' in their header. Returns the table."""
+    'axis not given' in their header. ``fanuc_unit_mm``: the FANUC axis' detection unit and least input increment
+    (0.001 mm IS-B, 0.0001 mm IS-C). Returns the table."""
     for fmt, _ in requests:
         if fmt not in WRITERS:
             raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
@@ -514,7 +515,9 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     if problem and on_confirmed is not None:
         on_confirmed(f"the compensation table holds {problem}, written as {unit_option} confirms the unit: "
                      "check it before loading it")
-    texts = [(path, WRITERS[fmt](table, axis=axis)) for fmt, path in requests]
+    fanuc = {"detection_unit_mm": fanuc_unit_mm, "increment_mm": fanuc_unit_mm}
+    texts = [(path, WRITERS[fmt](table, axis=axis, **(fanuc if fmt == "fanuc-pitch" else {})))
+             for fmt, path in requests]
     for path, text in texts:
         write(path, text)
     return table

@@ -150,7 +150,7 @@ def test_reader_accepts_and_refuses(tmp_path):
         "missing_run": ([lines[0]] + [l for l in lines[1:] if not l.startswith("0.0,+,2,")], "target 0 misses run"),
         "one_run": ([lines[0]] + [l for l in lines[1:] if not (l.startswith("100.0,-,") and not l.startswith("100.0,-,1,"))], "target 100 has 1 run"),
         "direction": ([lines[0], lines[1].replace(",+,", ",sideways,")] + lines[2:], "direction 'sideways'"),
-        "columns": (["target,dir,run,actual"] + lines[1:], "missing column 'direction'"),
+        "columns": (["target,way,run,actual"] + lines[1:], "missing column 'direction'"),
     }
     for name, (content, match) in cases.items():
         f = tmp_path / f"{name}.csv"

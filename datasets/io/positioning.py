@@ -22,6 +22,13 @@ from methods.units import canonical
 
 TARGET_NAMES = ("target", "position", "target position", "target [mm]", "target (mm)", "target position (mm)",
                 "target position [mm]", "position [mm]", "position (mm)", "nominal", "soll", "sollposition")
+#: other names of the long table's columns in real exports (matched like every header name, :func:`parse_name`:
+#: case, spaces and the unit ignored): ``Actual position [mm]``, ``Error (µm)`` (laser software's word), ``Dir``
+ROLE_NAMES = {"actual": ("actual", "actual position", "measured position", "measured", "ist", "istposition"),
+              "deviation": ("deviation", "error", "positional deviation", "position error", "positioning error",
+                            "abweichung", "fehler"),
+              "direction": ("direction", "dir", "richtung"),
+              "run": ("run", "run no", "run number", "lauf")}
 RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[]*"
                   r"(\+|-|up|down|u|d|fwd|rev|forward|reverse|pos|neg|↑|↓|hin|rück|rueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
                   re.IGNORECASE)
@@ -92,7 +99,7 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
                     "directions in the headers: Run 1 +, Run 1 -)")
         else:
             text = (f"columns {named} ... name the run order, not the axis direction; the targets are listed "
-                    f"{'increasing' if forward == '+' else 'decreasing'} ({targets[0]:g} to {targets[-1]:g} in the file's "
+                    f"{'increasing' if forward == '+' else 'decreasing'} ({targets[0] + 0.0:g} to {targets[-1] + 0.0:g} in the file's "
                     f"unit), so the forward runs are read as approaches in the {'+ (↑)' if forward == '+' else '− (↓)'} direction and "
                     f"the reverse runs as {'− (↓)' if forward == '+' else '+ (↑)'} (--forward-direction "
                     f"{'-' if forward == '+' else '+'} if the forward runs moved the other way)")
@@ -204,6 +211,30 @@ def _add_preamble_hint(exc: InvalidInputError, path, skip_rows: int) -> None:
             exc.args = (f"{exc.args[0]}{hint}",)
 
 
+def _trailer(df, lines, empty, path):
+    """The table without the lines laser software writes after it (``Environment compensation: automatic``, ``End
+    of data``): rows from the first incomplete one on are dropped, with a warning naming them, when a blank line
+    separates them from the table and none of them is a complete row; otherwise the first incomplete row is refused
+    in one line quoting it and saying what to do."""
+    from datasets.io.numbers import NUMBER
+    from datasets.io.textfile import read_lines
+    k = int(np.flatnonzero(empty)[0])
+    first = df.iloc[:, 0].fillna("").astype(str).str.strip()
+    if first.iloc[k] and NUMBER.fullmatch(first.iloc[k]):           # a data row with a field missing
+        raise DataFileError(f"{path} line {lines[k]}: missing field(s)")
+    text = read_lines(path, "")
+    quoted = text[lines[k] - 1].strip()[:60]
+    after_blank = k > 0 and any(not text[i].strip() for i in range(lines[k - 1], lines[k] - 1))
+    numeric = first.iloc[k:].map(lambda v: bool(v) and NUMBER.fullmatch(v) is not None).to_numpy(dtype=bool)
+    if after_blank and empty[k:].all() and not numeric.any():
+        shown = ", ".join(repr(text[n - 1].strip()[:40]) for n in lines[k:k + 3]) + (", ..." if len(lines) - k > 3 else "")
+        warnings.warn(f"{path}: lines {lines[k]}-{lines[-1]} after the blank line below the table are not data rows "
+                      f"and were not read ({shown})", UserWarning, stacklevel=4)
+        return df.iloc[:k].reset_index(drop=True), list(lines[:k])
+    raise DataFileError(f"{path} line {lines[k]}: {quoted!r} is not a data row (fields missing): delete the lines "
+                        "after the table, or prefix them with #")
+
+
 def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_directions=None):
     from methods.positioning import from_frame
 
@@ -211,15 +242,14 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
     df, lines = read_table(path, skip_rows=skip_rows, keep_default_na=False)
     empty = (df.isna() | df.apply(lambda c: c.astype(str).str.strip() == "")).any(axis=1).to_numpy()
     if empty.any():
-        k = int(np.flatnonzero(empty)[0])
-        raise DataFileError(f"{path} line {lines[k]}: missing field(s)")
+        df, lines = _trailer(df, lines, empty, path)
     lines = np.array(lines)
     target_keys = {parse_name(n)[0] for n in TARGET_NAMES}
+    role_of = {parse_name(n)[0]: role for role, names in ROLE_NAMES.items() for n in names}
     renamed, lengths, deviations = {}, {}, {}
     for c in df.columns:
         key, u = parse_name(c)
-        role = key if key in ("target", "direction", "run", "deviation", "actual") else \
-            "target" if key in target_keys else None
+        role = role_of.get(key) or ("target" if key in target_keys else None)
         if role is not None and role not in renamed.values():
             renamed[c] = role
         if u is not None and role in ("target", "actual"):

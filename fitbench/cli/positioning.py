@@ -56,6 +56,9 @@ def add_parser(sub):
     add_reader_options(pp, columns=False)
     pp.add_argument("--compensation", nargs=2, action="append", metavar=("FORMAT", "FILE"),
                     help="write a compensation table: FORMAT csv, siemens-eec or fanuc-pitch (repeatable)")
+    pp.add_argument("--fanuc-increment", choices=("0.001", "0.0001"), default="0.001", metavar="MM",
+                    help="fanuc-pitch: the axis' detection unit and least input increment in mm, 0.001 (IS-B, default) "
+                         "or 0.0001 (IS-C)")
     pp.add_argument("--interval", type=float, default=None, metavar="MM",
                     help="compensation point spacing (mm; default: the target spacing)")
     pp.add_argument("--compensation-from", choices=("model", "mean"), default=None,
@@ -305,7 +308,8 @@ def run(args) -> int:
                             write=write_text_atomic,
                             reference_mm=finite("--reference", args.reference),
                             unit_confirmed=given_deviation_unit is not None, on_confirmed=warn,
-                            model_confirmed=args.compensation_from == "model")
+                            model_confirmed=args.compensation_from == "model",
+                            fanuc_unit_mm=float(args.fanuc_increment))
     missing = [n for n in tolerances if n not in res.figures]
     if missing:
         raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "

@@ -134,7 +134,7 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
         k = int(np.flatnonzero(dup.to_numpy())[0])
         raise InvalidInputError(f"{name} line {lines[k]}: target {table.target[k]:g}, direction {table.direction[k]}, "
                                 f"run {table.run[k]:g} appears twice")
-    targets = np.sort(table["target"].unique())
+    targets = np.sort(table["target"].unique()) + 0.0      # -0.0 (a target written -0,0000) is 0
     if targets.size < 2:
         raise InvalidInputError(f"{name}: needs at least two target positions, got {targets.size}")
     runs = None

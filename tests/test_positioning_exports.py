@@ -102,3 +102,23 @@ def test_fanuc_is_c_from_the_command_line(tmp_path):
     before = methods.fit("positioning.iso230_2", data).figures
     after = methods.fit("positioning.iso230_2", remeasure(data, truth, encoder, np.random.default_rng(9))).figures
     assert after["M"] <= 0.5 * before["M"], (before["M"], after["M"])
+
+
+def test_a_space_aligned_table_whose_names_contain_spaces(tmp_path):
+    """A wide export aligned with spaces, header 'Target (mm)    Run 1 + (µm) ...': read by splitting the header at
+    runs of spaces (before: 'line 2: missing field(s); if line 1 is an instrument's preamble, give --skip-rows 1');
+    when that does not give the rows' field count either, one line says why."""
+    data, _ = axis()
+    semi = wide(data, decimal_comma=False).splitlines()
+    aligned = ["    ".join(f"{c:>14}" for c in ln.split(";")) for ln in semi]
+    (tmp_path / "ws.txt").write_text("\n".join(aligned) + "\n")
+    (tmp_path / "semi.csv").write_text("\n".join(semi) + "\n")
+    got = json.loads(cli("positioning", tmp_path / "ws.txt", "--json").stdout)
+    ref = json.loads(cli("positioning", tmp_path / "semi.csv", "--json").stdout)
+    assert all(got[k] == ref[k] for k in ("A", "E", "M", "R", "B_mean"))
+    bad = aligned[:]
+    bad[0] = bad[0].replace("Run 1 +", "Run  1 +")                            # one name split in two
+    (tmp_path / "bad.txt").write_text("\n".join(bad) + "\n")
+    out = cli("positioning", tmp_path / "bad.txt")
+    one_error_line(out, "its names contain spaces", "separate the columns with tabs or ';'")
+    assert "--skip-rows" not in out.stderr

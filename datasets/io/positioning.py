@@ -205,10 +205,43 @@ def _add_preamble_hint(exc: InvalidInputError, path, skip_rows: int) -> None:
     """Append :func:`preamble_hint` to the message of ``exc`` (a file read without --skip-rows whose data
     rows start below a preamble: its first line was taken as the header)."""
     if skip_rows == 0 and len(exc.args) == 1 and "--skip-rows" not in str(exc.args[0]) and \
-            not isinstance(exc, NumberFormatError):
+            not isinstance(exc, NumberFormatError) and not getattr(exc, "no_preamble_hint", False):
         hint = preamble_hint(path)
         if hint:
             exc.args = (f"{exc.args[0]}{hint}",)
+
+
+def _spaced_names(df, lines, path, skip_rows: int):
+    """A table aligned with spaces whose header names contain spaces (``Target (mm)    Run 1 + (µm) ...``) splits
+    its header into more fields than its rows have: the header is split again at runs of two or more spaces (or
+    tabs), and taken when that gives exactly the rows' field count; otherwise it is refused in one line saying so
+    (it was 'line 2: missing field(s); if line 1 is an instrument's preamble, give --skip-rows 1')."""
+    filled = ~(df.isna() | df.apply(lambda c: c.astype(str).str.strip() == "")).to_numpy()
+    if not len(df) or filled.all():
+        return df
+    counts = filled.sum(axis=1)
+    m = int(counts[0])
+    if not (np.all(counts == m) and filled[:, :m].all() and m < df.shape[1]):
+        return df
+    from datasets.io.delimiters import COMMENT_PREFIXES
+    from datasets.io.textfile import read_lines
+    text = read_lines(path, "")
+    k = next((i for i in range(skip_rows, lines[0] - 1) if text[i].strip()
+              and not text[i].lstrip().startswith(COMMENT_PREFIXES)), None)
+    if k is None or "\t" in text[k].strip() and len(text[k].strip().split("\t")) != m:
+        return df
+    names = re.split(r"\t|\s{2,}", text[k].strip())
+    if len(names) == len(text[k].split()):          # no name with a space in it: not this case
+        return df
+    if len(names) != m:
+        err = DataFileError(f"{path} line {k + 1}: the header splits at spaces into {df.shape[1]} names but the rows "
+                            f"have {m} fields: its names contain spaces; separate the columns with tabs or ';', or "
+                            "use names without spaces")
+        err.no_preamble_hint = True
+        raise err
+    out = df.iloc[:, :m].copy()
+    out.columns = names
+    return out
 
 
 def _trailer(df, lines, empty, path):
@@ -240,6 +273,7 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
 
     # 'nan' and 'inf' stay text here and are refused as not finite by _numeric_column, like every reader
     df, lines = read_table(path, skip_rows=skip_rows, keep_default_na=False)
+    df = _spaced_names(df, lines, path, skip_rows)
     empty = (df.isna() | df.apply(lambda c: c.astype(str).str.strip() == "")).any(axis=1).to_numpy()
     if empty.any():
         df, lines = _trailer(df, lines, empty, path)

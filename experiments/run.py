@@ -41,6 +41,7 @@ from experiments.summary import summarise, summary_units, to_markdown
 from fitbench import __version__
 import methods
 from methods import InvalidInputError
+from methods.files import NotRegularFileError, check_regular
 
 
 def default_studies() -> list[str]:
@@ -296,6 +297,29 @@ def check_out(out: Path) -> None:
 #: the lock file of an --out folder (one run at a time writes into it)
 LOCK_NAME = ".experiments-run.lock"
 _LOCKS: list = []
+#: the files a run reads (a previous run's) and writes in ``OUT`` and in each ``OUT/STUDY`` (:func:`check_outputs`)
+OUT_FILES = (LOCK_NAME, "verify.json")
+STUDY_FILES = ("meta.json", "results.csv", "summary.csv", "summary.md", "report.json", "rows.sqlite",
+               "rows.sqlite-wal", "rows.sqlite-shm", "rows.sqlite-journal")
+
+
+def check_outputs(out: Path, study_names: list[str]) -> None:
+    """Refuse, before anything is read or locked, a file the run reads and writes that exists and is not a regular
+    file (a FIFO, a device, a folder, a socket, or a symlink to one): reading a FIFO at ``OUT/STUDY/meta.json`` or
+    ``OUT/verify.json`` blocked the run forever, and SQLite said "free the space" of a ``rows.sqlite`` folder. A
+    study's folder must be a folder."""
+    for name in study_names:
+        folder = out / name
+        if folder.exists() and not folder.is_dir():
+            raise InvalidInputError(f"{folder}: is not a folder; the run writes the outputs of study {name!r} in it: "
+                                    f"remove it, or give another --out")
+    for path in [out / n for n in OUT_FILES] + [out / s / n for s in study_names for n in STUDY_FILES]:
+        try:
+            check_regular(path)   # follows a symlink; a path that does not exist is fine
+        except NotRegularFileError as exc:
+            what = str(exc).rsplit("; ", 1)[0]   # "PATH: is a FIFO (named pipe), not a regular file"
+            raise InvalidInputError(f"{what}; the run reads and writes this file: remove it, or give another "
+                                    f"--out") from None
 
 
 def lock_out(out: Path):
@@ -470,6 +494,7 @@ def _run(args) -> int:
         for cfg in checked:
             confined(args.out, cfg["name"])
         check_out(args.out)
+        check_outputs(args.out, [cfg["name"] for cfg in checked])
         lock_out(args.out)
         jobs = args.jobs if args.scheduler else usable_jobs(args.jobs)
         t0 = time.perf_counter()

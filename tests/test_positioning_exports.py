@@ -122,3 +122,6 @@ def test_a_space_aligned_table_whose_names_contain_spaces(tmp_path):
     out = cli("positioning", tmp_path / "bad.txt")
     one_error_line(out, "its names contain spaces", "separate the columns with tabs or ';'")
     assert "--skip-rows" not in out.stderr
+    comma = tmp_path / "c.csv"                                # a ','-table missing a field: not a spaces matter
+    comma.write_text("Target (mm),Direction,Run,Deviation (um)\n0,+,1,\n100,+,1,\n")
+    one_error_line(cli("positioning", comma), "line 2: missing field(s)")

@@ -228,7 +228,7 @@ def _spaced_names(df, lines, path, skip_rows: int):
     text = read_lines(path, "")
     k = next((i for i in range(skip_rows, lines[0] - 1) if text[i].strip()
               and not text[i].lstrip().startswith(COMMENT_PREFIXES)), None)
-    if k is None or "\t" in text[k].strip() and len(text[k].strip().split("\t")) != m:
+    if k is None or re.search(r"[,;|\t]", text[k].strip()):        # not a table separated by spaces
         return df
     names = re.split(r"\t|\s{2,}", text[k].strip())
     if len(names) == len(text[k].split()):          # no name with a space in it: not this case

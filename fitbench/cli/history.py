@@ -4,7 +4,10 @@ of G, the diagnostics, A/E/R/B and RONt against the date, and optionally a plot 
 between services). The date of a result is its test conditions' date (``--date``) when given, else the
 file's modification time. A trend is one machine's (``--machine``) and, for a circular test, one plane's, for a
 positioning test one axis' (``--axis``): results of different machines, planes or axes in one folder are separate
-trends (pooled, an X axis and a Y axis of two machines read as one axis drifting)."""
+trends (pooled, an X axis and a Y axis of two machines read as one axis drifting). Results evaluated with
+different settings (:func:`settings_of`: a positioning test's standard and k or its temperature correction, a
+roundness filter's cut-off, a circular test's radius and feed) are separate trends too, named by the setting that
+differs, and a warning says so: pooled, k = 3 beside k = 2 read as R growing 24 % on the same data."""
 from __future__ import annotations
 
 import fitbench.cli.options as cli_options
@@ -50,13 +53,70 @@ def series_of(kind: str, d: dict) -> tuple:
     return kind, str(cond.get("machine") or "").strip(), str(where or "").strip()
 
 
-def series_title(key) -> str:
-    """The trend's name: e.g. positioning, machine M2, axis Y (a plain test name: that test)."""
+def _number(v) -> float | None:
+    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+
+
+def settings_of(kind: str, d: dict) -> tuple:
+    """((setting, value as text), ...) of the result ``d``: how it was evaluated where that changes the trended
+    figures, so that results differing in one are never one trend. Positioning: the standard with its coverage
+    factor (ISO 230-2:1988's k = 3 against 2014's k = 2 changes A and R) and whether the deviations were corrected
+    to 20 °C; roundness: the Gaussian filter's cut-off (ISO 16610-21; 15 against 50 UPR changes every RON figure);
+    circular test: the nominal radius and the feed (ISO 230-4 compares tests at the same radius and feed)."""
+    if kind == "positioning":
+        k = _number(d.get("k"))
+        standard = str(d.get("standard") or "not recorded") + (f" (k = {k:g})" if k is not None else "")
+        deviations = "corrected to 20 °C" if d.get("temperature_correction") else "as measured"
+        return (("standard", standard), ("deviations", deviations))
+    if kind == "roundness":
+        cut = _number(d.get("cutoff_upr"))
+        return (("filter", "not recorded" if "cutoff_upr" not in d else f"{cut:g} UPR" if cut is not None
+                 else "unfiltered"),)
+    if kind == "circular-test":
+        details = d.get("details")
+        cond = details.get("conditions") if isinstance(details, dict) else None
+        cond = cond if isinstance(cond, dict) else {}
+        radius, feed = _number(cond.get("nominal_radius_mm")), _number(cond.get("feed_mm_min"))
+        return (("radius", "not recorded" if radius is None else f"{radius:g} mm"),
+                ("feed", "not given" if feed is None else f"{feed:g} mm/min"))
+    return ()
+
+
+def differing(history: dict) -> dict:
+    """{(test, machine, plane or axis): [names of the settings that differ between its trends]} for the results
+    of one machine's plane or axis that :func:`settings_of` split into several trends."""
+    groups: dict = {}
+    for key in history:
+        if isinstance(key, tuple) and len(key) == 4:
+            groups.setdefault(key[:3], []).append(dict(key[3]))
+    return {g: [n for n in sets[0] if len({s.get(n) for s in sets}) > 1]
+            for g, sets in groups.items() if len(sets) > 1}
+
+
+def series_title(key, differ: dict | None = None) -> str:
+    """The trend's name: e.g. positioning, machine M2, axis Y (a plain test name: that test), with the settings
+    that tell it from the plane's or axis' other trends (``differ``: :func:`differing`)."""
     if not isinstance(key, tuple):
         return key
-    kind, machine, where = key
+    kind, machine, where = key[:3]
     extra = SERIES.get(kind)
-    return f"{kind}, machine {machine or 'not given'}" + (f", {extra[0]} {where or 'not recorded'}" if extra else "")
+    title = f"{kind}, machine {machine or 'not given'}" + (f", {extra[0]} {where or 'not recorded'}" if extra else "")
+    names = (differ or {}).get(key[:3], [])
+    settings = dict(key[3]) if len(key) == 4 else {}
+    return title + "".join(f", {n} {settings[n]}" for n in names if n in settings)
+
+
+def mixed_settings_warnings(history: dict) -> list[str]:
+    """One line per machine's plane or axis whose results were evaluated with different settings: which differ,
+    and that they are separate trends."""
+    out = []
+    differ = differing(history)
+    for group, names in differ.items():
+        sets = [dict(k[3]) for k in history if isinstance(k, tuple) and len(k) == 4 and k[:3] == group]
+        what = "; ".join(f"{n} {' / '.join(dict.fromkeys(s[n] for s in sets))}" for n in names)
+        out.append(f"{series_title(group)}: the results were evaluated with different settings ({what}); their "
+                   "figures are not comparable: shown as separate trends")
+    return out
 
 
 def kind_of(d: dict) -> str | None:
@@ -118,7 +178,8 @@ def _load(path: Path):
 
 
 def collect(folder, warn=None) -> dict:
-    """{(test, machine, plane or axis): [(date, file, {column: value})]} (:func:`series_of`, one trend each) from
+    """{(test, machine, plane or axis, settings): [(date, file, {column: value})]} (:func:`series_of`,
+    :func:`settings_of`; one trend each) from
     the JSON results in ``folder``, oldest first, the trends ordered by test, machine, plane or axis. A ``*.json``
     that is not a result (unreadable, not JSON, another JSON, a test date that is not a date) is skipped and
     told to ``warn`` (a function taking one line; default :func:`fitbench.cli.options.warn`)."""
@@ -138,12 +199,13 @@ def collect(folder, warn=None) -> dict:
             warn(f"{exc}; skipped")
             continue
         row = {name: (None if (v := _get(d, p)) is None else v * f) for p, name, f, _ in COLUMNS[kind]}
-        out.setdefault(series_of(kind, d), []).append((date, path.name, row))
+        out.setdefault((*series_of(kind, d), settings_of(kind, d)), []).append((date, path.name, row))
     if not out:
         raise InvalidInputError(f"{folder}: no JSON results of circular-test, positioning or roundness found "
                                 "(save them with: fitbench circular-test ... --json > DIR/2026-11-25.json)")
     order = {k: i for i, k in enumerate(COLUMNS)}
-    keys = sorted(out, key=lambda k: (order[k[0]], k[1], k[2]))
+    # one machine's plane or axis evaluated with several settings: its trends by their first test's date
+    keys = sorted(out, key=lambda k: (order[k[0]], k[1], k[2], min((r[0], r[1]) for r in out[k])))
     return {k: sorted(out[k], key=lambda r: (r[0], r[1])) for k in keys}
 
 
@@ -154,9 +216,10 @@ def _kind(key) -> str:
 
 def table(history: dict) -> str:
     lines = []
+    differ = differing(history)
     for key, rows in history.items():
         cols = COLUMNS[_kind(key)]
-        lines.append(f"{series_title(key)}: {len(rows)} test(s)")
+        lines.append(f"{series_title(key, differ)}: {len(rows)} test(s)")
         head = f"  {'date':<16} {'file':<28} " + " ".join(f"{f'{n} [{u}]':>18}" for _, n, _, u in cols)
         lines += [head, "  " + "-" * (len(head) - 2)]
         for date, name, row in rows:
@@ -167,13 +230,15 @@ def table(history: dict) -> str:
 
 
 def as_json(history: dict) -> dict:
-    """{test: {units, trends: [{machine, plane or axis, tests}], tests: every test of it (each with its machine and
-    plane or axis), by date}}, the values in the printed units."""
+    """{test: {units, trends: [{machine, plane or axis, settings, tests}], tests: every test of it (each with its
+    machine, plane or axis and settings), by date}}, the values in the printed units."""
     out: dict = {}
     for key, rows in history.items():
-        kind, machine, where = key if isinstance(key, tuple) else (key, "", "")
+        kind, machine, where = key[:3] if isinstance(key, tuple) else (key, "", "")
         extra = SERIES.get(kind)
         labels = {"machine": machine, **({extra[0]: where} if extra else {})}
+        if isinstance(key, tuple) and len(key) == 4:
+            labels["settings"] = dict(key[3])
         tests = [{"date": d.isoformat(timespec="minutes"), "file": f, **labels, **row} for d, f, row in rows]
         entry = out.setdefault(kind, {"units": {n: u for _, n, _, u in COLUMNS[kind]}, "trends": [], "tests": []})
         entry["trends"].append({**labels, "tests": tests})
@@ -186,7 +251,8 @@ def as_json(history: dict) -> dict:
 def plot(history: dict, path, save) -> None:
     """The trend plot (:func:`fitbench.plots.history.plot`)."""
     from fitbench.plots.history import plot as draw
-    draw(history, COLUMNS, path, save, titles={k: series_title(k) for k in history})
+    differ = differing(history)
+    draw(history, COLUMNS, path, save, titles={k: series_title(k, differ) for k in history})
 
 
 def add_parser(sub):
@@ -203,6 +269,8 @@ def add_parser(sub):
 def run(args) -> int:
     plot_path = check_plot_path(args.plot)
     history = collect(args.folder)
+    for line in mixed_settings_warnings(history):
+        _warn(line)
     if plot_path:
         plot(history, plot_path, save_figure)
     if args.json:

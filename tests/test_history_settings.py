@@ -88,3 +88,23 @@ def test_one_setting_throughout_is_one_trend_without_a_warning(tmp_path):
     out = cli("history", folder)
     assert out.returncode == 0 and out.stderr == "", out.stderr
     assert out.stdout.splitlines()[0] == "positioning, machine M1, axis X: 2 test(s)"
+
+
+def test_circular_tests_at_another_radius_or_feed_are_another_trend(tmp_path):
+    """ISO 230-4 compares circular tests made at the same radius and feed: G at 150 mm or at another feed is
+    another trend of the same machine's plane, and the warning names radius and feed."""
+    folder = tmp_path / "results"
+    folder.mkdir()
+    for k, (radius, feed, g) in enumerate(((100, 1000, 0.010), (100, 1000, 0.011), (150, 1000, 0.014),
+                                           (100, 2000, 0.016))):
+        result = {"G_b": g, "G_cw": g, "G_ccw": g, "diagnostics": "not estimated: give --nominal-center X Y",
+                  "details": {"conditions": {"machine": "M1", "plane": "XY", "date": f"2026-0{k + 1}-01",
+                                             "nominal_radius_mm": radius, "feed_mm_min": feed}}}
+        (folder / f"{k}.json").write_text(json.dumps(result))
+    out = cli("history", folder, "--json")
+    assert out.returncode == 0
+    trends = json.loads(out.stdout)["circular-test"]["trends"]
+    assert {tuple(t["settings"].values()): [x["file"] for x in t["tests"]] for t in trends} == {
+        ("100 mm", "1000 mm/min"): ["0.json", "1.json"], ("150 mm", "1000 mm/min"): ["2.json"],
+        ("100 mm", "2000 mm/min"): ["3.json"]}
+    assert out.stderr.count("\n") == 1 and "radius 100 mm / 150 mm; feed 1000 mm/min / 2000 mm/min" in out.stderr

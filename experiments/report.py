@@ -27,6 +27,7 @@ import pandas as pd
 
 from experiments import config as configs
 from experiments.provenance import REPO
+from experiments.study import json_value
 from methods import InvalidInputError
 from methods.files import write_atomic
 
@@ -99,7 +100,7 @@ def _read_json(path: Path) -> dict:
     if not path.is_file():
         raise BrokenStudy(f"{path.name} is not a regular file")   # a FIFO would block the read
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = json_value(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise BrokenStudy(f"{path.name} is unreadable ({type(exc).__name__}: {exc})") from None
     if not isinstance(data, dict):

@@ -904,6 +904,25 @@ def json_text(value, **kwargs) -> str:
     return json.dumps(_finite(value), default=_plain, allow_nan=False, **kwargs)
 
 
+_FROM_TEXT = {"Infinity": math.inf, "-Infinity": -math.inf, "NaN": math.nan}
+
+
+def _numbers(v):
+    if isinstance(v, str):
+        return _FROM_TEXT.get(v, v)
+    if isinstance(v, dict):
+        return {k: _numbers(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_numbers(x) for x in v]
+    return v
+
+
+def json_value(text: str):
+    """The value :func:`json_text` wrote, its "Infinity", "-Infinity" and "NaN" texts the floats again (a study's
+    findings hold numbers: a condition number of a degenerate layout is infinite)."""
+    return _numbers(json.loads(text))
+
+
 def analyse(study: Study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tuple[dict, Analysis]:
     """Run a study's analysis (:meth:`Study.analyse`) and add the TOML's declared tables and figures; return
     (the named values for meta.json, Analysis)."""

@@ -320,7 +320,8 @@ def test_dataframe_input_and_parameters():
 def study(tmp_path_factory):
     from conftest import quick_study
     target = quick_study(tmp_path_factory, "multilateration")
-    return target, pd.read_csv(target / "results.csv"), json.loads((target / "meta.json").read_text())
+    from experiments.study import json_value
+    return target, pd.read_csv(target / "results.csv"), json_value((target / "meta.json").read_text())
 
 
 def test_study_rows_and_findings(study):

@@ -130,7 +130,7 @@ FEED_MIN_MM_MIN = 10.0
 def run(args) -> int:
     from methods.circular_test import diagnose, evaluate
     from fitbench.plots.circular_test import FIGSIZE as POLAR_FIGSIZE, diagnostics_json, model_json, polar_plot, text
-    from methods.circular_test.runs import check_nominal, check_pair, drop_repeated, trim
+    from methods.circular_test.runs import check_nominal, check_pair, drop_repeated, off_circle_ends, trim
 
     R = finite("--nominal-radius", args.nominal_radius, positive=True, allow_none=False)
     if args.nominal_center is not None:
@@ -175,6 +175,8 @@ def run(args) -> int:
             notes.append(said)
         runs[name], rep = trim(runs[name], center0, arc_deg=arc, lead_in_deg=args.lead_in, lead_out_deg=args.lead_out)
         trimmed[name] = dict(rep, **repeats)
+        if (fed := off_circle_ends(runs[name], center0, label)) is not None:
+            raise InvalidInputError(fed)
         if len(runs[name]) < 10:
             raise InvalidInputError(f"circular test ({name.upper()} run): {len(runs[name])} point(s) left after removing "
                                     f"the lead-in/out and the overrun beyond {arc:g}°; at least 10 are needed")

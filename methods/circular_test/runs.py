@@ -83,6 +83,55 @@ def drop_repeated(points, center=None, name: str = "") -> tuple[np.ndarray, dict
     return pts[~mask], report, text
 
 
+#: samples at a run's start or end further from the circle its middle follows than this many robust standard
+#: deviations of the middle's radial deviations, and than OFF_CIRCLE_MIN_MM, are no contour points (a feed-in)
+OFF_CIRCLE_SIGMAS = 30.0
+OFF_CIRCLE_MIN_MM = 0.05
+
+
+def off_circle_ends(points, center, name: str = "") -> str | None:
+    """What is wrong when the first or last samples of a run lie off the circle the rest of it follows (a radial
+    feed-in or feed-out a grid-encoder or tracking recording starts or ends with), or None. The circle is the
+    algebraic least-squares circle (Kasa) of the middle 80 % of the samples; a sample is off when its radial
+    deviation from it differs from the middle's median by more than OFF_CIRCLE_SIGMAS x 1.4826 MAD of the middle's
+    and OFF_CIRCLE_MIN_MM. Kept, 20 samples of a 2 mm feed-in before a 7 µm trace gave G 2003 µm, and the warnings
+    blamed the nominal centre and radius. Names the samples, how far off, and the --lead-in / --lead-out that
+    removes them (:func:`trim`, angles about ``center``)."""
+    p = np.asarray(points, dtype=float)
+    n = len(p)
+    if n < 20:
+        return None
+    margin = n // 10
+    mid = p[margin:n - margin]
+    c = mid.mean(axis=0)
+    q = mid - c
+    sol = np.linalg.lstsq(np.column_stack([2 * q, np.ones(len(q))]), np.sum(q * q, axis=1), rcond=None)[0]
+    centre, radius = c + sol[:2], float(np.sqrt(sol[2] + sol[:2] @ sol[:2]))
+    dr = np.hypot(*(p - centre).T) - radius
+    med = float(np.median(dr[margin:n - margin]))
+    spread = 1.4826 * float(np.median(np.abs(dr[margin:n - margin] - med)))
+    off = np.abs(dr - med) > max(OFF_CIRCLE_SIGMAS * spread, OFF_CIRCLE_MIN_MM)
+    head = int(np.argmin(off)) if off[0] else 0
+    tail = int(np.argmin(off[::-1])) if off[-1] else 0
+    if not (0 < head <= margin or 0 < tail <= margin):
+        return None
+    swept = np.maximum.accumulate(np.degrees(np.abs(unwrapped_angle(p, center) - unwrapped_angle(p, center)[0])))
+    total = float(swept[-1])
+    out = []
+    for part, k, lo, hi, option, edge in (("start", head, 0, head, "--lead-in", swept[head - 1] if head else 0.0),
+                                          ("end", tail, n - tail, n, "--lead-out", total - swept[n - tail] if tail else 0.0)):
+        if not 0 < k <= margin:
+            continue
+        worst = lo + int(np.argmax(np.abs(dr[lo:hi] - med)))
+        side = "inside" if dr[worst] < med else "outside"
+        deg = float(np.degrees(np.arctan2(*(p[worst] - center)[::-1])) % 360.0)
+        lead = np.ceil((edge + 1e-9) * 10.0) / 10.0 if edge > 0 else 0.1
+        out.append(f"samples {lo + 1}-{hi} at its {part} lie up to {abs(dr[worst] - med) * 1e3:.4g} µm {side} the "
+                   f"circle the other samples follow (their spread {spread * 1e3:.2g} µm; near {deg:.1f}°): a radial "
+                   f"feed-{'in' if part == 'start' else 'out'}? remove them ({option} {lead:g}, or delete those lines)")
+    return f"{name + ' run: ' if name else ''}" + "; ".join(out)
+
+
 def trim(points, center, *, arc_deg: float | None = 360.0, lead_in_deg: float = 0.0, lead_out_deg: float = 0.0):
     """Drop ``lead_in_deg`` of arc at the start and ``lead_out_deg`` at the end (along the point order),
     then anything beyond ``arc_deg`` of swept arc (overrun; a partial arc keeps a point at exactly

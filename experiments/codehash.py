@@ -6,16 +6,26 @@ closure is found **statically**: each module file is parsed with :mod:`ast` and 
 ``from ... import`` statement anywhere in it (also inside functions, so lazy imports count) is resolved
 with :func:`importlib.util.find_spec`; parent packages' ``__init__.py`` are added because Python runs them.
 The closure follows fitbench's own packages (``methods``, ``datasets``, ``experiments``) and the
-package the start module belongs to; third-party libraries (numpy, scipy, ...) are recorded in
-``meta.json`` by version instead. A static scan is used rather than ``sys.modules`` after an import
+package the start module belongs to. A static scan is used rather than ``sys.modules`` after an import
 because it needs no fresh interpreter per module, sees imports inside functions that a run has not
-executed yet, and is deterministic.
+executed yet, and is deterministic. Beside the modules of the repository's packages, every file that is not a Python
+module is hashed too: the data a module reads from its folder, the C sources of the compiled kernels.
+
+**Libraries** (numpy, scipy, shapely, finufft, a plugin's dependencies) are keyed by their installed version, not their
+files (:func:`libraries_of`): each top-level module the closure imports and that is neither the standard library nor
+fitbench's own, by an import statement or by a call that names it as a literal (``lazy_module("shapely")``,
+``importlib.import_module("finufft")``), with the version of its distribution; and the requirements a plugin's
+distribution declares. Upgrading one recomputes the rows whose code imports it.
 
 A module outside the repository (a plugin) is hashed with **its whole installed distribution**
 (:func:`importlib.metadata.packages_distributions`; every file the distribution records, except the
 installer's bookkeeping files ``RECORD``, ``INSTALLER``, ``REQUESTED``, ``direct_url.json`` and
-byte code), so that editing any helper module of a plugin recomputes its rows. A plugin module found
-without distribution metadata (a plain file on ``PYTHONPATH``) is hashed with its static closure.
+byte code), so that editing any helper module of a plugin recomputes its rows. A plugin whose record does not hold its
+module (an editable install, ``pip install -e``: the record holds a path hook; a package found on ``PYTHONPATH``) is
+hashed with **every file of its package's folder** (byte code, compiled extensions and hidden files excepted), so
+that its data files and the helpers it imports by a computed name are keyed as they are edited; a single-file module of
+an editable install with every file beside it. A single-file module without distribution metadata (a script's helper beside
+it) is hashed with its static closure.
 
 A method called **by name** (``methods.fit("circle.minimum_zone", ...)``: the roundness evaluation's reference
 circles, the circular test's fits) is a dependency no import statement shows: every string constant in a
@@ -98,10 +108,13 @@ def _method_modules() -> dict[str, str]:
     return {spec.id: spec.module for spec in methods.list_methods()}
 
 
-def _imported_names(path: Path, module: str, by_name: dict[str, str] | None = None) -> set[str]:
+def _imported_names(path: Path, module: str, by_name: dict[str, str] | None = None, dynamic: set | None = None) -> set[str]:
     """Every module name an import statement in ``path`` (module ``module``) may load, and the module of every
-    method id in ``by_name`` that the file names in a string constant (a call by name)."""
-    imports, strings = _scan(path, module)
+    method id in ``by_name`` that the file names in a string constant (a call by name); the modules it imports by a
+    call with a literal name are added to ``dynamic``."""
+    imports, strings, called = _scan(path, module)
+    if dynamic is not None:
+        dynamic.update(called)
     names = set(imports)
     if by_name:
         names.update(by_name[s] for s in strings if s in by_name)
@@ -114,14 +127,23 @@ def _imported_names(path: Path, module: str, by_name: dict[str, str] | None = No
 
 #: the file of :func:`_scan`'s results of earlier runs, by the SHA-256 of the module's name and bytes (a changed file is
 #: parsed again; the cache only saves the parsing, ~0.5 s for the closure of experiments.run)
-SCAN_CACHE = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "fitbench" / "import-scan.json"
+_SCAN_VERSION = 2
+#: (one file per format: checkouts of two versions of fitbench on one machine do not overwrite each other's)
+SCAN_CACHE = (Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "fitbench"
+              / f"import-scan-{_SCAN_VERSION}.json")
 _SCANNED: dict = {}
 _SCAN_STATE = {"loaded": False, "new": 0}
 
 
-def _scan(path: Path, module: str) -> tuple[list[str], list[str]]:
-    """(module names the import statements of ``path`` name, its string constants that may be method ids) of module
-    ``module``, parsed with :mod:`ast` or taken from :data:`SCAN_CACHE` (keyed by the module's name and the file's bytes)."""
+#: calls that import the module their first argument names: ``importlib.import_module("shapely")``,
+#: ``lazy_module("shapely")`` (``methods._lazy``), ``__import__("x")``
+_IMPORT_CALLS = frozenset({"import_module", "lazy_module", "__import__"})
+
+
+def _scan(path: Path, module: str) -> tuple[list[str], list[str], list[str]]:
+    """(module names the import statements of ``path`` name, its string constants that may be method ids, the module
+    names its calls of :data:`_IMPORT_CALLS` give as a literal) of module ``module``, parsed with :mod:`ast` or taken
+    from :data:`SCAN_CACHE` (keyed by the module's name and the file's bytes)."""
     data = path.read_bytes()
     key = hashlib.sha256(f"{module}\0{path.name}\0".encode() + data).hexdigest()
     if not _SCAN_STATE["loaded"]:
@@ -134,11 +156,16 @@ def _scan(path: Path, module: str) -> tuple[list[str], list[str]]:
             pass
     hit = _SCANNED.get(key)
     if hit is not None:
-        return hit[0], hit[1]
+        return hit[0], hit[1], hit[2]
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     imports: set[str] = set()
     strings: set[str] = set()
+    dynamic: set[str] = set()
     for node in ast.walk(ast.parse(data, filename=str(path))):
+        if isinstance(node, ast.Call) and node.args and isinstance(node.args[0], ast.Constant) \
+                and isinstance(node.args[0].value, str) and node.args[0].value \
+                and getattr(node.func, "attr", getattr(node.func, "id", None)) in _IMPORT_CALLS:
+            dynamic.add(node.args[0].value.lstrip("."))
         if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value.count(".") == 1 \
                 and len(node.value) <= 200 and "" not in node.value.split("."):  # 'family.name', as a method id is
             strings.add(node.value)
@@ -154,12 +181,9 @@ def _scan(path: Path, module: str) -> tuple[list[str], list[str]]:
             if base:
                 imports.add(base)
                 imports.update(f"{base}.{a.name}" for a in node.names if a.name != "*")
-    _SCANNED[key] = (sorted(imports), sorted(strings))
+    _SCANNED[key] = (sorted(imports), sorted(strings), sorted(dynamic))
     _SCAN_STATE["new"] += 1
     return _SCANNED[key]
-
-
-_SCAN_VERSION = 1
 
 
 def _save_scans() -> None:
@@ -180,10 +204,16 @@ def _save_scans() -> None:
             os.unlink(tmp)
 
 
-@lru_cache(maxsize=None)
 def module_closure(module: str) -> tuple[tuple[str, Path], ...]:
     """(module name, file) of ``module`` and every module of fitbench or of its own top-level package
     that it imports, directly or not (sorted by name)."""
+    return _walk(module)[0]
+
+
+@lru_cache(maxsize=None)
+def _walk(module: str) -> tuple[tuple[tuple[str, Path], ...], frozenset]:
+    """(:func:`module_closure`, the top-level names of the modules outside it that its modules import, by a statement
+    or a call of :data:`_IMPORT_CALLS` with a literal name: the libraries, :func:`libraries_of`)."""
     follow = set(FITBENCH_PACKAGES) | {module.split(".")[0]}
     by_name = _method_modules()
     follow |= {m.split(".")[0] for m in by_name.values()}
@@ -191,18 +221,27 @@ def module_closure(module: str) -> tuple[tuple[str, Path], ...]:
         follow |= {n.split(".")[0] for n in _imported_names(main_file(), module, by_name)
                    if _beside(n.split(".")[0], main_file().parent)}
     seen: dict[str, Path] = {}
+    outside: set[str] = set()
+    dynamic: set[str] = set()
     todo = [p for p in _imported_names_of_parents(module)]
     while todo:
         name = todo.pop()
-        if name in seen or name.split(".")[0] not in follow:
+        if name in seen:
+            continue
+        if name.split(".")[0] not in follow:
+            outside.add(name.split(".")[0])
             continue
         path = _origin(name)
         if path is None:
             continue
         seen[name] = path
-        todo.extend(_imported_names(path, name, by_name) - set(seen))
+        todo.extend(_imported_names(path, name, by_name, dynamic) - set(seen))
     _save_scans()
-    return tuple(sorted(seen.items()))
+    outside.update(n.split(".")[0] for n in dynamic)
+    return tuple(sorted(seen.items())), frozenset(outside - follow)
+
+
+module_closure.cache_clear = _walk.cache_clear  # type: ignore[attr-defined]
 
 
 def _beside(top: str, folder: Path) -> bool:
@@ -241,8 +280,55 @@ def _distribution_files(module: str) -> list[Path] | None:
     return sorted(files) or None
 
 
+#: files of a folder that are not a module's code or data: byte code, compiled extensions (their C source is hashed)
+_NOT_CODE = (".pyc", ".pyo", ".so", ".pyd", ".dll", ".dylib")
+
+
+def _plugin_files(module: str, path: Path) -> list[Path]:
+    """The files a module outside the repository is keyed by: the files its installed distribution records when they
+    hold the module's own file (a regular install ships what the package reads); otherwise (an editable install,
+    ``pip install -e``, whose record holds only a path hook; a package on ``PYTHONPATH``) every file of the folder of
+    its outermost package (:func:`_package_files`: its data files and the helpers it imports by a computed name), and
+    of a single-file module of an editable install, every file beside it."""
+    recorded = _distribution_files(module)
+    if recorded and path.resolve() in {p.resolve() for p in recorded}:
+        return recorded
+    folder = _package_folder(path)  # (an editable install's record, its path hook, names this machine's folders)
+    if folder is not None:
+        return _package_files(folder, recursive=True)
+    if recorded:  # a single-file module of an editable install: its project's files beside it
+        return _package_files(path.parent, recursive=False)
+    return [path]
+
+
+def _package_folder(path: Path) -> Path | None:
+    """The folder of the outermost regular package (with an ``__init__.py``) that holds the module file ``path``, None
+    for a top-level module (a file of its own)."""
+    folder = None
+    parent = path.parent
+    while (parent / "__init__.py").is_file():
+        folder, parent = parent, parent.parent
+    return folder
+
+
+def _package_files(folder: Path, *, recursive: bool) -> list[Path]:
+    """The regular files of ``folder`` (and of its sub-folders when ``recursive``), but byte code, compiled extensions
+    and hidden files or folders (``.git``, an editor's ``.swp``)."""
+    out = []
+    for root, dirs, names in os.walk(folder):
+        dirs[:] = sorted(d for d in dirs if recursive and not d.startswith(".") and d != "__pycache__")
+        out.extend(Path(root, n) for n in names
+                   if not n.startswith(".") and not n.endswith(_NOT_CODE) and os.path.isfile(os.path.join(root, n)))
+    return sorted(out)
+
+
 def _in_repo(path: Path) -> bool:
-    return REPO in path.resolve().parents
+    return _in_repo_text(str(path))
+
+
+@lru_cache(maxsize=None)
+def _in_repo_text(path: str) -> bool:
+    return REPO in Path(path).resolve().parents
 
 
 def files_of(module: str) -> list[Path]:
@@ -250,23 +336,27 @@ def files_of(module: str) -> list[Path]:
     files = {path for _, path in module_closure(module)}
     for name, path in module_closure(module):
         if not _in_repo(path):
-            files.update(_distribution_files(name) or [path])
-    files.update(_compiled_sources(files))
+            files.update(_plugin_files(name, path))
+    files.update(_data_beside(files))
     return sorted(files)
 
 
-def _compiled_sources(files) -> set[Path]:
-    """The C sources of the compiled kernels beside the repository's modules in ``files`` (a family loads
-    its ``_ckernels`` by name through ``methods/_compiled.py``, which no import statement shows), and
-    ``setup.py``, which holds their compile flags."""
-    sources = {c for f in files if _in_repo(f) for c in Path(f).parent.glob("*.c")}
-    if sources and (REPO / "setup.py").is_file():
-        sources.add(REPO / "setup.py")
-    return sources
+def _data_beside(files) -> set[Path]:
+    """The files beside the repository's package modules in ``files`` that are not Python modules (these are keyed by
+    the import closure): data a module reads from its folder, and the C sources of the compiled kernels (a family loads
+    its ``_ckernels`` by name through ``methods/_compiled.py``, which no import statement shows) with ``setup.py``,
+    which holds their compile flags."""
+    folders = {Path(f).parent for f in files if _in_repo(f) and Path(f).parent != REPO}
+    data = {p for folder in folders for p in _package_files(folder, recursive=False) if p.suffix != ".py"}
+    if any(p.suffix == ".c" for p in data) and (REPO / "setup.py").is_file():
+        data.add(REPO / "setup.py")
+    return data
 
 
-def _digest(files) -> str:
+def _digest(files, libraries: dict | None = None) -> str:
     h = hashlib.sha256()
+    if libraries:
+        h.update(json.dumps(libraries, sort_keys=True).encode())
     for f in sorted(set(files)):
         p = Path(f).resolve()
         h.update((str(p.relative_to(REPO)) if _in_repo(p) else p.name).encode())
@@ -278,11 +368,108 @@ def _digest(files) -> str:
 
 @lru_cache(maxsize=None)
 def code_hash(*modules: str) -> str:
-    """One hash over every file the given modules depend on."""
+    """One hash over every file the given modules depend on and the versions of the libraries they import
+    (:func:`libraries_of`)."""
     files = set()
     for m in modules:
         files.update(files_of(m))
-    return _digest(files)
+    return _digest(files, libraries_of(*modules))
+
+
+#: {distribution: version} of every library a code hash of this process was keyed by (``meta.json``: ``libraries``)
+KEYED_LIBRARIES: dict = {}
+
+
+def libraries_of(*modules: str) -> dict[str, str | None]:
+    """{distribution: version} of the libraries the code of ``modules`` imports (by a statement anywhere in a module
+    of their closure, or a call of :data:`_IMPORT_CALLS` with a literal name: ``lazy_module("shapely")``), and of the
+    requirements a plugin's distribution declares (``Requires-Dist``); None for a library that is not installed (an
+    optional import). The standard library and fitbench's own packages are not libraries."""
+    out: dict = {}
+    for m in modules:
+        closure, outside = _walk(m)
+        for top in outside:
+            out.update(_library(top))
+        for name, path in closure:
+            if not _in_repo(path):
+                for dist_name in _packages_distributions().get(name.split(".")[0], []):
+                    out.update(_requirements(dist_name))
+    KEYED_LIBRARIES.update(out)
+    return dict(sorted(out.items()))
+
+
+def _version(dist_name: str) -> str | None:
+    try:
+        return metadata.version(dist_name)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+@lru_cache(maxsize=None)
+def _library(top: str) -> dict:
+    """{distribution: version} of the top-level module ``top``, {} for the standard library and fitbench's own code.
+    Found by the distribution of the module's name first (numpy, shapely, finufft), else by the records of the
+    distributions in the module's folder (:func:`_distribution_in`), else by
+    :func:`importlib.metadata.packages_distributions` (which reads every installed distribution: 0.3 s)."""
+    if top in sys.stdlib_module_names or top in sys.builtin_module_names or top == "__main__":
+        return {}
+    try:
+        spec = importlib.util.find_spec(top)
+    except (ImportError, ValueError, AttributeError):
+        spec = None
+    if spec is None:
+        return {top: None}   # not installed: an optional import (installing it changes the key)
+    where = spec.origin if spec.has_location and spec.origin else next(iter(spec.submodule_search_locations or []), None)
+    if where and _in_repo(Path(where)):
+        return {}
+    version = _version(top)
+    if version is not None:
+        return {top: version}
+    if where:
+        base = Path(where).parent.parent if Path(where).name == "__init__.py" else Path(where).parent
+        found = _distribution_in(base, top)
+        if found:
+            return {found: _version(found)}
+    dists = _packages_distributions().get(top) or []
+    return {d: _version(d) for d in sorted(set(dists))} or {top: None}
+
+
+def _distribution_in(folder: Path, top: str) -> str | None:
+    """The name of the distribution installed in ``folder`` (a site-packages) whose record holds the top-level module
+    ``top`` (``markdown_it`` of ``markdown-it-py``): the distributions whose name starts as the module's does are read
+    first, each record once (a few ms, where :func:`importlib.metadata.packages_distributions` reads every
+    distribution of every folder of the path: 0.3 s)."""
+    try:
+        infos = [p for p in folder.iterdir() if p.name.endswith(".dist-info")]
+    except OSError:
+        return None
+    stem = top.lower().replace("-", "_")
+    infos.sort(key=lambda p: (not p.name.lower().startswith(stem), p.name))
+    for info in infos:
+        try:
+            record = (info / "RECORD").read_text(encoding="utf-8", errors="replace")
+        except OSError:
+            continue
+        if record.startswith((f"{top}/", f"{top}.py,")) or f"\n{top}/" in record or f"\n{top}.py," in record:
+            return info.name[:-len(".dist-info")].rpartition("-")[0] or None
+    return None
+
+
+@lru_cache(maxsize=None)
+def _requirements(dist_name: str) -> dict:
+    """{distribution: version} of what a plugin's distribution requires (its ``Requires-Dist``, extras excepted), as
+    installed (None: not installed)."""
+    out = {}
+    for req in metadata.distribution(dist_name).requires or []:
+        name, _, marker = req.partition(";")
+        if "extra" in marker:
+            continue
+        name = name.strip().split("[")[0]
+        for sep in "<>=!~ (":
+            name = name.split(sep)[0]
+        if name:
+            out[name] = _version(name)
+    return out
 
 
 def file_hash(path: str) -> str:

@@ -11,17 +11,22 @@ import methods
 from datasets import sources
 from experiments.rows import source_of
 
-#: versions of the libraries whose arithmetic can change a row's numbers (part of every key and of meta.json)
-NUMBER_PACKAGES = ("numpy", "scipy", "cvxpy", "clarabel", "nlopt")
+#: the libraries in every row's key: NumPy makes every row's data (its generators) and its BLAS is named beside it.
+#: The other libraries a row's code imports (SciPy, Clarabel, NLopt, shapely, finufft, a plugin's dependencies) are
+#: keyed with that code, by its imports (``experiments.codehash.libraries_of``), not by a list kept by hand.
+NUMBER_PACKAGES = ("numpy",)
 _CODE: dict = {}
 _ENV: dict = {}
 
 
 def environment() -> dict:
-    """What changes numbers besides the code (computed once per process): the kernel backend
-    (``FITBENCH_KERNELS``: compiled or numpy), Python's version and those of :data:`NUMBER_PACKAGES`."""
+    """What changes numbers besides the code and its libraries (computed once per process): the kernel backend
+    (``FITBENCH_KERNELS``: compiled or numpy), Python's version, those of :data:`NUMBER_PACKAGES` and the BLAS NumPy
+    calls (``numpy.show_config``: a NumPy of one version links OpenBLAS from PyPI, MKL from conda)."""
     if not _ENV:
         from importlib import metadata
+
+        from experiments.provenance import _blas
         from methods import kernel_path
         versions = {"python": ".".join(map(str, sys.version_info[:3]))}
         for pkg in NUMBER_PACKAGES:
@@ -29,7 +34,7 @@ def environment() -> dict:
                 versions[pkg] = metadata.version(pkg)
             except metadata.PackageNotFoundError:
                 versions[pkg] = None
-        _ENV.update(kernels=kernel_path(), versions=versions)
+        _ENV.update(kernels=kernel_path(), versions=versions, blas=_blas())
     return _ENV
 
 
@@ -48,6 +53,8 @@ def reset_caches() -> None:
     codehash.module_closure.cache_clear()
     codehash._file_hash.cache_clear()
     codehash._packages_distributions.cache_clear()
+    codehash._library.cache_clear()
+    codehash._requirements.cache_clear()
 
 
 def task_code(task: dict) -> dict:

@@ -133,15 +133,21 @@ def _fitted(task: dict, points):
     """(the result of the task's method on ``points``, None), or (None, its row) when the method raised: 'skipped'
     for an input it refuses, 'error' for any other exception (a method's bug: recorded, retried on the next run)."""
     pid = _getpid()
+    spec = methods.get(task["method"])
+    own = None if spec.builtin else _own_copy(points)
     try:
-        res = methods.get(task["method"]).unchecked(points, **task["params"])  # gated by _measured_row
+        res = spec.unchecked(points if own is None else own, **task["params"])  # gated by _measured_row
     except InvalidInputError as exc:
-        return None, {**base_row(task), "status": "skipped", "message": str(exc)}
+        res, failed = None, {**base_row(task), "status": "skipped", "message": str(exc)}
     except Exception as exc:
-        return None, {**base_row(task), "status": "error", "message": exception_text(exc)}
+        res, failed = None, {**base_row(task), "status": "error", "message": exception_text(exc)}
+    else:
+        failed = None
     finally:
         end_if_forked(pid)
-    return res, None
+    if own is not None and not np.array_equal(own, points):
+        return None, {**base_row(task), "status": "invalid", "message": _WROTE_INTO_INPUT}
+    return res, failed
 
 
 _getpid = os.getpid
@@ -155,7 +161,21 @@ def end_if_forked(pid: int) -> None:
         os._exit(0)
 
 
-def _measured_row(task: dict, res, points, truth) -> dict:
+#: the message of the row of a method that changed the points it was given
+_WROTE_INTO_INPUT = ("invalid result: the method wrote into the points it was given (read-only: changed through C or "
+                     "ctypes, past NumPy's flags); the methods after it got the data unchanged")
+
+
+def _own_copy(points):
+    """A private read-only copy of a point array for a plugin's method (None for other data): a method writing into
+    its input through C cannot change the data of the methods after it, and the write is seen by comparing the copy
+    with the data afterwards (the built-in methods are fitbench's, tested not to write)."""
+    if type(points) is not np.ndarray:
+        return None
+    return methods.immutable(np.array(points))
+
+
+def _measured_row(task: dict, res, points, truth, sent: dict | None = None) -> dict:
     """The row of a method's result: 'invalid' if it breaks its family's contract (the gate), else its status,
     metrics and (if the task asks) timing."""
     row = base_row(task)
@@ -184,11 +204,16 @@ def _measured_row(task: dict, res, points, truth) -> dict:
     own = None
     if given is not res:  # the columns the plugin's class adds: never the row's identity or status
         own = {k: v for k, v in result_base.own_columns(given, res, truth).items() if k not in row}
+    if sent:  # what a plugin's class adds, computed in its process (_plugin_rows): numbers only
+        family = {c.name for c in type(res).COLUMNS}
+        own = {**(own or {}), **{k: v for k, v in sent.items() if type(k) is str and k not in row
+                                 and k not in family and type(v) in (float, int)}}
     row.update(metrics(res, truth, own))
     if task.get("timing"):
         t = task["timing"]
         spec = methods.get(task["method"])
-        row.update(time_call(lambda: spec.unchecked(points, **task["params"]),
+        given = points if spec.builtin else (_own_copy(points) if type(points) is np.ndarray else points)
+        row.update(time_call(lambda: spec.unchecked(given, **task["params"]),
                              min_time_s=t.get("min_time_s", 0.02), rounds=t.get("rounds", 5)))
     return row
 
@@ -466,6 +491,51 @@ def _loaded_before_rows() -> None:
     sources.load_plugins()
 
 
+def _plugin_tasks(tasks: list[dict]) -> list[bool] | None:
+    """Which tasks run a plugin's code (a method or a data source not fitbench's own), or None when none does."""
+    seen, flags, any_plugin = {}, [], False
+    for task in tasks:
+        memo = (task.get("method"), id(task.get("dataset")))
+        flag = seen.get(memo)
+        if flag is None:
+            try:
+                flag = not (methods.get(task["method"]).builtin and _builtin_source(task["dataset"]))
+            except Exception:  # no registered method or source (a study's own task): its own code runs it, as before
+                flag = False
+            seen[memo] = flag
+        flags.append(flag)
+        any_plugin = any_plugin or flag
+    return flags if any_plugin else None
+
+
+def _builtin_source(spec: dict) -> bool:
+    return sources.get_source(source_of(spec)).builtin
+
+
+def _forks_plugin_rows() -> bool:
+    """Whether this process runs the rows of a plugin's code in a child process of their own: a local worker of the
+    engine (``experiments.localworkers``), in its main thread, where ``os.fork`` exists."""
+    import multiprocessing
+    return (hasattr(os, "fork") and threading.current_thread() is threading.main_thread()
+            and multiprocessing.current_process().name == "fitbench-worker")
+
+
+class _Positions:
+    """The progress array of a chunk seen by a part of it: a row's position in the part is written as its position
+    in the chunk (the parent blames a crash or a time-out on the row at that position)."""
+
+    def __init__(self, progress, where: list[int]):
+        self.progress, self.where = progress, where
+
+    def __setitem__(self, i, value):
+        if i == 1 and 0 <= int(value) < len(self.where):
+            value = self.where[int(value)]
+        self.progress[i] = value
+
+    def __getitem__(self, i):
+        return self.progress[i]
+
+
 def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None) -> dict:
     """Run a chunk of tasks in a worker; the rows come back encoded for the store and as the columns of the run's frame
     (:func:`encode_rows`). ``progress``
@@ -474,8 +544,27 @@ def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None
     (:func:`_generic_rows`)."""
     if row_timeout:
         _loaded_before_rows()
-    rows = []
     t0 = time.perf_counter()
+    plugin = _plugin_tasks(tasks) if _forks_plugin_rows() else None
+    if plugin is None:
+        rows = _chunk_rows(tasks, row_timeout, progress)
+    else:  # the rows of a plugin's code run in a child process: what they do to their process dies with it
+        rows = [None] * len(tasks)
+        for part in (False, True):
+            where = [i for i, flag in enumerate(plugin) if flag is part]
+            if not where:
+                continue
+            some = [tasks[i] for i in where]
+            at = progress if progress is None else _Positions(progress, where)
+            got = _plugin_rows(some, row_timeout, at) if part else _chunk_rows(some, row_timeout, at)
+            for i, row in zip(where, got):
+                rows[i] = row
+    return {"columns": encode_rows(rows), "seconds": time.perf_counter() - t0}
+
+
+def _chunk_rows(tasks: list[dict], row_timeout: float | None, progress) -> list[dict]:
+    """The rows of a chunk's tasks, in this process."""
+    rows = []
     start = 0
     while start < len(tasks):
         kind = tasks[start]["kind"]
@@ -490,7 +579,201 @@ def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None
                     progress[0], progress[1] = time.monotonic(), pos
                 rows.append(run_task(tasks[pos], row_timeout))
         start = end
-    return {"columns": encode_rows(rows), "seconds": time.perf_counter() - t0}
+    return rows
+
+
+# ------------------------------------------------- rows of a plugin's code: in a child process, gated in this one
+
+
+def _plugin_rows(tasks: list[dict], row_timeout: float | None, progress) -> list[dict]:
+    """The rows of tasks running a plugin's code (its method, or its data source), fitted in a child process forked
+    for them: a plugin that patches the gate, the metrics, a built-in method or NumPy does it in that child, which
+    ends with the chunk; the worker (this process, which ran no plugin code since it started, save the imports of
+    the installed plugins) gates the results and computes their metrics with its own code. The child sends back, for
+    a plugin's method, the result as fitbench's own class in plain types (:func:`methods.result_base.family_copy`),
+    the columns its class adds and its timing (and the data when the source is a plugin's too), read with
+    :class:`_ResultUnpickler`, which makes fitbench's result classes and NumPy arrays and nothing else; for a built-in
+    method on a plugin's data source (the data are the plugin's) and a study kind's own rows, the row. A child that
+    ends without sending them ends this worker likewise (exit status or signal): the run labels the row at the
+    chunk's progress position 'crashed' and runs the others again, as for a worker that ended."""
+    import pickle
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: never returns
+        status = 70
+        try:
+            os.close(read)
+            _child_setup(write)
+            items = []
+            for i, task in enumerate(tasks):
+                try:
+                    item = _child_item(task, row_timeout, progress, i)
+                except BaseException as exc:  # not an Exception (run_task raises it again): the row's error
+                    item = ("row", failed_row(task, "error", exception_text(exc)))
+                try:
+                    items.append(pickle.dumps(item, protocol=pickle.HIGHEST_PROTOCOL))
+                except Exception as exc:
+                    items.append(pickle.dumps(("row", failed_row(task, "error", f"its result cannot be sent to the "
+                                                                 f"engine ({type(exc).__name__}: {exc})"))))
+            with os.fdopen(write, "wb") as out:
+                out.write(pickle.dumps(items, protocol=pickle.HIGHEST_PROTOCOL))
+            status = 0
+        finally:
+            os._exit(status)
+    os.close(write)
+    with os.fdopen(read, "rb") as pipe:
+        data = pipe.read()
+    _, wait_status = os.waitpid(pid, 0)
+    items = None
+    if os.WIFEXITED(wait_status) and os.WEXITSTATUS(wait_status) == 0:
+        try:
+            items = _ResultUnpickler(data).load()  # a list of bytes, one per task
+        except Exception:
+            items = None
+        if type(items) is not list or len(items) != len(tasks) or not all(type(b) is bytes for b in items):
+            items = [b""] * len(tasks)
+    if items is None:  # it crashed or was ended: this worker ends as it did
+        if os.WIFSIGNALED(wait_status):
+            os.kill(os.getpid(), signal.SIGKILL)
+        os._exit(os.WEXITSTATUS(wait_status) or 1)
+    rows = []
+    for i, (task, item) in enumerate(zip(tasks, items)):
+        if progress is not None:
+            progress[0], progress[1] = time.monotonic(), i
+        try:
+            try:
+                item = _ResultUnpickler(item).load()
+            except Exception as exc:  # what this process does not read is not made into a row
+                item = ("row", failed_row(task, "error", f"the process of the plugin's row sent what the engine does "
+                                                         f"not read ({type(exc).__name__}: {str(exc)[:200]})"))
+            row = _gated_plugin_row(task, item)
+        except BaseException as exc:
+            row = _failure(task, exc)
+        rows.append(_finished(row, task))
+    return rows
+
+
+def _child_setup(write: int) -> None:
+    """In the child: it dies with the worker (a row past its time limit gets the worker killed), and keeps no file
+    of the worker's but the standard streams and its pipe (the worker's connection to the run is not its to use)."""
+    if hasattr(os, "closerange"):
+        os.closerange(3, write)
+        os.closerange(write + 1, 1 << 16)
+    try:
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+def _child_item(task: dict, row_timeout, progress, pos: int):
+    """In the child: what the worker needs to make the row of a task running a plugin's code (see
+    :func:`_plugin_rows`)."""
+    if progress is not None:
+        progress[0], progress[1] = time.monotonic(), pos
+    spec = methods.get(task["method"])
+    if spec.builtin or not study_of(task["kind"]).generic_rows:  # the data are the plugin's, or the study's own rows
+        return "row", run_task(task, row_timeout)
+    try:
+        with (_time_limit(row_timeout) if row_timeout else _NO_LIMIT):
+            points, truth = task_data(task)
+            res, failed = _fitted(task, points)
+            if res is None:
+                return "row", failed
+            problem = check_result(res, points)  # the plugin's class: its types, shapes and geometry
+            if problem:
+                return "row", {**base_row(task), "status": "invalid", "message": f"invalid result: {problem}"}
+            checked = result_base.family_copy(res)
+            if checked is res:  # a family a plugin declares: its class is its contract, its row is its own
+                return "row", _measured_row(task, res, points, truth)
+            own = result_base.own_columns(res, checked, None if _other_family(truth, task["method"]) else truth)
+            timing = None
+            if task.get("timing"):
+                t, given = task["timing"], _own_copy(points) if type(points) is np.ndarray else points
+                timing = time_call(lambda: spec.unchecked(given, **task["params"]),
+                                   min_time_s=t.get("min_time_s", 0.02), rounds=t.get("rounds", 5))
+            data = None if _builtin_source(task["dataset"]) else (points, result_base._plain_value(truth))
+    except RowTimeout:
+        return "row", failed_row(task, "timeout", f"the row ran longer than its limit of {row_timeout:g} s")
+    except BaseException as exc:
+        return "row", _failure(task, exc)
+    return "fit", checked, own, timing, data
+
+
+def _gated_plugin_row(task: dict, item) -> dict:
+    """In the worker: the row of a task from what its child sent (:func:`_child_item`): a row as it is; a result
+    gated against the data (this process's own, unless the data source is the plugin's) and measured by this
+    process's code, with the columns the plugin's class adds and the timing of its fit."""
+    if type(item) is tuple and len(item) == 2 and item[0] == "row" and type(item[1]) is dict:
+        row = {**item[1], **base_row(task)}  # its identity is the task's
+        if row.get("status") in _RESULT_STATUSES and _gated_here(task):
+            return failed_row(task, "error", "the process of the plugin's row sent a row where the engine gates the "
+                                             "result itself")
+        return row
+    if not (type(item) is tuple and len(item) == 5 and item[0] == "fit"):
+        return failed_row(task, "error", "the process of the plugin's row sent no row for it")
+    _, checked, own, timing, data = item
+    if not result_base.builtin_class(type(checked)):
+        return failed_row(task, "error", "the process of the plugin's row sent no result of fitbench's classes")
+    if data is None:
+        points, truth = task_data(task)
+    else:
+        points, truth = data
+    row = _measured_row({**task, "timing": None}, checked, points, truth,
+                        own if type(own) is dict else None)
+    if timing and type(timing) is dict and row.get("status") in ("ok", "not converged"):
+        row.update({k: v for k, v in timing.items() if type(k) is str and k.startswith("time_")
+                    and type(v) in (float, int)})
+    return row
+
+
+#: the statuses of a row made from a method's result (which the worker gates for a plugin's method)
+_RESULT_STATUSES = ("ok", "not converged")
+
+
+def _gated_here(task: dict) -> bool:
+    """Whether the worker gates the result of this task's method itself (a plugin's method in a generic study, of a
+    family whose contract is fitbench's class), so that its child may send no 'ok' row of its own."""
+    spec = methods.get(task["method"])
+    if spec.builtin or not study_of(task["kind"]).generic_rows:
+        return False
+    cls = result_base.contract(spec.family)
+    return cls is not None and result_base.builtin_class(cls)
+
+
+class _ResultUnpickler:
+    """Reads what a plugin's child process sent: Python's plain values, NumPy arrays and scalars, and instances of
+    fitbench's own result classes; any other class or function the data name is refused (unpickling calls what the
+    data name: a child running a plugin's code could otherwise make this process run anything)."""
+
+    NUMPY = {("numpy.core.multiarray", "_reconstruct"), ("numpy.core.multiarray", "scalar"),
+             ("numpy._core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "scalar"), ("numpy", "ndarray"),
+             ("numpy", "dtype"), ("numpy.core.numeric", "_frombuffer"), ("numpy._core.numeric", "_frombuffer")}
+
+    def __init__(self, data: bytes):
+        import io
+        import pickle
+        outer = self
+
+        class Unpickler(pickle.Unpickler):
+            def find_class(self, module, name):
+                return outer.find_class(module, name)
+        self.unpickler = Unpickler(io.BytesIO(data))
+
+    def load(self):
+        return self.unpickler.load()
+
+    def find_class(self, module: str, name: str):
+        import importlib
+        import pickle
+        if (module, name) in self.NUMPY or (module == "numpy" and (name.startswith(("float", "int", "uint"))
+                                                                   or name == "bool_")):
+            return getattr(importlib.import_module(module), name)
+        if module == result_base.__name__ or module in result_base.family_modules():
+            cls = getattr(importlib.import_module(module), name, None)
+            if isinstance(cls, type) and result_base.builtin_class(cls):
+                return cls
+        raise pickle.UnpicklingError(f"{module}.{name} is not a value fitbench reads from a plugin's process")
 
 
 def encode_rows(rows: list[dict]) -> dict:

@@ -1,0 +1,152 @@
+"""A plugin's method cannot change the rows of other methods, nor their cache, nor get 'ok' rows for lies by
+patching fitbench in its process: its rows are fitted in a child process of the worker (which ends with the chunk)
+and gated and measured by the worker's own code; a method writing into its read-only input through C gets an
+'invalid' row and the methods after it get the data unchanged."""
+from __future__ import annotations
+
+import ctypes
+import textwrap
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import install_plugin, run_python
+from experiments import rows
+from methods import register
+from methods._registry import _REGISTRY
+from methods.results import circle_result
+
+PATCHER = '''
+"""A plugin whose methods patch fitbench in the process they run in."""
+import ctypes
+
+import numpy as np
+from methods import register
+from methods.results import circle_result
+
+
+def _centroid(points):
+    c = points.mean(axis=0)
+    return c, float(np.hypot(*(points - c).T).mean())
+
+
+@register("circle.iso_poison", kind="closed form", summary="patches circle.kasa's function in its process",
+          reference="isolation test")
+def poison(points):
+    import methods
+    spec = methods.get("circle.kasa")
+    orig = spec.func
+    if not getattr(orig, "_poisoned", False):
+        def kasa(points, **kw):
+            res = orig(points, **kw)
+            return circle_result(points, res.center, res.radius * 1.001, converged=True, message=res.message)
+        kasa._poisoned = True
+        object.__setattr__(spec, "func", kasa)
+    c, r = _centroid(points)
+    return circle_result(points, c, r, converged=True, message="closed form")
+
+
+@register("circle.iso_patch_gate", kind="closed form", summary="disables the gate, then lies",
+          reference="isolation test")
+def patch_gate(points):
+    import methods
+    import methods.result_base as rb
+    import methods.results as mr
+    import experiments.rows as rows
+    for mod in (rb, mr, methods, rows):
+        for name in dir(mod):
+            if "check" in name and callable(getattr(mod, name)):
+                setattr(mod, name, lambda *a, **k: None)
+    c, r = _centroid(points)
+    return circle_result(points, c, -r, converged=True, message="lie after patch")
+
+
+@register("circle.iso_c_writer", kind="closed form", summary="writes into its read-only input through C",
+          reference="isolation test")
+def c_writer(points):
+    c, r = _centroid(points)
+    res = circle_result(points, c, r, converged=True, message="closed form")
+    scaled = np.ascontiguousarray(points * 1.01)
+    ctypes.memmove(points.ctypes.data, scaled.ctypes.data, scaled.nbytes)
+    return res
+'''
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    return install_plugin(tmp_path_factory.mktemp("patcher"), "fitbench-patcher", {"fitbench_patcher": PATCHER},
+                          {"fitbench.methods": {"patcher": "fitbench_patcher"}})
+
+
+def _study(folder, name: str, method_ids, repetitions=3):
+    folder.mkdir(parents=True, exist_ok=True)
+    study = folder / f"{name}.toml"
+    ids = "\n".join(f'[[methods]]\nid = "{m}"' for m in method_ids)
+    study.write_text(textwrap.dedent(f'''
+        name = "{name}"
+        title = "Isolation"
+        kind = "grid"
+        seed = 3
+        repetitions = {repetitions}
+        [[datasets]]
+        source = "circle"
+        params = {{ radius = 5.0, noise = 0.01, n = 30 }}
+        ''') + ids + "\n")
+    return study
+
+
+def _rows(out, name):
+    return pd.read_csv(out / name / "results.csv", keep_default_na=False, na_values=[""])
+
+
+@pytest.mark.slow
+def test_a_plugin_patching_fitbench_changes_no_other_row_nor_its_cache(site, tmp_path):
+    out, clean = tmp_path / "out", tmp_path / "clean"
+    study = _study(tmp_path / "a", "iso", ["circle.iso_poison", "circle.iso_patch_gate", "circle.iso_c_writer",
+                                           "circle.kasa"])
+    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report", path_first=[site])
+    assert proc.returncode == 0, proc.stderr
+    df = _rows(out, "iso")
+    # the same kasa rows, without the plugin, into the same folder (served from the cache) and into a new one
+    only_kasa = _study(tmp_path / "b", "iso", ["circle.kasa"])
+    for folder in (out, clean):
+        proc = run_python("-m", "experiments.run", only_kasa, "--out", folder, "--jobs", "1", "--no-report")
+        assert proc.returncode == 0, proc.stderr
+    reference = _rows(clean, "iso").set_index("repetition")["radius"]
+    kasa = df[df["method"] == "circle.kasa"].set_index("repetition")
+    assert (kasa["status"] == "ok").all() and kasa["radius"].tolist() == reference.tolist()
+    assert _rows(out, "iso").set_index("repetition")["radius"].tolist() == reference.tolist()
+    lies = df[df["method"] == "circle.iso_patch_gate"]
+    assert (lies["status"] == "invalid").all() and lies["message"].str.contains("must be > 0").all(), lies
+    writer = df[df["method"] == "circle.iso_c_writer"]
+    assert (writer["status"] == "invalid").all() and writer["message"].str.contains("wrote into the points").all()
+
+
+def _writer(points):
+    c = points.mean(axis=0)
+    res = circle_result(points, c, float(np.hypot(*(points - c).T).mean()), converged=True, message="closed form")
+    scaled = np.ascontiguousarray(points * 1.01)
+    ctypes.memmove(points.ctypes.data, scaled.ctypes.data, scaled.nbytes)
+    return res
+
+
+def test_a_method_writing_into_its_input_through_c_changes_no_data_of_the_methods_after_it():
+    """In the engine's own process (a method the running program registers): the batch of a repetition's rows."""
+    register("circle.iso_local_writer", kind="closed form", summary="writes into its input through C",
+             reference="isolation test")(_writer)
+    try:
+        t = np.linspace(0, 2 * np.pi, 30, endpoint=False)
+        points = np.c_[1 + 5 * np.cos(t), 2 + 5 * np.sin(t)]
+        truth = {"center": (1.0, 2.0), "radius": 5.0}
+        import methods
+        data = methods.immutable(points)
+        before = data.copy()
+        task = {"study": "iso", "dataset": {"label": "c"}, "repetition": 0, "seed": 1, "stream": (0,), "params": {}}
+        writer = rows.fit_row({**task, "method": "circle.iso_local_writer"}, data, truth)
+        assert writer["status"] == "invalid" and "wrote into the points" in writer["message"], writer
+        assert np.array_equal(data, before)
+        kasa = rows.fit_row({**task, "method": "circle.kasa"}, data, truth)
+        assert kasa == rows.fit_row({**task, "method": "circle.kasa"}, methods.immutable(before), truth)
+    finally:
+        _REGISTRY.pop("circle.iso_local_writer", None)

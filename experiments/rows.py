@@ -60,7 +60,20 @@ def load_data(spec: dict, seed: int, stream: list[int]):
         if problem:
             raise DataSourceError(f"data set {spec.get('label', name)!r} (source {name!r}) {problem}; the data "
                                   f"source is at fault, not the methods")
+        if type(data) is not np.ndarray or (data.dtype is not _FLOAT64 and data.dtype != _FLOAT64):
+            data = _float64_points(data)
     return data, truth
+
+
+_FLOAT64 = np.dtype(np.float64)
+
+
+def _float64_points(data: np.ndarray) -> np.ndarray:
+    """Points of a data source as the read-only float64 (N, 2) array the methods and the gate both see (a float32,
+    integer or ndarray-subclass array converted once here: a method fitting the float64 values and a gate checking
+    them against the source's float32 ones would call an honest fit a lie). A masked array reaches here without a
+    masked value (:func:`points_problem`)."""
+    return methods.immutable(np.ascontiguousarray(np.ma.getdata(data), dtype=np.float64))
 
 
 _isfinite = np.isfinite
@@ -68,7 +81,8 @@ _isfinite = np.isfinite
 
 def points_problem(data) -> str | None:
     """What is wrong with the points a data source gave (the contract of ``gives=numpy.ndarray``, and of an undeclared
-    source giving an array: an (N, 2) array of finite real numbers, N >= 1), or None. One pass over the points."""
+    source giving an array: an (N, 2) array of finite real numbers, N >= 1, none of them masked; any real dtype, made
+    float64 by :func:`load_data`), or None. One pass over the points."""
     if not isinstance(data, np.ndarray):
         return f"gave a {type(data).__name__}, not an (N, 2) numpy array of points"
     if data.dtype.kind not in "fiu":
@@ -77,6 +91,10 @@ def points_problem(data) -> str | None:
         return f"gave points of shape {data.shape}, not an (N, 2) array of x, y"
     if not len(data):
         return "gave no points"
+    if isinstance(data, np.ma.MaskedArray) and np.ma.getmaskarray(data).any():
+        masked = int(np.ma.getmaskarray(data).any(axis=1).sum())
+        return (f"gave a masked array with {masked} of {len(data)} points masked: give the measured points only, as "
+                f"a plain array (numpy.ma.compress_rows(points)); a method would fit the values under the mask")
     if data.dtype.kind == "f":
         if not _isfinite(data).all():  # one sweep (no overflow to silence: half the cost of a sum under errstate)
             bad = np.flatnonzero(~np.isfinite(data).all(axis=1))

@@ -460,7 +460,11 @@ def _requirements(dist_name: str) -> dict:
     """{distribution: version} of what a plugin's distribution requires (its ``Requires-Dist``, extras excepted), as
     installed (None: not installed)."""
     out = {}
-    for req in metadata.distribution(dist_name).requires or []:
+    try:
+        requires = metadata.distribution(dist_name).requires or []
+    except metadata.PackageNotFoundError:  # named by packages_distributions, its metadata gone since: nothing declared
+        requires = []
+    for req in requires:
         name, _, marker = req.partition(";")
         if "extra" in marker:
             continue

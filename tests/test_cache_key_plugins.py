@@ -138,3 +138,48 @@ def test_the_libraries_of_the_built_in_methods_are_found_by_their_imports():
     kasa = codehash.libraries_of(methods.get("circle.kasa").module)
     assert magnify["shapely"] and magnify["numpy"] and roundness["finufft"] and kasa["numpy"]
     assert "shapely" not in kasa and "finufft" not in kasa and not {"os", "math", "methods", "experiments"} & set(kasa)
+
+
+REQ_PLUGIN = '''
+"""A plugin fitter whose library is reached through a name (a registry of another library), never imported here."""
+import importlib
+
+import numpy as np
+from methods import register
+from methods.results import circle_result
+
+LIBRARY = "fakedep" + "_declared"
+
+
+@register("circle.keyed_req", kind="closed form", summary="a library by a computed name (cache-key test)",
+          reference="fitbench cache-key test")
+def keyed_req(points):
+    c = points.mean(axis=0)
+    scale = importlib.import_module(LIBRARY).scale()
+    return circle_result(points, c, float(np.hypot(*(points - c).T).mean()) * scale, converged=True,
+                         message="closed form")
+'''
+
+
+def test_the_version_of_a_declared_requirement_is_keyed(tmp_path):
+    """A library the plugin's code never names in an import is keyed by its distribution's ``dependencies``."""
+    src = tmp_path / "req_src"
+    src.mkdir()
+    (src / "fb_keyed_req.py").write_text(textwrap.dedent(REQ_PLUGIN))
+    (src / "pyproject.toml").write_text(
+        '[build-system]\nrequires = ["setuptools>=61"]\nbuild-backend = "setuptools.build_meta"\n'
+        '[project]\nname = "fb-keyed-req"\nversion = "0.1"\ndependencies = ["fakedep-declared>=1.0"]\n'
+        '[project.entry-points."fitbench.methods"]\nkeyed = "fb_keyed_req"\n'
+        '[tool.setuptools]\npy-modules = ["fb_keyed_req"]\n')
+    plugin = tmp_path / "plugin_site"
+    out = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
+                          "--quiet", "--target", str(plugin), str(src)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    old = install_plugin(tmp_path / "old", "fakedep-declared", {"fakedep_declared": FAKEDEP.format(scale=1.0)}, {}, "1.0")
+    new = install_plugin(tmp_path / "new", "fakedep-declared", {"fakedep_declared": FAKEDEP.format(scale=2.0)}, {}, "2.0")
+    study = tmp_path / "keyed.toml"
+    study.write_text(STUDY.format(kind="grid", method="circle.keyed_req"))
+    out_dir = tmp_path / "out"
+    assert run(REPO, study, out_dir, [plugin, old]) == (2, 2)
+    assert run(REPO, study, out_dir, [plugin, old]) == (2, 0)
+    assert run(REPO, study, out_dir, [plugin, new]) == (2, 2), "an upgraded requirement must recompute the rows"

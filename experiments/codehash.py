@@ -376,15 +376,13 @@ def code_hash(*modules: str) -> str:
     return _digest(files, libraries_of(*modules))
 
 
-#: {distribution: version} of every library a code hash of this process was keyed by (``meta.json``: ``libraries``)
-KEYED_LIBRARIES: dict = {}
-
-
+@lru_cache(maxsize=None)
 def libraries_of(*modules: str) -> dict[str, str | None]:
     """{distribution: version} of the libraries the code of ``modules`` imports (by a statement anywhere in a module
     of their closure, or a call of :data:`_IMPORT_CALLS` with a literal name: ``lazy_module("shapely")``), and of the
     requirements a plugin's distribution declares (``Requires-Dist``); None for a library that is not installed (an
-    optional import). The standard library and fitbench's own packages are not libraries."""
+    optional import). The standard library and fitbench's own packages are not libraries. (Remembered: do not change
+    the dict it returns.)"""
     out: dict = {}
     for m in modules:
         closure, outside = _walk(m)
@@ -394,7 +392,6 @@ def libraries_of(*modules: str) -> dict[str, str | None]:
             if not _in_repo(path):
                 for dist_name in _packages_distributions().get(name.split(".")[0], []):
                     out.update(_requirements(dist_name))
-    KEYED_LIBRARIES.update(out)
     return dict(sorted(out.items()))
 
 

@@ -16,6 +16,7 @@ from experiments.rows import source_of
 #: keyed with that code, by its imports (``experiments.codehash.libraries_of``), not by a list kept by hand.
 NUMBER_PACKAGES = ("numpy",)
 _CODE: dict = {}
+_LIBRARIES: dict = {}
 _ENV: dict = {}
 
 
@@ -40,16 +41,29 @@ def environment() -> dict:
 
 def forget_data_hashes() -> None:
     """Forget the code hashes of the data sets (a run of a process that ran studies before: the data files it reads
-    may have changed since; the code it runs has not, its modules are the ones loaded)."""
+    may have changed since; the code it runs has not, its modules are the ones loaded), and the libraries of the
+    tasks keyed so far (:func:`libraries`: those of the study that starts)."""
     _CODE.clear()
+    _LIBRARIES.clear()
+
+
+def libraries() -> dict:
+    """{distribution: version} of the libraries the code of the tasks keyed since :func:`forget_data_hashes` imports (a
+    study's rows: ``meta.json``'s ``libraries``), as their keys hold them (``experiments.codehash.libraries_of``)."""
+    out: dict = {}
+    for libs in _LIBRARIES.values():
+        out.update(libs)
+    return dict(sorted(out.items()))
 
 
 def reset_caches() -> None:
     """Forget the code hashes and the environment (a test that edits code in the same process)."""
     from experiments import codehash
     _CODE.clear()
+    _LIBRARIES.clear()
     _ENV.clear()
     codehash.code_hash.cache_clear()
+    codehash.libraries_of.cache_clear()
     codehash.module_closure.cache_clear()
     codehash._file_hash.cache_clear()
     codehash._packages_distributions.cache_clear()
@@ -69,12 +83,16 @@ def task_code(task: dict) -> dict:
         from experiments import codehash
         study = f"experiments.studies.{task['kind']}"
         method = methods.get(task["method"]).module if task["method"] in _method_ids() else None
+        has_source = _has_source(spec)
         code = {"method": module_code(method) if method else None,
-                "source": source_hash(spec) if _has_source(spec) else None,
+                "source": source_hash(spec) if has_source else None,
                 "metrics": codehash.code_hash("experiments.metrics", "experiments.timing"),
                 "rows": codehash.code_hash("experiments.rows"),
                 "study": codehash.code_hash(study)}
         _CODE[memo] = code
+        source = sources.get_source(source_of(spec)).module if has_source else None
+        _LIBRARIES[memo] = codehash.libraries_of(*(m for m in (method, source) if m), "experiments.metrics",
+                                                 "experiments.timing", "experiments.rows", study)
     return code
 
 

@@ -50,10 +50,9 @@ def config_hash(config: dict) -> str:
 
 
 def collect(config: dict) -> dict:
-    """The run's provenance for ``meta.json``; ``libraries`` are the versions of the libraries the code of the rows
-    imports, as their cache keys hold them (``experiments.codehash.libraries_of``: those keyed in this process so far,
-    which for a run of several studies includes the earlier studies')."""
-    from experiments.codehash import KEYED_LIBRARIES
+    """The run's provenance for ``meta.json``; ``libraries`` are the versions of the libraries the code of the study's
+    rows imports, as their cache keys hold them (``experiments.codekeys.libraries``)."""
+    from experiments.codekeys import libraries
     versions = {"python": sys.version.split()[0]}
     for pkg in PACKAGES:
         try:
@@ -65,7 +64,7 @@ def collect(config: dict) -> dict:
         "git_commit": _git("rev-parse", "HEAD"),
         "git_dirty": bool(status) if status is not None else None,
         "versions": versions,
-        "libraries": dict(sorted(KEYED_LIBRARIES.items())),
+        "libraries": libraries(),
         "blas": _blas(),
         "cpu": _cpu(),
         "cores": os.cpu_count(),

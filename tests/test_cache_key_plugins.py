@@ -2,6 +2,7 @@
 a computed name, a data file beside a method of this repository, and the versions of the libraries a row's code
 imports (a plugin's dependencies, shapely, finufft). Each case: the resumed run recomputes the rows instead of
 serving the old ones as up to date."""
+import json
 import subprocess
 import sys
 import textwrap
@@ -127,6 +128,15 @@ def test_the_version_of_a_library_the_method_imports_is_keyed(tmp_path):
     assert run(REPO, study, out, [plugin, old]) == (2, 2)
     assert run(REPO, study, out, [plugin, old]) == (2, 0)
     assert run(REPO, study, out, [plugin, new]) == (2, 2), "an upgraded library must recompute the rows"
+    # meta.json names the libraries of each study's rows: a study run after it in the same command has its own
+    builtin = tmp_path / "builtin.toml"
+    builtin.write_text(STUDY.format(kind="grid", method="circle.kasa").replace('name = "keyed"', 'name = "builtin"'))
+    both = run_python("-m", "experiments.run", study, builtin, "--out", out, "--jobs", "1", "--no-report",
+                      path_first=[plugin, new], timeout=300)
+    assert both.returncode == 0, both.stderr
+    keyed = json.loads((out / "keyed" / "meta.json").read_text())["libraries"]
+    alone = json.loads((out / "builtin" / "meta.json").read_text())["libraries"]
+    assert keyed["fakedep_keyed"] == "2.0" and keyed["numpy"] and alone["numpy"] and "fakedep_keyed" not in alone
 
 
 def test_the_libraries_of_the_built_in_methods_are_found_by_their_imports():

@@ -43,6 +43,7 @@ from concurrent.futures import CancelledError
 
 from experiments.executors import (KILL_GRACE_S, Chunks, Progress, _main_module_not_imported_by_workers,
                                   _one_blas_thread_per_worker, _store)
+from experiments.localworkers import end_process_group
 from methods import InvalidInputError
 
 #: how long a connection to a Dask scheduler may take before the run gives up (seconds)
@@ -189,6 +190,7 @@ class _RowProcess:
     def stop(self, now: bool = False) -> None:
         with contextlib.suppress(Exception):
             if now:
+                end_process_group(self.proc.pid)   # the row process leads a group: with the processes it started
                 self.proc.kill()
             else:
                 self.conn.send(None)
@@ -198,6 +200,7 @@ class _RowProcess:
             self.proc.kill()
             with contextlib.suppress(subprocess.TimeoutExpired):
                 self.proc.wait(timeout=5)
+        end_process_group(self.proc.pid)   # what its methods started and left in its group (their ids hold it)
         with contextlib.suppress(Exception):
             self.conn.close()
         with contextlib.suppress(Exception):

@@ -84,12 +84,54 @@ def _die_with_parent(parent_pid: int) -> None:
         threading.Thread(target=watch, daemon=True, name="fitbench-parent-watchdog").start()
 
 
+def _lead_own_group() -> None:
+    """Worker start: the worker leads a process group of its own (POSIX ``setpgid``), which the processes a method
+    starts join (``subprocess.Popen``, ``multiprocessing``, ``os.fork``: a child is in its parent's group unless it
+    leaves it), so that the run ends them with the worker (:func:`end_process_group`). Not through
+    ``PR_SET_PDEATHSIG``: the kernel clears it in a forked child, and a method's child could not be asked to set it.
+    A process that starts a session of its own (``start_new_session=True``, a daemon) leaves the group on purpose
+    and is not ended. The worker is then outside the terminal's foreground group: Ctrl-C reaches the run alone
+    (workers ignore it anyway: the run stops them), and the run's own end ends them (:func:`_die_with_parent`)."""
+    if hasattr(os, "setpgid"):
+        with contextlib.suppress(OSError):
+            os.setpgid(0, 0)
+
+
+def end_process_group(pid: int | None) -> None:
+    """SIGKILL to the process group ``pid`` leads (a worker's, :func:`_lead_own_group`: the worker and what its
+    methods started that is still in it). Call it before the worker is reaped (``join``), when it can be: while
+    its process (running or a zombie) or a member of its group exists, no other process can be given that id."""
+    if pid is None or not hasattr(os, "killpg"):
+        return
+    with contextlib.suppress(OSError):   # ESRCH: no such group (the worker never made it, or all have ended)
+        os.killpg(pid, signal.SIGKILL)
+
+
+def _ended_unreaped(pid: int, timeout: float) -> bool:
+    """Wait up to ``timeout`` seconds for child ``pid`` to end without reaping it (``waitid`` with ``WNOWAIT``): its
+    id stays its own, so its process group can be ended safely (:func:`end_process_group`). False if it did not end
+    in time, or this cannot be known here (no ``waitid``)."""
+    if not hasattr(os, "waitid") or not hasattr(os, "WNOWAIT"):
+        return False
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            if os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None:
+                return True
+        except ChildProcessError:   # reaped already (by multiprocessing's is_alive): nothing holds its id now
+            return False
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.002)
+
+
 _CALL = "call"  # the first item of a message that asks a worker for func(*args), not for rows
 
 
 def _worker_main(conn, parent_pid: int, progress) -> None:
     """A local worker: receive chunks, send back their rows as columns, until told to stop."""
     _die_with_parent(parent_pid)  # first: a run killed while this worker imports takes it along
+    _lead_own_group()  # what a method starts is in the worker's group, ended with it (_Worker.stop)
     import warnings
 
     from methods.plugins import PluginLoadWarning
@@ -168,11 +210,20 @@ class _Worker:
                 self.conn.send(None)
 
     def stop(self, now: bool = False) -> None:
+        """End the worker (``now``: killed, else told to end and waited for up to 5 s, then killed) and its process
+        group with it: what a method started in the worker does not outlive it (:func:`_lead_own_group`)."""
+        pid = self.proc.pid
         if now:
+            end_process_group(pid)   # the worker leads it: one signal ends the worker and its children
             with contextlib.suppress(Exception):
                 self.proc.kill()
         else:
             self.ask_to_stop()
+            if not _ended_unreaped(pid, 5.0):
+                with contextlib.suppress(Exception):
+                    self.proc.kill()
+                _ended_unreaped(pid, 5.0)
+            end_process_group(pid)
         self.proc.join(timeout=5)
         if self.proc.is_alive():
             self.proc.kill()

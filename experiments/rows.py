@@ -760,9 +760,10 @@ def _gated_here(task: dict) -> bool:
 
 
 class _ResultUnpickler:
-    """Reads what a plugin's child process sent: Python's plain values, NumPy arrays and scalars, and instances of
-    fitbench's own result classes; any other class or function the data name is refused (unpickling calls what the
-    data name: a child running a plugin's code could otherwise make this process run anything)."""
+    """Reads what a plugin's child process sent: Python's plain values, NumPy arrays and scalars, instances of
+    fitbench's own result classes and of the data classes of its loaded modules; any other class or function the data
+    name is refused (unpickling calls what the data name: a child running a plugin's code could otherwise make this
+    process run anything)."""
 
     NUMPY = {("numpy.core.multiarray", "_reconstruct"), ("numpy.core.multiarray", "scalar"),
              ("numpy._core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "scalar"), ("numpy", "ndarray"),
@@ -782,14 +783,21 @@ class _ResultUnpickler:
         return self.unpickler.load()
 
     def find_class(self, module: str, name: str):
+        import dataclasses
         import importlib
         import pickle
+        import sys
         if (module, name) in self.NUMPY or (module == "numpy" and (name.startswith(("float", "int", "uint"))
                                                                    or name == "bool_")):
             return getattr(importlib.import_module(module), name)
         if module == result_base.__name__ or module in result_base.family_modules():
             cls = getattr(importlib.import_module(module), name, None)
             if isinstance(cls, type) and result_base.builtin_class(cls):
+                return cls
+        if module.partition(".")[0] in ("methods", "datasets") and module in sys.modules:
+            # a data class of fitbench's own (the data a source of a plugin gives to a method that takes no points)
+            cls = getattr(sys.modules[module], name, None)
+            if isinstance(cls, type) and cls.__module__ == module and dataclasses.is_dataclass(cls):
                 return cls
         raise pickle.UnpicklingError(f"{module}.{name} is not a value fitbench reads from a plugin's process")
 

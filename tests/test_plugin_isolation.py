@@ -150,3 +150,27 @@ def test_a_method_writing_into_its_input_through_c_changes_no_data_of_the_method
         assert kasa == rows.fit_row({**task, "method": "circle.kasa"}, methods.immutable(before), truth)
     finally:
         _REGISTRY.pop("circle.iso_local_writer", None)
+
+
+def test_what_a_plugin_s_process_sends_can_name_no_code():
+    """The worker reads the child's bytes with an unpickler that makes Python's values, NumPy arrays, fitbench's result
+    classes and data classes, and nothing else: a pickle naming a function (os.system) is refused, not called."""
+    import os
+    import pickle
+
+    from datasets.circular_test import TestConditions
+    t = np.linspace(0, 2 * np.pi, 30, endpoint=False)
+    points = np.c_[np.cos(t), np.sin(t)]
+    res = circle_result(points, (0.0, 0.0), 1.0, converged=True, message="exact")
+    item = ("fit", res, {"lobes": 3.0}, None, (points.astype(np.float32), {"radius": np.float64(1.0)}))
+    back = rows._ResultUnpickler(pickle.dumps(item, protocol=pickle.HIGHEST_PROTOCOL)).load()
+    assert back[1].radius == 1.0 and np.array_equal(back[1].residuals, res.residuals)
+    assert back[4][0].dtype == np.float32 and np.array_equal(back[4][0], points.astype(np.float32))
+    conditions = rows._ResultUnpickler(pickle.dumps(TestConditions.__new__(TestConditions))).load()
+    assert type(conditions) is TestConditions
+
+    class Evil:
+        def __reduce__(self):
+            return os.system, ("echo pwned",)
+    with pytest.raises(pickle.UnpicklingError, match="posix.system is not a value fitbench reads"):
+        rows._ResultUnpickler(pickle.dumps(("fit", Evil()))).load()

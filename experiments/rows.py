@@ -163,7 +163,7 @@ def _fitted(task: dict, points):
         failed = None
     finally:
         end_if_forked(pid)
-    if own is not None and not np.array_equal(own, points):
+    if own is not None and not _unchanged(own, points):
         return None, {**base_row(task), "status": "invalid", "message": _WROTE_INTO_INPUT}
     return res, failed
 
@@ -182,6 +182,15 @@ def end_if_forked(pid: int) -> None:
 #: the message of the row of a method that changed the points it was given
 _WROTE_INTO_INPUT = ("invalid result: the method wrote into the points it was given (read-only: changed through C or "
                      "ctypes, past NumPy's flags); the methods after it got the data unchanged")
+
+
+def _unchanged(copy: np.ndarray, points: np.ndarray) -> bool:
+    """Whether a method's copy of the points still equals them (NaN where NaN was: data a source gives otherwise than
+    as checked points may hold it)."""
+    try:
+        return np.array_equal(copy, points, equal_nan=True)
+    except TypeError:  # a dtype without NaN
+        return np.array_equal(copy, points)
 
 
 def _own_copy(points):

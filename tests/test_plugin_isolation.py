@@ -146,10 +146,17 @@ def test_a_method_writing_into_its_input_through_c_changes_no_data_of_the_method
         writer = rows.fit_row({**task, "method": "circle.iso_local_writer"}, data, truth)
         assert writer["status"] == "invalid" and "wrote into the points" in writer["message"], writer
         assert np.array_equal(data, before)
+        # a method that writes nothing is not blamed, NaN in the data included
+        register("circle.iso_local_reader", kind="closed form", summary="reads its input",
+                 reference="isolation test")(lambda p: circle_result(p, (1.0, 2.0), 5.0, converged=False, message="m"))
+        with_nan = methods.immutable(np.r_[points, [[np.nan, 0.0]]])
+        reader = rows.fit_row({**task, "method": "circle.iso_local_reader"}, with_nan, truth)
+        assert reader["status"] == "skipped" and "wrote into" not in reader["message"], reader  # NaN: refused
         kasa = rows.fit_row({**task, "method": "circle.kasa"}, data, truth)
         assert kasa == rows.fit_row({**task, "method": "circle.kasa"}, methods.immutable(before), truth)
     finally:
         _REGISTRY.pop("circle.iso_local_writer", None)
+        _REGISTRY.pop("circle.iso_local_reader", None)
 
 
 def test_what_a_plugin_s_process_sends_can_name_no_code():

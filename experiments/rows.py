@@ -156,7 +156,10 @@ def _fitted(task: dict, points):
     try:
         res = spec.unchecked(points if own is None else own, **task["params"])  # gated by _measured_row
     except InvalidInputError as exc:
-        res, failed = None, {**base_row(task), "status": "skipped", "message": str(exc)}
+        try:
+            res, failed = None, {**base_row(task), "status": "skipped", "message": str(exc)}
+        except Exception:   # a refusal whose str() raises: the method's own bug, named by its type
+            res, failed = None, {**base_row(task), "status": "error", "message": exception_text(exc)}
     except Exception as exc:
         res, failed = None, {**base_row(task), "status": "error", "message": exception_text(exc)}
     else:

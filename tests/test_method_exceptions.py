@@ -131,7 +131,8 @@ def test_a_row_names_the_exception_whose_str_raises(raisers):
 @pytest.mark.slow
 def test_a_study_s_rows_name_the_exceptions_the_methods_raised(site, tmp_path):
     study = tmp_path / "raisers.toml"
-    ids = ["circle.kasa", "circle.raise_weird", "circle.raise_bad_str", "circle.raise_weird_bad_str"]
+    ids = ["circle.kasa", "circle.raise_weird", "circle.raise_bad_str", "circle.raise_weird_bad_str",
+           "circle.raise_bad_refusal"]
     study.write_text(textwrap.dedent('''
         name = "raisers"
         title = "Methods raising odd exceptions"
@@ -152,3 +153,12 @@ def test_a_study_s_rows_name_the_exceptions_the_methods_raised(site, tmp_path):
         "error", "BadStr (its message cannot be printed: RuntimeError: no str for you)"]
     assert df.loc["circle.raise_weird_bad_str", ["status", "message"]].tolist() == [
         "error", "WeirdBadStr (its message cannot be printed: RuntimeError: no str either)"]
+    assert df.loc["circle.raise_bad_refusal", ["status", "message"]].tolist() == [
+        "error", "BadRefusal (its message cannot be printed: RuntimeError: no refusal text)"]
+
+
+def test_a_row_of_a_refusal_whose_str_raises_names_the_refusal(raisers):
+    from experiments import rows
+    row = rows.run_task(_task("circle.raise_bad_refusal"))
+    assert row["status"] == "error"
+    assert row["message"] == "BadRefusal (its message cannot be printed: RuntimeError: no refusal text)", row

@@ -13,6 +13,8 @@ import hashlib
 import json
 from pathlib import Path
 
+from methods.files import open_regular
+
 VERDICT_FILE = "verify.json"
 
 
@@ -30,8 +32,9 @@ def results_sha256(folder: Path) -> str | None:
 
 def last_verdict(results: Path) -> dict | None:
     """The verdict file of ``results`` (None when there is none or it is unreadable)."""
-    try:
-        verdict = json.loads((Path(results) / VERDICT_FILE).read_text(encoding="utf-8"))
+    try:   # a regular file only: a FIFO there blocked the report (NotRegularFileError is a ValueError)
+        with open_regular(Path(results) / VERDICT_FILE) as fh:
+            verdict = json.loads(fh.read())
     except (OSError, ValueError):
         return None
     return verdict if isinstance(verdict, dict) and "agree" in verdict and isinstance(verdict.get("studies"), list) \

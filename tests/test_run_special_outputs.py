@@ -67,3 +67,15 @@ def test_a_study_folder_that_is_a_file_is_one_line(study, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"experiments.run: error: {out / 'special_out'}: is not a folder; the run writes the outputs of "
                    f"study 'special_out' in it: remove it, or give another --out"], err
+
+
+@posix_only
+def test_the_report_of_a_folder_whose_verify_json_is_a_fifo_does_not_hang(tmp_path):
+    """The report reads the folder's verdict (verify.json): a FIFO there is no verdict, not a wait for a writer."""
+    results = tmp_path / "results"
+    (results / "half").mkdir(parents=True)
+    (results / "half" / "rows.sqlite").write_bytes(b"")   # an unfinished study: the folder holds one
+    os.mkfifo(results / "verify.json")
+    proc = run_python("-m", "experiments.report", "--results", results, "--out", tmp_path / "paper", timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "paper" / "report.md").is_file()

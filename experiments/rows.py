@@ -238,7 +238,15 @@ def _measured_row(task: dict, res, points, truth, sent: dict | None = None) -> d
         family = {c.name for c in type(res).COLUMNS}
         own = {**(own or {}), **{k: v for k, v in sent.items() if type(k) is str and k not in row
                                  and k not in family and type(v) in (float, int)}}
-    row.update(metrics(res, truth, own))
+    try:
+        measured = metrics(res, truth, own)
+    except (TypeError, ValueError) as exc:  # fitbench's class on checked values: the truth is what it cannot take
+        if not truth:
+            raise
+        metrics(res, None, own)  # without the truth it can: the data source is at fault
+        raise DataSourceError(f"data set {_label(task)} gave a truth that cannot be compared with a fit "
+                              f"({exception_text(exc)}); the data source is at fault, not the methods") from None
+    row.update(measured)
     if task.get("timing"):
         t = task["timing"]
         spec = methods.get(task["method"])
@@ -246,6 +254,15 @@ def _measured_row(task: dict, res, points, truth, sent: dict | None = None) -> d
         row.update(time_call(lambda: spec.unchecked(given, **task["params"]),
                              min_time_s=t.get("min_time_s", 0.02), rounds=t.get("rounds", 5)))
     return row
+
+
+def _label(task: dict) -> str:
+    """The data set of a task as its errors name it: ``'label' (source 'name')``."""
+    spec = task["dataset"]
+    try:
+        return f"{spec.get('label')!r} (source {source_of(spec)!r})"
+    except (KeyError, TypeError, AttributeError):
+        return repr(spec.get("label"))
 
 
 def _other_family(truth, method: str) -> tuple[str, str] | None:

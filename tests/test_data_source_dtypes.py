@@ -55,3 +55,11 @@ def test_points_of_another_float_type_or_a_masked_array_make_ok_rows(dtype_sourc
 def test_a_masked_array_with_masked_points_is_refused_naming_the_source(dtype_sources):
     with pytest.raises(DataSourceError, match=r"source 'test_dtype_masked'.* 1 of 31 points masked.*compress_rows"):
         load_data(_task("circle.kasa", "test_dtype_masked")["dataset"], 1, [0])
+
+
+def test_a_truth_that_cannot_be_compared_is_the_source_s_error_not_the_methods(dtype_sources):
+    points = load_data(_task("circle.kasa", "test_dtype_float32")["dataset"], 1, [0])[0]
+    for method in ("circle.kasa", "circle.gauss_newton"):
+        with pytest.raises(DataSourceError, match=r"data set 'test_dtype_float32' \(source 'test_dtype_float32'\) gave a "
+                                                  r"truth that cannot be compared .*TypeError.*not the methods"):
+            fit_row(_task(method, "test_dtype_float32"), points, {"center": ("a", "b"), "radius": "x"})

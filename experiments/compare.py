@@ -269,8 +269,11 @@ def _shown(path: Path) -> str:
 
 
 def _meta(folder: Path) -> dict | None:
+    path = folder / "meta.json"
+    if not path.is_file():  # a FIFO or a device would block the read: no meta.json to use
+        return None
     try:
-        meta = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
+        meta = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
     return meta if isinstance(meta, dict) else None
@@ -491,8 +494,11 @@ def other_code(entry: dict) -> bool:
 def _fingerprint(folder: Path) -> str | None:
     """The fingerprint ``meta.json`` records for a study's outputs (its rows' keys, config and the code that analyses
     them, this module included: ``experiments.engine.fingerprint``), None when there is none."""
+    path = Path(folder) / "meta.json"
+    if not path.is_file():
+        return None
     try:
-        value = json.loads((Path(folder) / "meta.json").read_text(encoding="utf-8")).get("fingerprint")
+        value = json.loads(path.read_text(encoding="utf-8")).get("fingerprint")
     except (OSError, ValueError, AttributeError):
         return None
     return value if isinstance(value, str) else None

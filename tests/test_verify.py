@@ -623,3 +623,15 @@ def test_a_helper_module_among_the_study_kinds_does_not_stop_verify(committed, t
     assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 0, capsys.readouterr()
     with pytest.raises(studies.StudyKindError, match="leading underscore"):
         studies.study_of("zz_helper")
+
+
+def test_a_fifo_for_meta_json_does_not_block_verify(committed, tmp_path, capsys):
+    """A FIFO in place of a run's meta.json (a file only the run writes) is no meta.json to verify with, never a read
+    that waits forever."""
+    import os
+    fresh = copy_run(committed, tmp_path)
+    meta = fresh / "vstudy" / "meta.json"
+    meta.unlink()
+    os.mkfifo(meta)
+    assert verify.main(["--results", str(committed), "--against", str(fresh)]) == 0
+    assert capsys.readouterr().out.startswith("vstudy: agree")

@@ -27,7 +27,6 @@ def environment() -> dict:
     if not _ENV:
         from importlib import metadata
 
-        from experiments.provenance import _blas
         from methods import kernel_path
         versions = {"python": ".".join(map(str, sys.version_info[:3]))}
         for pkg in NUMBER_PACKAGES:
@@ -35,8 +34,19 @@ def environment() -> dict:
                 versions[pkg] = metadata.version(pkg)
             except metadata.PackageNotFoundError:
                 versions[pkg] = None
-        _ENV.update(kernels=kernel_path(), versions=versions, blas=_blas())
+        _ENV.update(kernels=kernel_path(), versions=versions, blas=blas())
     return _ENV
+
+
+def blas() -> str:
+    """The BLAS library NumPy calls, as ``numpy.show_config`` names it ("unknown" where its format differs)."""
+    try:
+        import numpy as np
+        cfg = np.show_config(mode="dicts")
+        found = cfg.get("Build Dependencies", {}).get("blas", {})
+        return f"{found.get('name', '?')} {found.get('version', '')}".strip()
+    except Exception:  # numpy's config format is not a stable API
+        return "unknown"
 
 
 def forget_data_hashes() -> None:

@@ -25,16 +25,6 @@ def _git(*args) -> str | None:
     return out.stdout.strip() if out.returncode == 0 else None
 
 
-def _blas() -> str:
-    try:
-        import numpy as np
-        cfg = np.show_config(mode="dicts")
-        blas = cfg.get("Build Dependencies", {}).get("blas", {})
-        return f"{blas.get('name', '?')} {blas.get('version', '')}".strip()
-    except Exception:  # numpy's config format is not a stable API
-        return "unknown"
-
-
 def _cpu() -> str:
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -52,7 +42,7 @@ def config_hash(config: dict) -> str:
 def collect(config: dict) -> dict:
     """The run's provenance for ``meta.json``; ``libraries`` are the versions of the libraries the code of the study's
     rows imports, as their cache keys hold them (``experiments.codekeys.libraries``)."""
-    from experiments.codekeys import libraries
+    from experiments.codekeys import blas, libraries
     versions = {"python": sys.version.split()[0]}
     for pkg in PACKAGES:
         try:
@@ -65,7 +55,7 @@ def collect(config: dict) -> dict:
         "git_dirty": bool(status) if status is not None else None,
         "versions": versions,
         "libraries": libraries(),
-        "blas": _blas(),
+        "blas": blas(),
         "cpu": _cpu(),
         "cores": os.cpu_count(),
         "platform": platform.platform(),

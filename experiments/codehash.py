@@ -328,7 +328,23 @@ def _in_repo(path: Path) -> bool:
 
 @lru_cache(maxsize=None)
 def _in_repo_text(path: str) -> bool:
-    return REPO in Path(path).resolve().parents
+    """Whether ``path`` is the repository's own code: under its folder, and not in an installation of Python or of
+    libraries made there (a virtual environment in the checkout, ``.venv`` as ``.ci/run`` makes it: its NumPy is a
+    library, keyed by its version, not code of the repository)."""
+    p = Path(path).resolve()
+    if REPO not in p.parents:
+        return False
+    if any(part in ("site-packages", "dist-packages") for part in p.relative_to(REPO).parts):
+        return False
+    return not any(root in p.parents for root in _environments_in_repo())
+
+
+@lru_cache(maxsize=None)
+def _environments_in_repo() -> tuple[Path, ...]:
+    """The folders of the running Python's installation (``sys.prefix``: a virtual environment) that lie in the
+    repository."""
+    roots = {Path(sys.prefix).resolve(), Path(sys.exec_prefix).resolve()}
+    return tuple(r for r in roots if REPO in r.parents)
 
 
 def files_of(module: str) -> list[Path]:

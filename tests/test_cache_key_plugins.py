@@ -193,3 +193,25 @@ def test_the_version_of_a_declared_requirement_is_keyed(tmp_path):
     assert run(REPO, study, out_dir, [plugin, old]) == (2, 2)
     assert run(REPO, study, out_dir, [plugin, old]) == (2, 0)
     assert run(REPO, study, out_dir, [plugin, new]) == (2, 2), "an upgraded requirement must recompute the rows"
+
+
+def test_a_virtual_environment_inside_the_checkout_holds_libraries_not_repository_code(monkeypatch):
+    """.ci/run makes its virtual environment in the checkout (.venv): NumPy there is a library keyed by its version
+    (its files were taken for the repository's own code: no library was keyed, and CI failed on it)."""
+    import sys
+
+    from experiments import codehash
+    monkeypatch.setattr(sys, "prefix", str(codehash.REPO / ".venv"))
+    monkeypatch.setattr(sys, "exec_prefix", str(codehash.REPO / ".venv"))
+    codehash._in_repo_text.cache_clear()
+    codehash._environments_in_repo.cache_clear()
+    try:
+        lib = codehash.REPO / ".venv" / "lib" / "python3.11" / "site-packages" / "numpy" / "__init__.py"
+        assert not codehash._in_repo(lib)
+        assert not codehash._in_repo(codehash.REPO / ".venv" / "bin" / "tool.py")  # the environment's own files
+        assert not codehash._in_repo(codehash.REPO / "other-env" / "lib" / "site-packages" / "x.py")
+        assert codehash._in_repo(codehash.REPO / "methods" / "circle" / "algebraic.py")
+        assert not codehash._in_repo(codehash.REPO.parent / "elsewhere.py")
+    finally:
+        codehash._in_repo_text.cache_clear()
+        codehash._environments_in_repo.cache_clear()

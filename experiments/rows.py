@@ -174,6 +174,15 @@ def _fitted(task: dict, points):
 _getpid = os.getpid
 
 
+def _unforked(func, points, params: dict):
+    """``func(points, **params)``, a child it forks and returns in ended where it returns (:func:`end_if_forked`)."""
+    pid = _getpid()
+    try:
+        return func(points, **params)
+    finally:
+        end_if_forked(pid)
+
+
 def end_if_forked(pid: int) -> None:
     """End this process at once if it is not process ``pid``: a method (or a study's code) that forked and returned
     in the child. Only the process a chunk was given to makes its rows; the child would run on as a second worker on
@@ -678,10 +687,10 @@ def _plugin_rows(tasks: list[dict], row_timeout: float | None, progress) -> list
         except Exception:
             items = None
         if type(items) is not list or len(items) != len(tasks) or not all(type(b) is bytes for b in items):
-            items = [b""] * len(tasks)
-    if items is None:  # it crashed or was ended: this worker ends as it did
+            items = None  # it ended with status 0 before it sent them (a method's os._exit(0)): a crash as well
+    if items is None:  # it crashed or was ended: this worker ends as it did, at the row where it was (the progress)
         if os.WIFSIGNALED(wait_status):
-            os.kill(os.getpid(), signal.SIGKILL)
+            _end_by_signal(os.WTERMSIG(wait_status))
         os._exit(os.WEXITSTATUS(wait_status) or 1)
     rows = []
     for i, (task, item) in enumerate(zip(tasks, items)):
@@ -698,6 +707,17 @@ def _plugin_rows(tasks: list[dict], row_timeout: float | None, progress) -> list
             row = _failure(task, exc)
         rows.append(_finished(row, task))
     return rows
+
+
+def _end_by_signal(signum: int) -> None:
+    """End this process by the signal that ended its child (a segmentation fault is told as one, not as a kill), by
+    SIGKILL if that signal does not end it."""
+    with contextlib.suppress(Exception):
+        signal.signal(signum, signal.SIG_DFL)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, [signum])
+        os.kill(os.getpid(), signum)
+        time.sleep(0.5)
+    os.kill(os.getpid(), signal.SIGKILL)
 
 
 def _child_setup(write: int) -> None:
@@ -737,7 +757,7 @@ def _child_item(task: dict, row_timeout, progress, pos: int):
             timing = None
             if task.get("timing"):
                 t, given = task["timing"], _own_copy(points) if type(points) is np.ndarray else points
-                timing = time_call(lambda: spec.unchecked(given, **task["params"]),
+                timing = time_call(lambda: _unforked(spec.unchecked, given, task["params"]),
                                    min_time_s=t.get("min_time_s", 0.02), rounds=t.get("rounds", 5))
             data = None if _builtin_source(task["dataset"]) else (points, result_base._plain_value(truth))
     except RowTimeout:
@@ -762,10 +782,17 @@ def _gated_plugin_row(task: dict, item) -> dict:
     _, checked, own, timing, data = item
     if not result_base.builtin_class(type(checked)):
         return failed_row(task, "error", "the process of the plugin's row sent no result of fitbench's classes")
-    if data is None:
+    checked.method, checked.params = task["method"], task["params"]  # gated as the task's method: its family's class
+    if _builtin_source(task["dataset"]):  # the data are made here, whatever the child sent
         points, truth = task_data(task)
-    else:
+    elif type(data) is tuple and len(data) == 2:  # a plugin's data source: its child made them; checked as here
         points, truth = data
+        problem = points_problem(points)
+        if problem:
+            raise DataSourceError(f"data set {task['dataset'].get('label')!r} (source {source_of(task['dataset'])!r}) "
+                                  f"{problem}; the data source is at fault, not the methods")
+    else:
+        return failed_row(task, "error", "the process of the plugin's row sent no data for its data source")
     row = _measured_row({**task, "timing": None}, checked, points, truth,
                         own if type(own) is dict else None)
     if timing and type(timing) is dict and row.get("status") in ("ok", "not converged"):

@@ -73,6 +73,84 @@ def c_writer(points):
 '''
 
 
+CHEATER = '''
+"""A plugin whose methods cheat the worker that gates their rows."""
+import os
+
+import numpy as np
+import methods
+from methods import register
+from methods.results import circle_result
+
+
+@register("circle.iso_exit_zero", kind="closed form", summary="ends its process with status 0",
+          reference="isolation test")
+def exit_zero(points):
+    os._exit(0)
+
+
+@register("circle.iso_honest", kind="closed form", summary="the centroid circle", reference="isolation test")
+def honest(points):
+    c = points.mean(axis=0)
+    return circle_result(points, c, float(np.hypot(*(points - c).T).mean()), converged=True, message="closed form")
+
+
+@register("circle.iso_ellipse", kind="closed form", summary="returns an ellipse for a circle",
+          reference="isolation test")
+def ellipse(points):
+    return methods.fit("ellipse.fitzgibbon", points)
+
+
+@register("circle.iso_swap_data", kind="closed form", summary="sends the worker a perfect circle as the data",
+          reference="isolation test")
+def swap_data(points):
+    import experiments.rows as rows
+    from methods.result_base import family_copy
+    t = np.linspace(0, 2 * np.pi, len(points), endpoint=False)
+    perfect = np.column_stack([5.0 * np.cos(t), 5.0 * np.sin(t)])
+    fake = circle_result(perfect, (0.0, 0.0), 5.0, converged=True, message="perfect")
+
+    def child_item(task, row_timeout, progress, pos):
+        return "fit", family_copy(fake), {}, None, (perfect, {"family": "circle", "center": (0.0, 0.0), "radius": 5.0})
+    rows._child_item = child_item
+    return honest(points)
+'''
+
+
+@pytest.fixture(scope="module")
+def cheater(tmp_path_factory):
+    return install_plugin(tmp_path_factory.mktemp("cheater"), "fitbench-cheater", {"fitbench_cheater": CHEATER},
+                          {"fitbench.methods": {"cheater": "fitbench_cheater"}})
+
+
+@pytest.mark.slow
+def test_a_plugin_cannot_send_its_own_data_nor_another_family_s_result_nor_lose_rows_by_exiting(cheater, tmp_path):
+    """The worker gates a plugin's result against the data it makes itself (a built-in source), as the result of the
+    task's method (its family's class), and a child that ends with status 0 before it sends the rows is a crash of the
+    row it was running (the others run again): no 'ok' row for a perfect circle the plugin sent as the data, none for
+    an ellipse, and the honest rows of the chunk kept."""
+    out = tmp_path / "out"
+    study = _study(tmp_path / "a", "cheat", ["circle.iso_honest", "circle.iso_ellipse", "circle.iso_exit_zero",
+                                             "circle.kasa"], repetitions=3)
+    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "2", "--no-report", path_first=[cheater],
+                      timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    df = _rows(out, "cheat").set_index(["method", "repetition"])
+    assert (df.loc["circle.iso_honest", "status"] == "ok").all() and (df.loc["circle.kasa", "status"] == "ok").all()
+    assert (df.loc["circle.iso_ellipse", "status"] == "invalid").all()
+    assert df.loc["circle.iso_ellipse", "message"].str.contains("must return a CircleFit").all()
+    exits = df.loc["circle.iso_exit_zero"]
+    assert (exits["status"] == "crashed").all(), exits[["status", "message"]]
+    # the plugin replaces what its process sends for the rows after its own: a perfect circle as the data and the fit
+    study = _study(tmp_path / "b", "swap", ["circle.iso_swap_data", "circle.iso_honest", "circle.kasa"])
+    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "2", "--no-report", path_first=[cheater],
+                      timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    df = _rows(out, "swap")
+    assert not ((df["status"] == "ok") & (df["form_error"] < 1e-9)).any(), df[["method", "status", "form_error"]]
+    assert (df[df["method"] == "circle.kasa"]["status"] == "ok").all()
+
+
 @pytest.fixture(scope="module")
 def site(tmp_path_factory):
     return install_plugin(tmp_path_factory.mktemp("patcher"), "fitbench-patcher", {"fitbench_patcher": PATCHER},

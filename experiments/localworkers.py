@@ -91,10 +91,16 @@ def _lead_own_group() -> None:
     ``PR_SET_PDEATHSIG``: the kernel clears it in a forked child, and a method's child could not be asked to set it.
     A process that starts a session of its own (``start_new_session=True``, a daemon) leaves the group on purpose
     and is not ended. The worker is then outside the terminal's foreground group: Ctrl-C reaches the run alone
-    (workers ignore it anyway: the run stops them), and the run's own end ends them (:func:`_die_with_parent`)."""
+    (workers ignore it anyway: the run stops them), and the run's own end ends them (:func:`_die_with_parent`). A
+    process of a background group that writes to the terminal under ``stty tostop`` (a method's or NumPy's warning) or
+    reads from it is stopped by SIGTTOU/SIGTTIN, and its chunk would never return: the worker ignores both (a write
+    then goes through, a read fails)."""
     if hasattr(os, "setpgid"):
         with contextlib.suppress(OSError):
             os.setpgid(0, 0)
+        for name in ("SIGTTOU", "SIGTTIN"):
+            if hasattr(signal, name):
+                signal.signal(getattr(signal, name), signal.SIG_IGN)
 
 
 def end_process_group(pid: int | None) -> None:

@@ -114,3 +114,15 @@ def test_a_method_s_children_end_with_the_worker_killed_at_the_time_limit(site, 
     assert proc.returncode == 0, proc.stderr
     assert "timeout" in (tmp_path / "out" / "spawn" / "results.csv").read_text()
     _check_ended(pids)
+
+
+def test_a_worker_outside_the_terminal_s_group_is_not_stopped_by_writing_to_it():
+    """A worker leads its own process group, a background group of the terminal: under `stty tostop` a write to the
+    terminal (a method's warning) would stop it by SIGTTOU and its chunk would never return; it ignores SIGTTOU and
+    SIGTTIN."""
+    from conftest import run_python
+    out = run_python("-c", "import signal; from experiments import localworkers; localworkers._lead_own_group(); "
+                           "print(signal.getsignal(signal.SIGTTOU) is signal.SIG_IGN, "
+                           "signal.getsignal(signal.SIGTTIN) is signal.SIG_IGN)")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["True", "True"]

@@ -125,3 +125,19 @@ def test_a_space_aligned_table_whose_names_contain_spaces(tmp_path):
     comma = tmp_path / "c.csv"                                # a ','-table missing a field: not a spaces matter
     comma.write_text("Target (mm),Direction,Run,Deviation (um)\n0,+,1,\n100,+,1,\n")
     one_error_line(cli("positioning", comma), "line 2: missing field(s)")
+
+
+def test_a_space_aligned_table_with_spaces_in_its_names_and_a_trailer(tmp_path):
+    """Both at once: the header split at runs of spaces is decided on the table's rows, not on the trailer after the
+    blank line below it (it was refused: 'line 2: missing field(s); if line 1 is an instrument's preamble, ...')."""
+    data, _ = axis()
+    semi = wide(data, decimal_comma=False).splitlines()
+    aligned = ["    ".join(f"{c:>14}" for c in ln.split(";")) for ln in semi]
+    (tmp_path / "ws.txt").write_text("\n".join(aligned) + "\n")
+    (tmp_path / "trail.txt").write_text("\n".join(aligned) + "\n\nOperator: X\n")
+    ref = json.loads(cli("positioning", tmp_path / "ws.txt", "--json").stdout)
+    out = cli("positioning", tmp_path / "trail.txt", "--json")
+    assert out.returncode == 0, out.stderr
+    assert f"line {len(aligned) + 2} after the blank line below the table is not a data row" in out.stderr
+    got = json.loads(out.stdout)
+    assert all(got[k] == ref[k] for k in ("A", "E", "M", "R", "B_mean"))

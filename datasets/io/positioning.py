@@ -221,7 +221,10 @@ def _spaced_names(df, lines, path, skip_rows: int):
         return df
     counts = filled.sum(axis=1)
     m = int(counts[0])
-    if not (np.all(counts == m) and filled[:, :m].all() and m < df.shape[1]):
+    n = len(counts) if np.all(counts == m) else int(np.argmin(counts == m))  # the table's rows: those before the
+    if n < len(counts) and (2 * n < len(counts) or not np.all(counts[n:] < m)):  # first of another length, shorter
+        return df                                                 # ones below them (a trailer), not longer (a preamble)
+    if not (filled[:n, :m].all() and m < df.shape[1]):
         return df
     from datasets.io.delimiters import COMMENT_PREFIXES
     from datasets.io.textfile import read_lines
@@ -261,8 +264,9 @@ def _trailer(df, lines, empty, path):
     numeric = first.iloc[k:].map(lambda v: bool(v) and NUMBER.fullmatch(v) is not None).to_numpy(dtype=bool)
     if after_blank and empty[k:].all() and not numeric.any():
         shown = ", ".join(repr(text[n - 1].strip()[:40]) for n in lines[k:k + 3]) + (", ..." if len(lines) - k > 3 else "")
-        warnings.warn(f"{path}: lines {lines[k]}-{lines[-1]} after the blank line below the table are not data rows "
-                      f"and were not read ({shown})", UserWarning, stacklevel=4)
+        where = (f"line {lines[k]} after the blank line below the table is not a data row and was" if lines[k] == lines[-1]
+                 else f"lines {lines[k]}-{lines[-1]} after the blank line below the table are not data rows and were")
+        warnings.warn(f"{path}: {where} not read ({shown})", UserWarning, stacklevel=4)
         return df.iloc[:k].reset_index(drop=True), list(lines[:k])
     raise DataFileError(f"{path} line {lines[k]}: {quoted!r} is not a data row (fields missing): delete the lines "
                         "after the table, or prefix them with #")

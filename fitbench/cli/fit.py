@@ -11,6 +11,7 @@ import fitbench.cli.options as cli_options
 import methods
 from fitbench.cli.guards import run_method
 from fitbench.cli.options import add_reader_options, check_plot_path, read_profile_args, save_figure
+from fitbench.cli.roundness import limacon_warning
 from methods import InvalidInputError
 from methods.units import canonical
 
@@ -100,6 +101,10 @@ def run(args) -> int:
     plot_path = check_plot_path(args.plot)
     source, points, unit, notes, axes = read_profile_args(args)
     result = run_method(spec, points, **params)
+    offcentre = limacon_warning(points, getattr(result, "form_error", None), notes,   # as roundness warns
+                                args.nominal_radius)
+    if offcentre:
+        cli_options.warn(offcentre)
     if plot_path:
         if spec.family not in ("circle", "ellipse"):
             raise InvalidInputError(f"--plot draws circle and ellipse fits; {spec.id} is a {spec.family} method")
@@ -113,6 +118,8 @@ def run(args) -> int:
         d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(unit)}
         if notes:
             d["notes"] = notes
+        if offcentre:
+            d["warnings"] = [*d.get("warnings", []), offcentre]
         cli_options.print_json(json.dumps(d))
         return 0
     print(f"input unit {canonical(unit)}{' (converted to mm)' if canonical(unit) != 'mm' else ''}; "

@@ -57,11 +57,9 @@ def run(args) -> int:
     for w in caught:
         if issubclass(w.category, UndersampledWarning):
             warn(str(w.message))
-    offcentre = None
-    if args.nominal_radius is None and any("without a nominal radius" in n for n in notes):
-        offcentre = limacon_problem(float(np.hypot(*res.raw_lsci["center"])), res.form_error)
-        if offcentre:
-            warn(offcentre)
+    offcentre = limacon_warning(points, res.form_error, notes, args.nominal_radius)
+    if offcentre:
+        warn(offcentre)
     check = roundness_verdict(res.references, tolerances, chosen=args.reference != "all")
     if plot_path:
         plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))
@@ -115,6 +113,20 @@ def limacon_problem(eccentricity_mm: float, form_error_mm: float) -> str | None:
             f"form figures carry a false 2 UPR term of up to e²/(2R) = {e * e * 1e3 / 2:.4g} µm·mm / R, more than "
             f"{LIMACON_SHARE * 100:g} % of RONt for R below {below:.4g} mm; give --nominal-radius R_MM (the radius the "
             "deviations are about) or centre the part")
+
+
+def limacon_warning(points, form_error_mm, notes, nominal_radius) -> str | None:
+    """:func:`limacon_problem` of a profile read from angle + radial deviations without its radius (the reader's note
+    says so; ``points`` placed about (0, 0), mm), for ``fitbench roundness`` and ``fitbench fit``: the eccentricity is
+    the first harmonic of the radii (linear least squares on 1, cos θ, sin θ: the limaçon's least-squares centre,
+    ISO 12181-1), ``form_error_mm`` the command's form figure; None for any other input."""
+    if nominal_radius is not None or form_error_mm is None or not any("without a nominal radius" in n for n in notes):
+        return None
+    p = np.asarray(points, dtype=float)
+    theta, r = np.arctan2(p[:, 1], p[:, 0]), np.hypot(p[:, 0], p[:, 1])
+    basis = np.column_stack([np.ones_like(theta), np.cos(theta), np.sin(theta)])
+    coef = np.linalg.lstsq(basis, r - r.mean(), rcond=None)[0]
+    return limacon_problem(float(np.hypot(coef[1], coef[2])), float(form_error_mm))
 
 
 #: the reference circle a roundness tolerance is checked with unless the user chooses one: ISO 1101 defines the

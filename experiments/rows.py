@@ -150,10 +150,12 @@ def fit_row(task: dict, points, truth) -> dict:
     return failed if res is None else _measured_row(task, res, points, truth)
 
 
-def _fitted(task: dict, points):
+def _fitted(task: dict, points, pid: int | None = None):
     """(the result of the task's method on ``points``, None), or (None, its row) when the method raised: 'skipped'
-    for an input it refuses, 'error' for any other exception (a method's bug: recorded, retried on the next run)."""
-    pid = _getpid()
+    for an input it refuses, 'error' for any other exception (a method's bug: recorded, retried on the next run).
+    ``pid``: this process's id, when the caller knows it (a batch asks once: each ``os.getpid`` is a system call)."""
+    if pid is None:
+        pid = _getpid()
     spec = methods.get(task["method"])
     own = None if spec.builtin else _own_copy(points)
     try:
@@ -513,6 +515,7 @@ def _generic_rows(tasks: list[dict], first: int, progress) -> list[dict]:
             if size >= BATCH_BYTES:
                 break
         fits = [None] * len(batch)
+        pid = _getpid()  # a method that forks and returns in the child: the child ends where it returns
         order = range(len(batch))
         if len({task["method"] for task in batch}) > 1:
             order = sorted(order, key=lambda i: batch[i]["method"])
@@ -524,7 +527,7 @@ def _generic_rows(tasks: list[dict], first: int, progress) -> list[dict]:
             if progress is not None:
                 progress[0], progress[1] = time.monotonic(), first + start + i
             try:
-                fits[i] = _fitted(task, got[0])
+                fits[i] = _fitted(task, got[0], pid)
             except BaseException as exc:
                 fits[i] = (None, _failure(task, exc))
         for i, task in enumerate(batch):  # 3. the gate, the metrics, the row

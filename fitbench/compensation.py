@@ -59,6 +59,16 @@ class CompensationError(InvalidInputError):
     """A compensation table that does not fit the controller (too many points, a field out of range)."""
 
 
+class _Required:
+    """The default of a writer's ``axis``: not given (a controller table is for one axis, which the caller names)."""
+
+    def __repr__(self) -> str:
+        return "<required>"
+
+
+AXIS_REQUIRED = _Required()
+
+
 def _exact(q: int) -> str:
     """A position of q x 1e-6 mm written exactly with 6 decimals (no float rounding)."""
     sign = "-" if q < 0 else ""
@@ -286,7 +296,7 @@ def write_csv(table, axis: str | None = "X") -> str:
 SINUMERIK_MAX_POINTS = 200
 
 
-def write_siemens_eec(table, axis: str = "X1", max_points: int = SINUMERIK_MAX_POINTS) -> str:
+def write_siemens_eec(table, axis: str = AXIS_REQUIRED, max_points: int = SINUMERIK_MAX_POINTS) -> str:
     """SINUMERIK leadscrew / measuring-system error compensation (LEC/MSEC) as a part program
     ``%_N_AX_EEC_INI``, ``CHANDATA(1)``, ``$AA_ENC_COMP[0,N,AXIS]`` (mm), ``$AA_ENC_COMP_STEP``,
     ``_MIN``, ``_MAX``, ``_IS_MODULO``, ``M17`` (SINUMERIK Function Manual Extended Functions, K3
@@ -301,7 +311,14 @@ def write_siemens_eec(table, axis: str = "X1", max_points: int = SINUMERIK_MAX_P
     points (N = 0...199)" (808D Function Manual p. 106), the default ``max_points``; an 840D with a larger
     MD38000 may pass it. The controller takes the table's end as MIN + k STEP (840D sl Function Manual
     01/2008 p. 355), so STEP, MIN and MAX are printed exactly with MIN + STEP (n - 1) = MAX. The value at
-    the reference point is 0 (808D p. 106). Values beyond MIN / MAX stay at the first / last value."""
+    the reference point is 0 (808D p. 106). Values beyond MIN / MAX stay at the first / last value.
+
+    ``axis`` (required): the machine-axis name the entries compensate (MD10000 $MN_AXCONF_MACHAX_NAME_TAB, e.g.
+    X1); a missing or None axis is refused (:class:`CompensationError`), as ``--axis`` is on the command line."""
+    if axis is AXIS_REQUIRED or axis is None:
+        raise CompensationError("siemens-eec: a SINUMERIK table names the machine axis it compensates "
+                                "($AA_ENC_COMP[0,N,AXIS], MD10000 $MN_AXCONF_MACHAX_NAME_TAB) and no axis is given: "
+                                "give axis=NAME, e.g. write_siemens_eec(table, axis='X1')")
     axis = check_axis(axis, "siemens-eec")
     n = len(table)
     if n > max_points:
@@ -330,7 +347,7 @@ FANUC_MAGNIFICATION = (1, 100)  # parameter 3623 (0 means 1)
 FANUC_INTERVAL_MAX = 99_999_999  # parameter 3624 (two-word, in the least input increment)
 
 
-def write_fanuc_pitch(table, axis: str | None = "X", detection_unit_mm: float = 0.001, increment_mm: float = 0.001,
+def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm: float = 0.001, increment_mm: float = 0.001,
                       first_number: int = 0, magnification: int | None = None) -> str:
     """FANUC pitch-error compensation data in the parameter-tape format: ``%``, comments ``(...)``, one
     line ``N<10000 + point number> P<value>`` per compensation point, ``%`` (FANUC Series 0i-PB
@@ -351,7 +368,15 @@ def write_fanuc_pitch(table, axis: str | None = "X", detection_unit_mm: float = 
     ``first_number`` (3621) and must end by 1023; 3624 = d / ``increment_mm`` (the least input increment,
     IS-B 0.001 mm) must be a whole number in 1 ... 99999999 (FANUC also requires d >= rapid traverse /
     7500, which the header states); 3623 in 1 ... 100, by default the smallest that keeps every value
-    within -128 ... 127. What does not fit is refused. ``axis`` None: the comments say 'axis not given'."""
+    within -128 ... 127. What does not fit is refused.
+
+    ``axis`` (required): the axis the table is for, named in the comments (the tape itself names none: the
+    parameters 3620-3624 are set per axis); None: the comments say 'axis not given' (``--axis`` left out on the
+    command line). A missing axis is refused (:class:`CompensationError`)."""
+    if axis is AXIS_REQUIRED:
+        raise CompensationError("fanuc-pitch: no axis is given: give axis=NAME (e.g. write_fanuc_pitch(table, "
+                                "axis='X')), the axis whose parameters 3620-3624 take the table, or axis=None for "
+                                "'axis not given' in its comments")
     label = NOT_GIVEN.upper() if axis is None else check_axis(axis, "fanuc-pitch").upper()
     a = table.attrs
     k0 = a["reference_index"]

@@ -94,7 +94,7 @@ def test_table_covers_the_measured_travel_and_says_so(seed, interval):
     if interval is None:
         assert step <= np.min(np.diff(data.targets)) + 1e-12
     for fmt, w in WRITERS.items():
-        text = w(t)
+        text = w(t, axis="X1")
         assert re.search(rf"covers {lo:.6f} to {hi:.6f} mm", text, re.I), fmt
         assert re.search(r"measured travel 0 to 2000 mm", text, re.I), fmt
 
@@ -107,7 +107,7 @@ def test_step_gives_max_exactly_as_printed():
             t = compensation_table(res, data, interval=interval)
             if len(t) > 200:
                 continue
-            text = write_siemens_eec(t)
+            text = write_siemens_eec(t, axis="X1")
             get = {k: Decimal(re.search(rf"\$AA_ENC_COMP_{k}\[0,X1\]=(\S+)", text).group(1)) for k in ("STEP", "MIN", "MAX")}
             n = len(re.findall(r"^\$AA_ENC_COMP\[0,", text, re.M))
             assert get["MIN"] + get["STEP"] * (n - 1) == get["MAX"]
@@ -126,7 +126,7 @@ def test_simulated_controller_at_least_halves_the_error(fmt, layout, interval):
           "negative-travel": {"travel": (-800.0, 0.0), "irregular": 0.3}}[layout]
     data, truth, res = axis(3, **kw)
     before = methods.fit("positioning.iso230_2", data).figures
-    encoder, _ = READERS[fmt](WRITERS[fmt](compensation_table(res, data, interval=interval)))
+    encoder, _ = READERS[fmt](WRITERS[fmt](compensation_table(res, data, interval=interval), axis="X1"))
     after = methods.fit("positioning.iso230_2", remeasure(data, truth, encoder, np.random.default_rng(9))).figures
     assert after["E"] <= 0.5 * before["E"], (before["E"], after["E"])
     assert after["M"] <= 0.5 * before["M"], (before["M"], after["M"])
@@ -136,9 +136,9 @@ def test_siemens_sign_follows_the_manual():
     """808D / 840D K3: a positive value moves the axis in the negative direction, so an axis that goes
     too far (deviation > 0) gets positive values."""
     data, _, res = axis(1, pitch=(0.0, 0.020), reversal=0.0)           # deviation grows to +20 um
-    _, info = read_siemens(write_siemens_eec(compensation_table(res, data)))
+    _, info = read_siemens(write_siemens_eec(compensation_table(res, data), axis="X1"))
     assert info["values"][0] == 0.0 and info["values"][-1] > 0.015
-    _, fan = read_fanuc(write_fanuc_pitch(compensation_table(res, data)))
+    _, fan = read_fanuc(write_fanuc_pitch(compensation_table(res, data), axis="X"))
     assert fan["values"].sum() < -0.015                                 # Fanuc: added to the command
 
 
@@ -146,11 +146,11 @@ def test_reference_point_holds_zero_in_every_format():
     data, _, res = axis(4, travel=(-400.0, 800.0), irregular=0.4)
     t = compensation_table(res, data)
     assert t.attrs["reference_q"] == 0 and t.position_mm.iloc[t.attrs["reference_index"]] == 0.0
-    _, sie = read_siemens(write_siemens_eec(t))
+    _, sie = read_siemens(write_siemens_eec(t, axis="X1"))
     assert sie["values"][t.attrs["reference_index"]] == 0.0
     _, csv = read_csv(WRITERS["csv"](t))
     assert csv["values"][t.attrs["reference_index"]] == 0.0
-    enc, fan = read_fanuc(write_fanuc_pitch(t))
+    enc, fan = read_fanuc(write_fanuc_pitch(t, axis="X"))
     assert enc(np.array([0.0]), "up")[0] - enc(np.array([0.0]), "down")[0] == pytest.approx(-t.attrs["backlash_mm"], abs=0.5e-6)
     with pytest.raises(InvalidInputError, match="reference point"):
         compensation_table(res, data, reference_mm=900.0)
@@ -161,9 +161,9 @@ def test_siemens_point_count_is_the_808d_limit():
     data, _, res = axis(2)
     t = compensation_table(res, data, interval=4.0)                      # 251 points
     with pytest.raises(CompensationError, match=r"251 points do not fit the controller's 200 .*at least 5.025126 mm"):
-        write_siemens_eec(t)
-    assert "$AA_ENC_COMP[0,250,X1]" in write_siemens_eec(t, max_points=1000)   # an 840D with MD38000 >= 251
-    assert len(read_siemens(write_siemens_eec(compensation_table(res, data, interval=5.025126)))[1]["values"]) == 200
+        write_siemens_eec(t, axis="X1")
+    assert "$AA_ENC_COMP[0,250,X1]" in write_siemens_eec(t, axis="X1", max_points=1000)   # an 840D with MD38000 >= 251
+    assert len(read_siemens(write_siemens_eec(compensation_table(res, data, interval=5.025126), axis="X1"))[1]["values"]) == 200
 
 
 def test_fanuc_refuses_what_does_not_fit_the_pitch_block(tmp_path):
@@ -178,23 +178,23 @@ def test_fanuc_refuses_what_does_not_fit_the_pitch_block(tmp_path):
         assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1 and re.search(match, out.stderr), out.stderr
         assert "Traceback" not in out.stderr and not (tmp_path / "f.txt").exists() and not (tmp_path / "c.csv").exists()
     _, info = read_fanuc(write_fanuc_pitch(compensation_table(methods.fit("positioning.gls_polynomial", data), data,
-                                                              interval=10.5)))
+                                                              interval=10.5), axis="X"))
     assert info["p3624"] == 10500 and info["numbers"][-1] <= 1023
 
 
 def test_fanuc_magnification_and_integer_fields():
     data, _, res = axis(5, pitch=(0.0, 0.9), reversal=0.0)              # 0.9 mm over 1000 mm: 90 um per 100 mm
     t = compensation_table(res, data, interval=200.0)                    # 180 um per interval > 127 units
-    text = write_fanuc_pitch(t)
+    text = write_fanuc_pitch(t, axis="X")
     _, info = read_fanuc(text)
     assert info["magnification"] == 2 and "3623 = 2," in text
     with pytest.raises(CompensationError, match="exceeds 127"):
-        write_fanuc_pitch(t, magnification=1)
+        write_fanuc_pitch(t, axis="X", magnification=1)
     for bad in (0, 101, 1.5):
         with pytest.raises(CompensationError, match="3623"):
-            write_fanuc_pitch(t, magnification=bad)
+            write_fanuc_pitch(t, axis="X", magnification=bad)
     with pytest.raises(CompensationError, match="pitch block"):
-        write_fanuc_pitch(t, first_number=1020)
+        write_fanuc_pitch(t, axis="X", first_number=1020)
 
 
 # ------------------------------------------------------------------------------------- axis grammar
@@ -223,7 +223,7 @@ def test_no_negative_zero():
     t = compensation_table(res, data, interval=50.0)
     assert np.any(np.signbit(t.compensation_mm)) and np.all(np.abs(t.compensation_mm) < 5e-7)
     for fmt in ("csv", "siemens-eec"):
-        text = WRITERS[fmt](t)
+        text = WRITERS[fmt](t, axis="X1")
         assert "-0.000000" not in text
         READERS[fmt](text)
 
@@ -250,7 +250,7 @@ def test_unidirectional_test_gives_the_table_of_its_direction():
     res = methods.fit("positioning.gls_polynomial", one)
     t = compensation_table(res, one)
     for fmt, w in WRITERS.items():
-        text = w(t)
+        text = w(t, axis="X1")
         low = text.lower()
         assert "mean reversal value b unknown, unidirectional test" in low and "one direction measured, up," in low
         encoder, _ = READERS[fmt](text)
@@ -291,8 +291,8 @@ def test_files_name_the_backlash_parameter_value():
     data, _, res = axis(7, reversal=-0.004)
     t = compensation_table(res, data)
     b = t.attrs["backlash_mm"]
-    sie = write_siemens_eec(t)
+    sie = write_siemens_eec(t, axis="X1")
     assert re.search(r"MD32450 \$MA_BACKLASH\[0\] of X1 = (\S+) mm", sie).group(1) == f"{-b:.6f}"
-    fan = write_fanuc_pitch(t, detection_unit_mm=0.0001)
+    fan = write_fanuc_pitch(t, axis="X", detection_unit_mm=0.0001)
     assert re.search(r"SET 1851 = (-?\d+) DETECTION UNITS OF 0.0001 MM", fan).group(1) == str(int(np.rint(-b / 1e-4)))
     read_siemens(sie), read_fanuc(fan, detection_unit_mm=0.0001)

@@ -42,3 +42,30 @@ def test_other_formats_take_the_axis_from_the_file_or_say_it_is_not_given(tmp_pa
     assert out.returncode == 0, out.stderr
     assert "table, axis not given," in (tmp_path / "t.csv").read_text()
     assert "AXIS NOT GIVEN" in (tmp_path / "t.tap").read_text() and "X1" not in (tmp_path / "t.csv").read_text()
+
+
+def test_the_api_writers_need_the_axis_as_the_command_line_does():
+    """write_siemens_eec / write_fanuc_pitch without an axis wrote the table for X1 / X whatever axis was tested;
+    now they refuse it in one line (a ValueError subclass of the package), and write the axis given."""
+    import pytest
+
+    import methods
+    from fitbench.compensation import CompensationError, compensation_table, write_fanuc_pitch, write_siemens_eec
+    from methods import InvalidInputError
+    data, _ = axis_test(rng=np.random.default_rng(4), reversal=-0.003)
+    table = compensation_table(methods.fit("positioning.gls_polynomial", data), data)
+    assert issubclass(CompensationError, InvalidInputError) and issubclass(InvalidInputError, ValueError)
+    for call in (lambda: write_siemens_eec(table), lambda: write_siemens_eec(table, axis=None)):
+        with pytest.raises(CompensationError, match=r"^siemens-eec: .*no axis is given: give axis=NAME") as err:
+            call()
+        assert "\n" not in str(err.value)
+    with pytest.raises(CompensationError, match=r"^fanuc-pitch: no axis is given: give axis=NAME") as err:
+        write_fanuc_pitch(table)
+    assert "\n" not in str(err.value)
+    for write in (write_siemens_eec, write_fanuc_pitch):
+        with pytest.raises(InvalidInputError, match="not a valid axis name"):
+            write(table, axis="Z 1")
+    sie = write_siemens_eec(table, axis="Z1")
+    assert "$AA_ENC_COMP[0,0,Z1]" in sie and "X1" not in sie
+    assert "AXIS Z VALUES" in write_fanuc_pitch(table, axis="Z")
+    assert "AXIS NOT GIVEN VALUES" in write_fanuc_pitch(table, axis=None)   # as without --axis

@@ -7,7 +7,8 @@ from pathlib import Path
 
 from experiments import schema
 from experiments.engine import ConfigError
-from experiments.study import count_rows, study_of, validate as validate_declarations  # noqa: F401  (count_rows: API)
+from experiments.declarations import validate as validate_declarations
+from experiments.study import count_rows, study_of  # noqa: F401  (count_rows: API)
 
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
 

@@ -27,7 +27,7 @@ import pandas as pd
 
 from experiments import config as configs
 from experiments.provenance import REPO
-from experiments.study import json_value
+from experiments.jsontext import json_value
 from methods import InvalidInputError
 from methods.files import write_atomic
 

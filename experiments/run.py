@@ -31,10 +31,10 @@ if __name__ == "__main__":  # the command: its local workers start now and impor
 from experiments import compare  # the verdict on every run: fresh results against the committed ones
 from experiments import config as configs
 from experiments import engine
+from experiments import analysis, figures, outputs
 from experiments import study as contract
 from experiments.csvtext import blocks, csv_text, write_results
 from experiments.executors import kept_workers, last_study, map_in_idle_workers, start_kept_workers, workers_done
-from experiments.study import remove_leftover_tmp
 from experiments.provenance import collect, write_atomic
 from experiments.rows import Terminated, clear_signal, fewer_collections, note_signal, raise_if_signalled, signalled
 from experiments.summary import summarise, summary_units, to_markdown
@@ -169,7 +169,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     n_rows = None if force else engine.up_to_date(cfg, make, target)
     if n_rows is not None:  # the same rows analysed by the same code: the outputs there are this run's
         log(f"   {n_rows} rows: {n_rows} already stored, 0 to run; results.csv, tables and figures up to date")
-        _FAILED.extend(filter(None, [contract.failed_rows(cfg, target / "results.csv")]))
+        _FAILED.extend(filter(None, [analysis.failed_rows(cfg, target / "results.csv")]))
         return target
     start_kept_workers()  # rows may run: workers (of a run on several) import while this study prepares
     store = engine.RowStore(target / "rows.sqlite", log=log)
@@ -179,7 +179,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
                                 desc=cfg["name"], log=log, row_timeout=row_timeout, chunk_rows=cfg.get("chunk_rows"),
                                 outputs=engine.outputs_code(cfg),
                                 # this process waits for the workers: it loads what the figures need meanwhile
-                                while_rows_run=contract.load_plotting_in_background if jobs > 1 or executor == "dask"
+                                while_rows_run=figures.load_plotting_in_background if jobs > 1 or executor == "dask"
                                 else None)
     finally:
         store.close()
@@ -187,15 +187,15 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     failure = environment_failure(cfg, df)
     if failure is not None:
         raise failure
-    _FAILED.extend(filter(None, [contract.failed_rows(cfg, df)]))
+    _FAILED.extend(filter(None, [analysis.failed_rows(cfg, df)]))
     used = counts.pop("used")
-    remove_leftover_tmp(target)
+    outputs.remove_leftover_tmp(target)
     # results.csv is made by the run's idle workers (if any) while this process analyses the rows
     texts = map_in_idle_workers(csv_text, blocks(df))
     try:
         t0 = time.perf_counter()
         log("   analysis, tables and figures ...")
-        findings, analysis = contract.analyse(study, df, cfg, target, log)
+        findings, analysed = analysis.analyse(study, df, cfg, target, log)
         log(f"   analysis done ({time.perf_counter() - t0:.1f} s)")
     finally:  # written also when the analysis fails: the rows are the run's result
         results_sha256 = write_results(df, target / "results.csv", texts)
@@ -212,14 +212,14 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
             "plugins": plugin_distributions(used), "results_sha256": results_sha256, "findings": findings,
             "fingerprint": counts.pop("fingerprint"), "inputs": compare.inputs(cfg)}
-    contract.write_manifest(target, cfg, analysis, summary)
+    outputs.write_manifest(target, cfg, analysed, summary)
     buf = io.StringIO()
     summary.to_csv(buf, index=False, float_format="%.10g")
     write_atomic(target / "summary.csv", buf.getvalue())
     write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary, units=summary_units(summary, cfg)))
     raise_if_signalled()  # before meta.json: a study whose outputs are not all written is not up to date
     write_atomic(target / "meta.json", json.dumps(meta, indent=1, default=str) + "\n")
-    remove_leftover_tmp(target)
+    outputs.remove_leftover_tmp(target)
     bad = ", ".join(f"{v} {k}" for k, v in meta["status_counts"].items() if k != "ok")
     log(f"-> {target}/results.csv ({len(df)} rows" + (f": {bad}" if bad else "") +
         f"; rows run in {counts['wall_s']:.1f} s), summary.csv, summary.md, meta.json")

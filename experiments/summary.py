@@ -65,10 +65,10 @@ DATA_LENGTHS = ("data_center", "data_radius", "data_semi_axes", "data_noise")
 
 def summary_units(summary: pd.DataFrame, cfg: dict | None = None) -> dict[str, str]:
     """{column: unit} of a :func:`summarise` table ('' for counts and shares): each statistic of a row column
-    takes that column's declared unit (``experiments.study.column_unit``: the result classes' declarations, s for
+    takes that column's declared unit (``experiments.units.column_unit``: the result classes' declarations, s for
     timings, a unit suffix such as ``_deg``); lengths in the study's own length unit where it declares one
-    (``experiments.study.data_length_unit``: else mm for the machine-tool data, else the data's own units)."""
-    from experiments.study import LENGTH_UNITS, column_unit, data_length_unit
+    (``experiments.units.data_length_unit``: else mm for the machine-tool data, else the data's own units)."""
+    from experiments.units import LENGTH_UNITS, column_unit, data_length_unit
     lengths = data_length_unit(cfg)
     source = {"form_error_median": "form_error", "iterations_median": "iterations", "time_median_s": "time_median_s"}
     for col in result_base.truth_error_columns():
@@ -111,7 +111,7 @@ def to_markdown(df: pd.DataFrame, floatfmt: str = ".4g", units: dict[str, str] |
     ``floatfmt``, shares by :func:`share_text` (never a rounded 1 or 0)."""
     from experiments.render.markdown import markdown_table
     from experiments.render.text import human_unit
-    from experiments.study import readable
+    from experiments.units import readable
     units = summary_units(df) if units is None else units
     names = {c: readable(c) + (f" [{human_unit(units[c])}]" if units.get(c) else "") for c in df.columns}
     shown = df.rename(columns=names)

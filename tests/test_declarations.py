@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from experiments import config as configs
+from experiments import analysis, figures, findings, tables, units
 from experiments import study as contract
 from experiments.engine import ConfigError
 
@@ -97,13 +98,13 @@ def test_good_declarations_load(tmp_path):
 
 def test_findings_are_rendered_by_a_sandbox():
     values = {"n_rows": 12, "n_ok": np.int64(10), "best": "circle.kasa", "rmse": 1.25e-3}
-    text = contract.render_findings("{best} best: {rmse:.2e} mm; {n_ok} of {n_rows}\n<!--block:zz-->", values)
+    text = findings.render_findings("{best} best: {rmse:.2e} mm; {n_ok} of {n_rows}\n<!--block:zz-->", values)
     assert text == "circle.kasa best: 1.25e-03 mm; 10 of 12 <!--block:zz-->"   # one paragraph, no line of its own
     for bad in ("{n_rows.__class__}", "{n_rows[0]}", "{0}", "{n_rows!r}", "{n_rows:>1000}", "{n_rows:{n_ok}}"):
         with pytest.raises(ValueError):
-            contract.render_findings(bad, values)
+            findings.render_findings(bad, values)
     with pytest.raises(ValueError, match="unknown value 'x'"):
-        contract.render_findings("{x}", values)
+        findings.render_findings("{x}", values)
 
 
 def rows_of_a_toml_only_study() -> pd.DataFrame:
@@ -122,22 +123,22 @@ def rows_of_a_toml_only_study() -> pd.DataFrame:
 def test_an_undeclared_toml_study_gets_a_table_and_a_figure_with_units(tmp_path):
     cfg = configs.load(str(write(tmp_path, "")))
     study = contract.study_of("grid")
-    _, analysis = contract.analyse(study, rows_of_a_toml_only_study(), cfg, tmp_path, log=lambda *a: None)
-    assert len(analysis.tables) == 1 and len(analysis.figures) == 1
-    table = analysis.tables[0]
+    _, analysed = analysis.analyse(study, rows_of_a_toml_only_study(), cfg, tmp_path, log=lambda *a: None)
+    assert len(analysed.tables) == 1 and len(analysed.figures) == 1
+    table = analysed.tables[0]
     # a generator's lengths are in the unit of its own parameters: the data's unit, mm only when declared
-    assert table.unit == contract.DATA_UNITS and "center error" in table.caption and "center_error" not in table.caption
+    assert table.unit == units.DATA_UNITS and "center error" in table.caption and "center_error" not in table.caption
     declared = dict(cfg)
     declared["length_unit"] = "mm"
-    assert contract.default_declarations(declared, rows_of_a_toml_only_study())[0]["unit"] == "mm"
+    assert analysis.default_declarations(declared, rows_of_a_toml_only_study())[0]["unit"] == "mm"
     # the degree column is a key named with its own unit: the table's mm never labels it
     # and a pivot's column names carry the key's unit, not the table's (read as 'arc 360 °', never 'arc [mm]')
     assert list(table.data.columns) == ["method", "arc = 360 °", "arc = 90 °", "arc = 22.5 °"]
-    assert (tmp_path / analysis.figures[0].file).is_file()
+    assert (tmp_path / analysed.figures[0].file).is_file()
 
 
 def test_a_declared_table_names_the_unit_of_its_numeric_key(tmp_path):
-    table = contract.declared_table(rows_of_a_toml_only_study(), {"caption": "c", "rows": ["data_arc_deg", "method"],
+    table = tables.declared_table(rows_of_a_toml_only_study(), {"caption": "c", "rows": ["data_arc_deg", "method"],
                                                                   "values": "radius_error", "unit": "mm"})
     assert list(table.data.columns) == ["arc [°]", "method", "mean of radius error"]
 
@@ -146,5 +147,5 @@ def test_figure_axes_carry_units(tmp_path, monkeypatch):
     seen = {}
     monkeypatch.setitem(contract.PLOTS, "probe", lambda df, ax, *, x, y, by=None, aggregate="mean", xlabel=None,
                         ylabel=None: seen.update(xlabel=xlabel, ylabel=ylabel))
-    contract.declared_figure(rows_of_a_toml_only_study(), {"plot": "probe", "x": "data_arc_deg", "y": "center_error", "aggregate": "rmse", "caption": "c"}, tmp_path, 1)
+    figures.declared_figure(rows_of_a_toml_only_study(), {"plot": "probe", "x": "data_arc_deg", "y": "center_error", "aggregate": "rmse", "caption": "c"}, tmp_path, 1)
     assert seen == {"xlabel": "arc [°]", "ylabel": "RMSE of center error [mm]"}

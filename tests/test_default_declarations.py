@@ -3,7 +3,9 @@ rows (table) and lines (figure); a length is labelled with the data's unit, mm o
 import numpy as np
 import pandas as pd
 
-from experiments.study import DATA_UNITS, declared_table, default_declarations
+from experiments.analysis import default_declarations
+from experiments.tables import declared_table
+from experiments.units import DATA_UNITS
 
 CIRCLE = {"name": "pool", "datasets": [{"generator": "circle", "params": {"radius": 1.0}}]}
 

@@ -320,7 +320,7 @@ def test_dataframe_input_and_parameters():
 def study(tmp_path_factory):
     from conftest import quick_study
     target = quick_study(tmp_path_factory, "multilateration")
-    from experiments.study import json_value
+    from experiments.jsontext import json_value
     return target, pd.read_csv(target / "results.csv"), json_value((target / "meta.json").read_text())
 
 

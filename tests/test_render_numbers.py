@@ -102,7 +102,7 @@ def test_the_studies_declare_the_formats_their_comparisons_need(study, tmp_path,
     import shutil
     import fitbench.plots.circular_test
     from experiments import config as configs
-    from experiments import study as contract
+    from experiments import analysis as analysing, outputs
     from experiments.report import declared_formats
     from experiments.render.report_tables import text_frame
     from experiments.studies import published, study_of
@@ -112,8 +112,8 @@ def test_the_studies_declare_the_formats_their_comparisons_need(study, tmp_path,
     shutil.copytree(QUICK / study, folder)
     cfg = configs.load(study, quick=True)
     df = pd.read_csv(folder / "results.csv", keep_default_na=False, na_values=[""])
-    _, analysis = contract.analyse(study_of(cfg["kind"]), df, cfg, folder, lambda *a: None)
-    contract.write_manifest(folder, cfg, analysis, pd.read_csv(folder / "summary.csv"))
+    _, analysis = analysing.analyse(study_of(cfg["kind"]), df, cfg, folder, lambda *a: None)
+    outputs.write_manifest(folder, cfg, analysis, pd.read_csv(folder / "summary.csv"))
     entry = next(t for t in json.loads((folder / "report.json").read_text(encoding="utf-8"))["tables"]
                  if TABLES[study] in t["caption"])
     stored = pd.read_csv(folder / entry["file"], keep_default_na=False, na_values=[""])

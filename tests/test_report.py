@@ -256,7 +256,7 @@ def test_every_row_the_tables_leave_out_is_counted_by_status_and_method(tmp_path
     tex = (paper / "report.tex").read_text(encoding="utf-8")
     assert "timed-out rows: 3 of 9" in tex and "crashed rows: 2 of 9" in tex and "circle.taubin 2" in tex
     # the default table holds the ok rows: its caption counts those (it said "over 9 rows" of a table of 3)
-    from experiments.study import default_declarations
+    from experiments.analysis import default_declarations
     table, _ = default_declarations({"name": "leftout"}, pd.read_csv(folder / "results.csv"))
     assert "over the 3 ok rows of 9 of leftout" in table["caption"], table["caption"]
 

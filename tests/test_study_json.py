@@ -67,8 +67,9 @@ def test_infinite_values_are_written_as_json_texts(tmp_path, monkeypatch):
 def test_json_value_reads_the_non_finite_texts_back_as_floats():
     import math
 
-    from experiments.study import json_text, json_value
+    from experiments.jsontext import json_text, json_value
     value = {"k": [1.5, math.inf, {"x": -math.inf}], "n": math.nan, "label": "Infinity war", "s": "x"}
     back = json_value(json_text(value))
     assert back["k"] == [1.5, math.inf, {"x": -math.inf}] and math.isnan(back["n"])
     assert back["label"] == "Infinity war" and back["s"] == "x"
+

@@ -5,7 +5,9 @@ them, says in its caption how many rows it leaves out and of which data sets."""
 import numpy as np
 import pandas as pd
 
-from experiments.study import NO_VALUE, declared_figure, declared_table, default_declarations
+from experiments.analysis import default_declarations
+from experiments.figures import declared_figure
+from experiments.tables import NO_VALUE, declared_table
 
 CFG = {"name": "mixed", "datasets": [{"source": "outliers", "grid": {"share": [0.0, 0.1]}}, {"source": "squares"}]}
 

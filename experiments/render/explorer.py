@@ -109,7 +109,7 @@ def ranking_data(name: str, r, folders: dict[str, Path], metas: dict[str, dict])
     taus = np.unique(np.concatenate([[1.0], np.geomspace(1.0, top * 1.01, 240)]))   # a grid, not every ratio
     prof = profile(table, taus=taus)
     from experiments.render.text import human_unit
-    from experiments.study import readable
+    from experiments.units import readable
     problems = list(map(str, table.index))
     # every number carries its unit: each problem's (its study's: "mm" for published, "R" for noise), which the
     # hovers name and the runtime panels group by

@@ -69,9 +69,9 @@ UNIT_WORDS = {"R": "R (relative to the radius R of the data's circle)"}
 
 def ranking_unit(study: str, decl: dict) -> str:
     """The unit of a declared ranking's costs: its ``unit``, checked against the dimension of the metric's
-    declared unit (``experiments.study.column_unit``: the result classes' declarations, timings in s), else that
+    declared unit (``experiments.units.column_unit``: the result classes' declarations, timings in s), else that
     declared unit. ValueError when they disagree (a length ranked in s)."""
-    from experiments.study import column_unit
+    from experiments.units import column_unit
     metric, unit = decl["metric"], decl.get("unit")
     own = column_unit(metric)
     if unit is None or unit == "":

@@ -19,7 +19,8 @@ from pydantic import Field
 
 from methods.results import Tolerance
 from experiments.schema import ConfigTable
-from experiments.study import Analysis, Figure, Study, Table, save_figure
+from experiments.outputs import save_figure
+from experiments.study import Analysis, Figure, Study, Table
 from methods.results import CircularTestFit
 from experiments.provenance import write_atomic
 

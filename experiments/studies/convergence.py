@@ -19,7 +19,8 @@ from experiments import engine
 from experiments.engine import ConfigError
 from experiments.schema import ConfigTable
 from experiments.render.text import counts_by_group, joined
-from experiments.study import Analysis, Figure, Study, Table, save_csv
+from experiments.outputs import save_csv
+from experiments.study import Analysis, Figure, Study, Table
 
 
 def reference_method(cfg_or_task: dict, method_id: str) -> str:

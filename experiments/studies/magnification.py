@@ -14,7 +14,8 @@ from experiments import engine
 from experiments.engine import ConfigError
 from methods.magnify import MagnifyInput
 from experiments.schema import ConfigTable
-from experiments.study import Analysis, Figure, Study, Table, save_csv
+from experiments.outputs import save_csv
+from experiments.study import Analysis, Figure, Study, Table
 
 
 def variant_params(variant: dict, eta: float) -> dict:

@@ -26,7 +26,8 @@ from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_ma
 from methods.multilateration.solvers import kabsch
 from methods.results import Tolerance
 from experiments.schema import ConfigTable
-from experiments.study import Analysis, Figure, Study, Table, save_csv
+from experiments.outputs import save_csv
+from experiments.study import Analysis, Figure, Study, Table
 
 
 SCENARIO_KEYS = {"stations", "noise", "errors", "grid"}

@@ -12,7 +12,8 @@ import pandas as pd
 
 from datasets.synthetic import circle_points
 from experiments.render.text import counts_by_group
-from experiments.study import Analysis, Figure, Study, Table, save_csv
+from experiments.outputs import save_csv
+from experiments.study import Analysis, Figure, Study, Table
 
 
 def kcr_bound(arc_deg: float, n: int, sigma: float, radius: float = 1.0) -> tuple[float, float]:

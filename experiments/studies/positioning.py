@@ -18,7 +18,8 @@ from experiments.engine import ConfigError
 from methods.positioning.model import evaluate_band
 from experiments.schema import ConfigTable
 from experiments.render.text import joined
-from experiments.study import Analysis, Figure, Study, Table, save_csv, save_figure
+from experiments.outputs import save_csv, save_figure
+from experiments.study import Analysis, Figure, Study, Table
 
 
 def example(cfg, target) -> str:

@@ -17,7 +17,8 @@ from experiments import engine
 from experiments.engine import ConfigError
 from methods.results import Tolerance
 from experiments.schema import ConfigTable
-from experiments.study import Analysis, Figure, Study, Table, save_csv
+from experiments.outputs import save_csv
+from experiments.study import Analysis, Figure, Study, Table
 from methods.roundness.filter import POINTS_PER_CUTOFF, parse_cutoff
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from experiments.figures import declared_figure
-from experiments.jsontext import json_text
+from experiments.jsontext import json_text, json_value
 from experiments.study import Analysis, Study
 from experiments.tables import declared_table
 from experiments.units import aggregate_words, metric_unit, readable
@@ -28,7 +28,7 @@ def analyse(study: Study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tup
         if figure and not cfg.get("figures"):
             analysis.figures.append(declared_figure(df, figure, target, 1))
     analysis.values = {"n_rows": len(df), "n_ok": int((df["status"] == "ok").sum()), **analysis.values}
-    findings = json.loads(json_text(analysis.values))  # what meta.json holds
+    findings = json_value(json_text(analysis.values))  # what meta.json holds: plain values, as read back from it
     analysis.tables += [declared_table(df, t) for t in cfg.get("tables", [])]
     for f in cfg.get("figures", []):
         analysis.figures.append(declared_figure(df, f, target, len(analysis.figures) + 1))

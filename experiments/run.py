@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
-import json
 import os
 import signal
 import sys
@@ -34,6 +33,7 @@ from experiments import engine
 from experiments import analysis, figures, outputs
 from experiments import study as contract
 from experiments.csvtext import blocks, csv_text, write_results
+from experiments.jsontext import json_text
 from experiments.executors import kept_workers, last_study, map_in_idle_workers, start_kept_workers, workers_done
 from experiments.provenance import collect, write_atomic
 from experiments.rows import Terminated, clear_signal, fewer_collections, note_signal, raise_if_signalled, signalled
@@ -218,7 +218,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     write_atomic(target / "summary.csv", buf.getvalue())
     write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary, units=summary_units(summary, cfg)))
     raise_if_signalled()  # before meta.json: a study whose outputs are not all written is not up to date
-    write_atomic(target / "meta.json", json.dumps(meta, indent=1, default=str) + "\n")
+    write_atomic(target / "meta.json", json_text(meta, indent=1) + "\n")
     outputs.remove_leftover_tmp(target)
     bad = ", ".join(f"{v} {k}" for k, v in meta["status_counts"].items() if k != "ok")
     log(f"-> {target}/results.csv ({len(df)} rows" + (f": {bad}" if bad else "") +

@@ -73,3 +73,43 @@ def test_json_value_reads_the_non_finite_texts_back_as_floats():
     assert back["k"] == [1.5, math.inf, {"x": -math.inf}] and math.isnan(back["n"])
     assert back["label"] == "Infinity war" and back["s"] == "x"
 
+
+def test_a_text_that_reads_as_a_number_stays_a_text():
+    """Only what json_text wrote as a number that is not finite is read back as a float: a label, a message or a value
+    that is the text "NaN", "Infinity" or "-Infinity" stays that text (it is written escaped: "\\NaN")."""
+    from experiments.jsontext import json_text, json_value
+    value = {"label": "NaN", "msg": ["Infinity", "-Infinity"], "n": math.nan, "esc": "\\NaN", "x": -math.inf,
+             "nested": {"source": "NaN", "ratio": math.inf}}
+    text = json_text(value)
+    strict(text)  # still strict JSON
+    back = json_value(text)
+    assert back["label"] == "NaN" and back["msg"] == ["Infinity", "-Infinity"] and back["esc"] == "\\NaN"
+    assert back["nested"]["source"] == "NaN" and back["nested"]["ratio"] == math.inf and back["x"] == -math.inf
+    assert math.isnan(back["n"])
+
+
+class TextValues(Study):
+    values = ("label", "ratio")
+
+    def analyse(self, rows, cfg, target, log):
+        return Analysis(values={"label": "NaN", "ratio": math.inf})
+
+
+def test_report_and_meta_keep_texts_that_read_as_numbers(tmp_path, monkeypatch):
+    """report.json and meta.json as the report reads them: a study value "NaN" and a data set labelled "Infinity" are
+    texts, an infinite value a float."""
+    from experiments.report import _read_json
+    module = types.ModuleType("experiments.studies.text_values")
+    TextValues.__module__ = module.__name__
+    module.TextValues = TextValues
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    path = tmp_path / "textvalues.toml"
+    text = TOML.format().replace('"nonfinite"', '"textvalues"').replace('"nonfinite_values"', '"text_values"')
+    text = text.replace('source = "circle"', 'source = "circle"\nlabel = "Infinity"')
+    path.write_text(text.replace("the ratio is {ratio:.3f}, the spread {spread}", "{label}"), encoding="utf-8")
+    target = run_study(str(path), tmp_path / "out", jobs=1, log=lambda *a: None)
+    report, meta = _read_json(target / "report.json"), _read_json(target / "meta.json")
+    for values in (report["values"], meta["findings"]):
+        assert values["label"] == "NaN" and values["ratio"] == math.inf
+    assert meta["config"]["datasets"][0]["label"] == "Infinity" and report["findings"] == "NaN"
+    strict((target / "meta.json").read_text())

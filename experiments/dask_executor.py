@@ -19,6 +19,10 @@ Isolation, as the local executor gives it (``experiments.executors``):
   *alone* (nothing else in flight, so a death is theirs), down to single rows; a row whose worker died
   :data:`DASK_ROW_ATTEMPTS` times, the last time alone, is ``crashed``. The innocent rows of the chunk are
   computed as usual.
+* A study running a plugin's code (its method or data source) runs its rows in row processes, with or without
+  a time limit: there, as in a local worker, the rows of the plugin's code are fitted in a child forked for the
+  chunk and gated and measured by the row process's own code (``experiments.rows``), so what the plugin does to
+  its process (patching the gate, a built-in method, NumPy) reaches neither the Dask worker nor another row.
 
 References: Dask distributed's ``KilledWorker`` and ``distributed.scheduler.allowed-failures``
 (https://distributed.dask.org/en/stable/killed.html); the Linux parent-death signal, prctl(2)
@@ -176,7 +180,7 @@ class _RowProcess:
             if self._ended(0) and not self.conn.poll(0):
                 return self._died()
             started = self.progress[0]
-            if started and time.monotonic() - started > row_timeout + KILL_GRACE_S:
+            if started and row_timeout and time.monotonic() - started > row_timeout + KILL_GRACE_S:
                 pos = int(self.progress[1])
                 self.stop(now=True)
                 return ("timeout", pos)
@@ -317,9 +321,9 @@ def expected_code(chunk: list) -> tuple:
     return reps, codekeys.environment()
 
 
-def run_isolated(tasks: list, row_timeout: float) -> dict:
+def run_isolated(tasks: list, row_timeout: float | None) -> dict:
     """A Dask task: run a chunk in a row process of this worker (see the module's docstring) and return its
-    rows in the store's columns, every row labelled, in the order of ``tasks``."""
+    rows in the store's columns, every row labelled, in the order of ``tasks`` (``row_timeout`` None: no limit)."""
     from experiments.rows import encode_rows, failed_row
     n = len(tasks)
     status: list = [None] * n
@@ -389,20 +393,20 @@ def execute(tasks, store, *, work, jobs: int, scheduler: str | None, desc: str, 
             row_timeout: float | None = None, chunk_rows: int | None = None, log=print, executor: str = "dask",
             isolate: bool = False):
     """``experiments.executors.execute`` on Dask: the tasks in chunks (sized as there), each chunk's rows
-    stored as it returns (:func:`run_dask`). Rows always run in Dask's worker processes (``isolate`` changes
-    nothing here)."""
+    stored as it returns (:func:`run_dask`). Rows always run in Dask's worker processes; with ``isolate`` (a
+    plugin's method or data source in the study) in their row processes (:func:`run_isolated`)."""
     if total == 0:
         return
     bar = Progress(total if total is not None else 0, desc, log)
     try:
-        run_dask(work, Chunks(tasks, chunk_rows, jobs, total), store, jobs, scheduler, bar, row_timeout)
+        run_dask(work, Chunks(tasks, chunk_rows, jobs, total), store, jobs, scheduler, bar, row_timeout, isolate)
     finally:
         bar.close()
 
 
-def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> None:
+def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout, isolate: bool = False) -> None:
     """Run ``chunks`` (an ``experiments.executors.Chunks``) as Dask tasks of ``work`` (or
-    :func:`run_isolated` with a time limit) on a LocalCluster of ``jobs`` single-threaded worker processes,
+    :func:`run_isolated` with a time limit or, ``isolate``, rows of a plugin's code) on a LocalCluster of ``jobs`` single-threaded worker processes,
     or on the cluster at ``scheduler``; store each chunk's rows as it returns (see the module's docstring).
 
     Ctrl-C is the run's own from before the cluster starts (:func:`_ctrl_c_sets`): interrupted while a LocalCluster
@@ -445,7 +449,8 @@ def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> Non
                         f"a machine too busy to start it in distributed's time limits?); run the same command again, "
                         f"or with --executor local") from None
                 where = "the local Dask cluster"
-            _drive(client, where, work, chunks, store, bar, row_timeout, limit_s, interrupted, finished, pending)
+            _drive(client, where, work, chunks, store, bar, row_timeout, limit_s, interrupted, finished, pending,
+                   isolate)
     except BaseException:
         if client is not None:
             with contextlib.suppress(Exception):
@@ -463,14 +468,14 @@ def run_dask(work, chunks, store, jobs: int, scheduler, bar, row_timeout) -> Non
 
 
 def _drive(client, where: str, work, chunks, store, bar, row_timeout, limit_s: float, interrupted: threading.Event,
-           finished: queue.Queue, pending: dict) -> None:
+           finished: queue.Queue, pending: dict, isolate: bool = False) -> None:
     """The run's loop over the chunks on ``client`` (see the module's docstring); ``pending`` holds the chunks in
     flight (the caller cancels them when the loop raises)."""
     from distributed import KilledWorker
     from experiments.rows import encode_rows, failed_row, raise_if_signalled
     if interrupted.is_set():
         raise KeyboardInterrupt
-    fn = run_isolated if row_timeout else work
+    fn = run_isolated if row_timeout or isolate else work
     retry: collections.deque = collections.deque()  # chunks whose worker died: each runs alone
     deaths: collections.Counter = collections.Counter()  # row key -> deaths of the worker running it
     threads = _threads(client)

@@ -211,7 +211,8 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
     warnings.simplefilter("ignore", PluginLoadWarning)
     import gc
 
-    from experiments.rows import ROW_GC_THRESHOLD, run_chunk  # the rows' code: imported here, in the worker
+    from experiments.rows import ROW_GC_THRESHOLD, mark_row_worker, run_chunk  # the rows' code: in the worker
+    mark_row_worker()
     from methods import exception_text
     gc.set_threshold(ROW_GC_THRESHOLD, *gc.get_threshold()[1:])  # a worker only makes rows (experiments.rows)
     while True:

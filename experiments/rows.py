@@ -598,12 +598,21 @@ def _builtin_source(spec: dict) -> bool:
     return sources.get_source(source_of(spec)).builtin
 
 
+#: set in a process that runs the engine's worker loop (``experiments.localworkers._worker_main``: a local worker,
+#: or a row process of a Dask worker), by :func:`mark_row_worker`
+_ROW_WORKER = [False]
+
+
+def mark_row_worker() -> None:
+    """Say that this process is a worker of the engine: the rows of a plugin's code it is given run in a child
+    process of their own (:func:`_forks_plugin_rows`)."""
+    _ROW_WORKER[0] = True
+
+
 def _forks_plugin_rows() -> bool:
-    """Whether this process runs the rows of a plugin's code in a child process of their own: a local worker of the
-    engine (``experiments.localworkers``), in its main thread, where ``os.fork`` exists."""
-    import multiprocessing
-    return (hasattr(os, "fork") and threading.current_thread() is threading.main_thread()
-            and multiprocessing.current_process().name == "fitbench-worker")
+    """Whether this process runs the rows of a plugin's code in a child process of their own: a worker of the
+    engine (:func:`mark_row_worker`), in its main thread, where ``os.fork`` exists."""
+    return _ROW_WORKER[0] and hasattr(os, "fork") and threading.current_thread() is threading.main_thread()
 
 
 class _Positions:

@@ -179,11 +179,13 @@ def _rows(out, name):
 
 
 @pytest.mark.slow
-def test_a_plugin_patching_fitbench_changes_no_other_row_nor_its_cache(site, tmp_path):
+@pytest.mark.parametrize("executor", [[], ["--executor", "dask"]], ids=["local", "dask"])
+def test_a_plugin_patching_fitbench_changes_no_other_row_nor_its_cache(site, tmp_path, executor):
     out, clean = tmp_path / "out", tmp_path / "clean"
     study = _study(tmp_path / "a", "iso", ["circle.iso_poison", "circle.iso_patch_gate", "circle.iso_c_writer",
                                            "circle.kasa"])
-    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report", path_first=[site])
+    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report", *executor,
+                      path_first=[site])
     assert proc.returncode == 0, proc.stderr
     df = _rows(out, "iso")
     # the same kasa rows, without the plugin, into the same folder (served from the cache) and into a new one

@@ -84,6 +84,8 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
             raise DataFileError(f"unknown plane {plane!r}; use one of {', '.join(PLANES)}")
         if layout.header is not None and (got := _pair(layout, PLANES[plane.lower()], d_col)) is not None:
             return got
+        if layout.header is not None and (got := _polar(layout, roles, d_col)) is not None:
+            return got   # angle + radial deviation: the plane names the axes the angle turns in (read_runs)
         return Resolved("xy", layout.index(PLANES[plane.lower()]), None, d_col)
     if columns is not None:
         idx = layout.index(columns)
@@ -100,11 +102,9 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
             raise DataFileError(f"{name} line {layout.first_data_line}: {layout.ncol} columns and no header; "
                                 "add a header line naming the x and y columns (or --columns 0 1)")
         return Resolved("xy", [0, 1])
+    if (got := _polar(layout, roles, d_col)) is not None:
+        return got
     a = roles.index("angle") if "angle" in roles else None
-    v = next((roles.index(r) for r in ("deviation", "radius") if r in roles), None)
-    if a is not None and v is not None:
-        _refuse_other_lengths(layout, [a, v], roles, d_col)
-        return Resolved("polar", [a, v], roles[v], d_col)
     if "x" in roles and "y" in roles and "z" in roles:
         raise DataFileError(_which_plane(layout, [roles.index(c) for c in "xyz"]))
     if (got := _pair(layout, ("x", "y"), d_col)) is not None:
@@ -131,6 +131,16 @@ def _numeric_column(layout: Layout, k: int) -> bool:
         return bool(vals) and all(np.isfinite(_field_number(t, layout.decimal_comma)) for t in vals)
     except (ValueError, IndexError, InvalidInputError):
         return False
+
+
+def _polar(layout: Layout, roles: list, d_col) -> Resolved | None:
+    """The angle + radial deviation (or radius) reading of a header naming both, else None."""
+    a = roles.index("angle") if "angle" in roles else None
+    v = next((roles.index(r) for r in ("deviation", "radius") if r in roles), None)
+    if a is None or v is None:
+        return None
+    _refuse_other_lengths(layout, [a, v], roles, d_col)
+    return Resolved("polar", [a, v], roles[v], d_col)
 
 
 def _pair(layout: Layout, axes: tuple, d_col) -> Resolved | None:

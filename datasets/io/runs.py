@@ -15,7 +15,7 @@ from datasets.io.headers import column_unit, length_unit
 from datasets.io.layout import Layout, sniff
 from datasets.io.numbers import DataFileError
 from datasets.io.polar import _unit_assumed, angle_unit_of, polar_to_points
-from datasets.io.roles import Resolved, coordinate_kind, read_offsets, resolve
+from datasets.io.roles import PLANES, Resolved, coordinate_kind, read_offsets, resolve
 from methods.units import to_mm
 
 
@@ -34,10 +34,13 @@ class CircularRuns:
     columns_note: str | None = None  # which columns were read when the header held more than x, y (actual, deviation)
 
 
-def _axes(layout: Layout, res: Resolved) -> tuple:
+def _axes(layout: Layout, res: Resolved, plane: str | None = None) -> tuple:
     """Names of the two coordinates read: the header's keys of an x, y layout (``z``, ``x`` for a z-x plane),
-    else ``x``, ``y`` (angle + deviation files are placed in an x, y plane; header-less files have no names)."""
+    else ``x``, ``y``; angle + deviation files are placed in the ``plane`` given (the angle turning from its first
+    axis to its second, ``zx``: from Z to X), else in an x, y plane; header-less files have no names."""
     keys = [k for k, _ in layout.fields()]
+    if res.kind == "polar" and plane is not None:
+        return PLANES[plane.lower()]
     if res.kind != "xy" or not keys:
         return ("x", "y")
     named = [coordinate_kind(keys[i]) for i in res.idx]   # 'X act' is the coordinate x
@@ -89,7 +92,10 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
             pts *= f
         if (dev := read_offsets(layout, res, cols)) is not None:
             pts += dev
-    axes = _axes(layout, res)
+    axes = _axes(layout, res, plane)
+    if res.kind == "polar" and plane is not None:
+        notes.append(f"angle + radial deviation in the {''.join(axes).upper()} plane (--plane {plane.lower()}): the "
+                     f"angle turns from +{axes[0].upper()} towards +{axes[1].upper()}")
     if res.direction is None:
         return CircularRuns([("file", pts)], name, res.kind, lu, notes, au, axes, assumed, res.note)
     labels = pd.Series(cols[res.direction]).astype(str).str.strip()

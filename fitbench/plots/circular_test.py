@@ -159,8 +159,7 @@ def text(ev, dg: dict | None) -> str:
                 lines.append(f"  {label:<22}  {item.get('note', 'not estimated')}")
             else:
                 unit = HUMAN_UNIT.get(item["unit"], item["unit"])
-                v = item["value"] if round(item["value"], 3) != 0 else 0.0     # never -0.000
-                lines.append((f"  {label:<22}  {v:+10.3f} +- {item['u']:.3f} {unit:<5}  "
+                lines.append((f"  {label:<22}  {_value_u(item['value'], item['u'], unit)} {unit:<5}  "
                               f"contribution {contrib:7.2f} µm  {meaning(name, item['value'], item['u'], plane, contrib)}").rstrip())
         m = dg["_model"]
         fit = f"fit converged in {m['iterations']} iterations" if m["converged"] else "fit NOT converged (below)"
@@ -168,6 +167,23 @@ def text(ev, dg: dict | None) -> str:
         if not m["converged"]:
             lines.append(f"  {m['message']}; the values above are its last iterate's")
     return "\n".join(lines)
+
+
+def _value_u(value: float, u: float, unit: str) -> str:
+    """``value +- u`` to 3 decimals (0.001 µm, µrad, µm/m: below any ballbar's resolution, where a value that prints
+    as 0.000 means nothing, :func:`meaning`); a time (ms) to the first significant digit of a smaller u (GUM 7.2.6):
+    0.001 ms is not below what the servo-mismatch fit resolves (a 2 ms lag with u = 0.3 µs read '+- 0.000 ms')."""
+    d = 3
+    if unit == "ms" and np.isfinite(u) and 0 < abs(u) < 0.0005:
+        d = int(min(9, -np.floor(np.log10(abs(u)))))
+    v = round(float(value), d) + 0.0                           # + 0.0: no "-0.000"
+    return f"{v:+10.{d}f} +- {float(u):.{d}f}"
+
+
+def _ring_label(value_um: float) -> str:
+    """A ring's radial deviation: signed, and '0 µm' (no sign) for the nominal circle's ring."""
+    v = round(float(value_um), 9) + 0.0
+    return "0 µm" if v == 0 else f"{v:+g} µm"
 
 
 def _nice_division(span_um: float) -> float:
@@ -311,7 +327,7 @@ def polar_plot(cw, ccw, ev, path, title: str = "", *, diagnostics=None, conditio
         ticks = np.arange(1, n_div + 1) * div
         ax.set_rticks(ticks)
         # ring labels on a white ground so that a trace passing under them does not hide them
-        ax.set_yticklabels([f"{base + t:+g} µm" for t in ticks], fontsize=MIN_FONT_PT,
+        ax.set_yticklabels([_ring_label(base + t) for t in ticks], fontsize=MIN_FONT_PT,
                            bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.8))
         ax.yaxis.set_zorder(4)                                 # the ring labels over the traces
         ax.set_rlim(0, outer)

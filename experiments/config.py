@@ -5,10 +5,9 @@ import os
 import tomllib
 from pathlib import Path
 
-from experiments import schema
-from experiments.engine import ConfigError
+from experiments import engine, schema
 from experiments.declarations import validate as validate_declarations
-from experiments.study import count_rows, study_of  # noqa: F401  (count_rows: API)
+from experiments.study import ConfigError, count_rows, study_of  # noqa: F401  (count_rows: API)
 
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
 
@@ -31,6 +30,28 @@ class StudyConfig(dict):
     def replace(self, **changes) -> "StudyConfig":
         """A copy with some keys changed (the same origin)."""
         return StudyConfig({**self, **changes}, where=self.where, folder=self.folder, quick=self.quick)
+
+    # -- its expansion (``experiments.engine``), for a study's ``validate`` and ``tasks``: a study module names the
+    # engine through its config, never by an import, so that its rows' cache keys hold no library of the run's own
+    # (the progress bars, Dask, the report's templates: docs/studies.md)
+
+    def expand_datasets(self) -> list[dict]:
+        """Its data set specs, one per grid point of each ``[[datasets]]`` entry (``experiments.engine.expand_datasets``)."""
+        return engine.expand_datasets(self, self.where)
+
+    def expand_methods(self) -> list[tuple[str, dict]]:
+        """(method id, its ``params``, ``on``, ``max_n``) per grid point of each ``[[methods]]`` entry
+        (``experiments.engine.expand_methods``; ``family.*`` expanded)."""
+        return engine.expand_methods(self, self.where)
+
+    def grid_tasks(self, *, keyed: bool = False):
+        """The generic grid's tasks, lazily: data sets x repetitions x methods (``experiments.engine.iter_grid_tasks``);
+        ``keyed``: each with its index and cache key."""
+        return engine.iter_grid_tasks(self, self.where, keyed=keyed)
+
+    def prepare(self, tasks):
+        """A study's own tasks with their index and cache key, lazily (``experiments.engine.iter_prepared``)."""
+        return engine.iter_prepared(tasks)
 
     def __reduce__(self):  # pickled with its attributes (a plain dict's pickle would drop them)
         return (_study_config, (dict(self), self.where, str(self.folder), self.quick))

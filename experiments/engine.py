@@ -41,15 +41,12 @@ from experiments.rows import RERUN_STATUSES, raise_if_signalled, row_from_json, 
 # the row API of studies with their own ``execute`` and of the command (engine.base_row, engine.fit_row, ...)
 from experiments.rows import ENVIRONMENT_STATUSES, base_row, fit_row, load_data, note_signal, task_data  # noqa: F401
 from experiments.store import RowStore
+from experiments.study import ConfigError
 from methods import InvalidInputError
 from methods.files import check_regular
 
 ENGINE_VERSION = 2
 REPO = Path(__file__).resolve().parents[1]
-
-
-class ConfigError(InvalidInputError):
-    """A study config that cannot run; the message names the file, the key and the problem."""
 
 
 # ---------------------------------------------------------------- config expansion

@@ -9,6 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from experiments.outputs import save_figure
+from experiments.render import style
 from experiments.study import PLOT_COLUMNS, PLOTS, Figure, register_plot
 from experiments.tables import AGGREGATES, NO_VALUE, lacking_note, rows_where
 from experiments.units import aggregate_words, column_unit, readable
@@ -70,11 +71,9 @@ def load_plotting_in_background() -> None:
 
     def load():
         try:
-            import matplotlib
-            matplotlib.use("Agg")
-            import matplotlib.pyplot  # noqa: F401
-            import matplotlib.backends.backend_agg  # noqa: F401  (the PNG of each figure)
-            import matplotlib.backends.backend_pdf  # noqa: F401  (its PDF, for the report's LaTeX: 0.15 s more)
+            style.plotting()
+            style.plotting("backends.backend_agg")  # the PNG of each figure
+            style.plotting("backends.backend_pdf")  # its PDF, for the report's LaTeX: 0.15 s more
         except Exception:  # reported where the figures import it
             pass
     threading.Thread(target=load, daemon=True, name="fitbench-load-plotting").start()
@@ -85,9 +84,7 @@ def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Fig
     ``target`` as figure ``number`` (PNG and PDF), or the file the study's analysis wrote."""
     if "file" in f:
         return Figure(caption=f["caption"], file=f["file"])
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = style.plotting()
     args = plot_arguments(f)
     accepted = inspect.signature(PLOTS[f["plot"]]).parameters
     for axis, label in (("x", "xlabel"), ("y", "ylabel")):  # axes name their column and its unit

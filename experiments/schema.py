@@ -349,7 +349,7 @@ _Validator = jsonschema.validators.extend(
 def check_structure(cfg: dict, where: str, study_keys: dict | None = None) -> None:
     """Raise ConfigError for the first structural problem (unknown key, wrong type, missing table);
     ``study_keys``: the keys the config's study kind declares (its ``Study.config_schema``)."""
-    from experiments.engine import ConfigError
+    from experiments.study import ConfigError
     schema = config_schema(study_keys)
     validator = _Validator(schema)
     errors = sorted(validator.iter_errors(cfg), key=lambda e: (list(map(str, e.absolute_path)), e.validator))
@@ -361,7 +361,7 @@ def check_structure(cfg: dict, where: str, study_keys: dict | None = None) -> No
 
 def _check_finite(value, where: str, path: str) -> None:
     """TOML accepts inf and nan: no config value may be one."""
-    from experiments.engine import ConfigError
+    from experiments.study import ConfigError
     if isinstance(value, float) and not math.isfinite(value):
         raise ConfigError(f"{where}: {path or '(top level)'}: must be a finite number, got {value!r}")
     if isinstance(value, dict):
@@ -511,7 +511,7 @@ register_source_check("published", _check_published)
 def check_values(cfg: dict, where: str) -> None:
     """The checks a schema cannot express: data source parameter values (each source's hook) and
     method parameter values (the registry's ``check_params``)."""
-    from experiments.engine import ConfigError
+    from experiments.study import ConfigError
     import methods
     for i, entry in enumerate(cfg.get("datasets", [])):
         source = next(s for s in DATASET_SOURCES if s in entry)
@@ -585,7 +585,7 @@ def check_data_kinds(cfg: dict, where: str) -> None:
     family paired with a source whose data are another family's shape (``register_source(family=...)``, or the
     ``family`` of a file's truth table): a circle fit on a square outline, unless its entry says ``any_family = true``
     (its rows then carry no errors against that truth: ``experiments.rows``)."""
-    from experiments.engine import ConfigError
+    from experiments.study import ConfigError
     from datasets import sources
     import methods
     if not cfg.get("datasets") or not cfg.get("methods"):

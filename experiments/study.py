@@ -61,6 +61,12 @@ The values also land in ``meta.json['findings']``. A study whose numbers need mo
 declares it as tasks (``tasks(cfg)`` + ``execute(task)``), so that the engine caches, resumes and
 parallelises it; ``analyse`` only aggregates rows.
 
+A study module's rows are keyed on its code and the libraries it imports (``experiments.codehash``): it builds rows
+with ``experiments.rows``, expands its config through ``cfg`` (``cfg.grid_tasks()``, ``cfg.expand_methods()``) rather
+than by importing the engine, and draws with ``experiments.render.style.plotting()`` rather than importing
+matplotlib, so that the run's and the figures' libraries are in no row's key (docs/studies.md). This module
+follows the same rules.
+
 The run's analysis step adds the TOML's declared tables and figures (``experiments.analysis``; checked before any row
 runs: ``experiments.declarations``) and writes ``report.json`` (the manifest: sections, numbered later by the
 report) and one CSV per table under ``target/tables/``, everything atomically (``experiments.outputs``).
@@ -73,10 +79,14 @@ from typing import Callable
 
 import pandas as pd
 
-from experiments import engine, studies
-from experiments.engine import ConfigError
-from methods import results
+from experiments import studies
+from experiments.rows import fit_row, task_data
+from methods import InvalidInputError, results
 from methods.plugins import add_entry
+
+
+class ConfigError(InvalidInputError):
+    """A study config that cannot run; the message names the file, the key and the problem."""
 
 
 @dataclass
@@ -216,19 +226,20 @@ class Study:
 
     def tasks(self, cfg: dict):
         """The tasks (plain picklable dicts, one row each; see ``experiments.engine``), an iterable read lazily.
-        Default: data sets x repetitions x methods (x their grids)."""
-        return engine.iter_grid_tasks(cfg, cfg.where)
+        Default: data sets x repetitions x methods (x their grids). ``cfg`` (``experiments.config.StudyConfig``)
+        expands itself: ``cfg.grid_tasks()``, ``cfg.expand_datasets()``, ``cfg.expand_methods()``."""
+        return cfg.grid_tasks()
 
     def prepared_tasks(self, cfg: dict):
         """The tasks with their index and cache key, lazily (what the engine runs)."""
         if not self.own_tasks:  # the generic grid keys its tasks as it expands them (one identity per pair)
-            return engine.iter_grid_tasks(cfg, cfg.where, keyed=True)
-        return engine.iter_prepared(self.tasks(cfg))
+            return cfg.grid_tasks(keyed=True)
+        return cfg.prepare(self.tasks(cfg))
 
     def execute(self, task: dict) -> dict:
         """One task's row (in a worker). Default: the generic fit of the task's method on its data set."""
-        points, truth = engine.task_data(task)  # load_data, made once for the methods that follow on the same data
-        return engine.fit_row(task, points, truth)
+        points, truth = task_data(task)  # load_data, made once for the methods that follow on the same data
+        return fit_row(task, points, truth)
 
     def row_columns(self, cfg: dict) -> dict[str, str] | None:
         """{column: "number" | "bool" | "text"} its rows will have besides the identity and status columns,

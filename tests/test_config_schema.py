@@ -10,7 +10,7 @@ from pydantic import Field
 
 from experiments import config as configs
 from experiments import run as runner
-from experiments.engine import ConfigError
+from experiments.study import ConfigError
 
 GOOD = '''name = "{name}"
 title = "a small study"

@@ -11,7 +11,7 @@ import pytest
 from experiments import config as configs
 from experiments import analysis, figures, findings, tables, units
 from experiments import study as contract
-from experiments.engine import ConfigError
+from experiments.study import ConfigError
 
 STUDY = '''
 name = "decl"

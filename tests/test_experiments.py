@@ -13,7 +13,7 @@ import pytest
 import methods
 from conftest import REPO, quick_study, while_storing_rows
 from experiments import config as configs
-from experiments.engine import ConfigError
+from experiments.study import ConfigError
 from experiments.run import main, run_study
 
 TINY = """

@@ -9,7 +9,7 @@ import pytest
 from datasets import sources
 from experiments import config as configs
 from experiments import run as runner
-from experiments.engine import ConfigError
+from experiments.study import ConfigError
 from experiments.rows import fit_row
 
 STUDY = """name = "study"

@@ -128,7 +128,7 @@ def test_html_table_colours_only_declared_comparisons():
 def test_schema_knows_colour_and_rankings():
     """A table's colour is one the report knows, checked by the generated schema before any row."""
     import tomllib
-    from experiments.engine import ConfigError
+    from experiments.study import ConfigError
     from experiments.schema import check_structure
     cfg = tomllib.loads((REPO / "experiments" / "configs" / "noise.toml").read_text(encoding="utf-8"))
     cfg.pop("kind", None)   # the generic study: its own keys only

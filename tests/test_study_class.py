@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from experiments import config as configs
-from experiments.engine import ConfigError
+from experiments.study import ConfigError
 from experiments.run import run_study
 from experiments.study import Analysis, Study, study_of
 

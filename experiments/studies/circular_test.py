@@ -13,13 +13,13 @@ import numpy as np
 
 import methods
 from datasets.circular_test import circular_test, lola_hbg130
-from experiments import engine
 import pandas as pd
 from pydantic import Field
 
 from methods.results import Tolerance
 from experiments.schema import ConfigTable
 from experiments.outputs import save_figure
+from experiments.rows import base_row, fit_row
 from experiments.study import Analysis, Figure, Study, Table
 from methods.results import CircularTestFit
 from experiments.provenance import write_atomic
@@ -52,7 +52,7 @@ def evaluation_row(task):
     ev = evaluate(cw, ccw, cond.nominal_radius, cond.nominal_center, conditions=cond)
     dg = diagnose(cw, ccw, cond.nominal_radius, cond.nominal_center, feed_mm_min=cond.feed_mm_min)
     converged = dg["_model"]["converged"]   # the diagnostics' fit: a row that did not converge says so
-    row = {**engine.base_row(task), "path": "cw+ccw", "status": "ok" if converged else "not converged",
+    row = {**base_row(task), "path": "cw+ccw", "status": "ok" if converged else "not converged",
            "message": "" if converged else f"diagnostics: {dg['_model']['message']}"}
     row.update({f"iso_{k}": ev.figures[k] for k in ISO_FIGURES})
     for k, v in dg.items():
@@ -116,13 +116,13 @@ class CircularTestStudy(Study):
     config_schema = CircularTestConfig
 
     def validate(self, cfg, where):
-        engine.expand_methods(cfg, where)  # paths: the schema (CircularTestConfig)
+        cfg.expand_methods()  # paths: the schema (CircularTestConfig)
 
     def tasks(self, cfg):
         out = []
         for j, path in enumerate(cfg["paths"]):
             spec = {"entry": 0, "point": j, "scenario": "lola_hbg130", "path": path, "label": f"lola_hbg130:{path}"}
-            for m, extra in engine.expand_methods(cfg, cfg.where):
+            for m, extra in cfg.expand_methods():
                 out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
                             "stream": [0, 0, 0], "seed": cfg["seed"], "method": m, "params": extra["params"], "timing": None})
         # the ISO 230-4 evaluation and the error-source diagnosis of both runs: one cached task (its row holds the numbers)
@@ -139,7 +139,7 @@ class CircularTestStudy(Study):
         truth = exact_truth(cond, err)
         if methods.get(task["method"]).family == "circle":
             truth = {"family": "circle", "center": truth["circle_center"], "radius": truth["circle_radius"]}
-        row = engine.fit_row(task, pts, truth)
+        row = fit_row(task, pts, truth)
         row["path"] = task["dataset"]["path"]
         return row
 

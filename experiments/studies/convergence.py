@@ -15,12 +15,11 @@ import pandas as pd
 from pydantic import Field
 
 import methods
-from experiments import engine
-from experiments.engine import ConfigError
 from experiments.schema import ConfigTable
 from experiments.render.text import counts_by_group, joined
 from experiments.outputs import save_csv
-from experiments.study import Analysis, Figure, Study, Table
+from experiments.rows import base_row, fit_row, load_data
+from experiments.study import Analysis, ConfigError, Figure, Study, Table
 
 
 def reference_method(cfg_or_task: dict, method_id: str) -> str:
@@ -74,7 +73,7 @@ class ConvergenceStudy(Study):
                 methods.get(r)
             except methods.UnknownMethodError as exc:
                 raise ConfigError(f"{where}: reference_optimum: {exc}") from None
-        for m, _ in engine.expand_methods(cfg, where):
+        for m, _ in cfg.expand_methods():
             if "start" not in methods.get(m).defaults:
                 raise ConfigError(f"{where}: {m} has no 'start' parameter, so it cannot be started far away")
 
@@ -85,7 +84,7 @@ class ConvergenceStudy(Study):
 
     def tasks(self, cfg):
         """The tasks, lazily (a generator: the engine counts and expands them a block at a time)."""
-        for t in engine.iter_grid_tasks(cfg.replace(repetitions=1), cfg.where):
+        for t in cfg.replace(repetitions=1).grid_tasks():
             for d in cfg["start_distances"]:
                 for k in range(cfg["start_directions"]):
                     yield {**t, "x_start_distance": float(d), "x_start_direction": k,
@@ -94,14 +93,14 @@ class ConvergenceStudy(Study):
     def execute(self, task):
         """Fit from the distant start; compare with the known optimum (the reference method of the TOML). The
         objective values are the method's own: the first ``history`` entry of a restart at each circle."""
-        points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
+        points, truth = load_data(task["dataset"], task["seed"], task["stream"])
         R = truth["radius"]
         phi = 2 * np.pi * task["x_start_direction"] / task["x_directions"]
         start = (truth["center"][0] + task["x_start_distance"] * R * np.cos(phi),
                  truth["center"][1] + task["x_start_distance"] * R * np.sin(phi), R)
         fit_task = {**task, "params": {**task["params"], "start": list(start)}}
-        row = engine.fit_row(fit_task, points, truth)
-        row["params"] = engine.base_row(task)["params"]  # the method's own parameters; the start has its columns
+        row = fit_row(fit_task, points, truth)
+        row["params"] = base_row(task)["params"]  # the method's own parameters; the start has its columns
         row.pop("param_start", None)
         row["start_x"], row["start_y"], row["start_radius"] = start
         row["start_distance"] = task["x_start_distance"]
@@ -178,7 +177,7 @@ def success_figure(success: pd.DataFrame, path):
     each method has its own marker size and line style, so curves that overlap stay visible and every point
     is drawn at its true value (0..1). ``success``: results/convergence/success.csv."""
     from experiments.render import style
-    import matplotlib.pyplot as plt
+    plt = style.plotting()
     arcs = list(success["arc_deg"].unique())
     with style.figure_style():
         fig, axes = plt.subplots(1, len(arcs), figsize=style.size(1.0, 0.42), sharey=True, squeeze=False)

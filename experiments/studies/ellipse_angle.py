@@ -61,11 +61,8 @@ def consistency_text(m, ratio, se, a_minus_b_mm) -> str:
 def figure(table, target, sigma, n, reps=None):
     """RMS angle error and the prediction against a − b (top); RMS / prediction with ± 2 Monte-Carlo standard errors
     (bottom: the scatter the log scale above hides)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from experiments.render import style
+    plt = style.plotting()
     diffs = table["a_minus_b_mm"].to_numpy() * 1e3
     keys = [k for k in table.columns if k.startswith("rms_error_deg")]
     with style.figure_style():

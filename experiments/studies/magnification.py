@@ -10,12 +10,11 @@ from pydantic import Field
 
 import methods
 from datasets.contouring import EXAMPLES
-from experiments import engine
-from experiments.engine import ConfigError
 from methods.magnify import MagnifyInput
 from experiments.schema import ConfigTable
 from experiments.outputs import save_csv
-from experiments.study import Analysis, Figure, Study, Table
+from experiments.rows import base_row
+from experiments.study import Analysis, ConfigError, Figure, Study, Table
 
 
 def variant_params(variant: dict, eta: float) -> dict:
@@ -100,9 +99,9 @@ class MagnificationStudy(Study):
         return out
 
     def execute(self, task):
-        """One row per (example, variant), built on the engine's identity columns (engine.base_row)."""
+        """One row per (example, variant), built on the engine's identity columns (base_row)."""
         name, eta, variant = task["dataset"]["label"], task["x_eta"], task["x_variant"]
-        row = {**engine.base_row(task), "param_eta": eta}
+        row = {**base_row(task), "param_eta": eta}
         try:
             ref, meas = EXAMPLES[name]()
             res = methods.fit(variant["method"], MagnifyInput(ref, meas), **variant_params(variant, eta))
@@ -157,7 +156,7 @@ def continuity_figure(results: pd.DataFrame, path, *, threshold: float = 1.0):
     a run the algorithm does not apply to is marked 'skipped'.
     ``results``: results/magnification/results.csv (dataset, method, status, continuity, loops)."""
     from experiments.render import style
-    import matplotlib.pyplot as plt
+    plt = style.plotting()
     examples = list(dict.fromkeys(results["dataset"]))
     algos = list(dict.fromkeys(results["method"]))
     colours = style.category_styles(algos)
@@ -202,10 +201,10 @@ def trajectories_figure(panels: list[dict], path):
     'eta': magnification, 'method': a magnify method id, 'params': its other parameters, 'title': str,
     'box': (x0, x1, y0, y1) in mm or None}. Axes in mm, reference and magnified path in the legend."""
     from experiments.render import style
-    import matplotlib.pyplot as plt
     import methods
     from datasets.contouring import EXAMPLES
     from methods.magnify import MagnifyInput
+    plt = style.plotting()
     ncol = min(3, len(panels))
     nrow = int(np.ceil(len(panels) / ncol))
     with style.figure_style():

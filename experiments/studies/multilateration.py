@@ -20,14 +20,13 @@ from pydantic import Field
 
 import methods
 from datasets import multilateration as sim
-from experiments import engine
-from experiments.engine import ConfigError
 from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_matrix, identify
 from methods.multilateration.solvers import kabsch
 from methods.results import Tolerance
 from experiments.schema import ConfigTable
 from experiments.outputs import save_csv
-from experiments.study import Analysis, Figure, Study, Table
+from experiments.rows import base_row
+from experiments.study import Analysis, ConfigError, Figure, Study, Table
 
 
 SCENARIO_KEYS = {"stations", "noise", "errors", "grid"}
@@ -129,7 +128,7 @@ def conditioning_row(task):
     b = methods.fit(task["method"], data)
     c = methods.fit(chk["same_estimator"], data)
     a = methods.fit(chk["reference"], data)
-    return {**engine.base_row(task), "stations": task["x_mode"], "status": "ok", "message": "",
+    return {**base_row(task), "stations": task["x_mode"], "status": "ok", "message": "",
             "published_vs_centred_um": 1e3 * float(np.max(np.abs(b.points - c.points))),
             "kappa_points_published": float(np.median(b.condition_numbers["points"]["svd"])),
             "kappa_points_centred": float(np.median(c.condition_numbers["points"]["svd"])),
@@ -220,11 +219,8 @@ def winner_text(win, n_methods: int) -> str:
 def figure_axis_line(cfg, target):
     """Figures 5-6 of the paper: volumetric errors along the x axis (y = 0, z = 0, no tool offset), truth
     against the schemes of the TOML's ``axis_figure`` list, stations located."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from experiments.render import style
+    plt = style.plotting()
     i, s = _first_noisy(cfg)
     params = _scenario(s["params"])
     params["grid"] = (16, 4, 4)
@@ -336,7 +332,7 @@ class MultilaterationStudy(Study):
         mode = task["x_mode"]
         if mode == "known":
             data = data.with_stations(truth["stations"])
-        row = {**engine.base_row(task), "stations": mode, "n_points": len(data.points), "n_stations": len(data.stations)}
+        row = {**base_row(task), "stations": mode, "n_points": len(data.points), "n_stations": len(data.stations)}
         t0 = time.perf_counter()
         res = methods.fit(task["method"], data)
         row["time_single_s"] = time.perf_counter() - t0  # one call: a timing column (time_ prefix)
@@ -428,7 +424,7 @@ def conditioning_figure(accuracy: pd.DataFrame, path, *, scenario: str | None = 
     """Condition numbers of both steps per scheme (categorical x: dots, no joining line) and the volumetric
     error RMS after alignment in a panel of its own. ``accuracy``: results/multilateration/accuracy.csv."""
     from experiments.render import style
-    import matplotlib.pyplot as plt
+    plt = style.plotting()
     sub = accuracy[accuracy["stations"] == stations]
     scenario = scenario or sub["dataset"].iloc[0]
     g = sub[sub["dataset"] == scenario].reset_index(drop=True)

@@ -14,9 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments import engine
-from experiments.engine import ConfigError
-from experiments.study import Analysis, Figure, Study, Table
+from experiments.study import Analysis, ConfigError, Figure, Study, Table
 
 
 def _folder() -> Path:
@@ -43,11 +41,8 @@ def error_table(df):
 
 
 def figure(table, target):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from experiments.render import style
+    plt = style.plotting()
     labels = [style.short_label(m).replace('{"backend": "nlopt"}', "(nlopt)") for m in table["method"]]
     x = np.arange(len(table))
     with style.figure_style():
@@ -70,7 +65,7 @@ class NistCircleStudy(Study):
     values = None  # its analysis names its values
 
     def validate(self, cfg, where):
-        engine.expand_methods(cfg, where)
+        cfg.expand_methods()
 
     def tasks(self, cfg):
         folder = _folder()
@@ -82,7 +77,7 @@ class NistCircleStudy(Study):
                      "radius": float(Decimal(ref["diameter"])) / 2}
             spec = {"entry": i, "point": 0, "file": str(meta_path.with_suffix(".csv")), "truth": truth,
                     "label": meta["name"]}
-            for m, extra in engine.expand_methods(cfg, cfg.where):
+            for m, extra in cfg.expand_methods():
                 out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
                             "stream": [i, 0, 0], "seed": cfg["seed"], "method": m, "params": extra["params"], "timing": None})
         return out

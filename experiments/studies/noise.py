@@ -179,7 +179,7 @@ def kcr_figure(kcr: pd.DataFrame, path, *, methods: list[str] | None = None, n: 
     'convex program': the least-squares estimators the KCR bound is about; the zone fits estimate other
     circles and stay in the table)."""
     from experiments.render import style
-    import matplotlib.pyplot as plt
+    plt = style.plotting()
     n = int(kcr["n"].max()) if n is None else n
     t = kcr[(kcr["n"] == n) & (kcr["params"].fillna("{}") == "{}")].copy()
     if methods is None:

@@ -13,13 +13,12 @@ from pydantic import Field
 
 import methods
 from datasets.positioning import axis_test
-from experiments import engine
-from experiments.engine import ConfigError
 from methods.positioning.model import evaluate_band
 from experiments.schema import ConfigTable
 from experiments.render.text import joined
 from experiments.outputs import save_csv, save_figure
-from experiments.study import Analysis, Figure, Study, Table
+from experiments.rows import base_row
+from experiments.study import Analysis, ConfigError, Figure, Study, Table
 
 
 def example(cfg, target) -> str:
@@ -112,7 +111,7 @@ class PositioningStudy(Study):
             v = np.interp(P, data.targets, per["mean_up"])
             U = np.interp(P, data.targets, 2 * per["s_up"])
         err = v - truth["up"](P)
-        return {**engine.base_row(task), "status": "ok", "message": "", "coverage": float(np.mean(np.abs(err) <= U)),
+        return {**base_row(task), "status": "ok", "message": "", "coverage": float(np.mean(np.abs(err) <= U)),
                 "band_halfwidth_mean": float(np.mean(U)), "error_rms": float(np.sqrt(np.mean(err ** 2)))}
 
     def analyse(self, df, cfg, target, log):
@@ -165,7 +164,7 @@ def coverage_figure(coverage: pd.DataFrame, path, *, nominal: float = 0.95):
     names readable on the y axis), the nominal coverage as a line, the legend below the axes.
     ``coverage``: results/positioning/coverage.csv (dataset, method, coverage)."""
     from experiments.render import style
-    import matplotlib.pyplot as plt
+    plt = style.plotting()
     scen = list(dict.fromkeys(coverage["dataset"]))
     bands = list(dict.fromkeys(coverage["method"]))
     with style.figure_style():

@@ -14,10 +14,10 @@ from pydantic import BaseModel, Field
 
 import datasets
 import methods
-from experiments import engine
 from experiments.render.text import percentile_phrase
 from experiments.schema import ConfigTable
-from experiments.study import Analysis, Figure, Study, Table
+from experiments.rows import base_row, fit_row, load_data
+from experiments.study import Analysis, ConfigError, Figure, Study, Table
 
 
 #: the data set label of the rounding Monte Carlo rows (one row per data set and table column)
@@ -92,15 +92,15 @@ class PublishedStudy(Study):
             try:
                 methods.get(method_id)
             except methods.UnknownMethodError as exc:
-                raise engine.ConfigError(f"{where} published_columns.{column!r}: {exc}") from None
-        engine.expand_methods(cfg, where)
+                raise ConfigError(f"{where} published_columns.{column!r}: {exc}") from None
+        cfg.expand_methods()
 
     def tasks(self, cfg):
         """The fits of every method on every published set, and one rounding Monte Carlo task per published
         figure of table 1 (its own seed stream: (seed, 99, data set entry, column))."""
-        out = engine.grid_tasks(cfg, cfg.where)
+        out = list(cfg.grid_tasks())
         samples = int(cfg.get("rounding", {}).get("samples", 1000))
-        for spec in engine.expand_datasets(cfg, cfg.where):
+        for spec in cfg.expand_datasets():
             variant = spec.get("variant")
             ds = datasets.load(spec["published"], drop_repeated_closing_point=variant == "drop_repeated_closing_point")
             for c, (column, method_id) in enumerate(cfg["published_columns"].items()):
@@ -116,13 +116,13 @@ class PublishedStudy(Study):
 
     def execute(self, task):
         """A generic fit row, or a rounding Monte Carlo row (percentiles of the circularity)."""
-        points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
+        points, truth = load_data(task["dataset"], task["seed"], task["stream"])
         if "x_rounding" not in task:
-            return engine.fit_row(task, points, truth)
+            return fit_row(task, points, truth)
         r = task["x_rounding"]
         rng = np.random.default_rng(np.random.SeedSequence(task["seed"], spawn_key=tuple(task["stream"])))
         widths = rounding_spread(points, r["decimals"], samples=r["samples"], rng=rng, method=task["method"])
-        row = {**engine.base_row(task), "table_column": r["column"], "published": r["published"],
+        row = {**base_row(task), "table_column": r["column"], "published": r["published"],
                "decimals_printed": r["decimals"], "rounding_samples": len(widths)}
         if not len(widths):
             return {**row, "status": "not converged", "message": "no fit of the rounded data converged"}
@@ -179,7 +179,7 @@ def circularity_figure(rows: pd.DataFrame, path):
     (dataset, variant, column, published, reproduced_value, rounding_p0_5, rounding_median, rounding_p99_5),
     values in mm; drawn in µm relative to the published value so that every panel shares one axis."""
     from experiments.render import style
-    import matplotlib.pyplot as plt
+    plt = style.plotting()
     r = rows.reset_index(drop=True)
     short = {"Rapidform": "RF"}   # the tick labels stay apart; the legend says what RF is
     labels = [f"{d.replace('roundness_', '')}{'*' if v != 'as published' else ''}\n"

@@ -13,12 +13,11 @@ from pydantic import Field
 
 import datasets
 import methods
-from experiments import engine
-from experiments.engine import ConfigError
 from methods.results import Tolerance
 from experiments.schema import ConfigTable
 from experiments.outputs import save_csv
-from experiments.study import Analysis, Figure, Study, Table
+from experiments.rows import base_row
+from experiments.study import Analysis, ConfigError, Figure, Study, Table
 from methods.roundness.filter import POINTS_PER_CUTOFF, parse_cutoff
 
 
@@ -81,11 +80,8 @@ def ranking_shown(ranks: pd.DataFrame) -> pd.DataFrame:
 
 
 def figure(table: pd.DataFrame, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from experiments.render import style
+    plt = style.plotting()
     profiles = list(dict.fromkeys(table["dataset"]))
     ncol = min(3, len(profiles))
     nrow = int(np.ceil(len(profiles) / ncol))
@@ -165,7 +161,7 @@ class RoundnessStudy(Study):
         spec = task["dataset"]
         pts = load(spec, task["seed"], task["stream"])
         cut = task["params"]["cutoff_upr"]
-        row = {**engine.base_row(task), "cutoff_upr": "none" if cut is None else cut, "n_points": int(pts.shape[0])}
+        row = {**base_row(task), "cutoff_upr": "none" if cut is None else cut, "n_points": int(pts.shape[0])}
         if cut is not None and pts.shape[0] < POINTS_PER_CUTOFF * cut:
             return {**row, "status": "skipped", "message": f"{pts.shape[0]} points cannot carry a {cut:g} UPR cut-off "
                                                            f"(ISO 12181-2: >= {POINTS_PER_CUTOFF} x cut-off points)"}

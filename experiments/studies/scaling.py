@@ -10,12 +10,9 @@ from experiments.study import Analysis, Figure, Study, Table
 
 def figure(ok, slopes, target):
     """Median runtime against N, one panel per method family (registry metadata), log-log slope in the legend."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     import methods
     from experiments.render import style
+    plt = style.plotting()
     ok = ok.assign(family=ok["method"].map(lambda m: methods.get(m).family))
     families = list(dict.fromkeys(ok["family"]))
     with style.figure_style():

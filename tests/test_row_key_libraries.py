@@ -1,0 +1,49 @@
+"""A row's cache key holds the versions of the libraries its code uses, not of those only the run, the report or the
+figures use: a study module reaches the engine through its config (``cfg.grid_tasks()``, ``cfg.expand_methods()``)
+and the row helpers in ``experiments.rows``, and its figures take matplotlib by name
+(``experiments.render.style.plotting``), so upgrading matplotlib, tqdm or Dask recomputes no row, upgrading NumPy
+every row (docs/studies.md)."""
+from __future__ import annotations
+
+from importlib import metadata
+
+import pytest
+
+from experiments import codehash, codekeys
+from experiments import config as configs
+from experiments.studies import study_of
+
+#: libraries of the run (progress bars, Dask), of the report (templates, Markdown) and of the figures
+NOT_ROW_LIBRARIES = {"matplotlib", "tqdm", "dask", "distributed", "jinja2", "markdown_it_py", "markdown-it-py",
+                     "markupsafe", "MarkupSafe"}
+
+
+@pytest.fixture
+def fresh_keys():
+    codekeys.reset_caches()
+    yield
+    codekeys.reset_caches()  # no key of a reported version that is not installed outlives the test
+
+
+def _first_key(monkeypatch, study: str, bumped: str | None = None) -> str:
+    """The cache key of the first row of ``study`` (its quick config) when ``bumped`` reports another version."""
+    real = metadata.version
+    monkeypatch.setattr(metadata, "version", lambda name: "999.0" if name == bumped else real(name))
+    codekeys.reset_caches()
+    cfg = configs.load(study, quick=True)
+    return next(iter(study_of(cfg["kind"]).prepared_tasks(cfg)))["key"]
+
+
+def test_a_default_studys_row_key_follows_numpy_not_matplotlib_or_tqdm(monkeypatch, fresh_keys):
+    key = _first_key(monkeypatch, "noise")  # a study that draws its own figures
+    assert _first_key(monkeypatch, "noise", "matplotlib") == key
+    assert _first_key(monkeypatch, "noise", "tqdm") == key
+    assert _first_key(monkeypatch, "noise", "numpy") != key
+
+
+def test_no_study_module_keys_its_rows_with_a_library_of_the_run_report_or_figures(fresh_keys):
+    kinds = sorted({configs.load(name)["kind"] for name in configs.available()} | {"grid"})
+    for kind in kinds:
+        used = codehash.libraries_of(f"experiments.studies.{kind}", "experiments.rows", "experiments.metrics",
+                                     "experiments.timing")
+        assert "numpy" in used and not NOT_ROW_LIBRARIES & set(used), (kind, sorted(used))

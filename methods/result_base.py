@@ -616,7 +616,8 @@ def check_result(result, data=None) -> str | None:
     if size:
         # one pass: a finite sum of squares means finite residuals and a finite residual RMS (the row's column);
         # NaN, inf or an overflow (|r| beyond ~1e154) is told apart below
-        squares = residuals.dot(residuals) if residuals.ndim == 1 and residuals.dtype.kind == "f" else None
+        with np.errstate(over="ignore"):   # an overflow is told below, in the message, never as a warning
+            squares = residuals.dot(residuals) if residuals.ndim == 1 and residuals.dtype.kind == "f" else None
         if squares is None or not math.isfinite(squares):
             if not np.isfinite(residuals).all():
                 return "residuals are not finite in a converged result"

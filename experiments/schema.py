@@ -25,7 +25,9 @@ import math
 from typing import Annotated, Any, Callable, Literal, Union
 
 import jsonschema
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
+
+from experiments.study import ConfigTable
 
 # ---------------------------------------------------------------- the typed config (pydantic models)
 # A study config is these models; the JSON Schema checked below is generated from them (``model_json_schema``,
@@ -40,13 +42,7 @@ Params = Annotated[dict[str, Any], Field(description="parameter -> value")]
 Columns = Annotated[Union[str, list[str]], Field(description="a column name or a list of them")]
 
 
-class ConfigTable(BaseModel):
-    """A TOML table: no key beyond its fields (optional fields default to None: absent). A study kind's own keys
-    are such a model (its ``Study.config_schema``)."""
-    model_config = ConfigDict(extra="forbid")
-
-
-_Table = ConfigTable
+_Table = ConfigTable  # (experiments.study: a study kind's own keys are such a model too)
 
 
 class GeneratorEntry(_Table):

@@ -78,6 +78,7 @@ from pathlib import Path
 from typing import Callable
 
 import pandas as pd
+from pydantic import BaseModel, ConfigDict
 
 from experiments import studies
 from experiments.rows import fit_row, task_data
@@ -87,6 +88,12 @@ from methods.plugins import add_entry
 
 class ConfigError(InvalidInputError):
     """A study config that cannot run; the message names the file, the key and the problem."""
+
+
+class ConfigTable(BaseModel):
+    """A TOML table: no key beyond its fields (optional fields default to None: absent). A study kind's own keys
+    are such a model (its :attr:`Study.config_schema`); the config's schema (``experiments.schema``) is made of them."""
+    model_config = ConfigDict(extra="forbid")
 
 
 @dataclass
@@ -164,7 +171,7 @@ class Study:
     with ``kind = "KIND"`` runs it (no kind, or ``kind = "grid"``: this class as it is, the generic benchmark).
     Every method has a default, so a subclass overrides only what its study does differently:
 
-    * :attr:`config_schema` -- the config keys only this kind uses: a model (``experiments.schema.ConfigTable``)
+    * :attr:`config_schema` -- the config keys only this kind uses: a model (:class:`ConfigTable`)
       or {key: JSON Schema}, merged into the schema;
     * :meth:`validate` -- the rules the schema cannot express; :meth:`count_rows` -- the rows from the config alone;
     * :meth:`tasks` -- the tasks (default: data sets x repetitions x methods); :meth:`execute` -- one task's row
@@ -179,7 +186,7 @@ class Study:
     #: the study kind (the module's name), set by :func:`study_of`
     kind: str = "grid"
 
-    #: the config keys only this kind uses: a model of them (``experiments.schema.ConfigTable``) or {key: JSON Schema}
+    #: the config keys only this kind uses: a model of them (:class:`ConfigTable`) or {key: JSON Schema}
     config_schema: dict | type = {}
     #: the names of the named values :meth:`analyse` adds (besides ``n_rows``, ``n_ok``); None: not known before
     values: tuple[str, ...] | None = ()

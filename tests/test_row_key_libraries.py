@@ -13,9 +13,10 @@ from experiments import codehash, codekeys
 from experiments import config as configs
 from experiments.studies import study_of
 
-#: libraries of the run (progress bars, Dask), of the report (templates, Markdown) and of the figures
+#: libraries of the run (progress bars, Dask), of the report (templates, Markdown), of the figures and of the
+#: config's checks (jsonschema)
 NOT_ROW_LIBRARIES = {"matplotlib", "tqdm", "dask", "distributed", "jinja2", "markdown_it_py", "markdown-it-py",
-                     "markupsafe", "MarkupSafe"}
+                     "markupsafe", "MarkupSafe", "jsonschema"}
 
 
 @pytest.fixture
@@ -41,7 +42,7 @@ def test_a_default_studys_row_key_follows_numpy_not_matplotlib_or_tqdm(monkeypat
     assert _first_key(monkeypatch, "noise", "numpy") != key
 
 
-def test_no_study_module_keys_its_rows_with_a_library_of_the_run_report_or_figures(fresh_keys):
+def test_no_study_module_keys_its_rows_with_a_library_of_the_run_report_figures_or_checks(fresh_keys):
     kinds = sorted({configs.load(name)["kind"] for name in configs.available()} | {"grid"})
     for kind in kinds:
         used = codehash.libraries_of(f"experiments.studies.{kind}", "experiments.rows", "experiments.metrics",

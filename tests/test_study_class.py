@@ -13,9 +13,8 @@ import pandas as pd
 import pytest
 
 from experiments import config as configs
-from experiments.study import ConfigError
 from experiments.run import run_study
-from experiments.study import Analysis, Study, study_of
+from experiments.study import Analysis, ConfigError, ConfigTable, Study, study_of
 
 REPO = Path(__file__).resolve().parents[1]
 TOML = '''name = "{name}"
@@ -197,7 +196,7 @@ def test_a_study_declares_the_tolerances_of_its_own_columns():
 
 
 def test_a_study_declares_its_own_keys_as_a_typed_model():
-    """A study kind's own config keys are a pydantic model (experiments.schema.ConfigTable) the schema is generated
+    """A study kind's own config keys are a pydantic model (experiments.study.ConfigTable) the schema is generated
     from; every shipped config's own keys are an instance of its kind's model."""
     from experiments import schema
     checked = 0
@@ -206,7 +205,7 @@ def test_a_study_declares_its_own_keys_as_a_typed_model():
         model = study_of(cfg["kind"]).config_schema
         if not model:
             continue
-        assert isinstance(model, type) and issubclass(model, schema.ConfigTable), cfg["kind"]
+        assert isinstance(model, type) and issubclass(model, ConfigTable), cfg["kind"]
         own = {k: cfg[k] for k in model.model_fields if k in cfg}
         assert own and model.model_validate(own) is not None
         assert set(schema.config_schema(model)["properties"]) >= set(model.model_fields)

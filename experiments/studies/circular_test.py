@@ -17,10 +17,9 @@ import pandas as pd
 from pydantic import Field
 
 from methods.results import Tolerance
-from experiments.schema import ConfigTable
 from experiments.outputs import save_figure
 from experiments.rows import base_row, fit_row
-from experiments.study import Analysis, Figure, Study, Table
+from experiments.study import Analysis, ConfigTable, Figure, Study, Table
 from methods.results import CircularTestFit
 from experiments.provenance import write_atomic
 

@@ -15,11 +15,10 @@ import pandas as pd
 from pydantic import Field
 
 import methods
-from experiments.schema import ConfigTable
 from experiments.render.text import counts_by_group, joined
 from experiments.outputs import save_csv
 from experiments.rows import base_row, fit_row, load_data
-from experiments.study import Analysis, ConfigError, Figure, Study, Table
+from experiments.study import Analysis, ConfigError, ConfigTable, Figure, Study, Table
 
 
 def reference_method(cfg_or_task: dict, method_id: str) -> str:

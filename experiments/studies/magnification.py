@@ -11,10 +11,9 @@ from pydantic import Field
 import methods
 from datasets.contouring import EXAMPLES
 from methods.magnify import MagnifyInput
-from experiments.schema import ConfigTable
 from experiments.outputs import save_csv
 from experiments.rows import base_row
-from experiments.study import Analysis, ConfigError, Figure, Study, Table
+from experiments.study import Analysis, ConfigError, ConfigTable, Figure, Study, Table
 
 
 def variant_params(variant: dict, eta: float) -> dict:

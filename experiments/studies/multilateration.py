@@ -23,10 +23,9 @@ from datasets import multilateration as sim
 from methods.multilateration.kinematics import COMPONENTS, SQUARENESS, design_matrix, identify
 from methods.multilateration.solvers import kabsch
 from methods.results import Tolerance
-from experiments.schema import ConfigTable
 from experiments.outputs import save_csv
 from experiments.rows import base_row
-from experiments.study import Analysis, ConfigError, Figure, Study, Table
+from experiments.study import Analysis, ConfigError, ConfigTable, Figure, Study, Table
 
 
 SCENARIO_KEYS = {"stations", "noise", "errors", "grid"}

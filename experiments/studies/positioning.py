@@ -14,11 +14,10 @@ from pydantic import Field
 import methods
 from datasets.positioning import axis_test
 from methods.positioning.model import evaluate_band
-from experiments.schema import ConfigTable
 from experiments.render.text import joined
 from experiments.outputs import save_csv, save_figure
 from experiments.rows import base_row
-from experiments.study import Analysis, ConfigError, Figure, Study, Table
+from experiments.study import Analysis, ConfigError, ConfigTable, Figure, Study, Table
 
 
 def example(cfg, target) -> str:

@@ -15,9 +15,8 @@ from pydantic import BaseModel, Field
 import datasets
 import methods
 from experiments.render.text import percentile_phrase
-from experiments.schema import ConfigTable
 from experiments.rows import base_row, fit_row, load_data
-from experiments.study import Analysis, ConfigError, Figure, Study, Table
+from experiments.study import Analysis, ConfigError, ConfigTable, Figure, Study, Table
 
 
 #: the data set label of the rounding Monte Carlo rows (one row per data set and table column)

@@ -14,10 +14,9 @@ from pydantic import Field
 import datasets
 import methods
 from methods.results import Tolerance
-from experiments.schema import ConfigTable
 from experiments.outputs import save_csv
 from experiments.rows import base_row
-from experiments.study import Analysis, ConfigError, Figure, Study, Table
+from experiments.study import Analysis, ConfigError, ConfigTable, Figure, Study, Table
 from methods.roundness.filter import POINTS_PER_CUTOFF, parse_cutoff
 
 

@@ -4,8 +4,9 @@ import pytest
 
 import methods
 from datasets.synthetic import circle_points
+from method_ids import method_ids
 
-ALL = [s.id for s in methods.list_methods("circle")]
+ALL = method_ids("circle")
 CASES = [
     ((0.0, 0.0), 1.0, (0, 2 * np.pi)),
     ((1200.0, 650.0), 299.0, (0, 2 * np.pi)),          # the LOLA HBG 130 test of the circle/ellipse paper

@@ -11,9 +11,10 @@ from scipy.optimize import least_squares
 import methods
 from datasets.synthetic import circle_points
 from methods import InvalidInputError
+from method_ids import method_ids, method_specs
 
 ITERATIVE = ["circle.gauss_newton", "circle.levenberg_marquardt", "circle.nelder_mead", "circle.powell_hybrid"]
-ALL = [s.id for s in methods.list_methods("circle")]
+ALL = method_ids("circle")
 
 
 def _objective_residuals(method_id, pts):
@@ -134,7 +135,7 @@ SCALES = [((0.0, 0.0), 3.45e-100), ((1e-139, 2e-139), 1e-140), ((5e-150, -3e-150
           ((1200.0, 650.0), 299.0), ((1e6, -1e6), 299.0)]
 #: beyond the 1e-150 ... 1e150 range: the least-squares methods (the zone methods' data-unit radii overflow there)
 EXTREME = [((3e150, -1e150), 1e160), ((0.0, 0.0), 1e300), ((1e300, 1e300), 1e295), ((1e300, -1e300), 1e290)]
-LEAST_SQUARES = [s.id for s in methods.list_methods("circle") if s.kind != "convex program"]
+LEAST_SQUARES = [s.id for s in method_specs("circle") if s.kind != "convex program"]
 CASES = [(m, *c) for m in ALL for c in SCALES] + [(m, *c) for m in LEAST_SQUARES for c in EXTREME]
 
 

@@ -15,8 +15,9 @@ from datasets.synthetic import ellipse_points
 from methods.ellipse._geometry import (canonical, closest_points, conic_to_params, orthogonal_residuals,
                                        paper_gamma_solutions, params_to_conic)
 from methods.ellipse.orthogonal import distance_jacobian
+from method_ids import method_ids
 
-ALL = [s.id for s in methods.list_methods("ellipse")]
+ALL = method_ids("ellipse")
 ACCURATE = ["ellipse.halir_flusser", "ellipse.orthogonal"]
 PAPER = dict(center=(1200.0, 650.0), semi_axes=(299.0243, 299.0022), angle=np.radians(32.04))  # table 3-5
 CASES = [

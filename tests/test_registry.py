@@ -6,8 +6,9 @@ import pytest
 
 import methods
 from datasets.synthetic import circle_points
+from method_ids import method_ids, method_specs
 
-CIRCLE_IDS = [s.id for s in methods.list_methods("circle")]
+CIRCLE_IDS = method_ids("circle")
 #: the circle methods of the circle/ellipse paper and of the form-error literature this project reproduces
 PUBLISHED_CIRCLE_IDS = {"circle.chebyshev_lp", "circle.gauss_newton", "circle.hyper", "circle.kasa",
                         "circle.levenberg_marquardt", "circle.max_inscribed", "circle.min_circumscribed",
@@ -16,7 +17,7 @@ PUBLISHED_CIRCLE_IDS = {"circle.chebyshev_lp", "circle.gauss_newton", "circle.hy
 
 
 def test_all_circle_methods_registered_with_metadata():
-    specs = methods.list_methods("circle")
+    specs = method_specs("circle")
     assert PUBLISHED_CIRCLE_IDS <= set(CIRCLE_IDS) and CIRCLE_IDS == sorted(CIRCLE_IDS)
     for s in specs:
         assert s.family == "circle" and s.id == f"{s.family}.{s.name}"

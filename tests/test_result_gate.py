@@ -6,6 +6,7 @@ import pytest
 import methods
 from methods import results
 from methods._registry import _REGISTRY
+from method_ids import method_specs
 
 ANGLES = np.linspace(0, 2 * np.pi, 40, endpoint=False)
 RADII = 299 + np.random.default_rng(2).normal(scale=1e-3, size=40)   # mm: a machine-tool circle, µm deviations
@@ -118,8 +119,8 @@ ARC = np.column_stack([5 + 20 * np.cos(np.radians(np.linspace(10, 100, 30))),
                        -3 + 20 * np.sin(np.radians(np.linspace(10, 100, 30)))])   # a 90° arc, radius 20 mm
 
 
-@pytest.mark.parametrize("spec", methods.list_methods("circle") + methods.list_methods("ellipse")
-                         + methods.list_methods("roundness"), ids=lambda s: s.id)
+@pytest.mark.parametrize("spec", method_specs("circle") + method_specs("ellipse") + method_specs("roundness"),
+                         ids=lambda s: s.id)
 @pytest.mark.parametrize("data", ["circle", "arc"])
 def test_every_built_in_result_passes(spec, data):
     """What lets methods.fit skip the gate for built-in methods: every point-fitting built-in keeps its

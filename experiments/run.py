@@ -265,11 +265,16 @@ def output_folder(out: str | None, cfgs: list, quick: bool) -> tuple[Path, str |
             from experiments.report import is_default_results
             if is_default_results(Path(out)):
                 c = foreign[0]
+                from experiments.provenance import REPO
+                inside = Path(out).resolve().parent in (REPO, REPO / "results")
+                what = ("holds the project's committed results, from which the report paper/ is rebuilt" if inside
+                        else "is reserved for the project's studies: results/ and results/quick/ of the current folder "
+                             "are where python -m experiments.run writes them without --out, with their report "
+                             "paper/ beside")
                 raise InvalidInputError(
-                    f"--out {out} holds the project's committed results, from which the report paper/ is rebuilt; "
-                    f"{c['name']} ({c.where}) is not one of the project's studies (experiments/configs/): leave "
-                    f"--out out (its outputs then go to {USER_OUT / 'quick' if quick else USER_OUT}/) or give "
-                    f"another folder")
+                    f"--out {out} {what}; {c['name']} ({c.where}) is not one of the project's studies "
+                    f"(experiments/configs/): leave --out out (its outputs then go to "
+                    f"{USER_OUT / 'quick' if quick else USER_OUT}/) or give another folder")
         return Path(out), None
     if not foreign:
         return (DEFAULT_OUT / "quick" if quick else DEFAULT_OUT), None   # a quick grid never joins the full results

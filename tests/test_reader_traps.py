@@ -434,5 +434,5 @@ def test_a_small_pin_in_um_read_as_mm_is_warned_about_by_roundness(tmp_path):
     path.write_text("X;Y\n" + "\n".join(f"{x:.4f};{y:.4f}".replace(".", ",") for x, y in pts) + "\n",
                     encoding="utf-8")
     out = cli("roundness", path)
-    assert out.returncode == 0 and "profile half-widths up to 3000" in out.stderr and "--unit um" in out.stderr
+    assert out.returncode == 0 and "profile radii (half the points' span) up to 3000" in out.stderr and "--unit um" in out.stderr
     assert "implausible" not in cli("fit", "circle.kasa", path).stderr

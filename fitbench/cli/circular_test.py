@@ -211,6 +211,7 @@ def run(args) -> int:
             warn(f"diagnostics: {dg['_model']['message']}; the estimates are its last iterate's")
     values = dict(ev.figures, G=max(ev.figures["G_cw"], ev.figures["G_ccw"]))
     check = verdict({n: values[n] for n in tolerances}, tolerances)
+    said = cli_options.said_warnings()   # printed before the figures, written into the report and the JSON
     if plot_path:
         polar_plot(runs["cw"], runs["ccw"], ev, plot_path, title=verdict_title(check).lstrip("; "), diagnostics=dg,
                    conditions=conditions, save=save_figure)
@@ -236,6 +237,7 @@ def run(args) -> int:
         shared = {f.name for f in fields(FitResult)}  # the evaluation's own fields only
         out["details"] = {k: v for k, v in d.items() if k not in shared}
         out["notes"] = notes
+        out["warnings"] = said
         if check:
             out["verdict"] = check
         if dg:

@@ -2,17 +2,18 @@
 ``fit METHOD_ID FILE`` and the machine-test subcommands (circular-test, positioning, magnify,
 multilaterate, roundness), one argparse tree built by :func:`build_parser`.
 
-Bad input ends with one line on stderr and exit status 2, never a traceback; warnings (a likely unit
-mix-up, a swapped pair of runs, a nominal centre far from the data) are lines ``fitbench: warning: ...``
-on stderr. Units: every reader takes ``--unit`` (its file's length unit, default mm); options on the
-command line are in mm (lengths), mm/min (feed) and degrees (angles); printed output is in µm, µrad and
-°; JSON in mm and rad with a ``units`` field. Subcommands are one table (``SUBCOMMANDS``): adding one is
-a function ``add_NAME(sub)`` that builds its parser and sets ``func``. Each subcommand lives in its own module,
-``fitbench/cli/NAME.py`` with ``add_parser(sub)`` and ``run(args)`` (listing, fit, circular_test, positioning,
-magnify, multilaterate, roundness, history), which ``add_NAME`` imports when the parser is built; this module
-holds the program around them (the parser, :func:`build_parser`, :func:`main`, exit statuses, ``--json``
-output, Ctrl-C), and :mod:`fitbench.cli.guards` what both use (one BLAS thread, stdout to stderr,
-:func:`~fitbench.cli.guards.run_method`), below the subcommands so that the imports run one way.
+Bad input ends with one line on stderr and exit status 2, never a traceback; warnings (a likely unit mix-up, a
+swapped pair of runs, a nominal centre far from the data) are lines ``fitbench: warning: ...`` on stderr, printed
+before the command's figures and written into its report and JSON (``warnings``). Units: every reader takes
+``--unit`` (its file's length unit, default mm); options on the command line are in mm (lengths), mm/min (feed) and
+degrees (angles); printed output is in µm, µrad and °; JSON in mm and rad with a ``units`` field. Subcommands are
+one table (``SUBCOMMANDS``): adding one is a function ``add_NAME(sub)`` that builds its parser and sets ``func``.
+Each subcommand lives in its own module, ``fitbench/cli/NAME.py`` with ``add_parser(sub)`` and ``run(args)``
+(listing, fit, circular_test, positioning, magnify, multilaterate, roundness, history), which ``add_NAME`` imports
+when the parser is built; this module holds the program around them (the parser, :func:`build_parser`,
+:func:`main`, exit statuses, ``--json`` output, Ctrl-C), and :mod:`fitbench.cli.guards` what both use (one BLAS
+thread, stdout to stderr, :func:`~fitbench.cli.guards.run_method`), below the subcommands so that the imports run
+one way.
 """
 from __future__ import annotations
 
@@ -134,10 +135,15 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
     """The command ``prog`` (``fitbench``, or ``python -m methods`` without the experiment subcommands): error
     and warning lines start with ``prog`` (:data:`fitbench.cli.options.PROGRAM`)."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    saved, cli_options.PROGRAM = cli_options.PROGRAM, prog
+    saved = cli_options.PROGRAM, cli_options.CAUGHT, cli_options.SAID
+    cli_options.PROGRAM = prog
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", category=UserWarning)
+            # the warnings are printed as the command gives them and before its figures (the subcommand asks
+            # cli_options.said_warnings() before it prints, writes its report or its JSON, which carry them);
+            # what is left is printed when it ends
+            cli_options.CAUGHT, cli_options.SAID = caught, []
             failed = None
             try:
                 if argv and argv[0] in EXPERIMENT_SUBCOMMANDS and argv[0] not in (extra_commands or {}):
@@ -153,7 +159,7 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
                 raise
             finally:
                 from methods.units import UnitWarning
-                for w in caught:
+                for w in list(caught):
                     # an error naming the unit to give (--unit ...) says what a unit warning before it said
                     if issubclass(w.category, UserWarning) and not (
                             failed and issubclass(w.category, UnitWarning) and "--unit" in failed):
@@ -170,4 +176,4 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
         print(f"\n{prog}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     finally:
-        cli_options.PROGRAM = saved
+        cli_options.PROGRAM, cli_options.CAUGHT, cli_options.SAID = saved

@@ -105,6 +105,7 @@ def run(args) -> int:
                                 args.nominal_radius)
     if offcentre:
         cli_options.warn(offcentre)
+    said = cli_options.said_warnings()   # printed before the figures, written into the JSON
     if plot_path:
         if spec.family not in ("circle", "ellipse"):
             raise InvalidInputError(f"--plot draws circle and ellipse fits; {spec.id} is a {spec.family} method")
@@ -118,8 +119,7 @@ def run(args) -> int:
         d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(unit)}
         if notes:
             d["notes"] = notes
-        if offcentre:
-            d["warnings"] = [*d.get("warnings", []), offcentre]
+        d["warnings"] = list(dict.fromkeys([*d.get("warnings", []), *said]))
         cli_options.print_json(json.dumps(d))
         return 0
     print(f"input unit {canonical(unit)}{' (converted to mm)' if canonical(unit) != 'mm' else ''}; "

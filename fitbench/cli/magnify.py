@@ -47,7 +47,7 @@ def run(args) -> int:
     data = MagnifyInput(read_points(args.reference, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows),
                         read_points(args.measured, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows))
     half = float(np.max(np.ptp(data.measured, axis=0))) / 2
-    warn_implausible("trajectory half-widths", half, PROFILE_LIMIT_MM, args.unit, typical_mm=50.0)
+    warn_implausible("trajectory sizes (half the points' span)", half, PROFILE_LIMIT_MM, args.unit, typical_mm=50.0)
     params = {"eta": eta}
     if args.method == "offset":
         params["delta"] = finite("--delta", args.delta, positive=True)
@@ -55,12 +55,14 @@ def run(args) -> int:
     elif args.delta is not None:
         raise InvalidInputError("--delta is a parameter of --method offset")
     res = methods.fit(f"magnify.{args.method}", data, **params)
+    said = cli_options.said_warnings()   # printed before the figures, written into the JSON
     if plot_path:
         from fitbench.plots.magnify import plot_magnified
         plot_magnified(data, res, plot_path, eta, save=save_figure)
     if args.json:
         d = res.to_dict(residuals=not args.no_residuals)
         d["units"] = {"length": "mm", "input_unit": canonical(args.unit)}
+        d["warnings"] = list(dict.fromkeys([*d.get("warnings", []), *said]))
         cli_options.print_json(json.dumps(d))
         return 0
     print(header_line("magnify", args.unit))

@@ -145,12 +145,14 @@ def run(args) -> int:
     if ident is not None and args.errors_csv:
         from methods.multilateration.export import errors_csv
         write_text_atomic(args.errors_csv, errors_csv(ident))
+    said = cli_options.said_warnings()   # printed before the figures, written into the JSON
     if args.json:
         d = res.to_dict(residuals=not args.no_residuals)
         d["units"] = {"length": "mm", "angle": "rad", "input_unit": canonical(args.unit), "input_units": units}
         d["nominal_points"] = jsonable(data.points)
         d["stations_given"] = data.known_stations is not None
         d["notes"] = notes
+        d["warnings"] = list(dict.fromkeys([*d.get("warnings", []), *said]))
         d["length_check"] = check
         d["point_uncertainty"] = None if u_pts is None else jsonable(u_pts)
         if ident is not None:

@@ -27,8 +27,32 @@ def version() -> str:
 PROGRAM = "fitbench"
 
 
+#: the running command's warnings (:func:`fitbench.cli.commands.main` sets both, None outside a command): the Python
+#: warnings (a reader's UnitWarning, ...) recorded and not printed yet, and every warning line printed so far
+CAUGHT: list | None = None
+SAID: list | None = None
+
+
 def warn(message: str) -> None:
+    """Print one ``PROGRAM: warning: ...`` line now, and keep it for the command's report and JSON
+    (:func:`said_warnings`)."""
     print(f"{PROGRAM}: warning: {message}", file=sys.stderr)
+    if SAID is not None:
+        SAID.append(str(message))
+
+
+def said_warnings() -> list[str]:
+    """Every warning the running command has given, each once, in order: the Python warnings recorded since the
+    last call (UserWarning and its subclasses) are printed first as :func:`warn` lines. A subcommand calls it
+    before it prints its figures, writes its report or its JSON, so that the warnings come before the numbers on
+    the terminal and are written into the report page and the JSON's ``warnings``, beside the notes."""
+    if CAUGHT:
+        pending = list(CAUGHT)
+        del CAUGHT[:]
+        for w in pending:
+            if issubclass(w.category, UserWarning):
+                warn(str(w.message))
+    return list(dict.fromkeys(SAID or []))
 
 
 #: the JSON a ``--json`` command printed while :func:`fitbench.cli.commands.main` keeps stdout for it alone (what
@@ -207,9 +231,10 @@ def add_report_option(p):
 
 
 def write_report(path, title: str, lines: list[str], draw, aspect: float) -> None:
-    """The one-page report (:func:`fitbench.plots.report_page.one_page`), written atomically; one line on failure."""
+    """The one-page report (:func:`fitbench.plots.report_page.one_page`) with the command's warnings in a box above
+    its text (:func:`said_warnings`), written atomically; one line on failure."""
     from fitbench.plots.report_page import one_page
-    one_page(path, title=title, lines=lines, draw=draw, aspect=aspect, save=save_figure)
+    one_page(path, title=title, lines=lines, draw=draw, aspect=aspect, save=save_figure, warnings=said_warnings())
 
 
 def verdict_title(v: dict | None) -> str:
@@ -250,7 +275,7 @@ def flat_points(points, axes=("x", "y")) -> str | None:
 def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: bool = False):
     """(source, points in mm, length unit used, notes, names of the two coordinates) of ``fit`` and ``roundness``: a file in any instrument
     layout (x, y or angle + radial deviation, :func:`datasets.io.read_profile`) or a published data set's
-    name; sizes implausible for the unit are warned about, naming the likely unit (profile half-widths above
+    name; sizes implausible for the unit are warned about, naming the likely unit (profile radii, half the span, above
     ``limit_mm``: :data:`PROFILE_LIMIT_MM`, or :data:`ROUNDNESS_LIMIT_MM` for ``roundness``); points on a straight
     line (:func:`flat_points`) are warned about, or refused with ``refuse_flat``."""
     from datasets import points_from
@@ -278,7 +303,7 @@ def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: boo
             warn_implausible("radial deviations spanning", span, 10.0, unit, typical_mm=0.01)
         else:
             half = float(np.max(np.ptp(points, axis=0))) / 2
-            warn_implausible("profile half-widths", half, limit_mm, unit, typical_mm=25.0)
+            warn_implausible("profile radii (half the points' span)", half, limit_mm, unit, typical_mm=25.0)
             if got is not None and got.kind == "polar" and nominal:
                 dev = float(np.max(np.abs(np.hypot(*points.T) - nominal)))
                 warn_implausible("radial deviations", dev, 0.05 * nominal, unit, typical_mm=0.01)

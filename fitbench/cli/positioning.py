@@ -315,6 +315,7 @@ def run(args) -> int:
         raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "
                                 f"({res.figures.get('directions', 'bidirectional')}, {args.standard})")
     check = verdict({n: abs(res.figures[n]) for n in tolerances}, tolerances)
+    said = cli_options.said_warnings()   # printed before the figures, written into the report and the JSON
     if plot_path:
         title = str(args.file) + (f"; corrected to 20 °C from {temperature:g} °C, {alpha:g} µm/(m·K)" if thermal else "")
         title += verdict_title(check)
@@ -344,6 +345,7 @@ def run(args) -> int:
                              for d, p in res.polynomial.items()}
         out["u_delta"] = res.extra.get("u_delta")
         out["notes"] = notes
+        out["warnings"] = said
         if args.standard.startswith("iso230-2"):
             out["iso230_2_conformity"] = {"meets_minimum": not lacks, "lacks": lacks}
         # the axis as given (--axis; '' if not): fitbench history keeps each machine's axes apart

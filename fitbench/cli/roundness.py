@@ -61,6 +61,7 @@ def run(args) -> int:
     if offcentre:
         warn(offcentre)
     check = roundness_verdict(res.references, tolerances, chosen=args.reference != "all")
+    said = cli_options.said_warnings()   # printed before the figures, written into the report and the JSON
     if plot_path:
         plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))
     lines = [header_line("roundness", unit, "; centre and radius in mm")]
@@ -80,8 +81,7 @@ def run(args) -> int:
                         "cutoff_upr": "undulations per revolution",
                         "spectrum.amplitude": "mm", "spectrum.phase": "rad"})
         d.pop("extra", None)
-        if offcentre:
-            d["warnings"] = [*d.get("warnings", []), offcentre]
+        d["warnings"] = list(dict.fromkeys([*d.get("warnings", []), *said]))
         d["details"] = {"conditions": test_conditions(args, files=[source])}
         cli_options.print_json(json.dumps(d))
         return 0 if res.converged else 1

@@ -545,7 +545,8 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
                                                              if p["column"] == "(rows)" else p["column"]
                                                              for p in r["problems"]))))
     studies = list(entries.values())
-    verdict = {"agree": all(s.get("agree") for s in studies), "date": date, "results": _shown(out),
+    # no study compared: "agree" is null, never true over nothing (the file still records the run for the report)
+    verdict = {"agree": all(s.get("agree") for s in studies) if studies else None, "date": date, "results": _shown(out),
                "studies": studies, "run": {"date": date, "studies": list(names)}}
     write_atomic(Path(out) / VERDICT_FILE, json.dumps(verdict, indent=1, default=str) + "\n")
     return verdict

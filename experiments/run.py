@@ -335,15 +335,22 @@ def lock_out(out: Path):
         import fcntl
     except ImportError:  # not POSIX: no lock (documented)
         return None
-    fh = open(out / LOCK_NAME, "a+")
-    try:
-        fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        fh.seek(0)
-        holder = fh.read().strip()
+    for _ in range(100):
+        fh = open(out / LOCK_NAME, "a+")
+        try:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            fh.seek(0)
+            holder = fh.read().strip()
+            fh.close()
+            raise InvalidInputError(f"--out {out} is in use by another experiments.run ({holder or 'a running process'}); "
+                                    f"wait for it to finish or give another --out") from None
+        try:   # the run that held it removes the file before releasing it: a lock on a removed file locks nothing
+            if os.stat(out / LOCK_NAME).st_ino == os.fstat(fh.fileno()).st_ino:
+                break
+        except FileNotFoundError:
+            pass
         fh.close()
-        raise InvalidInputError(f"--out {out} is in use by another experiments.run ({holder or 'a running process'}); "
-                                f"wait for it to finish or give another --out") from None
     fh.seek(0)
     fh.truncate()
     fh.write(f"pid {os.getpid()}")
@@ -418,9 +425,18 @@ def plugin_warnings_once():
 
 
 def release_locks(keep: int = 0) -> None:
-    """Release the ``--out`` locks taken after the first ``keep`` (closing the file releases its ``flock``)."""
+    """Release the ``--out`` locks taken after the first ``keep``: the lock file is removed while still locked (no
+    ``.experiments-run.lock`` is left in the folder; a run that opened it meanwhile sees it removed and opens the new
+    one, :func:`lock_out`), then closing it releases its ``flock``."""
     while len(_LOCKS) > keep:
-        _LOCKS.pop().close()
+        fh = _LOCKS.pop()
+        try:
+            path = Path(fh.name)
+            if os.stat(path).st_ino == os.fstat(fh.fileno()).st_ino:
+                path.unlink()
+        except OSError:
+            pass
+        fh.close()
 
 
 def main(argv=None) -> int:

@@ -13,6 +13,11 @@
 * ``positioning.csv``: an ISO 230-2 test of a 1000 mm axis as a laser interferometer's wide export (targets in
   mm, one deviation column per run and direction in µm): ``datasets.positioning.axis_test`` with seed 7 and a
   -3 µm reversal.
+* ``positioning_unlabelled.csv``: the same test with its run columns named ``Run 1 (µm)`` ... ``Run 10 (µm)``
+  (odd runs approached in +, even runs in -, nothing in the file says so).
+* ``positioning_periodic.csv``: an ISO 230-2 long table (target, direction, run and deviation, in mm) of a 1000 mm
+  ball-screw axis, 21 irregular targets, 5 runs per direction: 10 µm/m linear, -12 µm/m² and a 1.5 µm periodic
+  error of period 130 mm, ±1.5 µm reversal, 0.3 µm noise (seed 21), which a cubic cannot describe.
 * ``roundness.csv`` (not written here): a turned profile as x, y in mm, R 12.5 mm, 3600 points, lobes of
   1.5 µm at 3 UPR, 0.6 µm at 2, 0.3 µm at 17, 0.2 µm at 180 and 0.08 µm noise.
 """
@@ -68,6 +73,26 @@ def positioning() -> tuple[str, list[str]]:
     return ";".join(["Target (mm)", *names]), rows
 
 
+def positioning_unlabelled() -> tuple[str, list[str]]:
+    header, rows = positioning()
+    runs = header.count("Run")
+    return ";".join(["Target (mm)", *(f"Run {k} (µm)" for k in range(1, runs + 1))]), rows
+
+
+def positioning_periodic() -> tuple[str, list[str]]:
+    rng = np.random.default_rng(21)
+    targets = np.sort(np.r_[0, 1000, rng.uniform(20, 980, 19)]).round(1)
+
+    def err(p):
+        return 1e-3 * (10 * (p / 1000) - 12 * (p / 1000) ** 2 + 1.5 * np.sin(2 * np.pi * p / 130))
+    rows = []
+    for run in range(1, 6):
+        for d, off in (("+", 0.0015), ("-", -0.0015)):
+            for t in (targets if d == "+" else targets[::-1]):
+                rows.append(f"{t},{d},{run},{err(t) + off + rng.normal(0, 0.0003):.6f}")
+    return "Target (mm),Direction,Run,Deviation (mm)", rows
+
+
 def files() -> dict[str, tuple[str, list[str]]]:
     """Every written file: name -> (header line, data lines)."""
     cw, ccw, _ = ballbar_test()
@@ -82,6 +107,8 @@ def files() -> dict[str, tuple[str, list[str]]]:
     out["ballbar.csv"] = ("Direction,Angle [deg],Radial deviation [um]", rows)
     out["profile.csv"] = profile()
     out["positioning.csv"] = positioning()
+    out["positioning_unlabelled.csv"] = positioning_unlabelled()
+    out["positioning_periodic.csv"] = positioning_periodic()
     return out
 
 

@@ -13,7 +13,8 @@ import methods
 from fitbench.cli.guards import jsonable
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
                                   add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances,
-                                  save_figure, verdict, verdict_lines, verdict_title, warn, write_report)
+                                  save_figure, verdict, verdict_lines, verdict_title, warn, warn_bare_tolerances,
+                                  write_report)
 from methods import InvalidInputError
 from methods.units import JSON_UNITS, canonical
 
@@ -211,6 +212,7 @@ def run(args) -> int:
             warn(f"diagnostics: {dg['_model']['message']}; the estimates are its last iterate's")
     values = dict(ev.figures, G=max(ev.figures["G_cw"], ev.figures["G_ccw"]))
     check = verdict({n: values[n] for n in tolerances}, tolerances)
+    warn_bare_tolerances(tolerances, values)
     said = cli_options.said_warnings()   # printed before the figures, written into the report and the JSON
     if plot_path:
         polar_plot(runs["cw"], runs["ccw"], ev, plot_path, title=verdict_title(check).lstrip("; "), diagnostics=dg,

@@ -155,23 +155,80 @@ def header_line(command: str, unit: str | None, extra: str = "", deviation_unit:
 
 
 def add_tolerance_option(p, names: str):
-    p.add_argument("--tolerance", action="append", metavar="NAME=UM",
-                   help=f"a tolerance in µm for one of the standard's figures ({names}); repeatable: PASS/FAIL "
-                        "in the table, the JSON and the plot (the exit status does not change)")
+    p.add_argument("--tolerance", action="append", metavar="NAME=VALUE",
+                   help=f"a tolerance in µm (a bare number) or with its unit (NAME=10um, NAME=0.01mm) for one of the "
+                        f"standard's figures ({names}); repeatable: PASS/FAIL in the table, the JSON and the plot (the "
+                        "exit status does not change); a bare number far below the figure it judges is warned about")
 
 
-def parse_tolerances(items, allowed) -> dict:
-    """``--tolerance NAME=UM`` items as {figure name: tolerance in mm}; ``allowed``: the names (any case)."""
-    out = {}
+#: a number with an optional unit after it: '10', '10um', '10 µm', '0.01mm', '1e-2 mm'
+NUMBER_WITH_UNIT = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s.+-][^\s]*)?\s*"
+
+
+class Tolerances(dict):
+    """``--tolerance`` items as {figure name: tolerance in mm}, and how each was written: ``texts`` {name: the
+    value as given}, ``bare`` the names given as a bare number (µm), which :func:`warn_bare_tolerances` checks."""
+
+    def __init__(self):
+        super().__init__()
+        self.texts: dict = {}
+        self.bare: set = set()
+
+
+def parse_tolerances(items, allowed) -> Tolerances:
+    """``--tolerance NAME=VALUE`` items as {figure name: tolerance in mm}; ``allowed``: the names (any case). VALUE
+    is a length with its unit (``10um``, ``10 µm``, ``0.01mm``, ``500nm``) or a bare number in µm (as the printout)."""
+    import re
+    from methods.units import mm_per
+    out = Tolerances()
     by_lower = {a.lower(): a for a in allowed}
     for item in items or []:
         key, eq, text = str(item).partition("=")
         name = by_lower.get(key.strip().lower())
         if not eq or name is None:
-            raise InvalidInputError(f"--tolerance {item!r}: give NAME=UM with NAME one of {', '.join(allowed)}")
-        value = finite(f"--tolerance {name}", text, positive=True, allow_none=False)
-        out[name] = value * 1e-3
+            raise InvalidInputError(f"--tolerance {item!r}: give NAME=VALUE with NAME one of {', '.join(allowed)} and "
+                                    "VALUE in µm or with its unit (e.g. 10um, 0.01mm)")
+        m = re.fullmatch(NUMBER_WITH_UNIT, text)
+        if not m:
+            raise InvalidInputError(f"--tolerance {item!r}: give the tolerance as a length with its unit, e.g. "
+                                    f"{name}=10um or {name}=0.01mm (a bare number is µm)")
+        unit = m.group(2)
+        factor = 1e-3
+        if unit is not None:
+            try:
+                factor = mm_per(unit)
+            except InvalidInputError:
+                raise InvalidInputError(f"--tolerance {item!r}: unknown unit {unit!r}; use um (µm), nm or mm, e.g. "
+                                        f"{name}=10um or {name}=0.01mm") from None
+        value = finite(f"--tolerance {name}", m.group(1), allow_none=False)
+        if not value > 0:
+            raise InvalidInputError(f"--tolerance {item!r}: a tolerance must be positive, e.g. {name}=10um")
+        out[name] = value * factor
+        out.texts[name] = text.strip()
+        if unit is None:
+            out.bare.add(name)
+        else:
+            out.bare.discard(name)
     return out
+
+
+#: a bare ``--tolerance`` (µm) that the figure it judges exceeds this many times is likely a drawing's mm value
+#: (A=0.01 meant as 0.010 mm read as 0.01 µm: FAIL for an 8.5 µm axis; no machine is a hundred times out of tolerance)
+TOLERANCE_SUSPECT_RATIO = 100.0
+
+
+def warn_bare_tolerances(tolerances, values_mm: dict) -> None:
+    """Warn, naming the unit to give, about each tolerance given as a bare number (µm) that its figure
+    (``values_mm``: {name: value in mm}) exceeds more than :data:`TOLERANCE_SUSPECT_RATIO` times, as ``--mpe``'s
+    bare number is warned about."""
+    for name in sorted(getattr(tolerances, "bare", ()), key=list(tolerances).index):
+        tol, value = tolerances[name], values_mm.get(name)
+        if value is None or not (math.isfinite(value) and abs(value) > TOLERANCE_SUSPECT_RATIO * tol):
+            continue
+        text = tolerances.texts[name]
+        warn(f"--tolerance {name}={text} is read as {tol * 1e3:g} µm (a bare number is µm), and {name} is "
+             f"{abs(value) * 1e3:.4g} µm, {abs(value) / tol:.3g} times it: is it in mm? give --tolerance {name}={text}mm "
+             f"({tol * 1e6:g} µm), or --tolerance {name}={text}um to keep µm")
 
 
 def verdict(values_mm: dict, tolerances_mm: dict) -> dict | None:

@@ -15,7 +15,7 @@ from fitbench.cli.guards import jsonable
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
                                   add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances,
                                   save_figure, test_conditions, verdict, verdict_lines, verdict_title, warn,
-                                  write_report, write_text_atomic)
+                                  warn_bare_tolerances, write_report, write_text_atomic)
 from methods import InvalidInputError
 from methods.units import JSON_UNITS, UNIT_CHOICES, canonical
 
@@ -315,6 +315,7 @@ def run(args) -> int:
         raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "
                                 f"({res.figures.get('directions', 'bidirectional')}, {args.standard})")
     check = verdict({n: abs(res.figures[n]) for n in tolerances}, tolerances)
+    warn_bare_tolerances(tolerances, {n: abs(res.figures[n]) for n in tolerances})
     said = cli_options.said_warnings()   # printed before the figures, written into the report and the JSON
     if plot_path:
         title = str(args.file) + (f"; corrected to 20 °C from {temperature:g} °C, {alpha:g} µm/(m·K)" if thermal else "")

@@ -14,7 +14,7 @@ from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options, header_line,
                                   ROUNDNESS_LIMIT_MM, add_tolerance_option, check_plot_path, parse_tolerances, test_conditions, read_profile_args, save_figure, verdict, verdict_lines,
-                                  verdict_title, warn, write_report)
+                                  verdict_title, warn, warn_bare_tolerances, write_report)
 
 
 def add_parser(subparsers):
@@ -61,6 +61,8 @@ def run(args) -> int:
     if offcentre:
         warn(offcentre)
     check = roundness_verdict(res.references, tolerances, chosen=args.reference != "all")
+    if check:   # the figures the verdict judges: about its reference circle
+        warn_bare_tolerances(tolerances, res.references[check["reference"]])
     said = cli_options.said_warnings()   # printed before the figures, written into the report and the JSON
     if plot_path:
         plot(res, plot_path, title=f"{source}{verdict_title(check)}", save=lambda fig, path: save_figure(fig, path, dpi=110))

@@ -1,0 +1,82 @@
+"""``--tolerance`` takes a unit as ``--mpe`` does (``A=10um``, ``A=0.01mm``; a bare number stays µm, as before), and a
+bare number far below the figure it judges is warned about, naming mm: a drawing's ``A=0.01`` (0.010 mm) read as
+0.01 µm gave "A 8.498 µm tolerance 0.01 µm FAIL" with no word, while ``A=10um`` was refused as "must be a number"."""
+import json
+
+import numpy as np
+import pytest
+
+from datasets.positioning import axis_test, to_frame
+from test_cli_inputs import circular_runs_file, cli, one_error_line, profile_file
+
+
+@pytest.fixture(scope="module")
+def axis_file(tmp_path_factory):
+    data, _ = axis_test(rng=np.random.default_rng(7))
+    path = tmp_path_factory.mktemp("pos") / "axis.csv"
+    to_frame(data, actual=False).to_csv(path, index=False)
+    return path
+
+
+def verdict_of(*args):
+    out = cli(*args, "--json")
+    assert out.returncode == 0, out.stderr
+    d = json.loads(out.stdout)
+    return d["verdict"], d["warnings"], out.stderr
+
+
+@pytest.mark.parametrize("text", ["10", "10um", "10 µm", "10µm", "0.01mm", "10000nm", "1e-2 mm"])
+def test_a_tolerance_with_its_unit_is_the_same_tolerance(axis_file, text):
+    verdict, said, err = verdict_of("positioning", axis_file, "--tolerance", f"A={text}")
+    (check,) = verdict["checks"]
+    assert check["tolerance_mm"] == pytest.approx(0.01, rel=1e-12) and check["figure"] == "A"
+    assert check["result"] == ("PASS" if check["value_mm"] <= 0.01 else "FAIL")
+    assert said == [] and "warning" not in err
+
+
+def test_a_bare_tolerance_far_below_its_figure_is_warned_about_naming_mm(axis_file):
+    verdict, said, err = verdict_of("positioning", axis_file, "--tolerance", "A=0.01")
+    (check,) = verdict["checks"]
+    assert check["tolerance_mm"] == pytest.approx(1e-5) and check["result"] == "FAIL"   # a bare number is µm still
+    ratio = check["value_mm"] / 1e-5
+    line = (f"--tolerance A=0.01 is read as 0.01 µm (a bare number is µm), and A is {check['value_mm'] * 1e3:.4g} µm, "
+            f"{ratio:.3g} times it: is it in mm? give --tolerance A=0.01mm (10 µm), or --tolerance A=0.01um to keep µm")
+    assert f"warning: {line}" in err and said == [line]
+    # said in µm, or a tolerance the figure misses by less than 100 times: meant, no warning
+    for text in ("0.01um", "0.1"):
+        out = cli("positioning", axis_file, "--tolerance", f"A={text}")
+        assert out.returncode == 0 and "warning" not in out.stderr, out.stderr
+
+
+def test_roundness_and_circular_test_warn_about_a_bare_tolerance_in_mm(tmp_path):
+    shaft = profile_file(tmp_path / "shaft.csv")
+    out = cli("roundness", shaft, "--tolerance", "RONt=0.005")
+    assert out.returncode == 0 and "warning: --tolerance RONt=0.005 is read as 0.005 µm" in out.stderr
+    assert "give --tolerance RONt=0.005mm (5 µm)" in out.stderr
+    out = cli("roundness", shaft, "--tolerance", "RONt=0.005mm")
+    assert out.returncode == 0 and "warning" not in out.stderr and "tolerance 5 µm" in out.stdout
+    runs = circular_runs_file(tmp_path / "runs.csv")
+    out = cli("circular-test", runs, "--nominal-radius", 100, "--tolerance", "G=0.001")
+    assert out.returncode == 0 and "warning: --tolerance G=0.001 is read as 0.001 µm" in out.stderr
+    out = cli("circular-test", runs, "--nominal-radius", 100, "--tolerance", "G=0.05mm")
+    assert out.returncode == 0 and "warning" not in out.stderr and "tolerance 50 µm" in out.stdout
+
+
+@pytest.mark.parametrize("text, words", [
+    ("A=2cm", ("--tolerance 'A=2cm': unknown unit 'cm'", "A=10um or A=0.01mm")),
+    ("A=ten", ("--tolerance 'A=ten': give the tolerance as a length with its unit", "(a bare number is µm)")),
+    ("A=-1um", ("--tolerance 'A=-1um': a tolerance must be positive",)),
+    ("Q=1um", ("--tolerance 'Q=1um': give NAME=VALUE with NAME one of A, E", "VALUE in µm or with its unit")),
+])
+def test_a_bad_tolerance_is_one_line(axis_file, text, words):
+    one_error_line(cli("positioning", axis_file, "--tolerance", text), *words)
+
+
+def test_the_help_gives_both_forms(capsys):
+    from fitbench.cli import main
+    for command in ("positioning", "roundness", "circular-test"):
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        text = " ".join(capsys.readouterr().out.split())
+        assert "--tolerance NAME=VALUE" in text
+        assert "a tolerance in µm (a bare number) or with its unit (NAME=10um, NAME=0.01mm)" in text, command

@@ -204,14 +204,26 @@ def _save_scans() -> None:
             os.unlink(tmp)
 
 
-def module_closure(module: str) -> tuple[tuple[str, Path], ...]:
+#: fitbench's packages that draw and write a study's outputs (figures, the report), never its rows: the closure of a
+#: row's code does not enter them, although a study module imports them for its figures, so that a new matplotlib or
+#: an edited figure style redraws the figures and recomputes no row. The outputs' own hash enters them
+#: (``outputs=True``: ``experiments.engine.outputs_code``); tests/test_layers.py checks that the code every row runs
+#: (``experiments.rows``, the metrics, the methods, the data sources) imports none of them.
+OUTPUT_PACKAGES = ("experiments.render",)
+
+
+def _output_module(name: str) -> bool:
+    return any(name == p or name.startswith(p + ".") for p in OUTPUT_PACKAGES)
+
+
+def module_closure(module: str, outputs: bool = False) -> tuple[tuple[str, Path], ...]:
     """(module name, file) of ``module`` and every module of fitbench or of its own top-level package
-    that it imports, directly or not (sorted by name)."""
-    return _walk(module)[0]
+    that it imports, directly or not (sorted by name); without ``outputs``, none of :data:`OUTPUT_PACKAGES`."""
+    return _walk(module, outputs)[0]
 
 
 @lru_cache(maxsize=None)
-def _walk(module: str) -> tuple[tuple[tuple[str, Path], ...], frozenset]:
+def _walk(module: str, outputs: bool = False) -> tuple[tuple[tuple[str, Path], ...], frozenset]:
     """(:func:`module_closure`, the top-level names of the modules outside it that its modules import, by a statement
     or a call of :data:`_IMPORT_CALLS` with a literal name: the libraries, :func:`libraries_of`)."""
     follow = set(FITBENCH_PACKAGES) | {module.split(".")[0]}
@@ -226,7 +238,7 @@ def _walk(module: str) -> tuple[tuple[tuple[str, Path], ...], frozenset]:
     todo = [p for p in _imported_names_of_parents(module)]
     while todo:
         name = todo.pop()
-        if name in seen:
+        if name in seen or (not outputs and _output_module(name)):
             continue
         if name.split(".")[0] not in follow:
             outside.add(name.split(".")[0])
@@ -347,10 +359,10 @@ def _environments_in_repo() -> tuple[Path, ...]:
     return tuple(r for r in roots if REPO in r.parents)
 
 
-def files_of(module: str) -> list[Path]:
-    """Every file the code of ``module`` depends on (see the module docstring)."""
-    files = {path for _, path in module_closure(module)}
-    for name, path in module_closure(module):
+def files_of(module: str, outputs: bool = False) -> list[Path]:
+    """Every file the code of ``module`` depends on (see the module docstring; ``outputs``: :func:`module_closure`)."""
+    files = {path for _, path in module_closure(module, outputs)}
+    for name, path in module_closure(module, outputs):
         if not _in_repo(path):
             files.update(_plugin_files(name, path))
     files.update(_data_beside(files))
@@ -383,17 +395,17 @@ def _digest(files, libraries: dict | None = None) -> str:
 
 
 @lru_cache(maxsize=None)
-def code_hash(*modules: str) -> str:
+def code_hash(*modules: str, outputs: bool = False) -> str:
     """One hash over every file the given modules depend on and the versions of the libraries they import
-    (:func:`libraries_of`)."""
+    (:func:`libraries_of`); ``outputs``: also :data:`OUTPUT_PACKAGES` (the code of a study's outputs, not of a row)."""
     files = set()
     for m in modules:
-        files.update(files_of(m))
-    return _digest(files, libraries_of(*modules))
+        files.update(files_of(m, outputs))
+    return _digest(files, libraries_of(*modules, outputs=outputs))
 
 
 @lru_cache(maxsize=None)
-def libraries_of(*modules: str) -> dict[str, str | None]:
+def libraries_of(*modules: str, outputs: bool = False) -> dict[str, str | None]:
     """{distribution: version} of the libraries the code of ``modules`` imports (by a statement anywhere in a module
     of their closure, or a call of :data:`_IMPORT_CALLS` with a literal name: ``lazy_module("shapely")``), and of the
     requirements a plugin's distribution declares (``Requires-Dist``); None for a library that is not installed (an
@@ -401,7 +413,7 @@ def libraries_of(*modules: str) -> dict[str, str | None]:
     the dict it returns.)"""
     out: dict = {}
     for m in modules:
-        closure, outside = _walk(m)
+        closure, outside = _walk(m, outputs)
         for top in outside:
             out.update(_library(top))
         for name, path in closure:

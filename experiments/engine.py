@@ -397,7 +397,8 @@ def outputs_code(cfg: dict) -> str:
     plugins = sorted({ep.module for group in ("fitbench.methods", "fitbench.datasets")
                       for ep in metadata.entry_points(group=group)})
     ident = {"config": dict(cfg), "quick": bool(getattr(cfg, "quick", False)),  # a loaded config's [quick] flag
-             "code": codehash.code_hash("experiments.run", "fitbench.plots", f"experiments.studies.{cfg['kind']}"),
+             "code": codehash.code_hash("experiments.run", "fitbench.plots", f"experiments.studies.{cfg['kind']}",
+                                       outputs=True),
              "plugins": codehash.code_hash(*plugins) if plugins else None,
              "engine": ENGINE_VERSION, "env": environment(), "versions": versions}
     return hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode()).hexdigest()

@@ -63,8 +63,9 @@ parallelises it; ``analyse`` only aggregates rows.
 
 A study module's rows are keyed on its code and the libraries it imports (``experiments.codehash``): it builds rows
 with ``experiments.rows``, expands its config through ``cfg`` (``cfg.grid_tasks()``, ``cfg.expand_methods()``) rather
-than by importing the engine, and draws with ``experiments.render.style.plotting()`` rather than importing
-matplotlib, so that the run's and the figures' libraries are in no row's key (docs/studies.md). This module
+than by importing the engine, and draws with ``experiments.render.style.plotting()`` (output code, which no row's key
+enters: ``experiments.codehash.OUTPUT_PACKAGES``), so that the run's and the figures' libraries are in no row's key
+(docs/studies.md). This module
 follows the same rules.
 
 The run's analysis step adds the TOML's declared tables and figures (``experiments.analysis``; checked before any row

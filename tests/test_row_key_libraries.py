@@ -1,7 +1,7 @@
 """A row's cache key holds the versions of the libraries its code uses, not of those only the run, the report or the
 figures use: a study module reaches the engine through its config (``cfg.grid_tasks()``, ``cfg.expand_methods()``)
-and the row helpers in ``experiments.rows``, and its figures take matplotlib by name
-(``experiments.render.style.plotting``), so upgrading matplotlib, tqdm or Dask recomputes no row, upgrading NumPy
+and the row helpers in ``experiments.rows``, and its figures take matplotlib from output code that no row's key enters
+(``experiments.render``: ``experiments.codehash.OUTPUT_PACKAGES``), so upgrading matplotlib, tqdm or Dask recomputes no row, upgrading NumPy
 every row (docs/studies.md)."""
 from __future__ import annotations
 
@@ -48,3 +48,16 @@ def test_no_study_module_keys_its_rows_with_a_library_of_the_run_report_figures_
         used = codehash.libraries_of(f"experiments.studies.{kind}", "experiments.rows", "experiments.metrics",
                                      "experiments.timing")
         assert "numpy" in used and not NOT_ROW_LIBRARIES & set(used), (kind, sorted(used))
+
+
+def test_output_code_is_in_the_outputs_hash_and_in_no_row_key(fresh_keys):
+    """experiments.render (the figures' style and matplotlib) enters the outputs' hash, not the closure of a study's
+    rows; the code every row runs imports no output code at all."""
+    style = codehash.REPO / "experiments" / "render" / "style.py"
+    rows = {p for m in ("experiments.studies.noise", "experiments.rows") for p in codehash.files_of(m)}
+    outputs = set(codehash.files_of("experiments.studies.noise", outputs=True))
+    assert style not in rows and style in outputs
+    assert "matplotlib" in codehash.libraries_of("experiments.studies.noise", outputs=True)
+    for module in ("experiments.rows", "experiments.metrics", "experiments.timing"):
+        closure = {name for name, _ in codehash.module_closure(module, outputs=True)}
+        assert not {n for n in closure if codehash._output_module(n)}, module

@@ -4,7 +4,7 @@ Figures are drawn at their printed size: ``COLUMN_WIDTH_IN`` is the text width o
 2.5 cm margins (21 cm - 5 cm = 16 cm), so a font of 9 pt in matplotlib is 9 pt on paper. Use::
 
     from experiments.render import style
-    plt = style.plotting()             # matplotlib.pyplot, Agg backend (see plotting: why not an import)
+    plt = style.plotting()             # matplotlib.pyplot, Agg backend
     with style.figure_style():
         fig, ax = plt.subplots(figsize=style.size(height_ratio=0.5))
         ax.plot(x, y, **style.method_style("circle.kasa"))
@@ -59,22 +59,15 @@ MARKERS = ("o", "s", "^", "D", "v", "P", "X", "<", ">", "p", "h", "*")
 LINESTYLES = ("-", "--", "-.", ":")
 
 
-#: the plotting library, imported by this name when a figure is drawn (:func:`plotting`)
-PLOTTING = "matplotlib"
-
-
 def plotting(part: str = "pyplot"):
     """``matplotlib.<part>`` (pyplot by default; ``""``: matplotlib itself) on the Agg backend (files, no window): what
-    the figures of a study's analysis draw with.
-
-    Imported by a name that the import scan of the rows' cache keys does not read (``experiments.codehash`` follows
-    import statements and calls with a literal name): a study draws its figures in its analysis, never in a row, so
-    its rows' keys hold no matplotlib version and upgrading matplotlib recomputes no row. The outputs' fingerprint
-    holds that version (``experiments.engine.outputs_code``: ``experiments.provenance.PACKAGES``), so a new
-    matplotlib redraws the figures (docs/studies.md)."""
-    base = importlib.import_module(PLOTTING)
-    base.use("Agg")
-    return importlib.import_module(f"{PLOTTING}.{part}") if part else base
+    the figures of a study's analysis draw with. This package draws outputs, never rows
+    (``experiments.codehash.OUTPUT_PACKAGES``): a study module that imports it for its figures keeps matplotlib out of
+    its rows' keys, and a new matplotlib redraws the figures (the outputs' fingerprint holds its version) without
+    recomputing a row (docs/studies.md)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    return importlib.import_module(f"matplotlib.{part}") if part else matplotlib
 
 
 @contextlib.contextmanager

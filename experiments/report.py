@@ -68,23 +68,45 @@ def _command_folder(path: Path) -> str:
     return Path(path).resolve().name if shown.startswith(".../") else shown
 
 
-def _reproduce(names: list[str], known: dict, quick: bool, folder_arg: str) -> str:
+def study_command_names(results: Path, names: list[str], known: dict) -> dict[str, str]:
+    """{study: how a command names it}: a project study by its name; any other by the TOML file its ``meta.json``
+    records (``config_file``), relative to the current folder when it lies inside it, else by its file name
+    (``NAME.toml``: the report names no folder of this machine), quoted for a shell."""
+    import shlex
+    from experiments.verdict import recorded_config
+    out = {}
+    for n in names:
+        if n in known:
+            out[n] = n
+            continue
+        path, shown = recorded_config(results / n), f"{n}.toml"
+        if path is not None:
+            try:
+                shown = path.resolve().relative_to(Path.cwd().resolve()).as_posix()
+            except ValueError:
+                pass
+        out[n] = shlex.quote(shown)
+    return out
+
+
+def _reproduce(names: list[str], known: dict, quick: bool, folder_arg: str, called: dict | None = None) -> str:
     """The command(s) that reproduce the studies of this report (Markdown): the default studies' own command when
     the report holds just them in their folder, else one per study: a known study by name, a user's study by its
-    TOML file (named after the study; ``meta.json`` records the config it ran)."""
+    TOML file (``called``: :func:`study_command_names`; ``meta.json`` records the config it ran)."""
     from experiments.render.page import md_escape
     if not names:   # every study of the folder is broken or unfinished: no command made what is shown
         return "no study in it is finished, so none can be reproduced from it (each study below says why)"
+    called = {n: (n if n in known else f"{n}.toml") for n in names} | (called or {})
     q, out = (" --quick" if quick else ""), (f" --out{folder_arg}" if folder_arg else "")
     defaults = {n for n, c in known.items() if c.get("default")}
     every_default = bool(defaults) and defaults <= set(names)
     rest = [n for n in names if not (every_default and n in defaults)]
     commands = [f"`python -m experiments.run{q}{out}` (the default studies)"] if every_default else []
     if rest:
-        commands.append(f"`python -m experiments.run {' '.join(n if n in known else n + '.toml' for n in rest)}{q}{out}`")
+        commands.append(f"`python -m experiments.run {md_escape(' '.join(called[n] for n in rest))}{q}{out}`")
     own = [n for n in names if n not in known]
     # the files' names are user text (escaped); `meta.json` is the builder's own code span
-    note = (f" ({md_escape(', '.join(f'{n}.toml' for n in own))}: the study's TOML file, wherever it is; the config "
+    note = (f" ({md_escape(', '.join(called[n] for n in own))}: the study's TOML file, wherever it is; the config "
             f"it ran is recorded in {'its' if len(own) == 1 else 'each'} `meta.json`)") if own else ""
     return f"reproduce {'it' if len(names) == 1 else 'them'} with " + " and ".join(commands) + note
 
@@ -332,10 +354,11 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     except (ValueError, KeyError, TypeError) as exc:
         ranking_problem = str(exc)
     has_rankings = bool(rankings) or ranking_problem is not None
+    called = study_command_names(results, [e[2] for e in entries if e[4] is not None], known)
     verdicts = study_verdicts(results, [e[2] for e in entries if e[4] is not None],
                               {n: "not a default study" for n in present if not known.get(n, {}).get("default")},
                               quick={e[2]: bool(e[4].get("quick")) for e in entries if e[4] is not None},
-                              shown=_command_folder(results))
+                              shown=_command_folder(results), commands=called)
 
     # the command that fills a missing study into this folder: its --quick grid when the folder's studies are
     # quick runs, and this folder as --out unless it is the grid's default (results/, results/quick/)
@@ -348,11 +371,11 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     doc.heading(1, "fitbench: comparison report")
     done_names = [e[2] for e in entries if e[4] is not None]
     doc.prose(f"Built from `{md_escape(_shown(results))}` by `python -m experiments.report`; "
-              f"{_reproduce(done_names, known, folder_quick, folder_arg)}. "
+              f"{_reproduce(done_names, known, folder_quick, folder_arg, called)}. "
               "Interactive explorer (offline): [explorer.html](explorer.html).")
     abstract_at = len(doc.parts)
     from experiments.verdict import verdict_markdown
-    doc.prose(" ".join(verdict_markdown(results)))
+    doc.prose(" ".join(verdict_markdown(results, folder_quick, _command_folder(results))))
     quick_note = None
     if folder_quick:
         quick_note = ("studies marked quick run ran the reduced --quick grid; their numbers are not the "

@@ -211,7 +211,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
             "row_timeout_s": row_timeout, "environment": engine.environment(),
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
             "plugins": plugin_distributions(used), "results_sha256": results_sha256, "findings": findings,
-            "fingerprint": counts.pop("fingerprint"), "inputs": compare.inputs(cfg)}
+            "fingerprint": counts.pop("fingerprint"), "inputs": compare.inputs(cfg), "config_file": config_file(cfg)}
     outputs.write_manifest(target, cfg, analysed, summary)
     buf = io.StringIO()
     summary.to_csv(buf, index=False, float_format="%.10g")
@@ -224,6 +224,18 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     log(f"-> {target}/results.csv ({len(df)} rows" + (f": {bad}" if bad else "") +
         f"; rows run in {counts['wall_s']:.1f} s), summary.csv, summary.md, meta.json")
     return target
+
+
+def config_file(cfg) -> str:
+    """The TOML a study was loaded from, as ``meta.json`` records it (what ``experiments.verify`` and the report's
+    commands run again): a project study's relative to the checkout (``experiments/configs/NAME.toml``), any other
+    by its absolute path."""
+    path = Path(cfg.folder).resolve() / f"{cfg['name']}.toml"
+    from experiments.provenance import REPO
+    try:
+        return path.relative_to(REPO).as_posix() if is_project_study(cfg) else str(path)
+    except ValueError:
+        return str(path)
 
 
 def usable_jobs(jobs: int, log=print) -> int:

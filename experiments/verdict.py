@@ -30,6 +30,21 @@ def results_sha256(folder: Path) -> str | None:
         return None
 
 
+def recorded_config(study_folder: Path) -> Path | None:
+    """The TOML file a study's ``meta.json`` records it ran from (``config_file``: relative to the checkout for a
+    project study, else absolute), None when it records none or is unreadable."""
+    from experiments.provenance import REPO
+    try:
+        with open_regular(Path(study_folder) / "meta.json") as fh:
+            value = json.loads(fh.read()).get("config_file")
+    except (OSError, ValueError, AttributeError):
+        return None
+    if not isinstance(value, str) or not value.endswith(".toml"):
+        return None
+    path = Path(value)
+    return path if path.is_absolute() else REPO / path
+
+
 def last_verdict(results: Path) -> dict | None:
     """The verdict file of ``results`` (None when there is none or it is unreadable)."""
     try:   # a regular file only: a FIFO there blocked the report (NotRegularFileError is a ValueError)
@@ -100,13 +115,15 @@ def grid_options(results: Path, quick: bool, shown: str | None = None) -> tuple[
 
 
 def study_verdicts(results: Path, studies: list[str], reasons: dict[str, str] | None = None,
-                   quick: dict[str, bool] | None = None, shown: str | None = None) \
-        -> dict[str, list[tuple[str, str]]]:
+                   quick: dict[str, bool] | None = None, shown: str | None = None,
+                   commands: dict[str, str] | None = None) -> dict[str, list[tuple[str, str]]]:
     """{study: [(label, plain sentence), ...]} for the report: the current verdict, an out-of-date one said to
     be out of date, and a study not in the last ``experiments.run`` said to come from an earlier run
     (``reasons``: why that run did not include it, e.g. "not a default study"). The commands it suggests
     regenerate or check these results: with --quick where the study ran the quick grid (``quick``: study ->
-    bool) and the folder (``shown``: how to name ``results``) unless it is the grid's default."""
+    bool), the folder (``shown``: how to name ``results``) unless it is the grid's default, and the study as a
+    command names it (``commands``: study -> its name, or its TOML file for a study that is not the project's;
+    default: the name)."""
     current, stale = current_entries(results)
     v = last_verdict(results) or {}
     run = v.get("run") if isinstance(v.get("run"), dict) else None
@@ -114,6 +131,7 @@ def study_verdicts(results: Path, studies: list[str], reasons: dict[str, str] | 
     for name in studies:
         lines = []
         q, folder = grid_options(results, bool((quick or {}).get(name)), shown)
+        called = (commands or {}).get(name, name)
         if name in current:
             e = current[name]
             lines.append(("Reproducibility" if e.get("agree") else
@@ -122,24 +140,27 @@ def study_verdicts(results: Path, studies: list[str], reasons: dict[str, str] | 
         elif name in stale:
             lines.append(("Reproducibility: out of date",
                           f"The last verification ({stale[name].get('date', '?')}) judged other results than these "
-                          f"(results.csv changed since); run python -m experiments.verify {name}{q}"
+                          f"(results.csv changed since); run python -m experiments.verify {called}{q}"
                           f"{' --results' + folder if folder else ''} --write-verdict again."))
         if run and name not in run.get("studies", []):
             lines.append(("Older results", f"These results are older than the last run ({run.get('date', '?')}), which "
                           f"did not include this study ({(reasons or {}).get(name, 'not among the studies it ran')}); "
-                          f"rerun it with python -m experiments.run {name}{q}"
+                          f"rerun it with python -m experiments.run {called}{q}"
                           f"{' --out' + folder if folder else ''}."))
         if lines:
             out[name] = lines
     return out
 
 
-def verdict_markdown(results: Path) -> list[str]:
-    """Lines for the report: the current verdicts in one sentence (out-of-date ones are not counted)."""
+def verdict_markdown(results: Path, quick: bool = False, shown: str | None = None) -> list[str]:
+    """Lines for the report: the current verdicts in one sentence (out-of-date ones are not counted). The command it
+    suggests checks ``results`` (``shown``: how to name it; with --quick for a folder of quick runs)."""
     from experiments.render.page import md_escape
     current, stale = current_entries(results)
     if not current:
-        return ["No current reproducibility verdict: run `python -m experiments.verify --write-verdict`"
+        q, folder = grid_options(results, quick, shown)
+        command = f"python -m experiments.verify{q}{' --results' + folder if folder else ''} --write-verdict"
+        return [f"No current reproducibility verdict: run `{md_escape(command)}`"
                 + (f" (the last one judged other results for {len(stale)} "
                    f"{'study' if len(stale) == 1 else 'studies'})" if stale else "") + "."]
     changed = [k for k, e in current.items() if not e.get("agree") and _other_code(e)]

@@ -4,6 +4,8 @@ Reproducibility verdict: runs the studies (into a temporary folder) or reads a f
 and compares every non-timing column of each ``results.csv`` with the committed one (``--results``; default
 ``results/``, or ``results/quick`` with ``--quick``), with the tolerances declared with the metrics
 (``experiments.metrics.TOLERANCES``: exact for ids, statuses and counts; relative + absolute per metric).
+A study that is not one of the project's (a user's TOML) runs from the TOML file its ``meta.json`` records
+(``config_file``), or from the TOML given as STUDY.
 Rows are matched by their identity (study, data set, data stream, repetition, seed, method, parameters).
 A row with the same status other than "ok" in both runs (an iteration that did not converge) is compared by
 its status and counts only: its values are where the iteration stopped, not a result. When the two runs used
@@ -30,15 +32,32 @@ from experiments import run as runner
 from experiments.compare import (IDENTITY, WORST_ROWS, compare_study, identity_columns,  # noqa: F401  (the library's names)
                                  reference_snapshot, verdict_after_run, verify)
 from experiments.verdict import VERDICT_FILE, last_verdict, results_sha256, verdict_markdown  # noqa: F401  (the report's reading side)
+from experiments.verdict import recorded_config
 from fitbench import __version__
 from methods import InvalidInputError
+
+
+def config_of(study: str, results: Path, known: dict) -> str:
+    """What to run to check ``study`` of ``results``: a project study by its name; any other by the TOML file its
+    ``meta.json`` records (``config_file``), refused in one line when that file is not there."""
+    if study in known:
+        return study
+    recorded = recorded_config(results / study)
+    if recorded is None or not recorded.is_file():
+        where = (f"its meta.json records {recorded}, which is not there" if recorded is not None else
+                 "its meta.json records no TOML file (written by an older fitbench)")
+        raise InvalidInputError(f"{study} is not one of the project's studies and {where}; give its TOML file: "
+                                f"python -m experiments.verify PATH/{study}.toml --results {results}")
+    return str(recorded)
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.verify",
                                      description="Check that a run reproduces the committed results within declared tolerances.")
     parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
-    parser.add_argument("studies", nargs="*", metavar="STUDY", help="studies to check (default: every study in --results)")
+    parser.add_argument("studies", nargs="*", metavar="STUDY",
+                        help="studies to check, by name or TOML file (default: every study in --results; a study that "
+                             "is not one of the project's runs from the TOML its meta.json records)")
     parser.add_argument("--results", type=Path, help="committed results (default: results/, or results/quick with --quick)")
     parser.add_argument("--against", type=Path, help="a finished run to check (default: run the studies now, in a temporary folder)")
     parser.add_argument("--quick", action="store_true", help="the quick grids (compared with results/quick)")
@@ -57,11 +76,15 @@ def main(argv=None) -> int:
             raise InvalidInputError(f"--against {args.against} is not a folder of results")
         present = sorted(p.parent.name for p in results.glob("*/results.csv"))
         known = configs.available()
+        named = {}   # a study given as its TOML file (a user's study): its name -> that file
+        for s in args.studies:
+            if s.endswith(".toml"):
+                named[configs.load(s)["name"]] = s
         for s in args.studies:   # a name that is neither a study here nor a known one: never "run it first"
-            if s not in present and s not in known:
+            if not s.endswith(".toml") and s not in present and s not in known:
                 raise InvalidInputError(f"unknown study {s!r}: --results {results} holds "
                                         f"{', '.join(present) or 'no study'}; the known studies are {', '.join(known)}")
-        studies = args.studies or present
+        studies = [configs.load(s)["name"] if s.endswith(".toml") else s for s in args.studies] or present
         if not studies:
             raise InvalidInputError(f"--results {results} holds no study (no */results.csv)")
         for s in studies:
@@ -77,21 +100,22 @@ def main(argv=None) -> int:
         if args.against is not None:
             verdict = verify(studies, results, args.against, write=args.write_verdict)
         else:
-            ready = []
+            ready = {}
             for s in studies:  # a study whose data are not available here: named -> an error, implied -> a note
                 try:
-                    runner.check_ready(configs.load(s, quick=args.quick), configs.MAX_ROWS)
-                    ready.append(s)
+                    spec = named.get(s) or config_of(s, results, known)
+                    runner.check_ready(configs.load(spec, quick=args.quick), configs.MAX_ROWS)
+                    ready[s] = spec
                 except InvalidInputError as exc:
                     if args.studies:
                         raise
                     print(f"{s}: not checked here: {exc}")
             if not ready:
                 raise InvalidInputError("no study of --results can run here (see above)")
-            studies = ready
+            studies = list(ready)
             with tempfile.TemporaryDirectory(prefix="fitbench-verify-") as tmp:
                 for s in studies:
-                    runner.run_study(s, Path(tmp), quick=args.quick, jobs=runner.usable_jobs(args.jobs))
+                    runner.run_study(ready[s], Path(tmp), quick=args.quick, jobs=runner.usable_jobs(args.jobs))
                 verdict = verify(studies, results, Path(tmp), write=args.write_verdict,
                                  against_name=f"a fresh run of python -m experiments.verify (fitbench {__version__})")
     except InvalidInputError as exc:

@@ -410,7 +410,7 @@ def test_the_reports_hints_give_the_command_that_regenerates_these_results(tmp_p
     assert run("vstudy") == 0
     md = (out / "paper" / "report.md").read_text(encoding="utf-8")
     other = md.split("(`vother`)")[1].split("### ")[0]
-    assert "rerun it with python -m experiments.run vother --quick --out mine." in other
+    assert "rerun it with python -m experiments.run vother.toml --quick --out mine." in other   # its TOML, not its name
     edit(out, 0, "radius", lambda v: repr(float(v) * 2))
     from experiments.verdict import study_verdicts
     lines = dict(study_verdicts(out, ["vstudy"], quick={"vstudy": True}, shown="mine")["vstudy"])

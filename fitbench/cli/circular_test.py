@@ -131,6 +131,7 @@ FEED_MIN_MM_MIN = 10.0
 def run(args) -> int:
     from methods.circular_test import diagnose, evaluate
     from fitbench.plots.circular_test import FIGSIZE as POLAR_FIGSIZE, diagnostics_json, model_json, polar_plot, text
+    from methods.circular_test.evaluation import nominal_mismatch
     from methods.circular_test.runs import check_nominal, check_pair, drop_repeated, off_circle_ends, trim
 
     R = finite("--nominal-radius", args.nominal_radius, positive=True, allow_none=False)
@@ -163,6 +164,10 @@ def run(args) -> int:
             raise InvalidInputError(f"circular test ({name.upper()} run): needs at least 10 points, got {len(pts)}")
     center0 = tuple(args.nominal_center) if args.nominal_center else \
         tuple(methods.fit("circle.gauss_newton", np.vstack(list(runs.values()))).center)
+    for name, pts in runs.items():   # data off the nominal circle (a unit or a centre mistake): said before any
+        label = name.upper() if labelled else ('first', 'second')[name == 'ccw']   # direction is judged about it
+        if (why := nominal_mismatch(pts, label, R, args.nominal_center, args.unit, center=center0)) is not None:
+            raise InvalidInputError(why)
     trimmed = {}
     notes = ["angle + radial deviation: points placed about the nominal centre (0, 0), which the diagnostics use"] \
         if polar_centre else []

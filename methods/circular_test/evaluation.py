@@ -115,15 +115,89 @@ def radii(points, center):
     return np.hypot(points[:, 0] - center[0], points[:, 1] - center[1])
 
 
-def _check_run(points, name, nominal_radius, center):
-    r = radii(points, center)
-    if abs(np.median(r) - nominal_radius) > RADIUS_TOLERANCE * nominal_radius:
-        from methods.units import likely_unit
-        guess = likely_unit(float(np.median(r)), nominal_radius)
-        hint = f"; is the file in {guess}? (--unit {guess.replace('µ', 'u')})" if guess else ""
-        raise InvalidInputError(f"{name} run: the data's radius ({np.median(r):.6g} mm) is far from the nominal radius "
-                                f"{nominal_radius:g} mm (more than {RADIUS_TOLERANCE:.0%}); check --nominal-radius and "
-                                f"--unit{hint}")
+#: a typical ballbar radius (mm; ISO 230-4 ballbars measure 50 to 600 mm): of two unit readings that both fit
+#: the data, the one whose radius is nearer to it (in ratio) is named (:func:`nominal_mismatch`)
+TYPICAL_RADIUS_MM = 150.0
+#: the units a unit mix-up is looked for in (a file's numbers, or --nominal-radius typed in one of them)
+_MIXUP_UNITS = ("nm", "µm", "mm", "m", "in")
+
+
+def _unit_for(target_mm_per: float, exclude: str) -> str | None:
+    """The unit u (not ``exclude``) whose ``mm_per(u)`` is within ``RADIUS_TOLERANCE`` of ``target_mm_per``."""
+    from methods.units import canonical, mm_per
+    for u in _MIXUP_UNITS:
+        if u != canonical(exclude) and abs(mm_per(u) / target_mm_per - 1.0) <= RADIUS_TOLERANCE:
+            return u
+    return None
+
+
+def nominal_mismatch(points, name: str, nominal_radius: float, nominal_center=None, unit: str = "mm",
+                     center=None) -> str | None:
+    """Why the run ``points`` (mm, read from a file in ``unit``) lie off the nominal circle, or None when the median
+    distance of its points from ``nominal_center`` (else ``center``, else the run's own least-squares centre) is
+    within ``RADIUS_TOLERANCE`` of ``nominal_radius``. The run's own least-squares circle tells a wrong nominal centre
+    (its radius matches) from a unit mix-up: the unit that scales the file's numbers onto the nominal circle
+    (``--unit``), or the unit ``--nominal-radius`` was typed in. When both fit, the nominal centre decides (the data
+    rescaled must land on it: the centre and the radius are given in one unit), else the reading whose radius is
+    nearer (in ratio) to ``TYPICAL_RADIUS_MM``."""
+    from methods.units import canonical, mm_per
+    pts = np.asarray(points, float)
+    R = float(nominal_radius)
+    own = None
+    if nominal_center is None and center is None:
+        own = methods.fit("circle.gauss_newton", pts)
+        center = own.center
+    about = np.asarray(nominal_center if nominal_center is not None else center, float)
+    dist = float(np.median(radii(pts, about)))
+    if abs(dist - R) <= RADIUS_TOLERANCE * R:
+        return None
+    own = own or methods.fit("circle.gauss_newton", pts)
+    c_own, r_own = np.asarray(own.center, float), float(own.radius)
+    unit = canonical(unit)
+    if nominal_center is not None:
+        where = (f"{name} run: the data lie {dist:.6g} mm from --nominal-center ({about[0]:g}, {about[1]:g}) mm, "
+                 f"not {R:g} mm (--nominal-radius)")
+        if abs(r_own - R) <= RADIUS_TOLERANCE * R:   # the right circle in the wrong place
+            return (f"{where}; their own circle (radius {r_own:.6g} mm) is centred at ({c_own[0]:.6g}, "
+                    f"{c_own[1]:.6g}) mm, {float(np.hypot(*(c_own - about))):.6g} mm from it: check --nominal-center")
+    if not r_own > 0:
+        return f"{where if nominal_center is not None else name + ' run: far from the nominal circle'}; " \
+               "check --nominal-radius and --unit"
+    factor = R / r_own   # what the data would have to be multiplied by to lie on the nominal circle
+    scale = f"{factor:.4g} times smaller" if factor > 1 else f"{1 / factor:.4g} times larger"
+    if nominal_center is not None:
+        what = (f"{where}; their own circle (centre ({c_own[0]:.6g}, {c_own[1]:.6g}) mm, radius {r_own:.6g} mm, "
+                f"read as {unit}) is {scale} than the nominal circle")
+    else:
+        what = (f"{name} run: the data's radius ({dist:.6g} mm, read as {unit}) is far from the nominal radius {R:g} mm "
+                f"(more than {RADIUS_TOLERANCE:.0%}: {scale})")
+    candidates = []      # (does not fit the nominal centre, log distance from a typical radius, hint)
+    named = {"in": "inches"}
+    file_unit = _unit_for(factor * mm_per(unit), unit)
+    if file_unit is not None:
+        off_centre = nominal_center is not None and float(np.hypot(*(c_own * factor - about))) > RADIUS_TOLERANCE * R
+        candidates.append((off_centre, abs(np.log(R / TYPICAL_RADIUS_MM)),
+                           f"is the file in {named.get(file_unit, file_unit)}? (--unit {file_unit.replace('µ', 'u')})"))
+    radius_unit = _unit_for(r_own / R, "mm")
+    if radius_unit is not None:   # --nominal-radius typed in radius_unit (and --nominal-center as given or in it)
+        f, u = mm_per(radius_unit), named.get(radius_unit, radius_unit)
+        as_given, scaled = (None, None) if nominal_center is None else \
+            (float(np.hypot(*(c_own - about))), float(np.hypot(*(c_own - about * f))))
+        if nominal_center is not None and scaled <= RADIUS_TOLERANCE * r_own < as_given:   # both typed in that unit
+            hint = (f"are --nominal-radius and --nominal-center in {u}? (they are in mm: give --nominal-radius "
+                    f"{R * f:.6g} --nominal-center {about[0] * f:.6g} {about[1] * f:.6g})")
+        else:
+            hint = f"is --nominal-radius in {u}? (it is in mm: give --nominal-radius {R * f:.6g})"
+        off_centre = nominal_center is not None and min(as_given, scaled) > RADIUS_TOLERANCE * r_own
+        candidates.append((off_centre, abs(np.log(r_own / TYPICAL_RADIUS_MM)), hint))
+    if not candidates:
+        return f"{what}; check --nominal-radius, --unit" + (" and --nominal-center" if nominal_center is not None else "")
+    return f"{what}; {min(candidates)[2]}"
+
+
+def _check_run(points, name, nominal_radius, center, nominal_center=None, unit="mm"):
+    if (why := nominal_mismatch(points, name, nominal_radius, nominal_center, unit, center=center)) is not None:
+        raise InvalidInputError(why)
     arc, gap = coverage_deg(points, center)
     if arc < MIN_ARC_DEG - arc_tolerance_deg(points, center):
         raise InvalidInputError(f"{name} run: it covers an arc of {arc:.6g} deg; an evaluation needs at least "
@@ -179,6 +253,8 @@ def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = 
     :class:`~methods.circular_test.results.CircularTestFit`; lengths in data units."""
     if center not in ("lsq", "mz"):
         raise InvalidInputError(f"center must be 'lsq' or 'mz', got {center!r}")
+    if is_dataclass(conditions):
+        conditions = asdict(conditions)
     if not (np.isfinite(nominal_radius) and nominal_radius > 0):
         raise InvalidInputError(f"the nominal radius must be a positive number, got {nominal_radius!r}")
     cw = validate_points(cw, min_points=10, method="circular test (CW run)")
@@ -190,7 +266,8 @@ def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = 
     arcs = {}
     for pts, name in ((cw, "CW"), (ccw, "CCW")):
         arcs[name.lower()], _ = _check_run(pts, name, nominal_radius,
-                                           nominal_center if nominal_center is not None else c_both)
+                                           nominal_center if nominal_center is not None else c_both, nominal_center,
+                                           (conditions or {}).get("input_unit") or "mm")
     partial = any(360.0 - a > MAX_ANGULAR_GAP_DEG for a in arcs.values())
     fits = {name: methods.fit("circle.gauss_newton", pts) for name, pts in (("cw", cw), ("ccw", ccw))}
     dc = np.hypot(*(np.array(fits["cw"].center) - fits["ccw"].center))
@@ -204,8 +281,6 @@ def evaluate(cw, ccw, nominal_radius: float, nominal_center=None, center: str = 
     H = hysteresis(cw, ccw, c_both, partial=partial)
     f_center = np.asarray(nominal_center, dtype=float) if nominal_center is not None else c_both
     dev = radii(both, f_center) - nominal_radius
-    if is_dataclass(conditions):
-        conditions = asdict(conditions)
     about = {"lsq": "the least-squares centre", "mz": "the minimum-zone centre"}[center]
     return CircularTestFit(
         method="ISO 230-4", form_error=float(G_b), residuals=dev, converged=True,

@@ -101,6 +101,7 @@ def run(args) -> int:
     plot_path = check_plot_path(args.plot)
     source, points, unit, notes, axes = read_profile_args(args)
     result = run_method(spec, points, **params)
+    notes = [*notes, *(n for n in (result.extra or {}).get("notes", []) if isinstance(n, str))]  # the result's own
     offcentre = limacon_warning(points, getattr(result, "form_error", None), notes,   # as roundness warns
                                 args.nominal_radius)
     if offcentre:

@@ -114,10 +114,24 @@ def min_circumscribed(points, *, active_size=16, max_rounds=50):
         sol, _, it = z.clarabel_solve([0.0, 0.0, 1.0], rows, rhs, cones)
         return sol[:2], 1, it, [sol[2]]
 
-    return z.fit_zone(points, frame, start=z.kasa_normal(x, y), local_solve=local_solve,
-                      exact=lambda act, c: _best_single_sided(x, y, act, c, "outer"),
-                      certify=_mcc_certify(x, y), sides=("outer",), k=k, max_rounds=max_rounds,
-                      radius_rule=lambda r, c: r.max())
+    start = z.kasa_normal(x, y)
+    result = z.fit_zone(points, frame, start=start, local_solve=local_solve,
+                        exact=lambda act, c: _best_single_sided(x, y, act, c, "outer"),
+                        certify=_mcc_certify(x, y), sides=("outer",), k=k, max_rounds=max_rounds,
+                        radius_rule=lambda r, c: r.max())
+    gap = largest_angular_gap(x, y, start)
+    result.extra["angular_gap_deg"] = float(np.degrees(gap))
+    if gap >= np.pi:   # the MCC is right (and certified), but it is not the arc's circle
+        result.extra.setdefault("notes", []).append(partial_arc_note("the minimum circumscribed circle", gap))
+    return result
+
+
+def partial_arc_note(what: str, gap: float) -> str:
+    """The note of a circle that holds a partial arc (largest angular gap ``gap`` rad >= pi about the points'
+    algebraic centre) but is not the arc's circle: the MCC of a 90 deg arc has the chord as its diameter."""
+    return (f"the points do not surround a centre (largest angular gap {np.degrees(gap):.1f}° >= 180°, a partial "
+            f"arc): {what} holds the arc but is not its circle, and its form error is not the arc's roundness; "
+            "use circle.minimum_zone or a least-squares fit (circle.gauss_newton)")
 
 
 @register("circle.max_inscribed", kind="convex program",

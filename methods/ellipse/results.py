@@ -116,10 +116,37 @@ def ellipse_result(points, params, *, converged: bool, message: str, iterations=
     d = residuals
     conic, conic_extra = _conic(p)
     extra = {**(extra or {}), **conic_extra}
+    if converged and (note := angle_note(p[2] - p[3], d)) is not None:
+        extra["notes"] = [*extra.get("notes", []), note]
     return EllipseFit(center=(float(p[0]), float(p[1])), semi_axes=(float(p[2]), float(p[3])), angle=float(p[4]),
                       conic=tuple(float(c) for c in conic), form_error=float(d.max() - d.min()), residuals=d,
                       converged=bool(converged), iterations=iterations, nfev=nfev, history=list(history or []),
                       message=message, extra=extra)
+
+
+#: the first-order standard uncertainty of the angle (deg) from which a fit notes that its angle is ill-determined
+ANGLE_NOTE_DEG = 10.0
+
+
+def angle_note(a_minus_b: float, residuals) -> str | None:
+    """A note when the angle of the a axis is ill-determined: its first-order standard uncertainty
+    u = RMS / ((a - b) sqrt(N/2)) rad (docs/methods.md, the ellipse_angle study: residual RMS as the noise, N points
+    around the ellipse; larger on a partial arc) is ``ANGLE_NOTE_DEG`` or more, as for a circle whose a - b is below
+    its residual RMS, or a = b. None otherwise (scale-free: no overflow for data near the float range's ends)."""
+    d = np.asarray(residuals, float)
+    if not d.size or not np.isfinite(d).all() or not a_minus_b >= 0:
+        return None
+    if a_minus_b == 0:
+        return "the angle is undetermined: a = b, any direction of a describes this ellipse"
+    m = float(np.max(np.abs(d)))
+    rms = m * float(np.sqrt(np.mean((d / m) ** 2))) if m > 0 else 0.0
+    ratio = a_minus_b / rms if rms > 0 else math.inf     # a - b in residual RMS
+    u = math.degrees(1.0 / (ratio * math.sqrt(d.size / 2)))
+    if not u >= ANGLE_NOTE_DEG:
+        return None
+    return (f"the angle is {'undetermined' if u >= 3 * ANGLE_NOTE_DEG else 'ill-determined'}: a - b is {ratio:.2g} x "
+            f"the residual RMS over {d.size} points, a first-order standard uncertainty of {u:.2g}° "
+            "(RMS / ((a - b) sqrt(N/2)) rad)" + ("; the points fit a circle within their scatter" if ratio < 1 else ""))
 
 
 def residuals_from_unit(frame, p_unit) -> np.ndarray:

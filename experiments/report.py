@@ -512,7 +512,8 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
         doc.prose(md_escape(machine))
         doc.prose(md_escape(versions))
         doc.prose("Each study's `meta.json` holds its own commit, date, configuration and hash.")
-    abstract = _abstract(entries, verdicts)
+    from experiments.verdict import carried_over
+    abstract = _abstract(entries, verdicts, *carried_over(results))
     if abstract:
         from experiments.render.page import Part, prose_html
         md_abstract = "**Abstract.** " + md_escape(abstract)
@@ -531,8 +532,10 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     return out
 
 
-def _abstract(entries, verdicts) -> str:
-    """What was compared, the main numbers (each study's findings, first sentence) and what reproduced."""
+def _abstract(entries, verdicts, carried: dict | None = None, run_date: str | None = None) -> str:
+    """What was compared, the main numbers (each study's findings, first sentence) and what reproduced: the verdicts
+    the last run made apart from those it carried over from an earlier one (``carried``: study -> verdict entry,
+    ``experiments.verdict.carried_over``), which it did not reproduce."""
     done = [e for e in entries if e[4] is not None]
     if not done:
         return ""
@@ -547,10 +550,17 @@ def _abstract(entries, verdicts) -> str:
     judged = {k: lines[0][0] for k, lines in verdicts.items() if lines[0][0].startswith("Reproducibility")
               and not lines[0][0].endswith("out of date")}
     changed = [k for k, lines in verdicts.items() if lines[0][0].startswith("Changed since")]
-    if judged:
-        differ = [k for k, label in judged.items() if label.endswith("differs")]
-        parts.append(f"Reproduced: {len(judged) - len(differ)} of {len(judged)} studies with a current verdict"
+    carried = {k: e for k, e in (carried or {}).items() if k in judged}
+    here = {k: label for k, label in judged.items() if k not in carried}
+    if here:
+        differ = [k for k, label in here.items() if label.endswith("differs")]
+        parts.append(f"Reproduced: {len(here) - len(differ)} of {len(here)} studies with a current verdict"
+                     + (f" made by the last run ({run_date})" if carried else "")
                      + (f" (differ: {', '.join(differ)})" if differ else "") + ".")
+    if carried:
+        parts.append(f"Carried over from an earlier verdict, not reproduced by the last run: "
+                     + ", ".join(f"{k} ({'agreed' if e.get('agree') else 'differed'}, {e.get('date', '?')})"
+                                 for k, e in carried.items()) + ".")
     if changed:
         parts.append(f"Changed since the results compared with (other code or config, not a reproducibility check): "
                      f"{', '.join(changed)}.")

@@ -69,6 +69,18 @@ def current_entries(results: Path) -> tuple[dict, dict]:
     return current, stale
 
 
+def carried_over(results: Path) -> tuple[dict, str | None]:
+    """({study: entry} of the current verdicts the last ``experiments.run`` into ``results`` did not make, the date of
+    that run): a study it did not run (its data not available there, not asked for) keeps the verdict of an earlier run
+    or check, which is not a reproduction by that run. ({}, None) when the verdict file is not a run's."""
+    v = last_verdict(results) or {}
+    run = v.get("run")
+    if not isinstance(run, dict) or not isinstance(run.get("studies"), list):
+        return {}, None
+    current, _ = current_entries(results)
+    return {k: e for k, e in current.items() if k not in run["studies"]}, str(run.get("date") or "?")
+
+
 def _columns(entry: dict) -> str:
     cols = [str(p.get("column")) for p in entry.get("problems", []) if isinstance(p, dict)]
     return ", ".join(cols[:8]) + (f" and {len(cols) - 8} more" if len(cols) > 8 else "")
@@ -172,6 +184,13 @@ def verdict_markdown(results: Path, quick: bool = False, shown: str | None = Non
             f"computed (not a reproducibility check; see `verify.json`)."] if changed else []
     if not current:
         return head
+    carried, run_date = carried_over(results)
+    carried = {k: e for k, e in carried.items() if k in current}
+    if carried:   # verdicts the last run did not make: counted apart, never as reproduced by it
+        tail += (f"; {len(current) - len(carried)} of them checked by the last run ({run_date}), {len(carried)} "
+                 f"carried over from an earlier verdict, not rerun by it: "
+                 + md_escape(", ".join(f"{k} ({'agrees' if e.get('agree') else 'differs'}, {e.get('date', '?')})"
+                                       for k, e in carried.items())))
     if not differ:
         return [f"Reproducibility: all {len(current)} verified {'study agrees' if len(current) == 1 else 'studies agree'} "
                 f"with these results within the declared "

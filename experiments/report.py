@@ -654,8 +654,8 @@ def default_out(results: Path) -> Path:
     return Path("paper") if Path(results).resolve() == Path("results").resolve() else Path(results) / "paper"
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m experiments.report", description="Build paper/ from results/.")
+def main(argv=None, prog: str = "python -m experiments.report") -> int:
+    parser = argparse.ArgumentParser(prog=prog, description="Build paper/ from results/.")
     from fitbench import __version__
     parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
     parser.add_argument("--results", type=Path, default=Path("results"),

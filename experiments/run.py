@@ -451,19 +451,20 @@ def release_locks(keep: int = 0) -> None:
         fh.close()
 
 
-def main(argv=None) -> int:
-    """The command line as a function (exit status returned); the ``--out`` lock it takes is released when it
-    returns, however it ends, so a second call in the same process can write to the same folder."""
+def main(argv=None, prog: str = "python -m experiments.run") -> int:
+    """The command line as a function (exit status returned; ``prog``: the command named in its usage, ``fitbench
+    run`` from fitbench); the ``--out`` lock it takes is released when it returns, however it ends, so a second call
+    in the same process can write to the same folder."""
     held = len(_LOCKS)
     try:
         with plugin_warnings_once(), fewer_collections():
-            return _main(argv)
+            return _main(argv, prog)
     finally:
         release_locks(held)
 
 
-def _main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m experiments.run", description="Run fitbench studies.")
+def _main(argv=None, prog: str = "python -m experiments.run") -> int:
+    parser = argparse.ArgumentParser(prog=prog, description="Run fitbench studies.")
     parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
     parser.add_argument("names", nargs="*", metavar="NAME", help="studies (names or .toml paths); default: the default studies")
     parser.add_argument("--list", action="store_true", help="list the studies, one line each")

@@ -51,8 +51,8 @@ def config_of(study: str, results: Path, known: dict) -> str:
     return str(recorded)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m experiments.verify",
+def main(argv=None, prog: str = "python -m experiments.verify") -> int:
+    parser = argparse.ArgumentParser(prog=prog,
                                      description="Check that a run reproduces the committed results within declared tolerances.")
     parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
     parser.add_argument("studies", nargs="*", metavar="STUDY",

@@ -596,7 +596,7 @@ def test_fitbench_run_and_report_default_folders_are_relative_to_the_cwd(monkeyp
     import fitbench.cli as fc
     seen = {}
     fake = types.ModuleType("fake_experiments")
-    fake.main = lambda argv: seen.setdefault("argv", argv) and 0
+    fake.main = lambda argv, prog: seen.setdefault("argv", argv) and 0
     monkeypatch.setitem(sys.modules, "fake_experiments", fake)
     monkeypatch.setitem(fc.DELEGATED, "run", ("fake_experiments", "x"))
     monkeypatch.setitem(fc.DELEGATED, "report", ("fake_experiments", "x"))

@@ -59,7 +59,7 @@ def _main(argv=None) -> int:
                 if not any(a == option or a.startswith(option + "=") for a in rest):
                     rest = [*rest, option, folder]
         try:
-            return int(module.main(rest) or 0)
+            return int(module.main(rest, prog=f"fitbench {name}") or 0)   # its usage names what the user typed
         except SystemExit as exc:  # argparse's --help / errors inside the delegated module
             return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
     from fitbench.cli.commands import main as commands_main

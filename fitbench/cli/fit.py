@@ -18,7 +18,8 @@ from methods.units import canonical
 
 def add_parser(sub):
     pf = sub.add_parser("fit", help="fit a file or published data set with one method")
-    pf.add_argument("method", metavar="METHOD_ID")
+    pf.add_argument("method", metavar="METHOD_ID", help="the method, e.g. circle.gauss_newton ('fitbench list' shows "
+                    "every method with what it minimises)")
     pf.add_argument("file", metavar="FILE", help="a points file (x, y, or angle + radial deviation) or a published "
                                                 "data set name")
     pf.add_argument("--param", action="append", metavar="KEY=VALUE", help="method parameter (repeatable)")
@@ -26,7 +27,8 @@ def add_parser(sub):
                     help="angle + radial-deviation files: the radius the deviations are about (mm; default: the "
                          "deviations alone)")
     add_reader_options(pf, polar=True, printed="mm")
-    pf.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    pf.add_argument("--json", action="store_true", help="print the result as one JSON object (mm, rad; see its "
+                    "'units')")
     pf.add_argument("--no-residuals", action="store_true", help="leave the per-point residuals out of --json")
     pf.add_argument("--verbose", action="store_true",
                     help="also print the solver's message on a converged fit (its stopping and optimality tests; "

@@ -23,7 +23,7 @@ def add_parser(sub):
     pm.add_argument("--method", choices=("offset", "nearest"), default="offset")
     pm.add_argument("--selection", choices=("same_side", "nearest_of_both"), default="same_side",
                     help="offset method: the offset on the point's side, or the paper's printed step (2)")
-    add_reader_options(pm)
+    add_reader_options(pm, angles=False)   # x, y trajectories only
     pm.add_argument("--json", action="store_true", help="print one JSON object (points: the magnified trajectory, mm)")
     pm.add_argument("--no-residuals", action="store_true", help="leave the per-point errors out of --json")
     pm.add_argument("--plot", metavar="FILE", help="write a plot (.png, .pdf, .svg)")

@@ -127,9 +127,10 @@ def write_text_atomic(path, text: str) -> None:
         raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
-def add_reader_options(p, *, columns=True, polar=False, printed: str = "µm"):
+def add_reader_options(p, *, columns=True, polar=False, angles=True, printed: str = "µm"):
     """--unit, --skip-rows (and --columns / --plane; with ``polar`` --angle-unit): the options of every file reader;
-    ``printed``: the unit the command prints lengths in (whatever the input's)."""
+    ``angles``: the command reads angle + radial-deviation files too (said in --columns' help); ``printed``: the unit
+    the command prints lengths in (whatever the input's)."""
     p.add_argument("--unit", default=None, choices=UNIT_CHOICES,
                    help="length unit of the input file(s) (default: the header's unit, e.g. 'x [um]', else mm); "
                         f"the input is converted to mm and lengths are printed in {printed}")
@@ -139,7 +140,8 @@ def add_reader_options(p, *, columns=True, polar=False, printed: str = "µm"):
         g = p.add_mutually_exclusive_group()
         g.add_argument("--columns", nargs=2, metavar=("A", "B"),
                        help="the two columns to read (header names, case and spaces ignored, or 0-based numbers): "
-                            "x y, or an angle and a radial deviation / radius (default: from the header)")
+                            + ("x y, or an angle and a radial deviation / radius" if angles else "x y")
+                            + " (default: from the header)")
         g.add_argument("--plane", choices=("xy", "yz", "zx"), help="the plane's two named columns (x,y / y,z / z,x)")
     if polar:
         p.add_argument("--angle-unit", choices=("deg", "rad"),

@@ -46,6 +46,7 @@ def add_parser(sub):
                     help="wide exports with Forward/Reverse (Hin/Rück) runs: the axis direction the forward runs "
                          "moved in (default: from the order of the targets in the file, + when increasing)")
     pp.add_argument("--run-directions", choices=("up", "down", "up,down", "down,up"), default=None,
+                    metavar="{up|down|up,down|down,up}",
                     help="wide exports whose run columns name no direction (Run 1, Run 2, ...): up or down (every run "
                          "approached in the + or - direction), up,down or down,up (alternating: odd runs in the first, "
                          "even runs in the second, a bidirectional test exported without labels); default: one "

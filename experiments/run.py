@@ -37,7 +37,7 @@ from experiments.jsontext import json_text
 from experiments.executors import kept_workers, last_study, map_in_idle_workers, start_kept_workers, workers_done
 from experiments.provenance import collect, write_atomic
 from experiments.rows import Terminated, clear_signal, fewer_collections, note_signal, raise_if_signalled, signalled
-from experiments.summary import summarise, summary_units, to_markdown
+from experiments.summary import summarise, summary_units, to_markdown, with_units
 from fitbench import __version__
 import methods
 from methods import InvalidInputError
@@ -212,11 +212,17 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
             "plugins": plugin_distributions(used), "results_sha256": results_sha256, "findings": findings,
             "fingerprint": counts.pop("fingerprint"), "inputs": compare.inputs(cfg), "config_file": config_file(cfg)}
-    outputs.write_manifest(target, cfg, analysed, summary)
+    units = summary_units(summary, cfg)
+    outputs.write_manifest(target, cfg, analysed, with_units(summary, units))   # its fallback table: units as summary.md
+    template = (cfg.get("report") or {}).get("findings")
+    if template and analysed.findings:   # the analysis's own findings win: said, never silently
+        print(f"experiments.run: note: {cfg.where}: [report] findings is not used: the analysis of kind "
+              f"{cfg['kind']!r} writes its own findings ({_shorter(analysed.findings)}); drop findings from the "
+              f"TOML, or return none from analyse() to use the template", file=sys.stderr)
     buf = io.StringIO()
     summary.to_csv(buf, index=False, float_format="%.10g")
     write_atomic(target / "summary.csv", buf.getvalue())
-    write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary, units=summary_units(summary, cfg)))
+    write_atomic(target / "summary.md", f"# {cfg['title']}\n\n" + to_markdown(summary, units=units))
     raise_if_signalled()  # before meta.json: a study whose outputs are not all written is not up to date
     write_atomic(target / "meta.json", json_text(meta, indent=1) + "\n")
     outputs.remove_leftover_tmp(target)
@@ -236,6 +242,11 @@ def config_file(cfg) -> str:
         return path.relative_to(REPO).as_posix() if is_project_study(cfg) else str(path)
     except ValueError:
         return str(path)
+
+
+def _shorter(text, limit: int = 80) -> str:
+    text = " ".join(str(text).split())
+    return repr(text if len(text) <= limit else text[:limit - 1] + "…")
 
 
 def usable_jobs(jobs: int, log=print) -> int:

@@ -105,6 +105,13 @@ def share_text(value, digits: int = 4) -> str:
 SHARE_COLUMNS = ("ok_share",)
 
 
+def with_units(df: pd.DataFrame, units: dict[str, str]) -> pd.DataFrame:
+    """``df`` whose columns with a unit name it in brackets ('form_error_median [data units]', as summary.md's
+    headers do): the summary as a report table (the fallback table of a study whose analysis gives none)."""
+    from experiments.render.text import human_unit
+    return df.rename(columns={c: f"{c} [{human_unit(units[c])}]" for c in df.columns if units.get(c)})
+
+
 def to_markdown(df: pd.DataFrame, floatfmt: str = ".4g", units: dict[str, str] | None = None) -> str:
     """A GitHub Markdown table (``experiments.render.page.markdown_table``) whose headers carry the units
     (``units``: {column: unit}, default :func:`summary_units` of ``df``): 'form error median [mm]'. Numbers in

@@ -15,7 +15,7 @@ def test_list_one_line_per_method():
     assert out.returncode == 0
     lines = out.stdout.strip().splitlines()
     assert len(lines) >= 8
-    assert any(l.startswith("circle.gauss_newton") and "iterative" in l and "eq." in l for l in lines)
+    assert any(l.startswith("circle.gauss_newton") and "iterative" in l and "least squares" in l for l in lines)
 
 
 def test_list_of_a_family_that_does_not_exist_says_so():

@@ -1,4 +1,5 @@
-"""``fitbench list``: one line per registered method (id, kind, reference), or the listing with defaults as JSON."""
+"""``fitbench list``: one line per registered method (id, kind and its one-line summary: what it computes and
+minimises), with ``--long`` its reference under it, or the listing with defaults as JSON."""
 from __future__ import annotations
 
 import json
@@ -8,8 +9,10 @@ from fitbench.cli.guards import jsonable
 
 
 def add_parser(sub):
-    pl = sub.add_parser("list", help="one line per registered method: id, kind, reference")
+    pl = sub.add_parser("list", help="one line per registered method: id, kind and what it computes (--long: "
+                                     "and its reference)")
     pl.add_argument("--family", help="only this family (e.g. circle)")
+    pl.add_argument("--long", action="store_true", help="also each method's literature reference, under its line")
     pl.add_argument("--json", action="store_true", help="machine-readable listing with defaults")
     pl.set_defaults(func=run)
 
@@ -29,5 +32,9 @@ def run(args) -> int:
         return 0
     width = max((len(s.id) for s in specs), default=10)
     for s in specs:
-        print(f"{s.id:<{width}}  {s.kind:<14}  {s.reference}")
+        # the summary says what a method minimises (kasa, pratt, taubin, hyper: algebraic; powell_hybrid: Kåsa's
+        # objective; chebyshev_lp: an algebraic Chebyshev fit), which a citation alone does not
+        print(f"{s.id:<{width}}  {s.kind:<14}  {' '.join(str(s.summary or '-').split())}")
+        if args.long:
+            print(f"{'':<{width}}  {'':<14}  reference: {s.reference or '-'}")
     return 0

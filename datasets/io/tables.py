@@ -47,7 +47,7 @@ def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, sk
         df = pd.read_csv(io.StringIO("\n".join(kept)), sep=r"\s+" if sep is None else sep, engine="python", dtype=str,
                          keep_default_na=keep_default_na)
     except pd.errors.ParserError as exc:
-        raise DataFileError(f"{path}: malformed table ({str(exc).splitlines()[0]})") from None
+        raise DataFileError(_parser_error(path, exc, lines)) from None
     units = _units_row(df.iloc[0].fillna("").astype(str).tolist()) if len(df) else None
     if units is not None:                     # a units row under the header: into the names, as NAME [UNIT]
         df.columns = _with_units(path, [str(c) for c in df.columns], units, lines[1])
@@ -65,6 +65,21 @@ def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, sk
                                                   regex=True)
                       if pd.api.types.is_string_dtype(col) or col.dtype == object else col)
     return df, lines[1:]
+
+
+def _parser_error(path, exc, lines) -> str:
+    """pandas' ParserError in the file's own terms: its 'line L' counts the lines pandas was given (blank, comment
+    and skipped lines left out), so it is translated to the file's line (``lines``: the file's line number of each
+    line given); pandas' guesses about quoting are left out."""
+    import re
+    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    m = re.match(r"Expected (\d+) fields? in line (\d+), saw (\d+)", text)
+    if m and 1 <= int(m.group(2)) <= len(lines):
+        want, at, got = int(m.group(1)), lines[int(m.group(2)) - 1], int(m.group(3))
+        return f"{path} line {at}: {got} field{'s' * (got != 1)} where the header (line {lines[0]}) has {want}"
+    text = re.sub(r"\s*Error could possibly be due to.*$", "", text)
+    text = re.sub(r"\s*(?:in|at|on) line \d+|\s*line \d+", "", text).rstrip(" .,;")   # not the file's line numbers
+    return f"{path}: malformed table ({text})"
 
 
 def _numeric_column(col, what: str, name, lines) -> np.ndarray:

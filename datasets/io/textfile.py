@@ -3,7 +3,8 @@
 The encoding (:func:`file_encoding`): UTF-32 or UTF-16 with a byte-order mark or without one (a table saved as
 "Unicode"), UTF-8 with or without a BOM, else Windows-1252 (the ANSI code page of Windows exports, with an
 :class:`EncodingNote`) or Latin-1. A spreadsheet, an archive, a PDF or an image is refused by its first bytes
-(:data:`NOT_TEXT`, :func:`not_text`: an Excel 97-2003 OLE2 workbook, an ``.xlsx``/``.ods`` zip); only regular files
+(:data:`NOT_TEXT`, :func:`not_text`: an Excel 97-2003 OLE2 workbook, an ``.xlsx``/``.ods`` zip), XML, HTML and JSON
+(fitbench's own ``--json`` results among them) by their first characters (:func:`markup`); only regular files
 are opened (a FIFO or a device is refused without blocking, :func:`methods.files.open_regular`); no line may exceed
 :data:`MAX_LINE_CHARS` (:func:`iter_lines`, :func:`check_line_lengths`); a last line without a line end cut in its
 number is refused (:func:`unterminated_last_line`, :func:`refuse_cut_last_line`)."""
@@ -125,7 +126,8 @@ ZIP_SPREADSHEETS = {".xlsx": "an Excel workbook", ".xlsm": "an Excel workbook", 
 def not_text(path) -> str | None:
     """What is wrong when ``path`` is a spreadsheet, an archive, a PDF or an image rather than a text table (its
     first bytes, :data:`NOT_TEXT`): 'x.xlsx is an Excel workbook (a zip archive), not a text table: save it as
-    CSV ...'; None for anything else (also when it cannot be opened: the reader then says why)."""
+    CSV ...', or XML, HTML or JSON (:func:`markup`); None for anything else (also when it cannot be opened: the
+    reader then says why)."""
     name = os.fspath(path)
     try:
         with open_regular(name, encoding=None) as fh:
@@ -140,7 +142,56 @@ def not_text(path) -> str | None:
                     what, todo = f"{sheet} (a zip archive)", ("save it as CSV (UTF-8) from the spreadsheet program "
                                                               "(Excel: File > Save As > CSV UTF-8) and give that file")
             return f"{name} is {what}, not a text table: {todo}"
-    return None
+    return markup(name)
+
+
+#: characters of a file's start read to tell XML or JSON (:func:`markup`)
+MARKUP_HEAD_CHARS = 4096
+#: JSON files up to this size (bytes) are parsed to tell a JSON array from a table starting with '[' (an INI-like
+#: '[General]' preamble) and to recognise fitbench's own results
+MARKUP_PARSE_BYTES = 16 << 20
+
+
+def markup(path) -> str | None:
+    """What is wrong when ``path`` is XML (or HTML) or JSON rather than a text table, from its first characters in
+    its encoding: 'test.b5r is an XML file (root <BallbarTest>: an instrument's own format?), not a text table:
+    export ...', 'r.json is JSON (a fitbench result ...)'; None for anything else. A text table (or its preamble)
+    never starts with '<' or '{'; a file starting with '[' is JSON only when it parses as JSON."""
+    import json
+    name = os.fspath(path)
+    try:
+        with open_regular(name, encoding=file_encoding(name)) as fh:
+            head = fh.read(MARKUP_HEAD_CHARS)
+    except (OSError, InvalidInputError, UnicodeDecodeError, ValueError):
+        return None
+    head = head.lstrip("\ufeff \t\r\n")
+    if head.startswith("<"):
+        if re.match(r"<(!doctype\s+html|html[\s>])", head, re.I):
+            return (f"{name} is an HTML page, not a text table: save the measurement file itself (not the web page "
+                    "showing it) as CSV or text")
+        if not re.match(r"<(\?xml|!--|!doctype|[A-Za-z_])", head, re.I):
+            return None
+        root = re.search(r"<([A-Za-z_][\w.:-]*)", re.sub(r"<\?.*?\?>|<!--.*?-->|<!.*?>", "", head, flags=re.S))
+        what = f"root <{root.group(1)}>: " if root else ""
+        return (f"{name} is an XML file ({what}an instrument's own format?), not a text table: export the measured "
+                "points as CSV or text from the instrument software (one point per line, columns named in a header)")
+    if not head.startswith(("{", "[")):
+        return None
+    data = None
+    try:
+        if os.path.getsize(name) <= MARKUP_PARSE_BYTES:
+            with open_regular(name, encoding=file_encoding(name)) as fh:
+                data = json.loads(fh.read().lstrip("\ufeff"))
+    except (OSError, InvalidInputError, UnicodeDecodeError, ValueError):
+        if head.startswith("["):
+            return None     # '[General]', '[mm]': an instrument's preamble or header, not JSON
+    if head.startswith("[") and data is None:
+        return None
+    if isinstance(data, dict) and isinstance(data.get("units"), dict):
+        return (f"{name} is JSON (a fitbench result, as --json writes it: 'fitbench history DIR' trends a folder of "
+                "them), not a points table: give the file of measured points the result was made from")
+    return (f"{name} is a JSON file, not a text table: export the measured points as CSV or text (one point per "
+            "line, columns named in a header)")
 
 
 def _open_text(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'"):

@@ -261,7 +261,8 @@ def nist_folder() -> Path:
     folder = os.environ.get("FITBENCH_NIST_DIR")
     if not folder or not Path(folder).is_dir():
         raise FileNotFoundError("set FITBENCH_NIST_DIR to the folder of the NIST Circle2d sets "
-                                "(nist_cir2d_*.csv with their .json)")
+                                "(nist_cir2d_*.csv with their .json, made by python -m datasets.nist_circle2d "
+                                "from NIST's Circle2d reference pairs; docs/methods.md)")
     return Path(folder)
 
 

@@ -21,7 +21,9 @@ def _folder() -> Path:
     value = os.environ.get("FITBENCH_NIST_DIR")
     if not value or not Path(value).is_dir():
         raise ConfigError("nist_circle needs FITBENCH_NIST_DIR set to the folder of nist_cir2d_*.csv/.json "
-                          f"(got {value!r})")
+                          + (f"({value!r} is not a folder)" if value else "(not set)")
+                          + "; make them from NIST's Circle2d reference pairs with python -m datasets.nist_circle2d "
+                            "CIRCLE2D_FOLDER OUT (docs/methods.md)")
     return Path(value)
 
 

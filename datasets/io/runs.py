@@ -122,7 +122,31 @@ def read_profile(path, *, columns=None, plane=None, unit: str | None = None, ski
     if len(got.runs) != 1:
         raise DataFileError(f"{got.source}: holds {len(got.runs)} runs ({', '.join(l for l, _ in got.runs)}); "
                             "give a file with one profile")
+    pts, note = drop_closing_repeat(got.runs[0][1])
+    if note is not None:
+        got.runs[0] = (got.runs[0][0], pts)
+        got.notes.append(note)
     return got
+
+
+#: a last point within this many units of roundoff of the coordinates' size from the first repeats it (an x, y file's
+#: exact repeat; an angle + deviation file's 360° point, whose sine is -2.4e-16, not 0, at the same deviation)
+CLOSING_REPEAT_ULPS = 16
+
+
+def drop_closing_repeat(points) -> tuple[np.ndarray, str | None]:
+    """(``points`` without a last point that repeats the first, a note saying so; or ``points`` and None): a closed
+    trace as many instruments export it, its first point written again at the end (x, y equal, or 360° at the
+    0° deviation) is one position measured once; kept, it is two points at one polar angle, which a roundness
+    evaluation refuses (ISO 12181 profiles have one point per angle) and a fit weights twice."""
+    pts = np.asarray(points, dtype=float)
+    if pts.ndim != 2 or len(pts) < 4 or not np.isfinite(pts[[0, -1]]).all():
+        return pts, None
+    size = float(np.max(np.abs(pts[[0, -1]])))
+    if not np.all(np.abs(pts[-1] - pts[0]) <= CLOSING_REPEAT_ULPS * np.finfo(float).eps * size):
+        return pts, None
+    return pts[:-1], (f"the last point repeats the first (a closed trace written back to its start): dropped, "
+                      f"{len(pts) - 1} points evaluated")
 
 
 CW_WORDS = {"cw", "g02", "g2", "clockwise", "-", "-1"}

@@ -53,8 +53,49 @@ def column_unit(layout, k: int, kind: str) -> str | None:
     known = LENGTH_UNITS if kind == "length" else ANGLE_UNITS
     if unit in known.values():
         return unit
-    want = "a length unit (nm, µm, mm, m, in)" if kind == "length" else "an angle unit (deg, rad)"
-    raise DataFileError(f"{layout.name}: column {layout.header[k]!r} carries the unit {unit!r}; expected {want}")
+    raise unit_refusal(layout.name, layout.header[k], unit, kind)
+
+
+#: length and angle units a header may give that fitbench does not read: what to multiply the column by, and the
+#: unit that gives (said in the refusal, :func:`unit_refusal`)
+CONVERT = {"length": {"cm": (10.0, "mm"), "dm": (100.0, "mm"), "km": (1e6, "mm"), "mil": (0.0254, "mm"),
+                      "mils": (0.0254, "mm"), "thou": (0.0254, "mm"), "ft": (304.8, "mm")},
+           "angle": {"mrad": (1e-3, "rad"), "µrad": (1e-6, "rad"), "urad": (1e-6, "rad"), "gon": (0.9, "deg"),
+                     "grad": (0.9, "deg"), "arcmin": (1 / 60, "deg"), "arcsec": (1 / 3600, "deg")}}
+
+
+def _bare_name(column) -> str:
+    """A header name without its unit (``X [cm]`` -> ``X``, ``dr/µm`` -> ``dr``), as written."""
+    name = str(column).strip()
+    return re.sub(r"\s*(?:[(\[{].*|/.*)$", "", name) or name
+
+
+def mixed_units(where, given: dict) -> DataFileError:
+    """The one-line refusal of length columns ``given`` ({column: canonical unit}) in different units, naming the
+    factor that brings the first column of another unit to the first column's."""
+    from methods.units import mm_per
+    to = next(iter(given.values()))
+    other, unit = next((c, u) for c, u in given.items() if u != to)
+    key = _bare_name(other)
+    return DataFileError(f"{where}: the columns {', '.join(map(str, given))} are in different units "
+                         f"({', '.join(sorted(set(given.values())))}); convert them to one unit, e.g. multiply column "
+                         f"{str(other).strip()!r} by {mm_per(unit) / mm_per(to):.6g} and name it '{key} [{to}]'")
+
+
+def unit_refusal(where, column, unit: str, kind: str = "length") -> DataFileError:
+    """The one-line refusal of a ``kind`` ('length' or 'angle') column whose header gives a unit fitbench does not
+    read: the factor that converts it to one it reads when the unit is known (cm: x 10 to mm), else the units it
+    reads and how to name one in the header."""
+    name, key = str(column).strip(), _bare_name(column)
+    reads = "nm, µm, mm, m, in" if kind == "length" else "deg, rad"
+    if unit in CONVERT[kind]:
+        factor, to = CONVERT[kind][unit]
+        return DataFileError(f"{where}: column {name!r} carries the unit {unit!r}, which fitbench does not read (it "
+                             f"reads {reads}): multiply the column by {factor:.6g} and name its unit {to} "
+                             f"('{key} [{to}]')")
+    what, example = ("a length", "mm") if kind == "length" else ("an angle", "deg")
+    return DataFileError(f"{where}: column {name!r} carries the unit {unit!r}, not {what} unit: name the column's "
+                         f"unit in the header ({reads}; e.g. '{key} [{example}]')")
 
 
 def length_unit(layout, idx, unit: str | None) -> str:
@@ -63,8 +104,7 @@ def length_unit(layout, idx, unit: str | None) -> str:
     found = {layout.header[k]: column_unit(layout, k, "length") for k in idx} if layout.header else {}
     given = {c: u for c, u in found.items() if u is not None}
     if len(set(given.values())) > 1:
-        raise DataFileError(f"{layout.name}: the columns {', '.join(given)} are in different units "
-                            f"({', '.join(sorted(set(given.values())))}); convert them to one unit")
+        raise mixed_units(layout.name, given)
     header = next(iter(given.values()), None)
     if unit is not None and header is not None and canonical(unit) != header:
         col = next(iter(given))

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from datasets.io._pandas import pd
-from datasets.io.headers import LENGTH_UNITS, parse_name
+from datasets.io.headers import LENGTH_UNITS, parse_name, unit_refusal
 from datasets.io.numbers import DataFileError
 from datasets.io.tables import _numeric_column, read_table
 from methods.units import canonical, to_mm
@@ -27,8 +27,7 @@ def _multilateration_table(path, need: tuple[str, ...], optional: tuple[str, ...
         names.append(key)
         if u is not None and key in need[1:] + optional:
             if u not in LENGTH_UNITS.values():
-                raise DataFileError(f"{path}: column {str(c).strip()!r} carries the unit {u!r}; expected a length unit "
-                                    "(nm, µm, mm, m, in)")
+                raise unit_refusal(path, c, u)
             if unit is not None and canonical(unit) != u:
                 raise DataFileError(f"{path}: the header says column {str(c).strip()!r} is in {u} but --unit says "
                                     f"{canonical(unit)}; drop --unit or correct the header")

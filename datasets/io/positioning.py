@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 
 from datasets.io._pandas import pd
-from datasets.io.headers import LENGTH_UNITS, parse_name
+from datasets.io.headers import LENGTH_UNITS, mixed_units, parse_name, unit_refusal
 from datasets.io.layout import preamble_hint
 from datasets.io.numbers import DataFileError, NumberFormatError
 from datasets.io.tables import _numeric_column, read_table
@@ -168,12 +168,13 @@ def _header_unit(found: dict, given: str | None, option: str, name) -> str | Non
     """The one unit the header gives columns ``found`` ({column: unit}), checked against the option's value."""
     units = set(found.values())
     if len(units) > 1:
+        if units <= set(LENGTH_UNITS.values()):
+            raise mixed_units(name, found)
         raise DataFileError(f"{name}: the columns {', '.join(found)} are in different units "
                             f"({', '.join(sorted(units))}); convert them to one unit")
     header = units.pop() if units else None
     if header is not None and header not in LENGTH_UNITS.values():
-        raise DataFileError(f"{name}: column {next(iter(found))!r} carries the unit {header!r}; expected a length "
-                            "unit (nm, µm, mm, m, in)")
+        raise unit_refusal(name, next(iter(found)), header)
     if header is not None and given is not None and canonical(given) != header:
         raise DataFileError(f"{name}: the header says column {next(iter(found))!r} is in {header} but {option} says "
                             f"{canonical(given)}; drop {option} or correct the header")

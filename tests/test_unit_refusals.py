@@ -1,0 +1,83 @@
+"""A header unit fitbench does not read is refused saying what to do, and doing it gives the right figures: 'X [cm]'
+said "carries the unit 'cm'; expected a length unit (nm, µm, mm, m, in)" (cm is a length unit); two columns in
+different units name the factor that brings one to the other."""
+import json
+import re
+
+import numpy as np
+import pytest
+
+from test_cli_inputs import cli, one_error_line
+
+
+def ring(n=120, r=5.0, cx=2.0, cy=-1.0, lobes=0.0004):
+    t = 2 * np.pi * np.arange(n) / n
+    rr = r + lobes * np.cos(3 * t)
+    return np.c_[cx + rr * np.cos(t), cy + rr * np.sin(t)]
+
+
+def write(path, header, cols):
+    path.write_text(header + "\n" + "".join(",".join(f"{v:.9g}" for v in row) + "\n" for row in np.c_[cols]),
+                    encoding="utf-8")
+    return path
+
+
+def fitted(path):
+    out = cli("fit", "circle.gauss_newton", path, "--json", "--no-residuals")
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout)
+
+
+def followed(message: str):
+    """The refusal's advice applied: (factor, unit) read from 'multiply ... by F and name ... [UNIT]'."""
+    m = re.search(r"multiply (?:the column|column '[^']*') by ([0-9.e+-]+) and name (?:its unit \w+ \('[^']*|it '[^']*) "
+                  r"\[(\w+)\]'", message)
+    assert m, message
+    return float(m.group(1)), m.group(2)
+
+
+def test_a_centimetre_column_says_how_to_convert_and_that_gives_the_circle(tmp_path):
+    pts = ring()
+    out = cli("fit", "circle.gauss_newton", write(tmp_path / "cm.csv", "X [cm],Y [cm]", pts / 10))
+    one_error_line(out, "column 'X [cm]' carries the unit 'cm', which fitbench does not read (it reads nm, µm, mm, m, "
+                        "in)")
+    factor, unit = followed(out.stderr)
+    assert unit == "mm"
+    d = fitted(write(tmp_path / "mm.csv", f"X [{unit}],Y [{unit}]", pts / 10 * factor))
+    assert d["radius"] == pytest.approx(5.0, abs=1e-6) and d["center"] == pytest.approx([2.0, -1.0], abs=1e-6)
+
+
+def test_two_columns_in_different_units_name_the_factor_that_makes_them_one(tmp_path):
+    pts = ring()
+    out = cli("fit", "circle.gauss_newton", write(tmp_path / "mixed.csv", "X [mm],Y [um]", np.c_[pts[:, 0], pts[:, 1] * 1e3]))
+    one_error_line(out, "the columns X [mm], Y [um] are in different units (mm, µm)")
+    factor, unit = followed(out.stderr)
+    d = fitted(write(tmp_path / "one.csv", f"X [mm],Y [{unit}]", np.c_[pts[:, 0], pts[:, 1] * 1e3 * factor]))
+    assert d["radius"] == pytest.approx(5.0, abs=1e-6)
+
+
+def test_an_angle_in_milliradians_says_how_to_convert(tmp_path):
+    t = np.arange(0, 360, 2.0)
+    dev = 2.0 * np.cos(np.radians(3 * t))
+    out = cli("roundness", write(tmp_path / "mrad.csv", "Angle [mrad],Deviation [um]", np.c_[np.radians(t) * 1e3, dev]))
+    one_error_line(out, "column 'Angle [mrad]' carries the unit 'mrad', which fitbench does not read (it reads deg, "
+                        "rad)")
+    factor, unit = followed(out.stderr)
+    good = write(tmp_path / "rad.csv", f"Angle [{unit}],Deviation [um]", np.c_[np.radians(t) * 1e3 * factor, dev])
+    ref = write(tmp_path / "deg.csv", "Angle [deg],Deviation [um]", np.c_[t, dev])
+    got, want = (json.loads(cli("roundness", p, "--json").stdout) for p in (good, ref))
+    assert got["references"]["mzci"]["RONt"] == pytest.approx(want["references"]["mzci"]["RONt"], rel=1e-9)
+
+
+@pytest.mark.parametrize("command, header", [
+    (("fit", "circle.kasa"), "X [%],Y [%]"),
+    (("positioning",), "Target [cm],Run 1 + (µm),Run 1 - (µm),Run 2 + (µm),Run 2 - (µm)"),
+])
+def test_other_commands_and_unknown_units_say_what_to_do(tmp_path, command, header):
+    rows = np.c_[np.arange(6.0), np.ones((6, header.count(",")))] if command[0] == "positioning" else ring() / 10
+    out = cli(*command, write(tmp_path / "f.csv", header, rows))
+    if "%" in header:
+        one_error_line(out, "column 'X [%]' carries the unit '%', not a length unit: name the column's unit in the "
+                            "header (nm, µm, mm, m, in; e.g. 'X [mm]')")
+    else:
+        one_error_line(out, "column 'Target [cm]' carries the unit 'cm'", "multiply the column by 10", "'Target [mm]'")

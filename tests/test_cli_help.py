@@ -88,3 +88,12 @@ def test_the_history_of_a_fit_is_its_objective_in_squared_data_units_as_the_docs
     text = " ".join((DOCS / "cli.md").read_text(encoding="utf-8").split())
     assert "`history` (the objective per iteration, in its own unit: the data unit squared for the sums of " \
            "squares of gauss_newton, levenberg_marquardt and nelder_mead, e.g. mm²" in text
+
+
+@pytest.mark.parametrize("argv, prog", [(["positioning", "x.csv", "--run-directions", "sideways"], "fitbench positioning"),
+                                        (["fit"], "fitbench fit"), (["nosuch"], "fitbench")])
+def test_an_argument_error_points_at_the_help_of_the_subcommand_that_refused(capsys, argv, prog):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("fitbench: error: ") and err.rstrip().endswith(f"(see '{prog} --help')"), err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err

@@ -43,7 +43,8 @@ PROG = "python -m methods"
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, exit 2 (argparse prints usage over several lines)
-        raise InvalidInputError(f"{message} (see '{self.prog.split()[0] if self.prog.startswith('fitbench') else PROG} --help')")
+        # the help of the (sub)command that refused: 'fitbench positioning --help' lists positioning's options
+        raise InvalidInputError(f"{message} (see '{self.prog} --help')")
 
 
 # ----------------------------------------------------------------------------------------- the table

@@ -49,12 +49,14 @@ def _axes(layout: Layout, res: Resolved, plane: str | None = None) -> tuple:
 
 def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
               angle_unit: str | None = None, nominal_radius: float | None = None, nominal_center=(0.0, 0.0),
-              need_nominal_radius: bool = True) -> CircularRuns:
+              need_nominal_radius: bool = True, min_arc_deg: float | None = None) -> CircularRuns:
     """One measurement file in any instrument layout (:func:`resolve`): x, y columns or angle + radial
     deviation / radius, holding one run or both directions (a ``direction`` or ``run`` column; rows of each
     run in the order measured). Lengths in the header's unit or ``unit`` (a contradiction is an error),
     returned in mm; angle + deviation are placed about ``nominal_center`` with ``nominal_radius`` (mm; with
-    ``need_nominal_radius`` false the deviations alone are evaluated, :func:`polar_to_points`).
+    ``need_nominal_radius`` false the deviations alone are evaluated, :func:`polar_to_points`). ``min_arc_deg``: the
+    smallest arc the caller evaluates; angles read as degrees that span less and look like radians are refused
+    naming the angle unit (:func:`radians_as_degrees`).
 
     The angle + deviation layout follows what ballbar and roundness software lists as its data (sample angle
     and radial deviation per point, e.g. the Renishaw Ballbar 20 "data" view and its text export); we found
@@ -78,6 +80,11 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
     cols = read_columns(layout, res.idx + (res.offsets or []), skip_rows=skip_rows, strings=strings)
     f = to_mm(1.0, lu)
     if res.kind == "polar":
+        if au == "deg" and (why := radians_as_degrees(layout, res.idx[0], cols[res.idx[0]], angle_unit,
+                                                      min_arc_deg)):
+            if min_arc_deg is not None:
+                raise DataFileError(why)
+            notes.append(why)   # a fit of an arc: it may be one
         ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
         if assumed and res.polar_value == "deviation":
             notes.append(_unit_assumed(layout, res.idx[1], cols[res.idx[1]]))
@@ -113,12 +120,35 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
                         assumed, res.note)
 
 
+def radians_as_degrees(layout: Layout, k: int, angles, angle_unit: str | None,
+                       min_arc_deg: float | None) -> str | None:
+    """The error line when the angle column ``k``, read as degrees, spans less than ``min_arc_deg`` while every angle
+    lies within +-2 pi and they span at least pi: a revolution written in radians (0 to 6.28, or -3.14 to 3.14) read
+    as a 6° arc, which a roundness evaluation then refused as open ('no point between 6.3° and 0.0°'); without
+    ``min_arc_deg`` (a fit, which may be of an arc) the same line as a note, asked. None otherwise."""
+    a = np.asarray(angles, dtype=float)
+    if a.size < 3 or not np.isfinite(a).all():
+        return None
+    lo, hi = float(a.min()), float(a.max())
+    turn = 2 * np.pi * (1 + 1e-9)
+    if not (-turn <= lo and hi <= turn and np.pi <= hi - lo):
+        return None
+    col = layout.header[k] if layout.header else f"column {k}"
+    todo = ("give --angle-unit rad" if angle_unit is None and column_unit(layout, k, "angle") is None else
+            "give --angle-unit rad, not deg" if angle_unit == "deg" else f"correct the header of {col!r} to [rad]")
+    need = f" (less than the {min_arc_deg:g}° needed)" if min_arc_deg is not None else ""
+    return (f"{layout.name}: the angles of {col!r} run from {lo:g} to {hi:g}: read as degrees they cover {hi - lo:.3g}°"
+            f"{need}, each within ±2π; are they in radians? {todo}")
+
+
 def read_profile(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
-                 angle_unit: str | None = None, nominal_radius: float | None = None) -> CircularRuns:
+                 angle_unit: str | None = None, nominal_radius: float | None = None,
+                 min_arc_deg: float | None = None) -> CircularRuns:
     """One closed profile (roundness, a fit) in any instrument layout (:func:`read_runs`); deviations without
-    ``nominal_radius`` are evaluated alone. A file holding two runs is refused (one profile is needed)."""
+    ``nominal_radius`` are evaluated alone. A file holding two runs is refused (one profile is needed).
+    ``min_arc_deg``: as :func:`read_runs` (a closed profile: 180)."""
     got = read_runs(path, columns=columns, plane=plane, unit=unit, skip_rows=skip_rows, angle_unit=angle_unit,
-                    nominal_radius=nominal_radius, need_nominal_radius=False)
+                    nominal_radius=nominal_radius, need_nominal_radius=False, min_arc_deg=min_arc_deg)
     if len(got.runs) != 1:
         raise DataFileError(f"{got.source}: holds {len(got.runs)} runs ({', '.join(l for l, _ in got.runs)}); "
                             "give a file with one profile")

@@ -50,8 +50,10 @@ def _read_circular_runs(args):
     """({'cw': points, 'ccw': points} as the user labelled them, the first file's CircularRuns, labelled?), from one
     file (direction/run column) or two."""
     from datasets.io import read_runs
+    from methods.circular_test.evaluation import MIN_ARC_DEG
     kw = dict(columns=tuple(args.columns) if args.columns else None, plane=args.plane, unit=args.unit,
               skip_rows=args.skip_rows, angle_unit=args.angle_unit, nominal_radius=args.nominal_radius,
+              min_arc_deg=MIN_ARC_DEG,
               nominal_center=tuple(args.nominal_center) if args.nominal_center else (0.0, 0.0))
     if len(args.files) > 2:
         raise InvalidInputError(f"give one file holding both runs or two files (CW then CCW), got {len(args.files)}")

@@ -331,19 +331,21 @@ def flat_points(points, axes=("x", "y")) -> str | None:
             "is in another plane (give --plane or --columns)")
 
 
-def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: bool = False):
+def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: bool = False,
+                      min_arc_deg: float | None = None):
     """(source, points in mm, length unit used, notes, names of the two coordinates) of ``fit`` and ``roundness``: a file in any instrument
     layout (x, y or angle + radial deviation, :func:`datasets.io.read_profile`) or a published data set's
     name; sizes implausible for the unit are warned about, naming the likely unit (profile radii, half the span, above
     ``limit_mm``: :data:`PROFILE_LIMIT_MM`, or :data:`ROUNDNESS_LIMIT_MM` for ``roundness``); points on a straight
-    line (:func:`flat_points`) are warned about, or refused with ``refuse_flat``."""
+    line (:func:`flat_points`) are warned about, or refused with ``refuse_flat``; ``min_arc_deg``: the smallest arc
+    evaluated (angles in radians read as degrees are refused naming the angle unit, :func:`datasets.io.read_runs`)."""
     from datasets import points_from
     from datasets.io import read_profile
     nominal = finite("--nominal-radius", getattr(args, "nominal_radius", None), positive=True)
     if Path(args.file).exists() or args.unit or args.columns or args.plane or args.skip_rows or nominal:
         got = read_profile(args.file, columns=tuple(args.columns) if args.columns else None, plane=args.plane,
                            unit=args.unit, skip_rows=args.skip_rows, angle_unit=args.angle_unit,
-                           nominal_radius=nominal)
+                           nominal_radius=nominal, min_arc_deg=min_arc_deg)
         source, points, unit, notes, axes = str(args.file), got.runs[0][1], got.unit, list(got.notes), got.axes
         polar_alone = got.kind == "polar" and nominal is None and any("without a nominal radius" in n for n in notes)
     else:

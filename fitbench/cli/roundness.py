@@ -50,7 +50,8 @@ def run(args) -> int:
     plot_path = check_plot_path(args.plot)
     report_path = check_plot_path(args.report, "--report")
     tolerances = parse_tolerances(args.tolerance, ("RONt", "RONp", "RONv", "RONq"))
-    source, points, unit, notes, axes = read_profile_args(args, limit_mm=ROUNDNESS_LIMIT_MM, refuse_flat=True)
+    source, points, unit, notes, axes = read_profile_args(args, limit_mm=ROUNDNESS_LIMIT_MM, refuse_flat=True,
+                                                        min_arc_deg=360.0)   # a closed profile
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UndersampledWarning)
         res = methods.fit("roundness.iso12181", points, cutoff_upr=cutoff, reference=args.reference)

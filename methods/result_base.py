@@ -177,8 +177,8 @@ class FitResult:
     * :meth:`report_lines` -- (label, text with unit) lines the CLI prints for that geometry.
 
     ``form_error`` (in data units) and ``residuals`` have one meaning per family: each family's class says which.
-    ``history`` holds the objective per iteration of iterative methods in data units; ``extra`` holds
-    method-specific diagnostics.
+    ``history`` holds the objective per iteration of iterative methods, in its objective's unit (a sum of squares in
+    data units squared, a zone width in data units; docs/cli.md); ``extra`` holds method-specific diagnostics.
     """
 
     method: str = ""

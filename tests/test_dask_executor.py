@@ -97,19 +97,23 @@ def test_rows_blocked_in_c_end_as_timeout_on_dask(tmp_path, hostile_site):
 
 @pytest.mark.system  # a Dask cluster whose workers are killed and restarted: 10-40 s
 def test_workers_dying_again_and_again_never_hang_the_run(tmp_path, hostile_site):
-    """No time limit: each os._exit kills a Dask worker. With LocalCluster's lost-worker timeout short (it closed
-    a nanny whose restarted worker had not registered yet: after a few deaths no worker was left and the run
-    waited for ever) the run completes; the chunk holding a killer is bisected, so the rows beside it are
-    computed and only the killer is ``crashed``; nothing outlives the run."""
-    study = write_study(tmp_path, name="dd", reps=2, methods=hostile_methods("exit"), extra="chunk_rows = 6\n")
+    """No time limit: each ``kill_worker`` row kills its Dask worker (the plugin's row runs in a child of a row
+    process, which kills the worker above it). With LocalCluster's lost-worker timeout short (it closed a nanny
+    whose restarted worker had not registered yet: after a few deaths no worker was left and the run waited for
+    ever) the run completes; the chunk holding a killer is bisected, so the rows beside it are computed and only
+    the killer is ``crashed``; a plugin's os._exit ends only its row's process, never the worker; nothing outlives
+    the run."""
+    study = write_study(tmp_path, name="dd", reps=2, methods=hostile_methods("exit", "kill_worker"),
+                        extra="chunk_rows = 6\n")
     code, out, err, left = run([study, "--jobs", "2", "--executor", "dask", "--out", tmp_path / "out"], tmp_path,
                                hostile_site, timeout=400, DASK_DISTRIBUTED__DEPLOY__LOST_WORKER_TIMEOUT="0.2s")
     assert code == 0, err
     df = statuses(tmp_path / "out" / "dd" / "results.csv")
-    assert len(df) == 2 * 2 * 3
+    assert len(df) == 2 * 2 * 4
     assert set(df.loc[df["what"] == "", "status"]) == {"ok"}
-    assert set(df.loc[df["what"] == "exit", "status"]) == {"crashed"}
-    assert df.loc[df["what"] == "exit", "message"].str.contains("KilledWorker").all()
+    assert set(df.loc[df["what"].isin(["exit", "kill_worker"]), "status"]) == {"crashed"}
+    assert df.loc[df["what"] == "kill_worker", "message"].str.contains("KilledWorker").all()
+    assert set(df.loc[df["what"] == "exit", "message"]) == {"the process running this row ended (exit code 3)"}
     assert not left, f"processes of the run still alive after it ended: {left}"
 
 
@@ -185,9 +189,9 @@ def free_port() -> int:
 @pytest.mark.system
 @pytest.mark.skipif(DASK is None, reason="the dask command line (package distributed) is not installed")
 def test_a_cluster_without_workers_stops_the_run_in_one_line(tmp_path, hostile_site):
-    """A scheduler whose only worker has no nanny: the first os._exit leaves the cluster without workers. The
-    run waited for ever; it stops after FITBENCH_DASK_NO_WORKER_S with one line and exit 2, the rows finished
-    before are kept."""
+    """A scheduler whose only worker has no nanny: the first row that kills its worker leaves the cluster without
+    workers. The run waited for ever; it stops after FITBENCH_DASK_NO_WORKER_S with one line and exit 2, the rows
+    finished before are kept."""
     env = subprocess_env(hostile_site, OPENBLAS_NUM_THREADS="1")
     port = free_port()
     address = f"tcp://127.0.0.1:{port}"
@@ -201,7 +205,7 @@ def test_a_cluster_without_workers_stops_the_run_in_one_line(tmp_path, hostile_s
         from distributed import Client
         with Client(address, timeout=30) as c:
             c.wait_for_workers(1, timeout=120)
-        study = write_study(tmp_path, name="dn", reps=3, methods=hostile_methods("exit"))
+        study = write_study(tmp_path, name="dn", reps=3, methods=hostile_methods("kill_worker"))
         t0 = time.monotonic()
         code, out, err, left = run([study, "--executor", "dask", "--scheduler", address, "--out", tmp_path / "out"],
                                    tmp_path, hostile_site, timeout=300, FITBENCH_DASK_NO_WORKER_S="5")

@@ -1,6 +1,9 @@
 """Circular tests (ISO 230-4): figures by their definitions, diagnostics recover injected sources,
 the paper's elliptic path, the CLI."""
+import contextlib
+import io
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -148,7 +151,22 @@ def files(tmp_path_factory):
 
 
 def run_cli(*args):
+    """``python -m methods circular-test ARGS`` in a new process (its exit status, stdout and stderr)."""
     return run_python("-m", "methods", "circular-test", *args)
+
+
+def run_here(*args):
+    """:func:`run_cli`'s command by its entry point in this process (no Python start-up, no imports): for the cases
+    whose process-level behaviour (exit status, one line, no traceback, JSON alone on stdout) a :func:`run_cli` case
+    of the same command checks; an exception escaping it fails the test as a traceback would."""
+    from fitbench.cli.commands import main as cli_main
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = cli_main(["circular-test", *map(str, args)], prog="python -m methods")
+        except SystemExit as exc:  # argparse's own exit
+            code = exc.code
+    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
 
 
 def test_cli_json_and_plot(files, tmp_path):
@@ -164,20 +182,20 @@ def test_cli_json_and_plot(files, tmp_path):
     for name in names - {"cyclic_error"}:
         assert {"value", "unit", "u"} <= set(d["diagnostics"][name])
     assert (tmp_path / "p.png").stat().st_size > 10_000
-    human = run_cli(files / "cw.csv", files / "ccw.csv", "--nominal-radius", 298.997, "--center", "mz")
+    human = run_here(files / "cw.csv", files / "ccw.csv", "--nominal-radius", 298.997, "--center", "mz")
     assert human.returncode == 0 and "G(b)" in human.stdout and "not estimated" in human.stdout
 
 
-@pytest.mark.parametrize("args, match", [
-    (("bad.csv", "ccw.csv", "--nominal-radius", 298.997), "line 3: 'oops' is not a number"),
-    (("cw.csv", "other.csv", "--nominal-radius", 298.997), "do not describe the same circle"),
-    (("cw.csv", "ccw.csv", "--nominal-radius", 150.0), "far from the nominal radius"),
-    (("cw.csv", "ccw.csv"), "--nominal-radius"),
-    (("cw.csv", "missing.csv", "--nominal-radius", 298.997), "no such file"),
+@pytest.mark.parametrize("args, match, process", [  # process: in a new process (else by the entry point here)
+    (("bad.csv", "ccw.csv", "--nominal-radius", 298.997), "line 3: 'oops' is not a number", True),
+    (("cw.csv", "other.csv", "--nominal-radius", 298.997), "do not describe the same circle", False),
+    (("cw.csv", "ccw.csv", "--nominal-radius", 150.0), "far from the nominal radius", False),
+    (("cw.csv", "ccw.csv"), "--nominal-radius", True),
+    (("cw.csv", "missing.csv", "--nominal-radius", 298.997), "no such file", False),
 ])
-def test_cli_bad_input(files, args, match):
+def test_cli_bad_input(files, args, match, process):
     args = [files / a if str(a).endswith(".csv") else a for a in args]
-    out = run_cli(*args)
+    out = (run_cli if process else run_here)(*args)
     assert out.returncode == 2 and match in out.stderr and "Traceback" not in out.stderr
     assert len(out.stderr.strip().splitlines()) == 1
 
@@ -301,8 +319,8 @@ def test_cli_arc_90(tmp_path):
     cw, ccw = exact_arc_pair(90.0, 200.0, MachineErrors(squareness=15e-6, backlash_y=0.003, noise=0.0003))
     for name, pts in (("cw", cw), ("ccw", ccw)):
         np.savetxt(tmp_path / f"{name}.csv", pts, delimiter=",", header="x,y", comments="", fmt="%.9f")
-    out = run_cli(tmp_path / "cw.csv", tmp_path / "ccw.csv", "--nominal-radius", 150, "--nominal-center", 300, 200,
-                  "--arc", 90, "--json")
+    out = run_here(tmp_path / "cw.csv", tmp_path / "ccw.csv", "--nominal-radius", 150, "--nominal-center", 300, 200,
+                   "--arc", 90, "--json")
     assert out.returncode == 0, out.stderr
     d = json.loads(out.stdout)
     assert d["details"]["n_points"] == {"cw": len(cw), "ccw": len(ccw)}

@@ -97,12 +97,13 @@ def task_code(task: dict) -> dict:
         code = {"method": module_code(method) if method else None,
                 "source": source_hash(spec) if has_source else None,
                 "metrics": codehash.code_hash("experiments.metrics", "experiments.timing"),
-                "rows": codehash.code_hash("experiments.rows"),
+                "rows": codehash.code_hash("experiments.rows", "experiments.chunkrows"),
                 "study": codehash.code_hash(study)}
         _CODE[memo] = code
         source = sources.get_source(source_of(spec)).module if has_source else None
         _LIBRARIES[memo] = codehash.libraries_of(*(m for m in (method, source) if m), "experiments.metrics",
-                                                 "experiments.timing", "experiments.rows", study)
+                                                 "experiments.timing", "experiments.rows", "experiments.chunkrows",
+                                                 study)
     return code
 
 

@@ -21,7 +21,7 @@ Isolation, as the local executor gives it (``experiments.executors``):
   computed as usual.
 * A study running a plugin's code (its method or data source) runs its rows in row processes, with or without
   a time limit: there, as in a local worker, the rows of the plugin's code are fitted in a child forked for the
-  chunk and gated and measured by the row process's own code (``experiments.rows``), so what the plugin does to
+  chunk and gated and measured by the row process's own code (``experiments.chunkrows``), so what the plugin does to
   its process (patching the gate, a built-in method, NumPy) reaches neither the Dask worker nor another row.
 
 References: Dask distributed's ``KilledWorker`` and ``distributed.scheduler.allowed-failures``

@@ -2,7 +2,7 @@
 
 Light to import (the standard library and fitbench.threads): ``python -m experiments.run`` starts its workers with :func:`start_early`
 before it imports its own modules (pandas, the report's code: 0.4 s), so that both import at once; a worker imports
-the rows' code (:mod:`experiments.rows`) itself. :mod:`experiments.executors` runs chunks on them.
+the rows' code (:mod:`experiments.chunkrows`) itself. :mod:`experiments.executors` runs chunks on them.
 """
 from __future__ import annotations
 
@@ -211,7 +211,8 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
     warnings.simplefilter("ignore", PluginLoadWarning)
     import gc
 
-    from experiments.rows import ROW_GC_THRESHOLD, mark_row_worker, run_chunk  # the rows' code: in the worker
+    from experiments.chunkrows import mark_row_worker, run_chunk  # the rows' code: imported here, in the worker
+    from experiments.rows import ROW_GC_THRESHOLD
     mark_row_worker()
     from methods import exception_text
     gc.set_threshold(ROW_GC_THRESHOLD, *gc.get_threshold()[1:])  # a worker only makes rows (experiments.rows)

@@ -558,7 +558,7 @@ def _abstract(entries, verdicts, carried: dict | None = None, run_date: str | No
                      + (f" made by the last run ({run_date})" if carried else "")
                      + (f" (differ: {', '.join(differ)})" if differ else "") + ".")
     if carried:
-        parts.append(f"Carried over from an earlier verdict, not reproduced by the last run: "
+        parts.append("Carried over from an earlier verdict, not reproduced by the last run: "
                      + ", ".join(f"{k} ({'agreed' if e.get('agree') else 'differed'}, {e.get('date', '?')})"
                                  for k, e in carried.items()) + ".")
     if changed:

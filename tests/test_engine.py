@@ -999,9 +999,9 @@ def test_the_run_collects_garbage_less_often_and_gives_the_caller_its_thresholds
     run.main gets its own thresholds back, also when the run fails."""
     import gc
 
-    from experiments import rows
+    from experiments import chunkrows, rows
     seen = []
-    real = rows.run_chunk
+    real = chunkrows.run_chunk
 
     def spy(*a, **k):
         seen.append(gc.get_threshold()[0])
@@ -1028,7 +1028,7 @@ def test_batched_generic_rows_are_the_rows_of_one_task_at_a_time(monkeypatch):
     the fits of a batch run a method's together (two methods here), the rows stay in task order."""
     import methods
     from datasets import sources
-    from experiments import rows
+    from experiments import chunkrows, rows
     from methods import results as mres
     from methods._registry import _REGISTRY
 
@@ -1084,7 +1084,7 @@ def test_batched_generic_rows_are_the_rows_of_one_task_at_a_time(monkeypatch):
             rows._LAST_DATA[:] = [None] * 4
             batched = rows._generic_rows(tasks, 0, None)
             assert batched == one_by_one
-            chunk = rows.run_chunk(tasks)["columns"]
+            chunk = chunkrows.run_chunk(tasks)["columns"]
             assert chunk["row"] == [rows.row_json(r) for r in one_by_one]
             monkeypatch.undo()
     finally:

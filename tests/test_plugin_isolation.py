@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from conftest import install_plugin, run_python
-from experiments import rows
+from experiments import chunkrows, rows
 from methods import register
 from methods._registry import _REGISTRY
 from methods.results import circle_result
@@ -53,8 +53,9 @@ def patch_gate(points):
     import methods
     import methods.result_base as rb
     import methods.results as mr
+    import experiments.chunkrows as chunkrows
     import experiments.rows as rows
-    for mod in (rb, mr, methods, rows):
+    for mod in (rb, mr, methods, rows, chunkrows):
         for name in dir(mod):
             if "check" in name and callable(getattr(mod, name)):
                 setattr(mod, name, lambda *a, **k: None)
@@ -104,7 +105,7 @@ def ellipse(points):
 @register("circle.iso_swap_data", kind="closed form", summary="sends the worker a perfect circle as the data",
           reference="isolation test")
 def swap_data(points):
-    import experiments.rows as rows
+    import experiments.chunkrows as chunkrows
     from methods.result_base import family_copy
     t = np.linspace(0, 2 * np.pi, len(points), endpoint=False)
     perfect = np.column_stack([5.0 * np.cos(t), 5.0 * np.sin(t)])
@@ -112,7 +113,7 @@ def swap_data(points):
 
     def child_item(task, row_timeout, progress, pos):
         return "fit", family_copy(fake), {}, None, (perfect, {"family": "circle", "center": (0.0, 0.0), "radius": 5.0})
-    rows._child_item = child_item
+    chunkrows._child_item = child_item
     return honest(points)
 '''
 
@@ -250,14 +251,14 @@ def test_what_a_plugin_s_process_sends_can_name_no_code():
     points = np.c_[np.cos(t), np.sin(t)]
     res = circle_result(points, (0.0, 0.0), 1.0, converged=True, message="exact")
     item = ("fit", res, {"lobes": 3.0}, None, (points.astype(np.float32), {"radius": np.float64(1.0)}))
-    back = rows._ResultUnpickler(pickle.dumps(item, protocol=pickle.HIGHEST_PROTOCOL)).load()
+    back = chunkrows._ResultUnpickler(pickle.dumps(item, protocol=pickle.HIGHEST_PROTOCOL)).load()
     assert back[1].radius == 1.0 and np.array_equal(back[1].residuals, res.residuals)
     assert back[4][0].dtype == np.float32 and np.array_equal(back[4][0], points.astype(np.float32))
-    conditions = rows._ResultUnpickler(pickle.dumps(TestConditions.__new__(TestConditions))).load()
+    conditions = chunkrows._ResultUnpickler(pickle.dumps(TestConditions.__new__(TestConditions))).load()
     assert type(conditions) is TestConditions
 
     class Evil:
         def __reduce__(self):
             return os.system, ("echo pwned",)
     with pytest.raises(pickle.UnpicklingError, match="posix.system is not a value fitbench reads"):
-        rows._ResultUnpickler(pickle.dumps(("fit", Evil()))).load()
+        chunkrows._ResultUnpickler(pickle.dumps(("fit", Evil()))).load()

@@ -138,7 +138,7 @@ import os, sys
 import numpy as np
 import methods
 from methods.results import circle_result
-from experiments import config, rows
+from experiments import chunkrows, config
 from experiments.studies import study_of
 
 
@@ -153,7 +153,7 @@ def forker(points):
 
 cfg = config.load(sys.argv[1])
 tasks = list(study_of(cfg["kind"]).prepared_tasks(cfg))
-out = rows.run_chunk(tasks)
+out = chunkrows.run_chunk(tasks)
 print("rows", os.getpid(), len(out["columns"]["row"]), sorted(set(r.split('"message":"')[1].split('"')[0][:6]
                                                                    for r in out["columns"]["row"])), flush=True)
 '''

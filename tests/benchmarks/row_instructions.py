@@ -24,7 +24,7 @@ ROWS = 2000
 CHILD = """
 import sys
 sys.path.insert(0, {root!r})
-from experiments import config as configs, rows
+from experiments import chunkrows, config as configs, rows
 from experiments.studies import study_of
 import methods
 cfg = configs.load({study!r})
@@ -33,7 +33,7 @@ for t in study_of(cfg["kind"]).prepared_tasks(cfg):
     tasks.append(t)
     if len(tasks) == {n} + 100:
         break
-rows.run_chunk(tasks[:100])
+chunkrows.run_chunk(tasks[:100])
 work = tasks[100:]
 mode = sys.argv[1]
 if mode == "rows":

@@ -23,6 +23,7 @@ import pytest
 
 from conftest import stop_processes, subprocess_env
 from test_engine import hostile_methods, hostile_site, write_study  # noqa: F401 (hostile_site: a fixture)
+from test_dask_cluster import wait_listening
 
 pytestmark = pytest.mark.skipif(not Path("/proc/self/environ").exists(), reason="looks for processes in /proc")
 
@@ -198,7 +199,7 @@ def test_a_cluster_without_workers_stops_the_run_in_one_line(tmp_path, hostile_s
     procs = [subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
                               cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
-        time.sleep(2)
+        wait_listening(procs[0], port)  # not a fixed sleep (2 s before)
         procs.append(subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
                                        "--local-directory", str(tmp_path / "w")], cwd=tmp_path, env=env,
                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
@@ -256,7 +257,7 @@ def test_a_worker_that_loaded_a_method_before_it_changed_stores_no_row(tmp_path)
     procs = [subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
                               cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
-        time.sleep(2)
+        wait_listening(procs[0], port)  # not a fixed sleep (2 s before)
         procs.append(worker())
         from distributed import Client
         with Client(address, timeout=30) as c:

@@ -14,6 +14,9 @@ from experiments.run import run_study
 from conftest import quick_study
 
 
+# The tests reading ``built`` are in the slow tier (pytest -m "not slow" leaves them out): the quick studies it reports
+# (the magnification study's alone ~8 s of CPU; no other test of the inner loop runs them) and the report's build
+# make its first test ~12 s on two cores.
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
     root = tmp_path_factory.mktemp("report")
@@ -48,6 +51,7 @@ def built(tmp_path_factory):
     return build(results, paper, log=lambda *a: None)
 
 
+@pytest.mark.slow  # built (above)
 def test_broken_studies_shown_with_reason_rest_built(built):
     md = (built / "report.md").read_text()
     assert "(`list_meta`)" in md and "**Broken**: meta.json is not a JSON object" in md
@@ -64,6 +68,7 @@ def test_broken_studies_shown_with_reason_rest_built(built):
     assert len(numbers) == len(list(built.glob("tables/table-*.csv"))) == md.count("*Table ")
 
 
+@pytest.mark.slow  # built (above)
 def test_sections_tables_figures(built):
     md = (built / "report.md").read_text()
     assert md.startswith("# fitbench: comparison report")
@@ -88,6 +93,7 @@ def test_sections_tables_figures(built):
     assert len(vector) >= 3 and len(vector) == len(list(built.glob("figures/*.pdf"))), sorted(built.glob("figures/*"))
 
 
+@pytest.mark.slow  # built (above)
 def test_failed_studies_are_shown_and_a_results_folder_holds_its_own_studies(built):
     """A report of a results folder of one's own (--out DIR) holds the studies in it: no default study it lacks
     is listed as missing (it listed 10 "**Missing**: no results in DIR/published ..." sections)."""
@@ -96,6 +102,7 @@ def test_failed_studies_are_shown_and_a_results_folder_holds_its_own_studies(bui
     assert "**Missing**" not in md and "(`noise`)" not in md and "(`multilateration`)" not in md
 
 
+@pytest.mark.slow  # built (above)
 def test_the_default_results_folder_shows_the_default_studies_it_lacks(built, tmp_path, monkeypatch):
     """results/ (of the current folder) is what a run of the default studies fills: a default study it lacks is
     missing, with the command that fills it (the same grid: --quick, and this folder as --out, since results/
@@ -109,6 +116,7 @@ def test_the_default_results_folder_shows_the_default_studies_it_lacks(built, tm
     assert "python -m experiments.run noise --quick --out results" in md.replace("\\", "") and str(tmp_path) not in md
 
 
+@pytest.mark.slow  # built (above)
 def test_latex_fragments(built, tmp_path):
     tex = sorted(built.glob("tables/*.tex"))
     assert tex and all(r"\toprule" in t.read_text() and r"\bottomrule" in t.read_text() for t in tex)
@@ -125,6 +133,7 @@ CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic
                   "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
 
+@pytest.mark.slow  # built (above)
 def test_html_renders_in_headless_chromium(built, tmp_path):
     chromium = shutil.which("chromium") or shutil.which("chromium-browser")
     if chromium is None:
@@ -183,6 +192,7 @@ def test_the_report_writes_files_only_through_the_one_atomic_writer():
     assert not found, found
 
 
+@pytest.mark.slow  # built (above)
 def test_quick_run_is_marked_in_the_pdf_source(built):
     """The studies of ``built`` ran --quick: the TeX says so in its title, beside the abstract and per study,
     as the HTML and Markdown do."""

@@ -42,10 +42,25 @@ def test_a_bare_tolerance_far_below_its_figure_is_warned_about_naming_mm(axis_fi
     line = (f"--tolerance A=0.01 is read as 0.01 µm (a bare number is µm), and A is {check['value_mm'] * 1e3:.4g} µm, "
             f"{ratio:.3g} times it: is it in mm? give --tolerance A=0.01mm (10 µm), or --tolerance A=0.01um to keep µm")
     assert f"warning: {line}" in err and said == [line]
-    # said in µm, or a tolerance the figure misses by less than 100 times: meant, no warning
-    for text in ("0.01um", "0.1"):
+    # said in µm, or a bare tolerance the figure misses by less than 10 times: meant, no warning
+    bare = f"{check['value_mm'] * 1e3 / 9.9:.6f}"
+    for text in ("0.01um", bare):
         out = cli("positioning", axis_file, "--tolerance", f"A={text}")
         assert out.returncode == 0 and "warning" not in out.stderr, out.stderr
+
+
+def test_a_bare_tolerance_ten_times_below_its_figure_is_warned_about(axis_file):
+    """A drawing's 0.1 mm given bare (read as 0.1 µm) beside ``--mpe 2um``: the figure is 85 times it, a silent FAIL
+    while the warning needed 100 times; from 10 times on it is warned about."""
+    verdict, _, _ = verdict_of("positioning", axis_file, "--tolerance", "A=0.01um")
+    a_um = verdict["checks"][0]["value_mm"] * 1e3
+    for ratio in (10.001, 85.0):   # 10 times (to the 6 digits written) and the drawing's 0.1 mm
+        text = f"{a_um / ratio:.6g}"
+        verdict, said, err = verdict_of("positioning", axis_file, "--mpe", "2um", "--tolerance", f"A={text}")
+        assert verdict["overall"] == "FAIL" and verdict["checks"][0]["tolerance_bare"] is True
+        assert verdict["checks"][0]["tolerance_given"] == text
+        assert len(said) == 1 and said[0].startswith(f"--tolerance A={text} is read as {float(text):g} µm")
+        assert f"give --tolerance A={text}mm" in said[0] and f"warning: {said[0]}" in err
 
 
 def test_roundness_and_circular_test_warn_about_a_bare_tolerance_in_mm(tmp_path):
@@ -72,6 +87,36 @@ def test_a_bad_tolerance_is_one_line(axis_file, text, words):
     one_error_line(cli("positioning", axis_file, "--tolerance", text), *words)
 
 
+def test_the_verdict_line_says_how_a_bare_tolerance_was_read(tmp_path):
+    """The reviewer's command (docs' example file, ``--mpe 2um --tolerance A=0.1``): the warning comes before the
+    figures on the terminal and is in the report's warnings box; the verdict line states the µm reading of the bare
+    number, and a tolerance with its unit is printed as before."""
+    from pathlib import Path
+    from test_cli_warnings import report_text, terminal
+    example = Path(__file__).resolve().parents[1] / "docs" / "examples" / "positioning.csv"
+    code, shown = terminal("positioning", example, "--mpe", "2um", "--tolerance", "A=0.1")
+    assert code == 0
+    warning = shown.index("warning: --tolerance A=0.1 is read as 0.1 µm (a bare number is µm), and A is ")
+    line = next(ln for ln in shown.splitlines() if ln.strip().startswith("A ") and "tolerance" in ln)
+    assert warning < shown.index("verdict      FAIL") and "tolerance 0.1 µm (a bare number: µm)  FAIL" in line
+    page = " ".join(report_text(tmp_path, "positioning", example, "--mpe", "2um", "--tolerance", "A=0.1").split())
+    assert "warning: --tolerance A=0.1 is read as 0.1 µm (a bare number is µm), and A is " in page
+    assert "give --tolerance A=0.1mm (100 µm)" in page and "tolerance 0.1 µm (a bare number: µm) FAIL" in page
+    code, shown = terminal("positioning", example, "--mpe", "2um", "--tolerance", "A=0.1mm")
+    assert code == 0 and "warning" not in shown and "tolerance 100 µm  PASS" in shown
+    assert "a bare number" not in shown
+
+
+def test_roundness_states_the_bare_reading_on_every_tolerance_line(tmp_path):
+    shaft = profile_file(tmp_path / "shaft.csv")
+    out = cli("roundness", shaft, "--tolerance", "RONt=5")
+    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("  RONt ")]
+    assert out.returncode == 0 and len(lines) == 4
+    assert all("tolerance 5 µm (a bare number: µm)" in ln for ln in lines), lines
+    out = cli("roundness", shaft, "--tolerance", "RONt=5um")
+    assert out.returncode == 0 and "a bare number" not in out.stdout and "tolerance 5 µm  PASS" in out.stdout
+
+
 def test_the_help_gives_both_forms(capsys):
     from fitbench.cli import main
     for command in ("positioning", "roundness", "circular-test"):
@@ -80,3 +125,4 @@ def test_the_help_gives_both_forms(capsys):
         text = " ".join(capsys.readouterr().out.split())
         assert "--tolerance NAME=VALUE" in text
         assert "a tolerance in µm (a bare number) or with its unit (NAME=10um, NAME=0.01mm)" in text, command
+        assert "a bare number that the figure it judges exceeds 10 times or more is warned about" in text, command

@@ -156,11 +156,18 @@ def header_line(command: str, unit: str | None, extra: str = "", deviation_unit:
             f"lengths printed in µm{extra}")
 
 
+#: a bare ``--tolerance`` (µm) that the figure it judges exceeds this many times or more is likely a drawing's mm
+#: value (A=0.1 meant as 0.1 mm read as 0.1 µm: FAIL for an 8.5 µm axis, 85 times it; a machine or part that is
+#: accepted or rejected is not ten times out of tolerance; a tolerance meant in µm is said so with ``um``)
+TOLERANCE_SUSPECT_RATIO = 10.0
+
+
 def add_tolerance_option(p, names: str):
     p.add_argument("--tolerance", action="append", metavar="NAME=VALUE",
                    help=f"a tolerance in µm (a bare number) or with its unit (NAME=10um, NAME=0.01mm) for one of the "
                         f"standard's figures ({names}); repeatable: PASS/FAIL in the table, the JSON and the plot (the "
-                        "exit status does not change); a bare number far below the figure it judges is warned about")
+                        "exit status does not change); a bare number that the figure it judges exceeds "
+                        f"{TOLERANCE_SUSPECT_RATIO:g} times or more is warned about (is it in mm?)")
 
 
 #: a number with an optional unit after it: '10', '10um', '10 µm', '0.01mm', '1e-2 mm'
@@ -175,6 +182,10 @@ class Tolerances(dict):
         super().__init__()
         self.texts: dict = {}
         self.bare: set = set()
+
+    def given(self, name: str) -> tuple[str, bool] | None:
+        """(the tolerance as written, given as a bare number?) of one figure; None if it has no text."""
+        return (self.texts[name], name in self.bare) if name in self.texts else None
 
 
 def parse_tolerances(items, allowed) -> Tolerances:
@@ -214,18 +225,13 @@ def parse_tolerances(items, allowed) -> Tolerances:
     return out
 
 
-#: a bare ``--tolerance`` (µm) that the figure it judges exceeds this many times is likely a drawing's mm value
-#: (A=0.01 meant as 0.010 mm read as 0.01 µm: FAIL for an 8.5 µm axis; no machine is a hundred times out of tolerance)
-TOLERANCE_SUSPECT_RATIO = 100.0
-
-
 def warn_bare_tolerances(tolerances, values_mm: dict) -> None:
     """Warn, naming the unit to give, about each tolerance given as a bare number (µm) that its figure
-    (``values_mm``: {name: value in mm}) exceeds more than :data:`TOLERANCE_SUSPECT_RATIO` times, as ``--mpe``'s
+    (``values_mm``: {name: value in mm}) exceeds :data:`TOLERANCE_SUSPECT_RATIO` times or more, as ``--mpe``'s
     bare number is warned about."""
     for name in sorted(getattr(tolerances, "bare", ()), key=list(tolerances).index):
         tol, value = tolerances[name], values_mm.get(name)
-        if value is None or not (math.isfinite(value) and abs(value) > TOLERANCE_SUSPECT_RATIO * tol):
+        if value is None or not (math.isfinite(value) and abs(value) >= TOLERANCE_SUSPECT_RATIO * tol):
             continue
         text = tolerances.texts[name]
         warn(f"--tolerance {name}={text} is read as {tol * 1e3:g} µm (a bare number is µm), and {name} is "
@@ -233,22 +239,38 @@ def warn_bare_tolerances(tolerances, values_mm: dict) -> None:
              f"({tol * 1e6:g} µm), or --tolerance {name}={text}um to keep µm")
 
 
-def verdict(values_mm: dict, tolerances_mm: dict) -> dict | None:
+def verdict(values_mm: dict, tolerances_mm: dict, given: dict | None = None) -> dict | None:
     """PASS/FAIL of each figure against its tolerance (value <= tolerance passes), and the overall verdict;
-    None without tolerances."""
+    None without tolerances. Each check records the tolerance as written (``tolerance_given``, and
+    ``tolerance_bare``: a bare number, read as µm), from ``given`` ({figure: (text, bare)}) or, when
+    ``tolerances_mm`` is a :class:`Tolerances`, from it."""
     if not tolerances_mm:
         return None
-    checks = [{"figure": name, "value_mm": float(values_mm[name]), "tolerance_mm": tol,
-               "result": "PASS" if float(values_mm[name]) <= tol else "FAIL"} for name, tol in tolerances_mm.items()]
+    if given is None and isinstance(tolerances_mm, Tolerances):
+        given = {name: tolerances_mm.given(name) for name in tolerances_mm}
+    checks = []
+    for name, tol in tolerances_mm.items():
+        check = {"figure": name, "value_mm": float(values_mm[name]), "tolerance_mm": tol,
+                 "result": "PASS" if float(values_mm[name]) <= tol else "FAIL"}
+        if given and given.get(name):
+            check["tolerance_given"], check["tolerance_bare"] = given[name]
+        checks.append(check)
     return {"checks": checks, "overall": "PASS" if all(c["result"] == "PASS" for c in checks) else "FAIL"}
+
+
+def tolerance_text(check: dict) -> str:
+    """'tolerance 10 µm' of a verdict check, saying how a bare number was read: 'tolerance 0.1 µm (a bare
+    number: µm)' (a bare ``--tolerance`` is µm, a bare ``--mpe`` mm: the line shows which reading judged)."""
+    return (f"tolerance {check['tolerance_mm'] * 1e3:g} µm"
+            + (" (a bare number: µm)" if check.get("tolerance_bare") else ""))
 
 
 def verdict_lines(v: dict | None) -> list[str]:
     if not v:
         return []
     lines = [f"verdict      {v['overall']}"]
-    lines += [f"  {c['figure']:<12} {c['value_mm'] * 1e3:10.3f} µm  tolerance {c['tolerance_mm'] * 1e3:g} µm  "
-              f"{c['result']}" for c in v["checks"]]
+    lines += [f"  {c['figure']:<12} {c['value_mm'] * 1e3:10.3f} µm  {tolerance_text(c)}  {c['result']}"
+              for c in v["checks"]]
     return lines
 
 

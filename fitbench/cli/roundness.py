@@ -13,7 +13,7 @@ from methods.units import JSON_UNITS, canonical
 from methods.roundness.evaluation import REFERENCE_NAMES
 from methods.roundness.filter import UndersampledWarning, parse_cutoff
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options, header_line,
-                                  ROUNDNESS_LIMIT_MM, add_tolerance_option, check_plot_path, parse_tolerances, test_conditions, read_profile_args, save_figure, verdict, verdict_lines,
+                                  ROUNDNESS_LIMIT_MM, add_tolerance_option, check_plot_path, parse_tolerances, test_conditions, read_profile_args, save_figure, Tolerances, tolerance_text, verdict, verdict_lines,
                                   verdict_title, warn, warn_bare_tolerances, write_report)
 
 
@@ -148,10 +148,13 @@ def roundness_verdict(references: dict, tolerances: dict, chosen: bool = False) 
         return None
     kind = next(iter(references)) if chosen else DEFAULT_VERDICT_REFERENCE
     r = references[kind]
+    given = {f"{name} {k.upper()}": tolerances.given(name) if isinstance(tolerances, Tolerances) else None
+             for k in references for name in tolerances}
     check = verdict({f"{name} {kind.upper()}": r[name] for name in tolerances},
-                    {f"{name} {kind.upper()}": tol for name, tol in tolerances.items()})
+                    {f"{name} {kind.upper()}": tol for name, tol in tolerances.items()}, given)
     others = verdict({f"{name} {k.upper()}": o[name] for k, o in references.items() if k != kind for name in tolerances},
-                     {f"{name} {k.upper()}": tol for k in references if k != kind for name, tol in tolerances.items()})
+                     {f"{name} {k.upper()}": tol for k in references if k != kind for name, tol in tolerances.items()},
+                     given)
     check["reference"] = kind
     check["reference_basis"] = ("chosen with --reference" if chosen else
                                 "minimum zone, the default of ISO 12181-2 and the tolerance zone of ISO 1101")
@@ -167,7 +170,7 @@ def roundness_verdict_lines(v: dict | None) -> list[str]:
     lines[0] += f" (about the {v['reference'].upper()}: {v['reference_basis']})"
     if v["information"]:
         lines.append("  for information (not part of the verdict):")
-        lines += [f"  {c['figure']:<12} {c['value_mm'] * 1e3:10.3f} µm  tolerance {c['tolerance_mm'] * 1e3:g} µm  "
+        lines += [f"  {c['figure']:<12} {c['value_mm'] * 1e3:10.3f} µm  {tolerance_text(c)}  "
                   f"{'within' if c['result'] == 'PASS' else 'beyond'}" for c in v["information"]]
     return lines
 

@@ -3,7 +3,6 @@ the default table and figure of a study that has none and declares none (chosen 
 figures its TOML declares, and the one line of a study none of whose rows has a result."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pandas as pd
@@ -45,7 +44,7 @@ def failed_rows(cfg: dict, rows) -> str | None:
     has a result. ``rows``: the rows (``status`` and ``message``), or the study's ``results.csv``."""
     if not isinstance(rows, pd.DataFrame):
         try:   # meta.json's counts: a study with a result is not read again
-            counts = json.loads((Path(rows).parent / "meta.json").read_text(encoding="utf-8")).get("status_counts")
+            counts = json_value((Path(rows).parent / "meta.json").read_text(encoding="utf-8")).get("status_counts")
             if any(counts.get(s) for s in RESULT_STATUSES):
                 return None
         except (OSError, ValueError, AttributeError):

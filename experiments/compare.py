@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from experiments.jsontext import json_value
 from experiments.metrics import CHAOTIC, tolerance as declared_tolerance
 from experiments.provenance import write_atomic
 from experiments.verdict import VERDICT_FILE, last_verdict, results_sha256
@@ -273,7 +274,7 @@ def _meta(folder: Path) -> dict | None:
     if not path.is_file():  # a FIFO or a device would block the read: no meta.json to use
         return None
     try:
-        meta = json.loads(path.read_text(encoding="utf-8"))
+        meta = json_value(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
     return meta if isinstance(meta, dict) else None
@@ -460,7 +461,7 @@ def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path,
             if not csv.is_file() or not meta_path.is_file():
                 continue
             try:
-                meta = json.loads(meta_path.read_text(encoding="utf-8"))
+                meta = json_value(meta_path.read_text(encoding="utf-8"))
             except (OSError, ValueError):
                 continue
             if not isinstance(meta, dict) or bool(meta.get("quick")) != quick:
@@ -498,7 +499,7 @@ def _fingerprint(folder: Path) -> str | None:
     if not path.is_file():
         return None
     try:
-        value = json.loads(path.read_text(encoding="utf-8")).get("fingerprint")
+        value = json_value(path.read_text(encoding="utf-8")).get("fingerprint")
     except (OSError, ValueError, AttributeError):
         return None
     return value if isinstance(value, str) else None

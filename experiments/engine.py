@@ -34,6 +34,7 @@ import datasets
 import methods
 from datasets import sources
 from experiments.executors import execute
+from experiments.jsontext import json_value
 from experiments.rowframe import MissingRows, RowFrame
 from experiments.codekeys import (NUMBER_PACKAGES, _CODE, _ENV, _has_source, _method_ids, environment,  # noqa: F401
                                   forget_data_hashes, module_code, reset_caches, source_hash, task_code)
@@ -429,8 +430,8 @@ def up_to_date(cfg: dict, tasks, target: Path) -> int | None:
     from experiments.verdict import results_sha256
     target = Path(target)
     try:
-        meta = json.loads((target / "meta.json").read_text(encoding="utf-8"))
-        manifest = json.loads((target / "report.json").read_text(encoding="utf-8"))
+        meta = json_value((target / "meta.json").read_text(encoding="utf-8"))
+        manifest = json_value((target / "report.json").read_text(encoding="utf-8"))
         named = [e["file"] for e in manifest.get("tables", []) + manifest.get("figures", [])]
     except (OSError, ValueError, TypeError, KeyError, AttributeError):
         return None

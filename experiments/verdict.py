@@ -13,6 +13,7 @@ import hashlib
 import json
 from pathlib import Path
 
+from experiments.jsontext import json_value
 from methods.files import open_regular
 
 VERDICT_FILE = "verify.json"
@@ -36,7 +37,7 @@ def recorded_config(study_folder: Path) -> Path | None:
     from experiments.provenance import REPO
     try:
         with open_regular(Path(study_folder) / "meta.json") as fh:
-            value = json.loads(fh.read()).get("config_file")
+            value = json_value(fh.read()).get("config_file")
     except (OSError, ValueError, AttributeError):
         return None
     if not isinstance(value, str) or not value.endswith(".toml"):

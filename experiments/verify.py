@@ -22,13 +22,13 @@ Exit status: 0 all agree, 1 some values differ, 2 bad input (missing folder or s
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tempfile
 from pathlib import Path
 
 from experiments import config as configs
 from experiments import run as runner
+from experiments.jsontext import json_value
 from experiments.compare import (IDENTITY, WORST_ROWS, compare_study, identity_columns,  # noqa: F401  (the library's names)
                                  reference_snapshot, verdict_after_run, verify)
 from experiments.verdict import VERDICT_FILE, last_verdict, results_sha256, verdict_markdown  # noqa: F401  (the report's reading side)
@@ -91,7 +91,7 @@ def main(argv=None, prog: str = "python -m experiments.verify") -> int:
             meta_path = results / s / "meta.json"
             if meta_path.is_file():
                 try:
-                    committed_quick = bool(json.loads(meta_path.read_text(encoding="utf-8")).get("quick"))
+                    committed_quick = bool(json_value(meta_path.read_text(encoding="utf-8")).get("quick"))
                 except (ValueError, AttributeError):
                     raise InvalidInputError(f"{meta_path} is not readable JSON") from None
                 if committed_quick != args.quick:

@@ -94,3 +94,64 @@ def test_positioning_parser_error_names_the_files_line(tmp_path):
     code, _, err = cli("positioning", p)
     one_line(code, err, "laser.rtl line 5: 3 fields where the header (line 1) has 2", "--skip-rows 4")
     assert "Expected" not in err and "line 4" not in err
+
+
+def _table_below(path, first_lines: str, n: int = 40):
+    """A R50 circle's x, y table in mm below ``first_lines`` (an instrument's preamble)."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    rows = "".join(f"{50 * np.cos(a):.9f},{50 * np.sin(a):.9f}\n" for a in t)
+    path.write_text(f"{first_lines}\nx [mm],y [mm]\n{rows}", encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("first", ["<Operator: J. Smith>", "<Probe 3>", "{Probe 3}", "{Operator: J. Smith}"])
+def test_a_preamble_starting_with_a_bracket_is_not_markup(tmp_path, first):
+    """A text table whose first line starts with '<' + a letter or '{' was refused as XML or JSON whatever the
+    options ('is an XML file (root <Operator:>...'); it is neither, and --skip-rows 1 reads it."""
+    p = _table_below(tmp_path / "trace.csv", first)
+    assert not_text(p) is None and not_text(p, skip_rows=1) is None
+    code, out, err = cli("fit", "circle.kasa", p, "--skip-rows", 1, "--json")
+    assert code == 0, err
+    assert json.loads(out)["radius"] == pytest.approx(50.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("cmd", [("fit", "circle.kasa"), ("roundness",)], ids=lambda c: c[0])
+def test_a_line_skip_rows_skips_is_never_refused_as_markup(tmp_path, cmd):
+    """A preamble that is markup ('<Operator>J. Smith</Operator>', a JSON object) is refused without --skip-rows,
+    saying which lines to skip, and read with it."""
+    for first, what in (("<Operator>J. Smith</Operator>\n<Date>2026-11-26</Date>", "is an XML file (root <Operator>"),
+                        ('{"operator": "J. Smith"}\n{"probe": 3}', None)):
+        p = _table_below(tmp_path / "trace.csv", first, n=720)
+        if what:
+            one_line(*cli(*command(cmd, p))[::2], what, "if lines 1-2 are a preamble above a table, give --skip-rows 2")
+        code, out, err = cli(*command(cmd, p), "--skip-rows", 2)
+        assert code == 0 and "error" not in err, err
+
+
+def test_json_only_when_it_parses_and_xml_only_when_it_looks_like_markup(tmp_path):
+    p = tmp_path / "r.json"
+    p.write_text('{"radius": 50.0,\n "points": [[1, 2], [3, 4]]}\n')
+    assert "is a JSON file" in not_text(p)
+    p.write_text('{radius: 50.0}\n1,2\n')
+    assert not_text(p) is None
+    for text in ('<Part no="7"/>\n<Data>1,2</Data>\n', '<!DOCTYPE part [<!ENTITY a "b">]>\n<part>\n<x>1</x>\n</part>\n',
+                 '<Part>\n  <x>1</x>\n</Part>\n', '<Part>text</Part>\n', '<?xml version="1.0"?>\n1,2\n'):
+        p.write_text(text)
+        assert "is an XML file" in not_text(p), text
+    for text in ("<Operator: J. Smith>\n1,2\n", "<Part>\nx,y\n1,2\n", '<Part no=7>\n<a>\n', "<Probe 3> <x>\n"):
+        p.write_text(text)
+        assert not_text(p) is None, text
+    p.write_text("Machine: VMC\n<Operator>J. Smith</Operator>\n1,2\n")
+    assert not_text(p) is None and "XML" in not_text(p, skip_rows=1)
+
+
+def test_positioning_reads_below_a_markup_preamble_it_skips(tmp_path):
+    """The table reader of positioning and multilateration (its own path, not the points reader's)."""
+    p = tmp_path / "axis.csv"
+    p.write_text('<Machine id="VMC-1">laser test</Machine>\n'
+                 + (REPO / "docs/examples/positioning.csv").read_text(encoding="utf-8"), encoding="utf-8")
+    one_line(*cli("positioning", p)[::2], "is an XML file (root <Machine>", "give --skip-rows 1")
+    code, out, err = cli("positioning", p, "--skip-rows", 1, "--json")
+    code0, out0, _ = cli("positioning", REPO / "docs/examples/positioning.csv", "--json")
+    assert code == code0 == 0, err
+    assert json.loads(out)["A"] == json.loads(out0)["A"]

@@ -24,7 +24,7 @@ from datasets.io.textfile import (_open_text, check_line_lengths, file_encoding,
 def _diagnose(layout: Layout, idx, skip_rows: int):
     """Locate the first bad line (runs only after the fast parser failed)."""
     name = layout.name
-    for lineno, ln in enumerate(read_lines(name), start=1):
+    for lineno, ln in enumerate(read_lines(name, skip_rows=layout.skip_rows), start=1):
         ln = ln.strip()
         if lineno < layout.first_data_line or not ln or ln.startswith(COMMENT_PREFIXES):
             continue
@@ -51,7 +51,7 @@ def _diagnose(layout: Layout, idx, skip_rows: int):
 
 def _check_last_line(layout: Layout, idx) -> None:
     """:func:`refuse_cut_last_line` for a file read by :func:`read_columns` (the reference: the sniffed data rows)."""
-    last = unterminated_last_line(layout.name)
+    last = unterminated_last_line(layout.name, layout.skip_rows)
     if last is None:
         return
     toks = _split(last[1].strip(), layout.sep)
@@ -74,7 +74,7 @@ def _read_small(layout: Layout, usecols: list[int]) -> dict | None:
     except OSError:
         return None
     rows, fields = [], []
-    for lineno, raw in enumerate(read_lines(layout.name), start=1):
+    for lineno, raw in enumerate(read_lines(layout.name, skip_rows=layout.skip_rows), start=1):
         ln = raw.strip()
         if lineno < layout.first_data_line or not ln or ln.startswith(layout.comment):
             continue
@@ -106,14 +106,15 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
             _diagnose(layout, idx, skip_rows)
         _check_last_line(layout, idx)
         return small
-    check_line_lengths(layout.name)
+    check_line_lengths(layout.name, layout.skip_rows)
     dtype = {k: (object if k in strings else np.float64) for k in usecols}
 
     def parse(usecols=usecols, *, decimal="," if layout.decimal_comma else ".", thousands=None, minus=False):
         """The columns ``usecols`` by pandas' C parser (``minus``: from a stream writing U+2212 as '-')."""
         try:
             with contextlib.ExitStack() as stack:
-                source = _AsciiMinus(stack.enter_context(_open_text(layout.name))) if minus else layout.name
+                source = (_AsciiMinus(stack.enter_context(_open_text(layout.name, skip_rows=layout.skip_rows)))
+                          if minus else layout.name)
                 frame = pd.read_csv(source, sep=r"\s+" if layout.sep is None else layout.sep, header=None,
                                     skiprows=layout.first_data_line - 1, dtype={k: dtype[k] for k in usecols},
                                     usecols=None if len(usecols) == layout.ncol else usecols, decimal=decimal,
@@ -127,7 +128,7 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
 
     minus = False
     cols, ok = parse()
-    if not ok and _holds_unicode_minus(layout.name):   # parsed again, its minus signs in ASCII
+    if not ok and _holds_unicode_minus(layout.name, layout.skip_rows):   # parsed again, its minus signs in ASCII
         minus = True
         cols, ok = parse(minus=True)
     if not ok:
@@ -178,7 +179,7 @@ def _check_grouping(layout: Layout, idx, cols: dict, parse_grouped) -> None:
 def _data_fields(layout: Layout, columns) -> list:
     """(line number, fields ``columns``) of every data line of ``layout``'s file (an inline comment cut off)."""
     out = []
-    for lineno, raw in enumerate(read_lines(layout.name), start=1):
+    for lineno, raw in enumerate(read_lines(layout.name, skip_rows=layout.skip_rows), start=1):
         ln = raw.split(layout.comment, 1)[0].strip()
         if lineno < layout.first_data_line or not ln:
             continue
@@ -188,9 +189,9 @@ def _data_fields(layout: Layout, columns) -> list:
     return out
 
 
-def _holds_unicode_minus(path) -> bool:
+def _holds_unicode_minus(path, skip_rows: int = 0) -> bool:
     """Whether the text of ``path`` holds a Unicode minus sign (U+2212), read in blocks of 4 Mi characters."""
-    with _open_text(path) as fh:
+    with _open_text(path, skip_rows=skip_rows) as fh:
         while block := fh.read(1 << 22):
             if "\u2212" in block:
                 return True

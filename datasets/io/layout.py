@@ -32,6 +32,7 @@ class Layout:
     preamble: list = field(default_factory=list)  # non-comment lines skipped with skip_rows
     sample: list = field(default_factory=list)    # (line number, line) of the first data lines read by sniff
     units_line: int = 0             # 1-based line of a units row under the header (0: none)
+    skip_rows: int = 0              # the lines --skip-rows skipped (never refused as markup when read again)
 
     def index(self, names, default=(0, 1)) -> list[int]:
         """Column indices of ``names`` (case-insensitive header names or 0-based integers)."""
@@ -68,7 +69,7 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     name = os.fspath(path)
     if skip_rows < 0:
         raise DataFileError(f"{name}: --skip-rows must be >= 0, got {skip_rows}")
-    fh = _open_text(name)
+    fh = _open_text(name, skip_rows=skip_rows)
     note_encoding(name)
     body, preamble, comment = [], [], "#"
     try:
@@ -102,7 +103,8 @@ def sniff(path, skip_rows: int = 0) -> Layout:
             raise NumberFormatError(f"{name} line {body[0][0]}: {why[0]}")
     if numeric:
         decimal_comma = _marks(name, body, sep, decimal_comma)
-        return Layout(name, sep, decimal_comma, None, 0, body[0][0], len(head), comment, preamble, body)
+        return Layout(name, sep, decimal_comma, None, 0, body[0][0], len(head), comment, preamble, body,
+                      skip_rows=skip_rows)
     if _units_row(head) is not None:
         above = _names_above(skip_rows)
         raise DataFileError(f"{name} line {body[0][0]}: the header {first!r} names units, not columns; put the "
@@ -123,11 +125,12 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     if max(widths) < named:           # every row shorter than the header: said before any column is looked up
         lineno, ln = body[1]
         k = len(_split(ln, sep))
+        hint = preamble_hint(name, body[0][0], skip_rows=skip_rows)
         raise DataFileError(f"{name} line {lineno}: {k} field{'s' if k != 1 else ''} where the header (line "
-                            f"{body[0][0]}) has {len(head)}: {ln!r}{preamble_hint(name, body[0][0])}")
+                            f"{body[0][0]}) has {len(head)}: {ln!r}{hint}")
     decimal_comma = _marks(name, body[1:], sep, decimal_comma)
     return Layout(name, sep, decimal_comma, head, body[0][0], body[1][0], len(head), comment, preamble, body[1:],
-                  units_line)
+                  units_line, skip_rows)
 
 
 def _marks(name, body, sep, decimal_comma: bool) -> bool:
@@ -162,17 +165,17 @@ def _numeric_fields(line: str) -> tuple[str | None, int] | None:
 def skip_rows_hint(layout: Layout, before: int | None = None) -> str:
     """'; or, if ... is a preamble, give --skip-rows N' naming the first row of numbers (and keeping the header
     line just above it when it has as many fields), or '' when no such row is in the first lines."""
-    return preamble_hint(layout.name, layout.header_line, before)
+    return preamble_hint(layout.name, layout.header_line, before, skip_rows=layout.skip_rows)
 
 
-def preamble_hint(name, header_line: int = 1, before: int | None = None) -> str:
+def preamble_hint(name, header_line: int = 1, before: int | None = None, skip_rows: int = 0) -> str:
     """:func:`skip_rows_hint` for the file ``name`` whose header was taken from line ``header_line``: the hint
     when the first data row (:func:`_numeric_fields`; a direction or run label allowed) lies below the line
     after that header (and after line ``before``, the line an error names), else ''."""
     previous = None
     name = os.fspath(name)
     try:
-        with _open_text(name) as fh:
+        with _open_text(name, skip_rows=skip_rows) as fh:
             for lineno, raw in iter_lines(fh, name):
                 ln = raw.strip()
                 if lineno < header_line or not ln or ln.startswith(COMMENT_PREFIXES):

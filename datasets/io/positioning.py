@@ -155,7 +155,7 @@ def preamble_axis(path, skip_rows: int) -> tuple[str, int, str] | None:
     from itertools import islice
     from datasets.io.textfile import _open_text, iter_lines
     name = str(path)
-    with _open_text(name, "") as fh:
+    with _open_text(name, "", skip_rows) as fh:
         for lineno, line in islice(iter_lines(fh, name), skip_rows):
             m = re.fullmatch(r"\s*(?:axis|achse|axe|asse)\s*(?:name)?\s*[;:,\t=]\s*\"?([^;,\t\"]+?)\"?\s*[;,\t]*\s*",
                              line.lstrip("\ufeff").rstrip("\r\n"), re.IGNORECASE)
@@ -229,7 +229,7 @@ def _spaced_names(df, lines, path, skip_rows: int):
         return df
     from datasets.io.delimiters import COMMENT_PREFIXES
     from datasets.io.textfile import read_lines
-    text = read_lines(path, "")
+    text = read_lines(path, "", skip_rows)
     k = next((i for i in range(skip_rows, lines[0] - 1) if text[i].strip()
               and not text[i].lstrip().startswith(COMMENT_PREFIXES)), None)
     if k is None or re.search(r"[,;|\t]", text[k].strip()):        # not a table separated by spaces
@@ -248,7 +248,7 @@ def _spaced_names(df, lines, path, skip_rows: int):
     return out
 
 
-def _trailer(df, lines, empty, path):
+def _trailer(df, lines, empty, path, skip_rows: int = 0):
     """The table without the lines laser software writes after it (``Environment compensation: automatic``, ``End
     of data``): rows from the first incomplete one on are dropped, with a warning naming them, when a blank line
     separates them from the table and none of them is a complete row; otherwise the first incomplete row is refused
@@ -259,7 +259,7 @@ def _trailer(df, lines, empty, path):
     first = df.iloc[:, 0].fillna("").astype(str).str.strip()
     if first.iloc[k] and NUMBER.fullmatch(first.iloc[k]):           # a data row with a field missing
         raise DataFileError(f"{path} line {lines[k]}: missing field(s)")
-    text = read_lines(path, "")
+    text = read_lines(path, "", skip_rows)
     quoted = text[lines[k] - 1].strip()[:60]
     after_blank = k > 0 and any(not text[i].strip() for i in range(lines[k - 1], lines[k] - 1))
     numeric = first.iloc[k:].map(lambda v: bool(v) and NUMBER.fullmatch(v) is not None).to_numpy(dtype=bool)
@@ -281,7 +281,7 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
     df = _spaced_names(df, lines, path, skip_rows)
     empty = (df.isna() | df.apply(lambda c: c.astype(str).str.strip() == "")).any(axis=1).to_numpy()
     if empty.any():
-        df, lines = _trailer(df, lines, empty, path)
+        df, lines = _trailer(df, lines, empty, path, skip_rows)
     lines = np.array(lines)
     target_keys = {parse_name(n)[0] for n in TARGET_NAMES}
     role_of = {parse_name(n)[0]: role for role, names in ROLE_NAMES.items() for n in names}

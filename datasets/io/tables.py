@@ -22,7 +22,7 @@ def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, sk
     if skip_rows < 0:
         raise DataFileError(f"--skip-rows must be >= 0, got {skip_rows}")
     kept, lines = [], []
-    all_lines = read_lines(path, "")
+    all_lines = read_lines(path, "", skip_rows)
     note_encoding(path)
     for k, line in enumerate(all_lines, start=1):
         if k > skip_rows and line.strip() and not line.lstrip().startswith(COMMENT_PREFIXES):
@@ -57,7 +57,7 @@ def read_table(path, *, no_data_hint: str = "", keep_default_na: bool = True, sk
     cells = df.fillna("").astype(str).apply(lambda c: c.str.strip()).values.tolist()
     marks = decimal_marks(path, zip(lines[1:], cells))
     decimal_comma = decimal_comma if marks is None else marks
-    last = unterminated_last_line(path)
+    last = unterminated_last_line(path, skip_rows)
     if last is not None and last[0] == lines[-1]:
         refuse_cut_last_line(path, (last[0], cells[-1]), cells[:-1][:SNIFF_LINES], range(len(df.columns)))
     if decimal_comma:

@@ -123,11 +123,11 @@ ZIP_SPREADSHEETS = {".xlsx": "an Excel workbook", ".xlsm": "an Excel workbook", 
                     ".ods": "an OpenDocument spreadsheet", ".numbers": "a Numbers spreadsheet"}
 
 
-def not_text(path) -> str | None:
+def not_text(path, skip_rows: int = 0) -> str | None:
     """What is wrong when ``path`` is a spreadsheet, an archive, a PDF or an image rather than a text table (its
     first bytes, :data:`NOT_TEXT`): 'x.xlsx is an Excel workbook (a zip archive), not a text table: save it as
-    CSV ...', or XML, HTML or JSON (:func:`markup`); None for anything else (also when it cannot be opened: the
-    reader then says why)."""
+    CSV ...', or XML, HTML or JSON (:func:`markup`, below the ``skip_rows`` lines --skip-rows skips); None for
+    anything else (also when it cannot be opened: the reader then says why)."""
     name = os.fspath(path)
     try:
         with open_regular(name, encoding=None) as fh:
@@ -142,64 +142,108 @@ def not_text(path) -> str | None:
                     what, todo = f"{sheet} (a zip archive)", ("save it as CSV (UTF-8) from the spreadsheet program "
                                                               "(Excel: File > Save As > CSV UTF-8) and give that file")
             return f"{name} is {what}, not a text table: {todo}"
-    return markup(name)
+    return markup(name, skip_rows)
 
 
 #: characters of a file's start read to tell XML or JSON (:func:`markup`)
 MARKUP_HEAD_CHARS = 4096
-#: JSON files up to this size (bytes) are parsed to tell a JSON array from a table starting with '[' (an INI-like
-#: '[General]' preamble) and to recognise fitbench's own results
+#: JSON files up to this size (bytes) are parsed to tell a JSON value from a table starting with '[' (an INI-like
+#: '[General]' preamble) or '{' (a '{Probe 3}' preamble), and to recognise fitbench's own results
 MARKUP_PARSE_BYTES = 16 << 20
 
+_XML_NAME = r"[A-Za-z_][\w.:-]*"
+#: an XML element's start tag: a name, attributes name="value" (or 'value'), '>' or '/>' ('<Operator: J. Smith>'
+#: is none: 'J.' is no attribute)
+_XML_START_TAG = re.compile(rf"<({_XML_NAME})(?:\s+{_XML_NAME}\s*=\s*(?:\"[^\"<]*\"|'[^'<]*'))*\s*(/?)>")
+#: what may stand before the root element: comments, a document type declaration, processing instructions
+_XML_PROLOG = re.compile(r"(?:\s+|<!--.*?-->|<!doctype[^<>\[]*(?:\[.*?\])?\s*>|<\?.*?\?>)*", re.I | re.S)
+#: a large file's JSON object start, '{"name":' (or '{}'), when it is too large to be parsed
+_JSON_OBJECT_START = re.compile(r'\{\s*(?:"(?:[^"\\\n]|\\.)*"\s*:|\})')
 
-def markup(path) -> str | None:
+
+def _xml_root(head: str) -> str | None:
+    """The root element's name when ``head`` (a file's start, without leading blanks) is markup: an XML declaration,
+    or (after comments, a doctype, processing instructions) a start tag that closes and is followed by another tag
+    or by text and its own end tag; else None (a table whose first line is '<Operator: J. Smith>' or '<Probe 3>')."""
+    if re.match(r"<\?xml[\s?]", head, re.I):
+        root = re.search(rf"<({_XML_NAME})", re.sub(r"<\?.*?\?>|<!--.*?-->|<!.*?>", "", head, flags=re.S))
+        return root.group(1) if root else ""
+    rest = head[_XML_PROLOG.match(head).end():]
+    tag = _XML_START_TAG.match(rest)
+    if not tag:
+        return None
+    after = rest[tag.end():]
+    if re.match(rf"\s*<(?:/?{_XML_NAME}|!--)", after) or \
+            (not tag.group(2) and re.match(rf"[^<]*</{re.escape(tag.group(1))}\s*>", after)):
+        return tag.group(1)
+    return None
+
+
+def _markup_preamble_hint(head: str, skip_rows: int) -> str:
+    """'; if line 1 is a preamble above a table, give --skip-rows 1' when only the first lines of ``head`` are markup
+    (no '<' below them: '<Operator>J. Smith</Operator>' above a CSV table), else ''."""
+    lines = head.splitlines()
+    k = next((i for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("<")), None)
+    if k is None or "<" in "\n".join(lines[k:]):
+        return ""
+    first = int(skip_rows) + 1
+    where = f"line {first} is" if k == 1 else f"lines {first}-{first + k - 1} are"
+    return f"; if {where} a preamble above a table, give --skip-rows {int(skip_rows) + k}"
+
+
+def markup(path, skip_rows: int = 0) -> str | None:
     """What is wrong when ``path`` is XML (or HTML) or JSON rather than a text table, from its first characters in
-    its encoding: 'test.b5r is an XML file (root <BallbarTest>: an instrument's own format?), not a text table:
-    export ...', 'r.json is JSON (a fitbench result ...)'; None for anything else. A text table (or its preamble)
-    never starts with '<' or '{'; a file starting with '[' is JSON only when it parses as JSON."""
+    its encoding below the ``skip_rows`` lines --skip-rows skips (a skipped line is never refused): 'test.b5r is an
+    XML file (root <BallbarTest>: an instrument's own format?), not a text table: export ...', 'r.json is JSON (a
+    fitbench result ...)'; None for anything else. XML only when the start looks like markup (:func:`_xml_root`),
+    JSON only when it parses as JSON (a table's preamble may start with '<', '{' or '[')."""
     import json
     name = os.fspath(path)
     try:
         with open_regular(name, encoding=file_encoding(name)) as fh:
+            for _ in range(max(int(skip_rows), 0)):
+                if not fh.readline(MAX_LINE_CHARS + 1):
+                    break
             head = fh.read(MARKUP_HEAD_CHARS)
+            rest = (head + fh.read()) if head.lstrip("\ufeff \t\r\n")[:1] in ("{", "[") and \
+                os.path.getsize(name) <= MARKUP_PARSE_BYTES else None
     except (OSError, InvalidInputError, UnicodeDecodeError, ValueError):
         return None
-    head = head.lstrip("\ufeff \t\r\n")
+    raw, head = head.lstrip("\ufeff"), head.lstrip("\ufeff \t\r\n")
     if head.startswith("<"):
         if re.match(r"<(!doctype\s+html|html[\s>])", head, re.I):
             return (f"{name} is an HTML page, not a text table: save the measurement file itself (not the web page "
                     "showing it) as CSV or text")
-        if not re.match(r"<(\?xml|!--|!doctype|[A-Za-z_])", head, re.I):
+        root = _xml_root(head)
+        if root is None:
             return None
-        root = re.search(r"<([A-Za-z_][\w.:-]*)", re.sub(r"<\?.*?\?>|<!--.*?-->|<!.*?>", "", head, flags=re.S))
-        what = f"root <{root.group(1)}>: " if root else ""
+        what = f"root <{root}>: " if root else ""
         return (f"{name} is an XML file ({what}an instrument's own format?), not a text table: export the measured "
-                "points as CSV or text from the instrument software (one point per line, columns named in a header)")
+                "points as CSV or text from the instrument software (one point per line, columns named in a header)"
+                + _markup_preamble_hint(raw, skip_rows))
     if not head.startswith(("{", "[")):
         return None
-    data = None
-    try:
-        if os.path.getsize(name) <= MARKUP_PARSE_BYTES:
-            with open_regular(name, encoding=file_encoding(name)) as fh:
-                data = json.loads(fh.read().lstrip("\ufeff"))
-    except (OSError, InvalidInputError, UnicodeDecodeError, ValueError):
-        if head.startswith("["):
-            return None     # '[General]', '[mm]': an instrument's preamble or header, not JSON
-    if head.startswith("[") and data is None:
-        return None
-    if isinstance(data, dict) and isinstance(data.get("units"), dict):
+    data, parsed = None, False
+    if rest is not None:
+        try:
+            data, parsed = json.loads(rest.lstrip("\ufeff \t\r\n")), True
+        except (ValueError, RecursionError):   # '[General]', '[mm]', '{Probe 3}': a preamble or header, not JSON
+            return None
+    elif not (head.startswith("{") and _JSON_OBJECT_START.match(head)):
+        return None          # too large to parse: JSON only when it starts as a JSON object does
+    if parsed and isinstance(data, dict) and isinstance(data.get("units"), dict):
         return (f"{name} is JSON (a fitbench result, as --json writes it: 'fitbench history DIR' trends a folder of "
                 "them), not a points table: give the file of measured points the result was made from")
     return (f"{name} is a JSON file, not a text table: export the measured points as CSV or text (one point per "
             "line, columns named in a header)")
 
 
-def _open_text(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'"):
+def _open_text(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'", skip_rows: int = 0):
     """``path`` opened as text in its encoding (:func:`file_encoding`: UTF-8 with or without BOM, UTF-16 with
-    BOM, else Windows-1252), refusing a FIFO or a device, a spreadsheet, an archive or a PDF (:func:`not_text`);
-    errors are one line."""
+    BOM, else Windows-1252), refusing a FIFO or a device, a spreadsheet, an archive or a PDF, or XML or JSON below
+    the ``skip_rows`` lines --skip-rows skips (:func:`not_text`); errors are one line."""
     name = os.fspath(path)
-    if (why := not_text(name)) is not None:
+    if (why := not_text(name, skip_rows)) is not None:
         raise DataFileError(why)
     try:
         return open_regular(name, encoding=file_encoding(name))
@@ -233,19 +277,21 @@ def iter_lines(fh, name):
         yield lineno, ascii_minus(line)
 
 
-def read_lines(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'") -> list[str]:
-    """The lines of a text file (without line ends), read with :func:`iter_lines`."""
+def read_lines(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'",
+               skip_rows: int = 0) -> list[str]:
+    """The lines of a text file (without line ends), read with :func:`iter_lines`; ``skip_rows``: the lines
+    --skip-rows skips, never refused as markup (all lines are returned)."""
     name = os.fspath(path)
-    with _open_text(name, missing_hint) as fh:
+    with _open_text(name, missing_hint, skip_rows) as fh:
         return [ln.rstrip("\r\n") for _, ln in iter_lines(fh, name)]
 
 
-def check_line_lengths(path) -> None:
+def check_line_lengths(path, skip_rows: int = 0) -> None:
     """Refuse a file holding a line longer than :data:`MAX_LINE_CHARS` bytes (vectorised over 4 MiB blocks),
-    before a parser that reads a whole line into memory sees it."""
+    before a parser that reads a whole line into memory sees it (``skip_rows``: as :func:`read_lines`)."""
     name = os.fspath(path)
     limit = (MAX_LINE_CHARS + 1) * CODE_UNIT_BYTES.get(file_encoding(name), 1)   # bytes; + 1: a CR before the LF
-    with _open_text(name) as text:
+    with _open_text(name, skip_rows=skip_rows) as text:
         fh = text.buffer
         lineno, run = 1, 0
         while True:
@@ -270,15 +316,15 @@ def check_line_lengths(path) -> None:
                 raise _too_long(name, lineno)
 
 
-def unterminated_last_line(path) -> tuple[int, str] | None:
+def unterminated_last_line(path, skip_rows: int = 0) -> tuple[int, str] | None:
     """(line number, text) of the last line of ``path`` when the file does not end with a line end (LF or CR),
     else None. Reads the last byte; only a file without a final line end is read again, counting its lines
-    over 4 MiB blocks (UTF-16/32 files are decoded)."""
+    over 4 MiB blocks (UTF-16/32 files are decoded; ``skip_rows``: as :func:`read_lines`)."""
     name = os.fspath(path)
     enc = file_encoding(name)
     if enc in CODE_UNIT_BYTES:
         last = None
-        with _open_text(name) as fh:
+        with _open_text(name, skip_rows=skip_rows) as fh:
             for last in iter_lines(fh, name):
                 pass
         return None if last is None or last[1].endswith(("\n", "\r")) else (last[0], last[1])

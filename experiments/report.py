@@ -69,14 +69,15 @@ def _command_folder(path: Path) -> str:
 
 
 def study_command_names(results: Path, names: list[str], known: dict) -> dict[str, str]:
-    """{study: how a command names it}: a project study by its name; any other by the TOML file its ``meta.json``
-    records (``config_file``), relative to the current folder when it lies inside it, else by its file name
-    (``NAME.toml``: the report names no folder of this machine), quoted for a shell."""
+    """{study: how a command names it}: a project study by its name; any other (also one named like a project
+    study: ``experiments.verdict.is_project_study``) by the TOML file its ``meta.json`` records (``config_file``),
+    relative to the current folder when it lies inside it, else by its file name (``NAME.toml``: the report names
+    no folder of this machine), quoted for a shell."""
     import shlex
-    from experiments.verdict import recorded_config
+    from experiments.verdict import is_project_study, recorded_config
     out = {}
     for n in names:
-        if n in known:
+        if is_project_study(results / n, known):
             out[n] = n
             continue
         path, shown = recorded_config(results / n), f"{n}.toml"
@@ -324,6 +325,10 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
         except InvalidInputError:
             continue
     present = sorted(p.name for p in results.iterdir() if is_study_folder(p)) if results.exists() else []
+    # a user's study named like a project study is not that study (its meta.json records its own TOML): its
+    # commands name that TOML, and the project study's declarations and default flag are not its own
+    from experiments.verdict import is_project_study
+    known = {n: c for n, c in known.items() if n not in present or is_project_study(results / n, known)}
     # a report of a results folder holds the studies in it; only the default folders (results/, results/quick/),
     # which a run of the default studies fills, name the default studies they lack as missing
     names = present + ([n for n, c in known.items() if c.get("default") and n not in present]

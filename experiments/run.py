@@ -211,7 +211,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
             "row_timeout_s": row_timeout, "environment": engine.environment(),
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
             "plugins": plugin_distributions(used), "results_sha256": results_sha256, "findings": findings,
-            "fingerprint": counts.pop("fingerprint"), "inputs": compare.inputs(cfg), "config_file": config_file(cfg)}
+            "fingerprint": counts.pop("fingerprint"), "inputs": compare.inputs(cfg), **config_file(cfg, out)}
     units = summary_units(summary, cfg)
     outputs.write_manifest(target, cfg, analysed, with_units(summary, units))   # its fallback table: units as summary.md
     template = (cfg.get("report") or {}).get("findings")
@@ -232,16 +232,26 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     return target
 
 
-def config_file(cfg) -> str:
+def config_file(cfg, out: Path) -> dict[str, str]:
     """The TOML a study was loaded from, as ``meta.json`` records it (what ``experiments.verify`` and the report's
-    commands run again): a project study's relative to the checkout (``experiments/configs/NAME.toml``), any other
-    by its absolute path."""
-    path = Path(cfg.folder).resolve() / f"{cfg['name']}.toml"
+    commands run again; ``experiments.verdict.recorded_config`` reads it back): ``config_file``, with
+    ``config_file_relative_to`` saying from where. A project study's relative to the checkout
+    (``experiments/configs/NAME.toml``); any other relative to the results folder ``out`` (``../studies/NAME.toml``)
+    when the TOML lies in the folder that holds ``out`` or, with ``out``, in the current folder, so that a results
+    folder committed with its TOML names no folder of the author's machine; else by its absolute path."""
     from experiments.provenance import REPO
-    try:
-        return path.relative_to(REPO).as_posix() if is_project_study(cfg) else str(path)
-    except ValueError:
-        return str(path)
+    path = Path(cfg.folder).resolve() / f"{cfg['name']}.toml"
+    if is_project_study(cfg):
+        try:
+            return {"config_file": path.relative_to(REPO).as_posix(), "config_file_relative_to": "checkout"}
+        except ValueError:
+            pass
+    results = Path(out).resolve()
+    for base in (results.parent, Path.cwd().resolve()):
+        if path.is_relative_to(base) and results.is_relative_to(base):
+            return {"config_file": Path(os.path.relpath(path, results)).as_posix(),
+                    "config_file_relative_to": "results folder"}
+    return {"config_file": str(path)}
 
 
 def _shorter(text, limit: int = 80) -> str:

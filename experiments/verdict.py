@@ -32,18 +32,36 @@ def results_sha256(folder: Path) -> str | None:
 
 
 def recorded_config(study_folder: Path) -> Path | None:
-    """The TOML file a study's ``meta.json`` records it ran from (``config_file``: relative to the checkout for a
-    project study, else absolute), None when it records none or is unreadable."""
+    """The TOML file a study's ``meta.json`` records it ran from (``config_file``, ``experiments.run.config_file``:
+    a project study's relative to the checkout; another relative to the results folder that holds
+    ``study_folder`` when ``config_file_relative_to`` says so, else absolute), None when it records none or is
+    unreadable."""
     from experiments.provenance import REPO
     try:
         with open_regular(Path(study_folder) / "meta.json") as fh:
-            value = json_value(fh.read()).get("config_file")
+            meta = json_value(fh.read())
+        value, base = meta.get("config_file"), meta.get("config_file_relative_to")
     except (OSError, ValueError, AttributeError):
         return None
     if not isinstance(value, str) or not value.endswith(".toml"):
         return None
     path = Path(value)
-    return path if path.is_absolute() else REPO / path
+    if path.is_absolute():
+        return path
+    return (Path(study_folder).parent / path).resolve() if base == "results folder" else REPO / path
+
+
+def is_project_study(study_folder: Path, known) -> bool:
+    """Whether the study in ``study_folder`` is the project's study of its name (``known``: the project's study
+    names): its ``meta.json`` records the project's ``experiments/configs/NAME.toml``, or no TOML (a run older than
+    that record: the name decides). A user's TOML may bear a project study's name (a config's name is only
+    required to match its file's): its results are not the project study's, and are rerun from that TOML."""
+    from experiments.config import CONFIG_DIR
+    name = Path(study_folder).name
+    if name not in known:
+        return False
+    recorded = recorded_config(study_folder)
+    return recorded is None or recorded.resolve() == (CONFIG_DIR / f"{name}.toml").resolve()
 
 
 def last_verdict(results: Path) -> dict | None:

@@ -32,21 +32,24 @@ from experiments.jsontext import json_value
 from experiments.compare import (IDENTITY, WORST_ROWS, compare_study, identity_columns,  # noqa: F401  (the library's names)
                                  reference_snapshot, verdict_after_run, verify)
 from experiments.verdict import VERDICT_FILE, last_verdict, results_sha256, verdict_markdown  # noqa: F401  (the report's reading side)
-from experiments.verdict import recorded_config
+from experiments.verdict import is_project_study, recorded_config
 from fitbench import __version__
 from methods import InvalidInputError
 
 
 def config_of(study: str, results: Path, known: dict) -> str:
-    """What to run to check ``study`` of ``results``: a project study by its name; any other by the TOML file its
-    ``meta.json`` records (``config_file``), refused in one line when that file is not there."""
-    if study in known:
+    """What to run to check ``study`` of ``results``: a project study by its name; any other (also one named like a
+    project study: :func:`experiments.verdict.is_project_study` decides by the TOML its ``meta.json`` records) by
+    that TOML file (``config_file``), refused in one line when that file is not there."""
+    if is_project_study(results / study, known):
         return study
     recorded = recorded_config(results / study)
     if recorded is None or not recorded.is_file():
+        who = (f"{study} in {results} ran from another TOML than the project's study of that name" if study in known
+               else f"{study} is not one of the project's studies")
         where = (f"its meta.json records {recorded}, which is not there" if recorded is not None else
                  "its meta.json records no TOML file (written by an older fitbench)")
-        raise InvalidInputError(f"{study} is not one of the project's studies and {where}; give its TOML file: "
+        raise InvalidInputError(f"{who} and {where}; give its TOML file: "
                                 f"python -m experiments.verify PATH/{study}.toml --results {results}")
     return str(recorded)
 

@@ -1,0 +1,70 @@
+"""A user's study is known by the TOML its ``meta.json`` records, not by its name: one named like a project study
+(``noise.toml``) is rerun and verified from that TOML (before: ``experiments.verify --results OUT`` ran the project's
+28,800-row noise study, and the report said ``python -m experiments.run noise``); the TOML is recorded relative to
+the results folder when it lies beside it (no folder of the author's machine in a committed meta.json), and found
+again after both are moved."""
+import json
+import shutil
+
+from experiments import config as configs
+from experiments import report, verify
+from experiments import run as runner
+from experiments.verdict import is_project_study, recorded_config
+
+STUDY = ('name = "{name}"\ntitle = "a personal study"\nseed = 1\nrepetitions = 1\n[[datasets]]\nsource = "circle"\n'
+         'label = "mine"\nparams = {{ radius = 5.0, noise = 0.01, n = 12 }}\n[[methods]]\nid = "circle.kasa"\n')
+
+
+def _run(*args):
+    assert runner.main([*args, "--jobs", "1", "--no-report"]) == 0
+
+
+def test_a_user_study_named_like_a_project_study_is_rerun_from_its_toml(tmp_path, monkeypatch, capsys):
+    assert "noise" in configs.available()
+    project = tmp_path / "project"
+    project.mkdir()
+    (project / "noise.toml").write_text(STUDY.format(name="noise"), encoding="utf-8")
+    monkeypatch.chdir(project)
+    _run("noise.toml", "--out", "res")
+    known = configs.available()
+    assert verify.config_of("noise", project / "res", known) == str((project / "noise.toml").resolve())
+    assert report.study_command_names(project / "res", ["noise"], known) == {"noise": "noise.toml"}
+    assert not is_project_study(project / "res" / "noise", known)
+    report.build(project / "res", project / "res" / "paper", log=lambda *a: None)
+    text = (project / "res" / "paper" / "report.md").read_text(encoding="utf-8")
+    assert "reproduce it with `python -m experiments.run noise.toml --out res`" in text, text
+    meta_text = (project / "res" / "noise" / "meta.json").read_text(encoding="utf-8")
+    meta = json.loads(meta_text)
+    assert (meta["config_file"], meta["config_file_relative_to"]) == ("../noise.toml", "results folder")
+    assert str(tmp_path) not in meta_text
+    # moved with its results folder (a clone of the user's repository elsewhere): still found, relative to it
+    monkeypatch.chdir(tmp_path)
+    shutil.move(project, tmp_path / "moved")
+    assert recorded_config(tmp_path / "moved" / "res" / "noise") == (tmp_path / "moved" / "noise.toml").resolve()
+    assert verify.config_of("noise", tmp_path / "moved" / "res", known) == str((tmp_path / "moved" / "noise.toml").resolve())
+
+
+def test_the_project_s_own_record_and_an_older_meta_json_are_the_project_study(tmp_path):
+    known = configs.available()
+    for record in ({"config_file": "experiments/configs/noise.toml", "config_file_relative_to": "checkout"},
+                   {"config_file": "experiments/configs/noise.toml"}, {}):
+        folder = tmp_path / "res" / "noise"
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "meta.json").write_text(json.dumps({"quick": False, **record}), encoding="utf-8")
+        assert is_project_study(folder, known), record
+        assert verify.config_of("noise", tmp_path / "res", known) == "noise"
+
+
+def test_a_toml_outside_the_current_and_the_results_folder_s_is_recorded_whole(tmp_path, monkeypatch):
+    (tmp_path / "studies").mkdir()
+    (tmp_path / "work").mkdir()
+    (tmp_path / "studies" / "mine.toml").write_text(STUDY.format(name="mine"), encoding="utf-8")
+    monkeypatch.chdir(tmp_path / "work")
+    cfg = configs.load(str(tmp_path / "studies" / "mine.toml"))
+    assert runner.config_file(cfg, tmp_path / "work" / "res") == {"config_file": str((tmp_path / "studies" / "mine.toml").resolve())}
+    assert runner.config_file(cfg, tmp_path / "res") == {"config_file": "../studies/mine.toml",
+                                                         "config_file_relative_to": "results folder"}
+    monkeypatch.chdir(tmp_path)
+    assert runner.config_file(cfg, tmp_path / "work" / "res") == {"config_file": "../../studies/mine.toml",
+                                                                  "config_file_relative_to": "results folder"}
+

@@ -94,6 +94,7 @@ def _reproduce(names: list[str], known: dict, quick: bool, folder_arg: str, call
     """The command(s) that reproduce the studies of this report (Markdown): the default studies' own command when
     the report holds just them in their folder, else one per study: a known study by name, a user's study by its
     TOML file (``called``: :func:`study_command_names`; ``meta.json`` records the config it ran)."""
+    from experiments.render.markdown import md_code
     from experiments.render.page import md_escape
     if not names:   # every study of the folder is broken or unfinished: no command made what is shown
         return "no study in it is finished, so none can be reproduced from it (each study below says why)"
@@ -102,9 +103,9 @@ def _reproduce(names: list[str], known: dict, quick: bool, folder_arg: str, call
     defaults = {n for n, c in known.items() if c.get("default")}
     every_default = bool(defaults) and defaults <= set(names)
     rest = [n for n in names if not (every_default and n in defaults)]
-    commands = [f"`python -m experiments.run{q}{out}` (the default studies)"] if every_default else []
-    if rest:
-        commands.append(f"`python -m experiments.run {md_escape(' '.join(called[n] for n in rest))}{q}{out}`")
+    commands = [f"{md_code(f'python -m experiments.run{q}{out}')} (the default studies)"] if every_default else []
+    if rest:   # a command is shown literally (a code span), never Markdown-escaped: it is copied into a shell
+        commands.append(md_code(f"python -m experiments.run {' '.join(called[n] for n in rest)}{q}{out}"))
     own = [n for n in names if n not in known]
     # the files' names are user text (escaped); `meta.json` is the builder's own code span
     note = (f" ({md_escape(', '.join(called[n] for n in own))}: the study's TOML file, wherever it is; the config "
@@ -309,6 +310,7 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     wrote (the next build deletes only those files). User text is text: see ``experiments.render.page``."""
     from markupsafe import Markup
     from experiments.render.document import write_report_tex
+    from experiments.render.markdown import md_code
     from experiments.render.page import Document, markdown_table, md_escape
     from experiments.render.report_tables import html_table, text_frame
     from experiments.verdict import study_verdicts
@@ -375,7 +377,7 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     doc = Document()
     doc.heading(1, "fitbench: comparison report")
     done_names = [e[2] for e in entries if e[4] is not None]
-    doc.prose(f"Built from `{md_escape(_shown(results))}` by `python -m experiments.report`; "
+    doc.prose(f"Built from {md_code(_shown(results))} by `python -m experiments.report`; "
               f"{_reproduce(done_names, known, folder_quick, folder_arg, called)}. "
               "Interactive explorer (offline): [explorer.html](explorer.html).")
     abstract_at = len(doc.parts)
@@ -448,8 +450,8 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
             if problem == "missing":
                 default = known.get(name, {}).get("default", False)
                 command = f"python -m experiments.run {name}{missing_args}"
-                doc.prose(f"**Missing**: no results in `{md_escape(_shown(results / name))}`. Run "
-                          f"`{md_escape(command)}`" + ("" if default else " (not a default study)") + ".")
+                doc.prose(f"**Missing**: no results in {md_code(_shown(results / name))}. Run "
+                          f"{md_code(command)}" + ("" if default else " (not a default study)") + ".")
                 # the PDF names the folder in words: a long path is one unbreakable word on the page
                 tex_studies[-1]["findings"] = (f"Missing: no results. Run python -m experiments.run {name}"
                                                f"{' --quick' if folder_quick else ''}"

@@ -186,12 +186,13 @@ def study_verdicts(results: Path, studies: list[str], reasons: dict[str, str] | 
 def verdict_markdown(results: Path, quick: bool = False, shown: str | None = None) -> list[str]:
     """Lines for the report: the current verdicts in one sentence (out-of-date ones are not counted). The command it
     suggests checks ``results`` (``shown``: how to name it; with --quick for a folder of quick runs)."""
+    from experiments.render.markdown import md_code
     from experiments.render.page import md_escape
     current, stale = current_entries(results)
     if not current:
         q, folder = grid_options(results, quick, shown)
         command = f"python -m experiments.verify{q}{' --results' + folder if folder else ''} --write-verdict"
-        return [f"No current reproducibility verdict: run `{md_escape(command)}`"
+        return [f"No current reproducibility verdict: run {md_code(command)}"
                 + (f" (the last one judged other results for {len(stale)} "
                    f"{'study' if len(stale) == 1 else 'studies'})" if stale else "") + "."]
     changed = [k for k, e in current.items() if not e.get("agree") and _other_code(e)]

@@ -2,8 +2,12 @@
 (``noise.toml``) is rerun and verified from that TOML (before: ``experiments.verify --results OUT`` ran the project's
 28,800-row noise study, and the report said ``python -m experiments.run noise``); the TOML is recorded relative to
 the results folder when it lies beside it (no folder of the author's machine in a committed meta.json), and found
-again after both are moved."""
+again after both are moved. The report's commands are code spans shown literally: a folder named ``R&D #1 [a] ~{b}!``
+is not Markdown-escaped inside them (before: ``'R\\&D...'``, a path that does not exist)."""
+import html
 import json
+import re
+import shlex
 import shutil
 
 from experiments import config as configs
@@ -68,3 +72,32 @@ def test_a_toml_outside_the_current_and_the_results_folder_s_is_recorded_whole(t
     assert runner.config_file(cfg, tmp_path / "work" / "res") == {"config_file": "../../studies/mine.toml",
                                                                   "config_file_relative_to": "results folder"}
 
+
+def test_the_report_s_commands_are_shown_literally(tmp_path, monkeypatch):
+    folder = tmp_path / "R&D #1 [a] ~{b}!"
+    folder.mkdir()
+    (folder / "plain.toml").write_text(STUDY.format(name="plain"), encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    out = f"{folder.name}/res"
+    _run(f"{folder.name}/plain.toml", "--out", out)
+    report.build(tmp_path / out, tmp_path / out / "paper", log=lambda *a: None)
+    md = (tmp_path / out / "paper" / "report.md").read_text(encoding="utf-8")
+    page = (tmp_path / out / "paper" / "report.html").read_text(encoding="utf-8")
+    spans = {"md": re.findall(r"(?:reproduce it with|reproducibility verdict: run) (`+) ?(.*?) ?\1", md),
+             "html": [(None, html.unescape(c)) for c in re.findall(
+                 r"(?:reproduce it with|reproducibility verdict: run) <code>(.*?)</code>", page)]}
+    for kind, found in spans.items():
+        commands = [shlex.split(c) for _, c in found]
+        assert [c[:3] for c in commands] == [["python", "-m", "experiments.run"], ["python", "-m", "experiments.verify"]], (kind, found)
+        assert commands[0][3:] == [f"{folder.name}/plain.toml", "--out", out], (kind, found)
+        assert commands[1][3:] == ["--results", out, "--write-verdict"], (kind, found)
+        assert (tmp_path / commands[0][3]).is_file()
+
+
+def test_a_code_span_shows_any_text_as_it_is():
+    """Backticks in the text: a longer fence, padded where the text starts or ends with one (CommonMark 6.1)."""
+    from experiments.render.markdown import md_code
+    from experiments.render.page import prose_html
+    for text in ("a`b", "`x", "x``", " lead", "R&D #1 [a] ~{b}! <i> \\ *x* _y_ |"):
+        shown = re.fullmatch(r"<p><code>(.*)</code></p>", str(prose_html(md_code(text))).strip())
+        assert shown and html.unescape(shown.group(1)) == text, (text, md_code(text))

@@ -15,6 +15,17 @@ def md_escape(text) -> str:
     return _MD_SPECIAL.sub(lambda m: "\\" + m.group(0), re.sub(r"\s+", " ", str(text))).strip()
 
 
+def md_code(text) -> str:
+    """``text`` as a Markdown code span showing it literally (a command to copy): no backslash escape (a code span
+    shows backslashes as they are), a fence of one backtick more than the longest run of backticks in it, padded
+    with a space where it starts or ends with a backtick or a space (CommonMark 0.31, 6.1 "Code spans");
+    whitespace and line breaks folded into one space."""
+    text = re.sub(r"\s+", " ", str(text))
+    fence = "`" * (max(map(len, re.findall(r"`+", text)), default=0) + 1)
+    pad = " " if text[:1] in ("`", " ") or text[-1:] in ("`", " ") else ""
+    return f"{fence}{pad}{text}{pad}{fence}"
+
+
 def markdown_table(df, floatfmt: str = ".7g", *, escape: bool = True, formats: dict | None = None) -> str:
     """``df`` as a GitHub (pipe) Markdown table by pandas' ``DataFrame.to_markdown`` (tabulate): floats in
     ``floatfmt`` (NaN empty) or, for a column ``formats`` names, by its function (value -> text), every other cell

@@ -97,3 +97,18 @@ def test_an_argument_error_points_at_the_help_of_the_subcommand_that_refused(cap
     err = capsys.readouterr().err
     assert err.startswith("fitbench: error: ") and err.rstrip().endswith(f"(see '{prog} --help')"), err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv, prog, extras", [
+    (["positioning", "x.csv", "--bogus"], "fitbench positioning", "--bogus"),
+    (["fit", "circle.gauss_newton", "p.csv", "--nominal-radius", "20", "--nominal-center", "1", "2"], "fitbench fit",
+     "--nominal-center 1 2"),
+    (["roundness", "--bogus=3", "p.csv", "extra"], "fitbench roundness", "--bogus=3 extra"),
+    (["list", "--bogus"], "fitbench list", "--bogus")])
+def test_an_option_the_subcommand_does_not_know_points_at_its_help(capsys, argv, prog, extras):
+    """argparse reports unknown options from the top-level parser: they pointed at 'fitbench --help', which lists
+    no option of any subcommand."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == f"fitbench: error: unrecognized arguments: {extras} (see '{prog} --help')", err
+

@@ -46,6 +46,18 @@ class _Parser(argparse.ArgumentParser):
         # the help of the (sub)command that refused: 'fitbench positioning --help' lists positioning's options
         raise InvalidInputError(f"{message} (see '{self.prog} --help')")
 
+    def parse_args(self, args=None, namespace=None):
+        """argparse's, with an option the subcommand does not know (``fitbench positioning x.csv --bogus``, which
+        argparse reports from the top-level parser) pointing at that subcommand's help."""
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            chosen = self.subcommands.get(getattr(parsed, "command", None), self)
+            chosen.error(f"unrecognized arguments: {' '.join(extras)}")
+        return parsed
+
+    #: the subcommands' parsers by name (:func:`build_parser` sets them)
+    subcommands: dict = {}
+
 
 # ----------------------------------------------------------------------------------------- the table
 def add_list(sub):
@@ -110,6 +122,7 @@ def build_parser(prog: str = PROG, extra_commands: dict | None = None) -> argpar
         add(sub)
     for name, help_text in (extra_commands or {}).items():
         sub.add_parser(name, help=help_text, add_help=False)
+    p.subcommands = dict(sub.choices)
     for action in sub.choices.values():
         action.add_argument("--version", action="version", version=f"fitbench {version()}",
                             help="print the version and exit") if "--version" not in action._option_string_actions else None

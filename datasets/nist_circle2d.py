@@ -24,6 +24,7 @@ a run on files converted here with the committed results only when the bytes are
 from __future__ import annotations
 
 import json
+import math
 import re
 import sys
 from decimal import Decimal, InvalidOperation
@@ -48,21 +49,35 @@ def _decimal_text(token: str, where: str) -> str:
     return text.rstrip("0").rstrip(".") if "." in text else text
 
 
+def _text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="ascii")
+    except UnicodeDecodeError as exc:
+        raise NistFormatError(f"{path.name}: not ASCII text (byte {exc.start}); NIST's files are plain text") from None
+
+
 def read_ds(path: Path) -> list[list[str]]:
-    """The points of a ``.ds`` file as texts [x, y, z] (the first line, the number of points, is checked)."""
-    lines = [ln.split() for ln in path.read_text(encoding="ascii").splitlines() if ln.strip()]
-    if lines and len(lines[0]) == 1:
-        count, lines = lines[0][0], lines[1:]
-        if not count.isdigit() or int(count) != len(lines):
-            raise NistFormatError(f"{path.name}: the first line says {count} points, the file holds {len(lines)}")
-    bad = [i for i, ln in enumerate(lines) if len(ln) != 3]
-    if bad or len(lines) < 3:
+    """The points of a ``.ds`` file as texts [x, y, z] (the first line, the number of points, is checked); a field
+    that is not a finite number is refused naming the file and its line."""
+    numbered = [(i, ln.split()) for i, ln in enumerate(_text(path).splitlines(), start=1) if ln.strip()]
+    if numbered and len(numbered[0][1]) == 1:
+        count, numbered = numbered[0][1][0], numbered[1:]
+        if not count.isdigit() or int(count) != len(numbered):
+            raise NistFormatError(f"{path.name}: the first line says {count} points, the file holds {len(numbered)}")
+    bad = [(i, ln) for i, ln in numbered if len(ln) != 3]
+    if bad or len(numbered) < 3:
         raise NistFormatError(f"{path.name}: expected a count line and 3 or more lines of x y z"
-                              + (f" (line {bad[0] + 2} has {len(lines[bad[0]])} fields)" if bad else ""))
-    for ln in lines:
+                              + (f" (line {bad[0][0]} has {len(bad[0][1])} fields)" if bad else ""))
+    for i, ln in numbered:
         for t in ln:
-            float(t)
-    return lines
+            try:
+                finite = math.isfinite(float(t))
+            except ValueError:
+                finite = False
+            if not finite:
+                raise NistFormatError(f"{path.name}, line {i}: {t!r} is not a finite number (a line holds the "
+                                      f"x y z of one point)")
+    return [ln for _, ln in numbered]
 
 
 def convert_one(ds: Path, fit: Path, name: str) -> tuple[str, str]:
@@ -75,7 +90,7 @@ def convert_one(ds: Path, fit: Path, name: str) -> tuple[str, str]:
                               f"{len(constant)}")
     c = constant[0]
     kept = [k for k in range(3) if k != c]
-    numbers = [t for t in fit.read_text(encoding="ascii").split()]
+    numbers = _text(fit).split()
     if len(numbers) != 7:
         raise NistFormatError(f"{fit.name}: a circle's fit holds 7 numbers (centre, normal, diameter), "
                               f"this one {len(numbers)}")

@@ -88,3 +88,18 @@ def test_without_the_folder_the_study_says_not_set_and_how_to_make_it(tmp_path):
     err = run.stderr.strip().splitlines()
     assert len(err) == 1 and "(not set)" in err[0] and "None" not in err[0], err
     assert "python -m datasets.nist_circle2d" in err[0], err
+
+
+@pytest.mark.parametrize("field", ["x", "1.2.3", "nan", "inf"])
+def test_a_point_that_is_not_a_number_names_the_file_and_line(tmp_path, capsys, field):
+    """Before: "could not convert string to float: 'x'", naming neither the file nor the line (nan/inf passed)."""
+    _nist_folder(tmp_path / "Circle2d")
+    ds = tmp_path / "Circle2d" / "cir2d1.ds"
+    lines = ds.read_text(encoding="ascii").splitlines()
+    lines[4] = f"{lines[4].split()[0]} {field} {lines[4].split()[2]}"
+    ds.write_text("\n".join(lines[:2]) + "\n\n" + "\n".join(lines[2:]) + "\n", encoding="ascii")   # a blank line too
+    assert nist_circle2d.main([str(tmp_path / "Circle2d"), str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"datasets.nist_circle2d: error: cir2d1.ds, line 6: {field!r} is not a finite number "
+                   f"(a line holds the x y z of one point)"], err
+    assert not (tmp_path / "out").exists()

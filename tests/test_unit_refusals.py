@@ -29,11 +29,12 @@ def fitted(path):
 
 
 def followed(message: str):
-    """The refusal's advice applied: (factor, unit) read from 'multiply ... by F and name ... [UNIT]'."""
-    m = re.search(r"multiply (?:the column|column '[^']*') by ([0-9.e+-]+) and name (?:its unit \w+ \('[^']*|it '[^']*) "
-                  r"\[(\w+)\]'", message)
+    """The refusal's advice applied: (factor, unit) read from 'multiply ... by F and name ... [UNIT]' (or 'divide ...
+    by D': factor 1 / D)."""
+    m = re.search(r"(multiply|divide) (?:the column|column '[^']*') by ([0-9.e+-]+) and name (?:its unit \w+ \('[^']*|"
+                  r"it '[^']*) \[(\w+)\]'", message)
     assert m, message
-    return float(m.group(1)), m.group(2)
+    return (float(m.group(2)) if m.group(1) == "multiply" else 1.0 / float(m.group(2))), m.group(3)
 
 
 def test_a_centimetre_column_says_how_to_convert_and_that_gives_the_circle(tmp_path):
@@ -81,3 +82,32 @@ def test_other_commands_and_unknown_units_say_what_to_do(tmp_path, command, head
                             "header (nm, µm, mm, m, in; e.g. 'X [mm]')")
     else:
         one_error_line(out, "column 'Target [cm]' carries the unit 'cm'", "multiply the column by 10", "'Target [mm]'")
+
+
+@pytest.mark.parametrize("unit, per_degree", [("arcmin", 60), ("arcsec", 3600)])
+def test_minutes_and_seconds_of_arc_are_converted_exactly(tmp_path, unit, per_degree):
+    """The advice divides by 60 or 3600: 'multiply the column by 0.0166667' (a rounded 1/60) stretched 360° to
+    360.0007°; dividing as said gives the degree file's angles to the last bit, and its figures."""
+    t = np.arange(0, 360, 2.0)
+    dev = 2.0 * np.cos(np.radians(3 * t))
+    out = cli("roundness", write(tmp_path / f"{unit}.csv", f"Angle [{unit}],Deviation [um]", np.c_[t * per_degree, dev]))
+    one_error_line(out, f"column 'Angle [{unit}]' carries the unit '{unit}'",
+                   f"divide the column by {per_degree} and name its unit deg ('Angle [deg]')")
+    divisor = float(re.search(r"divide the column by ([0-9.]+)", out.stderr).group(1))
+    assert np.array_equal(t * per_degree / divisor, t)       # the degrees written, to the last bit
+    got = json.loads(cli("roundness", write(tmp_path / "conv.csv", "Angle [deg],Deviation [um]",
+                                            np.c_[t * per_degree / divisor, dev]), "--json").stdout)
+    want = json.loads(cli("roundness", write(tmp_path / "deg.csv", "Angle [deg],Deviation [um]", np.c_[t, dev]),
+                          "--json").stdout)
+    assert got["references"]["mzci"]["RONt"] == want["references"]["mzci"]["RONt"]
+
+
+def test_an_inch_column_beside_mm_is_divided_by_25_4(tmp_path):
+    pts = ring()
+    out = cli("fit", "circle.gauss_newton", write(tmp_path / "mixed.csv", "X [in],Y [mm]", np.c_[pts[:, 0] / 25.4, pts[:, 1]]))
+    one_error_line(out, "the columns X [in], Y [mm] are in different units (in, mm)",
+                   "divide column 'Y [mm]' by 25.4 and name it 'Y [in]'")
+    factor, unit = followed(out.stderr)
+    d = fitted(write(tmp_path / "one.csv", f"X [in],Y [{unit}]", np.c_[pts[:, 0] / 25.4, pts[:, 1] * factor]))
+    assert d["radius"] == pytest.approx(5.0, abs=1e-6)
+

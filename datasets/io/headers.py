@@ -57,11 +57,22 @@ def column_unit(layout, k: int, kind: str) -> str | None:
 
 
 #: length and angle units a header may give that fitbench does not read: what to multiply the column by, and the
-#: unit that gives (said in the refusal, :func:`unit_refusal`)
+#: unit that gives (said in the refusal, :func:`unit_refusal`, as an exact multiplication or division)
 CONVERT = {"length": {"cm": (10.0, "mm"), "dm": (100.0, "mm"), "km": (1e6, "mm"), "mil": (0.0254, "mm"),
                       "mils": (0.0254, "mm"), "thou": (0.0254, "mm"), "ft": (304.8, "mm")},
            "angle": {"mrad": (1e-3, "rad"), "µrad": (1e-6, "rad"), "urad": (1e-6, "rad"), "gon": (0.9, "deg"),
                      "grad": (0.9, "deg"), "arcmin": (1 / 60, "deg"), "arcsec": (1 / 3600, "deg")}}
+
+
+def _scaling(factor: float, what: str) -> str:
+    """'multiply WHAT by 10', or 'divide WHAT by 60' where the factor is the inverse of a short number (arcmin to
+    deg is 1/60: 'multiply by 0.0166667' stretched 360° to 360.0007°): the advice is exact, never a rounded factor."""
+    if f"{factor:.12g}" == f"{factor:.6g}":
+        return f"multiply {what} by {factor:.6g}"
+    inverse = 1.0 / factor
+    if f"{inverse:.12g}" == f"{inverse:.6g}":
+        return f"divide {what} by {inverse:.6g}"
+    return f"multiply {what} by {factor:.12g}"
 
 
 def _bare_name(column) -> str:
@@ -78,8 +89,9 @@ def mixed_units(where, given: dict) -> DataFileError:
     other, unit = next((c, u) for c, u in given.items() if u != to)
     key = _bare_name(other)
     return DataFileError(f"{where}: the columns {', '.join(map(str, given))} are in different units "
-                         f"({', '.join(sorted(set(given.values())))}); convert them to one unit, e.g. multiply column "
-                         f"{str(other).strip()!r} by {mm_per(unit) / mm_per(to):.6g} and name it '{key} [{to}]'")
+                         f"({', '.join(sorted(set(given.values())))}); convert them to one unit, e.g. "
+                         f"{_scaling(mm_per(unit) / mm_per(to), f'column {str(other).strip()!r}')} and name it "
+                         f"'{key} [{to}]'")
 
 
 def unit_refusal(where, column, unit: str, kind: str = "length") -> DataFileError:
@@ -91,7 +103,7 @@ def unit_refusal(where, column, unit: str, kind: str = "length") -> DataFileErro
     if unit in CONVERT[kind]:
         factor, to = CONVERT[kind][unit]
         return DataFileError(f"{where}: column {name!r} carries the unit {unit!r}, which fitbench does not read (it "
-                             f"reads {reads}): multiply the column by {factor:.6g} and name its unit {to} "
+                             f"reads {reads}): {_scaling(factor, 'the column')} and name its unit {to} "
                              f"('{key} [{to}]')")
     what, example = ("a length", "mm") if kind == "length" else ("an angle", "deg")
     return DataFileError(f"{where}: column {name!r} carries the unit {unit!r}, not {what} unit: name the column's "

@@ -151,15 +151,22 @@ class _RowProcess:
         from multiprocessing.connection import Connection
         mine, theirs = socket.socketpair()
         self.conn = Connection(mine.detach())
-        self.page = tempfile.TemporaryFile()
-        self.page.truncate(16)
-        self.progress = memoryview(mmap.mmap(self.page.fileno(), 16)).cast("d")
-        code = ("import sys, json; sys.path[:0] = json.loads(sys.argv[1]); "
-                "from experiments.dask_executor import _child_main; _child_main(*map(int, sys.argv[2:]))")
+        self.page = self._map = self.progress = None
         try:
+            self.page = tempfile.TemporaryFile()
+            self.page.truncate(16)
+            self._map = mmap.mmap(self.page.fileno(), 16)   # (it holds a descriptor of its own)
+            self.progress = memoryview(self._map).cast("d")
+            code = ("import sys, json; sys.path[:0] = json.loads(sys.argv[1]); "
+                    "from experiments.dask_executor import _child_main; _child_main(*map(int, sys.argv[2:]))")
             self.proc = _spawn([sys.executable, "-c", code, json.dumps(sys.path), str(theirs.fileno()),
                                 str(self.page.fileno()), str(os.getpid())], [theirs.fileno(), self.page.fileno()])
-            self.group = ProcessGroup(self.proc.pid)   # at once, before it can be reaped
+            # at once, before it can be reaped; where waitid is missing, Popen's returncode says whether it was
+            self.group = ProcessGroup(self.proc.pid, reaped=lambda proc=self.proc: proc.returncode is not None)
+        except BaseException:   # no row process (too many processes or open files): nothing of it is left open
+            self.conn.close()
+            self._close_page()
+            raise
         finally:
             theirs.close()
 
@@ -187,6 +194,7 @@ class _RowProcess:
 
     def _died(self):
         pos, started = int(self.progress[1]), self.progress[0]
+        self.group.end()   # it has closed its end of the socket, or ended: its group now, before anything reaps it
         self._ended(5.0)
         self.stop(now=True)
         return ("died", pos, started, self.proc.returncode)
@@ -216,8 +224,15 @@ class _RowProcess:
         self.group.close()
         with contextlib.suppress(Exception):
             self.conn.close()
-        with contextlib.suppress(Exception):
-            self.page.close()
+        self._close_page()
+
+    def _close_page(self) -> None:
+        """Release the progress page: the view, the mapping (and its descriptor) and the file."""
+        for release in (getattr(self.progress, "release", None), getattr(self._map, "close", None),
+                        getattr(self.page, "close", None)):
+            if release is not None:
+                with contextlib.suppress(Exception):
+                    release()
 
 
 def dask_setup(worker) -> None:

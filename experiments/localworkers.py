@@ -9,11 +9,13 @@ from __future__ import annotations
 import atexit
 import contextlib
 import errno
+import functools
 import os
 import signal
 import sys
 import threading
 import time
+import weakref
 
 from fitbench.threads import BLAS_THREAD_VARS, one_thread_environment  # noqa: F401 (BLAS_THREAD_VARS: re-exported)
 
@@ -115,21 +117,23 @@ class ProcessGroup:
     its members are ended even after the child was reaped, and never a group that was given the same id after the
     child was reaped and its members had ended. Where that is not available (an older kernel, another POSIX system)
     the group is signalled by its id (killpg(2)) only while the child is known unreaped (waitid(2) with ``WNOWAIT``:
-    until it is reaped the id is the child's); after that, what is left of its group is not ended. Residual there: a
-    thread of this process reaping the child between that check and the signal (the run does not: a worker is
-    stopped and reaped by the thread that owns it), and, without a pidfd, a new child of this process given the
-    reaped child's id meanwhile."""
+    until it is reaped the id is the child's; where waitid is missing, ``reaped()``, the record of the object that
+    reaps the child in this process, multiprocessing's or subprocess's); after that, what is left of its group is not
+    ended. Residual there: a thread of this process reaping the child between that check and the signal (the run
+    does not: a worker is stopped and reaped by the thread that owns it), and, without a pidfd, a new child of this
+    process given the reaped child's id meanwhile."""
 
-    def __init__(self, pid: int | None):
+    def __init__(self, pid: int | None, reaped=None):
         self.pid = pid
         self._fd = None
+        self._reaped = reaped
         if pid is not None and hasattr(os, "pidfd_open"):
             with contextlib.suppress(OSError):
                 self._fd = os.pidfd_open(pid)
 
     def _leader_unreaped(self) -> bool:
-        if not hasattr(os, "waitid") or not hasattr(os, "WNOWAIT"):
-            return False
+        if not _has_waitid():   # only what reaps it here knows (macOS before Python 3.13 has no waitid)
+            return self._reaped is not None and not self._reaped()
         if self._fd is not None and hasattr(os, "P_PIDFD"):
             idtype, ident = os.P_PIDFD, self._fd
         else:
@@ -173,11 +177,16 @@ def end_process_group(group: ProcessGroup | None) -> None:
         group.end()
 
 
+def _has_waitid() -> bool:
+    """This system tells a child that has ended without reaping it (waitid(2) with ``WNOWAIT``)."""
+    return hasattr(os, "waitid") and hasattr(os, "WNOWAIT")
+
+
 def _exit_state(pid: int, timeout: float) -> bool | None:
     """Wait up to ``timeout`` seconds for child ``pid`` to end without reaping it (``waitid`` with ``WNOWAIT``): True
     if it has ended (its id stays its own until it is reaped), False if it still runs, None if it was reaped already
     or this cannot be known here (no ``waitid``)."""
-    if not hasattr(os, "waitid") or not hasattr(os, "WNOWAIT"):
+    if not _has_waitid():
         return None
     deadline = time.monotonic() + timeout
     while True:
@@ -191,11 +200,6 @@ def _exit_state(pid: int, timeout: float) -> bool | None:
         time.sleep(0.002)
 
 
-def _ended_unreaped(pid: int, timeout: float) -> bool:
-    """True if child ``pid`` ended within ``timeout`` seconds and is not reaped (:func:`_exit_state`)."""
-    return _exit_state(pid, timeout) is True
-
-
 _CALL = "call"  # the first item of a message that asks a worker for func(*args), not for rows
 
 
@@ -203,6 +207,10 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
     """A local worker: receive chunks, send back their rows as columns, until told to stop."""
     _die_with_parent(parent_pid)  # first: a run killed while this worker imports takes it along
     _lead_own_group()  # what a method starts is in the worker's group, ended with it (_Worker.stop)
+    # the pipe to the run is this process's alone: a process a method starts (os.system's shell) inherited it (it came
+    # through fd passing, inheritable) and kept it open after the worker died, so the run did not see the death
+    with contextlib.suppress(OSError, AttributeError):
+        os.set_inheritable(conn.fileno(), False)
     import warnings
 
     from methods.plugins import PluginLoadWarning
@@ -256,15 +264,41 @@ def exit_now(status: int = 0, *, as_python_does: bool = False):
     os._exit(status)
 
 
+def _mp_reaped(proc) -> bool:
+    """Whether multiprocessing has reaped ``proc`` (a started Process), asked without reaping it: its Popen records the
+    exit status in ``returncode`` when it reaps the child (CPython's multiprocessing/popen_fork.py; ``exitcode`` and
+    ``is_alive`` reap it first). Used only where waitid(2) is missing; an object without that record counts as reaped
+    (its group is then not signalled by its id)."""
+    popen = getattr(proc, "_popen", None)
+    return popen is None or getattr(popen, "returncode", 0) is not None
+
+
+#: the workers this process started and has not stopped (:func:`_end_groups_of_ended_workers`)
+_STARTED: weakref.WeakSet = weakref.WeakSet()
+
+
+def _end_groups_of_ended_workers() -> None:
+    """End the process group of every worker of this process that has ended and is not reaped yet. Called before a
+    process is started: ``multiprocessing.Process.start`` reaps every child of this process that has ended
+    (``multiprocessing.process._cleanup``), and a worker reaped that way could have its group signalled only through a
+    pidfd (Linux 6.9); on an older kernel what its methods started would outlive it (:class:`ProcessGroup`). Residual:
+    a worker ending between this look and the start."""
+    for worker in list(_STARTED):
+        if worker._exit_state(0) is True:
+            worker.group.end()
+
+
 class _Worker:
     def __init__(self, ctx):
         self.conn, child = ctx.Pipe()
         self.progress = ctx.RawArray("d", 2)
         self.proc = ctx.Process(target=_worker_main, args=(child, os.getpid(), self.progress), daemon=True,
                                 name="fitbench-worker")
+        _end_groups_of_ended_workers()   # the start below reaps the workers that have ended
         with _main_module_not_imported_by_workers():
             self.proc.start()
-        self.group = ProcessGroup(self.proc.pid)   # at once: nothing has reaped the worker yet
+        self.group = ProcessGroup(self.proc.pid, reaped=functools.partial(_mp_reaped, self.proc))   # at once
+        _STARTED.add(self)
         child.close()
         self.chunk = None
         self.chunk_id = None
@@ -276,11 +310,21 @@ class _Worker:
         self.progress[0] = 0.0
         self.conn.send((chunk_id, chunk, row_timeout))
 
+    def _exit_state(self, timeout: float) -> bool | None:
+        """:func:`_exit_state` of the worker; without waitid its pipe sentinel tells (it is ready once the worker has
+        ended; waiting on it reaps nothing) while multiprocessing has not reaped it."""
+        if _has_waitid():
+            return _exit_state(self.proc.pid, timeout)
+        if _mp_reaped(self.proc):
+            return None
+        from multiprocessing.connection import wait
+        return bool(wait([self.proc.sentinel], timeout))
+
     def ended(self, timeout: float = 0) -> bool:
         """The worker's process has ended (waited for up to ``timeout`` s), told without reaping it where the system
         can (``is_alive`` and ``join`` reap it): its process group is then still ended safely by :meth:`stop`."""
-        state = _exit_state(self.proc.pid, timeout)
-        if state is None:   # reaped already, or no waitid: multiprocessing knows
+        state = self._exit_state(timeout)
+        if state is None:   # reaped already: multiprocessing knows
             self.proc.join(timeout)
             return not self.proc.is_alive()
         return state
@@ -295,23 +339,23 @@ class _Worker:
     def stop(self, now: bool = False) -> None:
         """End the worker (``now``: killed, else told to end and waited for up to 5 s, then killed) and its process
         group with it: what a method started in the worker does not outlive it (:func:`_lead_own_group`)."""
-        pid = self.proc.pid
         if now:
             self.group.end()   # the worker leads it: one signal ends the worker and its children
             with contextlib.suppress(Exception):
                 self.proc.kill()
         else:
             self.ask_to_stop()
-            if not _ended_unreaped(pid, 5.0):
+            if self._exit_state(5.0) is not True:
                 with contextlib.suppress(Exception):
                     self.proc.kill()
-                _ended_unreaped(pid, 5.0)
+                self._exit_state(5.0)
             self.group.end()
         self.proc.join(timeout=5)
         if self.proc.is_alive():
             self.proc.kill()
             self.proc.join(timeout=5)
         self.group.close()
+        _STARTED.discard(self)
         with contextlib.suppress(Exception):
             self.conn.close()
 

@@ -302,6 +302,21 @@ def test_a_worker_with_other_code_or_environment_is_refused():
         dask_executor.check_code([task], (reps, {**env, "kernels": "elsewhere"}))
 
 
+def test_a_row_process_that_cannot_start_leaves_nothing_open(monkeypatch):
+    """A row process that cannot be spawned (too many processes or open files): its socket and its progress page
+    are closed as the error is raised (they stayed open while the error's traceback lived, e.g. in Dask's report)."""
+    from experiments import dask_executor
+
+    def no_process(args, fds):
+        raise OSError(11, "Resource temporarily unavailable")
+    monkeypatch.setattr(dask_executor, "_spawn", no_process)
+    before = sorted(os.listdir("/proc/self/fd"))
+    with pytest.raises(OSError, match="Resource temporarily unavailable") as caught:
+        dask_executor._RowProcess()
+    assert sorted(os.listdir("/proc/self/fd")) == before, "descriptors left open by a row process that never started"
+    del caught
+
+
 @pytest.mark.parametrize("interrupted", [False, True], ids=["busy-machine", "ctrl-c-while-it-starts"])
 def test_a_local_cluster_that_does_not_start_is_one_line(tmp_path, monkeypatch, capsys, interrupted):
     """distributed gives the thread of its event loop 10 s to start, then fails an ``assert`` (seen in a test at load

@@ -31,9 +31,13 @@ def _group_pidfd() -> bool:
         os.close(fd)
 
 
+#: os.waitid as this system has it (a test takes it away from the run's code)
+_WAITID = getattr(os, "waitid", None)
+
+
 def _reaped(pid: int) -> bool:
     try:
-        os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT)
+        _WAITID(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT)
     except ChildProcessError:
         return True
     return False
@@ -149,5 +153,81 @@ def test_a_dask_row_process_that_died_ends_its_group_before_it_is_reaped(tmp_pat
         while _alive(member) and time.monotonic() < deadline:
             time.sleep(0.01)
         assert not _alive(member), "what the row process's method started outlived it"
+    finally:
+        _end_member(member)
+
+
+def _ended(member: int) -> bool:
+    deadline = time.monotonic() + 5
+    while _alive(member) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return not _alive(member)
+
+
+def test_a_dead_worker_reaped_by_the_start_of_another_has_its_group_ended(tmp_path, killpg_calls, how):
+    """multiprocessing's Process.start reaps every child that has ended: a worker that died while the run started
+    another (the replacement of a worker that died in the same wait) was reaped before the run ended its group, and
+    on a kernel without PIDFD_SIGNAL_PROCESS_GROUP what its method started lived on. A worker's start first ends the
+    groups of the workers that have ended."""
+    import multiprocessing as mp
+    ctx = mp.get_context("spawn")
+    w = localworkers._Worker(ctx)
+    member = _start_member(w.conn.send, w.conn.recv, tmp_path)
+    other = None
+    try:
+        os.kill(w.proc.pid, signal.SIGKILL)
+        assert w.ended(10.0) and not _reaped(w.proc.pid)
+        other = localworkers._Worker(ctx)   # the replacement of another worker
+        w.stop(now=True)
+        assert not [c for c in killpg_calls if c[1]], killpg_calls
+        assert _ended(member), "what the dead worker's method started outlived it"
+        assert w.proc.exitcode == -signal.SIGKILL
+    finally:
+        _end_member(member)
+        if other is not None:
+            other.stop(now=True)
+
+
+@pytest.fixture
+def no_waitid(monkeypatch):
+    """A system without waitid (macOS before Python 3.13) and without a process group's pidfd."""
+    def refuse(*args):
+        raise OSError(errno.EINVAL, "Invalid argument")
+    monkeypatch.setattr(signal, "pidfd_send_signal", refuse, raising=False)
+    monkeypatch.delattr(os, "waitid")
+
+
+def test_without_waitid_a_dead_workers_group_is_ended_before_it_is_reaped(tmp_path, killpg_calls, no_waitid):
+    """Without waitid no worker's group was ever ended: the run now signals it while the worker's process object has
+    not reaped it (the run finds a dead worker by its pipe, which reaps nothing)."""
+    import multiprocessing as mp
+    w = localworkers._Worker(mp.get_context("spawn"))
+    member = _start_member(w.conn.send, w.conn.recv, tmp_path)
+    try:
+        os.kill(w.proc.pid, signal.SIGKILL)
+        assert w.conn.poll(10)
+        with pytest.raises(EOFError):
+            w.conn.recv()
+        w.stop(now=True)
+        assert _reaped(w.proc.pid) and w.proc.exitcode == -signal.SIGKILL
+        assert killpg_calls and not [c for c in killpg_calls if c[1]], killpg_calls
+        assert _ended(member), "what the dead worker's method started outlived it"
+    finally:
+        _end_member(member)
+
+
+def test_without_waitid_a_dask_row_process_that_died_ends_its_group(tmp_path, killpg_calls, no_waitid):
+    from experiments.dask_executor import _RowProcess
+    rp = _RowProcess()
+    member = _start_member(rp.conn.send, rp.conn.recv, tmp_path)
+    try:
+        os.kill(rp.proc.pid, signal.SIGKILL)
+        deadline = time.monotonic() + 10
+        while not rp.conn.poll(0.05) and time.monotonic() < deadline:   # its socket closes: found without reaping
+            pass
+        assert rp._died()[0] == "died"
+        assert rp.proc.returncode == -signal.SIGKILL
+        assert killpg_calls and not [c for c in killpg_calls if c[1]], killpg_calls
+        assert _ended(member), "what the row process's method started outlived it"
     finally:
         _end_member(member)

@@ -82,6 +82,8 @@ def test_roundness_and_circular_test_warn_about_a_bare_tolerance_in_mm(tmp_path)
     ("A=ten", ("--tolerance 'A=ten': give the tolerance as a length with its unit", "(a bare number is µm)")),
     ("A=-1um", ("--tolerance 'A=-1um': a tolerance must be positive",)),
     ("Q=1um", ("--tolerance 'Q=1um': give NAME=VALUE with NAME one of A, E", "VALUE in µm or with its unit")),
+    ("A=10,5", ("--tolerance 'A=10,5': a decimal comma; write the number with a point, e.g. A=10.5",)),
+    ("A=10,5 um", ("--tolerance 'A=10,5 um': a decimal comma; write the number with a point, e.g. A=10.5 um",)),
 ])
 def test_a_bad_tolerance_is_one_line(axis_file, text, words):
     one_error_line(cli("positioning", axis_file, "--tolerance", text), *words)
@@ -115,6 +117,13 @@ def test_roundness_states_the_bare_reading_on_every_tolerance_line(tmp_path):
     assert all("tolerance 5 µm (a bare number: µm)" in ln for ln in lines), lines
     out = cli("roundness", shaft, "--tolerance", "RONt=5um")
     assert out.returncode == 0 and "a bare number" not in out.stdout and "tolerance 5 µm  PASS" in out.stdout
+
+
+@pytest.mark.parametrize("option, text, fixed", [("--mpe", "2,5um", "2.5um"), ("--instrument-u", "0,5", "0.5")])
+def test_a_decimal_comma_in_mpe_is_named(axis_file, option, text, fixed):
+    """'--mpe 2,5um' was refused as "unknown unit ',5um'"."""
+    one_error_line(cli("positioning", axis_file, option, text),
+                   f"{option} '{text}': a decimal comma; write the number with a point, e.g. {option} {fixed}")
 
 
 def test_the_help_gives_both_forms(capsys):

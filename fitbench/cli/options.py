@@ -174,6 +174,16 @@ def add_tolerance_option(p, names: str):
 NUMBER_WITH_UNIT = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s.+-][^\s]*)?\s*"
 
 
+def refuse_decimal_comma(what: str, text: str, example: str) -> None:
+    """Refuse a value written with a decimal comma (``10,5um``, ``10,5 um``, ``0,5``) in one line saying so, with the
+    value written with a point (``example`` formats it), rather than as an unknown unit ',5um'."""
+    import re
+    m = re.fullmatch(r"\s*([-+]?\d*),(\d+)(\s*\S*)\s*", str(text))
+    if m:
+        raise InvalidInputError(f"{what}: a decimal comma; write the number with a point, e.g. "
+                                f"{example.format(f'{m.group(1)}.{m.group(2)}{m.group(3)}')}")
+
+
 class Tolerances(dict):
     """``--tolerance`` items as {figure name: tolerance in mm}, and how each was written: ``texts`` {name: the
     value as given}, ``bare`` the names given as a bare number (µm), which :func:`warn_bare_tolerances` checks."""
@@ -201,6 +211,7 @@ def parse_tolerances(items, allowed) -> Tolerances:
         if not eq or name is None:
             raise InvalidInputError(f"--tolerance {item!r}: give NAME=VALUE with NAME one of {', '.join(allowed)} and "
                                     "VALUE in µm or with its unit (e.g. 10um, 0.01mm)")
+        refuse_decimal_comma(f"--tolerance {item!r}", text, f"{name}={{}}")
         m = re.fullmatch(NUMBER_WITH_UNIT, text)
         if not m:
             raise InvalidInputError(f"--tolerance {item!r}: give the tolerance as a length with its unit, e.g. "

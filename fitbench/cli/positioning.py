@@ -14,8 +14,8 @@ import methods
 from fitbench.cli.guards import jsonable
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
                                   add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances,
-                                  save_figure, test_conditions, verdict, verdict_lines, verdict_title, warn,
-                                  warn_bare_tolerances, write_report, write_text_atomic)
+                                  refuse_decimal_comma, save_figure, test_conditions, verdict, verdict_lines,
+                                  verdict_title, warn, warn_bare_tolerances, write_report, write_text_atomic)
 from methods import InvalidInputError
 from methods.units import JSON_UNITS, UNIT_CHOICES, canonical
 
@@ -82,6 +82,7 @@ def instrument_length(option: str, text) -> tuple[float | None, bool]:
     from methods.units import mm_per
     if text is None:
         return None, False
+    refuse_decimal_comma(f"{option} {text!r}", text, f"{option} {{}}")
     m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s.+-][^\s]*)?\s*", str(text))
     if not m:
         raise InvalidInputError(f"{option} {text!r}: give a length with its unit, e.g. {option} 2um (or a bare number in mm)")

@@ -56,12 +56,16 @@ def is_project_study(study_folder: Path, known) -> bool:
     names): its ``meta.json`` records the project's ``experiments/configs/NAME.toml``, or no TOML (a run older than
     that record: the name decides). A user's TOML may bear a project study's name (a config's name is only
     required to match its file's): its results are not the project study's, and are rerun from that TOML."""
-    from experiments.config import CONFIG_DIR
     name = Path(study_folder).name
     if name not in known:
         return False
     recorded = recorded_config(study_folder)
-    return recorded is None or recorded.resolve() == (CONFIG_DIR / f"{name}.toml").resolve()
+    return recorded is None or recorded.resolve() == (_CONFIG_DIR / f"{name}.toml").resolve()
+
+
+#: the project's study configs (``experiments.config.CONFIG_DIR``, the same folder; not imported from there: the config
+#: module imports the engine, which imports this module)
+_CONFIG_DIR = Path(__file__).resolve().parent / "configs"
 
 
 def last_verdict(results: Path) -> dict | None:

@@ -229,3 +229,10 @@ def test_every_private_module_is_imported_by_the_product():
     dead = sorted(m for m in mods if m.rpartition(".")[2].startswith("_") and not m.rpartition(".")[2].startswith("__")
                   and m not in imported and not any(m in s for s in named))
     assert not dead, f"private modules nothing imports: {dead}"
+
+
+def test_the_verdict_names_the_same_config_folder_as_the_config_module():
+    """experiments.verdict keeps its own path of the project's configs (importing experiments.config would close an
+    import cycle through the engine): it is the config module's."""
+    from experiments import config, verdict
+    assert verdict._CONFIG_DIR == config.CONFIG_DIR

@@ -104,13 +104,13 @@ def test_workers_dying_again_and_again_never_hang_the_run(tmp_path, hostile_site
     ever) the run completes; the chunk holding a killer is bisected, so the rows beside it are computed and only
     the killer is ``crashed``; a plugin's os._exit ends only its row's process, never the worker; nothing outlives
     the run."""
-    study = write_study(tmp_path, name="dd", reps=2, methods=hostile_methods("exit", "kill_worker"),
+    study = write_study(tmp_path, name="dd", reps=1, methods=hostile_methods("exit", "kill_worker"),
                         extra="chunk_rows = 6\n")
     code, out, err, left = run([study, "--jobs", "2", "--executor", "dask", "--out", tmp_path / "out"], tmp_path,
                                hostile_site, timeout=400, DASK_DISTRIBUTED__DEPLOY__LOST_WORKER_TIMEOUT="0.2s")
     assert code == 0, err
     df = statuses(tmp_path / "out" / "dd" / "results.csv")
-    assert len(df) == 2 * 2 * 4
+    assert len(df) == 2 * 4
     assert set(df.loc[df["what"] == "", "status"]) == {"ok"}
     assert set(df.loc[df["what"].isin(["exit", "kill_worker"]), "status"]) == {"crashed"}
     assert df.loc[df["what"] == "kill_worker", "message"].str.contains("KilledWorker").all()

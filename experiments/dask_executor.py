@@ -23,6 +23,9 @@ Isolation, as the local executor gives it (``experiments.executors``):
   a time limit: there, as in a local worker, the rows of the plugin's code are fitted in a child forked for the
   chunk and gated and measured by the row process's own code (``experiments.chunkrows``), so what the plugin does to
   its process (patching the gate, a built-in method, NumPy) reaches neither the Dask worker nor another row.
+* Without a time limit, a row that has been running for ``experiments.executors.STUCK_NOTICE_S`` seconds is named
+  once in the run's output, as the local executor names it: the worker watches its running row (:class:`_LongRows`)
+  and sends the line as a Dask event (``Worker.log_event``), which the client prints (``Client.subscribe_topic``).
 
 References: Dask distributed's ``KilledWorker`` and ``distributed.scheduler.allowed-failures``
 (https://distributed.dask.org/en/stable/killed.html); the Linux parent-death signal, prctl(2)
@@ -45,8 +48,9 @@ import threading
 import time
 from concurrent.futures import CancelledError
 
+from experiments import executors
 from experiments.executors import (KILL_GRACE_S, Chunks, Progress, _main_module_not_imported_by_workers,
-                                  _one_blas_thread_per_worker, _store)
+                                  _one_blas_thread_per_worker, _store, stuck_row_text)
 from experiments.localworkers import ProcessGroup, _exit_state
 from methods import InvalidInputError
 
@@ -62,6 +66,8 @@ CHECK_EVERY_S = 1.0
 MAX_CANCELLED = 20
 #: times in a row a row process may die before running a row before the task gives up
 CHILD_START_ATTEMPTS = 3
+#: the Dask event topic on which a worker names a row running long without a time limit (:class:`_LongRows`)
+LONG_ROW_TOPIC = "fitbench-row-running-long"
 
 
 class RowProcessError(RuntimeError):
@@ -174,8 +180,9 @@ class _RowProcess:
         self.progress[0] = self.progress[1] = 0.0
         self.conn.send((0, tasks, row_timeout))
 
-    def wait(self, row_timeout):
-        """``("done", out)``, ``("died", pos, started, exit code)`` or ``("timeout", pos)``."""
+    def wait(self, row_timeout, look=None):
+        """``("done", out)``, ``("died", pos, started, exit code)`` or ``("timeout", pos)``; ``look(started, pos)``
+        is called every 0.2 s with the running row (:class:`_LongRows`)."""
         while True:
             if self.conn.poll(0.2):
                 try:
@@ -191,6 +198,8 @@ class _RowProcess:
                 pos = int(self.progress[1])
                 self.stop(now=True)
                 return ("timeout", pos)
+            if started and look is not None:
+                look(started, int(self.progress[1]))
 
     def _died(self):
         pos, started = int(self.progress[1]), self.progress[0]
@@ -258,12 +267,65 @@ def _stat(path: str):
     return st.st_mtime_ns, st.st_size
 
 
-def run_checked(fn, tasks: list, row_timeout, expected) -> dict:
+def run_checked(fn, tasks: list, row_timeout, expected, notice_s: float | None = None) -> dict:
     """A Dask task: ``fn(tasks, row_timeout)`` once this worker's code and environment are shown to be the run's
     (:func:`check_code`), since the run stores the rows under keys of its own code. A worker started before a method
-    was edited (or a ``git pull``) runs the code it loaded then: its rows were stored under the new code's keys."""
+    was edited (or a ``git pull``) runs the code it loaded then: its rows were stored under the new code's keys.
+    ``notice_s``: a row running that long without a time limit is named to the run (:class:`_LongRows`)."""
     check_code(tasks, expected)
-    return fn(tasks, row_timeout)
+    if fn is run_isolated:
+        return run_isolated(tasks, row_timeout, notice_s)
+    if row_timeout or not notice_s:
+        return fn(tasks, row_timeout)
+    return _watched(fn, tasks, _LongRows(tasks, notice_s, _to_the_run()))
+
+
+class _LongRows:
+    """In a Dask worker: name each row of ``tasks`` that has been running for ``notice_s`` seconds without a time
+    limit, once, to the run (``say``), in the words of the local executor (``executors.STUCK_NOTICE_S``): a method
+    that hangs would otherwise leave the run's progress line frozen with no word."""
+
+    def __init__(self, tasks: list, notice_s: float | None, say):
+        self.tasks, self.notice_s, self.say, self.named = tasks, notice_s, say, set()
+
+    def look(self, started: float, i) -> None:
+        """The row at index ``i`` of the tasks started at ``started`` (``time.monotonic``, the machine's clock)."""
+        if not self.notice_s or not started or i is None or not 0 <= i < len(self.tasks) or i in self.named:
+            return
+        seconds = time.monotonic() - started
+        if seconds >= self.notice_s:
+            self.named.add(i)
+            with contextlib.suppress(Exception):   # the run goes on without the notice
+                self.say(stuck_row_text(self.tasks[i], seconds))
+
+
+def _to_the_run():
+    """A function that sends a text to the run's client as a Dask event on :data:`LONG_ROW_TOPIC` (thread-safe;
+    outside a Dask worker it drops it)."""
+    try:
+        from distributed import get_worker
+        worker = get_worker()
+    except Exception:   # not in a Dask worker's task
+        return lambda text: None
+    return lambda text: worker.log_event(LONG_ROW_TOPIC, text)
+
+
+def _watched(fn, tasks: list, long_rows: _LongRows) -> dict:
+    """``fn(tasks, None, progress)`` in this thread (rows in the Dask worker's thread, no time limit) while another
+    thread looks at the running row once a second (:class:`_LongRows`; a row holding the interpreter's lock in
+    compiled code keeps it from looking)."""
+    progress = [0.0, 0.0]
+    done = threading.Event()
+
+    def watch():
+        while not done.wait(min(1.0, long_rows.notice_s / 2)):
+            long_rows.look(progress[0], int(progress[1]))
+    watcher = threading.Thread(target=watch, daemon=True, name="fitbench-long-rows")
+    watcher.start()
+    try:
+        return fn(tasks, None, progress)
+    finally:
+        done.set()
 
 
 def check_code(tasks: list, expected) -> None:
@@ -336,9 +398,10 @@ def expected_code(chunk: list) -> tuple:
     return reps, codekeys.environment()
 
 
-def run_isolated(tasks: list, row_timeout: float | None) -> dict:
+def run_isolated(tasks: list, row_timeout: float | None, notice_s: float | None = None, say=None) -> dict:
     """A Dask task: run a chunk in a row process of this worker (see the module's docstring) and return its
-    rows in the store's columns, every row labelled, in the order of ``tasks`` (``row_timeout`` None: no limit)."""
+    rows in the store's columns, every row labelled, in the order of ``tasks`` (``row_timeout`` None: no limit; then
+    a row running ``notice_s`` seconds is named to the run, by ``say``: :class:`_LongRows`)."""
     from experiments.rows import encode_rows, failed_row
     n = len(tasks)
     status: list = [None] * n
@@ -348,6 +411,7 @@ def run_isolated(tasks: list, row_timeout: float | None) -> dict:
     with _IDLE_LOCK:
         child = _IDLE.pop() if _IDLE else None
     start_failures = 0
+    long_rows = _LongRows(tasks, None if row_timeout else notice_s, say or _to_the_run())
 
     def label(i, what, message):
         enc = encode_rows([failed_row(tasks[i], what, message)])
@@ -359,7 +423,8 @@ def run_isolated(tasks: list, row_timeout: float | None) -> dict:
                 child = _RowProcess()
             t0 = time.perf_counter()
             child.send([tasks[i] for i in idx], row_timeout)
-            what, *info = child.wait(row_timeout)
+            what, *info = child.wait(row_timeout, lambda started, pos, idx=idx:
+                                     long_rows.look(started, idx[pos] if 0 <= pos < len(idx) else None))
             if what == "done":
                 out = info[0]
                 if "failed" in out:  # the engine itself failed: the rows alone, then an error row
@@ -496,7 +561,8 @@ def _drive(client, where: str, work, chunks, store, bar, row_timeout, limit_s: f
     threads = _threads(client)
 
     def submit(chunk, alone):
-        fut = client.submit(run_checked, fn, chunk, row_timeout, expected_code(chunk), pure=False)
+        fut = client.submit(run_checked, fn, chunk, row_timeout, expected_code(chunk),
+                            None if row_timeout else executors.STUCK_NOTICE_S, pure=False)
         pending[fut.key] = (fut, chunk, alone)
         fut.add_done_callback(finished.put)
 
@@ -526,6 +592,9 @@ def _drive(client, where: str, work, chunks, store, bar, row_timeout, limit_s: f
         else:
             retry.appendleft(chunk)
 
+    notices: queue.Queue = queue.Queue()  # rows running long, named by the workers (_LongRows)
+    with contextlib.suppress(Exception):  # (the subscription ends with the client, closed after the run)
+        client.subscribe_topic(LONG_ROW_TOPIC, lambda event: notices.put(event[1]))
     fill()
     cancelled = 0
     seen = checked = time.monotonic()
@@ -534,6 +603,8 @@ def _drive(client, where: str, work, chunks, store, bar, row_timeout, limit_s: f
             fut = finished.get(timeout=CHECK_EVERY_S)
         except queue.Empty:
             fut = None
+        while not notices.empty():
+            bar.notice(str(notices.get_nowait()))
         if interrupted.is_set():
             raise KeyboardInterrupt
         raise_if_signalled()  # SIGTERM: the run's handler raised it, maybe where it was lost

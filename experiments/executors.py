@@ -254,13 +254,18 @@ def _notice_stuck_row(w: _Worker, seconds: float, bar) -> None:
     if w.noticed == (w.chunk_id, pos) or not 0 <= pos < len(w.chunk or ()):
         return
     w.noticed = (w.chunk_id, pos)
-    task = w.chunk[pos]
+    bar.notice(stuck_row_text(w.chunk[pos], seconds))
+
+
+def stuck_row_text(task: dict, seconds: float) -> str:
+    """The line that names a row running for ``seconds`` without a time limit (:data:`STUCK_NOTICE_S`), on every
+    executor."""
     spec = task.get("dataset")
     where = f" on {spec.get('label')}" if isinstance(spec, dict) and spec.get("label") else ""
     rep = f", repetition {task['repetition']}" if "repetition" in task else ""
-    bar.notice(f"   a row has been running for {seconds:.0f} s: {task.get('method', 'a row')}{where}{rep}; without a "
-               f"time limit nothing ends it (--row-timeout SECONDS, or row_timeout in the study's TOML, ends such rows "
-               f"as 'timeout')")
+    return (f"   a row has been running for {seconds:.0f} s: {task.get('method', 'a row')}{where}{rep}; without a "
+            f"time limit nothing ends it (--row-timeout SECONDS, or row_timeout in the study's TOML, ends such rows "
+            f"as 'timeout')")
 
 
 def _lost_chunk(chunks: Chunks, store: RowStore, bar, chunk: list, pos: int, status: str, message: str) -> None:

@@ -302,6 +302,46 @@ def test_a_worker_with_other_code_or_environment_is_refused():
         dask_executor.check_code([task], (reps, {**env, "kernels": "elsewhere"}))
 
 
+def test_a_row_running_long_in_a_dask_workers_thread_is_named_once():
+    """Rows in a Dask worker's thread without a time limit: a row running for the notice's seconds is named once to
+    the run, in the local executor's words (a hung row left the progress line frozen with no word on Dask)."""
+    from experiments import dask_executor
+    tasks = [{"method": "circle.slow", "dataset": {"label": "arc"}, "repetition": 3},
+             {"method": "circle.kasa", "dataset": {"label": "arc"}, "repetition": 4}]
+    said = []
+
+    def work(chunk, row_timeout, progress):
+        for i, pause in enumerate((1.2, 0.0)):
+            progress[0], progress[1] = time.monotonic(), i
+            time.sleep(pause)
+        return {"rows": len(chunk)}
+
+    out = dask_executor._watched(work, tasks, dask_executor._LongRows(tasks, 0.2, said.append))
+    assert out == {"rows": 2}
+    slow = [line for line in said if "circle.slow on arc, repetition 3" in line]
+    assert len(slow) == 1, said
+    assert "a row has been running for" in slow[0] and "--row-timeout SECONDS" in slow[0]
+
+
+@pytest.mark.system  # a local Dask cluster of one worker, two rows of 2.5 s in its row process: about 15 s
+def test_a_row_running_long_on_dask_is_named_once_in_the_runs_output(tmp_path, hostile_site):
+    """A plugin's study on Dask (rows in the workers' row processes), no time limit: each row running longer than
+    STUCK_NOTICE_S (1 s here; the rows take 2.5 s) is named once in the run's output, as with local workers."""
+    study = write_study(tmp_path, name="dlong", reps=1, methods=hostile_methods("slow"))
+    code = ("import sys; import experiments.executors as e; e.STUCK_NOTICE_S = 1.0; from experiments import run; "
+            "sys.exit(run.main(sys.argv[1:]))")
+    marker = uuid.uuid4().hex
+    res = subprocess.run([sys.executable, "-c", code, str(study), "--executor", "dask", "--jobs", "1", "--out",
+                          str(tmp_path / "o"), "--no-report"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=600, env=subprocess_env(hostile_site, OPENBLAS_NUM_THREADS="1",
+                                                         FITBENCH_TEST_RUN=marker))
+    assert res.returncode == 0, res.stderr
+    named = [line for line in res.stdout.splitlines() if "a row has been running for" in line]
+    assert len(named) == 2, res.stdout  # the study's two slow rows (one per data set), each named once
+    assert all("circle.hostile on " in line and "--row-timeout SECONDS" in line for line in named), named
+    assert not survivors(marker), "processes of the run still alive after it ended"
+
+
 def test_a_row_process_that_cannot_start_leaves_nothing_open(monkeypatch):
     """A row process that cannot be spawned (too many processes or open files): its socket and its progress page
     are closed as the error is raised (they stayed open while the error's traceback lived, e.g. in Dask's report)."""

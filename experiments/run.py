@@ -33,7 +33,7 @@ from experiments import engine
 from experiments import analysis, figures, outputs
 from experiments import study as contract
 from experiments.csvtext import blocks, csv_text, write_results
-from experiments.jsontext import json_text
+from experiments.jsontext import json_text, json_value
 from experiments.executors import kept_workers, last_study, map_in_idle_workers, start_kept_workers, workers_done
 from experiments.provenance import collect, write_atomic
 from experiments.rows import Terminated, clear_signal, fewer_collections, note_signal, raise_if_signalled, signalled
@@ -167,6 +167,8 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     jobs = min(jobs, cfg.get("max_jobs", jobs))
     row_timeout = row_timeout if row_timeout is not None else cfg.get("row_timeout")
     n_rows = None if force else engine.up_to_date(cfg, make, target)
+    if n_rows is not None and not _records_config_file(cfg, out, target):
+        n_rows = None  # the same study from a moved TOML: its rows are stored; its outputs name the TOML it ran from
     if n_rows is not None:  # the same rows analysed by the same code: the outputs there are this run's
         log(f"   {n_rows} rows: {n_rows} already stored, 0 to run; results.csv, tables and figures up to date")
         _FAILED.extend(filter(None, [analysis.failed_rows(cfg, target / "results.csv")]))
@@ -230,6 +232,16 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     log(f"-> {target}/results.csv ({len(df)} rows" + (f": {bad}" if bad else "") +
         f"; rows run in {counts['wall_s']:.1f} s), summary.csv, summary.md, meta.json")
     return target
+
+
+def _records_config_file(cfg, out: Path, target: Path) -> bool:
+    """Whether the study's ``meta.json`` in ``target`` records the TOML this run loaded (:func:`config_file`)."""
+    try:
+        meta = json_value((Path(target) / "meta.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    want = config_file(cfg, out)
+    return isinstance(meta, dict) and all(meta.get(k) == v for k, v in want.items())
 
 
 def config_file(cfg, out: Path) -> dict[str, str]:

@@ -59,7 +59,8 @@ def append(path, text="\n# edited by the cache-key test\n"):
 
 
 #: code every row of a Kåsa grid study depends on: each edit alone must recompute the rows
-ROW_CODE = ["experiments/metrics.py", "experiments/rows.py", "datasets/synthetic.py", "experiments/studies/grid.py",
+ROW_CODE = ["experiments/metrics.py", "experiments/rows.py", "experiments/chunkrows.py", "datasets/synthetic.py",
+            "experiments/studies/grid.py",
             "methods/circle/algebraic.py", "methods/circle/results.py", "methods/result_base.py",
             "methods/circle/_ckernels.c", "setup.py"]
 

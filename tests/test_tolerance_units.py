@@ -84,6 +84,8 @@ def test_roundness_and_circular_test_warn_about_a_bare_tolerance_in_mm(tmp_path)
     ("Q=1um", ("--tolerance 'Q=1um': give NAME=VALUE with NAME one of A, E", "VALUE in µm or with its unit")),
     ("A=10,5", ("--tolerance 'A=10,5': a decimal comma; write the number with a point, e.g. A=10.5",)),
     ("A=10,5 um", ("--tolerance 'A=10,5 um': a decimal comma; write the number with a point, e.g. A=10.5 um",)),
+    ("A=1,000", ("--tolerance 'A=1,000': a comma in the number, a decimal comma or a thousands separator",
+                 "write A=1.000 if it is decimal, A=1000 if it separates thousands")),
 ])
 def test_a_bad_tolerance_is_one_line(axis_file, text, words):
     one_error_line(cli("positioning", axis_file, "--tolerance", text), *words)

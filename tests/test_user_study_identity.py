@@ -98,6 +98,24 @@ def test_a_code_span_shows_any_text_as_it_is():
     """Backticks in the text: a longer fence, padded where the text starts or ends with one (CommonMark 6.1)."""
     from experiments.render.markdown import md_code
     from experiments.render.page import prose_html
-    for text in ("a`b", "`x", "x``", " lead", "R&D #1 [a] ~{b}! <i> \\ *x* _y_ |"):
+    for text in ("a`b", "`x", "x``", " lead", "R&D #1 [a] ~{b}! <i> \\ *x* _y_ |", "my  data/plain.toml"):
         shown = re.fullmatch(r"<p><code>(.*)</code></p>", str(prose_html(md_code(text))).strip())
         assert shown and html.unescape(shown.group(1)) == text, (text, md_code(text))
+
+
+def test_a_rerun_from_a_moved_toml_records_where_it_now_is(tmp_path, monkeypatch):
+    """A study run again, up to date, from its TOML moved elsewhere: its rows come from the store, and meta.json
+    names the TOML the run loaded (it kept naming the old place, which the report and verify then ran)."""
+    import json
+
+    from experiments import run
+    monkeypatch.chdir(tmp_path)
+    toml = tmp_path / "mine.toml"
+    toml.write_text('name = "mine"\ntitle = "Mine"\nkind = "grid"\nseed = 3\nrepetitions = 2\n[[datasets]]\n'
+                    'source = "circle"\nparams = { radius = 5.0, noise = 0.01, n = 12 }\n[[methods]]\nid = "circle.kasa"\n')
+    assert run.main([str(toml), "--out", "res", "--jobs", "1", "--no-report"]) == 0
+    (tmp_path / "sub").mkdir()
+    moved = toml.rename(tmp_path / "sub" / "mine.toml")
+    assert run.main([str(moved), "--out", "res", "--jobs", "1", "--no-report"]) == 0
+    meta = json.loads((tmp_path / "res" / "mine" / "meta.json").read_text())
+    assert meta["config_file"] == "../sub/mine.toml" and meta["config_file_relative_to"] == "results folder"

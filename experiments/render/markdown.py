@@ -18,9 +18,9 @@ def md_escape(text) -> str:
 def md_code(text) -> str:
     """``text`` as a Markdown code span showing it literally (a command to copy): no backslash escape (a code span
     shows backslashes as they are), a fence of one backtick more than the longest run of backticks in it, padded
-    with a space where it starts or ends with a backtick or a space (CommonMark 0.31, 6.1 "Code spans");
-    whitespace and line breaks folded into one space."""
-    text = re.sub(r"\s+", " ", str(text))
+    with a space where it starts or ends with a backtick or a space (CommonMark 0.31, 6.1 "Code spans"); a line
+    break (or another whitespace character) becomes a space, and runs of spaces are kept (a path may hold two)."""
+    text = re.sub(r"[^\S ]", " ", str(text))
     fence = "`" * (max(map(len, re.findall(r"`+", text)), default=0) + 1)
     pad = " " if text[:1] in ("`", " ") or text[-1:] in ("`", " ") else ""
     return f"{fence}{pad}{text}{pad}{fence}"

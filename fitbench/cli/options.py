@@ -180,8 +180,13 @@ def refuse_decimal_comma(what: str, text: str, example: str) -> None:
     import re
     m = re.fullmatch(r"\s*([-+]?\d*),(\d+)(\s*\S*)\s*", str(text))
     if m:
-        raise InvalidInputError(f"{what}: a decimal comma; write the number with a point, e.g. "
-                                f"{example.format(f'{m.group(1)}.{m.group(2)}{m.group(3)}')}")
+        point = example.format(f"{m.group(1)}.{m.group(2)}{m.group(3)}")
+        if len(m.group(2)) == 3 and m.group(1).lstrip("+-"):  # 1,000: a decimal comma or a thousands separator
+            raise InvalidInputError(f"{what}: a comma in the number, a decimal comma or a thousands separator; write "
+                                    f"{point} if it is decimal, "
+                                    f"{example.format(f'{m.group(1)}{m.group(2)}{m.group(3)}')} if it separates "
+                                    f"thousands")
+        raise InvalidInputError(f"{what}: a decimal comma; write the number with a point, e.g. {point}")
 
 
 class Tolerances(dict):

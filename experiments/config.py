@@ -17,19 +17,23 @@ class StudyConfig(dict):
     records and the study reads), and where it came from as typed attributes, never as keys of the mapping.
 
     ``where``: the file name that errors name; ``folder``: the TOML's folder (``file = ...`` data sets are
-    relative to it); ``quick``: whether its ``[quick]`` table was applied."""
+    relative to it); ``quick``: whether its ``[quick]`` table was applied; ``file``: the TOML file as it was given
+    (its folder resolved, a link kept as the link: what ``meta.json`` records and a rerun loads), None when the
+    config was made in memory."""
 
     where: str
     folder: Path
     quick: bool
+    file: Path | None
 
-    def __init__(self, values: dict, *, where: str, folder: Path, quick: bool = False):
+    def __init__(self, values: dict, *, where: str, folder: Path, quick: bool = False, file: Path | None = None):
         super().__init__(values)
         self.where, self.folder, self.quick = str(where), Path(folder), bool(quick)
+        self.file = None if file is None else Path(file)
 
     def replace(self, **changes) -> "StudyConfig":
         """A copy with some keys changed (the same origin)."""
-        return StudyConfig({**self, **changes}, where=self.where, folder=self.folder, quick=self.quick)
+        return StudyConfig({**self, **changes}, where=self.where, folder=self.folder, quick=self.quick, file=self.file)
 
     # -- its expansion (``experiments.engine``), for a study's ``validate`` and ``tasks``: a study module names the
     # engine through its config, never by an import, so that its rows' cache keys hold no library of the run's own
@@ -54,11 +58,12 @@ class StudyConfig(dict):
         return engine.iter_prepared(tasks)
 
     def __reduce__(self):  # pickled with its attributes (a plain dict's pickle would drop them)
-        return (_study_config, (dict(self), self.where, str(self.folder), self.quick))
+        return (_study_config, (dict(self), self.where, str(self.folder), self.quick,
+                                None if self.file is None else str(self.file)))
 
 
-def _study_config(values, where, folder, quick):
-    return StudyConfig(values, where=where, folder=Path(folder), quick=quick)
+def _study_config(values, where, folder, quick, file=None):
+    return StudyConfig(values, where=where, folder=Path(folder), quick=quick, file=file)
 
 
 def available() -> dict[str, Path]:
@@ -132,7 +137,9 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> StudyCon
         cfg["seed"] = seed
     cfg.setdefault("seed", 0)
     schema.check_values(cfg, where)
-    cfg = StudyConfig(cfg, where=where, folder=path.resolve().parent, quick=quick)
+    # a link to a TOML of another name stays the link: the file that was given, and whose name was checked above
+    cfg = StudyConfig(cfg, where=where, folder=path.resolve().parent, quick=quick,
+                      file=path.absolute().parent.resolve() / path.name)
     study.validate(cfg, where)
     validate_declarations(cfg, where)
     return cfg

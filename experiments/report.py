@@ -83,7 +83,7 @@ def study_command_names(results: Path, names: list[str], known: dict) -> dict[st
         path, shown = recorded_config(results / n), f"{n}.toml"
         if path is not None:
             try:
-                shown = path.resolve().relative_to(Path.cwd().resolve()).as_posix()
+                shown = (path.parent.resolve() / path.name).relative_to(Path.cwd().resolve()).as_posix()
             except ValueError:
                 pass
         out[n] = shlex.quote(shown)

@@ -250,7 +250,8 @@ def config_file(cfg, out: Path) -> dict[str, str]:
     ``config_file_relative_to`` saying from where. A project study's relative to the checkout
     (``experiments/configs/NAME.toml``); any other relative to the results folder ``out`` (``../studies/NAME.toml``)
     when the TOML lies in the folder that holds ``out`` or, with ``out``, in the current folder, so that a results
-    folder committed with its TOML names no folder of the author's machine; else by its absolute path."""
+    folder committed with its TOML names no folder of the author's machine; else by its absolute path. The file is
+    the one the run was given (``cfg.file``): a link to a TOML of another name is recorded as the link."""
     from experiments.provenance import REPO
     path = Path(cfg.folder).resolve() / f"{cfg['name']}.toml"
     if is_project_study(cfg):
@@ -258,6 +259,7 @@ def config_file(cfg, out: Path) -> dict[str, str]:
             return {"config_file": path.relative_to(REPO).as_posix(), "config_file_relative_to": "checkout"}
         except ValueError:
             pass
+    path = cfg.file if getattr(cfg, "file", None) is not None else path
     results = Path(out).resolve()
     for base in (results.parent, Path.cwd().resolve()):
         if path.is_relative_to(base) and results.is_relative_to(base):

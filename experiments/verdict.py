@@ -48,7 +48,10 @@ def recorded_config(study_folder: Path) -> Path | None:
     path = Path(value)
     if path.is_absolute():
         return path
-    return (Path(study_folder).parent / path).resolve() if base == "results folder" else REPO / path
+    if base != "results folder":
+        return REPO / path
+    path = Path(study_folder).parent / path   # its folder resolved (a link before '..'), the file itself kept: a link
+    return path.parent.resolve() / path.name  # to a TOML of another name is the file the run was given
 
 
 def is_project_study(study_folder: Path, known) -> bool:

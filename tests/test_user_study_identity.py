@@ -119,3 +119,30 @@ def test_a_rerun_from_a_moved_toml_records_where_it_now_is(tmp_path, monkeypatch
     assert run.main([str(moved), "--out", "res", "--jobs", "1", "--no-report"]) == 0
     meta = json.loads((tmp_path / "res" / "mine" / "meta.json").read_text())
     assert meta["config_file"] == "../sub/mine.toml" and meta["config_file_relative_to"] == "results folder"
+
+
+def test_a_symlinked_toml_of_another_name_is_recorded_as_the_link_given(tmp_path, monkeypatch):
+    """``proj/noise.toml`` a link to ``drafts/noise-v3.toml`` beside an older ``drafts/noise.toml``: meta.json
+    records the file the run was given (the link), and verify and the report's command run it again (they named the
+    link's target folder plus the study's name, the older draft, which verify then reran)."""
+    (tmp_path / "drafts").mkdir()
+    (tmp_path / "proj").mkdir()
+    (tmp_path / "drafts" / "noise-v3.toml").write_text(STUDY.format(name="noise").replace('"mine"', '"v3"'),
+                                                       encoding="utf-8")
+    (tmp_path / "drafts" / "noise.toml").write_text(STUDY.format(name="noise").replace('"mine"', '"old"'),
+                                                    encoding="utf-8")
+    (tmp_path / "proj" / "noise.toml").symlink_to(tmp_path / "drafts" / "noise-v3.toml")
+    monkeypatch.chdir(tmp_path / "proj")
+    _run("noise.toml", "--out", "res")
+    meta = json.loads((tmp_path / "proj" / "res" / "noise" / "meta.json").read_text(encoding="utf-8"))
+    assert (meta["config_file"], meta["config_file_relative_to"]) == ("../noise.toml", "results folder")
+    known = configs.available()
+    rerun = verify.config_of("noise", tmp_path / "proj" / "res", known)
+    assert rerun == str(tmp_path.resolve() / "proj" / "noise.toml")
+    assert configs.load(rerun)["datasets"][0]["label"] == "v3"
+    assert report.study_command_names(tmp_path / "proj" / "res", ["noise"], known) == {"noise": "noise.toml"}
+    # the link given by its absolute path, run from elsewhere: recorded whole, still the link
+    monkeypatch.chdir(tmp_path / "drafts")
+    cfg = configs.load(str(tmp_path / "proj" / "noise.toml"))
+    assert runner.config_file(cfg, tmp_path / "elsewhere" / "res") == {
+        "config_file": str(tmp_path.resolve() / "proj" / "noise.toml")}

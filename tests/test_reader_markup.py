@@ -155,3 +155,27 @@ def test_positioning_reads_below_a_markup_preamble_it_skips(tmp_path):
     code0, out0, _ = cli("positioning", REPO / "docs/examples/positioning.csv", "--json")
     assert code == code0 == 0, err
     assert json.loads(out)["A"] == json.loads(out0)["A"]
+
+
+@pytest.mark.parametrize("cmd", [("fit", "circle.kasa"), ("roundness",)], ids=lambda c: c[0])
+@pytest.mark.parametrize("first", ["{Probe 3}", "Probe 3", "[General]", "<Operator: J. Smith>"])
+def test_a_preamble_line_above_the_header_is_hinted_at(tmp_path, cmd, first):
+    """One preamble line above a profile's header, no --skip-rows: the refusal says to skip it, whatever the
+    refusal ('{Probe 3}' got 'cannot tell the unit of column '{Probe'', with no word of the preamble)."""
+    p = tmp_path / "lt2.csv"
+    p.write_text(f"{first}\n" + (REPO / "docs/examples/profile.csv").read_text(encoding="utf-8"), encoding="utf-8")
+    one_line(*cli(*command(cmd, p))[::2],
+             "if line 1 is an instrument's preamble, give --skip-rows 1 (the first row of numbers is line 3)")
+    code, out, err = cli(*command(cmd, p), "--skip-rows", 1)
+    assert code == 0 and "error" not in err, err
+
+
+def test_a_preamble_line_above_a_circular_test_s_header_is_hinted_at(tmp_path):
+    files = []
+    for name in ("cw.csv", "ccw.csv"):
+        files.append(tmp_path / name)
+        files[-1].write_text("{Probe 3}\n" + (REPO / "docs/examples" / name).read_text(encoding="utf-8"), encoding="utf-8")
+    one_line(*cli("circular-test", *files, "--nominal-radius", 150)[::2], "cw.csv: ",
+             "if line 1 is an instrument's preamble, give --skip-rows 1 (the first row of numbers is line 3)")
+    code, out, err = cli("circular-test", *files, "--nominal-radius", 150, "--skip-rows", 1)
+    assert code == 0 and "error" not in err, err

@@ -47,8 +47,9 @@ def column_unit(layout, k: int, kind: str) -> str | None:
     key, unit = parse_name(layout.header[k])
     if unit is None:
         if re.search(r"[\[\](){}<>|µμ°]", key):   # a unit fitbench cannot take apart: never read the column as mm
+            # the "header" may be a preamble line ('{Probe 3}') above the real header: said, as other refusals do
             raise DataFileError(f"{layout.name}: cannot tell the unit of column {layout.header[k]!r}; write it as "
-                                "'NAME [UNIT]' (x [µm])")
+                                f"'NAME [UNIT]' (x [µm]){layout.preamble_hint()}")
         return None
     known = LENGTH_UNITS if kind == "length" else ANGLE_UNITS
     if unit in known.values():

@@ -59,6 +59,11 @@ class Layout:
                 out.append(keys.index(want))
         return out
 
+    def preamble_hint(self) -> str:
+        """:func:`skip_rows_hint` of this file (for a refusal of its header made where this module is not imported:
+        ``datasets.io.headers``, which it imports)."""
+        return skip_rows_hint(self)
+
     def fields(self) -> list[tuple[str, str | None]]:
         """(key, unit) of each header name (:func:`parse_name`); [] without a header."""
         return [parse_name(h) for h in self.header] if self.header else []

@@ -5,26 +5,11 @@ A revolution in radians (0 to 6.28) read as degrees is a 6° arc: roundness refu
 and says what to give; fit (which may fit an arc) notes it."""
 from __future__ import annotations
 
-import contextlib
-import io
 
 import numpy as np
 import pytest
 
-from fitbench.cli.commands import main
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return code, out.getvalue(), err.getvalue()
-
-
-def one_line(code, err, *match):
-    assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
-    for m in match:
-        assert m in err, err
+from cli_calls import cli, one_error_line
 
 
 def polar_file(path, angles, deviation_um, header="Angle,Radial deviation [um]", direction=None):
@@ -40,7 +25,7 @@ def polar_file(path, angles, deviation_um, header="Angle,Radial deviation [um]",
 def test_roundness_names_radians_read_as_degrees(tmp_path, start):
     t = np.linspace(start, start + 2 * np.pi, 720, endpoint=False)
     p = polar_file(tmp_path / "polar_rad.csv", t, 2.0 * np.cos(3 * t))
-    one_line(*cli("roundness", p, "--angle-unit", "deg")[::2], "are they in radians?", "give --angle-unit rad")
+    one_error_line(cli("roundness", p, "--angle-unit", "deg"), "are they in radians?", "give --angle-unit rad")
     code, out, err = cli("roundness", p, "--angle-unit", "rad")   # read as radians: a closed profile, evaluated
     assert code == 0 and "RONt" in out, err
 
@@ -48,7 +33,7 @@ def test_roundness_names_radians_read_as_degrees(tmp_path, start):
 def test_header_saying_deg_is_named(tmp_path):
     t = np.linspace(0, 2 * np.pi, 360, endpoint=False)
     p = polar_file(tmp_path / "polar_rad.csv", t, 2.0 * np.cos(3 * t), header="Angle [deg],Radial deviation [um]")
-    one_line(*cli("roundness", p)[::2], "are they in radians?", "correct the header of 'Angle [deg]' to [rad]")
+    one_error_line(cli("roundness", p), "are they in radians?", "correct the header of 'Angle [deg]' to [rad]")
 
 
 def test_circular_test_names_radians_read_as_degrees(tmp_path):
@@ -57,8 +42,8 @@ def test_circular_test_names_radians_read_as_degrees(tmp_path):
     runs = np.r_[["cw"] * len(t), ["ccw"] * len(t)]
     p = polar_file(tmp_path / "ballbar.csv", angles, 3.0 * np.cos(2 * angles),
                    header="Direction,Angle,Radial deviation [um]", direction=runs)
-    one_line(*cli("circular-test", p, "--nominal-radius", 150, "--angle-unit", "deg")[::2],
-             "are they in radians?", "less than the 90° needed")
+    one_error_line(cli("circular-test", p, "--nominal-radius", 150, "--angle-unit", "deg"),
+                   "are they in radians?", "less than the 90° needed")
 
 
 def test_fit_notes_it_and_a_real_small_arc_in_degrees_is_not_refused(tmp_path):

@@ -9,7 +9,7 @@ import json
 import numpy as np
 
 from methods.circular_test.runs import off_circle_ends
-from test_cli_inputs import cli, one_error_line
+from cli_calls import cli, one_error_line
 
 R = 100.0
 

@@ -6,28 +6,13 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from datasets.circular_test import MachineErrors, TestConditions, circular_test
 from datasets.positioning import axis_test, to_frame
-from fitbench.cli import main
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
-
-
-def one_error_line(out, *words):
-    assert out.returncode == 2, (out.stdout, out.stderr)
-    assert "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
-    for w in words:
-        assert w in out.stderr, out.stderr
+from cli_calls import cli, one_error_line
 
 
 def profile_file(path, n=3600, seed=3):

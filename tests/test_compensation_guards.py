@@ -10,7 +10,7 @@ import methods
 from datasets.positioning import axis_test, to_frame
 from fitbench.compensation import (BACKLASH_LIMIT_MM, WRITERS, CompensationError, magnitude_problem,
                                    compensation_table, write_tables)
-from test_cli_inputs import cli, one_error_line
+from cli_calls import cli, one_error_line
 
 
 def um_file(path, header="deviation", **kw):

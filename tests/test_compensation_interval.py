@@ -14,7 +14,7 @@ from compensation_controllers import READERS, remeasure
 from datasets.positioning import axis_test, to_frame
 from fitbench.compensation import REPRESENT_SHARE, WRITERS, CompensationError, compensation_table
 from methods.positioning.model import evaluate_band
-from test_cli_inputs import cli, one_error_line
+from cli_calls import cli, one_error_line
 
 KW = {"travel": (-400.0, 600.0), "pitch": (0.0, 0.060, -0.090, 0.045), "reversal": -0.004, "repeatability": 0.0004,
       "irregular": 0.3}

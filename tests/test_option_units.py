@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from datasets.positioning import axis_test, to_frame
-from test_cli_inputs import cli, one_error_line
+from cli_calls import cli, one_error_line
 
 
 @pytest.fixture

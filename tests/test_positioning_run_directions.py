@@ -13,7 +13,7 @@ import pytest
 from datasets.io import read_positioning
 from datasets.io.positioning import ALTERNATING_P, alternating_runs
 from datasets.positioning import axis_test
-from test_cli_inputs import cli, one_error_line
+from cli_calls import cli, one_error_line
 
 
 def exports(tmp_path, seed=2):

@@ -5,29 +5,14 @@ columns? the header has <?xml, ...'; fitbench's own --json result given back to 
 And a positioning file's pandas error named pandas' line ('Expected 2 fields in line 4'), not the file's."""
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
 import pytest
 
-from datasets.io import not_text
-from fitbench.cli.commands import main
+from cli_calls import cli, one_error_line
 from conftest import REPO
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return code, out.getvalue(), err.getvalue()
-
-
-def one_line(code, err, *match):
-    assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
-    for m in match:
-        assert m in err, err
+from datasets.io import not_text
 
 
 XML = ('<?xml version="1.0" encoding="utf-8"?>\n<!-- exported -->\n<BallbarTest>\n  <Header Radius="150"/>\n'
@@ -46,7 +31,7 @@ def command(cmd, path):
 def test_xml_is_named_with_its_root_element(tmp_path, cmd, text):
     p = tmp_path / "test.b5r"
     p.write_text(text, encoding="utf-8")
-    one_line(*cli(*command(cmd, p))[::2], "test.b5r is an XML file (root <BallbarTest>", "export the measured points")
+    one_error_line(cli(*command(cmd, p)), "test.b5r is an XML file (root <BallbarTest>", "export the measured points")
 
 
 def test_utf16_xml_and_html(tmp_path):
@@ -72,28 +57,28 @@ def own_result(tmp_path_factory):
 
 @pytest.mark.parametrize("cmd", COMMANDS, ids=lambda c: c[0])
 def test_fitbench_own_json_result_is_named(own_result, cmd):
-    one_line(*cli(*command(cmd, own_result))[::2], "result.json is JSON (a fitbench result",
-             "give the file of measured points")
+    one_error_line(cli(*command(cmd, own_result)), "result.json is JSON (a fitbench result",
+                   "give the file of measured points")
 
 
 def test_other_json_is_named_and_an_ini_preamble_is_not_json(tmp_path):
     p = tmp_path / "points.json"
     p.write_text(json.dumps([[1.0, 2.0], [3.0, 4.0], [5.0, 1.0]]))
-    one_line(*cli("fit", "circle.kasa", p)[::2], "points.json is a JSON file, not a text table")
+    one_error_line(cli("fit", "circle.kasa", p), "points.json is a JSON file, not a text table")
     ini = tmp_path / "ini.csv"
     pts = np.array([[np.cos(t), np.sin(t)] for t in np.linspace(0, 6, 20)])
     ini.write_text("[General]\nMachine=VMC\n\nx,y\n" + "\n".join(f"{x:.6f},{y:.6f}" for x, y in pts) + "\n")
     assert not_text(ini) is None
-    one_line(*cli("fit", "circle.kasa", ini)[::2], "--skip-rows 3")
+    one_error_line(cli("fit", "circle.kasa", ini), "--skip-rows 3")
 
 
 def test_positioning_parser_error_names_the_files_line(tmp_path):
     p = tmp_path / "laser.rtl"
     p.write_text("Machine: VMC-1\nAxis: X\nDate: 2026-11-20\n\nTarget,Run 1,Run 2\n0,0.001,0.002\n100,0.003,0.004\n"
                  "200,0.002,0.001\n")
-    code, _, err = cli("positioning", p)
-    one_line(code, err, "laser.rtl line 5: 3 fields where the header (line 1) has 2", "--skip-rows 4")
-    assert "Expected" not in err and "line 4" not in err
+    called = cli("positioning", p)
+    one_error_line(called, "laser.rtl line 5: 3 fields where the header (line 1) has 2", "--skip-rows 4")
+    assert "Expected" not in called.stderr and "line 4" not in called.stderr
 
 
 def _table_below(path, first_lines: str, n: int = 40):
@@ -123,7 +108,7 @@ def test_a_line_skip_rows_skips_is_never_refused_as_markup(tmp_path, cmd):
                         ('{"operator": "J. Smith"}\n{"probe": 3}', None)):
         p = _table_below(tmp_path / "trace.csv", first, n=720)
         if what:
-            one_line(*cli(*command(cmd, p))[::2], what, "if lines 1-2 are a preamble above a table, give --skip-rows 2")
+            one_error_line(cli(*command(cmd, p)), what, "if lines 1-2 are a preamble above a table, give --skip-rows 2")
         code, out, err = cli(*command(cmd, p), "--skip-rows", 2)
         assert code == 0 and "error" not in err, err
 
@@ -150,7 +135,7 @@ def test_positioning_reads_below_a_markup_preamble_it_skips(tmp_path):
     p = tmp_path / "axis.csv"
     p.write_text('<Machine id="VMC-1">laser test</Machine>\n'
                  + (REPO / "docs/examples/positioning.csv").read_text(encoding="utf-8"), encoding="utf-8")
-    one_line(*cli("positioning", p)[::2], "is an XML file (root <Machine>", "give --skip-rows 1")
+    one_error_line(cli("positioning", p), "is an XML file (root <Machine>", "give --skip-rows 1")
     code, out, err = cli("positioning", p, "--skip-rows", 1, "--json")
     code0, out0, _ = cli("positioning", REPO / "docs/examples/positioning.csv", "--json")
     assert code == code0 == 0, err
@@ -164,8 +149,8 @@ def test_a_preamble_line_above_the_header_is_hinted_at(tmp_path, cmd, first):
     refusal ('{Probe 3}' got 'cannot tell the unit of column '{Probe'', with no word of the preamble)."""
     p = tmp_path / "lt2.csv"
     p.write_text(f"{first}\n" + (REPO / "docs/examples/profile.csv").read_text(encoding="utf-8"), encoding="utf-8")
-    one_line(*cli(*command(cmd, p))[::2],
-             "if line 1 is an instrument's preamble, give --skip-rows 1 (the first row of numbers is line 3)")
+    one_error_line(cli(*command(cmd, p)),
+                   "if line 1 is an instrument's preamble, give --skip-rows 1 (the first row of numbers is line 3)")
     code, out, err = cli(*command(cmd, p), "--skip-rows", 1)
     assert code == 0 and "error" not in err, err
 
@@ -175,7 +160,7 @@ def test_a_preamble_line_above_a_circular_test_s_header_is_hinted_at(tmp_path):
     for name in ("cw.csv", "ccw.csv"):
         files.append(tmp_path / name)
         files[-1].write_text("{Probe 3}\n" + (REPO / "docs/examples" / name).read_text(encoding="utf-8"), encoding="utf-8")
-    one_line(*cli("circular-test", *files, "--nominal-radius", 150)[::2], "cw.csv: ",
-             "if line 1 is an instrument's preamble, give --skip-rows 1 (the first row of numbers is line 3)")
+    one_error_line(cli("circular-test", *files, "--nominal-radius", 150), "cw.csv: ",
+                   "if line 1 is an instrument's preamble, give --skip-rows 1 (the first row of numbers is line 3)")
     code, out, err = cli("circular-test", *files, "--nominal-radius", 150, "--skip-rows", 1)
     assert code == 0 and "error" not in err, err

@@ -10,7 +10,7 @@ import json
 import numpy as np
 from scipy.optimize import linprog
 
-from test_cli_inputs import cli
+from cli_calls import cli
 
 
 def profile(path, n=720):

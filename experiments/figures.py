@@ -8,7 +8,6 @@ from pathlib import Path
 
 import pandas as pd
 
-from experiments.outputs import save_figure
 from experiments.render import style
 from experiments.study import PLOT_COLUMNS, PLOTS, Figure, register_plot
 from experiments.tables import AGGREGATES, NO_VALUE, lacking_note, rows_where
@@ -108,6 +107,5 @@ def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Fig
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     name = f"figure_{number}_{f['plot']}.png"
-    save_figure(fig, target / name)
-    plt.close(fig)
+    style.save(fig, target / name, dpi=110)
     return Figure(caption=f["caption"] + note, file=name)

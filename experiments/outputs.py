@@ -17,14 +17,6 @@ from experiments.study import Analysis, Table
 DEFAULT_SECTION = "Other studies"
 
 
-def save_figure(fig, path: Path, dpi: float = 110) -> None:
-    """Save a matplotlib figure atomically (:func:`fitbench.plots.save_atomic`: a kill never leaves a
-    half-written PNG)."""
-    from fitbench.plots import save_atomic
-    save_atomic(fig, path, dpi=dpi)
-    save_atomic(fig, Path(path).with_suffix(".pdf"))   # the vector form the report's LaTeX includes
-
-
 def save_csv(df: pd.DataFrame, path: Path, **kwargs) -> None:
     """``df.to_csv(path, **kwargs)``, written atomically."""
     buf = io.StringIO()

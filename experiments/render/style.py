@@ -202,16 +202,18 @@ def smallest_font_pt(fig) -> float:
     return min(sizes) if sizes else float("inf")
 
 
-def save(fig, path, *, pdf: bool = True) -> Path:
-    """Write ``fig`` atomically to ``path`` (PNG) and, unless ``pdf=False``, the same figure as a vector PDF next
-    to it (the report's LaTeX includes the PDF); close the figure."""
+def save(fig, path, *, dpi: float | None = None, pdf: bool = True) -> Path:
+    """Write ``fig`` atomically to ``path`` (PNG, at ``dpi``; None: the style's ``savefig.dpi``) and, unless
+    ``pdf=False``, the same figure as a vector PDF next to it (the report's LaTeX includes the PDF); close the figure.
+    The one way a study's figure is saved."""
     from fitbench.plots import save_atomic
     plt = plotting()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     try:
-        for target in [path] + ([path.with_suffix(".pdf")] if pdf else []):
-            save_atomic(fig, target)
+        save_atomic(fig, path, dpi=dpi)
+        if pdf:
+            save_atomic(fig, path.with_suffix(".pdf"))
     finally:
         plt.close(fig)
     return path

@@ -17,7 +17,6 @@ import pandas as pd
 from pydantic import Field
 
 from methods.results import Tolerance
-from experiments.outputs import save_figure
 from experiments.rows import base_row, fit_row
 from experiments.study import Analysis, ConfigTable, Figure, Study, Table
 from methods.results import CircularTestFit
@@ -146,6 +145,7 @@ class CircularTestStudy(Study):
         """Fits against the scenario's exact truth and the published values; ISO 230-4 figures; diagnostics."""
         from methods.circular_test import evaluate
         from fitbench.plots.circular_test import polar_plot
+        from experiments.render import style
 
         evaluation = df[df["method"] == EVALUATION].iloc[0]
         df = df[df["method"] != EVALUATION]
@@ -196,7 +196,7 @@ class CircularTestStudy(Study):
         for line in lines:
             log(line)
         polar_plot(cw, ccw, ev, target / "polar.png", title="LOLA HBG 130 (synthetic scenario)",
-                   save=lambda fig, path: save_figure(fig, path, dpi=120))      # PNG and the vector PDF
+                   save=lambda fig, path: style.save(fig, path, dpi=120))      # PNG and the vector PDF
         write_atomic(target / "tables.txt", "\n".join(lines) + "\n")
         iso_rows = pd.DataFrame([{"figure": k, "synthetic scenario": round(v * 1e3, 2), "published": PAPER_ISO.get(k, np.nan)}
                                  for k, v in iso.items()])

@@ -15,7 +15,7 @@ import methods
 from datasets.positioning import axis_test
 from methods.positioning.model import evaluate_band
 from experiments.render.text import joined
-from experiments.outputs import save_csv, save_figure
+from experiments.outputs import save_csv
 from experiments.rows import base_row
 from experiments.study import Analysis, ConfigError, ConfigTable, Figure, Study, Table
 
@@ -24,12 +24,13 @@ def example(cfg, target) -> str:
     """The paper's figures 2 and 3 for one synthetic axis with the periodic error; returns what the figure's right
     panel shows: the model's band, or the lack-of-fit test that rejects the model (then no band is drawn)."""
     from fitbench.plots.positioning import plot
+    from experiments.render import style
     s = cfg["scenarios"][-1]
     data, _ = axis_test(rng=np.random.default_rng(cfg["seed"]), **s["params"])
     band = next(b for b in cfg["bands"] if b["label"] == cfg["example_band"])
     res = methods.fit(band["method"], data, **{k: s.get(k) for k in band.get("scenario_params", [])})
     plot(res, target / "example.png", title=f"synthetic axis: {s['label']}",
-         save=lambda fig, path: save_figure(fig, path, dpi=120))      # PNG and the vector PDF
+         save=lambda fig, path: style.save(fig, path, dpi=120))      # PNG and the vector PDF
     tests = {d: p.get("lack_of_fit") or {} for d, p in res.polynomial.items()}
     rejected = [d for d, t in tests.items() if t.get("rejected")]
     if not rejected:

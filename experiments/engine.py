@@ -40,8 +40,6 @@ from experiments.codekeys import (NUMBER_PACKAGES, _CODE, _ENV, _has_source, _me
                                   forget_data_hashes, module_code, reset_caches, source_hash, task_code)
 from experiments.chunkrows import run_chunk
 from experiments.rows import RERUN_STATUSES, raise_if_signalled, row_from_json, source_of
-# the row API of studies with their own ``execute`` and of the command (engine.base_row, engine.fit_row, ...)
-from experiments.rows import ENVIRONMENT_STATUSES, base_row, fit_row, load_data, note_signal, task_data  # noqa: F401
 from experiments.store import RowStore
 from experiments.study import ConfigError
 from methods import InvalidInputError

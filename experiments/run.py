@@ -36,7 +36,8 @@ from experiments.csvtext import blocks, csv_text, write_results
 from experiments.jsontext import json_text, json_value
 from experiments.executors import kept_workers, last_study, map_in_idle_workers, start_kept_workers, workers_done
 from experiments.provenance import collect, write_atomic
-from experiments.rows import Terminated, clear_signal, fewer_collections, note_signal, raise_if_signalled, signalled
+from experiments.rows import (ENVIRONMENT_STATUSES, Terminated, base_row, clear_signal, fewer_collections, note_signal,
+                              raise_if_signalled, signalled)
 from experiments.summary import summarise, summary_units, to_markdown, with_units
 from fitbench import __version__
 import methods
@@ -75,7 +76,7 @@ def check_summary_by(cfg: dict, study, tasks: list[dict]) -> None:
         return  # its columns are known only after it ran: checked then (finish)
     known = set(engine.RESULT_COLUMNS) | set(own)
     for t in tasks[:10000]:
-        known |= set(engine.base_row(t))
+        known |= set(base_row(t))
     unknown = [c for c in by if c not in known]
     if unknown:
         raise configs.ConfigError(f"{cfg.where}: summary_by: no row will have the column(s) {', '.join(unknown)}; "
@@ -143,7 +144,7 @@ def task_source(cfg: dict, study, max_rows: int):
 
 def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
     """The one-line error of a study whose rows all failed for reasons of the environment, else None."""
-    if not len(df) or not df["status"].isin(engine.ENVIRONMENT_STATUSES).all():
+    if not len(df) or not df["status"].isin(ENVIRONMENT_STATUSES).all():
         return None
     reasons = df.groupby(["status", "message"], sort=False, dropna=False).size().sort_values(ascending=False)
     (status, message), n = reasons.index[0], int(reasons.iloc[0])

@@ -13,7 +13,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from experiments import engine, metrics, summary
+from experiments import metrics, summary
+from experiments.rows import fit_row
 from methods import register, result_base, results
 from methods._registry import _REGISTRY
 
@@ -72,7 +73,7 @@ def test_a_plugin_family_declares_its_columns_like_a_built_in_one(plugin_family)
     assert metrics.tolerance("side") == results.GEOMETRY and metrics.tolerance("side_error") == results.ERRORS
     # the engine's row carries the declared columns, the summary reports the declared errors' bias and RMSE; the
     # centre error is declared as the length of (center_error_x, center_error_y): its bias is the mean vector's length
-    rows = [engine.fit_row(_task("square.bounding_box"), SQUARE * scale, {"side": 2.0, "center": center})
+    rows = [fit_row(_task("square.bounding_box"), SQUARE * scale, {"side": 2.0, "center": center})
             for scale, center in ((1.0, (0.5, 1.0)), (1.5, (2.0, 1.5)))]
     assert [r["status"] for r in rows] == ["ok", "ok"] and [r["side"] for r in rows] == [2.0, 3.0]
     assert [r["side_error"] for r in rows] == [0.0, 1.0] and [r["center_error_x"] for r in rows] == [0.5, -0.5]
@@ -80,7 +81,7 @@ def test_a_plugin_family_declares_its_columns_like_a_built_in_one(plugin_family)
     assert table.loc[0, "side_bias"] == 0.5 and table.loc[0, "side_rmse"] == pytest.approx(np.sqrt(0.5))
     assert table.loc[0, "center_bias"] == 0.0 and table.loc[0, "center_rmse"] == 0.5
     # the gate holds the family to its declarations
-    bad = engine.fit_row(_task("square.negative"), SQUARE, {"side": 2.0, "center": (1.0, 1.0)})
+    bad = fit_row(_task("square.negative"), SQUARE, {"side": 2.0, "center": (1.0, 1.0)})
     assert bad["status"] == "invalid" and "side = -2 must be > 0" in bad["message"], bad
 
 
@@ -105,7 +106,7 @@ def test_a_plugin_method_of_a_built_in_family_adds_its_own_column():
     try:
         t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
         points = np.c_[5 + 2 * np.cos(t), -1 + 2 * np.sin(t)]
-        row = engine.fit_row(_task("circle.lobed_centroid"), points, {"center": (5.0, -1.0), "radius": 2.0})
+        row = fit_row(_task("circle.lobed_centroid"), points, {"center": (5.0, -1.0), "radius": 2.0})
         assert row["status"] == "ok" and row["lobes"] == 3 and row["radius"] == pytest.approx(2.0)
         lobes = result_base.row_columns()["lobes"]
         assert (lobes.unit, lobes.tolerance) == ("", results.EXACT) and metrics.tolerance("lobes") == results.EXACT

@@ -7,7 +7,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 import pytest
 
-from experiments import engine
+from experiments.rows import fit_row
 from methods import check_result, register, results
 from methods._registry import _REGISTRY
 
@@ -87,20 +87,20 @@ def methods_of_a_plugin():
 
 
 def test_a_subclass_cannot_compute_its_own_errors_against_the_truth(methods_of_a_plugin):
-    honest = engine.fit_row(_task("circle.pr_honest"), ARC, TRUTH)
+    honest = fit_row(_task("circle.pr_honest"), ARC, TRUTH)
     assert honest["status"] == "ok" and abs(honest["radius_error"]) > 1.0  # the centroid of an arc is far off
     for mid in ("circle.pr_zero_error", "circle.pr_lying_float"):
-        row = engine.fit_row(_task(mid), ARC, TRUTH)
+        row = fit_row(_task(mid), ARC, TRUTH)
         assert row["status"] == "ok", row
         for col in ("radius_error", "center_error", "center_error_x", "center_error_y"):
             assert row[col] == honest[col], (mid, col, row[col], honest[col])
     # its own column is kept; it cannot add a family column the truth does not give
-    row = engine.fit_row(_task("circle.pr_zero_error"), ARC, {"center": (1.0, 2.0)})
+    row = fit_row(_task("circle.pr_zero_error"), ARC, {"center": (1.0, 2.0)})
     assert row["flattery"] == 1.0 and "radius_error" not in row
 
 
 def test_the_geometry_of_a_row_is_what_the_gate_checked(methods_of_a_plugin):
-    row = engine.fit_row(_task("circle.pr_two_faced"), ARC, TRUTH)
+    row = fit_row(_task("circle.pr_two_faced"), ARC, TRUTH)
     assert row["status"] == "invalid", row
     assert "reports center_x = " in row["message"] and "which the gate checks against the data" in row["message"], row
     # the API's gate says the same (methods.fit of a plugin's method)
@@ -110,8 +110,8 @@ def test_the_geometry_of_a_row_is_what_the_gate_checked(methods_of_a_plugin):
 
 
 def test_a_subclass_adds_its_own_columns(methods_of_a_plugin):
-    row = engine.fit_row(_task("circle.pr_extra"), ARC, TRUTH)
-    honest = engine.fit_row(_task("circle.pr_honest"), ARC, TRUTH)
+    row = fit_row(_task("circle.pr_extra"), ARC, TRUTH)
+    honest = fit_row(_task("circle.pr_honest"), ARC, TRUTH)
     assert row["status"] == "ok" and row["plugin_class_lobes"] == 3
     assert {k: v for k, v in row.items() if k not in ("plugin_class_lobes", "method")} == \
         {k: v for k, v in honest.items() if k != "method"}

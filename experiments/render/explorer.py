@@ -81,6 +81,7 @@ def _points(meta: dict, study: str, dataset: str, stream: str):
     """The points of one problem, regenerated from the study's declaration (the data source and its seed
     stream); None when the source is not available here."""
     from experiments import engine
+    from experiments.rows import load_data
     cfg = meta.get("config") if isinstance(meta.get("config"), dict) else None
     if not cfg:
         return None
@@ -88,7 +89,7 @@ def _points(meta: dict, study: str, dataset: str, stream: str):
         entry, point, rep = (int(x) for x in str(stream).split("."))
         spec = next(s for s in engine.expand_datasets(cfg, study) if s["label"] == dataset
                     and s["entry"] == entry and s["point"] == point)
-        pts, _ = engine.load_data(spec, int(cfg.get("seed", 0)), [entry, point, rep])
+        pts, _ = load_data(spec, int(cfg.get("seed", 0)), [entry, point, rep])
     except Exception:  # noqa: BLE001 - a source missing here (e.g. NIST files) means: no drawing, said on the page
         return None
     pts = np.asarray(pts, dtype=float)

@@ -12,7 +12,8 @@ sys.path.insert(0, os.getcwd())  # this checkout's methods, not an installed cop
 import numpy as np  # noqa: E402
 
 import methods  # noqa: E402
-from experiments import config as C, engine  # noqa: E402
+from experiments import config as C  # noqa: E402
+from experiments.rows import load_data  # noqa: E402
 from experiments.studies import convergence as conv  # noqa: E402
 from experiments.studies import roundness as rs  # noqa: E402
 
@@ -21,7 +22,7 @@ eps = np.finfo(float).eps
 for task in conv.ConvergenceStudy().tasks(cfg):
     if task["method"] not in ("circle.gauss_newton", "circle.levenberg_marquardt") or task["x_start_distance"] < 1:
         continue
-    points, truth = engine.load_data(task["dataset"], task["seed"], task["stream"])
+    points, truth = load_data(task["dataset"], task["seed"], task["stream"])
     R = truth["radius"]
     phi = 2 * np.pi * task["x_start_direction"] / task["x_directions"]
     start = np.array([truth["center"][0] + task["x_start_distance"] * R * np.cos(phi),

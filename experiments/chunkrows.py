@@ -1,8 +1,8 @@
 """The rows of a chunk of tasks, as a worker of the engine makes them (:func:`run_chunk`: the executors' entry point),
 and the isolation of a plugin's code: in a worker (:func:`mark_row_worker`), the rows of a plugin's method or data
-source are fitted in a child process forked for them and gated and measured by the worker's own code
-(:func:`_plugin_rows`), so that what a plugin does to its process (patching the gate, a built-in method, NumPy) dies
-with the child (docs/plugins.md).
+source are fitted in a child process forked for them (one per method and data source in a chunk) and gated and
+measured by the worker's own code (:func:`_plugin_rows`), so that what a plugin does to its process (patching the
+gate, another method, NumPy) dies with the child (docs/plugins.md).
 
 The row itself (its data, fit, gate, metrics, time limit and statuses) is :mod:`experiments.rows`; this module's code
 is part of every row's cache key too (``experiments.codekeys.task_code``).
@@ -51,6 +51,12 @@ def _plugin_tasks(tasks: list[dict]) -> list[bool] | None:
         flags.append(flag)
         any_plugin = any_plugin or flag
     return flags if any_plugin else None
+
+
+def _plugin_part(task: dict) -> tuple:
+    """The rows that share a child process (:func:`_plugin_rows`) in a chunk: those of one method on one data source.
+    A plugin's method that patches another plugin's method, or a data source, patches them in its own child only."""
+    return task.get("method"), source_of(task["dataset"]) if isinstance(task.get("dataset"), dict) else None
 
 
 def _builtin_source(spec: dict) -> bool:
@@ -102,15 +108,15 @@ def run_chunk(tasks: list[dict], row_timeout: float | None = None, progress=None
     plugin = _plugin_tasks(tasks) if _forks_plugin_rows() else None
     if plugin is None:
         rows = _chunk_rows(tasks, row_timeout, progress)
-    else:  # the rows of a plugin's code run in a child process: what they do to their process dies with it
+    else:  # the rows of a plugin's code run in child processes: what they do to their process dies with it
         rows = [None] * len(tasks)
-        for part in (False, True):
-            where = [i for i, flag in enumerate(plugin) if flag is part]
-            if not where:
-                continue
+        parts: dict = {}  # None: fitbench's own rows, here; (method, data source): the rows of one plugin's code
+        for i, (task, flag) in enumerate(zip(tasks, plugin)):
+            parts.setdefault(_plugin_part(task) if flag else None, []).append(i)
+        for part, where in sorted(parts.items(), key=lambda kv: kv[0] is not None):
             some = [tasks[i] for i in where]
             at = progress if progress is None else _Positions(progress, where)
-            got = _plugin_rows(some, row_timeout, at) if part else _chunk_rows(some, row_timeout, at)
+            got = _chunk_rows(some, row_timeout, at) if part is None else _plugin_rows(some, row_timeout, at)
             for i, row in zip(where, got):
                 rows[i] = row
     return {"columns": encode_rows(rows), "seconds": time.perf_counter() - t0}
@@ -140,16 +146,17 @@ def _chunk_rows(tasks: list[dict], row_timeout: float | None, progress) -> list[
 
 
 def _plugin_rows(tasks: list[dict], row_timeout: float | None, progress) -> list[dict]:
-    """The rows of tasks running a plugin's code (its method, or its data source), fitted in a child process forked
-    for them: a plugin that patches the gate, the metrics, a built-in method or NumPy does it in that child, which
-    ends with the chunk; the worker (this process, which ran no plugin code since it started, save the imports of
+    """The rows of tasks running a plugin's code (its method, or its data source; one method on one data source,
+    :func:`_plugin_part`), fitted in a child process forked for them: a plugin that patches the gate, the metrics,
+    another method or NumPy does it in that child, which ends with these rows; the worker (this process, which ran no plugin code since it started, save the imports of
     the installed plugins) gates the results and computes their metrics with its own code. The child sends back, for
     a plugin's method, the result as fitbench's own class in plain types (:func:`methods.result_base.family_copy`),
     the columns its class adds and its timing (and the data when the source is a plugin's too), read with
     :class:`_ResultUnpickler`, which makes fitbench's result classes and NumPy arrays and nothing else; for a built-in
-    method on a plugin's data source (the data are the plugin's) and a study kind's own rows, the row. A child that
-    ends without sending them ends this worker likewise (exit status or signal): the run labels the row at the
-    chunk's progress position 'crashed' and runs the others again, as for a worker that ended."""
+    method on a plugin's data source (the data are the plugin's) and a study kind's own rows, the row. The child
+    sends each row's item as soon as it is made; a child that ends before it sent them all ends this worker likewise
+    (exit status or signal) with the first row it did not send at the chunk's progress position: the run labels that
+    row 'crashed' and runs the others again, as for a worker that ended."""
     import pickle
     read, write = os.pipe()
     pid = os.fork()
@@ -158,38 +165,36 @@ def _plugin_rows(tasks: list[dict], row_timeout: float | None, progress) -> list
         try:
             os.close(read)
             _child_setup(write)
-            items = []
             for i, task in enumerate(tasks):
                 try:
                     item = _child_item(task, row_timeout, progress, i)
                 except BaseException as exc:  # not an Exception (run_task raises it again): the row's error
                     item = ("row", failed_row(task, "error", exception_text(exc)))
                 try:
-                    items.append(pickle.dumps(item, protocol=pickle.HIGHEST_PROTOCOL))
+                    data = pickle.dumps(item, protocol=pickle.HIGHEST_PROTOCOL)
                 except Exception as exc:
-                    items.append(pickle.dumps(("row", failed_row(task, "error", f"its result cannot be sent to the "
-                                                                 f"engine ({type(exc).__name__}: {exc})"))))
-            with os.fdopen(write, "wb") as out:
-                out.write(pickle.dumps(items, protocol=pickle.HIGHEST_PROTOCOL))
+                    data = pickle.dumps(("row", failed_row(task, "error", f"its result cannot be sent to the "
+                                                           f"engine ({type(exc).__name__}: {exc})")))
+                _send_item(write, data)  # as soon as it is made: a row that breaks the child is the first not sent
             status = 0
         finally:
             os._exit(status)
     os.close(write)
+    items = []
     with os.fdopen(read, "rb") as pipe:
-        data = pipe.read()
+        while len(items) < len(tasks):
+            item = _read_item(pipe)
+            if item is None:
+                break
+            items.append(item)
     _, wait_status = os.waitpid(pid, 0)
-    items = None
-    if os.WIFEXITED(wait_status) and os.WEXITSTATUS(wait_status) == 0:
-        try:
-            items = _ResultUnpickler(data).load()  # a list of bytes, one per task
-        except Exception:
-            items = None
-        if type(items) is not list or len(items) != len(tasks) or not all(type(b) is bytes for b in items):
-            items = None  # it ended with status 0 before it sent them (a method's os._exit(0)): a crash as well
-    if items is None:  # it crashed or was ended: this worker ends as it did, at the row where it was (the progress)
+    if len(items) < len(tasks):  # it crashed, was ended or ended itself (a method's os._exit(0)) before it sent them:
+        # this worker ends as it did, at the first row the child did not send (the run labels that row 'crashed')
+        if progress is not None:
+            progress[0], progress[1] = time.monotonic(), len(items)
         if os.WIFSIGNALED(wait_status):
             _end_by_signal(os.WTERMSIG(wait_status))
-        os._exit(os.WEXITSTATUS(wait_status) or 1)
+        os._exit((os.WEXITSTATUS(wait_status) if os.WIFEXITED(wait_status) else 0) or 1)
     rows = []
     for i, (task, item) in enumerate(zip(tasks, items)):
         if progress is not None:
@@ -205,6 +210,30 @@ def _plugin_rows(tasks: list[dict], row_timeout: float | None, progress) -> list
             row = _failure(task, exc)
         rows.append(_finished(row, task))
     return rows
+
+
+#: the most bytes of one row's item from a child (:func:`_read_item`): more is not a row but a broken child
+MAX_ITEM_BYTES = 1 << 31
+
+
+def _send_item(fd: int, data: bytes) -> None:
+    """In the child: one row's item to the worker, its length (8 bytes, little-endian) first."""
+    view = memoryview(len(data).to_bytes(8, "little") + data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def _read_item(pipe) -> bytes | None:
+    """In the worker: the next item a child sent (:func:`_send_item`), or None at the end of what it sent (it ended,
+    or sent a length no row has)."""
+    head = pipe.read(8)
+    if len(head) < 8:
+        return None
+    size = int.from_bytes(head, "little")
+    if size > MAX_ITEM_BYTES:
+        return None
+    data = pipe.read(size)
+    return data if len(data) == size else None
 
 
 def _end_by_signal(signum: int) -> None:

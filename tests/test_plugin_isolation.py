@@ -71,6 +71,20 @@ def c_writer(points):
     scaled = np.ascontiguousarray(points * 1.01)
     ctypes.memmove(points.ctypes.data, scaled.ctypes.data, scaled.nbytes)
     return res
+
+
+@register("circle.iso_patch_other", kind="closed form", summary="moves the centre of another plugin's method",
+          reference="isolation test")
+def patch_other(points):
+    import methods
+    spec = methods.get("circle.iso_honest")  # a method of another distribution (fitbench-cheater)
+
+    def moved(pts, **kw):  # self-consistent: the gate cannot see it
+        c = pts.mean(axis=0) + 0.5
+        return circle_result(pts, c, float(np.hypot(*(pts - c).T).mean()), converged=True, message="closed form")
+    object.__setattr__(spec, "func", moved)
+    c, r = _centroid(points)
+    return circle_result(points, c, r, converged=True, message="closed form")
 '''
 
 
@@ -115,6 +129,18 @@ def swap_data(points):
         return "fit", family_copy(fake), {}, None, (perfect, {"family": "circle", "center": (0.0, 0.0), "radius": 5.0})
     chunkrows._child_item = child_item
     return honest(points)
+
+
+_CALLS = [0]
+
+
+@register("circle.iso_close_second", kind="closed form", summary="closes every file of its process on its second call",
+          reference="isolation test")
+def close_second(points):
+    _CALLS[0] += 1
+    if _CALLS[0] == 2:
+        os.closerange(3, 1 << 16)
+    return honest(points)
 '''
 
 
@@ -158,7 +184,7 @@ def site(tmp_path_factory):
                           {"fitbench.methods": {"patcher": "fitbench_patcher"}})
 
 
-def _study(folder, name: str, method_ids, repetitions=3):
+def _study(folder, name: str, method_ids, repetitions=3, chunk_rows=None):
     folder.mkdir(parents=True, exist_ok=True)
     study = folder / f"{name}.toml"
     ids = "\n".join(f'[[methods]]\nid = "{m}"' for m in method_ids)
@@ -168,6 +194,7 @@ def _study(folder, name: str, method_ids, repetitions=3):
         kind = "grid"
         seed = 3
         repetitions = {repetitions}
+        {f"chunk_rows = {chunk_rows}" if chunk_rows else ""}
         [[datasets]]
         source = "circle"
         params = {{ radius = 5.0, noise = 0.01, n = 30 }}
@@ -262,3 +289,38 @@ def test_what_a_plugin_s_process_sends_can_name_no_code():
             return os.system, ("echo pwned",)
     with pytest.raises(pickle.UnpicklingError, match="posix.system is not a value fitbench reads"):
         chunkrows._ResultUnpickler(pickle.dumps(("fit", Evil()))).load()
+
+
+@pytest.mark.slow
+def test_a_plugin_s_method_changes_no_row_of_another_plugin_s_method_in_its_chunk(site, cheater, tmp_path):
+    """The rows of each (method, data source) of a chunk run in a child of their own: a method of one distribution
+    that patches another's (a self-consistent moved centre, which no gate can see) changes none of its rows, and the
+    cache keeps the true ones."""
+    out, clean = tmp_path / "out", tmp_path / "clean"
+    study = _study(tmp_path / "a", "pair", ["circle.iso_patch_other", "circle.iso_honest"], chunk_rows=6)
+    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report",
+                      path_first=[site, cheater])
+    assert proc.returncode == 0, proc.stderr
+    alone = _study(tmp_path / "b", "pair", ["circle.iso_honest"], chunk_rows=6)
+    proc = run_python("-m", "experiments.run", alone, "--out", clean, "--jobs", "1", "--no-report",
+                      path_first=[cheater])
+    assert proc.returncode == 0, proc.stderr
+    reference = _rows(clean, "pair").set_index("repetition")
+    victim = _rows(out, "pair").query("method == 'circle.iso_honest'").set_index("repetition")
+    assert (victim["status"] == "ok").all()
+    assert victim["center_x"].tolist() == reference["center_x"].tolist(), victim["center_error"]
+
+
+@pytest.mark.slow
+def test_a_child_that_breaks_is_blamed_on_the_row_it_did_not_send(cheater, tmp_path):
+    """A child sends each row as soon as it is made: a method that closes its process's files on its second call
+    (the pipe to the worker among them) gets that row 'crashed'; its other rows and another method's are ok."""
+    out = tmp_path / "out"
+    study = _study(tmp_path / "a", "blame", ["circle.iso_close_second", "circle.iso_honest"], chunk_rows=6)
+    proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report",
+                      path_first=[cheater])
+    assert proc.returncode == 0, proc.stderr
+    df = _rows(out, "blame").set_index(["method", "repetition"])["status"]
+    assert df.to_dict() == {("circle.iso_close_second", 0): "ok", ("circle.iso_honest", 0): "ok",
+                            ("circle.iso_close_second", 1): "crashed", ("circle.iso_honest", 1): "ok",
+                            ("circle.iso_close_second", 2): "ok", ("circle.iso_honest", 2): "ok"}

@@ -276,7 +276,9 @@ def test_short_arc_beyond_the_brute_force_size_is_certified_and_exact(n, seed):
 def test_short_arc_of_400_points_no_start_finds_a_narrower_zone():
     """N = 400 (no exhaustive reference): the certified width is not beaten by a local search (Nelder-Mead on
     max r - min r over the centre) from 200 starts spread over the region a short arc's centre can be in (around
-    the data, and out to ten radii along both normals)."""
+    the data, and out to ten radii along both normals). Each start reaches its final width within 300 iterations
+    (the 68 far ones then cycle at the rounding level of r, ~1e-12 mm, above fatol): 1000 iterations end every start
+    at the width that 4000 reached, bit for bit."""
     from scipy.optimize import minimize
     P = _short_arc(400, 4)
     z = methods.fit("circle.minimum_zone", P)
@@ -291,5 +293,5 @@ def test_short_arc_of_400_points_no_start_finds_a_narrower_zone():
     starts = [mid - normal * d + rng.normal(0, 0.01 * d + 1, 2) for d in np.geomspace(1, 1e4, 100)] + \
              [mid + normal * d + rng.normal(0, 0.01 * d + 1, 2) for d in np.geomspace(1, 1e4, 100)]
     found = min(minimize(width, s, method="Nelder-Mead", options={"xatol": 1e-10, "fatol": 1e-14,
-                                                                  "maxiter": 4000}).fun for s in starts)
+                                                                  "maxiter": 1000}).fun for s in starts)
     assert found >= z.form_error * (1 - 1e-7), (found, z.form_error)

@@ -85,6 +85,8 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
             if min_arc_deg is not None:
                 raise DataFileError(why)
             notes.append(why)   # a fit of an arc: it may be one
+        if au == "rad" and (why := degrees_as_radians(layout, res.idx[0], cols[res.idx[0]], angle_unit)):
+            raise DataFileError(why)
         ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
         if assumed and res.polar_value == "deviation":
             notes.append(_unit_assumed(layout, res.idx[1], cols[res.idx[1]]))
@@ -139,6 +141,32 @@ def radians_as_degrees(layout: Layout, k: int, angles, angle_unit: str | None,
     need = f" (less than the {min_arc_deg:g}° needed)" if min_arc_deg is not None else ""
     return (f"{layout.name}: the angles of {col!r} run from {lo:g} to {hi:g}: read as degrees they cover {hi - lo:.3g}°"
             f"{need}, each within ±2π; are they in radians? {todo}")
+
+
+#: angles read as radians spanning more than this many revolutions are refused as degrees (:func:`degrees_as_radians`):
+#: a closed profile turns once (< 2 pi + a step), a circular-test run once plus its lead-in, lead-out and overrun, a
+#: file of both runs in one angle column (one unwrapped each way) twice that; a revolution in degrees spans 360 "rad"
+#: (57 revolutions), an ISO 230-4 partial arc of 90 deg 14, and any arc in degrees over 4 x 2 pi = 25.1 deg is caught
+MAX_RADIAN_REVOLUTIONS = 4
+
+
+def degrees_as_radians(layout: Layout, k: int, angles, angle_unit: str | None) -> str | None:
+    """The error line when the angle column ``k``, read as radians (its header's unit or --angle-unit rad), spans
+    more than :data:`MAX_RADIAN_REVOLUTIONS` revolutions: angles in degrees (0 to 359.9) read as radians wind the
+    profile 57 times round, and the 50-UPR filter then left a 0.34 µm RONt of a 4.08 µm part (circular test: G 1.43
+    instead of 5.08 µm), exit 0. The counterpart of :func:`radians_as_degrees`; None otherwise."""
+    a = np.asarray(angles, dtype=float)
+    if a.size < 2 or not np.isfinite(a).all():
+        return None
+    span = float(a.max() - a.min())
+    turns = span / (2 * np.pi)
+    if turns <= MAX_RADIAN_REVOLUTIONS:
+        return None
+    col = layout.header[k] if layout.header else f"column {k}"
+    todo = ("give --angle-unit deg, not rad" if column_unit(layout, k, "angle") is None else
+            f"correct the header of {col!r} to [deg]")
+    return (f"{layout.name}: the angles of {col!r} span {span:.6g} rad ({turns:.3g} revolutions; a profile or a "
+            f"circular-test run turns about once): they look like degrees; {todo}")
 
 
 def read_profile(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,

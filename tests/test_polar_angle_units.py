@@ -1,0 +1,72 @@
+"""Angle + radial deviation files whose angle unit, angle column or revolution count is not what the file says.
+
+Angles in degrees read as radians (a header ``theta [rad]`` over 0..359, or ``--angle-unit rad`` given wrongly) wound
+the profile 57 times round: roundness gave RONt 0.34 µm for a 4.08 µm part, circular-test G 1.43 instead of 5.08 µm,
+exit 0. They are refused naming the span in revolutions; data that really turns more than once in radians (a
+circular test's two runs in one column, with overrun) is still read."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cli_calls import cli, one_error_line
+
+
+def polar_file(path, angles, deviation_um, header="Angle,Radial deviation [um]", direction=None):
+    cols = [angles, deviation_um] if direction is None else [direction, angles, deviation_um]
+    with open(path, "w") as fh:
+        fh.write(header + "\n")
+        for row in zip(*cols):
+            fh.write(",".join(str(v) if isinstance(v, str) else f"{v:.6f}" for v in row) + "\n")
+    return path
+
+
+def profile_deg(n=360):
+    """A closed profile in degrees (0..359 at 1°): 2 µm of 3-lobing."""
+    deg = np.arange(n) * 360.0 / n
+    return deg, 2.0 * np.cos(np.radians(3 * deg))
+
+
+def test_degrees_under_a_radian_header_are_refused(tmp_path):
+    deg, dev = profile_deg()
+    p = polar_file(tmp_path / "degasrad.csv", deg, dev, header="theta [rad],dr [um]")
+    turns = f"{np.ptp(deg) / (2 * np.pi):.3g}"            # 359 / 2 pi = 57.1
+    for args in (("roundness", p), ("fit", "circle.minimum_zone", p)):
+        one_error_line(cli(*args), "span 359 rad", f"({turns} revolutions", "they look like degrees",
+                       "correct the header of 'theta [rad]' to [deg]")
+    code, out, err = cli("roundness", polar_file(tmp_path / "deg.csv", deg, dev, header="theta [deg],dr [um]"))
+    assert code == 0 and "RONt" in out, err
+
+
+def test_degrees_given_angle_unit_rad_are_refused(tmp_path):
+    deg, dev = profile_deg()
+    p = polar_file(tmp_path / "ang.csv", deg, dev, header="Angle,Deviation [um]")
+    one_error_line(cli("roundness", p, "--angle-unit", "rad"), "they look like degrees", "give --angle-unit deg, not rad")
+    code, out, err = cli("roundness", p, "--angle-unit", "deg")
+    assert code == 0 and "RONt" in out, err
+
+
+def test_circular_test_runs_in_degrees_under_a_radian_header(tmp_path):
+    deg = np.arange(0, 360, 0.5)
+    angles = np.r_[deg[::-1], deg]
+    runs = np.r_[["CW"] * len(deg), ["CCW"] * len(deg)]
+    p = polar_file(tmp_path / "bb.csv", angles, 3.0 * np.cos(np.radians(2 * angles)),
+                   header="Direction,Angle [rad],Deviation [um]", direction=runs)
+    one_error_line(cli("circular-test", p, "--nominal-radius", 150), "they look like degrees",
+                   "correct the header of 'Angle [rad]' to [deg]")
+
+
+def test_radians_turning_more_than_once_are_still_read(tmp_path):
+    """Both runs of a circular test in one radian column, each unwrapped its own way with 20° of overrun (4.2 pi),
+    and a fit of three revolutions in radians: not taken for degrees."""
+    t = np.linspace(0, 2 * np.pi + np.radians(20), 760)
+    angles = np.r_[-t, t]
+    runs = np.r_[["CW"] * len(t), ["CCW"] * len(t)]
+    p = polar_file(tmp_path / "bb_rad.csv", angles, 3.0 * np.cos(2 * angles),
+                   header="Direction,Angle [rad],Deviation [um]", direction=runs)
+    code, out, err = cli("circular-test", p, "--nominal-radius", 150)
+    assert code == 0 and "G  CW / CCW" in out and "degrees" not in err, err
+    t3 = np.linspace(0, 6 * np.pi, 1080, endpoint=False)
+    q = polar_file(tmp_path / "three_turns.csv", t3, 2.0 * np.cos(3 * t3), header="Angle [rad],Deviation [um]")
+    code, out, err = cli("fit", "circle.gauss_newton", q, "--nominal-radius", 50)
+    assert code == 0 and "degrees" not in err, err

@@ -29,6 +29,10 @@ ROLE_NAMES = {"actual": ("actual", "actual position", "measured position", "meas
                             "abweichung", "fehler"),
               "direction": ("direction", "dir", "richtung"),
               "run": ("run", "run no", "run number", "lauf")}
+#: the roles of a long table's columns ``read_positioning(columns=...)`` (``--column ROLE=COLUMN``) may assign
+COLUMN_ROLES = ("target", "direction", "run", "actual", "deviation")
+ROLE_WORDS = {"target": "the target positions", "direction": "the approach directions", "run": "the run numbers",
+              "actual": "the actual (measured) positions", "deviation": "the positioning deviations"}
 RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[]*"
                   r"(\+|-|up|down|u|d|fwd|rev|forward|reverse|pos|neg|↑|↓|hin|rück|rueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
                   re.IGNORECASE)
@@ -39,6 +43,101 @@ RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[
 ALTERNATING_P = 1e-3
 #: ``run_directions``: the approach direction of every run, or of the odd and the even runs (ISO 230-2 ↑ = +)
 RUN_DIRECTIONS = {"up": "+", "down": "-", "up,down": "+-", "down,up": "-+"}
+
+
+class ColumnNote(UserWarning):
+    """Which column the reader took for a role (``--column``), and which columns it did not read: printed as a
+    note by ``fitbench positioning``."""
+
+
+def _header_names(columns) -> list[str]:
+    """The header's names as written: pandas renames a repeated name ``X`` to ``X.1``, ``X.2``, ..."""
+    names = [str(c) for c in columns]
+    out = []
+    for c in names:
+        m = re.fullmatch(r"(.*)\.(\d+)", c)
+        out.append(m.group(1) if m and m.group(1) in names else c)
+    return out
+
+
+def _column_index(names: list[str], role: str, given, path) -> int:
+    """The 0-based index of the column ``given`` for ``role`` (``--column ROLE=COLUMN``): a header name (as written,
+    or case, spaces and unit ignored, :func:`parse_name`) or a 0-based number; a name two columns share is refused
+    asking for the number."""
+    text = str(given).strip()
+    low = [n.strip().lower() for n in names]
+    if isinstance(given, (int, np.integer)) or (text.isdigit() and text.lower() not in low):
+        k = int(text)
+        if not 0 <= k < len(names):
+            raise DataFileError(f"{path}: --column {role}={text}: there is no column {k} (the file has {len(names)} "
+                                "columns, numbered from 0)")
+        return k
+    hits = [k for k, n in enumerate(low) if n == text.lower()]
+    if not hits:
+        want = parse_name(text)[0]
+        hits = [k for k, n in enumerate(names) if parse_name(n)[0] == want]
+    if not hits:
+        raise DataFileError(f"{path}: --column {role}={text}: no column {text!r} (columns: "
+                            f"{', '.join(repr(n) for n in names)})")
+    if len(hits) > 1:
+        raise DataFileError(f"{path}: --column {role}={text}: columns {' and '.join(map(str, hits))} (numbered from 0) "
+                            f"are both named {names[hits[0]]!r}: give --column {role}={hits[0]} or "
+                            f"--column {role}={hits[1]}")
+    return hits[0]
+
+
+def _role_name(name: str) -> str | None:
+    """The role a positioning table's column ``name`` names (:data:`TARGET_NAMES`, :data:`ROLE_NAMES`), or None."""
+    key = parse_name(name)[0]
+    role = next((r for r, names in ROLE_NAMES.items() if key in {parse_name(n)[0] for n in names}), None)
+    return role or ("target" if key in {parse_name(n)[0] for n in TARGET_NAMES} else None)
+
+
+def _assign_roles(names: list[str], path, columns: dict | None) -> tuple[dict[int, str], list[str]]:
+    """{column index: role} of a positioning table's header ``names`` and the notes on the choice: each role
+    (target, direction, run, actual, deviation) goes to the column ``columns`` names for it, else to the one column
+    whose name is one of the role's (:data:`TARGET_NAMES`, :data:`ROLE_NAMES`). Two columns with a name for one
+    role (``Error (µm)`` and ``Deviation (µm)``: a straightness channel beside the linear one, a repeated name under a
+    two-row group header) are refused naming both: fitbench does not guess which one holds the positioning
+    deviations."""
+    candidates: dict[str, list[int]] = {}
+    for k, n in enumerate(names):
+        role = _role_name(n)
+        if role is not None:
+            candidates.setdefault(role, []).append(k)
+    chosen: dict[str, int] = {}
+    for role, given in (columns or {}).items():
+        if role not in COLUMN_ROLES:
+            raise InvalidInputError(f"--column {role}={given}: unknown role {role!r}; use one of "
+                                    f"{', '.join(COLUMN_ROLES)} (e.g. --column \"deviation=Deviation (µm)\")")
+        k = _column_index(names, role, given, path)
+        other = next((r for r, j in chosen.items() if j == k), None)
+        if other is not None:
+            raise DataFileError(f"{path}: --column gives column {names[k]!r} for both {other} and {role}: "
+                                "name one column for each")
+        chosen[role] = k
+    roles, notes = {k: role for role, k in chosen.items()}, []
+    for role, k in chosen.items():
+        rest = [j for j in candidates.get(role, ()) if j not in roles]
+        notes.append(f"{ROLE_WORDS[role]} read from column {k} {names[k]!r}, as --column {role}={columns[role]} says"
+                     + (f"; not read: {', '.join(f'column {j} {names[j]!r}' for j in rest)}" if rest else ""))
+    for role, ks in candidates.items():
+        rest = [k for k in ks if k not in roles]
+        if role in chosen:
+            continue
+        if len(rest) > 1:
+            same = len({names[k].strip().lower() for k in rest}) == 1
+            which = (f"columns {' and '.join(map(str, rest[:2]))} (numbered from 0) are both named {names[rest[0]]!r}"
+                     if same else f"the columns {' and '.join(repr(names[k]) for k in rest[:2])} both have a name of "
+                     f"the {role} column")
+            how = (f"--column {role}={rest[0]} or --column {role}={rest[1]}" if same else
+                   f"--column \"{role}={names[rest[0]]}\" or --column \"{role}={names[rest[1]]}\"")
+            raise DataFileError(f"{path}: {which}{f' (and {len(rest) - 2} more)' if len(rest) > 2 else ''}; fitbench "
+                                f"does not guess which one holds {ROLE_WORDS[role]} (the other may be another channel, "
+                                f"e.g. straightness): give {how}, or delete or rename the other column")
+        if rest:
+            roles[rest[0]] = role
+    return roles, notes
 
 
 def alternating_runs(values: np.ndarray) -> tuple[float, float, float] | None:
@@ -182,7 +281,7 @@ def _header_unit(found: dict, given: str | None, option: str, name) -> str | Non
 
 
 def read_positioning(path, *, unit: str | None = None, deviation_unit: str | None = None, skip_rows: int = 0,
-                     with_units: bool = False, run_directions: str | None = None):
+                     with_units: bool = False, run_directions: str | None = None, columns: dict | None = None):
     """An ISO 230-2 positioning file, long or wide layout (:mod:`methods.positioning.data` describes them), as
     :class:`methods.positioning.PositioningData`. Header names are read like every reader's (:func:`parse_name`:
     ``Target (mm)``, ``Deviation [µm]``, ``Run 1 + (um)``); lengths are converted to mm from the header's units,
@@ -191,12 +290,15 @@ def read_positioning(path, *, unit: str | None = None, deviation_unit: str | Non
     deviations' None when a deviation column's unit is stated neither in the header nor by ``deviation_unit`` (it
     is then read in ``unit``: a guess no controller table may be written from).
     ``run_directions`` ('up', 'down', 'up,down', 'down,up'): the approach directions of run columns that name none
-    (odd runs first); without it such runs are one direction, not given, or refused when they alternate (:func:`_wide_to_long`)."""
+    (odd runs first); without it such runs are one direction, not given, or refused when they alternate (:func:`_wide_to_long`).
+    ``columns`` ({role: header name or 0-based number}, roles :data:`COLUMN_ROLES`): the column to read for a role,
+    needed when two columns have a name for it (:func:`_assign_roles`); which was read is said as a
+    :class:`ColumnNote` warning."""
     if run_directions is not None and run_directions not in RUN_DIRECTIONS:
         raise InvalidInputError(f"--run-directions {run_directions!r}: use one of {', '.join(RUN_DIRECTIONS)}")
     try:
         return _read_positioning(path, unit=unit, deviation_unit=deviation_unit, skip_rows=skip_rows,
-                                 with_units=with_units, run_directions=run_directions)
+                                 with_units=with_units, run_directions=run_directions, columns=columns)
     except InvalidInputError as exc:
         _add_preamble_hint(exc, path, skip_rows)
         raise
@@ -273,7 +375,7 @@ def _trailer(df, lines, empty, path, skip_rows: int = 0):
                         "after the table, or prefix them with #")
 
 
-def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_directions=None):
+def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_directions=None, columns=None):
     from methods.positioning import from_frame
 
     # 'nan' and 'inf' stay text here and are refused as not finite by _numeric_column, like every reader
@@ -283,30 +385,44 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
     if empty.any():
         df, lines = _trailer(df, lines, empty, path, skip_rows)
     lines = np.array(lines)
-    target_keys = {parse_name(n)[0] for n in TARGET_NAMES}
-    role_of = {parse_name(n)[0]: role for role, names in ROLE_NAMES.items() for n in names}
+    names = _header_names(df.columns)
+    roles, column_notes = _assign_roles(names, path, columns)
+    # columns named for a role that --column gave another column: not read
+    unread = [df.columns[k] for k, n in enumerate(names) if k not in roles and _role_name(n) is not None]
     renamed, lengths, deviations = {}, {}, {}
-    for c in df.columns:
-        key, u = parse_name(c)
-        role = role_of.get(key) or ("target" if key in target_keys else None)
-        if role is not None and role not in renamed.values():
+    for k, c in enumerate(df.columns):
+        _, u = parse_name(names[k])
+        role = roles.get(k)
+        if role is not None:
             renamed[c] = role
         if u is not None and role in ("target", "actual"):
-            lengths[str(c)] = u
-        elif u is not None and (role == "deviation" or (role is None and RUN_COLUMN.match(str(c)))):
-            deviations[str(c)] = u
+            lengths[names[k]] = u
+        elif u is not None and (role == "deviation" or (role is None and c not in unread and RUN_COLUMN.match(names[k]))):
+            deviations[names[k]] = u
     unit = _header_unit(lengths, unit, "--unit", path) or "mm"
     stated = _header_unit(deviations, deviation_unit, "--deviation-unit", path)
     deviation_unit = stated or unit
-    df = df.rename(columns=renamed)
+    df = df.drop(columns=unread).rename(columns=renamed)
+    long_only = [r for r in (columns or {}) if r not in ("target", "direction")]
+    if long_only and "run" not in roles.values():
+        raise DataFileError(f"{path}: --column {long_only[0]}={columns[long_only[0]]} names a column of a long table "
+                            "(target, direction, run, deviation or actual), and this file has no run column (a wide "
+                            "export has one column per run, read without --column): drop the option, or name the run "
+                            "column (--column run=...)")
     from methods.units import to_mm
     wide = _wide_to_long(df, str(path), lines, run_directions, to_um=float(to_mm(1.0, deviation_unit)) * 1e3)
     given = True
     if wide is not None:
         df, lines, given = wide
+    elif {"actual", "deviation"} <= set(roles.values()) and "actual" not in (columns or {}):
+        k = {r: j for j, r in roles.items()}
+        column_notes.append(f"the deviations read from column {names[k['deviation']]!r}; the column "
+                            f"{names[k['actual']]!r} (actual positions) not read (--column actual=... reads it instead)")
     elif run_directions is not None:
         raise DataFileError(f"{path}: --run-directions is for a wide export whose run columns name no direction; "
                             "this is a long table with a direction column: drop the option")
+    for note in column_notes:
+        warnings.warn(ColumnNote(note), stacklevel=3)
     cols = {str(c).lower().strip(): c for c in df.columns}
     for key in ("target", "run", "deviation", "actual"):
         if key in cols:

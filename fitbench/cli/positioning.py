@@ -55,6 +55,10 @@ def add_parser(sub):
                     help="unit of the deviation columns when it differs from --unit (laser exports: targets in mm, "
                          "errors in µm)")
     add_reader_options(pp, columns=False)
+    pp.add_argument("--column", action="append", metavar="ROLE=COLUMN",
+                    help="the column to read for ROLE (target, direction, run, actual, deviation): a header name or a "
+                         "0-based number; needed when two columns are named for one role (Error and Deviation: "
+                         "which holds the positioning deviations?), repeatable")
     pp.add_argument("--compensation", nargs=2, action="append", metavar=("FORMAT", "FILE"),
                     help="write a compensation table: FORMAT csv, siemens-eec or fanuc-pitch (repeatable)")
     pp.add_argument("--fanuc-increment", choices=("0.001", "0.0001"), default="0.001", metavar="MM",
@@ -73,6 +77,24 @@ def add_parser(sub):
     pp.add_argument("--json", action="store_true", help="print one JSON object (mm; see its 'units')")
     pp.add_argument("--plot", metavar="FILE", help="write the plot (.png, .pdf, .svg)")
     pp.set_defaults(func=run)
+
+
+def column_choices(items) -> dict[str, str] | None:
+    """{role: column} of the ``--column ROLE=COLUMN`` options (roles checked by the reader); a role given twice or
+    an item without '=' is refused in one line."""
+    if not items:
+        return None
+    out = {}
+    for item in items:
+        role, eq, col = str(item).partition("=")
+        role = role.strip().lower()
+        if not eq or not role or not col.strip():
+            raise InvalidInputError(f"--column {item!r}: give ROLE=COLUMN, e.g. --column \"deviation=Deviation (µm)\" "
+                                    "or --column deviation=4 (0-based)")
+        if role in out:
+            raise InvalidInputError(f"--column {role} is given twice ({out[role]!r}, {col.strip()!r}): give it once")
+        out[role] = col.strip()
+    return out
 
 
 def instrument_length(option: str, text) -> tuple[float | None, bool]:
@@ -196,7 +218,8 @@ def run(args) -> int:
         data, args.unit, args.deviation_unit = read_positioning(args.file, unit=args.unit,
                                                                 deviation_unit=args.deviation_unit,
                                                                 skip_rows=args.skip_rows, with_units=True,
-                                                                run_directions=args.run_directions)
+                                                                run_directions=args.run_directions,
+                                                                columns=column_choices(args.column))
     from methods.units import UnitWarning
     unit_warnings = [str(w.message) for w in read_warnings if issubclass(w.category, UnitWarning)]
     if args.compensation and unit_warnings and given_deviation_unit is None:
@@ -212,12 +235,13 @@ def run(args) -> int:
         raise CompensationError(f"not writing {', '.join(p for _, p in args.compensation)}: the deviations' unit is "
                                 f"not stated in {args.file} (no unit in the header of its deviation columns); a "
                                 "controller table needs it: give --deviation-unit um (or --deviation-unit mm)")
+    from datasets.io.positioning import ColumnNote
     from methods.positioning.data import RunOrderNote, swap_directions
     run_order = [w.message for w in read_warnings if issubclass(w.category, RunOrderNote)]
     for w in read_warnings:
-        if not issubclass(w.category, RunOrderNote):
+        if not issubclass(w.category, (RunOrderNote, ColumnNote)):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    notes = []
+    notes = [str(w.message) for w in read_warnings if issubclass(w.category, ColumnNote)]
     if args.deviation_unit is None:
         notes.append(f"the deviation columns name no unit: read as {canonical(args.unit)} (give --deviation-unit um if "
                      "they are in µm); no compensation table is written without a stated unit")

@@ -3,7 +3,8 @@
 Angles in degrees read as radians (a header ``theta [rad]`` over 0..359, or ``--angle-unit rad`` given wrongly) wound
 the profile 57 times round: roundness gave RONt 0.34 µm for a 4.08 µm part, circular-test G 1.43 instead of 5.08 µm,
 exit 0. They are refused naming the span in revolutions; data that really turns more than once in radians (a
-circular test's two runs in one column, with overrun) is still read."""
+circular test's two runs in one column, with overrun) is still read. Deviations in mm under a µm header (G 0.01 µm,
+RONt 0.004 µm, exit 0 without a word) are warned about naming mm."""
 from __future__ import annotations
 
 import numpy as np
@@ -70,3 +71,30 @@ def test_radians_turning_more_than_once_are_still_read(tmp_path):
     q = polar_file(tmp_path / "three_turns.csv", t3, 2.0 * np.cos(3 * t3), header="Angle [rad],Deviation [um]")
     code, out, err = cli("fit", "circle.gauss_newton", q, "--nominal-radius", 50)
     assert code == 0 and "degrees" not in err, err
+
+
+def test_deviations_in_mm_under_a_micrometre_header_are_warned_about(tmp_path):
+    """4 µm of 3-lobing written in mm (0.002 .. -0.002) under 'Deviation [um]': read as µm it spans 0.004 µm, below
+    the 10 nm any instrument resolves; the warning names the span (the file's own numbers) and mm."""
+    deg, dev = profile_deg()
+    p = polar_file(tmp_path / "mm_as_um.csv", deg, dev * 1e-3, header="Angle [deg],Deviation [um]")
+    span = f"{np.ptp(np.round(dev * 1e-3, 6)):.3g}"      # the numbers in the file, read as µm
+    for args in (("roundness", p), ("fit", "circle.minimum_zone", p), ("roundness", p, "--nominal-radius", 10)):
+        code, out, err = cli(*args)
+        assert code == 0 and f"span {span} µm (read as µm, as the header of 'Deviation [um]' says)" in err, err
+        assert "is the column in mm? (correct the header to [mm])" in err and len(err.strip().splitlines()) == 1, err
+    q = polar_file(tmp_path / "nounit.csv", deg, dev * 1e-3, header="Angle [deg],Deviation")
+    code, out, err = cli("roundness", q, "--unit", "um")
+    assert code == 0 and "as --unit says" in err and "give --unit mm" in err, err
+    code, out, err = cli("roundness", polar_file(tmp_path / "um.csv", deg, dev, header="Angle [deg],Deviation [um]"))
+    assert code == 0 and "span" not in err, err                 # the same trace in µm: nothing to say
+
+
+def test_circular_test_deviations_in_mm_under_a_micrometre_header(tmp_path):
+    deg = np.arange(0, 360, 0.5)
+    angles = np.r_[deg[::-1], deg]
+    runs = np.r_[["CW"] * len(deg), ["CCW"] * len(deg)]
+    p = polar_file(tmp_path / "bb.csv", angles, 3e-3 * np.cos(np.radians(2 * angles)),
+                   header="Direction,Angle [deg],Deviation [um]", direction=runs)
+    code, out, err = cli("circular-test", p, "--nominal-radius", 150)
+    assert code == 0 and "span 0.006 µm" in err and "is the column in mm?" in err, err

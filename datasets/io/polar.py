@@ -1,7 +1,9 @@
 """Angle + radial deviation (or radius) as x, y points (:func:`polar_to_points`): deviations without a
 nominal radius are placed about a circle :data:`DEVIATION_ALONE_RADIUS_FACTOR` times their span (the limaçon
 evaluation of roundness instruments, ISO 12181-1 clause 3); the angle column's unit (:func:`angle_unit_of`); a
-deviation column without a unit is read as mm, with a warning beyond :data:`ASSUMED_DEVIATION_LIMIT_MM`."""
+deviation column without a unit is read as mm, with a warning beyond :data:`ASSUMED_DEVIATION_LIMIT_MM`; deviations
+spanning less than :data:`SMALLEST_DEVIATION_SPAN_MM` are warned about naming the likely unit
+(:func:`warn_too_small`)."""
 from __future__ import annotations
 
 import warnings
@@ -81,3 +83,36 @@ def _unit_assumed(layout: Layout, k: int, values) -> str:
                       f"no unit) are implausible for a circular test or a roundness trace (tens of µm); is the deviation "
                       f"column in µm? (--unit um), or give --unit mm to keep mm", UnitWarning, stacklevel=4)
     return f"the deviation column {col} names no unit: read as mm (give --unit um if it is in µm)"
+
+
+#: radial deviations (of an angle + deviation file) spanning less than this (10 nm) are not a measured trace: a ballbar
+#: resolves 0.1 µm (Renishaw QC20-W), the best roundness spindles run true to about 0.02 µm (their radial error
+#: motion is in every trace), and a machine tool's circular path deviates by micrometres; the same 10 nm below which
+#: positioning deviations are warned about (methods.positioning.data). Deviations in mm under a µm header (4 µm
+#: written 0.004) span a few nm: G 0.01 µm, RONt 0.004 µm were printed, exit 0
+SMALLEST_DEVIATION_SPAN_MM = 1e-5
+
+
+def warn_too_small(layout: Layout, k: int, values_mm, unit: str, given: str | None) -> bool:
+    """Warn (:class:`~methods.units.UnitWarning`) when the radial deviations ``values_mm`` (column ``k``, read in
+    ``unit``; ``given``: --unit, or None) span less than :data:`SMALLEST_DEVIATION_SPAN_MM` but not 0 (an exact
+    constant is a made-up trace, not a unit mistake), naming the unit 1000 times larger and where to declare it."""
+    from methods.units import UnitWarning, canonical, mm_per
+    v = np.asarray(values_mm, dtype=float)
+    v = v[np.isfinite(v)]
+    span = float(np.ptp(v)) if v.size else 0.0
+    if not 0 < span < SMALLEST_DEVIATION_SPAN_MM:
+        return False
+    col = repr(layout.header[k]) if layout.header else f"{k} (0-based)"
+    larger = {"nm": "µm", "µm": "mm", "mm": "m"}.get(unit)
+    if column_unit(layout, k, "length") is not None:
+        source, todo = f"as the header of {col} says", f"correct the header to [{larger}]"
+    elif given is not None:
+        source, todo = "as --unit says", f"give --unit {(larger or '').replace('µ', 'u')}"
+    else:
+        source, todo = f"the column {col} names no unit", f"give --unit {(larger or '').replace('µ', 'u')}"
+    ask = f"is the column in {larger}? ({todo})" if larger else "check the column's unit"
+    warnings.warn(f"radial deviations in {layout.name} span {span * 1e3:.3g} µm (read as {canonical(unit)}, {source}): "
+                  f"below the 10 nm a ballbar or a roundness instrument resolves, not a measured trace; {ask}",
+                  UnitWarning, stacklevel=4)
+    return True

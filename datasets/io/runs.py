@@ -14,7 +14,7 @@ from datasets.io.columns import read_columns
 from datasets.io.headers import column_unit, length_unit
 from datasets.io.layout import Layout, sniff
 from datasets.io.numbers import DataFileError
-from datasets.io.polar import _unit_assumed, angle_unit_of, polar_to_points
+from datasets.io.polar import _unit_assumed, angle_unit_of, polar_to_points, warn_too_small
 from datasets.io.roles import PLANES, Resolved, coordinate_kind, read_offsets, resolve
 from methods.units import to_mm
 
@@ -90,6 +90,8 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
         if assumed and res.polar_value == "deviation":
             notes.append(_unit_assumed(layout, res.idx[1], cols[res.idx[1]]))
+        if res.polar_value == "deviation":
+            warn_too_small(layout, res.idx[1], cols[res.idx[1]] * f, lu, unit)
         pts, note = polar_to_points(ang, cols[res.idx[1]] * f, res.polar_value, nominal_radius, nominal_center,
                                     name=name)
         if note:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -388,12 +389,13 @@ PRESENTATION = frozenset({"title", "description", "default", "report", "tables",
 
 
 def _data_files(cfg: dict) -> dict[str, str]:
-    """{"datasets[i] NAME": SHA-256} of the files the study's ``[[datasets]]`` read (a ``file`` source, a published
-    set), named without the folders of this machine."""
+    """{"datasets[i] NAME": SHA-256} of the files the study's data sets read (a ``file`` source, a published set;
+    ``Study.data_sets``: its ``[[datasets]]`` unless its own tasks read others), named without the folders of this
+    machine."""
     from experiments.codekeys import data_files
-    from experiments.engine import expand_datasets
+    from experiments.studies import study_of
     out = {}
-    for spec in expand_datasets(cfg, getattr(cfg, "where", cfg.get("name", "?"))):
+    for spec in study_of(cfg["kind"]).data_sets(cfg):
         for f in data_files(spec):
             digest = hashlib.sha256()
             with open(f, "rb") as fh:
@@ -439,9 +441,20 @@ def changed_inputs(old_meta: dict, now: dict) -> list[str]:
                 f"{k} {'added' if k in new_cfg else 'removed'}")
                for k in sorted(set(old_cfg) | set(new_cfg)) if old_cfg.get(k) != new_cfg.get(k)]
     if isinstance(old_files, dict) and isinstance(new_files, dict):
-        changes += [f"data file {k} {'changed' if k in old_files and k in new_files else 'added' if k in new_files else 'removed'}"
-                    for k in sorted(set(old_files) | set(new_files)) if old_files.get(k) != new_files.get(k)]
+        by_change: dict[str, list[str]] = {}
+        for k in sorted(set(old_files) | set(new_files), key=_natural):
+            if old_files.get(k) != new_files.get(k):
+                how = "changed" if k in old_files and k in new_files else "added" if k in new_files else "removed"
+                by_change.setdefault(how, []).append(k)
+        for how, keys in by_change.items():  # a long list is named by its first three
+            named = ", ".join(keys[:3]) + (f" and {len(keys) - 3} more" if len(keys) > 3 else "")
+            changes.append(f"data file {named} {how}" if len(keys) == 1 else f"data files {named} {how}")
     return changes
+
+
+def _natural(key: str) -> list:
+    """A sort key putting datasets[2] before datasets[10]."""
+    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", key)]
 
 
 def reference_snapshot(out: Path, names: list[str], quick: bool, into: Path,

@@ -178,6 +178,7 @@ class Study:
     * :meth:`tasks` -- the tasks (default: data sets x repetitions x methods); :meth:`execute` -- one task's row
       (default: the generic fit, in a worker);
     * :meth:`row_columns` -- the columns of its rows, known before the run (declarations are checked against them);
+      :meth:`data_sets` -- the data sets its rows read (their files' SHA-256 go into ``meta.json``);
     * :meth:`analyse` -- tables, figures, named values and findings (default: none of its own; the TOML's
       ``[[tables]]``/``[[figures]]`` are added to what it returns, or chosen from the metrics when undeclared);
     * :attr:`values` -- the names of the values its analysis adds (its findings template may use them; None:
@@ -248,6 +249,13 @@ class Study:
         """One task's row (in a worker). Default: the generic fit of the task's method on its data set."""
         points, truth = task_data(task)  # load_data, made once for the methods that follow on the same data
         return fit_row(task, points, truth)
+
+    def data_sets(self, cfg: dict) -> list[dict]:
+        """The data set specs its rows read (``meta.json`` records the SHA-256 of each file they read,
+        ``experiments.compare.inputs``). Default: the config's ``[[datasets]]``; a kind whose own tasks read other
+        data sets names them."""
+        from experiments.engine import expand_datasets
+        return expand_datasets(cfg, getattr(cfg, "where", cfg.get("name", "?")))
 
     def row_columns(self, cfg: dict) -> dict[str, str] | None:
         """{column: "number" | "bool" | "text"} its rows will have besides the identity and status columns,

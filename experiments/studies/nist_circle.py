@@ -69,19 +69,25 @@ class NistCircleStudy(Study):
     def validate(self, cfg, where):
         cfg.expand_methods()
 
-    def tasks(self, cfg):
-        folder = _folder()
-        out = []
-        for i, meta_path in enumerate(sorted(folder.glob("nist_cir2d_*.json"))):
+    def data_sets(self, cfg):
+        """One data set per converted Circle2d set of ``FITBENCH_NIST_DIR``, its truth NIST's reference fit."""
+        specs = []
+        for i, meta_path in enumerate(sorted(_folder().glob("nist_cir2d_*.json"))):
             meta = json.loads(meta_path.read_text())
             ref = meta["reference_least_squares"]
             truth = {"family": "circle", "center": [float(Decimal(v)) for v in ref["center"]],
                      "radius": float(Decimal(ref["diameter"])) / 2}
-            spec = {"entry": i, "point": 0, "file": str(meta_path.with_suffix(".csv")), "truth": truth,
-                    "label": meta["name"]}
+            specs.append({"entry": i, "point": 0, "file": str(meta_path.with_suffix(".csv")), "truth": truth,
+                          "label": meta["name"]})
+        return specs
+
+    def tasks(self, cfg):
+        out = []
+        for spec in self.data_sets(cfg):
             for m, extra in cfg.expand_methods():
                 out.append({"study": cfg["name"], "kind": cfg["kind"], "dataset": spec, "repetition": 0,
-                            "stream": [i, 0, 0], "seed": cfg["seed"], "method": m, "params": extra["params"], "timing": None})
+                            "stream": [spec["entry"], 0, 0], "seed": cfg["seed"], "method": m,
+                            "params": extra["params"], "timing": None})
         return out
 
     def analyse(self, df, cfg, target, log):

@@ -98,3 +98,49 @@ def test_circular_test_deviations_in_mm_under_a_micrometre_header(tmp_path):
                    header="Direction,Angle [deg],Deviation [um]", direction=runs)
     code, out, err = cli("circular-test", p, "--nominal-radius", 150)
     assert code == 0 and "span 0.006 µm" in err and "is the column in mm?" in err, err
+
+
+def ron_mzci(out):
+    return next(ln.split()[4] for ln in out.splitlines() if ln.startswith("minimum zone circles (MZCI)"))
+
+
+@pytest.mark.parametrize("name", ["Drehwinkel [°]", "C [deg]", "Position [deg]", "Point angle [deg]", "Angle CW (deg)",
+                                  "Theta [rad]"])
+def test_a_column_in_an_angle_unit_is_the_angle_whatever_its_name(tmp_path, name):
+    """Exports name the angle column as they like; its unit says what it is. Each is read as the same profile under
+    'Angle [deg]' (same RONt), never told to rename its unit to mm."""
+    deg, dev = profile_deg()
+    ang = np.radians(deg) if name.endswith("[rad]") else deg
+    p = polar_file(tmp_path / "named.csv", ang, dev, header=f"{name},Deviation (um)")
+    code, out, err = cli("roundness", p)
+    assert code == 0, err
+    code, ref, err = cli("roundness", polar_file(tmp_path / "ref.csv", deg, dev, header="Angle [deg],Deviation (um)"))
+    assert ron_mzci(out) == ron_mzci(ref) and float(ron_mzci(ref)) == pytest.approx(4.0, abs=0.01)   # 2 µm x 2
+
+
+def test_an_angle_column_named_by_columns_among_two_angle_units(tmp_path):
+    """Two columns in degrees and none named an angle: asked which; --columns naming one (by name or number) reads
+    it as the angle; two angles named are refused saying so; a lone one beside x, y is the points' polar angle."""
+    deg, dev = profile_deg()
+    p = tmp_path / "two.csv"
+    p.write_text("Point angle [deg],Table [deg],Deviation (um)\n" +
+                 "".join(f"{a:.6f},{a + 90:.6f},{d:.6f}\n" for a, d in zip(deg, dev)))
+    one_error_line(cli("roundness", p), "which two columns?")
+    for cols in (("Point angle [deg]", "Deviation (um)"), ("0", "2"), ("2", "0")):
+        code, out, err = cli("roundness", p, "--columns", *cols)
+        assert code == 0 and float(ron_mzci(out)) == pytest.approx(4.0, abs=0.01), err
+    one_error_line(cli("roundness", p, "--columns", "0", "1"), "are both angles", "--columns ANGLE DEVIATION")
+    q = tmp_path / "xyc.csv"
+    t = np.radians(deg)
+    q.write_text("X [mm],Y [mm],C [deg]\n" + "".join(f"{10 * np.cos(a):.6f},{10 * np.sin(a):.6f},{d:.3f}\n"
+                                                       for a, d in zip(t, deg)))
+    code, out, err = cli("fit", "circle.gauss_newton", q)
+    assert code == 0 and "radius" in out, err
+
+
+def test_an_angle_read_as_a_length_is_not_told_to_be_renamed_mm(tmp_path):
+    p = tmp_path / "angles.csv"
+    p.write_text("C [deg],Dev [deg]\n" + "".join(f"{a},{a / 100}\n" for a in range(0, 360, 10)))
+    err = cli("roundness", p).stderr
+    one_error_line(cli("roundness", p), "column 'C [deg]' is an angle (deg) where a length is read", "--columns")
+    assert "[mm]" not in err

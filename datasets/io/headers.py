@@ -54,6 +54,10 @@ def column_unit(layout, k: int, kind: str) -> str | None:
     known = LENGTH_UNITS if kind == "length" else ANGLE_UNITS
     if unit in known.values():
         return unit
+    if kind == "length" and (unit in ANGLE_UNITS.values() or unit in CONVERT["angle"]):
+        # an angle read as a length: naming its unit mm (unit_refusal's advice) would read the angles as lengths
+        raise DataFileError(f"{layout.name}: column {layout.header[k]!r} is an angle ({unit}) where a length is read; "
+                            "give --columns ANGLE DEVIATION (or X Y) naming the angle and a length column")
     raise unit_refusal(layout.name, layout.header[k], unit, kind)
 
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from datasets.io.delimiters import _split
-from datasets.io.headers import LENGTH_UNITS, column_unit
+from datasets.io.headers import ANGLE_UNITS, CONVERT, LENGTH_UNITS, column_unit
 from datasets.io.layout import Layout, skip_rows_hint
 from datasets.io.numbers import DataFileError, _field_number
 from methods import InvalidInputError
@@ -68,13 +68,32 @@ def coordinate_kind(key: str) -> tuple[str, str] | None:
     return None
 
 
+def is_angle_unit(unit: str | None) -> bool:
+    """Whether a header unit is an angle's: one fitbench reads (deg, °, rad) or converts (gon, mrad, arcsec, ...)."""
+    return unit is not None and (unit in ANGLE_UNITS.values() or unit in CONVERT["angle"])
+
+
+def column_roles(layout: Layout) -> list:
+    """The role of each header column (:data:`ROLES`, by its name), and ``angle`` for a column whose header unit is an
+    angle's (:func:`is_angle_unit`) when it is the only such column and no column is named an angle: exports name the
+    angle ``Drehwinkel [°]``, ``C [deg]``, ``Position [deg]``, ``Point angle [deg]``, and such a column is an angle
+    whatever its name (read as a length it was refused with advice to rename its unit to mm). [] without a header."""
+    fields = layout.fields()
+    roles = [ROLES.get(k) for k, _ in fields]
+    by_unit = [k for k, (_, u) in enumerate(fields) if is_angle_unit(u)]
+    if "angle" not in roles and len(by_unit) == 1:
+        roles[by_unit[0]] = "angle"
+    return roles
+
+
 def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
     """The instrument layout of a file, decided by its header where it can (:data:`ROLES`, :func:`parse_name`):
     angle + radial deviation (or radius) when the header names both, else x, y (``plane`` picks its named
     pair). ``columns`` names any layout's two columns (header names, case and spaces ignored, or 0-based
-    numbers); an angle among them makes the file polar. A header that names an angle is never read as x, y."""
+    numbers); an angle among them (by its name or its header unit) makes the file polar. A header that names an angle
+    (:func:`column_roles`) is never read as x, y."""
     name = layout.name
-    roles = [ROLES.get(k) for k, _ in layout.fields()]
+    roles = column_roles(layout)
     d_col = roles.index("direction") if "direction" in roles else None
     if columns is not None and tuple(str(c).strip().lower() for c in columns) == ("x", "y") and \
             not ("x" in roles and "y" in roles):
@@ -91,7 +110,11 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
         idx = layout.index(columns)
         if len(idx) != 2 or idx[0] == idx[1]:
             raise DataFileError(f"{name}: give two different columns, got {tuple(columns)!r}")
-        r = [roles[k] for k in idx] if roles else [None, None]
+        fields = layout.fields()
+        r = [("angle" if is_angle_unit(fields[k][1]) else roles[k]) for k in idx] if roles else [None, None]
+        if r == ["angle", "angle"]:
+            raise DataFileError(f"{name}: the columns {layout.header[idx[0]]!r}, {layout.header[idx[1]]!r} are both "
+                                "angles (by their names or units); give --columns ANGLE DEVIATION, the second a length")
         if "angle" in r:
             if r[1] == "angle":
                 idx, r = idx[::-1], r[::-1]
@@ -151,6 +174,7 @@ def _pair(layout: Layout, axes: tuple, d_col) -> Resolved | None:
     fitbench cannot place is refused naming them (reading the nominal path of such a file gave a 0.11 µm
     circular deviation for a 7 µm trace)."""
     name = layout.name
+    roles = column_roles(layout)
     kinds = [coordinate_kind(k) for k, _ in layout.fields()]
     found = {}
     for k, c in enumerate(kinds):
@@ -192,7 +216,7 @@ def _pair(layout: Layout, axes: tuple, d_col) -> Resolved | None:
                             f"of one kind (nominal + deviation, or actual); give --columns NAME NAME")
     used = set(idx) | set(offsets or ()) | {k for k in base + act + dev if k is not None}
     extra = [k for k, (key, _) in enumerate(layout.fields())
-             if k not in used and k != d_col and key not in ANCILLARY and ROLES.get(key) != "angle" and h[k].strip()
+             if k not in used and k != d_col and key not in ANCILLARY and roles[k] != "angle" and h[k].strip()
              and not (kinds[k] is not None and kinds[k][0] not in axes) and _numeric_column(layout, k)]
     if extra:
         raise DataFileError(f"{name}: besides {h[idx[0]]!r}, {h[idx[1]]!r} the header has the numeric column(s) "

@@ -38,16 +38,14 @@ def run(args) -> int:
     plot_path = check_plot_path(args.plot)
     cols = tuple(args.columns) if args.columns else None   # x, y from the header (x, y, z: --plane or --columns)
     from datasets.io import points_unit
-    units = {points_unit(f, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows)
-             for f in (args.reference, args.measured)}
-    if len(units) > 1:
-        raise InvalidInputError(f"{args.reference} and {args.measured} are in different units ({', '.join(sorted(units))}); "
-                                "give both in one unit")
-    args.unit = units.pop()
-    data = MagnifyInput(read_points(args.reference, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows),
-                        read_points(args.measured, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows))
+    # each file in its header's unit (or --unit, else mm), converted to mm as every reader does
+    ref_unit, meas_unit = (points_unit(f, cols, plane=args.plane, unit=args.unit, skip_rows=args.skip_rows)
+                           for f in (args.reference, args.measured))
+    data = MagnifyInput(read_points(args.reference, cols, plane=args.plane, unit=ref_unit, skip_rows=args.skip_rows),
+                        read_points(args.measured, cols, plane=args.plane, unit=meas_unit, skip_rows=args.skip_rows))
+    args.unit = meas_unit
     half = float(np.max(np.ptp(data.measured, axis=0))) / 2
-    warn_implausible("trajectory sizes (half the points' span)", half, PROFILE_LIMIT_MM, args.unit, typical_mm=50.0)
+    warn_implausible("trajectory sizes (half the points' span)", half, PROFILE_LIMIT_MM, meas_unit, typical_mm=50.0)
     params = {"eta": eta}
     if args.method == "offset":
         params["delta"] = finite("--delta", args.delta, positive=True)
@@ -61,13 +59,18 @@ def run(args) -> int:
         plot_magnified(data, res, plot_path, eta, save=save_figure)
     if args.json:
         d = res.to_dict(residuals=not args.no_residuals)
-        d["units"] = {"length": "mm", "input_unit": canonical(args.unit)}
+        d["units"] = {"length": "mm", "input_unit": canonical(meas_unit), "reference_unit": canonical(ref_unit)}
         d["warnings"] = list(dict.fromkeys([*d.get("warnings", []), *said]))
         cli_options.print_json(json.dumps(d))
         return 0
-    print(header_line("magnify", args.unit))
+    both = "" if canonical(ref_unit) == canonical(meas_unit) else f"; reference in {canonical(ref_unit)}"
+    print(header_line("magnify", meas_unit, both))
     print(f"method       {res.method} ({res.message})")
-    print(f"points       {len(res.points)}; largest contouring error {res.form_error * 1e3:.3f} µm")
+    print(f"points       {len(res.points)}; largest contouring error {res.form_error * 1e3:.3f} µm "
+          "(distance from the reference path)")
+    if args.method == "offset":
+        print(f"magnified    about points of the path up to {res.extra['max_magnified_distance'] * 1e3:.3f} µm from "
+              "the measured point (|p - r~|: at a corner the distance to the corner, magnified radially)")
     print(f"continuity   {res.extra['continuity']:.3g} (largest magnified step / (eta x largest measured step))")
     print(f"loops        {res.extra['self_intersections']} self-intersections of the magnified trajectory")
     return 0

@@ -85,7 +85,7 @@ def plot_magnified(data, res, path, eta, *, save=None):
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_title(f"continuity {res.extra['continuity']:.2f}, loops {res.extra['self_intersections']}; "
-                 f"largest error {res.form_error * 1e3:.2f} µm", fontsize=9)
+                 f"largest contouring error {res.form_error * 1e3:.2f} µm", fontsize=9)
     loc = "best"
     if zoom_on_largest_error(ax, data, res, eta) is not None:   # the legend where the inset and window leave room
         import numpy as np

@@ -48,15 +48,20 @@ def _eta(eta, method_id) -> float:
     return float(check_positive("eta", eta, method_id))
 
 
-def _finish(data: MagnifyInput, r, eta, extra, message, e_max):
-    """The result; ``e_max`` is the largest contouring error (distance of a measured point from R)."""
+def _finish(data: MagnifyInput, r, eta, extra, message, err):
+    """The result. ``err``: the contouring errors, each measured point's distance from R (the magnification
+    paper's contouring error, whichever method maps it); ``residuals`` and ``form_error`` (their largest) are
+    these for every method. The distance |p - r~| to the point r~ the method magnifies about is another
+    quantity: at a corner magnified radially (the offset method) it is the distance to the corner, larger than
+    the contouring error; its largest is ``extra['max_magnified_distance']``."""
     p = data.measured
     mag = r + eta * (p - r)
-    err = np.hypot(*(p - r).T)
-    return MagnifyFit(points=mag, reference_points=r, form_error=float(np.nanmax(err)), residuals=err,
+    e_max = float(np.max(err))
+    return MagnifyFit(points=mag, reference_points=r, form_error=e_max, residuals=err,
                       converged=bool(np.isfinite(mag).all()), message=message,
-                      extra={**extra, "max_contouring_error": e_max, "continuity": continuity(mag, p, eta),
-                             "self_intersections": self_intersections(mag)})
+                      extra={**extra, "max_contouring_error": e_max,
+                             "max_magnified_distance": float(np.nanmax(np.hypot(*(p - r).T))),
+                             "continuity": continuity(mag, p, eta), "self_intersections": self_intersections(mag)})
 
 
 @register("magnify.nearest", kind="closed form", validator=validate,
@@ -69,7 +74,7 @@ def nearest(data, *, eta=1000.0):
     line = data.line
     pts_geom = shapely.points(data.measured)
     r, err, _ = _signed_error(line, pts_geom, data.measured)
-    return _finish(data, r, float(eta), {}, "nearest-point magnification", float(err.max()))
+    return _finish(data, r, float(eta), {}, "nearest-point magnification", err)
 
 
 @register("magnify.offset", kind="closed form", validator=validate,
@@ -126,7 +131,7 @@ def offset(data, *, eta=1000.0, delta=None, delta_emax=None, selection="same_sid
     miss = empty & ~on_line
     r[miss] = r0[miss]
     return _finish(data, r, float(eta), {"delta": delta, "selection": selection, "nearest_point_used": int(miss.sum())},
-                   f"offset magnification ({selection})", emax)
+                   f"offset magnification ({selection})", err)
 
 
 def _nearest_on_each(geoms, pts_geom):

@@ -360,7 +360,17 @@ def _trailer(df, lines, empty, path, skip_rows: int = 0):
     k = int(np.flatnonzero(empty)[0])
     first = df.iloc[:, 0].fillna("").astype(str).str.strip()
     if first.iloc[k] and NUMBER.fullmatch(first.iloc[k]):           # a data row with a field missing
-        raise DataFileError(f"{path} line {lines[k]}: missing field(s)")
+        names, row = _header_names(df.columns), df.iloc[k]
+        blank = [names[j] for j in range(df.shape[1]) if isinstance(row.iloc[j], str) and not row.iloc[j].strip()]
+        short = [names[j] for j in range(df.shape[1]) if not isinstance(row.iloc[j], str)]   # the line ends early
+        if blank:
+            raise DataFileError(f"{path} line {lines[k]}: missing field(s): {' and '.join(repr(n) for n in blank[:2])}"
+                                f"{f' (and {len(blank) - 2} more)' if len(blank) > 2 else ''} "
+                                f"{'is' if len(blank) == 1 else 'are'} empty: fill in the value, or delete the line "
+                                "(or the column)")
+        raise DataFileError(f"{path} line {lines[k]}: missing field(s): {df.shape[1] - len(short)} where the header "
+                            f"has {df.shape[1]} (no {', '.join(repr(n) for n in short[:2])}"
+                            f"{', ...' if len(short) > 2 else ''})")
     text = read_lines(path, "", skip_rows)
     quoted = text[lines[k] - 1].strip()[:60]
     after_blank = k > 0 and any(not text[i].strip() for i in range(lines[k - 1], lines[k] - 1))
@@ -375,11 +385,30 @@ def _trailer(df, lines, empty, path, skip_rows: int = 0):
                         "after the table, or prefix them with #")
 
 
+def _trailing_separators(df, lines, path):
+    """The table without the empty last column a separator after the last field of every line, header included,
+    gives (Excel's ``;`` at the end of each line when the sheet has an empty column to the right): an unnamed last
+    column whose every cell is empty. Rows that all have one field more than the header (pandas then takes their
+    first field for the row index, shifting every column) are refused in one line saying so."""
+    if not (isinstance(df.index, pd.RangeIndex) and df.index.start == 0 and df.index.step == 1):
+        n = df.shape[1]
+        ends = df.iloc[:, -1].fillna("").astype(str).str.strip().eq("").all()
+        raise DataFileError(f"{path}: the header has {n} names but every data line has {n + 1} fields (from line "
+                            f"{lines[0]})" + (": each data line ends with a separator and the header does not; delete "
+                            "the separators after the last values, or end the header with one too" if ends else
+                            ": name every column in the header"))
+    while df.shape[1] > 1 and str(df.columns[-1]).startswith("Unnamed: ") and \
+            df.iloc[:, -1].fillna("").astype(str).str.strip().eq("").all():
+        df = df.iloc[:, :-1]
+    return df
+
+
 def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_directions=None, columns=None):
     from methods.positioning import from_frame
 
     # 'nan' and 'inf' stay text here and are refused as not finite by _numeric_column, like every reader
     df, lines = read_table(path, skip_rows=skip_rows, keep_default_na=False)
+    df = _trailing_separators(df, lines, path)
     df = _spaced_names(df, lines, path, skip_rows)
     empty = (df.isna() | df.apply(lambda c: c.astype(str).str.strip() == "")).any(axis=1).to_numpy()
     if empty.any():

@@ -1,0 +1,70 @@
+"""Separators at the ends of a positioning table's lines, and an empty cell. Excel writes a ';' after the last field
+of every line, header included, when the sheet has an empty column to the right: that was refused as 'line 2:
+missing field(s)' (the profile reader reads it); it is read now, the empty last column dropped. An empty cell was
+'line 4: missing field(s)'; its column is named now. Rows that all have one field more than the header (pandas took their
+first field for the row index, shifting every column) are refused saying so. Figures checked against ISO 230-2's
+definitions computed here (k = 2)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from cli_calls import cli, one_error_line
+
+TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7])
+NAMES = ["Target (mm)"] + [f"Run {r} {d} (µm)" for r in (1, 2, 3) for d in "+-"]
+
+
+def runs(seed=4):
+    """{'+': (targets, runs), '-': ...} in µm to 3 decimals, as written."""
+    rng = np.random.default_rng(seed)
+    return {d: np.round((8 * TARGETS / 1000 + b)[:, None] + rng.normal(0, 0.6, (len(TARGETS), 3)), 3)
+            for d, b in (("+", -1.8), ("-", 1.8))}
+
+
+def iso_a_um(dev) -> float:
+    """ISO 230-2 bidirectional accuracy A (k = 2): max(mean + 2 s) - min(mean - 2 s), s with n - 1."""
+    hi = max(float(np.max(v.mean(axis=1) + 2 * v.std(axis=1, ddof=1))) for v in dev.values())
+    lo = min(float(np.min(v.mean(axis=1) - 2 * v.std(axis=1, ddof=1))) for v in dev.values())
+    return hi - lo
+
+
+def rows(dev):
+    """The wide export's data rows as lists of cells, decimal commas."""
+    return [[f"{t:.4f}".replace(".", ",")] + [f"{dev[d][i, r]:.3f}".replace(".", ",") for r in range(3) for d in "+-"]
+            for i, t in enumerate(TARGETS)]
+
+
+def write(path, header, cells, end=""):
+    """BOM, CRLF, ';' separators, ``end`` after every data line (and after the header when it ends ``header``)."""
+    path.write_bytes(("\r\n".join([header] + [";".join(c) + end for c in cells]) + "\r\n").encode("utf-8-sig"))
+    return path
+
+
+def test_a_separator_after_every_line_header_included_is_read(tmp_path):
+    dev = runs()
+    plain = write(tmp_path / "plain.csv", ";".join(NAMES), rows(dev))
+    trail = write(tmp_path / "trail.csv", ";".join(NAMES) + ";", rows(dev), end=";")
+    for path in (plain, trail):
+        out = cli("positioning", path, "--json")
+        assert out.returncode == 0 and not out.stderr, (path.name, out.stderr)
+        assert json.loads(out.stdout)["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9)
+
+
+def test_an_empty_cell_is_named_with_its_column_and_line(tmp_path):
+    cells = rows(runs())
+    cells[2][3] = ""                                   # line 4: 'Run 2 + (µm)'
+    one_error_line(cli("positioning", write(tmp_path / "e.csv", ";".join(NAMES), cells)),
+                   "line 4: missing field(s): 'Run 2 + (µm)' is empty", "fill in the value")
+
+
+def test_rows_with_one_field_more_than_the_header_are_refused(tmp_path):
+    dev = runs()
+    only_rows = write(tmp_path / "rows.csv", ";".join(NAMES), rows(dev), end=";")
+    one_error_line(cli("positioning", only_rows), "the header has 7 names but every data line has 8 fields",
+                   "each data line ends with a separator and the header does not")
+    extra = write(tmp_path / "extra.csv", ";".join(NAMES[:-1]), rows(dev))     # the header lacks a name
+    one_error_line(cli("positioning", extra), "the header has 6 names but every data line has 7 fields",
+                   "name every column in the header")

@@ -393,9 +393,11 @@ def _data_files(cfg: dict) -> dict[str, str]:
     ``Study.data_sets``: its ``[[datasets]]`` unless its own tasks read others), named without the folders of this
     machine."""
     from experiments.codekeys import data_files
+    from experiments.engine import expand_datasets
     from experiments.studies import study_of
+    specs = study_of(cfg["kind"]).data_sets(cfg)
     out = {}
-    for spec in study_of(cfg["kind"]).data_sets(cfg):
+    for spec in specs if specs is not None else expand_datasets(cfg, getattr(cfg, "where", cfg.get("name", "?"))):
         for f in data_files(spec):
             digest = hashlib.sha256()
             with open(f, "rb") as fh:

@@ -36,8 +36,7 @@ from datasets import sources
 from experiments.executors import execute
 from experiments.jsontext import json_value
 from experiments.rowframe import MissingRows, RowFrame
-from experiments.codekeys import (NUMBER_PACKAGES, _CODE, _ENV, _has_source, _method_ids, environment,  # noqa: F401
-                                  forget_data_hashes, module_code, reset_caches, source_hash, task_code)
+from experiments.codekeys import _method_ids, environment, task_code
 from experiments.chunkrows import run_chunk
 from experiments.rows import RERUN_STATUSES, raise_if_signalled, row_from_json, source_of
 from experiments.store import RowStore

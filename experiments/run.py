@@ -29,7 +29,7 @@ if __name__ == "__main__":  # the command: its local workers start now and impor
 
 from experiments import compare  # the verdict on every run: fresh results against the committed ones
 from experiments import config as configs
-from experiments import engine
+from experiments import codekeys, engine
 from experiments import analysis, figures, outputs
 from experiments import study as contract
 from experiments.csvtext import blocks, csv_text, write_results
@@ -156,7 +156,7 @@ def environment_failure(cfg: dict, df) -> EnvironmentFailure | None:
 
 def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", scheduler=None, force=False,
               seed=None, log=print, max_rows=configs.MAX_ROWS, row_timeout=None) -> Path:
-    engine.forget_data_hashes()
+    codekeys.forget_data_hashes()
     cfg = configs.load(name, quick=quick, seed=seed)
     study = contract.study_of(cfg["kind"])
     target = confined(out, cfg["name"])
@@ -211,7 +211,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     summary = summarise(df, summary_columns(cfg, df))
     public_cfg = dict(cfg)
     meta = {**collect(public_cfg), "study": cfg["name"], "quick": quick, "executor": executor, "jobs": jobs,
-            "row_timeout_s": row_timeout, "environment": engine.environment(),
+            "row_timeout_s": row_timeout, "environment": codekeys.environment(),
             "counts": counts, "n_rows": len(df), "status_counts": df["status"].value_counts().to_dict(),
             "plugins": plugin_distributions(used), "results_sha256": results_sha256, "findings": findings,
             "fingerprint": counts.pop("fingerprint"), "inputs": compare.inputs(cfg), **config_file(cfg, out)}

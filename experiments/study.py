@@ -250,12 +250,11 @@ class Study:
         points, truth = task_data(task)  # load_data, made once for the methods that follow on the same data
         return fit_row(task, points, truth)
 
-    def data_sets(self, cfg: dict) -> list[dict]:
+    def data_sets(self, cfg: dict) -> list[dict] | None:
         """The data set specs its rows read (``meta.json`` records the SHA-256 of each file they read,
-        ``experiments.compare.inputs``). Default: the config's ``[[datasets]]``; a kind whose own tasks read other
-        data sets names them."""
-        from experiments.engine import expand_datasets
-        return expand_datasets(cfg, getattr(cfg, "where", cfg.get("name", "?")))
+        ``experiments.compare.inputs``); None (the default): the config's ``[[datasets]]``. A kind whose own tasks
+        read other data sets names them."""
+        return None
 
     def row_columns(self, cfg: dict) -> dict[str, str] | None:
         """{column: "number" | "bool" | "text"} its rows will have besides the identity and status columns,

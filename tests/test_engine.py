@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 
 from conftest import install_plugin, subprocess_env
-from experiments import codehash, engine, executors, rows as row_code, run
+from experiments import codehash, codekeys, engine, executors, rows as row_code, run
 from experiments.rowframe import MissingRows, RowFrame, part_of
 from experiments.store import RowStore, StoreIOError
 from methods import InvalidInputError
@@ -54,7 +54,7 @@ def non_timing(df: pd.DataFrame) -> pd.DataFrame:
 def test_code_is_hashed_once_per_pair_not_per_row(tmp_path, monkeypatch):
     """A run of N rows hashes the code of each (method, data set) pair once (it hashed it for every row)."""
     cfg = run.configs.load(str(write_study(tmp_path, reps=200)))
-    engine.reset_caches()
+    codekeys.reset_caches()
     calls = []
     original = codehash.code_hash
 
@@ -73,15 +73,15 @@ def test_code_is_hashed_once_per_pair_not_per_row(tmp_path, monkeypatch):
 def test_kernel_backend_and_versions_are_in_the_key(tmp_path, monkeypatch):
     cfg = run.configs.load(str(write_study(tmp_path, reps=1)))
     task = next(engine.iter_grid_tasks(cfg, cfg.where))
-    engine.reset_caches()
+    codekeys.reset_caches()
     compiled = engine.task_key(task)
-    assert engine.environment()["kernels"] == "compiled" and engine.environment()["versions"]["numpy"]
+    assert codekeys.environment()["kernels"] == "compiled" and codekeys.environment()["versions"]["numpy"]
     monkeypatch.setenv("FITBENCH_KERNELS", "numpy")
-    engine.reset_caches()
-    assert engine.environment()["kernels"] == "numpy"
+    codekeys.reset_caches()
+    assert codekeys.environment()["kernels"] == "numpy"
     assert engine.task_key(task) != compiled
     monkeypatch.delenv("FITBENCH_KERNELS")
-    engine.reset_caches()
+    codekeys.reset_caches()
     assert engine.task_key(task) == compiled
 
 
@@ -334,17 +334,17 @@ def test_an_installed_plugins_code_is_part_of_a_studys_outputs(tmp_path, monkeyp
     """A plugin may register plots the analysis draws: installing one, or editing its code, makes a study's outputs
     out of date."""
     cfg = run.configs.load(str(write_study(tmp_path)))
-    engine.reset_caches()
+    codekeys.reset_caches()
     without = engine.outputs_code(cfg)
     site = install_plugin(tmp_path, "fitbench-outputs-probe", {"fitbench_outputs_probe": "X = 1\n"},
                           {"fitbench.methods": {"probe": "fitbench_outputs_probe"}})
     monkeypatch.syspath_prepend(str(site))
-    engine.reset_caches()
+    codekeys.reset_caches()
     installed = engine.outputs_code(cfg)
     (site / "fitbench_outputs_probe.py").write_text("X = 2\n")
-    engine.reset_caches()
+    codekeys.reset_caches()
     edited = engine.outputs_code(cfg)
-    engine.reset_caches()
+    codekeys.reset_caches()
     assert len({without, installed, edited}) == 3
 
 

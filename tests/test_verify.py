@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from conftest import quick_run_on
-from experiments import run as runner
+from experiments import codekeys, run as runner
 from experiments import verify
 from experiments.metrics import TOLERANCES, tolerance
 
@@ -437,7 +437,6 @@ def test_previous_results_of_another_config_or_data_are_not_compared(tmp_path, c
     the run says in one line that the previous results are not compared and records no verdict for the study (it
     said "DIFFERS ... in: (rows)" and the report "Reproducibility: differs"); a run of the same config and data as
     the previous one is compared as before, whatever changed in between."""
-    from experiments import engine
     data = tmp_path / "trace.csv"
     rng = np.random.default_rng(3)
     t = rng.uniform(0.0, 2.0 * np.pi, 20)
@@ -472,7 +471,7 @@ file = "trace.csv"
     assert len(lines) == 1 and "verify: vstudy: reproduces the previous results" in lines[0]
     run(study)
     data.write_text(data.read_text(encoding="utf-8") + "6.0,-2.0\n", encoding="utf-8")   # one point more
-    engine.reset_caches()   # this process hashed the data file once for its row keys: hash it again, as a new run does
+    codekeys.reset_caches()   # this process hashed the data file once for its row keys: hash it again, as a new run does
     lines = run(study, report=True)
     assert len(lines) == 1 and "not compared" in lines[0] and "data file datasets[1] trace.csv changed" in lines[0]
     assert no_verdict()

@@ -15,6 +15,7 @@ from fitbench.cli.options import (add_reader_options, add_report_option, add_tes
                                   add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances,
                                   save_figure, verdict, verdict_lines, verdict_title, warn, warn_bare_tolerances,
                                   write_report)
+from fitbench.cli.options import quantity
 from methods import InvalidInputError
 from methods.units import JSON_UNITS, canonical
 
@@ -24,12 +25,15 @@ def add_parser(sub):
     pc.add_argument("files", nargs="+", metavar="FILE",
                     help="CW.csv CCW.csv, or one file with both runs (a direction or run column); x, y columns or "
                          "angle + radial deviation")
-    pc.add_argument("--nominal-radius", type=float, required=True, metavar="R_MM", help="nominal radius (mm)")
-    pc.add_argument("--nominal-center", type=float, nargs=2, metavar=("X", "Y"),
+    pc.add_argument("--nominal-radius", type=quantity("--nominal-radius"), required=True, metavar="R_MM",
+                    help="nominal radius (mm, or with its unit: 150mm, 5.9in)")
+    pc.add_argument("--nominal-center", type=quantity("--nominal-center"), nargs=2, metavar=("X", "Y"),
                     help="nominal centre in machine coordinates (mm); needed for F about it and for the diagnostics")
     pc.add_argument("--center", choices=("lsq", "mz"), default="lsq", help="centre for G: least squares or minimum zone")
-    pc.add_argument("--feed", type=float, metavar="MM_PER_MIN", help="feed (mm/min): gives the servo mismatch in ms")
-    pc.add_argument("--cyclic-pitch", type=float, metavar="MM", help="ball-screw pitch (mm): estimates the cyclic error")
+    pc.add_argument("--feed", type=quantity("--feed", "feed"), metavar="MM_PER_MIN",
+                    help="feed (mm/min, or with its unit: 2000mm/min, 2m/min): gives the servo mismatch in ms")
+    pc.add_argument("--cyclic-pitch", type=quantity("--cyclic-pitch"), metavar="MM",
+                    help="ball-screw pitch (mm, or with its unit: 10mm): estimates the cyclic error")
     pc.add_argument("--arc", type=float, default=360.0, metavar="DEG",
                     help="nominal arc of each run (default 360; ISO 230-4 partial arcs >= 90): overrun beyond it is trimmed")
     pc.add_argument("--lead-in", type=float, default=0.0, metavar="DEG", help="remove this arc at the start of each run")

@@ -11,6 +11,7 @@ import fitbench.cli.options as cli_options
 import methods
 from fitbench.cli.guards import run_method
 from fitbench.cli.options import add_reader_options, check_plot_path, read_profile_args, save_figure
+from fitbench.cli.options import quantity
 from fitbench.cli.roundness import limacon_warning
 from methods import InvalidInputError
 from methods.units import canonical
@@ -23,9 +24,9 @@ def add_parser(sub):
     pf.add_argument("file", metavar="FILE", help="a points file (x, y, or angle + radial deviation) or a published "
                                                 "data set name")
     pf.add_argument("--param", action="append", metavar="KEY=VALUE", help="method parameter (repeatable)")
-    pf.add_argument("--nominal-radius", type=float, metavar="R_MM",
-                    help="angle + radial-deviation files: the radius the deviations are about (mm; default: the "
-                         "deviations alone)")
+    pf.add_argument("--nominal-radius", type=quantity("--nominal-radius"), metavar="R_MM",
+                    help="angle + radial-deviation files: the radius the deviations are about (mm, or with its unit: "
+                         "150mm; default: the deviations alone)")
     add_reader_options(pf, polar=True, printed="mm")
     pf.add_argument("--json", action="store_true", help="print the result as one JSON object (mm, rad; see its "
                     "'units')")

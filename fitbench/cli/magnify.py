@@ -10,6 +10,7 @@ import fitbench.cli.options as cli_options
 import methods
 from fitbench.cli.options import (PROFILE_LIMIT_MM, add_reader_options, check_plot_path, finite, header_line,
                                   save_figure)
+from fitbench.cli.options import quantity
 from methods import InvalidInputError
 from methods.units import canonical, warn_implausible
 
@@ -19,7 +20,8 @@ def add_parser(sub):
     pm.add_argument("reference", metavar="REFERENCE.csv", help="reference polyline (x, y; arcs as fine polylines)")
     pm.add_argument("measured", metavar="MEASURED.csv", help="measured trajectory (x, y), in order")
     pm.add_argument("--eta", type=float, required=True, metavar="E", help="magnification (a positive number)")
-    pm.add_argument("--delta", type=float, metavar="D_MM", help="offset distance (mm; > the largest error; default twice it)")
+    pm.add_argument("--delta", type=quantity("--delta"), metavar="D_MM",
+                    help="offset distance (mm, or with its unit: 10um; > the largest contouring error; default twice it)")
     pm.add_argument("--method", choices=("offset", "nearest"), default="offset")
     pm.add_argument("--selection", choices=("same_side", "nearest_of_both"), default="same_side",
                     help="offset method: the offset on the point's side, or the paper's printed step (2)")

@@ -189,6 +189,46 @@ def refuse_decimal_comma(what: str, text: str, example: str) -> None:
         raise InvalidInputError(f"{what}: a decimal comma; write the number with a point, e.g. {point}")
 
 
+#: feed units: mm/min per unit (a bare --feed is mm/min)
+FEED_MM_PER_MIN = {"mm/min": 1.0, "m/min": 1000.0, "mm/s": 60.0, "in/min": 25.4}
+
+
+def quantity(option: str, kind: str = "length"):
+    """An argparse ``type`` for an option taking a length (a bare number in mm, or with its unit: 150mm, 0.15m,
+    5.9in, 150 µm) or, with ``kind="feed"``, a feed (a bare number in mm/min, or 2000mm/min, 2m/min, 33mm/s): the
+    value in mm (mm/min). A bare 'nan' or 'inf' passes as a float for the command's own check of the number; anything
+    else is one line naming the unit to give."""
+    import argparse
+    import re
+    from methods.units import mm_per
+    base, examples = (("mm/min", "2000mm/min, 2m/min") if kind == "feed" else ("mm", "150mm, 0.15m, 5.9in"))
+
+    def parse(text):
+        try:
+            refuse_decimal_comma(repr(str(text)), text, f"{option} {{}}")
+        except InvalidInputError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        m = re.fullmatch(NUMBER_WITH_UNIT, str(text))
+        if not m:
+            try:
+                return float(text)   # nan, inf: refused by the command's check of a finite number
+            except ValueError:
+                raise argparse.ArgumentTypeError(f"{text!r} is not a number: give a number in {base} or with its "
+                                                 f"unit (e.g. {examples})") from None
+        value, unit = float(m.group(1)), m.group(2)
+        if unit is None:
+            return value
+        try:
+            factor = (FEED_MM_PER_MIN[unit.lower()] if kind == "feed" else mm_per(unit))
+        except (KeyError, InvalidInputError):
+            known = ", ".join(FEED_MM_PER_MIN) if kind == "feed" else "mm, um (µm), nm, m, in"
+            raise argparse.ArgumentTypeError(f"{text!r}: unknown unit {unit!r}; give a number in {base} or with one "
+                                             f"of {known} (e.g. {examples})") from None
+        return value * factor
+    parse.__name__ = kind
+    return parse
+
+
 class Tolerances(dict):
     """``--tolerance`` items as {figure name: tolerance in mm}, and how each was written: ``texts`` {name: the
     value as given}, ``bare`` the names given as a bare number (µm), which :func:`warn_bare_tolerances` checks."""

@@ -15,6 +15,7 @@ from methods.roundness.filter import UndersampledWarning, parse_cutoff
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options, header_line,
                                   ROUNDNESS_LIMIT_MM, add_tolerance_option, check_plot_path, parse_tolerances, test_conditions, read_profile_args, save_figure, Tolerances, tolerance_text, verdict, verdict_lines,
                                   verdict_title, warn, warn_bare_tolerances, write_report)
+from fitbench.cli.options import quantity
 
 
 def add_parser(subparsers):
@@ -27,8 +28,8 @@ def add_parser(subparsers):
                         "1500 or any positive value (ISO 16610-21)")
     p.add_argument("--reference", choices=("lsci", "mzci", "mici", "mcci", "all"), default="all",
                    help="reference circle(s) (default: all four)")
-    p.add_argument("--nominal-radius", type=float, metavar="R_MM",
-                   help="angle + radial-deviation files: the radius the deviations are about (mm; default: the "
+    p.add_argument("--nominal-radius", type=quantity("--nominal-radius"), metavar="R_MM",
+                   help="angle + radial-deviation files: the radius the deviations are about (mm, or with its unit: 10mm; default: the "
                         "deviations alone, as an instrument's limaçon evaluation)")
     add_reader_options(p, polar=True)
     p.add_argument("--json", action="store_true", help="print one JSON object (lengths in mm)")

@@ -54,6 +54,8 @@ Over 400 random arcs of 90-360 deg with every source (the common lag included) a
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from methods._errors import InvalidInputError
@@ -93,6 +95,7 @@ class _Model:
     def __init__(self, q, d, first, R, center, pitch, names):
         self.q, self.d, self.first, self.R, self.center, self.pitch = q, d, first, R, center, pitch
         self.names = names                     # linear parameters, in order
+        self.half_d, self.minus_half_d, self.minus_d = 0.5 * d, -0.5 * d, -d   # the fields' factors (exact)
         self.r = np.hypot(q[:, 0], q[:, 1])
         phi = np.arctan2(q[:, 1], q[:, 0])
         # unwrapped along each run (the run's own order), so theta is continuous within a run
@@ -129,52 +132,96 @@ class _Model:
 
     def fields(self, theta, phi_tau, derivative=False):
         """{name: G_j as its (x, y) components} (and {name: dG_j / dtheta} with ``derivative``)."""
+        G, dG = self._fields(theta, phi_tau, derivative)[:2]
+        return (G, dG) if derivative else G
+
+    def _fields(self, theta, phi_tau, derivative):
+        """(G, dG or None, cos theta, sin theta, the zero array of G's zero components, the one array of its unit
+        ones): the fields of the model's parameters only, their derivatives only when asked (vectorised, called at
+        every iteration of :meth:`theta`)."""
         R, d = self.R, self.d
+        want = {n for n in self.names if n != "radius_difference"}
         c, s = np.cos(theta), np.sin(theta)
-        zero, one = np.zeros_like(c), np.ones_like(c)
-        sx = np.where((np.abs(s) <= REVERSAL_ZONE) | self.at_reversal_x, 0.0, np.sign(s))  # 0 at a reversal
-        sy = np.where((np.abs(c) <= REVERSAL_ZONE) | self.at_reversal_y, 0.0, np.sign(c))
-        G, dG = {}, {}
-        G["center_x"], dG["center_x"] = (one, zero), (zero, zero)
-        G["center_y"], dG["center_y"] = (zero, one), (zero, zero)
-        G["mean_scale"], dG["mean_scale"] = (R * c, R * s), (-R * s, R * c)
-        G["scale_mismatch"], dG["scale_mismatch"] = (0.5 * R * c, -0.5 * R * s), (-0.5 * R * s, -0.5 * R * c)
-        G["squareness"], dG["squareness"] = (R * s, zero), (R * c, zero)
-        G["servo_mismatch"], dG["servo_mismatch"] = (0.5 * d * s, 0.5 * d * c), (0.5 * d * c, -0.5 * d * s)
-        G["backlash_x"], dG["backlash_x"] = (0.5 * d * sx, zero), (zero, zero)
-        G["backlash_y"], dG["backlash_y"] = (zero, -0.5 * d * sy), (zero, zero)
-        ex = np.exp(-self.spike_decay(theta, 0.0) / phi_tau)
-        ey = np.exp(-self.spike_decay(theta, np.pi / 2) / phi_tau)
-        G["reversal_spike_x"], dG["reversal_spike_x"] = (d * sx * ex, zero), (-sx * ex / phi_tau, zero)
-        G["reversal_spike_y"], dG["reversal_spike_y"] = (zero, -d * sy * ey), (zero, sy * ey / phi_tau)
-        if self.pitch:
+        zero, one = self._constant(c.shape)
+        G, dG = {}, ({} if derivative else None)
+        Rc, Rs = R * c, R * s
+        G["center_x"], G["center_y"] = (one, zero), (zero, one)
+        G["mean_scale"] = (Rc, Rs)
+        G["scale_mismatch"] = (0.5 * R * c, -0.5 * R * s)
+        G["squareness"] = (Rs, zero)
+        G["servo_mismatch"] = (self.half_d * s, self.half_d * c)
+        if derivative:
+            dG["center_x"] = dG["center_y"] = (zero, zero)
+            dG["mean_scale"] = (-R * s, R * c)
+            dG["scale_mismatch"] = (-0.5 * R * s, -0.5 * R * c)
+            dG["squareness"] = (R * c, zero)
+            dG["servo_mismatch"] = (self.half_d * c, self.minus_half_d * s)
+        if want & {"backlash_x", "reversal_spike_x"}:
+            sx = np.where((np.abs(s) <= REVERSAL_ZONE) | self.at_reversal_x, 0.0, np.sign(s))  # 0 at a reversal
+            G["backlash_x"] = (self.half_d * sx, zero)
+            if "reversal_spike_x" in want:
+                ex = np.exp(-self.spike_decay(theta, 0.0) / phi_tau)
+                G["reversal_spike_x"] = (d * sx * ex, zero)
+            if derivative:
+                dG["backlash_x"] = (zero, zero)
+                if "reversal_spike_x" in want:
+                    dG["reversal_spike_x"] = (-sx * ex / phi_tau, zero)
+        if want & {"backlash_y", "reversal_spike_y"}:
+            sy = np.where((np.abs(c) <= REVERSAL_ZONE) | self.at_reversal_y, 0.0, np.sign(c))
+            G["backlash_y"] = (zero, self.minus_half_d * sy)
+            if "reversal_spike_y" in want:
+                ey = np.exp(-self.spike_decay(theta, np.pi / 2) / phi_tau)
+                G["reversal_spike_y"] = (zero, self.minus_d * sy * ey)
+            if derivative:
+                dG["backlash_y"] = (zero, zero)
+                if "reversal_spike_y" in want:
+                    dG["reversal_spike_y"] = (zero, sy * ey / phi_tau)
+        if self.pitch and want & set(CYCLIC):
             k = 2 * np.pi / self.pitch
-            X, Y = self.center[0] + R * c, self.center[1] + R * s
-            G["cyc_xs"], dG["cyc_xs"] = (np.sin(k * X), zero), (-k * R * s * np.cos(k * X), zero)
-            G["cyc_xc"], dG["cyc_xc"] = (np.cos(k * X), zero), (k * R * s * np.sin(k * X), zero)
-            G["cyc_ys"], dG["cyc_ys"] = (zero, np.sin(k * Y)), (zero, k * R * c * np.cos(k * Y))
-            G["cyc_yc"], dG["cyc_yc"] = (zero, np.cos(k * Y)), (zero, -k * R * c * np.sin(k * Y))
+            X, Y = self.center[0] + Rc, self.center[1] + Rs
+            sin_x, cos_x, sin_y, cos_y = np.sin(k * X), np.cos(k * X), np.sin(k * Y), np.cos(k * Y)
+            G["cyc_xs"], G["cyc_xc"] = (sin_x, zero), (cos_x, zero)
+            G["cyc_ys"], G["cyc_yc"] = (zero, sin_y), (zero, cos_y)
+            if derivative:
+                dG["cyc_xs"], dG["cyc_xc"] = (-k * R * s * cos_x, zero), (k * R * s * sin_x, zero)
+                dG["cyc_ys"], dG["cyc_yc"] = (zero, k * R * c * cos_y), (zero, -k * R * c * sin_y)
         G = {n: G[n] for n in self.names if n != "radius_difference"}
-        if not derivative:
-            return G
-        return G, {n: dG[n] for n in G}
+        if derivative:
+            dG = {n: dG[n] for n in G}
+        return G, dG, c, s, zero, one
+
+    def _constant(self, shape):
+        """The zero and one arrays of the fields (shared by their calls: never written to)."""
+        memo = self.__dict__.get("_zero_one")
+        if memo is None or memo[0].shape != shape:
+            memo = self._zero_one = (np.zeros(shape), np.ones(shape))
+        return memo
 
     def path(self, theta, beta, phi_tau, derivative=False):
         """Model point(s) R u(theta) + D(theta) as (x, y) (and d/dtheta, and the fields). Each coordinate is summed
-        on its own (the same operations, in the same order, as on (N, 2) rows, without building them)."""
-        out = self.fields(theta, phi_tau, derivative)
-        G, dG = out if derivative else (out, None)
-        px, py = self.R * np.cos(theta), self.R * np.sin(theta)
-        for j, n in enumerate(self.names):
-            if n in G and beta[j]:
-                px, py = px + beta[j] * G[n][0], py + beta[j] * G[n][1]
-        if not derivative:
-            return px, py
-        tx, ty = self.R * -np.sin(theta), self.R * np.cos(theta)
-        for j, n in enumerate(self.names):
-            if n in dG and beta[j]:
-                tx, ty = tx + beta[j] * dG[n][0], ty + beta[j] * dG[n][1]
-        return (px, py), (tx, ty), G
+        on its own (the same operations, in the same order, as on (N, 2) rows, without building them). A unit
+        component of a field adds beta_j itself; a zero one adds nothing, and is skipped with a finite beta_j when no
+        angle is 0 (then no sum is -0, which adding +0 would turn into +0)."""
+        G, dG, c, s, zero, one = self._fields(theta, phi_tau, derivative)
+        px, py = self.R * c, self.R * s
+        sums = [(px, py, G)]
+        if derivative:
+            sums.append((self.R * -s, self.R * c, dG))
+        skip = not np.any(theta == 0.0)
+        out = []
+        for x, y, F in sums:
+            for j, n in enumerate(self.names):
+                b = beta[j]
+                if n not in F or not b:
+                    continue
+                fin = skip and math.isfinite(b)
+                gx, gy = F[n]
+                if gx is not zero or not fin:
+                    x = x + (b if gx is one else b * gx)
+                if gy is not zero or not fin:
+                    y = y + (b if gy is one else b * gy)
+            out.append((x, y))
+        return (*out, G) if derivative else out[0]
 
     def theta(self, beta, phi_tau):
         """The commanded angle of each point: angle(R u(theta) + D(theta)) = the measured angle."""

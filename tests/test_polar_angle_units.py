@@ -4,7 +4,8 @@ Angles in degrees read as radians (a header ``theta [rad]`` over 0..359, or ``--
 the profile 57 times round: roundness gave RONt 0.34 µm for a 4.08 µm part, circular-test G 1.43 instead of 5.08 µm,
 exit 0. They are refused naming the span in revolutions; data that really turns more than once in radians (a
 circular test's two runs in one column, with overrun) is still read. Deviations in mm under a µm header (G 0.01 µm,
-RONt 0.004 µm, exit 0 without a word) are warned about naming mm."""
+RONt 0.004 µm, exit 0 without a word) are warned about naming mm. A column in an angle unit is the angle whatever its
+name ('C [deg]' was told to be renamed mm). A roundness trace over more than one revolution names the lines to keep."""
 from __future__ import annotations
 
 import numpy as np
@@ -144,3 +145,44 @@ def test_an_angle_read_as_a_length_is_not_told_to_be_renamed_mm(tmp_path):
     err = cli("roundness", p).stderr
     one_error_line(cli("roundness", p), "column 'C [deg]' is an angle (deg) where a length is read", "--columns")
     assert "[mm]" not in err
+
+
+def test_a_trace_over_more_than_one_revolution_names_the_lines_to_keep(tmp_path):
+    """0 to 369.9° at 0.1° (instruments overlap to check closure): was 'two points lie at the same polar angle
+    (point 3666) ... (drop a repeated closing point)'. The lines are the file's (header on line 1)."""
+    deg = np.round(np.arange(3700) * 0.1, 1)
+    dev = 2.0 * np.cos(np.radians(3 * deg)) + 0.5 * deg / deg[-1]          # a drift: the overlap differs
+    past = np.flatnonzero(deg >= 360.0)                                    # 100 points, 360.0 .. 369.9
+    want = (f"covers 369.9°, more than one revolution ({past.size} points at or beyond 360° from the first, "
+            f"lines {past[0] + 2}-{past[-1] + 2}); a roundness profile is one revolution (ISO 12181-1): "
+            f"keep lines 2-{past[0] + 1}")
+    for label, angles in (("unwrapped", deg), ("wrapped", deg % 360.0)):
+        p = polar_file(tmp_path / f"{label}.csv", angles, dev, header="Angle [deg],Deviation [um]")
+        one_error_line(cli("roundness", p), f"{label}.csv: the profile " + want)
+        code, out, err = cli("fit", "circle.gauss_newton", p, "--nominal-radius", 10)   # a fit takes it
+        assert code == 0, err
+    first = polar_file(tmp_path / "first.csv", deg[:past[0]], dev[:past[0]], header="Angle [deg],Deviation [um]")
+    code, out, err = cli("roundness", first)
+    assert code == 0 and "RONt" in out, err
+
+
+def test_one_closing_point_with_another_value_is_named_by_its_line(tmp_path):
+    deg, dev = profile_deg()
+    p = polar_file(tmp_path / "closed.csv", np.r_[deg, 360.0], np.r_[dev, dev[0] + 0.05],
+                   header="Angle [deg],Deviation [um]")
+    one_error_line(cli("roundness", p), f"closed.csv line {deg.size + 2}:", "same polar angle as the first point's (line 2)",
+                   f"drop line {deg.size + 2}")
+    q = polar_file(tmp_path / "repeat.csv", np.r_[deg, 360.0], np.r_[dev, dev[0]], header="Angle [deg],Deviation [um]")
+    code, out, err = cli("roundness", q)                     # the first point written again: dropped with a note
+    assert code == 0 and "repeats the first" in out, (out, err)
+
+
+def test_an_xy_trace_over_more_than_one_revolution_names_both_points(tmp_path):
+    """x, y points have no angle column to count revolutions by: the evaluation's refusal names both points at one
+    angle, 1-based in the order given (was 'point 3666', a 0-based index of one of them)."""
+    deg = np.round(np.arange(3700) * 0.1, 1)
+    t = np.radians(deg)
+    p = tmp_path / "xy.csv"
+    p.write_text("X [mm],Y [mm]\n" + "".join(f"{10 * np.cos(a):.6f},{10 * np.sin(a):.6f}\n" for a in t))
+    twin = int(np.flatnonzero(deg == 360.0)[0]) + 1        # 360.0° is point 3601, at point 1's angle
+    one_error_line(cli("roundness", p), f"(points 1 and {twin} in the order given)", "keep one revolution")

@@ -49,14 +49,18 @@ def _axes(layout: Layout, res: Resolved, plane: str | None = None) -> tuple:
 
 def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
               angle_unit: str | None = None, nominal_radius: float | None = None, nominal_center=(0.0, 0.0),
-              need_nominal_radius: bool = True, min_arc_deg: float | None = None) -> CircularRuns:
+              need_nominal_radius: bool = True, min_arc_deg: float | None = None,
+              one_revolution: bool = False) -> CircularRuns:
     """One measurement file in any instrument layout (:func:`resolve`): x, y columns or angle + radial
     deviation / radius, holding one run or both directions (a ``direction`` or ``run`` column; rows of each
     run in the order measured). Lengths in the header's unit or ``unit`` (a contradiction is an error),
     returned in mm; angle + deviation are placed about ``nominal_center`` with ``nominal_radius`` (mm; with
     ``need_nominal_radius`` false the deviations alone are evaluated, :func:`polar_to_points`). ``min_arc_deg``: the
     smallest arc the caller evaluates; angles read as degrees that span less and look like radians are refused
-    naming the angle unit (:func:`radians_as_degrees`).
+    naming the angle unit (:func:`radians_as_degrees`), angles read as radians that turn more than
+    :data:`MAX_RADIAN_REVOLUTIONS` times are refused as degrees (:func:`degrees_as_radians`); ``one_revolution`` (a
+    closed profile): angles going on past one revolution are refused naming the lines to keep
+    (:func:`beyond_one_revolution`).
 
     The angle + deviation layout follows what ballbar and roundness software lists as its data (sample angle
     and radial deviation per point, e.g. the Renishaw Ballbar 20 "data" view and its text export); we found
@@ -88,6 +92,9 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         if au == "rad" and (why := degrees_as_radians(layout, res.idx[0], cols[res.idx[0]], angle_unit)):
             raise DataFileError(why)
         ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
+        if one_revolution and res.direction is None and (
+                why := beyond_one_revolution(layout, res.idx[0], ang, cols[res.idx[1]])):
+            raise DataFileError(why)
         if assumed and res.polar_value == "deviation":
             notes.append(_unit_assumed(layout, res.idx[1], cols[res.idx[1]]))
         if res.polar_value == "deviation":
@@ -171,14 +178,55 @@ def degrees_as_radians(layout: Layout, k: int, angles, angle_unit: str | None) -
             f"circular-test run turns about once): they look like degrees; {todo}")
 
 
+#: an angle within this of one revolution from the first point's (rad) is the first point's angle
+SAME_ANGLE_RAD = 1e-9
+
+
+def beyond_one_revolution(layout: Layout, k: int, angles_rad, values) -> str | None:
+    """The error line when the angles of a closed profile (column ``k``, in radians, in the file's order) go on past
+    one revolution from the first point: instruments record a little more than 360° to check closure (0 to 369.9°),
+    and the roundness evaluation refused that as 'two points lie at the same polar angle (point 3666) ... (drop a
+    repeated closing point)'. Names the file's lines beyond and the lines of the first revolution to keep; one point
+    at the first one's angle with another value is named as such. None when the angles do not run one way (the
+    evaluation decides), or the only point past is the first repeated (:func:`drop_closing_repeat` drops it)."""
+    a = np.unwrap(np.asarray(angles_rad, dtype=float))
+    if a.size < 4 or not np.isfinite(a).all():
+        return None
+    step = np.diff(a)
+    sign = 1.0 if step[0] > 0 else -1.0
+    if not (np.all(step * sign > 0)):
+        return None
+    swept = (a - a[0]) * sign
+    past = np.flatnonzero(swept >= 2 * np.pi - SAME_ANGLE_RAD)
+    v = np.asarray(values, dtype=float)
+    if not past.size or (past.size == 1 and past[0] == a.size - 1 and v[-1] == v[0]):
+        return None
+    from datasets.io.columns import _data_fields
+    lines = [n for n, _ in _data_fields(layout, [])]
+    where = "line" if len(lines) == a.size else "point"
+    if len(lines) != a.size:
+        lines = list(range(1, a.size + 1))
+    col = layout.header[k] if layout.header else f"column {k}"
+    first, keep = lines[0], lines[past[0] - 1]
+    if past.size == 1:
+        return (f"{layout.name} {where} {lines[past[0]]}: its angle ({col!r}) lies at the same polar angle as the first "
+                f"point's ({where} {first}), one revolution on, with another value; a closed profile has one point per "
+                f"angle: drop {where} {lines[past[0]]}")
+    return (f"{layout.name}: the profile covers {np.degrees(swept[-1]):.6g}°, more than one revolution ({past.size} "
+            f"points at or beyond 360° from the first, {where}s {lines[past[0]]}-{lines[past[-1]]}); a roundness profile "
+            f"is one revolution (ISO 12181-1): keep {where}s {first}-{keep}")
+
+
 def read_profile(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,
                  angle_unit: str | None = None, nominal_radius: float | None = None,
                  min_arc_deg: float | None = None) -> CircularRuns:
     """One closed profile (roundness, a fit) in any instrument layout (:func:`read_runs`); deviations without
     ``nominal_radius`` are evaluated alone. A file holding two runs is refused (one profile is needed).
-    ``min_arc_deg``: as :func:`read_runs` (a closed profile: 180)."""
+    ``min_arc_deg``: as :func:`read_runs` (a closed profile: 360, whose angles may not go on past one revolution,
+    :func:`beyond_one_revolution`)."""
     got = read_runs(path, columns=columns, plane=plane, unit=unit, skip_rows=skip_rows, angle_unit=angle_unit,
-                    nominal_radius=nominal_radius, need_nominal_radius=False, min_arc_deg=min_arc_deg)
+                    nominal_radius=nominal_radius, need_nominal_radius=False, min_arc_deg=min_arc_deg,
+                    one_revolution=min_arc_deg is not None and min_arc_deg >= 360.0)
     if len(got.runs) != 1:
         raise DataFileError(f"{got.source}: holds {len(got.runs)} runs ({', '.join(l for l, _ in got.runs)}); "
                             "give a file with one profile")

@@ -109,9 +109,11 @@ def order_by_angle(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     a = a[order]
     steps = np.diff(np.concatenate([a, [a[0] + 2 * np.pi]]))
     if np.min(steps) <= 1e-12:
-        i = order[int(np.argmin(steps))]
-        raise InvalidInputError(f"roundness: two points lie at the same polar angle (point {i}); a closed profile "
-                                "needs one point per angle (drop a repeated closing point)")
+        j = int(np.argmin(steps))
+        i, k = sorted((int(order[j]) + 1, int(order[(j + 1) % len(order)]) + 1))   # 1-based, in the input's order
+        raise InvalidInputError(f"roundness: two points lie at the same polar angle (points {i} and {k} in the "
+                                "order given); a closed profile needs one point per angle (drop a repeated closing "
+                                "point, or keep one revolution of a trace recorded over more)")
     return order, a
 
 

@@ -325,9 +325,10 @@ def grid_tasks(cfg: dict, where: str) -> list[dict]:
     return list(iter_grid_tasks(cfg, where))
 
 
-#: columns a generic row may have besides those of base_row: the engine's own and every column a family's result class
-#: declares (``methods.result_base.row_columns``)
-RESULT_COLUMNS = ("status", "message", "converged", "iterations", "nfev", *methods.result_base.row_columns(), "task_index")
+def result_columns() -> tuple[str, ...]:
+    """The columns a generic row may have besides those of base_row: the engine's own and every column a result class
+    declares (``methods.result_base.row_columns``), a plugin's loaded by now included."""
+    return ("status", "message", "converged", "iterations", "nfev", *methods.result_base.row_columns(), "task_index")
 
 
 def prepare(tasks: list[dict]) -> list[dict]:

@@ -74,7 +74,7 @@ def check_summary_by(cfg: dict, study, tasks: list[dict]) -> None:
     own = study.row_columns(cfg)
     if own is None:
         return  # its columns are known only after it ran: checked then (finish)
-    known = set(engine.RESULT_COLUMNS) | set(own)
+    known = set(engine.result_columns()) | set(own)
     for t in tasks[:10000]:
         known |= set(base_row(t))
     unknown = [c for c in by if c not in known]

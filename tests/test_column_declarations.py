@@ -40,7 +40,7 @@ def current_table() -> dict:
                            for name, col in ((n, columns[n]) for n in builtin_columns)},
         "truth_error_columns": [c for c in results.truth_error_columns() if c in builtin_columns],
         "summary_error_columns": [c for c in summary.ERROR_COLUMNS if c in builtin_columns],
-        "engine_result_columns": sorted(c for c in engine.RESULT_COLUMNS
+        "engine_result_columns": sorted(c for c in engine.result_columns()
                                         if c in builtin_columns or c not in columns),
         "verify_tolerances": {name: _tolerance(t) for name, t in sorted({**metrics.TOLERANCES,
                                                                          **studies.tolerances()}.items())

@@ -1129,3 +1129,24 @@ def test_a_file_data_set_with_x_y_z_columns_needs_its_plane(tmp_path):
     assert run.main([str(tmp_path / "plane.toml"), "--out", str(tmp_path / "o"), "--no-report", "--jobs", "1"]) == 0
     df = pd.read_csv(tmp_path / "o" / "plane" / "results.csv")
     assert df["status"].tolist() == ["ok"] and df["radius"][0] == pytest.approx(5.0, rel=1e-6)
+
+
+def test_summary_by_may_name_a_column_of_a_result_class_loaded_after_the_engine(tmp_path):
+    """The columns a row may have are read when a study is checked, not when the engine was imported: a plugin's
+    result class (plugins load on first use, after the engine) adds its columns, and ``summary_by`` may name them."""
+    from dataclasses import dataclass
+
+    from experiments import config as configs
+    from experiments.studies import study_of
+    from methods import results
+
+    @dataclass(kw_only=True)
+    class LateFit(results.CircleFit):
+        COLUMNS = (*results.CircleFit.COLUMNS, results.Column("late_class_lobes", "count", results.EXACT))
+
+    study = tmp_path / "late.toml"
+    study.write_text('name = "late"\ntitle = "t"\nseed = 1\nsummary_by = ["method", "late_class_lobes"]\n'
+                     '[[datasets]]\nsource = "circle"\nparams = { n = 10 }\n[[methods]]\nid = "circle.kasa"\n')
+    cfg = configs.load(str(study))
+    run.check_summary_by(cfg, study_of(cfg["kind"]), list(cfg.grid_tasks()))  # raised 'no row will have' before
+    assert "late_class_lobes" in engine.result_columns() and LateFit

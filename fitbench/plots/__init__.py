@@ -15,6 +15,12 @@ from pathlib import Path
 from methods.files import atomic_path
 
 
+def ring_label(value_um: float) -> str:
+    """A polar plot's ring: its radial deviation signed, and '0 µm' (no sign) for the nominal circle's ring."""
+    v = round(float(value_um), 9) + 0.0
+    return "0 µm" if v == 0 else f"{v:+g} µm"
+
+
 def pyplot():
     """matplotlib.pyplot on the non-interactive Agg backend."""
     import matplotlib

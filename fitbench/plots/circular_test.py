@@ -9,7 +9,7 @@ import textwrap
 
 import numpy as np
 
-from fitbench.plots import report_figure
+from fitbench.plots import report_figure, ring_label
 
 LABELS = {"squareness": "squareness", "scale_mismatch": "scale mismatch X-Y", "servo_mismatch": "servo mismatch X-Y",
           "backlash_x": "backlash X", "backlash_y": "backlash Y", "reversal_spike_x": "reversal spike X",
@@ -180,12 +180,6 @@ def _value_u(value: float, u: float, unit: str) -> str:
     return f"{v:+10.{d}f} +- {float(u):.{d}f}"
 
 
-def _ring_label(value_um: float) -> str:
-    """A ring's radial deviation: signed, and '0 µm' (no sign) for the nominal circle's ring."""
-    v = round(float(value_um), 9) + 0.0
-    return "0 µm" if v == 0 else f"{v:+g} µm"
-
-
 def _nice_division(span_um: float) -> float:
     """A 1-2-5 step (µm) so that the span covers about 4 divisions."""
     raw = max(span_um / 4.0, 1e-6)
@@ -327,7 +321,7 @@ def polar_plot(cw, ccw, ev, path, title: str = "", *, diagnostics=None, conditio
         ticks = np.arange(1, n_div + 1) * div
         ax.set_rticks(ticks)
         # ring labels on a white ground so that a trace passing under them does not hide them
-        ax.set_yticklabels([_ring_label(base + t) for t in ticks], fontsize=MIN_FONT_PT,
+        ax.set_yticklabels([ring_label(base + t) for t in ticks], fontsize=MIN_FONT_PT,
                            bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.8))
         ax.yaxis.set_zorder(4)                                 # the ring labels over the traces
         ax.set_rlim(0, outer)

@@ -7,7 +7,7 @@ import textwrap
 
 import numpy as np
 
-from fitbench.plots import report_figure, tight
+from fitbench.plots import report_figure, ring_label, tight
 from methods.roundness.filter import transmission
 
 #: the figure's size (inches) and its smallest font (pt): 8.5 pt is about 9.4 px high with the figure 800 px wide
@@ -51,7 +51,7 @@ def plot(res, path, title: str = "", *, save=None, into=None) -> None:
         ax.set_rticks(rings)
         # ring labels (µm about the raw LSCI radius) along the ray where the profile is innermost: there the
         # profile and the reference circles lie below the labelled rings instead of across them
-        ax.set_yticklabels([f"{v:+g} µm" for v in rings], fontsize=MIN_FONT_PT, color="0.3",
+        ax.set_yticklabels([ring_label(v) for v in rings], fontsize=MIN_FONT_PT, color="0.3",
                            bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
         ax.yaxis.set_zorder(4)                                 # the ring labels over the profile
         ray = float(np.degrees(theta[int(np.argmin(dev_um))])) % 360

@@ -186,3 +186,18 @@ def test_an_xy_trace_over_more_than_one_revolution_names_both_points(tmp_path):
     p.write_text("X [mm],Y [mm]\n" + "".join(f"{10 * np.cos(a):.6f},{10 * np.sin(a):.6f}\n" for a in t))
     twin = int(np.flatnonzero(deg == 360.0)[0]) + 1        # 360.0° is point 3601, at point 1's angle
     one_error_line(cli("roundness", p), f"(points 1 and {twin} in the order given)", "keep one revolution")
+
+
+def test_an_overlap_whose_angles_do_not_repeat_is_refused_too(tmp_path):
+    """A time-sampled trace (steps of 0.10003°: no angle of the overlap repeats one of the first revolution) was
+    evaluated as one profile, exit 0; gradians labelled degrees (0 .. 399.9) likewise, RONt 3.93 of a 4.08 µm part."""
+    deg = np.arange(3719) * 0.10003
+    dev = 2.0 * np.cos(np.radians(3 * deg)) + 0.8 * deg / deg[-1]
+    past = np.flatnonzero(deg >= 360.0)
+    p = polar_file(tmp_path / "timed.csv", deg, dev, header="Angle [deg],Deviation [um]")
+    one_error_line(cli("roundness", p), f"covers {deg[-1]:.6g}°", f"({past.size} points at or beyond 360°",
+                   f"keep lines 2-{past[0] + 1}")
+    assert "gon" not in cli("roundness", p).stderr
+    gon = np.arange(4000) * 0.1
+    q = polar_file(tmp_path / "gon.csv", gon, 2.0 * np.cos(np.radians(3 * 0.9 * gon)), header="Angle [deg],Deviation [um]")
+    one_error_line(cli("roundness", q), "covers 399.9°", "in gon (400 a revolution), multiply the column by 0.9")

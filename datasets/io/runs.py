@@ -212,9 +212,12 @@ def beyond_one_revolution(layout: Layout, k: int, angles_rad, values) -> str | N
         return (f"{layout.name} {where} {lines[past[0]]}: its angle ({col!r}) lies at the same polar angle as the first "
                 f"point's ({where} {first}), one revolution on, with another value; a closed profile has one point per "
                 f"angle: drop {where} {lines[past[0]]}")
-    return (f"{layout.name}: the profile covers {np.degrees(swept[-1]):.6g}°, more than one revolution ({past.size} "
+    covered, step = float(np.degrees(swept[-1])), float(np.degrees(np.median(np.abs(step))))
+    gon = ("; if the angles are in gon (400 a revolution), multiply the column by 0.9 and name its unit deg"
+           if 400 - 3 * step <= covered < 400 + step else "")
+    return (f"{layout.name}: the profile covers {covered:.6g}°, more than one revolution ({past.size} "
             f"points at or beyond 360° from the first, {where}s {lines[past[0]]}-{lines[past[-1]]}); a roundness profile "
-            f"is one revolution (ISO 12181-1): keep {where}s {first}-{keep}")
+            f"is one revolution (ISO 12181-1): keep {where}s {first}-{keep}{gon}")
 
 
 def read_profile(path, *, columns=None, plane=None, unit: str | None = None, skip_rows: int = 0,

@@ -10,6 +10,8 @@ This module imports nothing of fitbench, so any registry can use it without an i
 """
 from __future__ import annotations
 
+import signal
+import threading
 import warnings
 from contextlib import contextmanager
 from importlib import metadata
@@ -59,9 +61,69 @@ def own_entries():
 
 
 def _one_line(exc: BaseException) -> str:
-    """``Type: first line of the message`` (an exception's message may span lines; a warning must not)."""
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+    """``Type: first line of the message`` (an exception's message may span lines; a warning must not); a plugin's
+    exception whose message cannot be printed is named by its type alone."""
+    name = getattr(type(exc), "__name__", None)
+    name = name if isinstance(name, str) else "an exception"
+    try:
+        text = str(exc)
+        text = text.strip().splitlines() if isinstance(text, str) else []
+    except Exception:  # the plugin's own __str__
+        text = []
+    return f"{name}: {text[0]}" if text else name
+
+
+class _ProcessSignals:
+    """While plugins load (main thread): every Python signal handler is wrapped so that what it raises is known to be
+    the process's (the user's Ctrl-C, a SIGTERM, a row's time limit), not the plugin's. A plugin's import that raises
+    a ``BaseException`` of its own (``sys.exit()``, ``KeyboardInterrupt``, ``GeneratorExit``) is a failed plugin; one
+    raised by a handler, or by the plugin while handling it, is raised again (Ctrl-C stops the process as usual)."""
+
+    def __init__(self):
+        self.raised: list[BaseException] = []
+        self.wrapped: dict = {}
+
+    def __enter__(self):
+        if threading.current_thread() is not threading.main_thread():
+            return self   # Python runs signal handlers in the main thread only: nothing raised here is a signal's
+        for sig in signal.valid_signals():
+            try:
+                handler = signal.getsignal(sig)
+            except (OSError, ValueError):
+                continue
+            if callable(handler):
+                wrapper = self._wrap(handler)
+                try:
+                    signal.signal(sig, wrapper)
+                except (OSError, ValueError, RuntimeError):
+                    continue
+                self.wrapped[sig] = (handler, wrapper)
+        return self
+
+    def _wrap(self, handler):
+        def on_signal(signum, frame):
+            try:
+                return handler(signum, frame)
+            except BaseException as exc:
+                self.raised.append(exc)
+                raise
+        return on_signal
+
+    def __exit__(self, *exc_info):
+        for sig, (handler, wrapper) in self.wrapped.items():
+            if signal.getsignal(sig) is wrapper:   # a plugin that installed its own handler keeps it
+                signal.signal(sig, handler)
+        return False
+
+    def caused(self, exc: BaseException | None) -> BaseException | None:
+        """The exception a signal handler raised that ``exc`` is (or was raised while handling), else None."""
+        seen = set()
+        while exc is not None and id(exc) not in seen:
+            seen.add(id(exc))
+            if any(exc is r for r in self.raised):
+                return exc
+            exc = exc.__cause__ or exc.__context__
+        return None
 
 
 def load_entry_points(group: str, what: str, before=None) -> None:
@@ -84,28 +146,47 @@ def load_entry_points(group: str, what: str, before=None) -> None:
         except BaseException:
             _loaded_groups.discard(group)
             raise
-    for ep in entry_points:
-        mark = len(_JOURNAL)
-        dist = getattr(ep, "dist", None)
-        try:
-            ep.load()
-        except Exception as exc:  # a third-party bug must not take the built-ins down
-            while len(_JOURNAL) > mark:
-                registry, key, previous = _JOURNAL.pop()
-                if previous is _MISSING:
-                    registry.pop(key, None)
-                else:
-                    registry[key] = previous
-            origin = f"distribution {dist.name} {dist.version}" if dist is not None else "an unknown distribution"
-            warnings.warn(f"{what} plugin {ep.name!r} (entry point {ep.value!r} of group {group!r}, "
-                          f"{origin}) failed to load and is skipped: {_one_line(exc)}; fix or uninstall that "
-                          f"distribution", PluginLoadWarning, stacklevel=3)
-            continue
-        if dist is not None:
-            for registry, key, _ in _JOURNAL[mark:]:
-                module = getattr(registry.get(key), "module", None)
-                if module:
-                    _MODULE_DIST[module] = (dist.name, dist.version)
+    with _ProcessSignals() as signals:
+        for ep in entry_points:
+            _load_one(ep, group, what, signals)
+
+
+def _load_one(ep, group: str, what: str, signals: _ProcessSignals) -> None:
+    """Import one entry point; whatever it raises (an ``Exception`` or any other ``BaseException``: a plugin's
+    ``sys.exit()`` at import must not end the process with the plugin's status) takes out what it registered, with
+    one warning line. An interrupt a signal handler raised (the user's Ctrl-C) is raised again."""
+    mark = len(_JOURNAL)
+    dist = getattr(ep, "dist", None)
+    try:
+        ep.load()
+    except BaseException as exc:  # a third-party bug must not take the built-ins, or the process, down
+        _undo(mark)
+        own = signals.caused(exc)
+        if own is not None:   # the user's Ctrl-C (or what the plugin made of it): the process stops as usual
+            raise own
+        origin = f"distribution {dist.name} {dist.version}" if dist is not None else "an unknown distribution"
+        warnings.warn(f"{what} plugin {ep.name!r} (entry point {ep.value!r} of group {group!r}, "
+                      f"{origin}) failed to load and is skipped: {_one_line(exc)}; fix or uninstall that "
+                      f"distribution", PluginLoadWarning, stacklevel=4)
+        return
+    if signals.raised:   # the plugin swallowed the user's interrupt: it still stops the process
+        _undo(mark)
+        raise signals.raised[0]
+    if dist is not None:
+        for registry, key, _ in _JOURNAL[mark:]:
+            module = getattr(registry.get(key), "module", None)
+            if module:
+                _MODULE_DIST[module] = (dist.name, dist.version)
+
+
+def _undo(mark: int) -> None:
+    """Take out every registry entry added since the journal held ``mark`` entries."""
+    while len(_JOURNAL) > mark:
+        registry, key, previous = _JOURNAL.pop()
+        if previous is _MISSING:
+            registry.pop(key, None)
+        else:
+            registry[key] = previous
 
 
 def distributions_of(modules) -> dict[str, str]:

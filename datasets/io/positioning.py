@@ -21,7 +21,8 @@ from methods.units import canonical
 
 
 TARGET_NAMES = ("target", "position", "target position", "target [mm]", "target (mm)", "target position (mm)",
-                "target position [mm]", "position [mm]", "position (mm)", "nominal", "soll", "sollposition")
+                "target position [mm]", "position [mm]", "position (mm)", "nominal", "nominal position", "commanded",
+                "commanded position", "soll", "sollposition", "ziel", "zielposition")
 #: other names of the long table's columns in real exports (matched like every header name, :func:`parse_name`:
 #: case, spaces and the unit ignored): ``Actual position [mm]``, ``Error (µm)`` (laser software's word), ``Dir``
 ROLE_NAMES = {"actual": ("actual", "actual position", "measured position", "measured", "ist", "istposition"),
@@ -403,6 +404,51 @@ def _trailing_separators(df, lines, path):
     return df
 
 
+def _target_names() -> str:
+    """The names read as the target column, for a message (``Target, Position, Nominal, ...``)."""
+    seen = {}
+    for n in TARGET_NAMES:
+        name = re.sub(r"\s*[(\[].*$", "", n).strip()
+        seen.setdefault(parse_name(name)[0], name[:1].upper() + name[1:])
+    return ", ".join(seen.values())
+
+
+def _no_target(path, names: list[str], roles: dict, wide: bool) -> str:
+    """The refusal of a table without a target column, in the terms of its layout: a wide export (a column per run,
+    no run column) names its first column; a long table its own columns."""
+    runs = [n for k, n in enumerate(names) if k not in roles and RUN_COLUMN.match(n)]
+    if wide or ("run" not in roles.values() and runs):
+        first = next((n for k, n in enumerate(names) if k not in roles and not RUN_COLUMN.match(n)), None)
+        which = (f"its first column {first!r} is not a name fitbench reads as the target ({_target_names()})"
+                 if first is not None else f"the columns are all run columns ({runs[0]!r}, ...)")
+        how = (f"rename it 'Target (mm)' or give --column \"target={first}\"" if first is not None else
+               "add the target column first, named 'Target (mm)'")
+        return f"{path}: no target column in this wide export (the targets, then one column per run): {which}; {how}"
+    return (f"{path}: no target column (a long table has target, direction, run, and actual or deviation; the target "
+            f"column is read under the names {_target_names()}): rename it, or give --column target=NAME")
+
+
+def _target_jitter(targets: np.ndarray, unit: str) -> str | None:
+    """'the targets 0, -0.001, 0.001 mm lie within 0.002 mm of each other' when distinct target values lie closer
+    together than 0.1 % of the travel (no ISO 230-2 test spaces its targets so: a machine readout's last digit
+    written as the target), else None."""
+    values = np.unique(targets[np.isfinite(targets)])
+    if values.size < 3:
+        return None
+    travel = float(values[-1] - values[0])
+    close = np.flatnonzero(np.diff(values) < 1e-3 * travel)
+    if not close.size:
+        return None
+    k = int(close[0])
+    group = [values[k]]
+    while k < values.size - 1 and values[k + 1] - values[k] < 1e-3 * travel:
+        group.append(values[k + 1])
+        k += 1
+    spread = group[-1] - group[0]
+    shown = ", ".join(f"{v + 0.0:g}" for v in group[:4]) + (", ..." if len(group) > 4 else "")
+    return f"the targets {shown} {canonical(unit)} lie within {spread:.3g} {canonical(unit)} of each other"
+
+
 def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_directions=None, columns=None):
     from methods.positioning import from_frame
 
@@ -443,20 +489,31 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
     given = True
     if wide is not None:
         df, lines, given = wide
-    elif {"actual", "deviation"} <= set(roles.values()) and "actual" not in (columns or {}):
-        k = {r: j for j, r in roles.items()}
-        column_notes.append(f"the deviations read from column {names[k['deviation']]!r}; the column "
-                            f"{names[k['actual']]!r} (actual positions) not read (--column actual=... reads it instead)")
     elif run_directions is not None:
         raise DataFileError(f"{path}: --run-directions is for a wide export whose run columns name no direction; "
                             "this is a long table with a direction column: drop the option")
+    if wide is None and {"actual", "deviation"} <= set(roles.values()) and "actual" not in (columns or {}):
+        k = {r: j for j, r in roles.items()}
+        column_notes.append(f"the deviations read from column {names[k['deviation']]!r}; the column "
+                            f"{names[k['actual']]!r} (actual positions) not read (--column actual=... reads it instead)")
     for note in column_notes:
         warnings.warn(ColumnNote(note), stacklevel=3)
     cols = {str(c).lower().strip(): c for c in df.columns}
     for key in ("target", "run", "deviation", "actual"):
         if key in cols:
             df[cols[key]] = _numeric_column(df[cols[key]], key, path, lines)
-    data = from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit, direction_given=given)
+    if "target" not in cols:
+        raise DataFileError(_no_target(path, names, roles, wide is not None))
+    try:
+        data = from_frame(df, str(path), lines=lines, unit=unit, deviation_unit=deviation_unit, direction_given=given)
+    except InvalidInputError as exc:
+        jitter = _target_jitter(df[cols["target"]].to_numpy(dtype=float), unit)
+        if jitter is None:
+            raise
+        reason = str(exc)[len(f"{path}: "):] if str(exc).startswith(f"{path}: ") else str(exc)
+        raise DataFileError(f"{path}: {jitter} and are read as different targets ({reason}); if they are one target "
+                            "with the machine's readout jitter, round the target column to the targets commanded"
+                            ) from None
     # deviations from actual positions are in the positions' unit; a deviation column's unit is stated or not
     stated = stated if "deviation" in cols else unit
     return (data, unit, stated) if with_units else data

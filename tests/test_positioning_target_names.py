@@ -1,0 +1,84 @@
+"""The target column of a positioning table under other names, and the refusals when it is not found or its
+values jitter. Before: a wide export whose first column is 'Nominal position (mm)', 'Commanded (mm)' or 'Ziel [mm]'
+was refused with the long table's columns ('missing column 'target' (need target, direction, run, and actual or
+deviation)'), which a wide export does not have, without saying which names are read; a long table whose targets
+carry the readout's last digit (0.000 / -0.001 / 0.001) was refused as 'target -0.001 has 0 run(s) in the up
+direction'. Figures checked against ISO 230-2's definitions computed here (k = 2)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from cli_calls import cli, one_error_line
+
+TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7])
+
+
+def runs(seed=6):
+    """{'+': (targets, runs), '-': ...} in µm to 3 decimals, as written."""
+    rng = np.random.default_rng(seed)
+    return {d: np.round((8 * TARGETS / 1000 + b)[:, None] + rng.normal(0, 0.6, (len(TARGETS), 3)), 3)
+            for d, b in (("+", -1.8), ("-", 1.8))}
+
+
+def iso_a_um(dev) -> float:
+    """ISO 230-2 bidirectional accuracy A (k = 2): max(mean + 2 s) - min(mean - 2 s), s with n - 1."""
+    hi = max(float(np.max(v.mean(axis=1) + 2 * v.std(axis=1, ddof=1))) for v in dev.values())
+    lo = min(float(np.min(v.mean(axis=1) - 2 * v.std(axis=1, ddof=1))) for v in dev.values())
+    return hi - lo
+
+
+def wide(path, first, dev):
+    head = ";".join([first] + [f"Run {r} {d} (µm)" for r in (1, 2, 3) for d in "+-"])
+    rows = [";".join([f"{t:.4f}"] + [f"{dev[d][i, r]:.3f}" for r in range(3) for d in "+-"])
+            for i, t in enumerate(TARGETS)]
+    path.write_text(head + "\n" + "\n".join(rows) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("first", ["Nominal position (mm)", "Commanded (mm)", "Ziel [mm]"])
+def test_other_names_of_the_target_column_are_read(tmp_path, first):
+    dev = runs()
+    out = cli("positioning", wide(tmp_path / "w.csv", first, dev), "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9)
+
+
+def test_a_wide_export_without_a_target_name_is_told_so_in_its_terms(tmp_path):
+    dev = runs()
+    path = wide(tmp_path / "p.csv", "Point", dev)
+    out = cli("positioning", path)
+    one_error_line(out, "no target column in this wide export", "'Point' is not a name fitbench reads as the target",
+                   "Nominal", "Soll", "rename it 'Target (mm)'", '--column "target=Point"')
+    assert "need target, direction, run" not in out.stderr
+    chosen = cli("positioning", path, "--column", "target=Point", "--json")
+    assert chosen.returncode == 0, chosen.stderr
+    got = json.loads(chosen.stdout)
+    assert got["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9)
+    assert "the target positions read from column 0 'Point', as --column target=Point says" in got["notes"]
+
+
+def test_a_long_table_without_a_target_name_lists_the_names(tmp_path):
+    path = tmp_path / "l.csv"
+    path.write_text("Point,Direction,Run,Deviation (um)\n" + "".join(
+        f"{t},{d},{r},{0.1 * r}\n" for t in (0, 100, 200) for d in "+-" for r in (1, 2)))
+    one_error_line(cli("positioning", path), "no target column", "Target, Position", "--column target=NAME")
+
+
+def test_targets_with_readout_jitter_are_said_to_be_read_as_different_targets(tmp_path):
+    dev = runs()
+    jitter = np.random.default_rng(1).choice([-0.001, 0.0, 0.001], size=(len(TARGETS), 3, 2))
+    path = tmp_path / "j.csv"
+    path.write_text("Target [mm],Direction,Run,Deviation [um]\n" + "".join(
+        f"{t + jitter[i, r, k]:.3f},{d},{r + 1},{dev[d][i, r]:.3f}\n"
+        for k, d in enumerate("+-") for r in range(3) for i, t in enumerate(TARGETS)))
+    one_error_line(cli("positioning", path), "lie within 0.002 mm of each other", "read as different targets",
+                   "round the target column")
+    rounded = tmp_path / "r.csv"
+    rounded.write_text("Target [mm],Direction,Run,Deviation [um]\n" + "".join(
+        f"{t:.1f},{d},{r + 1},{dev[d][i, r]:.3f}\n" for d in "+-" for r in range(3) for i, t in enumerate(TARGETS)))
+    out = cli("positioning", rounded, "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9)

@@ -18,7 +18,7 @@ from datasets.io.layout import Layout, skip_rows_hint
 from datasets.io.numbers import (_COMMA_GROUPED, _COMMA_NUMBER, DataFileError, NumberFormatError, _AsciiMinus,
                                  _field_number, _is_number, _number, decimal_marks, number_problem)
 from datasets.io.textfile import (_open_text, check_line_lengths, file_encoding, read_lines, refuse_cut_last_line,
-                                  unterminated_last_line)
+                                  text_end, unterminated_last_line)
 
 
 def _diagnose(layout: Layout, idx, skip_rows: int):
@@ -108,13 +108,14 @@ def read_columns(layout: Layout, idx: list[int], *, skip_rows: int = 0, strings:
         return small
     check_line_lengths(layout.name, layout.skip_rows)
     dtype = {k: (object if k in strings else np.float64) for k in usecols}
+    dos_eof = text_end(layout.name) is not None
 
     def parse(usecols=usecols, *, decimal="," if layout.decimal_comma else ".", thousands=None, minus=False):
         """The columns ``usecols`` by pandas' C parser (``minus``: from a stream writing U+2212 as '-')."""
         try:
             with contextlib.ExitStack() as stack:
                 source = (_AsciiMinus(stack.enter_context(_open_text(layout.name, skip_rows=layout.skip_rows)))
-                          if minus else layout.name)
+                          if minus or dos_eof else layout.name)   # the text before a DOS end-of-file mark
                 frame = pd.read_csv(source, sep=r"\s+" if layout.sep is None else layout.sep, header=None,
                                     skiprows=layout.first_data_line - 1, dtype={k: dtype[k] for k in usecols},
                                     usecols=None if len(usecols) == layout.ncol else usecols, decimal=decimal,

@@ -11,6 +11,7 @@ number is refused (:func:`unterminated_last_line`, :func:`refuse_cut_last_line`)
 from __future__ import annotations
 
 import codecs
+import io
 import os
 import re
 import warnings
@@ -238,14 +239,63 @@ def markup(path, skip_rows: int = 0) -> str | None:
             "line, columns named in a header)")
 
 
+#: the DOS end-of-file mark (Ctrl-Z) that old instrument PCs write after a file's last line: ignored there
+DOS_EOF = b"\x1a"
+
+
+def text_end(path) -> int | None:
+    """The size in bytes of ``path`` without the DOS end-of-file marks (:data:`DOS_EOF`) at its very end, or None
+    when it ends without one (or is UTF-16/32 text, or cannot be read). A Ctrl-Z anywhere else is data (refused as
+    such by the readers)."""
+    name = os.fspath(path)
+    if file_encoding(name) in CODE_UNIT_BYTES:
+        return None
+    try:
+        with open_regular(name, encoding=None) as fh:
+            size = fh.seek(0, os.SEEK_END)
+            fh.seek(max(size - 64, 0))
+            tail = fh.read()
+    except (OSError, InvalidInputError):
+        return None
+    k = len(tail) - len(tail.rstrip(DOS_EOF))
+    return size - k if k else None
+
+
+class _UpTo(io.RawIOBase):
+    """A binary file read up to ``end`` bytes (its text before a DOS end-of-file mark)."""
+
+    def __init__(self, raw, end: int):
+        super().__init__()
+        self._raw, self._left = raw, end
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, b) -> int:
+        n = min(len(b), self._left)
+        if n <= 0:
+            return 0
+        got = self._raw.readinto(memoryview(b)[:n]) or 0
+        self._left -= got
+        return got
+
+    def close(self) -> None:
+        self._raw.close()
+        super().close()
+
+
 def _open_text(path, missing_hint: str = "give a path or a data set name from 'datasets.list()'", skip_rows: int = 0):
     """``path`` opened as text in its encoding (:func:`file_encoding`: UTF-8 with or without BOM, UTF-16 with
     BOM, else Windows-1252), refusing a FIFO or a device, a spreadsheet, an archive or a PDF, or XML or JSON below
-    the ``skip_rows`` lines --skip-rows skips (:func:`not_text`); errors are one line."""
+    the ``skip_rows`` lines --skip-rows skips (:func:`not_text`); errors are one line. A DOS end-of-file mark
+    (Ctrl-Z) at the file's end is not read (:func:`text_end`)."""
     name = os.fspath(path)
     if (why := not_text(name, skip_rows)) is not None:
         raise DataFileError(why)
     try:
+        if (end := text_end(name)) is not None:
+            raw = open_regular(name, encoding=None)
+            return io.TextIOWrapper(io.BufferedReader(_UpTo(raw, end)), encoding=file_encoding(name))
         return open_regular(name, encoding=file_encoding(name))
     except FileNotFoundError:
         raise DataFileError(f"{name}: no such file{f' ({missing_hint})' if missing_hint else ''}") from None
@@ -330,13 +380,14 @@ def unterminated_last_line(path, skip_rows: int = 0) -> tuple[int, str] | None:
         return None if last is None or last[1].endswith(("\n", "\r")) else (last[0], last[1])
     lf = cr = 0
     tail = b""
+    end = text_end(name)   # before a DOS end-of-file mark
     with open_regular(name, encoding=None) as fh:
-        size = fh.seek(0, os.SEEK_END)
+        size = fh.seek(0, os.SEEK_END) if end is None else end
         fh.seek(max(size - 1, 0))
-        if fh.read(1) in (b"", b"\n", b"\r"):
+        if size == 0 or fh.read(1) in (b"", b"\n", b"\r"):
             return None                          # the usual case: ends with a line end, no pass over the file
         fh.seek(0)
-        while block := fh.read(1 << 22):
+        while fh.tell() < size and (block := fh.read(min(1 << 22, size - fh.tell()))):
             lf += block.count(b"\n")
             cr += block.count(b"\r")
             tail = (tail + block)[-(4 * MAX_LINE_CHARS):]

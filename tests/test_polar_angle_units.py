@@ -201,3 +201,35 @@ def test_an_overlap_whose_angles_do_not_repeat_is_refused_too(tmp_path):
     gon = np.arange(4000) * 0.1
     q = polar_file(tmp_path / "gon.csv", gon, 2.0 * np.cos(np.radians(3 * 0.9 * gon)), header="Angle [deg],Deviation [um]")
     one_error_line(cli("roundness", q), "covers 399.9°", "in gon (400 a revolution), multiply the column by 0.9")
+
+
+def circle_lines(radius, n=360, phase=0.0):
+    t = np.radians(np.arange(n) * 360.0 / n + phase)
+    r = radius + 0.0015 * np.cos(3 * t)
+    return [f"{x:.7f},{y:.7f}" for x, y in zip(r * np.cos(t), r * np.sin(t))]
+
+
+def test_two_profiles_separated_by_a_blank_line_are_refused(tmp_path):
+    """Two diameters exported one after the other (R 10.000 and 10.020 mm, a blank line between): were read as one
+    profile, RONt 3.01 µm 'ok'. The blocks are named by their lines (header on line 1, the blank on line 362)."""
+    a, b = circle_lines(10.0), circle_lines(10.02, phase=0.5)
+    p = tmp_path / "two.csv"
+    p.write_text("X [mm],Y [mm]\n" + "\n".join(a) + "\n\n" + "\n".join(b) + "\n")
+    for args in (("roundness", p), ("fit", "circle.minimum_zone", p)):
+        one_error_line(cli(*args), f"two.csv: 2 blocks of points separated by blank lines (lines 2-{len(a) + 1}, "
+                                   f"{len(a) + 3}-{len(a) + len(b) + 2})", "save each block in its own file")
+    one = tmp_path / "one.csv"                               # blank lines before the data and at the end: one block
+    one.write_text("X [mm],Y [mm]\n\n" + "\n".join(a) + "\n\n\n")
+    code, out, err = cli("roundness", one)
+    assert code == 0 and "RONt" in out, err
+
+
+def test_a_blank_line_between_labelled_runs_is_read(tmp_path):
+    """A ballbar export's two runs, labelled in a Direction column, separated by a blank line: read as before."""
+    deg = np.arange(0, 360, 0.5)
+    cw = [f"CW,{a:.3f},{3 * np.cos(np.radians(2 * a)):.4f}" for a in deg[::-1]]
+    ccw = [f"CCW,{a:.3f},{3 * np.cos(np.radians(2 * a)):.4f}" for a in deg]
+    p = tmp_path / "bb.csv"
+    p.write_text("Direction,Angle [deg],Deviation [um]\n" + "\n".join(cw) + "\n\n" + "\n".join(ccw) + "\n")
+    code, out, err = cli("circular-test", p, "--nominal-radius", 150)
+    assert code == 0 and "G  CW / CCW" in out, err

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 
 import numpy as np
 
@@ -17,8 +18,8 @@ from datasets.io.delimiters import COMMENT_PREFIXES, _split
 from datasets.io.layout import Layout, skip_rows_hint
 from datasets.io.numbers import (_COMMA_GROUPED, _COMMA_NUMBER, DataFileError, NumberFormatError, _AsciiMinus,
                                  _field_number, _is_number, _number, decimal_marks, number_problem)
-from datasets.io.textfile import (_open_text, check_line_lengths, file_encoding, read_lines, refuse_cut_last_line,
-                                  text_end, unterminated_last_line)
+from datasets.io.textfile import (_open_text, check_line_lengths, file_encoding, iter_lines, read_lines,
+                                  refuse_cut_last_line, text_end, unterminated_last_line)
 
 
 def _diagnose(layout: Layout, idx, skip_rows: int):
@@ -188,6 +189,51 @@ def _data_fields(layout: Layout, columns) -> list:
         if len(toks) == layout.ncol:
             out.append((lineno, [toks[k] for k in columns]))
     return out
+
+
+def data_blocks(layout: Layout) -> list[tuple[int, int]]:
+    """(first, last) line of each block of data lines of ``layout``'s file, blocks being separated by blank lines
+    (comment lines neither end nor start one): CMM and form-tester exports list several features one after another
+    that way. A file without a blank line between two lines is one block, found by a regular-expression scan of 4 Mi
+    character blocks; else one pass over the lines, nothing kept but the blocks."""
+    if not _has_blank_line(layout.name, layout.skip_rows):
+        return [(layout.first_data_line, -1)]
+    blocks, start, last, blank = [], None, None, False
+    with _open_text(layout.name, skip_rows=layout.skip_rows) as fh:
+        for lineno, raw in iter_lines(fh, layout.name):
+            if lineno < layout.first_data_line:
+                continue
+            ln = raw.strip()
+            if not ln:
+                blank = start is not None
+                continue
+            if ln.startswith(COMMENT_PREFIXES) or ln.startswith(layout.comment):
+                continue
+            if blank:
+                blocks.append((start, last))
+                start, blank = None, False
+            if start is None:
+                start = lineno
+            last = lineno
+    if start is not None:
+        blocks.append((start, last))
+    return blocks
+
+
+_BLANK_LINE = re.compile(r"\n[ \t\r\f\v]*\n\s*\S")
+
+
+def _has_blank_line(path, skip_rows: int = 0) -> bool:
+    """Whether the text of ``path`` holds a blank line followed by more text (read in blocks of 4 Mi characters)."""
+    tail = ""
+    with _open_text(path, skip_rows=skip_rows) as fh:
+        while block := fh.read(1 << 22):
+            text = tail + block
+            if _BLANK_LINE.search(text):
+                return True
+            cut = text.rfind("\n", 0, max(text.rfind("\n"), 0))   # from the last line but one: across the boundary
+            tail = text[cut:] if cut >= 0 else text
+    return False
 
 
 def _holds_unicode_minus(path, skip_rows: int = 0) -> bool:

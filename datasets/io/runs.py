@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from datasets.io._pandas import pd
-from datasets.io.columns import read_columns
+from datasets.io.columns import data_blocks, read_columns
 from datasets.io.headers import column_unit, length_unit
 from datasets.io.layout import Layout, sniff
 from datasets.io.numbers import DataFileError
@@ -110,6 +110,8 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
             pts *= f
         if (dev := read_offsets(layout, res, cols)) is not None:
             pts += dev
+    if res.direction is None and len(blocks := data_blocks(layout)) > 1:
+        raise DataFileError(two_blocks(layout, blocks))
     axes = _axes(layout, res, plane)
     if res.kind == "polar" and plane is not None:
         notes.append(f"angle + radial deviation in the {''.join(axes).upper()} plane (--plane {plane.lower()}): the "
@@ -176,6 +178,16 @@ def degrees_as_radians(layout: Layout, k: int, angles, angle_unit: str | None) -
             f"correct the header of {col!r} to [deg]")
     return (f"{layout.name}: the angles of {col!r} span {span:.6g} rad ({turns:.3g} revolutions; a profile or a "
             f"circular-test run turns about once): they look like degrees; {todo}")
+
+
+def two_blocks(layout: Layout, blocks: list) -> str:
+    """The error line of a file of one profile (or run) holding ``blocks`` of data lines separated by blank lines: two
+    diameters or heights of a part exported one after the other were read as one profile (RONt 3.01 µm 'ok' for two
+    circles 20 µm apart in radius: the 50-UPR filter removed the zigzag between them)."""
+    shown = ", ".join(f"{a}-{b}" for a, b in blocks[:4]) + (", ..." if len(blocks) > 4 else "")
+    return (f"{layout.name}: {len(blocks)} blocks of points separated by blank lines (lines {shown}): one profile per "
+            "file (a part's diameters or heights one after the other?); save each block in its own file (a circular "
+            "test's two runs: or label them in a Direction column)")
 
 
 #: an angle within this of one revolution from the first point's (rad) is the first point's angle

@@ -125,16 +125,44 @@ ARC = np.column_stack([5 + 20 * np.cos(np.radians(np.linspace(10, 100, 30))),
 def test_every_built_in_result_passes(spec, data):
     """What lets methods.fit skip the gate for built-in methods: every point-fitting built-in keeps its
     family's contract on a full circle and a short arc (the engine gates every benchmark row besides); roundness
-    (ISO 12181, defined on the closed profile) refuses the arc as bad input instead of returning a result."""
+    (ISO 12181, defined on the closed profile) refuses the arc as bad input instead of returning a result. A plugin
+    method named in FITBENCH_TEST_METHODS (docs/plugins.md) is held to the same gate (it is not one of the built-ins
+    methods.fit trusts: the gate checks it there too)."""
     base = CIRCLE if data == "circle" else ARC
     pts = base + np.random.default_rng(1).normal(scale=1e-3, size=base.shape)
-    assert spec.id in methods._registry.BUILTIN_IDS
-    if spec.family == "roundness" and data == "arc":
+    assert spec.builtin == (spec.id in methods._registry.BUILTIN_IDS)
+    if spec.family == "roundness" and data == "arc" and spec.builtin:
         with pytest.raises(methods.InvalidInputError, match="the profile is open"):
             methods.get(spec.id).unchecked(pts)
         return
     res = methods.get(spec.id).unchecked(pts)
-    assert methods.check_result(res, pts) is None
+    problem = methods.check_result(res, pts)
+    assert problem is None, problem
+
+
+def test_a_plugin_named_for_the_method_tests_is_checked_by_the_gate():
+    """docs/plugins.md's command for testing a plugin method runs the test above on it: an honest plugin passes
+    (it failed, on the built-in assertion, whatever the method), a plugin whose result lies fails on the gate's
+    reason."""
+    def centroid(points, lie=False):
+        c = points.mean(axis=0)
+        res = results.circle_result(points, c, float(np.hypot(*(points - c).T).mean()), converged=True, message="ok")
+        if lie:
+            res.residuals = np.zeros(len(points))
+        return res
+
+    methods.list_methods()
+    for name, lie in (("circle.test_gate_named_honest", False), ("circle.test_gate_named_liar", True)):
+        methods.register(name, kind="closed form", summary="centroid", reference="gate test")(
+            lambda points, lie=lie: centroid(points, lie))
+    try:
+        for data in ("circle", "arc"):
+            test_every_built_in_result_passes(methods.get("circle.test_gate_named_honest"), data)
+            with pytest.raises(AssertionError, match="residuals are not the radial distances"):
+                test_every_built_in_result_passes(methods.get("circle.test_gate_named_liar"), data)
+    finally:
+        _REGISTRY.pop("circle.test_gate_named_honest", None)
+        _REGISTRY.pop("circle.test_gate_named_liar", None)
 
 
 def test_a_method_cannot_change_the_callers_array():

@@ -409,6 +409,25 @@ def flat_points(points, axes=("x", "y")) -> str | None:
             "is in another plane (give --plane or --columns)")
 
 
+def _polar_value(args) -> str | None:
+    """'deviation' or 'radius': what the second column of the angle file ``args.file`` holds
+    (:func:`datasets.io.resolve`)."""
+    from datasets.io import resolve, sniff
+    return resolve(sniff(args.file, args.skip_rows), tuple(args.columns) if args.columns else None,
+                   args.plane).polar_value
+
+
+def nominal_radius_problem(nominal_mm: float, limit_mm: float) -> str:
+    """The warning on a ``--nominal-radius`` no roundness part (or profile) has, the radius likely typed in µm (as
+    ``circular-test`` says of its own, :func:`methods.circular_test.evaluation.nominal_mismatch`)."""
+    from methods.units import likely_unit, mm_per
+    what = "a roundness part" if limit_mm == ROUNDNESS_LIMIT_MM else "a profile"
+    guess = likely_unit(nominal_mm, 25.0)
+    hint = (f"is it in {guess}? give --nominal-radius {nominal_mm * mm_per(guess):.6g} (or "
+            f"{nominal_mm:g}{guess.replace('µ', 'u')})" if guess and guess != "m" else "check its unit (a bare number is mm)")
+    return (f"--nominal-radius {nominal_mm:g} mm is implausible for {what} (radii above {limit_mm:g} mm); {hint}")
+
+
 def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: bool = False,
                       min_arc_deg: float | None = None):
     """(source, points in mm, length unit used, notes, names of the two coordinates) of ``fit`` and ``roundness``: a file in any instrument
@@ -430,6 +449,10 @@ def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: boo
         (source, points), unit, notes, polar_alone, axes = points_from(args.file), "mm", [], False, ("x", "y")
         got = None
     points = np.asarray(points, dtype=float)
+    if nominal and got is not None and (got.kind != "polar" or _polar_value(args) == "radius"):
+        what = "radii, not radial deviations" if got.kind == "polar" else "x, y coordinates"
+        notes.append(f"--nominal-radius {nominal:g} mm is not used: the file gives {what} (the option places the "
+                     "radial deviations of an angle + deviation file)")
     if (flat := flat_points(points, axes)) is not None:
         if refuse_flat:
             raise InvalidInputError(f"{source}: {flat}")
@@ -440,6 +463,10 @@ def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: boo
             # not about the points' centroid, which unequal angle steps move metres off a 236 km circle
             span = float(np.ptp(np.hypot(*points.T)))
             warn_implausible("radial deviations spanning", span, 10.0, unit, typical_mm=0.01)
+        elif got is not None and got.kind == "polar" and nominal and nominal > limit_mm and \
+                float(np.max(np.hypot(*points.T))) > limit_mm and _polar_value(args) == "deviation":
+            # the placed radii are the option's: the implausible number is --nominal-radius, not the file's unit
+            warn(nominal_radius_problem(nominal, limit_mm))
         else:
             half = float(np.max(np.ptp(points, axis=0))) / 2
             warn_implausible("profile radii (half the points' span)", half, limit_mm, unit, typical_mm=25.0)

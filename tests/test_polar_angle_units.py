@@ -233,3 +233,21 @@ def test_a_blank_line_between_labelled_runs_is_read(tmp_path):
     p.write_text("Direction,Angle [deg],Deviation [um]\n" + "\n".join(cw) + "\n\n" + "\n".join(ccw) + "\n")
     code, out, err = cli("circular-test", p, "--nominal-radius", 150)
     assert code == 0 and "G  CW / CCW" in out, err
+
+
+def test_a_radius_column_holding_deviations_is_warned_about(tmp_path):
+    """'Radius (um)' holding the deviations + 10 µm (a form tester's offset): read as radii, a 10 µm circle whose form
+    is 40 % of it, RONt 3.89 µm 'ok'. The warning names the range and the fraction (span / median radius)."""
+    deg, dev = profile_deg()
+    r = dev + 10.0
+    p = polar_file(tmp_path / "radius.csv", deg, r, header="Angle (deg),Radius (um)")
+    frac = f"{np.ptp(r) / np.median(r):.0%}"
+    for args in (("roundness", p), ("fit", "circle.minimum_zone", p)):
+        code, out, err = cli(*args)
+        assert code == 0 and f"radii in {p} run from 8 to 12 µm (column 'Radius (um)'): they vary by {frac}" in err, err
+        assert "name it 'Deviation [µm]'" in err, err
+    q = polar_file(tmp_path / "part.csv", deg, 10.0 + dev * 1e-3, header="Angle (deg),Radius (mm)")   # a real R 10
+    code, out, err = cli("roundness", q)
+    assert code == 0 and "radii" not in err, err
+    neg = polar_file(tmp_path / "neg.csv", deg, dev, header="Angle (deg),Radius (um)")
+    one_error_line(cli("roundness", neg), "radii must be > 0", "if the column holds radial deviations, name it 'Deviation'")

@@ -57,7 +57,8 @@ def polar_to_points(angles_rad, values_mm, polar_value: str, nominal_radius: flo
     if bad.size:
         k = int(np.argmin(r))
         if polar_value == "radius":
-            raise DataFileError(f"{name}: a radius of {r[k]:.6g} mm (point {k + 1}); radii must be > 0")
+            raise DataFileError(f"{name}: a radius of {r[k]:.6g} mm (point {k + 1}); radii must be > 0 (if the column "
+                                "holds radial deviations, name it 'Deviation' with its unit)")
         raise DataFileError(f"{name}: the nominal radius {float(nominal_radius):g} mm + the radial deviation "
                             f"{values_mm[k] * 1e3:.6g} µm (point {k + 1}) is {r[k]:.6g} mm <= 0; give the part's "
                             "nominal radius in mm (--nominal-radius)")
@@ -115,4 +116,31 @@ def warn_too_small(layout: Layout, k: int, values_mm, unit: str, given: str | No
     warnings.warn(f"radial deviations in {layout.name} span {span * 1e3:.3g} µm (read as {canonical(unit)}, {source}): "
                   f"below the 10 nm a ballbar or a roundness instrument resolves, not a measured trace; {ask}",
                   UnitWarning, stacklevel=4)
+    return True
+
+
+#: radii (of an angle + radius file) varying by more than this fraction of their median are not a roundness profile
+#: or a circular path (RONt or a ballbar's deviations are micrometres on millimetres: below 1e-2 of the radius even
+#: for a rough 1 mm pin): the 'Radius' column likely holds radial deviations offset to stay positive, as some form
+#: testers export them (6.3 to 14.5 µm read as radii: a 10 µm circle, RONt 3.89 µm 'ok' of a 4.08 µm part)
+RADIUS_SPAN_FRACTION = 0.1
+
+
+def warn_radius_like_deviation(layout: Layout, k: int, radii_mm, unit: str) -> bool:
+    """Warn (:class:`~methods.units.UnitWarning`) when the radii ``radii_mm`` of column ``k`` (read in ``unit``) vary
+    by more than :data:`RADIUS_SPAN_FRACTION` of their median, naming the range and what to name the column."""
+    from methods.units import UnitWarning, canonical, mm_per
+    r = np.asarray(radii_mm, dtype=float)
+    r = r[np.isfinite(r)]
+    if r.size < 3:
+        return False
+    mid, span = float(np.median(r)), float(np.ptp(r))
+    if not (mid > 0 and span > RADIUS_SPAN_FRACTION * mid):
+        return False
+    col = layout.header[k] if layout.header else f"column {k}"
+    f = mm_per(unit)
+    warnings.warn(f"radii in {layout.name} run from {r.min() / f:.6g} to {r.max() / f:.6g} {canonical(unit)} "
+                  f"(column {col!r}): they vary by {span / mid:.0%} of themselves, no roundness profile or circular "
+                  f"path does; does the column hold radial deviations? name it 'Deviation [{canonical(unit)}]' (and "
+                  "give --nominal-radius for circular-test)", UnitWarning, stacklevel=4)
     return True

@@ -14,7 +14,8 @@ from datasets.io.columns import data_blocks, read_columns
 from datasets.io.headers import column_unit, length_unit
 from datasets.io.layout import Layout, sniff
 from datasets.io.numbers import DataFileError
-from datasets.io.polar import _unit_assumed, angle_unit_of, polar_to_points, warn_too_small
+from datasets.io.polar import (_unit_assumed, angle_unit_of, polar_to_points, warn_radius_like_deviation,
+                               warn_too_small)
 from datasets.io.roles import PLANES, Resolved, coordinate_kind, read_offsets, resolve
 from methods.units import to_mm
 
@@ -101,6 +102,8 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
             warn_too_small(layout, res.idx[1], cols[res.idx[1]] * f, lu, unit)
         pts, note = polar_to_points(ang, cols[res.idx[1]] * f, res.polar_value, nominal_radius, nominal_center,
                                     name=name)
+        if res.polar_value == "radius":
+            warn_radius_like_deviation(layout, res.idx[1], cols[res.idx[1]] * f, lu)
         if note:
             notes.append(note)
     else:

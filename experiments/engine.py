@@ -54,6 +54,14 @@ def _grid(fixed: dict, grid: dict, where: str) -> list[dict]:
     for k, v in grid.items():
         if not isinstance(v, list) or not v:
             raise ConfigError(f"{where}: grid.{k} must be a non-empty list of values, got {v!r}")
+        seen: dict = {}
+        for value in v:  # a value twice runs its rows twice, and the summary pools them
+            same = ("number", float(value)) if type(value) in (int, float) else json.dumps(value, sort_keys=True, default=str)
+            if same in seen:
+                twice = f"{value!r} appears twice" if repr(seen[same]) == repr(value) else \
+                    f"{seen[same]!r} and {value!r} are the same value"
+                raise ConfigError(f"{where}: grid.{k}: {twice}; give each value once (a typo?)")
+            seen[same] = value
     keys = list(grid)
     return [{**fixed, **dict(zip(keys, combo))} for combo in itertools.product(*(grid[k] for k in keys))] or [dict(fixed)]
 
@@ -288,6 +296,26 @@ def _grid_parts(cfg: dict, where: str):
     return specs, runs, reps, timing
 
 
+def _repetitions(spec: dict, reps: int) -> int:
+    """The repetitions of a data set: one for data read or fixed, else the study's."""
+    return 1 if ("published" in spec or "file" in spec or spec.get("fixed")) else reps
+
+
+def _pairs(spec: dict, runs: list) -> list[tuple[str, dict]]:
+    """(method id, params) of the method runs on a data set (its ``on`` labels and ``max_n``)."""
+    n = spec.get("params", {}).get("n")
+    return [(m, extra["params"]) for m, extra in runs
+            if (extra["on"] is None or spec["label"] in extra["on"])
+            and (extra["max_n"] is None or n is None or n <= extra["max_n"])]
+
+
+def grid_rows(cfg: dict, where: str) -> int:
+    """The number of rows of the generic grid (:func:`iter_grid_tasks`), counted without making its tasks: each
+    data set's repetitions x the method runs its ``on`` and ``max_n`` leave it."""
+    specs, runs, reps, _ = _grid_parts(cfg, where)
+    return sum(_repetitions(spec, reps) * len(_pairs(spec, runs)) for spec in specs)
+
+
 def iter_grid_tasks(cfg: dict, where: str, *, keyed: bool = False):
     """The generic expansion, lazily: data sets x repetitions x methods (x method grid), in row order.
     With ``keyed`` each task also gets its ``index`` and cache ``key`` (the identity of each (data set,
@@ -296,11 +324,8 @@ def iter_grid_tasks(cfg: dict, where: str, *, keyed: bool = False):
     index = 0
     study, kind, seed = cfg["name"], cfg["kind"], cfg["seed"]
     for spec in specs:
-        n_rep = 1 if ("published" in spec or "file" in spec or spec.get("fixed")) else reps
-        n = spec.get("params", {}).get("n")
-        pairs = [(m, extra["params"]) for m, extra in runs  # the methods run on this data set
-                 if (extra["on"] is None or spec["label"] in extra["on"])
-                 and (extra["max_n"] is None or n is None or n <= extra["max_n"])]
+        n_rep = _repetitions(spec, reps)
+        pairs = _pairs(spec, runs)
         prefixes = [None] * len(pairs)  # per pair, the hash state after its identity: a key hashes only its stream
         entry, point = spec["entry"], spec["point"]
         for r in range(n_rep):

@@ -110,7 +110,7 @@ class TableDeclaration(_Table):
     columns: str = None
     aggregate: Literal["mean", "median", "max", "min", "std", "count", "rmse", "ok_share"] = None
     unit: str = None
-    digits: Annotated[int, Field(ge=0)] = None
+    digits: Annotated[int, Field(ge=1, le=17, description="significant digits of the numbers shown (1-17)")] = None
     where: dict[str, Any] = None
     colour: Annotated[Literal["lower_is_better"], Field(description="a method comparison: HTML cells coloured by their "
                                                                     "ratio to the row's best (lowest) value")] = None
@@ -146,7 +146,7 @@ class FigureDeclaration(_Table):
 
 class StudyConfigModel(_Table):
     name: Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_-]*$",
-                               description="the file name without .toml (letters, digits, _ and -)")]
+                               description="the file name without .toml (ASCII letters A-Z a-z, digits, _ and -)")]
     title: Annotated[str, Field(min_length=1)]
     kind: Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")] = "grid"
     default: bool = False

@@ -84,6 +84,9 @@ def _direction(value, lineno, name):
         return "up"
     if v in DOWN:
         return "down"
+    if v in RUN_ORDER_TAGS:   # the laser software's run order (docs/positioning.md), which way the axis moved unknown
+        raise InvalidInputError(f"{name} line {lineno}: direction {value!r} names the run order, not the axis direction: "
+                                "write + or - (the direction the axis moved to the targets in that run)")
     raise InvalidInputError(f"{name} line {lineno}: direction {value!r} is not one of +, -, up, down")
 
 

@@ -1,0 +1,29 @@
+"""Two small positioning messages: a long table whose direction column says Forward/Reverse (the laser software's
+run order) is refused saying so and what to write (it said only "is not one of +, -, up, down"); an inch test that
+writes compensation tables (in mm) gets a note that an inch machine needs them in inches."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from cli_calls import cli, one_error_line
+from datasets.positioning import axis_test, to_frame
+
+
+def long_table(tmp_path, name, *, scale=1.0, unit="mm", directions=None):
+    data, _ = axis_test(rng=np.random.default_rng(1), pitch=(0.0, 0.01), reversal=-0.002)
+    df = to_frame(data, actual=False)
+    if directions:
+        df["direction"] = df["direction"].map(directions)
+    df["target"] *= scale
+    df["deviation"] *= scale
+    df.columns = [f"Target ({unit})", "Direction", "Run", f"Deviation ({unit})"]
+    p = tmp_path / name
+    df.to_csv(p, index=False)
+    return p
+
+
+def test_forward_in_a_long_table_names_the_run_order(tmp_path):
+    p = long_table(tmp_path, "fr.csv", directions={"+": "Forward", "-": "Reverse"})
+    one_error_line(cli("positioning", p), "line 2", "'Forward' names the run order", "write + or -")

@@ -27,3 +27,17 @@ def long_table(tmp_path, name, *, scale=1.0, unit="mm", directions=None):
 def test_forward_in_a_long_table_names_the_run_order(tmp_path):
     p = long_table(tmp_path, "fr.csv", directions={"+": "Forward", "-": "Reverse"})
     one_error_line(cli("positioning", p), "line 2", "'Forward' names the run order", "write + or -")
+
+
+def test_an_inch_test_writing_tables_in_mm_says_so(tmp_path):
+    inch = long_table(tmp_path, "in.csv", scale=1 / 25.4, unit="in")
+    mm = long_table(tmp_path, "mm.csv")
+    for p in (inch, mm):
+        out = cli("positioning", p, "--json", "--compensation-from", "mean", "--compensation", "csv", tmp_path / "t.csv")
+        assert out.returncode == 0, out.stderr
+        said = [n for n in json.loads(out.stdout)["notes"] if "inch machine" in n]
+        assert bool(said) == (p == inch), said
+    text = cli("positioning", inch, "--compensation-from", "mean", "--compensation", "csv", tmp_path / "t.csv")
+    assert "the compensation tables are in mm (FANUC: increments of 0.001 mm), the input in inches" in text.stdout + text.stderr
+    plain = cli("positioning", inch)
+    assert "inch machine" not in plain.stdout + plain.stderr   # no table written, no note

@@ -336,6 +336,10 @@ def run(args) -> int:
                             unit_confirmed=given_deviation_unit is not None, on_confirmed=warn,
                             model_confirmed=args.compensation_from == "model",
                             fanuc_unit_mm=float(args.fanuc_increment))
+        if "in" in {canonical(u) for u in (args.unit, args.deviation_unit) if u}:   # read in inches, written in mm
+            notes.append(f"the compensation tables are in mm (FANUC: increments of {args.fanuc_increment} mm), the "
+                         "input in inches: an inch machine (SINUMERIK basic system inch, FANUC inch detection unit) "
+                         "needs them in its own unit (divide by 25.4)")
     missing = [n for n in tolerances if n not in res.figures]
     if missing:
         raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "

@@ -79,6 +79,30 @@ def add_parser(sub):
     pp.set_defaults(func=run)
 
 
+def model_unavailable(data, degree: int, instrument: float | None) -> tuple[str, str | None] | None:
+    """(why, the option that would give it or None) when the GLS polynomial model (paper eq. 2, 8-10) cannot be
+    fitted to a test of repeated runs, else None: fewer targets than coefficients, or a target whose runs all read
+    the same (the laser zeroed there at each run's start, or a rounded export) while no instrument uncertainty is
+    given, or two such targets (U(x) = D + u²(δ) 1 1ᵀ is singular then whatever u(δ)). The ISO 230-2 figures need
+    no model and are given all the same."""
+    m = len(data.targets)
+    if degree + 1 > m:
+        return (f"a degree-{degree} polynomial needs at least {degree + 1} targets and this test has {m}",
+                f"--degree {m - 1} (or lower)")
+    arrows = {"up": " (↑)" if data.direction_given else "", "down": " (↓)"}
+    for d in data.directions:
+        zero = np.flatnonzero(np.ptp(getattr(data, d), axis=1) == 0)
+        if zero.size and (not instrument or zero.size > 1):
+            at = " and ".join(f"{data.targets[k] + 0.0:g} mm" for k in zero[:2]) + (", ..." if zero.size > 2 else "")
+            why = (f"every run reads the same at target{'s' * (zero.size > 1)} {at}{arrows[d]} (zero scatter: the laser "
+                   "zeroed there at each run's start, or rounded values?), and the model is weighted by the scatter "
+                   "at the targets")
+            if zero.size > 1:
+                return why + " (with more than one such target no instrument uncertainty makes its covariance regular)", None
+            return why, "the instrument's uncertainty (--mpe or --instrument-u)"
+    return None
+
+
 def column_choices(items) -> dict[str, str] | None:
     """{role: column} of the ``--column ROLE=COLUMN`` options (roles checked by the reader); a role given twice or
     an item without '=' is refused in one line."""
@@ -299,6 +323,17 @@ def run(args) -> int:
             raise CompensationError(f"not writing {', '.join(p for _, p in args.compensation)}: the polynomial model "
                                     "needs repeated runs and this test has one run per direction: give "
                                     "--compensation-from mean (the measured deviations at the targets)")
+    elif (lacking := model_unavailable(data, args.degree, instrument_u or mpe)) is not None:
+        # the ISO 230-2 figures need no model: they are given, the model is said not to be (as a rejected one is)
+        why, remedy = lacking
+        res = methods.fit("positioning.iso230_2", data, standard=args.standard)
+        notes.append(f"the polynomial model and its U(P) are not given: {why}" +
+                     (f"; give {remedy} for the model" if remedy else ""))
+        if args.compensation and args.compensation_from != "mean":
+            from fitbench.compensation import CompensationError
+            raise CompensationError(f"not writing {', '.join(p for _, p in args.compensation)}: the polynomial model "
+                                    f"is not given ({why}): give --compensation-from mean (the measured deviations at "
+                                    f"the targets){f', or {remedy}' if remedy else ''}")
     else:
         res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
     from fitbench.compensation import model_misfit

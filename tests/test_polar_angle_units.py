@@ -251,3 +251,17 @@ def test_a_radius_column_holding_deviations_is_warned_about(tmp_path):
     assert code == 0 and "radii" not in err, err
     neg = polar_file(tmp_path / "neg.csv", deg, dev, header="Angle (deg),Radius (um)")
     one_error_line(cli("roundness", neg), "radii must be > 0", "if the column holds radial deviations, name it 'Deviation'")
+
+
+@pytest.mark.parametrize("text", ["Deviation [µm]\n", "Deviation_um\n", "Radial deviation um\n", ""], ids=["name [unit]",
+                                  "one token", "suffix", "no header"])
+def test_one_column_of_deviations_says_an_angle_is_needed(tmp_path, text):
+    """Radial deviations alone, one per line (equally spaced over the revolution): was 'line 2: 1 field where the
+    header (line 1) has 2' (the name split at its space), which sent the user looking for a missing field."""
+    deg, dev = profile_deg()
+    p = tmp_path / "devonly.txt"
+    p.write_text(text + "".join(f"{d:.4f}\n" for d in dev), encoding="utf-8")
+    for args in (("roundness", p), ("circular-test", p, "--nominal-radius", 150), ("fit", "circle.kasa", p)):
+        one_error_line(cli(*args), "one column of numbers", "add an angle column (i x 360/N deg")
+    if text:
+        assert f"({text.strip()!r})" in cli("roundness", p).stderr

@@ -69,6 +69,15 @@ class Layout:
         return [parse_name(h) for h in self.header] if self.header else []
 
 
+def one_column(name, header: str | None) -> str:
+    """The refusal of a file of one column of numbers (the radial deviations alone, as roundness and ballbar software
+    export them equally spaced over the revolution): each point needs two numbers."""
+    what = f" ({header})" if header else ""
+    return (f"{name}: one column of numbers{what}: fitbench needs two per point (x, y, or angle + radial deviation); "
+            "if they are radial deviations equally spaced over a revolution, add an angle column (i x 360/N deg for "
+            "the i-th of N, from 0) and name both, e.g. 'Angle [deg];Deviation [um]'")
+
+
 def sniff(path, skip_rows: int = 0) -> Layout:
     """Read at most the first ``SNIFF_LINES`` lines: separator, decimal comma, header, comment style."""
     name = os.fspath(path)
@@ -128,6 +137,9 @@ def sniff(path, skip_rows: int = 0) -> Layout:
     widths = {len(_split(ln, sep)) for _, ln in body[1:]}
     named = len(head) - next((k for k, h in enumerate(reversed(head)) if h), len(head))  # 'X;Y;': two names
     if max(widths) < named:           # every row shorter than the header: said before any column is looked up
+        if max(widths) == 1 and sep is None and parse_name(first)[1] is not None:
+            # one name with its unit ('Deviation [µm]', split at its space) over one column of numbers
+            raise DataFileError(one_column(name, repr(first.strip())))
         lineno, ln = body[1]
         k = len(_split(ln, sep))
         hint = preamble_hint(name, body[0][0], skip_rows=skip_rows)

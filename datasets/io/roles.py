@@ -11,7 +11,7 @@ import numpy as np
 
 from datasets.io.delimiters import _split
 from datasets.io.headers import ANGLE_UNITS, CONVERT, LENGTH_UNITS, column_unit
-from datasets.io.layout import Layout, skip_rows_hint
+from datasets.io.layout import Layout, one_column, skip_rows_hint
 from datasets.io.numbers import DataFileError, _field_number
 from methods import InvalidInputError
 from methods.units import to_mm
@@ -120,6 +120,9 @@ def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
                 idx, r = idx[::-1], r[::-1]
             return Resolved("polar", idx, "radius" if r[1] == "radius" else "deviation", d_col)
         return Resolved("xy", idx, None, d_col)
+    if layout.ncol == 1 and all(len(_split(ln, layout.sep)) == 1 for _, ln in layout.sample):
+        raise DataFileError(one_column(name, repr(layout.header[0]) if layout.header else None)
+                            + skip_rows_hint(layout))
     if layout.header is None:
         if layout.ncol != 2:
             raise DataFileError(f"{name} line {layout.first_data_line}: {layout.ncol} columns and no header; "

@@ -138,7 +138,8 @@ def run(args) -> int:
     from methods.circular_test import diagnose, evaluate
     from fitbench.plots.circular_test import FIGSIZE as POLAR_FIGSIZE, diagnostics_json, model_json, polar_plot, text
     from methods.circular_test.evaluation import nominal_mismatch
-    from methods.circular_test.runs import check_nominal, check_pair, drop_repeated, off_circle_ends, trim
+    from methods.circular_test.runs import (check_nominal, check_pair, drop_repeated, off_circle_ends,
+                                            overrun_text, trim)
 
     R = finite("--nominal-radius", args.nominal_radius, positive=True, allow_none=False)
     if args.nominal_center is not None:
@@ -185,18 +186,19 @@ def run(args) -> int:
         if said:
             warn(said)
             notes.append(said)
-        runs[name], rep = trim(runs[name], center0, arc_deg=arc, lead_in_deg=args.lead_in, lead_out_deg=args.lead_out)
+        runs[name], rep = trim(runs[name], center0, arc_deg=arc, lead_in_deg=args.lead_in, lead_out_deg=args.lead_out,
+                               overrun="end" if args.lead_in or args.lead_out else "auto", name=label)
         trimmed[name] = dict(rep, **repeats)
+        trim_note, trim_warning = overrun_text(rep, label, arc)
         if (fed := off_circle_ends(runs[name], center0, label)) is not None:
             raise InvalidInputError(fed)
         if len(runs[name]) < 10:
             raise InvalidInputError(f"circular test ({name.upper()} run): {len(runs[name])} point(s) left after removing "
                                     f"the lead-in/out and the overrun beyond {arc:g}°; at least 10 are needed")
-        if rep["overrun_trimmed_points"] or rep["lead_removed_points"]:
-            notes.append(f"{name.upper()} run: recorded {rep['recorded_arc_deg']:.1f}°, "
-                         f"{rep['lead_removed_points']} lead-in/out point(s) removed, "
-                         f"{rep['overrun_trimmed_points']} point(s) of overrun beyond {arc:g}° trimmed; "
-                         f"{rep['evaluated_arc_deg']:.1f}° evaluated")
+        if trim_warning:   # the passes over the same angles differ: which end was kept, and how to keep the other
+            warn(trim_warning)
+        if trim_note:
+            notes.append(trim_note)
     if labelled:
         runs, pair_warnings = check_pair(runs, center0, as_given=args.as_given)
     else:

@@ -132,16 +132,90 @@ def off_circle_ends(points, center, name: str = "") -> str | None:
     return f"{name + ' run: ' if name else ''}" + "; ".join(out)
 
 
-def trim(points, center, *, arc_deg: float | None = 360.0, lead_in_deg: float = 0.0, lead_out_deg: float = 0.0):
+#: the two passes of a run recorded beyond 360 deg differ when they disagree at some common angle by more than this
+#: many standard deviations of a difference of two samples (sqrt 2 x the run's sample noise, :func:`sample_noise`)
+OVERLAP_SIGMAS = 5.0
+#: ... and by more than this (mm): 0.1 µm, a ballbar's resolution (exact or quantised data have no noise to scale by)
+OVERLAP_MIN_MM = 1e-4
+#: fewest samples of the overlap compared at all, and fewest in each third of it for deciding which pass is steady
+OVERLAP_MIN_SAMPLES = 3
+
+
+def sample_noise(points, center) -> float:
+    """Robust standard deviation (mm) of one sample's radius about ``center``: 1.4826 MAD of the differences of
+    consecutive radii over sqrt 2 (the path's own shape changes little over one sampling step; a backlash step or
+    a spike is a few outliers the MAD ignores)."""
+    r = np.hypot(*(np.asarray(points, float) - np.asarray(center, float)).T)
+    d = np.diff(r)
+    if len(d) < 2:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2.0))
+
+
+def compare_passes(points, center, swept_deg, arc_deg: float = 360.0, closing_deg: float = 0.0) -> dict | None:
+    """The two passes of a run recorded over more than one revolution (``swept_deg``, its arc swept from its first
+    sample, beyond ``arc_deg`` = 360), compared over the angles both cover: the first pass's radius interpolated
+    linearly in swept angle at each sample of the overrun (the samples from 360 deg - ``closing_deg`` on). ISO 230-4 takes the data
+    arc clear of the feed-in and feed-out arcs, whose acceleration transients are no contour deviation; which end
+    of an over-long recording is the lead-in or lead-out is not in the file, but the passes say where they differ.
+    Returns None for fewer than ``OVERLAP_MIN_SAMPLES`` overrun samples, else {'overlap_deg', 'samples',
+    'max_difference_mm', 'noise_mm', 'limit_mm', 'differ', 'at_start', 'at_end', 'steady'}: ``at_start`` the
+    largest difference in the third of the overlap where the first pass is the recording's start, ``at_end`` in the
+    third where the second pass is its end; ``steady`` 'end' (the first pass carries a transient that has died out
+    by the end of the overlap: keep the last 360 deg), 'start' (the second pass differs only near the recording's
+    end: keep the first 360 deg) or None (they agree, or differ throughout: a drift, or transients at both ends)."""
+    sw = np.asarray(swept_deg, float)
+    r = np.hypot(*(np.asarray(points, float) - np.asarray(center, float)).T)
+    if arc_deg < 360.0 or len(sw) < 2:
+        return None
+    step = float(np.median(np.diff(sw)))
+    late = sw >= arc_deg - closing_deg      # the samples the full circle trims (from 360 deg within ``closing_deg`` on)
+    n = int(late.sum())
+    if n < OVERLAP_MIN_SAMPLES:
+        return None
+    phi = sw[late] - arc_deg
+    first = ~late & (sw <= phi[-1] + step + 1e-9)
+    if first.sum() < 2:
+        return None
+    diff = np.interp(phi, sw[first], r[first]) - r[late]   # first pass minus second, at the overrun's angles
+    noise = sample_noise(points, center)
+    limit = max(OVERLAP_SIGMAS * np.sqrt(2.0) * noise, OVERLAP_MIN_MM)
+    third = n // 3
+    worst = float(np.max(np.abs(diff)))
+    out = {"overlap_deg": float(phi[-1]), "samples": n, "max_difference_mm": worst, "noise_mm": noise,
+           "limit_mm": float(limit), "differ": worst > limit, "at_start": None, "at_end": None, "steady": None}
+    if third >= OVERLAP_MIN_SAMPLES:
+        a, b = float(np.max(np.abs(diff[:third]))), float(np.max(np.abs(diff[-third:])))
+        out.update(at_start=a, at_end=b)
+        if out["differ"] and a > limit >= b:
+            out["steady"] = "end"
+        elif out["differ"] and b > limit >= a:
+            out["steady"] = "start"
+    return out
+
+
+def trim(points, center, *, arc_deg: float | None = 360.0, lead_in_deg: float = 0.0, lead_out_deg: float = 0.0,
+         overrun: str = "end", name: str = ""):
     """Drop ``lead_in_deg`` of arc at the start and ``lead_out_deg`` at the end (along the point order),
     then anything beyond ``arc_deg`` of swept arc (overrun; a partial arc keeps a point at exactly
-    ``arc_deg`` within ``arc_tolerance_deg``, a full circle drops the one back at 360 deg within roundoff;
-    the leads are cut within roundoff; leads as long as the recorded arc are refused). Returns (points, report dict)."""
+    ``arc_deg`` within ``arc_tolerance_deg``, a full circle drops the samples back at 360 deg within roundoff or
+    within the noise of their angle, 5 x the radial sample noise over the radius (:func:`sample_noise`), at most
+    half a sampling step: they measure its first sample's angle again;
+    the leads are cut within roundoff; leads as long as the recorded arc are refused). Returns (points, report dict).
+
+    A full circle recorded beyond 360 deg covers its first angles twice: the passes are compared
+    (:func:`compare_passes`, in ``report['passes']``). ``overrun='end'`` trims the end (the overrun);
+    ``overrun='auto'`` keeps the last 360 deg instead when the first pass carries a transient the second has not
+    (a lead-in arc recorded with the data: its first samples off by a 6 µm acceleration transient gave G 6.61 µm
+    for a 1.45 µm circle). ``report['overrun_at']`` says which end was trimmed. A run that goes round twice (two
+    tests in one file, the second after a blank line) is refused: which revolution is the test is not in the data."""
     for v, n in ((lead_in_deg, "--lead-in"), (lead_out_deg, "--lead-out")):
         if not (np.isfinite(v) and v >= 0):
             raise InvalidInputError(f"{n} must be a non-negative angle in degrees, got {v!r}")
     if arc_deg is not None and not (np.isfinite(arc_deg) and MIN_ARC_DEG <= arc_deg <= 360.0):
         raise InvalidInputError(f"--arc must be between {MIN_ARC_DEG:g} and 360 degrees, got {arc_deg!r}")
+    if overrun not in ("end", "auto"):
+        raise ValueError(f"overrun must be 'end' or 'auto', got {overrun!r}")
     tol = arc_tolerance_deg(points, center)                           # a recorded arc's end
     eps = arc_tolerance_deg(points, center, deviations=False)         # roundoff only
     a = unwrapped_angle(points, center)
@@ -155,17 +229,80 @@ def trim(points, center, *, arc_deg: float | None = 360.0, lead_in_deg: float = 
     n_lead = int(len(points) - keep.sum())
     pts = points[keep]
     sw = swept[keep] - (swept[keep][0] if keep.any() else 0.0)
-    overrun = 0
+    over, passes, at = 0, None, None
+    step = float(np.median(np.diff(sw))) if len(sw) > 1 else 0.0     # the sampling step (deg)
     if arc_deg is not None and len(pts):
-        if arc_deg >= 360.0:   # the full circle: only the point back at its start (within roundoff) is not kept
-            within = sw < arc_deg - eps
+        if arc_deg >= 360.0:   # the full circle: the samples back at its start's angle (within their noise) are not kept
+            r_mid = float(np.median(np.hypot(*(pts - np.asarray(center, float)).T)))
+            half = max(eps, min(step / 2.0, float(np.degrees(OVERLAP_SIGMAS * sample_noise(pts, center) / r_mid))))
+            if len(sw) > 2 and sw[-1] >= 720.0 - 2 * step - eps:
+                k = int(np.argmax(sw >= 360.0 - half))
+                first_out = np.ceil((sw[-1] - 360.0 + step / 2.0) * 10.0 - 1e-6) / 10.0   # cut between samples
+                second_in = np.floor((sw[k] - step / 2.0) * 10.0 + 1e-6) / 10.0
+                raise InvalidInputError(
+                    f"{name + ' run: ' if name else ''}recorded {sw[-1]:.1f}°: it goes round twice (samples 1-{k} and "
+                    f"{k + 1}-{len(sw)}{' after the lead-in/out' if n_lead else ''}), two tests in one file (the "
+                    f"second after a blank line?) or one recorded twice; evaluate one revolution: --lead-out "
+                    f"{first_out + lead_out_deg:g} keeps the first, --lead-in {second_in + lead_in_deg:g} the second "
+                    f"(or give each test in a file of its own)")
+            within = sw < arc_deg - half
+            passes = compare_passes(pts, center, sw, arc_deg, half)
+            if overrun == "auto" and passes is not None and passes["steady"] == "end":
+                within = sw > sw[-1] - arc_deg + half
         else:
             within = sw <= arc_deg + tol
-        overrun = int(len(pts) - within.sum())
+        over = int(len(pts) - within.sum())
+        if over:
+            at = "end" if within[0] else "start"
         pts, sw = pts[within], sw[within]
-    report = {"recorded_arc_deg": total, "lead_removed_points": n_lead, "overrun_trimmed_points": overrun,
-              "evaluated_arc_deg": float(sw[-1]) if len(sw) else 0.0}
+        sw = sw - sw[0] if len(sw) else sw
+    report = {"recorded_arc_deg": total, "lead_removed_points": n_lead, "lead_in_deg": float(lead_in_deg),
+              "lead_out_deg": float(lead_out_deg), "overrun_trimmed_points": over, "overrun_at": at,
+              "sampling_step_deg": step, "passes": passes, "evaluated_arc_deg": float(sw[-1]) if len(sw) else 0.0}
     return pts, report
+
+
+def overrun_text(report: dict, name: str = "", arc_deg: float = 360.0) -> tuple[str | None, str | None]:
+    """(the note naming which end of a run was trimmed, a warning when its two passes over the same angles
+    differ beyond the noise, or None) for a report of :func:`trim`. The note: 'the last 179 points (overrun
+    beyond 360°)'; the warning: how much they differ, where, what was kept and the option that keeps the other."""
+    over, at, ps = report["overrun_trimmed_points"], report["overrun_at"], report["passes"]
+    lead = report["lead_removed_points"]
+    if not (over or lead):
+        return None, None
+    who = f"{name} run: " if name else ""
+    what = (f"the {'first' if at == 'start' else 'last'} {over} point(s) ("
+            f"{'a lead-in: its first pass differs' if at == 'start' else f'overrun beyond {arc_deg:g}°'}) trimmed"
+            if over else "no overrun trimmed")
+    note = (f"{who}recorded {report['recorded_arc_deg']:.1f}°, {lead} lead-in/out point(s) removed, {what}; "
+            f"{report['evaluated_arc_deg']:.1f}° evaluated")
+    if not (ps and ps["differ"]):
+        return note, None
+    e = ps["overlap_deg"]
+    extra = report["recorded_arc_deg"] - arc_deg      # the leads that leave one revolution
+    half = report["sampling_step_deg"] / 2.0      # cut half a step beyond, not at, the angle of a sample
+    lead_in, lead_out = (np.ceil((extra + half - v) * 10.0 - 1e-6) / 10.0
+                         for v in (report["lead_out_deg"], report["lead_in_deg"]))
+    noise = np.sqrt(2.0) * ps["noise_mm"]
+    limit = (f"more than {OVERLAP_SIGMAS:g} x the {noise * 1e3:.2f} µm noise of a difference: "
+             f"{ps['limit_mm'] * 1e3:.2f} µm" if OVERLAP_SIGMAS * noise >= OVERLAP_MIN_MM else
+             f"more than {OVERLAP_MIN_MM * 1e3:g} µm, a ballbar's resolution")
+    same = (f"{who}its first {e:.1f}° and its last {e:.1f}° cover the same angles and differ by up to "
+            f"{ps['max_difference_mm'] * 1e3:.2f} µm ({limit})")
+    if ps["steady"] == "start":   # what was trimmed anyway: said in the note
+        return note + (f" (its two passes over the first {e:.1f}° differ only near the run's end: a lead-out "
+                       "transient)"), None
+    if ps["steady"] == "end":
+        if at == "start":
+            return note, (f"{same}, most at its start and within the limit where the overlap ends: a lead-in "
+                          f"transient; the first {over} point(s) trimmed instead of the last (--lead-out {lead_out:g} "
+                          f"keeps them)")
+        return note, (f"{same}, most at its start and within the limit where the overlap ends: a lead-in transient? "
+                      f"give --lead-in {lead_in:g}")
+    both = ps["at_start"] is not None and min(ps["at_start"], ps["at_end"]) > ps["limit_mm"]
+    where = " at both ends of the overlap (a drift over the revolution, or transients at both ends?)" if both else ""
+    return note, (f"{same}{where}; the last {over} point(s) trimmed as overrun: if the run starts with a "
+                  f"lead-in transient, give --lead-in {lead_in:g} (if it ends with a lead-out, --lead-out {lead_out:g})")
 
 
 def check_pair(runs: dict, center, *, as_given: bool = False) -> tuple[dict, list]:

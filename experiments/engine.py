@@ -43,6 +43,7 @@ from experiments.store import RowStore
 from experiments.study import ConfigError
 from methods import InvalidInputError
 from methods.files import check_regular
+from methods.plugins import failed as plugin_failed
 
 ENGINE_VERSION = 2
 REPO = Path(__file__).resolve().parents[1]
@@ -418,9 +419,12 @@ def outputs_code(cfg: dict) -> str:
             versions[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
             versions[pkg] = None
-    # plugins register plots (and columns) when they load: their code, with their whole distribution, is part of it
+    # plugins register plots (and columns) when they load: their code, with their whole distribution, is part of it;
+    # one that failed to load registered nothing, and finding a module imports its package again (a sys.exit() there)
+    methods.load_plugins()
+    sources.load_plugins()
     plugins = sorted({ep.module for group in ("fitbench.methods", "fitbench.datasets")
-                      for ep in metadata.entry_points(group=group)})
+                      for ep in metadata.entry_points(group=group) if not plugin_failed(group, ep)})
     ident = {"config": dict(cfg), "quick": bool(getattr(cfg, "quick", False)),  # a loaded config's [quick] flag
              "code": codehash.code_hash("experiments.run", "fitbench.plots", f"experiments.studies.{cfg['kind']}",
                                        outputs=True),

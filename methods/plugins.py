@@ -30,6 +30,8 @@ _MISSING = object()
 _JOURNAL: list[tuple[dict, object, object]] = []
 #: module -> (distribution, version) of what entry points registered
 _MODULE_DIST: dict[str, tuple[str, str]] = {}
+#: (group, entry point name, its value) of every entry point that failed to load in this process
+_FAILED: set[tuple[str, str, str]] = set()
 
 
 #: > 0 while fitbench registers its own entries (:func:`own_entries`): those are journaled to no plugin
@@ -164,6 +166,7 @@ def _load_one(ep, group: str, what: str, signals: _ProcessSignals) -> None:
         own = signals.caused(exc)
         if own is not None:   # the user's Ctrl-C (or what the plugin made of it): the process stops as usual
             raise own
+        _FAILED.add((group, ep.name, ep.value))
         origin = f"distribution {dist.name} {dist.version}" if dist is not None else "an unknown distribution"
         warnings.warn(f"{what} plugin {ep.name!r} (entry point {ep.value!r} of group {group!r}, "
                       f"{origin}) failed to load and is skipped: {_one_line(exc)}; fix or uninstall that "
@@ -189,6 +192,12 @@ def _undo(mark: int) -> None:
             registry[key] = previous
 
 
+def failed(group: str, ep) -> bool:
+    """Whether the entry point ``ep`` of ``group`` failed to load in this process (it registered nothing; importing its
+    module again, or its parent package to find it, would run the failing code again)."""
+    return (group, ep.name, ep.value) in _FAILED
+
+
 def distributions_of(modules) -> dict[str, str]:
     """{distribution: version} of the modules that are not fitbench's own (plugins), wherever they are
     installed (a virtual environment inside the checkout included): the distribution whose entry point
@@ -207,4 +216,5 @@ def distributions_of(modules) -> dict[str, str]:
     return out
 
 
-__all__ = ["PluginLoadWarning", "load_entry_points", "add_entry", "own_entries", "distributions_of", "OWN_PACKAGES"]
+__all__ = ["PluginLoadWarning", "load_entry_points", "add_entry", "own_entries", "distributions_of", "failed",
+           "OWN_PACKAGES"]

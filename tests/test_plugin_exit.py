@@ -138,3 +138,41 @@ def test_the_user_s_ctrl_c_while_a_plugin_loads_still_stops_the_command(sigint_s
     assert out.returncode == 130, out.stdout + out.stderr
     assert line in out.stderr and "Traceback" not in out.stderr, out.stderr
     assert "failed to load" not in out.stderr, out.stderr
+
+
+def install_package_plugin(workdir, init_code: str):
+    """A plugin that is a package (entry point ``fitbench_exitpkg.methods``) whose ``__init__`` runs ``init_code``."""
+    import subprocess
+    import sys
+    src, site = workdir / "src", workdir / "site"
+    (src / "fitbench_exitpkg").mkdir(parents=True)
+    (src / "fitbench_exitpkg" / "__init__.py").write_text(init_code)
+    (src / "fitbench_exitpkg" / "methods.py").write_text("X = 1\n")
+    (src / "pyproject.toml").write_text(
+        '[build-system]\nrequires = ["setuptools>=61"]\nbuild-backend = "setuptools.build_meta"\n'
+        '[project]\nname = "fitbench-exitpkg"\nversion = "0.1"\n'
+        '[project.entry-points."fitbench.methods"]\npkg = "fitbench_exitpkg.methods"\n'
+        '[tool.setuptools]\npackages = ["fitbench_exitpkg"]\n')
+    out = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
+                          "--quiet", "--target", str(site), str(src)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    return site
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("init_code, raised", [("import sys\nsys.exit(0)\n", "SystemExit: 0"),
+                                               ("raise RuntimeError('boom in the package')\n",
+                                                "RuntimeError: boom in the package")])
+def test_a_plugin_package_failing_on_import_does_not_end_the_run(tmp_path, init_code, raised):
+    """A plugin's entry point in a package whose ``__init__`` fails: the run warns once and writes its results. Before,
+    the hash of the study's outputs looked for the failed plugin's module, which imports its package again: the run
+    ended at that point with exit 0 and no results (sys.exit) or with a traceback (RuntimeError)."""
+    site = install_package_plugin(tmp_path, init_code)
+    study = tmp_path / "exitplug.toml"
+    study.write_text(STUDY.replace("repetitions = 2", "repetitions = 1"), encoding="utf-8")
+    out = run_python("-m", "experiments.run", study, "--out", tmp_path / "out", "--no-report", "--jobs", "1",
+                     path_first=[site])
+    assert out.returncode == 0 and "Traceback" not in out.stderr, out.stdout + out.stderr
+    assert len(_rows(tmp_path / "out" / "exitplug" / "results.csv")) == 2, out.stdout + out.stderr
+    lines = [line for line in out.stderr.splitlines() if "fitbench-exitpkg" in line]
+    assert len(lines) == 1 and f"failed to load and is skipped: {raised};" in lines[0], out.stderr

@@ -23,12 +23,12 @@ def analyse(study: Study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tup
     if not study.own_analysis and not (cfg.get("tables") and cfg.get("figures")):
         table, figure = default_declarations(cfg, df)
         if table and not cfg.get("tables"):
-            analysis.tables.append(declared_table(df, table))
+            analysis.tables.append(declared_table(df, table, cfg))
         if figure and not cfg.get("figures"):
             analysis.figures.append(declared_figure(df, figure, target, 1))
     analysis.values = {"n_rows": len(df), "n_ok": int((df["status"] == "ok").sum()), **analysis.values}
     findings = json_value(json_text(analysis.values))  # what meta.json holds: plain values, as read back from it
-    analysis.tables += [declared_table(df, t) for t in cfg.get("tables", [])]
+    analysis.tables += [declared_table(df, t, cfg) for t in cfg.get("tables", [])]
     for f in cfg.get("figures", []):
         analysis.figures.append(declared_figure(df, f, target, len(analysis.figures) + 1))
     return findings, analysis

@@ -46,7 +46,7 @@ def validate(cfg: dict, where: str) -> None:
             if how not in ("count", "ok_share", "max", "min") and columns[t["values"]] == "text":
                 raise ConfigError(f"{here}.aggregate: the {how} of {t['values']!r} (a text column) is not defined; "
                                   "use count, or a numeric column")
-        problem = unit_problem(t["values"], t.get("unit", ""), how)
+        problem = unit_problem(t["values"], t.get("unit", ""), how, cfg)
         if problem:
             raise ConfigError(f"{here}.unit: {problem}")
     for i, f in enumerate(cfg.get("figures", [])):

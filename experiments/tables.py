@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 
 from experiments.study import ConfigError, Table
-from experiments.units import aggregate_words, column_unit, readable
+from experiments.units import DATA_UNITS, aggregate_words, column_unit, metric_unit, readable, table_unit
 
 #: the aggregates a ``[[tables]]`` or ``[[figures]]`` entry may name (``aggregate = "rmse"``)
 AGGREGATES = {
@@ -35,11 +35,17 @@ def _no_result(df: pd.DataFrame) -> str:
     return f": no row has a result ({counts}{f'; most often: {message}' if message else ''})"
 
 
-def declared_table(df: pd.DataFrame, t: dict) -> Table:
-    """A pivot (or a grouped aggregate) of the rows, as declared."""
+def declared_table(df: pd.DataFrame, t: dict, cfg: dict | None = None) -> Table:
+    """A pivot (or a grouped aggregate) of the rows, as declared, in the declared unit: values converted from their
+    own (a length in the study's unit of lengths, ``cfg``; :func:`experiments.units.table_unit`), labelled with their
+    own unit when the table declares none."""
     rows = [t["rows"]] if isinstance(t["rows"], str) else list(t["rows"])
     how = t.get("aggregate", "mean")
     value = t["values"]
+    try:
+        unit, factor = table_unit(cfg, value, t.get("unit", ""), how)
+    except ValueError as exc:   # the config's check refuses it before any row runs
+        raise ConfigError(f"table {t['caption'][:40]!r}: {exc}") from None
     # only the columns read below (selecting the rows of the whole frame would copy every column)
     used = [*rows, *([t["columns"]] if t.get("columns") else []), value, "status", *(t.get("where") or {})]
     data = rows_where(df[[c for c in dict.fromkeys(used) if c in df.columns]], t.get("where"))
@@ -52,6 +58,8 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
         if c not in data.columns:
             raise ConfigError(f"table {t['caption'][:40]!r}: no column {c!r} in the rows{_no_result(df)} "
                               f"(columns: {', '.join(df.columns)})")
+    if factor != 1.0:   # shown in another unit of the same dimension (mm rows in µm): every aggregate scales with it
+        data = data.assign(**{value: pd.to_numeric(data[value], errors="coerce") * factor})
     # a key some rows lack (a data parameter of one data set, not of another) keeps those rows under NO_VALUE: the
     # groupby keeps NaN keys (pivot_table drops them, and every group whose value is NaN: rows nobody would see)
     lacking = [c for c in rows + ([t["columns"]] if t.get("columns") else []) if data[c].isna().any()]
@@ -75,7 +83,9 @@ def declared_table(df: pd.DataFrame, t: dict) -> Table:
     out = out.rename(columns={c: f"{readable(c)} [{column_unit(c)}]" for c in rows
                               if column_unit(c) and c in numeric_keys})
     caption = t["caption"] + lacking_note(df, lacking)
-    return Table(caption=caption, data=out, unit=t.get("unit", ""), digits=t.get("digits", 4),  # significant digits
+    if unit == DATA_UNITS and not t.get("unit"):
+        caption += metric_unit(cfg or {}, t["values"])[1]   # how to name the data's unit, as the default table says
+    return Table(caption=caption, data=out, unit=unit, digits=t.get("digits", 4),  # significant digits
                  colour=t.get("colour", ""))
 
 

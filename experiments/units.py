@@ -3,7 +3,10 @@
 the data's own unit for a generator's), and the words a table header or a figure axis shows for a column."""
 from __future__ import annotations
 
+import math
+
 from methods import results
+from methods.units import MM_PER
 
 #: units read from a column name's suffix (data and study columns: ``data_arc_deg``, ``station_error_um``)
 SUFFIX_UNITS = {"_deg": "°", "_rad": "rad", "_urad": "µrad", "_um": "µm", "_mm": "mm", "_nm": "nm", "_s": "s"}
@@ -52,17 +55,77 @@ def aggregate_words(how: str, column: str) -> str:
     return f"{'RMSE' if how == 'rmse' else how} of {readable(column)}"
 
 
-def unit_problem(column: str, unit: str, how: str) -> str | None:
-    """A table unit of another dimension than its values' (a degree column is never labelled mm)."""
-    if not unit or how in ("count", "ok_share"):
-        return None
-    own = column_unit(column)
-    for group, what in ((LENGTH_UNITS, "a length"), (ANGLE_UNITS, "an angle")):
-        if own in group and unit not in group:
-            return f"{column!r} is {what} in {own}, not in {unit!r}"
-        if unit in group and own and own not in group:
-            return f"{column!r} is in {own}, not {what} ({unit!r})"
+def unit_problem(column: str, unit: str, how: str, cfg: dict | None = None) -> str | None:
+    """Why a declared table cannot show ``column`` in ``unit`` (:func:`table_unit`), None when it can."""
+    try:
+        table_unit(cfg, column, unit, how)
+    except ValueError as exc:
+        return str(exc)
     return None
+
+
+#: the units a table's values may be converted between: base units per unit (lengths in mm, angles in rad, times in
+#: s; ``methods.units.MM_PER`` for the lengths fitbench reads)
+FACTORS = {"length": {**{u: f for u, f in MM_PER.items() if u in LENGTH_UNITS}, "µm": 1e-3, "cm": 10.0},
+           "angle": {"rad": 1.0, "mrad": 1e-3, "µrad": 1e-6, "urad": 1e-6, "deg": math.pi / 180,
+                     "°": math.pi / 180, "arcsec": math.pi / 648000},
+           "time": {"s": 1.0, "ms": 1e-3, "µs": 1e-6, "us": 1e-6, "ns": 1e-9}}
+_WHAT = {"length": "a length", "angle": "an angle", "time": "a time"}
+
+
+def _dimension(unit: str) -> str | None:
+    unit = str(unit).replace("μ", "µ")
+    return next((dim for dim, factors in FACTORS.items() if unit in factors), None)
+
+
+def _factor(unit: str) -> float:
+    unit = str(unit).replace("μ", "µ")
+    return FACTORS[_dimension(unit)][unit]
+
+
+def value_unit(cfg: dict | None, column: str) -> str:
+    """The unit ``column``'s values are in, in this study: a length in the study's unit of lengths
+    (:func:`metric_unit`: its ``length_unit``, mm for the machine-tool data, else :data:`DATA_UNITS`), any other
+    column in its declared unit (:func:`column_unit`; '' when unknown)."""
+    return metric_unit(cfg or {}, column)[0]
+
+
+def table_unit(cfg: dict | None, column: str, unit: str, how: str) -> tuple[str, float]:
+    """(the unit a declared table shows ``column``'s ``how`` aggregate in, the factor its values are multiplied by).
+    Without a declared ``unit``: the values' own unit (:func:`value_unit`), as the default table. A declared unit of the
+    same dimension as the values' is a conversion (mm values shown in µm are multiplied by 1000; rad shown in ° by
+    180/π); one that names the values' own unit (``um`` for µm, ``deg`` for °) is kept as written. Raises ValueError
+    (one line) for a unit of another dimension, and for a length unit of data whose lengths are in no known unit
+    (a generator's: :data:`DATA_UNITS`; a ``length_unit`` such as R), which no factor converts. A count or a share of
+    ok rows has no unit but the declared one."""
+    if how in ("count", "ok_share"):
+        return unit or "", 1.0
+    own, values = column_unit(column), value_unit(cfg, column)
+    if not unit or unit == values or (unit == DATA_UNITS and own in LENGTH_UNITS):   # the data's own unit, whatever
+        return unit or values, 1.0
+    dim = _dimension(unit)
+    if dim is not None and dim == _dimension(values):   # the same unit spelt otherwise (um, µm) is a factor of 1
+        return unit, _factor(values) / _factor(unit)
+    if own in LENGTH_UNITS and values not in LENGTH_UNITS and dim in (None, "length"):
+        if values == DATA_UNITS and dim == "length" and _factor(unit) == _factor(own):
+            return unit, 1.0   # naming the data's lengths in the unit the columns declare (mm), as length_unit would
+        if values != DATA_UNITS:
+            return _refuse(f"{column!r} is in {values} (the study's length_unit), which cannot be converted to "
+                           f"{unit!r}: declare unit = {values!r}, or drop the table's unit")
+        name = "\"mm\" if they are in mm, then a table may show them in " + unit if dim else repr(unit).replace("'", '"')
+        return _refuse(f"{column!r} is in the unit of the data (a generator's lengths are those of its own radius and "
+                       f"noise), which cannot be converted to {unit!r}: name it with the study's length_unit "
+                       f"(length_unit = {name}), or drop the table's unit")
+    for dimension, group in (("length", LENGTH_UNITS), ("angle", ANGLE_UNITS), ("time", set(FACTORS["time"]))):
+        if own in group and unit not in group:
+            return _refuse(f"{column!r} is {_WHAT[dimension]} in {own}, not in {unit!r}")
+        if unit in group and own and own not in group:
+            return _refuse(f"{column!r} is in {own}, not {_WHAT[dimension]} ({unit!r})")
+    return unit, 1.0   # a column of unknown unit (a study's own): the declared unit names it
+
+
+def _refuse(problem: str):
+    raise ValueError(problem)
 
 
 #: data sources whose lengths are in mm (published coordinates, files read into mm, the machine-tool simulators); a
@@ -76,12 +139,13 @@ def data_length_unit(cfg: dict | None) -> str | None:
     """The unit of a study's lengths: its declared ``length_unit`` (:func:`length_unit`), else None (the columns'
     declared mm) when every data set comes from a source whose lengths are mm (:data:`MM_SOURCES`), else
     :data:`DATA_UNITS` (a generator's lengths are those of its own parameters)."""
-    declared = length_unit(cfg)
-    if declared:
-        return declared
+    if (cfg or {}).get("length_unit"):
+        return str(cfg["length_unit"])
     used = {"published" if "published" in d else "file" if "file" in d else d.get("source") or d.get("generator")
             for d in (cfg or {}).get("datasets") or []}
-    return None if not used or used <= MM_SOURCES else DATA_UNITS
+    if used and used <= MM_SOURCES:
+        return None   # data in mm: a ranking's unit does not make them another unit (µm costs of mm rows)
+    return length_unit(cfg) or (DATA_UNITS if used else None)
 
 
 def metric_unit(cfg: dict, metric: str) -> tuple[str, str]:

@@ -169,15 +169,22 @@ def quick_study(tmp_path_factory, name: str) -> Path:
 
 
 def install_plugin(workdir: Path, name: str, modules: dict, entry_points: dict, version: str = "0.0.1") -> Path:
-    """Build and install a plugin distribution offline (pip, no index, no build isolation) into a new folder
-    ``workdir/site`` and return that folder (put it first on PYTHONPATH).
+    """Install a plugin distribution offline into a new folder ``workdir/site`` and return that folder (put it first on
+    PYTHONPATH). The files are those ``pip install --target`` of its built wheel writes (PyPA's "Recording installed
+    projects"): the modules and ``NAME-VERSION.dist-info`` with METADATA, entry_points.txt, top_level.txt, WHEEL,
+    INSTALLER, REQUESTED, direct_url.json (naming the source folder ``workdir/plugin_src``, with its pyproject.toml)
+    and the RECORD of them all with their sha256 and sizes, which importlib.metadata reads (entry points, version,
+    the files a plugin's rows are keyed by). Written here in milliseconds: pip took 1-3 s of CPU per plugin.
 
     ``modules`` maps a top-level module name to its source; ``entry_points`` maps an entry-point group
     (``fitbench.methods``, ``fitbench.datasets``) to ``{entry point name: module}``."""
+    import base64
+    import hashlib
+    import json
+    import re
     src, site = Path(workdir) / "plugin_src", Path(workdir) / "site"
     src.mkdir(parents=True)
-    for module, code in modules.items():
-        (src / f"{module}.py").write_text(textwrap.dedent(code))
+    site.mkdir()
     groups = "".join(f'[project.entry-points."{group}"]\n' + "".join(f'{ep} = "{value}"\n' for ep, value in eps.items())
                      for group, eps in entry_points.items())
     py_modules = ", ".join(f'"{m}"' for m in modules)
@@ -185,9 +192,28 @@ def install_plugin(workdir: Path, name: str, modules: dict, entry_points: dict, 
         '[build-system]\nrequires = ["setuptools>=61"]\nbuild-backend = "setuptools.build_meta"\n'
         f'[project]\nname = "{name}"\nversion = "{version}"\n{groups}'
         f'[tool.setuptools]\npy-modules = [{py_modules}]\n')
-    out = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
-                          "--quiet", "--target", str(site), str(src)], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
+    info = f"{re.sub(r'[-_.]+', '_', name)}-{version}.dist-info"
+    files = {f"{module}.py": textwrap.dedent(code) for module, code in modules.items()}
+    for module, code in files.items():
+        (src / module).write_text(code)
+    files.update({
+        f"{info}/METADATA": f"Metadata-Version: 2.4\nName: {name}\nVersion: {version}\n",
+        f"{info}/entry_points.txt": "\n".join(f"[{group}]\n" + "".join(f"{ep} = {value}\n" for ep, value in eps.items())
+                                              for group, eps in entry_points.items()),
+        f"{info}/top_level.txt": "".join(f"{m}\n" for m in sorted(modules)),
+        f"{info}/WHEEL": "Wheel-Version: 1.0\nGenerator: fitbench tests\nRoot-Is-Purelib: true\nTag: py3-none-any\n",
+        f"{info}/INSTALLER": "pip\n",
+        f"{info}/REQUESTED": "",
+        f"{info}/direct_url.json": json.dumps({"dir_info": {}, "url": src.resolve().as_uri()}),
+    })
+    record = []
+    for rel, text in files.items():
+        data = text.encode()
+        (site / rel).parent.mkdir(parents=True, exist_ok=True)
+        (site / rel).write_bytes(data)
+        digest = base64.urlsafe_b64encode(hashlib.sha256(data).digest()).rstrip(b"=").decode()
+        record.append(f"{rel},sha256={digest},{len(data)}\n")
+    (site / info / "RECORD").write_text("".join(sorted(record + [f"{info}/RECORD,,\n"])))
     return site
 
 

@@ -55,6 +55,12 @@ def config_of(study: str, results: Path, known: dict) -> str:
 
 
 def main(argv=None, prog: str = "python -m experiments.verify") -> int:
+    """The command; a plugin that fails to load is reported in one line, once, as by ``experiments.run``."""
+    with runner.plugin_warnings_once():
+        return _main(argv, prog)
+
+
+def _main(argv, prog: str) -> int:
     parser = argparse.ArgumentParser(prog=prog,
                                      description="Check that a run reproduces the committed results within declared tolerances.")
     parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")

@@ -525,8 +525,9 @@ def check_result(result, data=None) -> str | None:
     the class; ``converged`` a bool, ``iterations``/``nfev`` None or counts, ``message`` a string; every
     declared column a number, and in a converged result finite and of the declared sign (radius > 0, form
     error >= 0); every declared shape (``"n"``: one per point of ``data``); ``extra`` JSON-serialisable;
-    for circles, the form error and residuals recomputed from ``data`` about the returned centre (a method
-    cannot claim a form error its points do not have).
+    for circles and ellipses, the form error and residuals recomputed from ``data`` about the returned curve (a method
+    cannot claim a form error its points do not have), and a zone's radii and contacts: the ``consistency`` of the
+    family's class, or of fitbench's own subclass of it that the result is (``ZoneFit``).
 
     It runs for every row of the benchmark (a few µs beside a fit of tens): the types a built-in result holds
     (Python floats and ints, tuples of floats, float64 arrays, a ``dict`` geometry) take quick paths that decide
@@ -627,6 +628,10 @@ def check_result(result, data=None) -> str | None:
                 return (f"the residual RMS overflows float64 (residuals up to {float(np.abs(residuals).max()):.3g}) "
                         f"in a converged result; rescale the data (e.g. to another unit)")
     if n:
+        if own is not rules:  # fitbench's own subclass of the family's class may refine its contract (ZoneFit's radii)
+            base = builtin_base(own)
+            if base is not rules and issubclass(base, rules):
+                return base.consistency(result, data)
         return rules.consistency(result, data)
     return None
 

@@ -51,33 +51,39 @@ class CircleFit(FitResult):
     @staticmethod
     def consistency(result: "CircleFit", points: np.ndarray) -> str | None:
         """A converged circle's form error and residuals are those of its points about its centre and radius."""
-        radius = result.radius
-        if type(radius) is not float:
-            radius = float(radius)
-        swept = _compiled_sweep(points, result.center, radius)  # r_i - R, min and max r_i in one pass
-        if swept is None:
-            with np.errstate(all="ignore"):
-                r = np.hypot(points[:, 0] - result.center[0], points[:, 1] - result.center[1])
-                deviations, r_min, r_max = r - radius, float(r.min()), float(r.max())
-        else:  # finite r_i - R (the sweep returns None otherwise), computed without a NumPy operation
-            deviations, r_min, r_max = swept
-        span = r_max - r_min
-        tol = 1e-9 * (r_max + abs(radius)) + 1e-6 * span
-        form_error = result.form_error
-        if type(form_error) is not float:
-            form_error = float(form_error)
-        if not abs(form_error - span) <= tol:
-            return (f"form_error = {form_error:.10g} but the points' radial span about the "
-                    f"returned centre is {span:.10g}")
-        residuals = result.residuals
-        if residuals.shape != deviations.shape:
-            return None
-        if swept is not None and residuals.dtype == _FLOAT64 and residuals.tobytes() == deviations.tobytes():
-            return None  # the very numbers (as a builder computes them: the same sweep), finite: within any tol >= 0
+        return _radial_problem(result, points)[0]
+
+
+def _radial_problem(result: CircleFit, points: np.ndarray):
+    """(what :meth:`CircleFit.consistency` finds wrong or None, min r_i, max r_i, the tolerance it applied): the radial
+    distances r_i of the points about the returned centre, swept once (also for :meth:`ZoneFit.consistency`)."""
+    radius = result.radius
+    if type(radius) is not float:
+        radius = float(radius)
+    swept = _compiled_sweep(points, result.center, radius)  # r_i - R, min and max r_i in one pass
+    if swept is None:
         with np.errstate(all="ignore"):
-            if not (np.abs(residuals - deviations) <= tol).all():
-                return "residuals are not the radial distances minus the radius about the returned centre"
-        return None
+            r = np.hypot(points[:, 0] - result.center[0], points[:, 1] - result.center[1])
+            deviations, r_min, r_max = r - radius, float(r.min()), float(r.max())
+    else:  # finite r_i - R (the sweep returns None otherwise), computed without a NumPy operation
+        deviations, r_min, r_max = swept
+    span = r_max - r_min
+    tol = 1e-9 * (r_max + abs(radius)) + 1e-6 * span
+    form_error = result.form_error
+    if type(form_error) is not float:
+        form_error = float(form_error)
+    if not abs(form_error - span) <= tol:
+        return (f"form_error = {form_error:.10g} but the points' radial span about the "
+                f"returned centre is {span:.10g}"), r_min, r_max, tol
+    residuals = result.residuals
+    if residuals.shape != deviations.shape:
+        return None, r_min, r_max, tol
+    if swept is not None and residuals.dtype == _FLOAT64 and residuals.tobytes() == deviations.tobytes():
+        return None, r_min, r_max, tol  # the very numbers (as a builder computes them: the same sweep), finite
+    with np.errstate(all="ignore"):
+        if not (np.abs(residuals - deviations) <= tol).all():
+            return "residuals are not the radial distances minus the radius about the returned centre", r_min, r_max, tol
+    return None, r_min, r_max, tol
 
 
 _FLOAT64 = np.dtype(np.float64)
@@ -179,6 +185,48 @@ class ZoneFit(CircleFit):
         head = {k: d.pop(k) for k in ("method", "center", "radius", "inner_radius", "outer_radius",
                                       "form_error", "contacts")}
         return {**head, **d}
+
+    @staticmethod
+    def consistency(result: "ZoneFit", points: np.ndarray) -> str | None:
+        """A converged zone is a circle's (:meth:`CircleFit.consistency`) whose ``inner_radius``/``outer_radius`` are
+        the smallest/largest radial distance of the points about its centre and whose ``contacts`` name points at
+        those radii (indices, as ``{"outer": [...], "inner": [...]}``), to the circle's tolerance (1e-9 of the radii
+        + 1e-6 of the zone width: the zone methods' contacts tie to 1e-12 of the radius in their unit frame)."""
+        problem, r_min, r_max, tol = _radial_problem(result, points)
+        if problem:
+            return problem
+        for name, value, extreme, which in (("inner_radius", result.inner_radius, r_min, "smallest"),
+                                            ("outer_radius", result.outer_radius, r_max, "largest")):
+            value = float(value)
+            if not abs(value - extreme) <= tol:
+                return (f"{name} = {value:.10g} but the {which} radial distance of the points about the returned "
+                        f"centre is {extreme:.10g}")
+        return _contacts_problem(result, points, r_min, r_max, tol)
+
+
+def _contacts_problem(result: ZoneFit, points: np.ndarray, r_min: float, r_max: float, tol: float) -> str | None:
+    """What is wrong with a zone's ``contacts`` (None: each names a point at the zone's outer or inner radius). A zone
+    has a few contacts (2 to 4 for the built-in methods): they are checked one by one, in Python floats."""
+    contacts = result.contacts
+    if not (isinstance(contacts, dict) and len(contacts) == 2 and "outer" in contacts and "inner" in contacts):
+        return (f"contacts must be {{'outer': [...], 'inner': [...]}} (point indices), got "
+                f"{type(contacts).__name__} {str(contacts)[:60]}")
+    n = points.shape[0]
+    cx, cy = float(result.center[0]), float(result.center[1])
+    for side, extreme in (("outer", r_max), ("inner", r_min)):
+        given = contacts[side]
+        if not isinstance(given, (list, tuple)):
+            return f"contacts['{side}'] must be a list of point indices, got {str(given)[:60]}"
+        for i in given:
+            if not (isinstance(i, (int, np.integer)) and not isinstance(i, (bool, np.bool_))):
+                return f"contacts['{side}'] must be a list of point indices, got {str(given)[:60]}"
+            if not 0 <= i < n:
+                return f"contacts['{side}'] names point {int(i)}, not one of the {n} points"
+            r = math.hypot(float(points[i, 0]) - cx, float(points[i, 1]) - cy)
+            if not abs(r - extreme) <= tol:
+                return (f"contacts['{side}'] names point {int(i)} at {r:.10g} from the returned centre, not at the "
+                        f"{side} radius {extreme:.10g}")
+    return None
 
 
 def zone_result(points: np.ndarray, center, radius: float, contacts: dict, *, converged: bool, message: str,

@@ -83,8 +83,9 @@ def declared_table(df: pd.DataFrame, t: dict, cfg: dict | None = None) -> Table:
     out = out.rename(columns={c: f"{readable(c)} [{column_unit(c)}]" for c in rows
                               if column_unit(c) and c in numeric_keys})
     caption = t["caption"] + lacking_note(df, lacking)
-    if unit == DATA_UNITS and not t.get("unit"):
-        caption += metric_unit(cfg or {}, t["values"])[1]   # how to name the data's unit, as the default table says
+    if unit == DATA_UNITS and not t.get("unit"):   # how to name the data's unit, as the default table says
+        caption = caption.rstrip() + ("" if caption.rstrip().endswith((".", "!", "?")) else ".")
+        caption += metric_unit(cfg or {}, t["values"])[1]
     return Table(caption=caption, data=out, unit=unit, digits=t.get("digits", 4),  # significant digits
                  colour=t.get("colour", ""))
 

@@ -81,7 +81,8 @@ def test_a_count_keeps_no_unit():
 
 def test_lengths_of_a_generator_without_a_unit_are_in_data_units():
     got = declared_table(rows(), table(), GENERATOR_STUDY)
-    assert got.unit == DATA_UNITS and "length_unit" in got.caption
+    assert got.unit == DATA_UNITS and got.caption.startswith("c. Lengths are in the unit of the data")
+    assert "length_unit" in got.caption
     assert declared_table(rows(), table(), {**GENERATOR_STUDY, "length_unit": "R"}).unit == "R"
 
 

@@ -102,7 +102,7 @@ def test_column_option_misuse_is_one_line(two_deviations, tmp_path):
     one_error_line(cli("positioning", named, "--column", "deviation=Straightness"), "no column 'Straightness'")
     wide = tmp_path / "wide.csv"
     wide.write_text("Target (mm),Run 1 + (µm),Run 1 - (µm),Run 2 + (µm),Run 2 - (µm)\n0,1,2,1.5,2.5\n100,2,3,2.2,3.1\n")
-    one_error_line(cli("positioning", wide, "--column", "deviation=1"), "no run column", "drop the option")
+    one_error_line(cli("positioning", wide, "--column", "deviation=1"), "this file has run columns", "drop the option")
 
 
 def test_actual_beside_deviation_reads_the_deviations_and_says_so(tmp_path):
@@ -115,4 +115,4 @@ def test_actual_beside_deviation_reads_the_deviations_and_says_so(tmp_path):
     assert got["A"] * 1e3 == pytest.approx(iso_a_um(lin), abs=1e-9)
     assert any("deviations read from column 'Deviation (µm)'" in n and "'Actual (mm)'" in n for n in got["notes"])
     # the note does not hide the refusal of an option for wide exports
-    one_error_line(cli("positioning", path, "--run-directions", "up"), "--run-directions is for a wide export")
+    one_error_line(cli("positioning", path, "--run-directions", "up"), "a long table with a direction column")

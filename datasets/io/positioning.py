@@ -167,7 +167,7 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
     cols = [str(c).strip() for c in df.columns]
     low = [c.lower() for c in cols]
     t = next((low.index(n) for n in TARGET_NAMES if n in low), None)
-    if t is None or "run" in low:
+    if t is None or "run" in low or "deviation" in low or "actual" in low:   # a long table (with or without runs)
         return None
     d_col = low.index("direction") if "direction" in low else None
     runs = {}
@@ -449,6 +449,60 @@ def _target_jitter(targets: np.ndarray, unit: str) -> str | None:
     return f"the targets {shown} {canonical(unit)} lie within {spread:.3g} {canonical(unit)} of each other"
 
 
+def _long_runs_and_directions(df, path, lines, run_directions, notes: list, to_um: float) -> bool:
+    """Complete a long table in place: without a run column (laser software's capture order: target, direction,
+    deviation per point, the runs one after the other) the k-th row of each target and direction is run k, said
+    in ``notes``; without a direction column the runs are one direction, not given, or as ``run_directions`` says
+    (odd and even runs in the order of their numbers), and refused when the odd and even runs differ as two
+    directions do (:func:`alternating_runs`), as a wide export's unlabelled run columns are. Returns whether the
+    directions were given."""
+    cols = {str(c).lower().strip(): c for c in df.columns}
+    if "target" not in cols:
+        return True
+    has_direction = "direction" in cols
+    if "run" not in cols:
+        targets = _numeric_column(df[cols["target"]], "target", path, lines)
+        keys = [targets] + ([df[cols["direction"]].astype(str).str.strip().str.lower().to_numpy()] if has_direction
+                            else [])
+        df["run"] = pd.DataFrame({f"k{i}": k for i, k in enumerate(keys)}).groupby(
+            [f"k{i}" for i in range(len(keys))], sort=False).cumcount().to_numpy() + 1
+        notes.append(f"the table has no run column: the k-th row of each target{' and direction' * has_direction} "
+                     "is read as run k, in the order of the file (as laser software lists the runs one after the "
+                     "other)")
+        cols["run"] = "run"
+    if has_direction:
+        return True
+    run = _numeric_column(df[cols["run"]], "run", path, lines)
+    targets = _numeric_column(df[cols["target"]], "target", path, lines)
+    twice = pd.DataFrame({"t": targets, "r": run}).duplicated(keep=False).to_numpy()
+    if twice.any():
+        first, second = np.flatnonzero(twice & (targets == targets[twice][0]) & (run == run[twice][0]))[:2]
+        raise DataFileError(f"{path}: missing column 'direction': target {targets[first] + 0.0:g} has run "
+                            f"{run[first]:g} twice (lines {lines[first]} and {lines[second]}), two approach directions? "
+                            "name the direction column 'Direction' (+ or - on every row)")
+    order = {r: i for i, r in enumerate(np.unique(run))}
+    if run_directions is not None:
+        pattern = RUN_DIRECTIONS.get(run_directions, run_directions)
+        df["direction"] = [pattern[order[r] % len(pattern)] for r in run]
+        return True
+    dev_col = cols.get("deviation") or cols.get("actual")
+    if dev_col is not None:
+        values = _numeric_column(df[dev_col], "deviation", path, lines)
+        if dev_col == cols.get("actual"):
+            values = values - targets
+        table = pd.DataFrame({"t": targets, "r": run, "v": values}).pivot_table(index="t", columns="r", values="v")
+        alt = alternating_runs(table.to_numpy()) if not table.isna().any().any() else None
+        if alt is not None and alt[2] < ALTERNATING_P:
+            raise DataFileError(
+                f"{path}: the table has no direction column, and its {table.shape[1]} runs' odd runs differ from the "
+                f"even runs by {alt[0] * to_um:+.3g} µm on average (Welch t = {alt[1]:.3g} over the runs' means, "
+                f"p = {alt[2]:.2g}), as the two directions of a bidirectional test do: give --run-directions up,down "
+                "(odd runs approached in +, even runs in -) or down,up, or --run-directions up / down if all runs "
+                "approached one way (or add a Direction column with + or - on every row)")
+    df["direction"] = "+"            # one direction, not given (labelled so by from_frame's direction_given)
+    return False
+
+
 def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_directions=None, columns=None):
     from methods.positioning import from_frame
 
@@ -479,19 +533,22 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
     deviation_unit = stated or unit
     df = df.drop(columns=unread).rename(columns=renamed)
     long_only = [r for r in (columns or {}) if r not in ("target", "direction")]
-    if long_only and "run" not in roles.values():
+    run_columns = [n for k, n in enumerate(names) if k not in roles and _role_name(n) is None and RUN_COLUMN.match(n)]
+    if long_only and run_columns:
         raise DataFileError(f"{path}: --column {long_only[0]}={columns[long_only[0]]} names a column of a long table "
-                            "(target, direction, run, deviation or actual), and this file has no run column (a wide "
-                            "export has one column per run, read without --column): drop the option, or name the run "
-                            "column (--column run=...)")
+                            f"(target, direction, run, deviation or actual), and this file has run columns "
+                            f"({run_columns[0]!r}, ...: a wide export, read without --column): drop the option")
     from methods.units import to_mm
     wide = _wide_to_long(df, str(path), lines, run_directions, to_um=float(to_mm(1.0, deviation_unit)) * 1e3)
     given = True
     if wide is not None:
         df, lines, given = wide
-    elif run_directions is not None:
-        raise DataFileError(f"{path}: --run-directions is for a wide export whose run columns name no direction; "
-                            "this is a long table with a direction column: drop the option")
+    elif run_directions is not None and "direction" in roles.values():
+        raise DataFileError(f"{path}: --run-directions is for run columns without directions; this is a long table "
+                            "with a direction column: drop the option")
+    else:
+        given = _long_runs_and_directions(df, path, lines, run_directions, column_notes,
+                                          to_um=float(to_mm(1.0, deviation_unit)) * 1e3)
     if wide is None and {"actual", "deviation"} <= set(roles.values()) and "actual" not in (columns or {}):
         k = {r: j for j, r in roles.items()}
         column_notes.append(f"the deviations read from column {names[k['deviation']]!r}; the column "

@@ -286,7 +286,8 @@ def run(args) -> int:
         else:
             notes.append(str(run_order[0]))
     if not data.direction_given:
-        notes.append("the run columns name no approach direction: evaluated as one direction, not given (shown as ?; "
+        notes.append("the columns name no approach direction (no direction column, or run columns without + or -): "
+                     "evaluated as one direction, not given (shown as ?; "
                      "in the JSON under the keys *_up); give --run-directions up or down to name it, up,down or down,up "
                      "if the runs alternate")
     elif args.run_directions is not None:

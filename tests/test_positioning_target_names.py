@@ -82,3 +82,22 @@ def test_targets_with_readout_jitter_are_said_to_be_read_as_different_targets(tm
     out = cli("positioning", rounded, "--json")
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9)
+
+
+@pytest.mark.parametrize("up, down", [("Fwd", "Bwd"), ("Forward", "Backward"), ("Hin", "Zurück"), ("Up", "Dn"),
+                                      ("Increasing", "Decreasing")])
+def test_direction_and_run_order_words_of_run_columns(tmp_path, up, down):
+    """Before: 'column 'Run 1 Bwd (µm)' is neither the target, a direction nor a run' (the words were not read, and
+    the message did not list those that are)."""
+    dev = runs()
+    head = ";".join(["Target (mm)"] + [f"Run {r} {w} (µm)" for r in (1, 2, 3) for w in (up, down)])
+    rows = [";".join([f"{t:.4f}"] + [f"{dev[d][i, r]:.3f}" for r in range(3) for d in "+-"])
+            for i, t in enumerate(TARGETS)]
+    (tmp_path / "w.csv").write_text(head + "\n" + "\n".join(rows) + "\n")
+    out = cli("positioning", tmp_path / "w.csv", "--json")
+    assert out.returncode == 0, out.stderr
+    got = json.loads(out.stdout)
+    assert got["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9) and got["B_mean"] < 0   # ↑ below ↓ as written
+    (tmp_path / "x.csv").write_text(head.replace(f"Run 1 {up}", "Run 1 Vor") + "\n" + "\n".join(rows) + "\n")
+    one_error_line(cli("positioning", tmp_path / "x.csv"), "'Run 1 Vor (µm)' is neither", "up/down (dn)",
+                   "forward/reverse (fwd/rev/bwd, backward, hin/rück/zurück)")

@@ -35,7 +35,8 @@ COLUMN_ROLES = ("target", "direction", "run", "actual", "deviation")
 ROLE_WORDS = {"target": "the target positions", "direction": "the approach directions", "run": "the run numbers",
               "actual": "the actual (measured) positions", "deviation": "the positioning deviations"}
 RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[]*"
-                  r"(\+|-|up|down|u|d|fwd|rev|forward|reverse|pos|neg|↑|↓|hin|rück|rueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
+                  r"(\+|-|up|down|dn|u|d|increasing|decreasing|inc|dec|positive|negative|pos|neg|↑|↓|fwd|rev|bwd|"
+                  r"forward|reverse|backward|hin|rück|rueck|zurück|zurueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
                   re.IGNORECASE)
 
 
@@ -177,13 +178,16 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
         m = RUN_COLUMN.match(c)
         if not m:
             raise DataFileError(f"{name}: column {c!r} is neither the target, a direction nor a run "
-                                    "(wide layout: target, run 1 +, run 1 -, ... or target, direction, run 1, run 2, ...)")
+                                "(wide layout: target, run 1 +, run 1 -, ... or target, direction, run 1, run 2, ...; "
+                                "the words read after a run's number: +/-, up/down (dn), ↑/↓, pos/neg, "
+                                "increasing/decreasing as the axis direction, forward/reverse (fwd/rev/bwd, backward, "
+                                "hin/rück/zurück) as the run order)")
         runs[k] = (int(m.group(1)), m.group(2))
     if not runs:
         return None
     # 'Forward'/'Reverse' ('Hin'/'Rück') are the laser software's run order, not the axis direction (ISO 230-2: ↑ is
     # an approach in the + direction): the forward runs pass the targets in the order the file lists them
-    from methods.positioning.data import RUN_ORDER_TAGS, RunOrderNote
+    from methods.positioning.data import RUN_ORDER_TAGS, UP, RunOrderNote
     order = {k: RUN_ORDER_TAGS[tag.lower()] for k, (_, tag) in runs.items() if tag and tag.lower() in RUN_ORDER_TAGS}
     forward = None
     if order and d_col is None:
@@ -239,7 +243,7 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
             signs = pattern or "+"
             direction = np.full(len(df), signs[seq[k] % len(signs)])
         else:
-            direction = np.full(len(df), "+" if tag is None or tag.lower() in ("+", "up", "u", "pos", "↑") else "-")
+            direction = np.full(len(df), "+" if tag is None or tag.lower() in UP else "-")
         rows.append(pd.DataFrame({"target": df.iloc[:, t].to_numpy(), "direction": direction, "run": run,
                                   "deviation": df.iloc[:, k].to_numpy(), "_line": lines}))
     long = pd.concat(rows, ignore_index=True)

@@ -32,14 +32,15 @@ pd = lazy_module("pandas")
 
 
 MAX_ABS_DEVIATION_MM = 1e6     # larger deviations are not measurements (and overflow the statistics)
-UP = {"+", "up", "u", "positive", "pos", "↑"}
-DOWN = {"-", "down", "d", "negative", "neg", "↓"}
+UP = {"+", "up", "u", "positive", "pos", "increasing", "inc", "↑"}
+DOWN = {"-", "down", "dn", "d", "negative", "neg", "decreasing", "dec", "↓"}
 
 
 #: column words of wide laser exports that name the run order (the first and second run of a pair), not the axis
 #: direction: what a forward run is depends on where the test started
 RUN_ORDER_TAGS = {"fwd": "forward", "forward": "forward", "hin": "forward",
-                  "rev": "reverse", "reverse": "reverse", "rück": "reverse", "rueck": "reverse"}
+                  "rev": "reverse", "reverse": "reverse", "bwd": "reverse", "backward": "reverse", "rück": "reverse",
+                  "rueck": "reverse", "zurück": "reverse", "zurueck": "reverse"}
 
 
 class RunOrderNote(UserWarning):

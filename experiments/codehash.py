@@ -80,14 +80,39 @@ def _origin(name: str) -> Path | None:
                 if path.is_file():
                     return path
             return None
-    try:
-        spec = importlib.util.find_spec(name)
-    except (ImportError, ValueError, AttributeError):
-        return None
+    spec = _spec(name)
     if spec is None or not spec.origin or not spec.has_location:
         return None
     path = Path(spec.origin)
     return path if path.suffix == ".py" and path.exists() else None
+
+
+def _spec(name: str):
+    """The module spec of ``name`` found without running any code of it or of its parent packages (what
+    ``importlib.util.find_spec`` does for a dotted name by importing the parents: a package whose ``__init__`` exits,
+    hangs or fails would act during the hashing of a key); None when not found."""
+    import sys
+    spec, path = None, None
+    parts = name.split(".")
+    for i in range(len(parts)):
+        full = ".".join(parts[:i + 1])
+        module = sys.modules.get(full)
+        spec = getattr(module, "__spec__", None) if module is not None else None
+        if spec is None:
+            for finder in sys.meta_path:
+                find = getattr(finder, "find_spec", None)
+                try:
+                    spec = find(full, path) if find is not None else None
+                except Exception:  # a finder that cannot look there (a plugin's own finder): not found by it
+                    spec = None
+                if spec is not None:
+                    break
+        if spec is None:
+            return None
+        path = getattr(module, "__path__", None) if module is not None else spec.submodule_search_locations
+        if path is None and i < len(parts) - 1:  # a module, not a package: nothing below it
+            return None
+    return spec
 
 
 @lru_cache(maxsize=None)

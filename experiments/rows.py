@@ -227,7 +227,8 @@ def _measured_row(task: dict, res, points, truth, sent: dict | None = None) -> d
     row = base_row(task)
     problem = check_result(res, points)  # the gate: a result that breaks its family's contract is no row
     given = res
-    if not problem and not result_base.trusted(res, task["method"]):
+    plugin = not result_base.trusted(res, task["method"])
+    if not problem and plugin:
         # a plugin's method or class: the row is computed by fitbench's own class from a copy of the values in plain
         # types, which the gate checks again; the plugin's class adds its own columns only
         checked = result_base.family_copy(res)
@@ -248,11 +249,11 @@ def _measured_row(task: dict, res, points, truth, sent: dict | None = None) -> d
                          f"{task['method']} of {other[1]!r}"
         truth = None
     own = None
-    if given is not res:  # the columns the plugin's class adds: never the row's identity or status
-        own = {k: v for k, v in result_base.own_columns(given, res, truth).items() if k not in row}
+    if given is not res:  # the columns the plugin's class adds (one the engine writes is refused below)
+        own = result_base.own_columns(given, res, truth)
     if sent:  # what a plugin's class adds, computed in its process (_plugin_rows): numbers only
         family = {c.name for c in type(res).COLUMNS}
-        own = {**(own or {}), **{k: v for k, v in sent.items() if type(k) is str and k not in row
+        own = {**(own or {}), **{k: v for k, v in sent.items() if type(k) is str
                                  and k not in family and type(v) in (float, int)}}
     try:
         measured = metrics(res, truth, own)
@@ -262,6 +263,10 @@ def _measured_row(task: dict, res, points, truth, sent: dict | None = None) -> d
         metrics(res, None, own)  # without the truth it can: the data source is at fault
         raise DataSourceError(f"data set {_label(task)} gave a truth that cannot be compared with a fit "
                               f"({exception_text(exc)}); the data source is at fault, not the methods") from None
+    if plugin and any(map(result_base.engine_column, measured)):  # the engine's columns are the engine's alone
+        taken = [k for k in measured if result_base.engine_column(k)]
+        return {**base_row(task), "status": "invalid", "message": f"invalid result: its class gives the column(s) "
+                f"{', '.join(map(repr, taken))}, which the engine writes in the row; rename them"}
     row.update(measured)
     if task.get("timing"):
         t = task["timing"]

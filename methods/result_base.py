@@ -164,7 +164,21 @@ CENTER_ERROR_COLUMNS = (*error_columns("center_error_x", "center_error_y", summa
 
 class DeclarationError(ValueError):
     """A result class that declares a column another class declares already, with another quantity (unit),
-    tolerance or summary role: a row column has one declaration."""
+    tolerance or summary role (a row column has one declaration), or a column the engine writes itself
+    (:data:`ENGINE_COLUMNS`)."""
+
+
+#: the columns the engine writes in a row (``experiments/rows.py``: ``base_row``'s identity, ``_measured_row``'s status
+#: and counts, ``_finished``'s task index), and the prefixes of those it writes per data set parameter, per method
+#: parameter and per timing (``experiments/timing.py``): no result class may declare one (it would overwrite it)
+ENGINE_COLUMNS = frozenset({"study", "dataset", "repetition", "seed", "data_stream", "method", "params", "status",
+                            "message", "converged", "iterations", "nfev", "task_index"})
+ENGINE_PREFIXES = ("data_", "param_", "time_")
+
+
+def engine_column(name) -> bool:
+    """Whether ``name`` is a row column the engine writes (:data:`ENGINE_COLUMNS`, :data:`ENGINE_PREFIXES`)."""
+    return name in ENGINE_COLUMNS or (type(name) is str and name.startswith(ENGINE_PREFIXES))
 
 
 @dataclass(kw_only=True)
@@ -337,11 +351,18 @@ def _declared_as(col: Column) -> str:
 
 
 def _check_declarations(cls: type) -> None:
-    """Refuse a class whose ``COLUMNS`` redeclare a column of another class with another quantity, tolerance or
-    summary role (its ``check`` may differ: the gate applies the family's). Run when the class is defined (against
+    """Refuse a class whose ``COLUMNS`` name a column the engine writes (:func:`engine_column`), or redeclare a
+    column of another class with another quantity, tolerance or summary role (its ``check`` may differ: the gate applies the family's). Run when the class is defined (against
     the classes defined so far; a plugin's class defined before the built-in families is checked again when they
     are loaded): the declaration that counts is the first in :func:`result_classes`' order (a built-in family's
     before a plugin's)."""
+    for col in cls.__dict__.get("COLUMNS", ()):
+        if engine_column(col.name):
+            what = ("the row's identity, status or counts" if col.name in ENGINE_COLUMNS else
+                    "a data set's or a method's parameter, or a timing")
+            raise DeclarationError(
+                f"{cls.__module__}.{cls.__qualname__} declares the column {col.name!r}, which the engine writes ({what}): "
+                f"a result cannot set it; rename the column (e.g. {cls.__dict__.get('FAMILY') or 'my'}_{col.name})")
     classes = _classes_so_far()
     earlier = classes[:classes.index(cls)] if cls in classes else classes
     for col in cls.__dict__.get("COLUMNS", ()):

@@ -68,3 +68,12 @@ def test_rows_with_one_field_more_than_the_header_are_refused(tmp_path):
     extra = write(tmp_path / "extra.csv", ";".join(NAMES[:-1]), rows(dev))     # the header lacks a name
     one_error_line(cli("positioning", extra), "the header has 6 names but every data line has 7 fields",
                    "name every column in the header")
+
+
+def test_a_run_column_named_twice_is_named_as_written(tmp_path):
+    """Before: "column 'Run 1 + (µm).1' is neither the target, a direction nor a run" (pandas' renaming, not in
+    the file)."""
+    names = NAMES[:3] + ["Run 1 + (µm)"] + NAMES[4:]
+    out = cli("positioning", write(tmp_path / "dup.csv", ";".join(names), rows(runs())))
+    one_error_line(out, "the column 'Run 1 + (µm)' appears twice (columns 1 and 3, numbered from 0)")
+    assert ".1'" not in out.stderr

@@ -165,16 +165,20 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
     odd and even runs differ as two directions do (:func:`alternating_runs`): that is refused naming the option.
     ``to_um``: µm per unit of the deviations (for the message)."""
     pattern = RUN_DIRECTIONS.get(run_directions, run_directions)
-    cols = [str(c).strip() for c in df.columns]
+    cols = [c.strip() for c in _header_names(df.columns)]     # as the header writes them (not pandas' 'X.1')
     low = [c.lower() for c in cols]
     t = next((low.index(n) for n in TARGET_NAMES if n in low), None)
     if t is None or "run" in low or "deviation" in low or "actual" in low:   # a long table (with or without runs)
         return None
     d_col = low.index("direction") if "direction" in low else None
-    runs = {}
+    runs, seen = {}, {}
     for k, c in enumerate(cols):
         if k in (t, d_col):
             continue
+        if c in seen:
+            raise DataFileError(f"{name}: the column {c!r} appears twice (columns {seen[c]} and {k}, numbered from 0): "
+                                "rename the one that is another run, or delete it")
+        seen[c] = k
         m = RUN_COLUMN.match(c)
         if not m:
             raise DataFileError(f"{name}: column {c!r} is neither the target, a direction nor a run "

@@ -661,6 +661,25 @@ def default_out(results: Path) -> Path:
     return Path("paper") if Path(results).resolve() == Path("results").resolve() else Path(results) / "paper"
 
 
+def committed_clash(out: Path, project: bool) -> str | None:
+    """What of the committed report (``paper/``) or results (``results/``) of the repository or of the current
+    folder (as :func:`is_default_results`) ``experiments.run --out out`` would write into, as words for a refusal,
+    or None. Its report goes to :func:`default_out`, so ``--out`` of the checkout itself puts it in ``paper/``. A
+    study that is not the project's (``project`` False) stays out of ``results/`` too, except ``results/user/``,
+    where its outputs go by default."""
+    here, report = Path(out).resolve(), default_out(out).resolve()
+    for base in (REPO, Path(".").resolve()):
+        paper, results = base / "paper", base / "results"
+        if report == paper and not (project and here == results):
+            return ("would put the run's report into paper/, the committed report (the report of --out DIR goes to "
+                    "DIR/paper)")
+        if here.is_relative_to(paper):
+            return "lies inside paper/, the committed report"
+        if not project and here.is_relative_to(results) and not here.is_relative_to(results / "user"):
+            return "lies inside results/, the committed results (a personal study goes to results/user/)"
+    return None
+
+
 def main(argv=None, prog: str = "python -m experiments.report") -> int:
     parser = argparse.ArgumentParser(prog=prog, description="Build paper/ from results/.")
     from fitbench import __version__

@@ -331,6 +331,10 @@ def output_folder(out: str | None, cfgs: list, quick: bool) -> tuple[Path, str |
                     f"--out {out} {what}; {c['name']} ({c.where}) is not one of the project's studies "
                     f"(experiments/configs/): leave --out out (its outputs then go to "
                     f"{USER_OUT / 'quick' if quick else USER_OUT}/) or give another folder")
+        from experiments.report import committed_clash
+        if clash := committed_clash(Path(out), project=not foreign):
+            raise InvalidInputError(f"--out {out} {clash}; give another folder, or leave --out out (the outputs then go "
+                                    f"to {(USER_OUT if foreign else DEFAULT_OUT) / ('quick' if quick else '')}/)")
         return Path(out), None
     if not foreign:
         return (DEFAULT_OUT / "quick" if quick else DEFAULT_OUT), None   # a quick grid never joins the full results

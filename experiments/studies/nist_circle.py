@@ -18,12 +18,18 @@ from experiments.study import Analysis, ConfigError, Figure, Study, Table
 
 
 def _folder() -> Path:
+    """FITBENCH_NIST_DIR, refused in one line unless it holds converted sets (each nist_cir2d_*.json with its .csv)."""
     value = os.environ.get("FITBENCH_NIST_DIR")
-    if not value or not Path(value).is_dir():
-        raise ConfigError("nist_circle needs FITBENCH_NIST_DIR set to the folder of nist_cir2d_*.csv/.json "
-                          + (f"({value!r} is not a folder)" if value else "(not set)")
-                          + "; make them from NIST's Circle2d reference pairs with python -m datasets.nist_circle2d "
-                            "CIRCLE2D_FOLDER OUT (docs/methods.md)")
+    why = ("not set" if not value else f"{value!r} is not a folder" if not Path(value).is_dir() else None)
+    if why is None:
+        sets = sorted(Path(value).glob("nist_cir2d_*.json"))
+        lone = [p.name for p in sets if not p.with_suffix(".csv").is_file()]
+        why = (f"{value!r} holds no nist_cir2d_*.json" if not sets else
+               f"{value!r} holds {lone[0]} without {Path(lone[0]).stem}.csv" if lone else None)
+    if why:
+        raise ConfigError(f"nist_circle needs FITBENCH_NIST_DIR set to the folder of nist_cir2d_*.csv/.json ({why}); "
+                          "make them from NIST's Circle2d reference pairs with python -m datasets.nist_circle2d "
+                          "CIRCLE2D_FOLDER OUT (docs/methods.md)")
     return Path(value)
 
 
@@ -73,12 +79,17 @@ class NistCircleStudy(Study):
         """One data set per converted Circle2d set of ``FITBENCH_NIST_DIR``, its truth NIST's reference fit."""
         specs = []
         for i, meta_path in enumerate(sorted(_folder().glob("nist_cir2d_*.json"))):
-            meta = json.loads(meta_path.read_text())
-            ref = meta["reference_least_squares"]
-            truth = {"family": "circle", "center": [float(Decimal(v)) for v in ref["center"]],
-                     "radius": float(Decimal(ref["diameter"])) / 2}
+            try:
+                meta = json.loads(meta_path.read_text(encoding="utf-8"))
+                ref = meta["reference_least_squares"]
+                truth = {"family": "circle", "center": [float(Decimal(v)) for v in ref["center"]],
+                         "radius": float(Decimal(ref["diameter"])) / 2}
+                label = str(meta["name"])
+            except (OSError, UnicodeError, ValueError, KeyError, TypeError, ArithmeticError) as exc:
+                raise ConfigError(f"nist_circle: {meta_path} is not a set python -m datasets.nist_circle2d makes "
+                                  f"({type(exc).__name__}: {exc}); make the folder again with it") from None
             specs.append({"entry": i, "point": 0, "file": str(meta_path.with_suffix(".csv")), "truth": truth,
-                          "label": meta["name"]})
+                          "label": label})
         return specs
 
     def tasks(self, cfg):

@@ -69,12 +69,13 @@ def stdout_to_stderr():
 
 
 def run_method(spec, data, **params):
-    """``spec(data, **params)`` with the method's prints sent to stderr (stdout carries the command's output
-    alone: ``--json`` stays one JSON object) and its own exceptions turned into one line naming it
-    (:class:`MethodFailed`); bad input (:class:`~methods.InvalidInputError`, the result gate's refusal) passes."""
+    """``spec.checked(data, **params)`` (the result gate for every method, a built-in's too) with the method's prints
+    sent to stderr (stdout carries the command's output alone: ``--json`` stays one JSON object) and its own exceptions
+    turned into one line naming it (:class:`MethodFailed`); bad input (:class:`~methods.InvalidInputError`, the
+    result gate's refusal) passes."""
     try:
         with stdout_to_stderr():
-            return spec(data, **params)
+            return spec.checked(data, **params)
     except InvalidInputError as exc:   # bad input, said by the method: its message is the line (if it can be printed)
         try:
             str(exc)

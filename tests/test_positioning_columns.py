@@ -116,3 +116,27 @@ def test_actual_beside_deviation_reads_the_deviations_and_says_so(tmp_path):
     assert any("deviations read from column 'Deviation (µm)'" in n and "'Actual (mm)'" in n for n in got["notes"])
     # the note does not hide the refusal of an option for wide exports
     one_error_line(cli("positioning", path, "--run-directions", "up"), "a long table with a direction column")
+
+
+def test_other_channels_are_refused_or_named(tmp_path):
+    """A second channel whose name is not exactly a role's ('Deviation Z (µm)') was read past without a word
+    (review16 V1): a length column with a position or deviation word is refused unless --column chose; other
+    numeric columns (straightness, pitch) are named in a note; --column naming another role's column is refused."""
+    lin, straight = channels()
+    cells = lambda d, i, r: [f"{TARGETS[i]:.1f}", str(r + 1), d, f"{straight[d][i, r]:.4f}", f"{lin[d][i, r]:.4f}"]
+    z = long_table(tmp_path / "z.csv", ["Target (mm)", "Run", "Direction", "Deviation Z (µm)", "Deviation (µm)"], cells)
+    one_error_line(cli("positioning", z), "besides 'Deviation (µm)'", "'Deviation Z (µm)'", '--column "deviation=NAME"')
+    out = cli("positioning", z, "--column", "deviation=4", "--json")
+    assert out.returncode == 0, out.stderr
+    got = json.loads(out.stdout)
+    assert got["A"] * 1e3 == pytest.approx(iso_a_um(lin), abs=1e-9)
+    assert any("not read: column 3 'Deviation Z (µm)'" in n for n in got["notes"])
+    cells3 = lambda d, i, r: cells(d, i, r) + ["12.5"]
+    three = long_table(tmp_path / "three.csv", ["Target (mm)", "Run", "Direction", "Straightness Y (µm)",
+                                                "Deviation (µm)", "Pitch (µrad)"], cells3)
+    out = cli("positioning", three, "--json")
+    assert out.returncode == 0, out.stderr
+    got = json.loads(out.stdout)
+    assert got["A"] * 1e3 == pytest.approx(iso_a_um(lin), abs=1e-9)
+    assert "not read: column 3 'Straightness Y (µm)', column 5 'Pitch (µrad)'" in got["notes"]
+    one_error_line(cli("positioning", z, "--column", "deviation=1"), "--column deviation=1 names 'Run', the run column")

@@ -118,6 +118,11 @@ def _assign_roles(names: list[str], path, columns: dict | None) -> tuple[dict[in
             raise DataFileError(f"{path}: --column gives column {names[k]!r} for both {other} and {role}: "
                                 "name one column for each")
         chosen[role] = k
+    for role, k in chosen.items():
+        named = _role_name(names[k])
+        if named is not None and named != role and named not in chosen:
+            raise DataFileError(f"{path}: --column {role}={columns[role]} names {names[k]!r}, the {named} column: give "
+                                f"the {role} column (its header name or 0-based number)")
     roles, notes = {k: role for role, k in chosen.items()}, []
     for role, k in chosen.items():
         rest = [j for j in candidates.get(role, ()) if j not in roles]
@@ -457,6 +462,41 @@ def _target_jitter(targets: np.ndarray, unit: str) -> str | None:
     return f"the targets {shown} {canonical(unit)} lie within {spread:.3g} {canonical(unit)} of each other"
 
 
+#: words in a column's name (its :func:`parse_name` key) that say it holds a position or a positional deviation
+POSITION_WORDS = ("deviation", "error", "abweichung", "fehler", "actual", "measured", "position", "target", "soll",
+                  "nominal")
+
+
+def _unread_columns(df, names, roles, unread, path, columns, notes: list) -> None:
+    """A long table's numeric columns that no role took: one with a length unit and a position or deviation word in
+    its name (``Deviation Z (µm)`` beside ``Deviation (µm)``: another channel of a 6-DoF laser) is refused unless
+    ``--column`` chose the columns read, since fitbench does not guess which channel holds the positioning
+    deviations; the others (``Straightness Y (µm)``, ``Pitch (µrad)``, ``Temperature (°C)``) are named in a note."""
+    from datasets.io.numbers import NUMBER
+    taken = set(roles) | {k for k, c in enumerate(df.columns) if c in unread}
+    other = []
+    for k, n in enumerate(names):
+        if k in taken or not n.strip():
+            continue
+        cells = df.iloc[:, k].fillna("").astype(str).str.strip()
+        if len(cells) and cells.map(lambda v: NUMBER.fullmatch(v) is not None).all():
+            other.append(k)
+    if not other:
+        return
+    key_unit = {k: parse_name(names[k]) for k in other}
+    suspect = [k for k in other if key_unit[k][1] in LENGTH_UNITS.values()
+               and any(w in key_unit[k][0] for w in POSITION_WORDS)]
+    if suspect and not columns:
+        dev = next((j for j, r in roles.items() if r in ("deviation", "actual")), None)
+        read = f"besides {names[dev]!r} " if dev is not None else ""
+        role = roles.get(dev, "deviation")
+        raise DataFileError(f"{path}: {read}the table has the length column(s) "
+                            f"{', '.join(repr(names[k]) for k in suspect)}, and fitbench does not guess which one holds "
+                            f"the positioning deviations (another channel?): give --column \"{role}=NAME\" naming the "
+                            "column to read (or its 0-based number), or delete the others")
+    notes.append(f"not read: {', '.join(f'column {k} {names[k]!r}' for k in other)}")
+
+
 def _long_runs_and_directions(df, path, lines, run_directions, notes: list, to_um: float) -> bool:
     """Complete a long table in place: without a run column (laser software's capture order: target, direction,
     deviation per point, the runs one after the other) the k-th row of each target and direction is run k, said
@@ -539,7 +579,7 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
     unit = _header_unit(lengths, unit, "--unit", path) or "mm"
     stated = _header_unit(deviations, deviation_unit, "--deviation-unit", path)
     deviation_unit = stated or unit
-    df = df.drop(columns=unread).rename(columns=renamed)
+    raw, df = df, df.drop(columns=unread).rename(columns=renamed)
     long_only = [r for r in (columns or {}) if r not in ("target", "direction")]
     run_columns = [n for k, n in enumerate(names) if k not in roles and _role_name(n) is None and RUN_COLUMN.match(n)]
     if long_only and run_columns:
@@ -557,6 +597,8 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
     else:
         given = _long_runs_and_directions(df, path, lines, run_directions, column_notes,
                                           to_um=float(to_mm(1.0, deviation_unit)) * 1e3)
+    if wide is None:
+        _unread_columns(raw, names, roles, unread, path, columns, column_notes)
     if wide is None and {"actual", "deviation"} <= set(roles.values()) and "actual" not in (columns or {}):
         k = {r: j for j, r in roles.items()}
         column_notes.append(f"the deviations read from column {names[k['deviation']]!r}; the column "

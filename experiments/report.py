@@ -636,10 +636,14 @@ def _rankings_section(rankings, problem, out, add_table, add_figure, doc):
         if r.by_dataset is None or r.by_dataset.empty:
             continue
         units = r.unit_words()
+        fewer = r.dataset_notes
         tex_items = add_table(r.by_dataset.reset_index(),
-                                     f"Median {name} per data set and method over the data set's problems (failed, "
-                                     "or -- in the LaTeX table: failed on at least half of them); colour in the HTML "
-                                     "report: ratio to the best method of the row"
+                                     f"Median {name} per data set and method over the data set's problems that "
+                                     "every method of the row ran on (failed: it failed on at least half of them, – in the Markdown and LaTeX "
+                                     "tables; –: not run on the data set); "
+                                     "colour in the HTML report: ratio to the best method of the row"
+                                     + (f". Fewer problems than the data set's (those every method of the row ran on): {'; '.join(fewer)}"
+                                        if fewer else "")
                                      + (f". Units by study (the data set's prefix): {units}" if units else ""),
                                      r.unit, 3, "lower_is_better")
         items += tex_items

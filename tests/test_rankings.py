@@ -152,3 +152,58 @@ def test_the_explorer_shows_every_cost_with_its_unit(tmp_path):
     assert "axis_unit" not in data and "axis_unit" not in alone and "axis_unit" not in script
     # the hovers name each problem's unit; the runtime plot's y axes name their panel's unit (one panel per unit)
     assert "esc(r.metric)" not in script and "panel.unit" in script and "r.units[i]" in script
+
+
+def test_medians_per_data_set_are_over_the_problems_every_method_ran_on(tmp_path):
+    """A method skipped on a data set's hardest problem (max_n) had its median over its easier problems only, and
+    looked best (the report's 'scaling: circle': Nelder–Mead 0.028 beside the minimum zone's 0.032, though above it
+    at every N). Each method's median is now over the problems every method of the row ran on, and the caption says
+    which data set lost problems."""
+    from experiments.report import _rankings_section
+
+    name, folder, meta = study(tmp_path, "scaling", {"circle.minimum_zone": [1.0, 2.0, 9.0],
+                                                     "circle.nelder_mead": [1.1, 2.2, 9.9]})
+    rows = pd.read_csv(folder / "results.csv")
+    rows = rows[~((rows["method"] == "circle.nelder_mead") & (rows["data_stream"] == "s2"))]   # not run on s2
+    rows.to_csv(folder / "results.csv", index=False)
+    r = collect([(name, folder, meta)])["circularity"]
+    med = r.by_dataset.loc["scaling: d"]
+    assert med["circle.minimum_zone"] < med["circle.nelder_mead"]
+    assert med["circle.minimum_zone"] == np.median([1.0, 2.0]) and med["circle.nelder_mead"] == np.median([1.1, 2.2])
+    assert r.dataset_notes == ["scaling: d: 2 of its 3 problems (circle.nelder_mead ran on 2)"]
+    captions = []
+
+    class Doc:
+        def heading(self, *a, **k): pass
+        def prose(self, *a, **k): pass
+
+    _rankings_section({"circularity": r}, None, tmp_path, lambda t, c, *a: captions.append(c) or [],
+                      lambda *a: [], Doc())
+    assert "scaling: d: 2 of its 3 problems (circle.nelder_mead ran on 2)" in captions[0]
+    # a data set on which no problem was run by every method of its row is left out, and said so
+    other = study(tmp_path, "other", {"circle.minimum_zone": [1.0], "circle.nelder_mead": [2.0]})
+    rows = pd.read_csv(other[1] / "results.csv")
+    rows.loc[rows["method"] == "circle.nelder_mead", "data_stream"] = "s1"
+    rows.to_csv(other[1] / "results.csv", index=False)
+    r2 = collect([other])["circularity"]
+    assert r2.by_dataset.empty and r2.dataset_notes == [
+        "left out, no problem that every method of the row ran on: other: d"]
+
+
+def test_a_method_not_run_on_a_data_set_is_not_shown_failed(tmp_path):
+    """A method run by one study only was shown 'failed' (grey) in the other studies' rows of the HTML median
+    table: not run is not failed. A median of inf (failed on at least half) stays 'failed'; not run is '–',
+    uncoloured."""
+    import re
+
+    from experiments.render.report_tables import html_table
+    nan = float("nan")
+    a = study(tmp_path, "a", {"circle.kasa": [1.0, 2.0], "circle.max_inscribed": [nan, nan]})
+    b = study(tmp_path, "b", {"circle.kasa": [1.0], "circle.max_inscribed": [2.0], "circle.plugin": [0.5]})
+    r = collect([a, b])["circularity"]
+    med = r.by_dataset
+    assert np.isinf(med.loc["a: d", "circle.max_inscribed"]) and np.isnan(med.loc["a: d", "circle.plugin"])
+    html = html_table(med.reset_index(), caption="c", unit="mm", digits=3, colour="lower_is_better")
+    cells = dict(re.findall(r'<td[^>]*class="data (row0 col\d+) num" >([^<]*)', html))
+    assert cells["row0 col1"] == "failed" and cells["row0 col2"] == "–"
+    assert "T_table_row0_col2" not in html.split("</style>")[0]   # no colour for a cell without a value

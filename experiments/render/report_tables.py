@@ -122,7 +122,7 @@ def latex_fragments(df: pd.DataFrame, *, caption: str, label: str, unit: str = "
     methods_rows = any(str(c).strip().lower() in ("method", "methods") for c in keys) or \
         any(str(c).startswith(("circle.", "ellipse.")) for c in values)
     notes = ([f"-- : no value{' (it does not apply there, or the method did not run or failed)' if methods_rows else ''}"]
-             if df.isna().any().any() else None)
+             if (df.isna() | df.isin([np.inf, -np.inf])).any().any() else None)   # inf: failed (a ranking's median)
 
     def attempt(vals, cap, lab):
         return latex_table(df[keys + vals], _columns(df, keys, vals, unit, digits, decimals, exact), caption=cap,

@@ -67,13 +67,17 @@ class MethodSpec(MethodInfo):
     param_checks: dict = field(default_factory=dict, repr=False, compare=False)
 
     def check_params(self, params: dict) -> None:
-        """Refuse parameter values before any data is fitted (see :func:`check_param`)."""
+        """Refuse parameter values before any data is fitted (see :func:`check_param`), then by the checks the
+        method's own code makes (:func:`body_checks`) of a parameter that declares none."""
         unknown = sorted(set(params) - set(self.defaults))
         if unknown:
             raise InvalidInputError(f"{self.id} has no parameter {', '.join(map(repr, unknown))}; "
                                     f"its parameters are: {', '.join(self.defaults) or 'none'}")
         for name, value in params.items():
             problem = check_param(name, value, self.defaults[name], self.param_checks.get(name))
+            if not problem and name not in self.param_checks:  # then the checks its own code makes (a choice)
+                own = body_checks(self.func).get(name)
+                problem = own(value) if own is not None else None
             if problem:
                 raise InvalidInputError(f"{self.id}: parameter {name}={value!r} {problem}")
 
@@ -168,6 +172,140 @@ def check_param(name: str, value, default, check: Callable | None = None) -> str
     if check is None:
         check = next((c for match, c in PARAM_CONVENTIONS if match(name)), None)
     return check(value) if check is not None else None
+
+
+#: the value checks of :mod:`methods._validation` whose calls in a method's body :func:`body_checks` reads
+_CHECK_HELPERS = ("check_choice", "check_positive", "check_vector")
+_BODY_CHECKS: dict = {}
+
+
+def body_checks(func: Callable) -> dict[str, Callable]:
+    """{parameter: check(value) -> problem or None}: the checks a method's own code makes of its parameters' values,
+    so that a study's config (:meth:`MethodSpec.check_params`) refuses before any row what the method would refuse
+    when its rows run (``backend="bogus"``: was a ``skipped`` row). Read from the source of ``func``: every call of
+    ``check_choice``, ``check_positive`` or ``check_vector`` (:mod:`methods._validation`) on a parameter itself,
+    made by every call of the method (a statement of its body, not inside an ``if``, loop, ``try`` or ``with``),
+    or by a function of its own package that it so calls with the parameter (``_setup(points, name, backend,
+    ...)``, two levels deep). Their other arguments (the choices, the length) are names and constants evaluated
+    when checked; a call with others is not read. Nothing without readable source (a method made at run time)."""
+    hit = _BODY_CHECKS.get(func)
+    if hit is None:
+        found: dict[str, list] = {}
+        names = {p.name: p.name for p in inspect.signature(func).parameters.values()}
+        _read_checks(func, names, found, depth=0, package=func.__module__.split(".")[0])
+        hit = _BODY_CHECKS[func] = {p: _combined(p, checks) for p, checks in found.items()}
+    return hit
+
+
+def _read_checks(func: Callable, names: dict, found: dict, depth: int, package: str) -> None:
+    """Add to ``found`` the checks ``func``'s body makes of its variables in ``names`` (variable -> the method's
+    parameter it holds), following the calls that pass one of them to a function of ``package``."""
+    import ast
+    import textwrap
+    try:
+        tree = ast.parse(textwrap.dedent(inspect.getsource(func)))
+    except (OSError, TypeError, SyntaxError):
+        return
+    node = next((n for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))
+                 and n.name == func.__name__), None)
+    if node is None:
+        return
+    env = getattr(func, "__globals__", {})
+    for stmt in node.body:
+        if isinstance(stmt, (ast.If, ast.For, ast.AsyncFor, ast.While, ast.Try, ast.With, ast.AsyncWith,
+                             ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) or type(stmt).__name__ == "TryStar":
+            continue
+        for call in _unconditional_calls(stmt):
+            callee = _resolve(call.func, env)
+            if callee is None:
+                continue
+            helper = getattr(callee, "__name__", "") in _CHECK_HELPERS and \
+                getattr(callee, "__module__", "") == "methods._validation"
+            try:
+                bound = inspect.signature(callee).bind(*call.args, **{k.arg: k.value for k in call.keywords
+                                                                      if k.arg is not None})
+            except (TypeError, ValueError):
+                continue
+            if any(isinstance(a, ast.Starred) for a in call.args) or any(k.arg is None for k in call.keywords):
+                continue
+            args = bound.arguments
+            if helper:
+                value = args.get("value")
+                if isinstance(value, ast.Name) and value.id in names and isinstance(args.get("name"), ast.Constant):
+                    rest = {k: v for k, v in args.items() if k not in ("name", "value", "method")}
+                    if all(_plain_expression(v) for v in rest.values()):
+                        found.setdefault(names[value.id], []).append((callee, args["name"].value, rest, env))
+            elif depth < 2 and inspect.isfunction(callee) and callee.__module__.split(".")[0] == package:
+                passed = {k: names[v.id] for k, v in args.items() if isinstance(v, ast.Name) and v.id in names}
+                if passed:
+                    _read_checks(callee, passed, found, depth + 1, package)
+
+
+def _unconditional_calls(node):
+    """The calls an expression or statement always makes (not inside a conditional expression, ``and``/``or``, a
+    lambda or a comprehension)."""
+    import ast
+    if isinstance(node, (ast.IfExp, ast.BoolOp, ast.Lambda, ast.ListComp, ast.SetComp, ast.DictComp,
+                         ast.GeneratorExp)):
+        return
+    if isinstance(node, ast.Call):
+        yield node
+    for child in ast.iter_child_nodes(node):
+        yield from _unconditional_calls(child)
+
+
+def _plain_expression(node) -> bool:
+    """A constant, a name, an attribute of one, or a tuple/list of them: evaluated without running code."""
+    import ast
+    if isinstance(node, ast.Constant):
+        return True
+    if isinstance(node, ast.Name):
+        return True
+    if isinstance(node, ast.Attribute):
+        return _plain_expression(node.value)
+    if isinstance(node, (ast.Tuple, ast.List)):
+        return all(_plain_expression(e.value if isinstance(e, ast.Starred) else e) for e in node.elts)
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+        return _plain_expression(node.operand)
+    return False
+
+
+def _evaluate(node, env: dict):
+    import ast
+    return eval(compile(ast.Expression(node), "<check>", "eval"), env)  # a _plain_expression: names and constants
+
+
+def _resolve(node, env: dict):
+    """The function a call names (``check_choice``, ``simplex.nelder_mead``), when it is a name or an attribute of
+    one in ``env``; else None."""
+    import ast
+    if not isinstance(node, (ast.Name, ast.Attribute)) or not _plain_expression(node):
+        return None
+    try:
+        return _evaluate(node, env)
+    except Exception:  # a name defined later, a local variable: not a function this reading can follow
+        return None
+
+
+def _combined(param: str, checks: list) -> Callable:
+    """One check(value) -> problem or None of a parameter from the helper calls :func:`body_checks` found."""
+    def check(value):
+        for helper, name, rest, env in checks:
+            try:
+                kwargs = {k: _evaluate(v, env) for k, v in rest.items()}
+            except Exception:  # a name the module defines no more: this check cannot be made before the run
+                continue
+            try:
+                helper(name, value, **kwargs)
+            except InvalidInputError as exc:
+                text = str(exc)
+                for head in (f"parameter {name}={value!r} ", f"parameter {name} "):
+                    if head in text:
+                        return text[text.index(head) + len(head):]
+                return text
+        return None
+    check.__qualname__ = f"body_check[{param}]"
+    return check
 
 
 def register(method_id: str, *, summary: str, reference: str, kind: str, min_points: int | None = None,

@@ -504,6 +504,57 @@ register_source_check("source", _check_source)
 register_source_check("published", _check_published)
 
 
+# ---------------------------------------------------------------- a file's truth table
+
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _numbers(v, n: int, positive: bool = False) -> bool:
+    return isinstance(v, list) and len(v) == n and all(_number(x) and (x > 0 or not positive) for x in v)
+
+
+#: The keys of a ``file = ...`` data set's ``truth`` table: what the built-in result classes' ``truth_errors`` compare
+#: (``methods.result_base.center_errors``, ``CircleFit``, ``EllipseFit``, ``CircularTestFit``; read by
+#: tests/test_file_truth.py) and ``family`` (the shape the points are of, ``check_data_kinds``): key -> (what its value
+#: must be, its check).
+TRUTH_KEYS: dict[str, tuple[str, Callable]] = {
+    "center": ("2 finite numbers [x, y] (the true centre, in mm: the points are read in mm)", lambda v: _numbers(v, 2)),
+    "radius": ("a number > 0 (the true radius, in mm)", lambda v: _number(v) and v > 0),
+    "semi_axes": ("2 numbers > 0 [a, b] (the true semi-axes in mm, a the one at angle)",
+                  lambda v: _numbers(v, 2, positive=True)),
+    "angle": ("a number (the true direction of semi-axis a, in rad)", _number),
+    "family": ("the family name of the points' shape (e.g. 'circle', 'ellipse')", lambda v: isinstance(v, str) and v),
+}
+#: the truth keys each built-in family's result class compares (a family declared here: no other key may stand in its
+#: truth; another family's truth is read by its own class, whatever its keys)
+FAMILY_TRUTH: dict[str, tuple[str, ...]] = {"circle": ("center", "radius"), "ellipse": ("center", "semi_axes", "angle"),
+                                            "circular_test": ("center",)}
+
+
+def truth_problem(truth: dict) -> tuple[str, str] | None:
+    """(the key, what is wrong with it) of the first problem of a file's ``truth`` table (:data:`TRUTH_KEYS`), before
+    any row: a shape a fit cannot be compared with (``center = [120.0]``) made every row ``error`` with an
+    IndexError, an unknown key (``centre``) was ignored. None when sound."""
+    family = truth.get("family")
+    known = (*FAMILY_TRUTH[family], "family") if family in FAMILY_TRUTH else tuple(TRUTH_KEYS)
+    for key, value in truth.items():
+        if key not in TRUTH_KEYS or key not in known:
+            if key not in TRUTH_KEYS and isinstance(family, str) and family not in FAMILY_TRUTH:
+                continue  # another family's class reads its own keys
+            close = difflib.get_close_matches(str(key), list(known), n=1)
+            whose = f"the truth of a {family} has" if family in FAMILY_TRUTH else "a file's truth has"
+            return key, (f"unknown key ({whose}: {', '.join(known)}; no fit compares {key!r})"
+                         + (f"; did you mean {close[0]!r}?" if close else ""))
+        words, ok = TRUTH_KEYS[key]
+        if not ok(value):
+            return key, f"must be {words}, got {value!r}"
+    if ("semi_axes" in truth) != ("angle" in truth):
+        given, lacking = ("semi_axes", "angle") if "semi_axes" in truth else ("angle", "semi_axes")
+        return given, f"needs {lacking} too (an ellipse's errors compare the semi-axes and the angle together)"
+    return None
+
+
 def check_values(cfg: dict, where: str) -> None:
     """The checks a schema cannot express: data source parameter values (each source's hook) and
     method parameter values (the registry's ``check_params``)."""
@@ -517,6 +568,10 @@ def check_values(cfg: dict, where: str) -> None:
                 check(entry)
             except ValueError as exc:
                 raise ConfigError(f"{where}: datasets[{i}] ({source} {entry[source]!r}): {exc}") from None
+        if source == "file" and isinstance(entry.get("truth"), dict):
+            problem = truth_problem(entry["truth"])
+            if problem:
+                raise ConfigError(f"{where}: datasets[{i}].truth.{problem[0]}: {problem[1]}")
     for i, entry in enumerate(cfg.get("methods", [])):
         if isinstance(entry, str):
             entry = {"id": entry}

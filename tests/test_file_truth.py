@@ -1,0 +1,109 @@
+"""A file data set's ``truth`` table is checked when the study's config is loaded, against what the result classes
+compare (``experiments.schema.TRUTH_KEYS``): a shape no fit can be compared with (``center = [120.0]``: every row
+was ``error`` with ``IndexError: list index out of range``, blamed on the method and retried every run) or an
+unknown key (``centre``: silently no centre error) is one line naming ``datasets[0].truth.KEY``, exit 2."""
+from __future__ import annotations
+
+import contextlib
+import io
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from experiments import config as configs
+from experiments import run
+from experiments.schema import FAMILY_TRUTH, TRUTH_KEYS
+from experiments.study import ConfigError
+from methods import results
+
+STUDY = '''
+name = "truthy"
+title = "t"
+seed = 1
+[[datasets]]
+file = "ring.csv"
+truth = {truth}
+[[methods]]
+id = "{method}"
+{extra}
+'''
+
+
+def _write(tmp_path, truth, method="circle.kasa", extra=""):
+    t = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+    np.savetxt(tmp_path / "ring.csv", np.c_[120 + 50 * np.cos(t), 80 + 30 * np.sin(t)], delimiter=",",
+               header="x,y", comments="")
+    path = tmp_path / "truthy.toml"
+    path.write_text(STUDY.format(truth=truth, method=method, extra=extra), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("truth, said", [
+    ('{ center = [120.0], radius = "50" }', "datasets[0].truth.center: must be 2 finite numbers [x, y]"),
+    ('{ center = [120.0, 80.0], radius = "50" }', "datasets[0].truth.radius: must be a number > 0"),
+    ('{ center = [120.0, true] }', "datasets[0].truth.center: must be 2 finite numbers"),
+    ('{ centre = [120.0, 80.0], radius = 50.0 }', "datasets[0].truth.centre: unknown key (a file's truth has: center, "
+                                                   "radius, semi_axes, angle, family; no fit compares 'centre'); "
+                                                   "did you mean 'center'?"),
+    ('{ family = "circle", center = [120.0, 80.0], semi_axes = [50.0, 30.0], angle = 0.0 }',
+     "datasets[0].truth.semi_axes: unknown key (the truth of a circle has: center, radius, family"),
+    ('{ family = "ellipse", center = [120.0, 80.0], semi_axes = [50.0, 30.0] }',
+     "datasets[0].truth.semi_axes: needs angle too"),
+])
+def test_a_truth_no_fit_can_be_compared_with_is_refused_in_one_line(tmp_path, truth, said):
+    method = "ellipse.fitzgibbon" if "ellipse" in truth else "circle.kasa"
+    with pytest.raises(ConfigError) as caught:
+        configs.load(str(_write(tmp_path, truth, method)))
+    assert said in str(caught.value) and "\n" not in str(caught.value), str(caught.value)
+
+
+def test_the_run_refuses_it_before_any_row(tmp_path):
+    path = _write(tmp_path, '{ center = [120.0], radius = "50" }')
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = run.main([str(path), "--out", str(tmp_path / "out"), "--no-report"])
+    assert code == 2, (out.getvalue(), err.getvalue())
+    lines = err.getvalue().strip().splitlines()
+    assert len(lines) == 1 and "truthy.toml: datasets[0].truth.center: must be" in lines[0], err.getvalue()
+    assert not (tmp_path / "out" / "truthy" / "results.csv").exists()
+
+
+def test_sound_truths_load(tmp_path):
+    configs.load(str(_write(tmp_path, "{ center = [120, 80.0], radius = 50 }")))
+    configs.load(str(_write(tmp_path, '{ family = "ellipse", center = [120.0, 80.0], semi_axes = [50.0, 30.0], '
+                                      'angle = 0.0 }', "ellipse.fitzgibbon")))
+    # another family's truth is read by that family's own class, whatever its keys
+    configs.load(str(_write(tmp_path, '{ family = "square", center = [120.0, 80.0], side = 2.0 }',
+                            extra="any_family = true")))
+
+
+class _Recording(dict):
+    """A truth that records the keys a ``truth_errors`` asks for."""
+
+    def __init__(self, *args):
+        super().__init__(*args)
+        self.asked = set()
+
+    def __contains__(self, key):
+        self.asked.add(key)
+        return super().__contains__(key)
+
+    def __getitem__(self, key):
+        self.asked.add(key)
+        return super().__getitem__(key)
+
+    def get(self, key, default=None):
+        self.asked.add(key)
+        return super().get(key, default)
+
+
+@pytest.mark.parametrize("family", sorted(FAMILY_TRUTH))
+def test_the_keys_checked_are_those_the_family_compares(family):
+    cls = results.contract(family)
+    fitted = SimpleNamespace(center=np.array([1.0, 2.0]), radius=3.0, semi_axes=np.array([3.0, 2.0]), angle=0.5)
+    truth = _Recording({"center": [1.5, 2.5], "radius": 2.0, "semi_axes": [2.0, 1.0], "angle": 0.25,
+                        "family": family})
+    errors = cls.truth_errors(fitted, truth)
+    assert errors and all(np.isfinite(v) for v in errors.values())
+    assert truth.asked == set(FAMILY_TRUTH[family]) and truth.asked <= set(TRUTH_KEYS)

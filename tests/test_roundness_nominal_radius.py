@@ -54,3 +54,15 @@ def test_a_nominal_radius_a_file_does_not_use_is_said_to_be_unused(tmp_path, kin
         assert "not used" not in cli(*command, path).stdout
     dev = cli("roundness", profile(tmp_path, "dev"), "--nominal-radius", 10)
     assert "not used" not in dev.stdout
+
+
+def test_a_nominal_radius_typed_in_metres_is_blamed_on_the_option(tmp_path):
+    """--nominal-radius 0.01 for a 10 mm part (review16 V6) was 'radial deviations up to 0.002 mm (read as µm) are
+    implausible; is the file in µm? (--unit um)', blaming a file whose header says µm."""
+    path = profile(tmp_path, "dev")
+    for command in (("roundness",), ("fit", "circle.kasa")):
+        out = cli(*command, path, "--nominal-radius", 0.01)
+        assert out.returncode == 0, out.stderr
+        assert ("warning: --nominal-radius 0.01 mm is implausibly small for these deviations (up to 2 µm, 20% of it); "
+                "is it in m? give --nominal-radius 10 (or 0.01m)") in out.stderr, (command, out.stderr)
+        assert "--unit" not in out.stderr

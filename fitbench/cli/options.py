@@ -417,14 +417,18 @@ def _polar_value(args) -> str | None:
                    args.plane).polar_value
 
 
-def nominal_radius_problem(nominal_mm: float, limit_mm: float) -> str:
-    """The warning on a ``--nominal-radius`` no roundness part (or profile) has, the radius likely typed in µm (as
-    ``circular-test`` says of its own, :func:`methods.circular_test.evaluation.nominal_mismatch`)."""
+def nominal_radius_problem(nominal_mm: float, limit_mm: float, deviation_mm: float | None = None) -> str:
+    """The warning on a ``--nominal-radius`` no roundness part (or profile) has: above ``limit_mm`` (likely typed in
+    µm), or, with ``deviation_mm``, so small that the deviations are a good part of it (likely typed in m); as
+    ``circular-test`` says of its own (:func:`methods.circular_test.evaluation.nominal_mismatch`)."""
     from methods.units import likely_unit, mm_per
-    what = "a roundness part" if limit_mm == ROUNDNESS_LIMIT_MM else "a profile"
     guess = likely_unit(nominal_mm, 25.0)
     hint = (f"is it in {guess}? give --nominal-radius {nominal_mm * mm_per(guess):.6g} (or "
-            f"{nominal_mm:g}{guess.replace('µ', 'u')})" if guess and guess != "m" else "check its unit (a bare number is mm)")
+            f"{nominal_mm:g}{guess.replace('µ', 'u')})" if guess else "check its unit (a bare number is mm)")
+    if deviation_mm is not None:
+        return (f"--nominal-radius {nominal_mm:g} mm is implausibly small for these deviations (up to "
+                f"{deviation_mm * 1e3:.3g} µm, {deviation_mm / nominal_mm:.0%} of it); {hint}")
+    what = "a roundness part" if limit_mm == ROUNDNESS_LIMIT_MM else "a profile"
     return (f"--nominal-radius {nominal_mm:g} mm is implausible for {what} (radii above {limit_mm:g} mm); {hint}")
 
 
@@ -470,7 +474,12 @@ def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: boo
         else:
             half = float(np.max(np.ptp(points, axis=0))) / 2
             warn_implausible("profile radii (half the points' span)", half, limit_mm, unit, typical_mm=25.0)
-            if got is not None and got.kind == "polar" and nominal:
+            if got is not None and got.kind == "polar" and nominal and _polar_value(args) == "deviation":
+                from datasets.io import ASSUMED_DEVIATION_LIMIT_MM
                 dev = float(np.max(np.abs(np.hypot(*points.T) - nominal)))
-                warn_implausible("radial deviations", dev, 0.05 * nominal, unit, typical_mm=0.01)
+                if 0.05 * nominal < dev <= ASSUMED_DEVIATION_LIMIT_MM:
+                    # deviations a roundness trace has, about a radius they are a good part of: the option is small
+                    warn(nominal_radius_problem(nominal, limit_mm, deviation_mm=dev))
+                else:
+                    warn_implausible("radial deviations", dev, 0.05 * nominal, unit, typical_mm=0.01)
     return source, points, unit, notes, axes

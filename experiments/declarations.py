@@ -13,7 +13,7 @@ from experiments.figures import plot_arguments
 from experiments.findings import BASE_VALUES, findings_problem
 from experiments.study import PLOT_COLUMNS, PLOTS, ConfigError, study_of
 from experiments.tables import AGGREGATES
-from experiments.units import unit_problem
+from experiments.units import length_unit_problem, ranking_unit, unit_problem
 
 
 def validate(cfg: dict, where: str) -> None:
@@ -24,6 +24,9 @@ def validate(cfg: dict, where: str) -> None:
     Errors are one line: ``FILE: KEY: PROBLEM``."""
     rep = cfg.get("report", {})
     columns = declared_columns(cfg)
+    problem = length_unit_problem(cfg)
+    if problem:
+        raise ConfigError(f"{where}: length_unit: {problem}")
     if rep.get("findings") is not None:
         fixed = _values_known(cfg)
         problem = findings_problem(rep["findings"], fixed)
@@ -85,10 +88,14 @@ def validate(cfg: dict, where: str) -> None:
 
 def _check_ranking(r: dict, cfg: dict, columns: dict | None, here: str) -> None:
     """A ``[[rankings]]`` entry (``experiments.render.rankings``), before any row runs: its metric a numeric column
-    of the rows, its problem and where columns too, its methods pattern matching a method of the study (its unit is
-    checked by the report, ``ranking_unit``)."""
+    of the rows, its problem and where columns too, its methods pattern matching a method of the study, its
+    unit against the metric and the study's lengths (``experiments.units.ranking_unit``)."""
     import fnmatch
     _check_where(r.get("where"), columns, f"{here}.where")
+    try:
+        ranking_unit(cfg, r["metric"], r.get("unit"))
+    except ValueError as exc:
+        raise ConfigError(f"{here}.unit: {exc}") from None
     if columns is not None:
         _check_column(r["metric"], columns, f"{here}.metric")
         if columns[r["metric"]] != "number":

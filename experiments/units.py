@@ -135,6 +135,81 @@ MM_SOURCES = frozenset({"published", "file", "circular_test", "positioning", "co
 DATA_UNITS = "data units"
 
 
+#: the names a study's lengths may be given: the length units a table or ranking converts between, and R (lengths
+#: relative to the radius of data on a unit circle, a generator's: the noise and convergence studies)
+LENGTH_NAMES = ("mm", "µm", "um", "nm", "m", "cm", "R")
+_KNOWN = "mm, µm (um), nm, m, cm; R for lengths relative to the radius of data on a unit circle"
+
+
+def _sources(cfg: dict | None) -> dict:
+    """{data set as the TOML names it: its source} of a study's ``[[datasets]]``."""
+    out = {}
+    for d in (cfg or {}).get("datasets") or []:
+        source = "published" if "published" in d else "file" if "file" in d else d.get("source") or d.get("generator")
+        out[str(d.get("label") or d.get("published") or d.get("file") or source)] = source
+    return out
+
+
+def _in_mm(cfg: dict | None) -> list[str]:
+    """The data sets of a study whose lengths are mm (:data:`MM_SOURCES`), as 'trace.csv (file)'."""
+    return [f"{name} ({source})" for name, source in _sources(cfg).items() if source in MM_SOURCES]
+
+
+def length_unit_problem(cfg: dict | None) -> str | None:
+    """Why a study's ``length_unit`` cannot name its lengths, None when it can (or none is declared). It names the
+    lengths of a generator's data, whose unit is that of its own radius and noise ('R' for unit circles); data read
+    in mm (a file, published coordinates, a simulator's) are in mm whatever it says, and a table's or a ranking's
+    ``unit`` shows them in another unit (a conversion), so any other unit there is refused, as is a unit fitbench
+    does not know."""
+    unit = str((cfg or {}).get("length_unit") or "").replace("μ", "µ")
+    if not unit:
+        return None
+    if unit not in LENGTH_NAMES:
+        return f"{unit!r} is not a unit of length fitbench knows ({_KNOWN})"
+    mm = _in_mm(cfg)
+    if mm and (unit == "R" or _factor(unit) != 1.0):
+        return (f"{unit!r} would relabel lengths that are in mm: data set {mm[0]} is read in mm; length_unit names "
+                f"a generator's lengths; drop it (a [[tables]] or [[rankings]] unit = {unit!r} converts mm"
+                f"{'' if unit == 'R' else ' to ' + unit})")
+    return None
+
+
+def ranking_unit(cfg: dict | None, metric: str, unit: str | None) -> tuple[str, float]:
+    """(the unit of a ``[[rankings]]``'s costs, the factor the rows' values are multiplied by). Without a ``unit``:
+    the values' own (:func:`value_unit`: mm for mm data, the ``length_unit``, else data units; timings in s). A
+    length whose unit is known (mm data, a declared ``length_unit``) converts to a length unit (mm to µm: x 1000)
+    and refuses any other (R on mm data); a generator's lengths have no unit but the one the study gives: the
+    ranking's ``unit`` names them (R for unit circles, as :func:`length_unit` reads it), unless the study also has
+    data in mm (it would relabel those) or another ranking names them otherwise. Other metrics as a table's
+    (:func:`table_unit`). Raises ValueError (one line)."""
+    unit = str(unit or "").replace("μ", "µ")
+    if column_unit(metric) not in LENGTH_UNITS:
+        return table_unit(cfg, metric, unit, "mean")
+    if unit and unit not in LENGTH_NAMES:
+        return _refuse(f"{metric!r} is a length, and {unit!r} is not a unit of length fitbench knows ({_KNOWN})")
+    sources = set(_sources(cfg).values())
+    declared = (cfg or {}).get("length_unit")
+    if unit and not declared and not (sources and sources <= MM_SOURCES):   # names a generator's lengths
+        mm = _in_mm(cfg)
+        if mm and unit != "mm":
+            return _refuse(f"unit {unit!r} would name the lengths of every data set of the study, and data set "
+                           f"{mm[0]} is read in mm: declare unit = \"mm\" or none")
+        named = {str(d["unit"]).replace("μ", "µ") for d in (cfg or {}).get("rankings") or []
+                 if d.get("unit") and column_unit(str(d.get("metric", ""))) in LENGTH_UNITS}
+        if len(named) > 1:
+            return _refuse(f"the study's rankings name its lengths in {' and '.join(sorted(named))}: a generator's "
+                           f"lengths have one unit; declare it as length_unit, or the same unit in every ranking")
+        return unit, 1.0
+    values = value_unit(cfg, metric)
+    if not unit or unit == values:
+        return unit or values, 1.0
+    if values in FACTORS["length"] and unit in FACTORS["length"]:   # mm data shown in µm: x 1000
+        return unit, _factor(values) / _factor(unit)
+    why = "the study's length_unit" if declared else "data read in mm"
+    return _refuse(f"{metric!r} is in {values} ({why}), which cannot be shown in {unit!r}: declare a unit of length "
+                   f"({', '.join(u for u in LENGTH_NAMES if u != 'R')}) or none")
+
+
 def data_length_unit(cfg: dict | None) -> str | None:
     """The unit of a study's lengths: its declared ``length_unit`` (:func:`length_unit`), else None (the columns'
     declared mm) when every data set comes from a source whose lengths are mm (:data:`MM_SOURCES`), else

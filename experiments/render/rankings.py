@@ -6,9 +6,11 @@ A study opts in with ``[[rankings]]`` entries in its TOML (kept in its ``meta.js
     profile = "centre error against the true centre"   # studies declaring the same name are pooled
     metric = "center_error"                             # a column of the rows; lower is better
     methods = "circle.*"                                # fnmatch pattern on the method id (default: all)
-    unit = "mm"                                         # optional; problem = ["dataset", "data_stream", "repetition"]
-                                                        # default: the metric's declared unit (methods' result
-                                                        # columns: lengths in mm); "R" for data on a unit circle
+    unit = "um"                                         # optional; problem = ["dataset", "data_stream", "repetition"]
+                                                        # default: the values' own unit (lengths: mm for data
+                                                        # in mm, else the study's length_unit or data units);
+                                                        # another length unit converts mm (x 1000 for um);
+                                                        # for a generator's lengths it names them ("R": unit circle)
     floor = 1e-12                                       # costs below it are equal (default 1e-12; 0 for runtimes)
 
 The report names no study: it reads the declarations of whichever study folders exist. A problem is one
@@ -62,27 +64,20 @@ class Ranking:
         return "; ".join(f"{UNIT_WORDS.get(u, u)}: {', '.join(st)}" for u, st in by_unit.items())
 
 
-#: units a ranking may declare beyond the metric's own, per dimension of the metric's declared unit
-_LENGTHS = {"mm", "µm", "um", "nm", "m", "cm", "R"}
-_TIMES = {"s", "ms", "µs", "us", "ns"}
 UNIT_WORDS = {"R": "R (relative to the radius R of the data's circle)"}
 
 
-def ranking_unit(study: str, decl: dict) -> str:
-    """The unit of a declared ranking's costs: its ``unit``, checked against the dimension of the metric's
-    declared unit (``experiments.units.column_unit``: the result classes' declarations, timings in s), else that
-    declared unit. ValueError when they disagree (a length ranked in s)."""
-    from experiments.units import column_unit
-    metric, unit = decl["metric"], decl.get("unit")
-    own = column_unit(metric)
-    if unit is None or unit == "":
-        return own
-    for group, what in ((_LENGTHS, "a length"), (_TIMES, "a time")):
-        if (own in group) != (unit in group) and own:
-            raise ValueError(f"rankings: study {study!r} declares unit {unit!r} for metric {metric!r}, which is "
-                             f"{'not ' if own not in group else ''}{what} ({own}); declare "
-                             f"{'one of ' + ', '.join(sorted(group)) if own in group else repr(own)}")
-    return unit
+def ranking_unit(study: str, decl: dict, cfg: dict | None = None) -> tuple[str, float]:
+    """(the unit of a declared ranking's costs, the factor the rows' values are multiplied by):
+    ``experiments.units.ranking_unit`` for the study's config ``cfg`` (its ``unit`` converts lengths of a known unit
+    and times, names a generator's lengths, R for unit circles; default: the values' own unit). ValueError naming the
+    study when the unit cannot apply (a length ranked in s, R on mm data, a unit fitbench does not know)."""
+    from experiments.units import ranking_unit as unit_of
+    try:
+        return unit_of(cfg if cfg is not None else {"rankings": [decl]}, decl["metric"], decl.get("unit"))
+    except ValueError as exc:
+        raise ValueError(f"rankings: study {study!r} declares unit {decl.get('unit')!r} for metric "
+                         f"{decl['metric']!r}: {exc}") from None
 
 
 def collect(studies: list[tuple[str, Path, dict]]) -> dict[str, Ranking]:
@@ -105,12 +100,12 @@ def collect(studies: list[tuple[str, Path, dict]]) -> dict[str, Ranking]:
             for k, v in (d.get("where") or {}).items():
                 sel = sel[sel[k].isin(v if isinstance(v, list) else [v])]
             problem = [c for c in d.get("problem", DEFAULT_PROBLEM) if c in sel.columns]
+            unit, factor = ranking_unit(name, d, meta.get("config") or {})
             part = pd.DataFrame({"study": name, "problem": sel[problem].astype(str).agg(" | ".join, axis=1),
                                  "dataset": sel["dataset"].astype(str) if "dataset" in sel else "",
                                  "method": sel["method"], "params": sel.get("params", pd.Series("", index=sel.index)),
-                                 "status": sel["status"], "cost": pd.to_numeric(sel[metric], errors="coerce"),
+                                 "status": sel["status"], "cost": pd.to_numeric(sel[metric], errors="coerce") * factor,
                                  "floor": float(d.get("floor", 0.0 if d.get("unit") == "s" else 1e-12))})
-            unit = ranking_unit(name, d)
             r = out.setdefault(d["profile"], Ranking(d["profile"], metric, unit))
             # a problem whose rows all finished without the metric does not measure it: not a problem here
             blank = (part["cost"].isna() & (part["status"] == "ok")).groupby(part["problem"]).transform("all")

@@ -18,7 +18,10 @@ from methods import results
 def analyse(study: Study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tuple[dict, Analysis]:
     """Run a study's analysis (:meth:`Study.analyse`; for a study without its own, the table and the figure
     :func:`default_declarations` chooses for what the TOML does not declare) and add the TOML's declared tables and
-    figures; return (the named values for meta.json, Analysis)."""
+    figures; return (the named values for meta.json, Analysis). Without rows (a study refused before its run has
+    none) there is nothing to analyse: no table, no figure."""
+    if not len(df):
+        return {"n_rows": 0, "n_ok": 0}, Analysis(values={"n_rows": 0, "n_ok": 0})
     analysis = study.analyse(df, cfg, target, log)
     if not study.own_analysis and not (cfg.get("tables") and cfg.get("figures")):
         table, figure = default_declarations(cfg, df)

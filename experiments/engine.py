@@ -317,6 +317,23 @@ def grid_rows(cfg: dict, where: str) -> int:
     return sum(_repetitions(spec, reps) * len(_pairs(spec, runs)) for spec in specs)
 
 
+def why_no_rows(cfg: dict, where: str) -> str:
+    """Why the generic grid has no rows, in the TOML's words: its methods' ``on`` and ``max_n`` against its data
+    sets' labels and sizes (for the one-line refusal of a study without rows)."""
+    specs, runs, _, _ = _grid_parts(cfg, where)
+    sizes: dict = {}
+    for spec in specs:
+        sizes.setdefault(spec["label"], []).append(spec.get("params", {}).get("n"))
+    data = [f"{label}" + (f" (n = {', '.join(str(n) for n in dict.fromkeys(ns) if n is not None)})"
+                          if any(n is not None for n in ns) else "") for label, ns in sizes.items()]
+    ways = [f"{m}" + "".join(f" {k} = {json.dumps(extra[k])}" for k in ("on", "max_n") if extra[k] is not None)
+            for m, extra in runs]
+    ways = list(dict.fromkeys(ways))
+    return (f"no method runs on a data set: their on = [...] and max_n leave out every one (the data sets: "
+            f"{'; '.join(data[:5])}{' ...' if len(data) > 5 else ''}; the methods: {'; '.join(ways[:5])}"
+            f"{' ...' if len(ways) > 5 else ''}); widen on or max_n")
+
+
 def iter_grid_tasks(cfg: dict, where: str, *, keyed: bool = False):
     """The generic expansion, lazily: data sets x repetitions x methods (x method grid), in row order.
     With ``keyed`` each task also gets its ``index`` and cache ``key`` (the identity of each (data set,

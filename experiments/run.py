@@ -142,7 +142,16 @@ def check_ready(cfg: dict, max_rows: int) -> None:
     (:func:`check_size`) and its first task (a study whose data are not available here, such as a reference
     folder named by an environment variable, says so now, not after the studies before it ran)."""
     check_size(cfg, max_rows)
-    next(iter(task_source(cfg, contract.study_of(cfg["kind"]), max_rows)()), None)
+    check_has_rows(cfg, task_source(cfg, contract.study_of(cfg["kind"]), max_rows))
+
+
+def check_has_rows(cfg: dict, make) -> None:
+    """A study whose tasks are none is refused before it runs (its analysis would have no rows)."""
+    if next(iter(make()), None) is None:
+        study = contract.study_of(cfg["kind"])
+        raise configs.ConfigError(f"{cfg.where}: the grid has 0 rows: " + (
+            f"the study kind {cfg['kind']!r} makes no task from it" if study.own_tasks else
+            engine.why_no_rows(cfg, cfg.where)))
 
 
 def task_source(cfg: dict, study, max_rows: int):
@@ -171,6 +180,7 @@ def run_study(name: str, out: Path, *, quick=False, jobs=1, executor="local", sc
     log(f"== {cfg['name']}: {cfg['title']}" + (" [quick]" if quick else ""))
     check_size(cfg, max_rows)
     make = task_source(cfg, study, max_rows)
+    check_has_rows(cfg, make)
     if cfg.get("summary_by"):
         check_summary_by(cfg, study, list(islice(make(), 10000)))
     jobs = min(jobs, cfg.get("max_jobs", jobs))

@@ -593,6 +593,24 @@ def check_values(cfg: dict, where: str) -> None:
             except ValueError as exc:
                 raise ConfigError(f"{where}: methods[{i}]: {exc}") from None
     check_data_kinds(cfg, where)
+    check_on_labels(cfg, where)
+
+
+def check_on_labels(cfg: dict, where: str) -> None:
+    """Refuse a method's ``on = [...]`` label that names no ``[[datasets]]`` entry (a typo would run the method on
+    nothing, silently, or leave the study without rows)."""
+    from experiments.study import ConfigError
+    if not cfg.get("datasets"):
+        return
+    labels = list(dict.fromkeys(_entry_source(e)[1] for e in cfg["datasets"]))
+    for i, entry in enumerate(cfg.get("methods", [])):
+        for label in ([] if isinstance(entry, str) else entry.get("on") or []):
+            if label not in labels:
+                close = difflib.get_close_matches(label, labels, n=1)
+                raise ConfigError(f"{where}: methods[{i}]: on = [...] names {label!r}, no data set's label"
+                                  f"{f' (did you mean {close[0]!r}?)' if close else ''}; the labels are: "
+                                  f"{', '.join(map(repr, labels))} (a [[datasets]] entry's label, else its source, "
+                                  f"published set or file name)")
 
 
 def method_takes(spec) -> type | None:

@@ -62,7 +62,7 @@ def test_a_plugin_source_and_a_file_declare_their_family(tmp_path):
         with pytest.raises(ConfigError, match=r"circle.kasa \(family 'circle'\) would fit datasets\[0\] \(source "
                                               r"'test_squares'\), whose points and truth are of family 'square'"):
             configs.load(str(write(tmp_path, source="test_squares", params="")))
-        configs.load(str(write(tmp_path, source="test_squares", params="", extra='on = ["elsewhere"]')))
+        configs.load(str(write(tmp_path, source="test_squares", params="", extra='on = ["circle"]\n[[datasets]]\nsource = "circle"')))
         configs.load(str(write(tmp_path, source="test_squares_undeclared", params="")))
         with pytest.raises(ValueError, match="family must be a family name"):
             sources.register_source("test_bad_family", random=False, summary="t", family=3)

@@ -129,6 +129,7 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> StudyCon
     if cfg["name"] != stem:
         raise ConfigError(f"{where}: name = {cfg['name']!r} must match the file name {stem!r}")
     quick_table = cfg.pop("quick", {})
+    full = dict(cfg) if quick and quick_table else None  # (a declaration's where may name values of the full grid)
     if quick:
         cfg.update(quick_table)
     if seed is not None:
@@ -141,7 +142,8 @@ def load(name: str, *, quick: bool = False, seed: int | None = None) -> StudyCon
     cfg = StudyConfig(cfg, where=where, folder=path.resolve().parent, quick=quick,
                       file=path.absolute().parent.resolve() / path.name)
     study.validate(cfg, where)
-    validate_declarations(cfg, where)
+    validate_declarations(cfg, where, None if full is None else
+                          StudyConfig({**full, "seed": cfg["seed"]}, where=where, folder=cfg.folder))
     return cfg
 
 

@@ -38,6 +38,11 @@ def test_an_inch_test_writing_tables_in_mm_says_so(tmp_path):
         said = [n for n in json.loads(out.stdout)["notes"] if "inch machine" in n]
         assert bool(said) == (p == inch), said
     text = cli("positioning", inch, "--compensation-from", "mean", "--compensation", "csv", tmp_path / "t.csv")
-    assert "the compensation tables are in mm (FANUC: increments of 0.001 mm), the input in inches" in text.stdout + text.stderr
+    assert "the compensation tables are in mm, the input in inches" in text.stdout
+    assert "the csv values are mm: divide them by 25.4 for inches" in text.stdout and "fanuc" not in text.stdout
+    # a FANUC table holds counts of the detection unit: 0.001 mm -> 0.0001 in is a factor 2.54, not 25.4
+    fanuc = cli("positioning", inch, "--compensation-from", "mean", "--compensation", "fanuc-pitch", tmp_path / "f.txt")
+    assert ("the fanuc-pitch values are counts of 0.001 mm: divide them by 2.54 for counts of 0.0001 in (IS-B inch)"
+            in fanuc.stdout), fanuc.stdout + fanuc.stderr
     plain = cli("positioning", inch)
     assert "inch machine" not in plain.stdout + plain.stderr   # no table written, no note

@@ -373,9 +373,14 @@ def run(args) -> int:
                             model_confirmed=args.compensation_from == "model",
                             fanuc_unit_mm=float(args.fanuc_increment))
         if "in" in {canonical(u) for u in (args.unit, args.deviation_unit) if u}:   # read in inches, written in mm
-            notes.append(f"the compensation tables are in mm (FANUC: increments of {args.fanuc_increment} mm), the "
-                         "input in inches: an inch machine (SINUMERIK basic system inch, FANUC inch detection unit) "
-                         "needs them in its own unit (divide by 25.4)")
+            formats = {fmt for fmt, _ in args.compensation}
+            inch = {"0.001": "0.0001 in (IS-B inch)", "0.0001": "0.00001 in (IS-C inch)"}[args.fanuc_increment]
+            how = ([f"the {' and '.join(f for f in ('csv', 'siemens-eec') if f in formats)} values are mm: divide them "
+                    "by 25.4 for inches"] if formats & {"csv", "siemens-eec"} else []) + \
+                  ([f"the fanuc-pitch values are counts of {args.fanuc_increment} mm: divide them by 2.54 for counts "
+                    f"of {inch}"] if "fanuc-pitch" in formats else [])
+            notes.append("the compensation tables are in mm, the input in inches: an inch machine (SINUMERIK basic "
+                         f"system inch, FANUC inch detection unit) needs them in its own unit: {'; '.join(how)}")
     missing = [n for n in tolerances if n not in res.figures]
     if missing:
         raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "

@@ -40,7 +40,8 @@ on = ["ellipses"]
 max_n = 20
 {extra}
 [quick]
-datasets = [{{ source = "circle", label = "arcs", params = {{ radius = 5.0, noise = 0.01, n = 30 }} }}]
+datasets = [{{ source = "circle", label = "arcs", params = {{ radius = 5.0, noise = 0.01, n = 30 }} }},
+            {{ source = "ellipse", label = "ellipses", params = {{ n = 40 }} }}]
 '''
 
 TABLE = '[[tables]]\ncaption = "t"\nrows = ["method"]\nvalues = "radius_error"\nwhere = {where}\n'

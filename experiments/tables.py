@@ -75,7 +75,7 @@ def declared_table(df: pd.DataFrame, t: dict, cfg: dict | None = None) -> Table:
         out = out.reset_index()
     else:
         out = data.groupby(rows, sort=False, dropna=False)[value].agg(AGGREGATES[how]).reset_index()
-        out = out.rename(columns={value: aggregate_words(how, t["values"])})
+        out = out.rename(columns={value: aggregate_words(t.get("aggregate", "mean"), t["values"])})
     for c in rows:
         if c in lacking:
             out[c] = out[c].astype(object).where(out[c].notna(), NO_VALUE)

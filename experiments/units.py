@@ -51,7 +51,10 @@ def readable(name: str) -> str:
 
 
 def aggregate_words(how: str, column: str) -> str:
-    """'RMSE of radius error', 'mean of arc'."""
+    """'RMSE of radius error', 'mean of arc', 'count of radius error' (its ok rows); 'ok share' (of the rows whose
+    status is ok, as summary.md's column: whatever the column)."""
+    if how == "ok_share":
+        return "ok share"
     return f"{'RMSE' if how == 'rmse' else how} of {readable(column)}"
 
 
@@ -96,10 +99,12 @@ def table_unit(cfg: dict | None, column: str, unit: str, how: str) -> tuple[str,
     same dimension as the values' is a conversion (mm values shown in µm are multiplied by 1000; rad shown in ° by
     180/π); one that names the values' own unit (``um`` for µm, ``deg`` for °) is kept as written. Raises ValueError
     (one line) for a unit of another dimension, and for a length unit of data whose lengths are in no known unit
-    (a generator's: :data:`DATA_UNITS`; a ``length_unit`` such as R), which no factor converts. A count or a share of
-    ok rows has no unit but the declared one."""
+    (a generator's: :data:`DATA_UNITS`; a ``length_unit`` such as R), which no factor converts, and for any unit on a
+    count of rows or a share of ok rows, which have none."""
     if how in ("count", "ok_share"):
-        return unit or "", 1.0
+        what = "a count of rows" if how == "count" else "the share of ok rows (0 to 1)"
+        return ("", 1.0) if not unit else _refuse(f"aggregate = {how!r} gives {what}, which has no unit: drop the "
+                                                  f"unit {unit!r}")
     own, values = column_unit(column), value_unit(cfg, column)
     if not unit or unit == values or (unit == DATA_UNITS and own in LENGTH_UNITS):   # the data's own unit, whatever
         return unit or values, 1.0

@@ -42,7 +42,7 @@ def test_the_default_table_keeps_the_rows_of_a_data_set_without_the_pivoted_para
         else:
             assert np.isnan(line[col].item())
     # every ok row is counted in exactly one cell
-    count = declared_table(df, {**table, "aggregate": "count"}).data
+    count = declared_table(df, {**table, "aggregate": "count", "unit": ""}).data
     assert count.drop(columns=["method", "dataset"]).sum().sum() == len(df)
 
 

@@ -100,9 +100,20 @@ def _number(values: pd.Series) -> np.ndarray | None:
         return None
 
 
+def _unit(cfg: dict | None, column: str) -> str:
+    """The unit of ``column``'s values (``experiments.units.value_unit``: a length in the study's unit of lengths, mm
+    for the machine-tool data), from the study's config as ``meta.json`` records it; without the config a length is in
+    the data's unit; '' for a count, a flag or a text."""
+    from experiments.units import DATA_UNITS, LENGTH_UNITS, column_unit, value_unit
+    if isinstance(cfg, dict):
+        return value_unit(cfg, column)
+    return DATA_UNITS if column_unit(column) in LENGTH_UNITS else value_unit({}, column)
+
+
 def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame,
-                  kernels: tuple[str, str] | None = None) -> dict:
-    """Every column outside its tolerance, with its worst rows: {study, rows, columns, problems: [...]}.
+                  kernels: tuple[str, str] | None = None, cfg: dict | None = None) -> dict:
+    """Every column outside its tolerance, with its worst rows: {study, rows, columns, problems: [...]}; each problem
+    with the ``unit`` of its column's values (and of its atol), from the study's config ``cfg`` (:func:`_unit`).
 
     ``kernels``: the kernel backends (``meta.json`` ``kernels``) of the committed run and of this one. When they
     differ (compiled against ``FITBENCH_KERNELS=numpy``), the differences that backend explains are listed apart,
@@ -179,6 +190,7 @@ def compare_study(study: str, committed: pd.DataFrame, fresh: pd.DataFrame,
                 into.append({
                     "column": col, "n_rows": int(rows.sum()),
                     "problem": "differs" if t.rtol == t.atol == 0 else f"outside rtol={t.rtol:g}, atol={t.atol:g}",
+                    "unit": "" if diff is None else _unit(cfg, col),
                     "worst": [{"row": a.index[i], "committed": old.iloc[i], "this_run": new.iloc[i],
                                "difference": "" if diff is None else f"{diff[i]:.3g}"} for i in idx]})
     out = {"study": study, "rows": int(len(committed)), "columns": compared, "agree": not problems,
@@ -250,9 +262,13 @@ def _table(problems: list[tuple[str, dict]]) -> str:
     lines = []
     for study, p in problems:
         worst = p["worst"] or [{"row": "", "committed": "", "this_run": "", "difference": ""}]
+        unit = p.get("unit") or ""
+        with_unit = (lambda v: f"{v} {unit}" if unit and str(v) not in ("", "nan") else str(v))  # noqa: E731
+        problem = p["problem"] + (f" {unit}" if unit and p["problem"].startswith("outside rtol=") else "")  # the atol's
         for k, w in enumerate(worst):
             lines.append([study if k == 0 else "", p["column"] if k == 0 else "", str(p["n_rows"]) if k == 0 else "",
-                          p["problem"] if k == 0 else "", w["row"], str(w["committed"]), str(w["this_run"]), str(w["difference"])])
+                          problem if k == 0 else "", w["row"], with_unit(w["committed"]), with_unit(w["this_run"]),
+                          with_unit(w["difference"])])
     widths = [max(len(h), *(len(r[i]) for r in lines)) for i, h in enumerate(head)]
     fmt = lambda r: "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip()  # noqa: E731
     return "\n".join([fmt(head), fmt(["-" * w for w in widths])] + [fmt(r) for r in lines])
@@ -330,7 +346,8 @@ def verify(studies: list[str], results: Path, against: Path, log=print, write: b
         committed = _read(results, study, "--results")
         fresh = _read(against, study, "--against")
         _same_inputs(results / study, against / study)
-        reports.append({**compare_study(study, committed, fresh, _kernels(results / study, against / study)), "date": date,
+        reports.append({**compare_study(study, committed, fresh, _kernels(results / study, against / study),
+                                        (_meta(results / study) or {}).get("config")), "date": date,
                         "results_sha256": results_sha256(results / study),   # what this verdict judged
                         "fingerprint": _fingerprint(results / study),
                         "reference_fingerprint": _fingerprint(against / study),
@@ -549,7 +566,8 @@ def verdict_after_run(out: Path, names: list[str], refs: dict[str, dict], log=pr
                     r = self_comparison(name, Path(out))  # the same bytes: the verdict of a table on itself, cheaply
                 else:
                     r = compare_study(name, _read(ref["folder"], name, "reference"), _read(Path(out), name, "--out"),
-                                      _kernels(ref["folder"] / name, Path(out) / name))
+                                      _kernels(ref["folder"] / name, Path(out) / name),
+                                      (_meta(Path(out) / name) or {}).get("config"))
             except InvalidInputError as exc:
                 log(f"verify: {name}: not compared ({exc})")
                 continue

@@ -100,4 +100,15 @@ def test_direction_and_run_order_words_of_run_columns(tmp_path, up, down):
     assert got["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9) and got["B_mean"] < 0   # ↑ below ↓ as written
     (tmp_path / "x.csv").write_text(head.replace(f"Run 1 {up}", "Run 1 Vor") + "\n" + "\n".join(rows) + "\n")
     one_error_line(cli("positioning", tmp_path / "x.csv"), "'Run 1 Vor (µm)' is neither", "up/down (dn)",
-                   "forward/reverse (fwd/rev/bwd, backward, hin/rück/zurück)")
+                   "forward/reverse (fwd/rev/bwd, backward, return, hin/rück/zurück")
+
+
+@pytest.mark.parametrize("forward, reverse", [("Forward", "Backward"), ("Fwd", "Bwd"), ("Vorwärts", "Rückwärts"),
+                                              ("Hin", "Zurück"), ("Forward", "Return")])
+def test_run_order_words_in_a_long_tables_direction_column_name_the_run_order(tmp_path, forward, reverse):
+    """Backward, Bwd, Zurück, Rückwärts, Return were 'direction 'Backward' is not one of +, -, up, down' while
+    Forward and Reverse got the run-order explanation (review16 V8): the same mistake, one message."""
+    path = tmp_path / "l.csv"
+    path.write_text("Target (mm),Direction,Run,Deviation (µm)\n" + "".join(
+        f"{t:.1f},{w},{r},0.{r}\n" for w in (reverse, forward) for r in (1, 2) for t in TARGETS))
+    one_error_line(cli("positioning", path), f"direction {reverse!r} names the run order", "write + or -")

@@ -36,7 +36,8 @@ ROLE_WORDS = {"target": "the target positions", "direction": "the approach direc
               "actual": "the actual (measured) positions", "deviation": "the positioning deviations"}
 RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[]*"
                   r"(\+|-|up|down|dn|u|d|increasing|decreasing|inc|dec|positive|negative|pos|neg|↑|↓|fwd|rev|bwd|"
-                  r"forward|reverse|backward|hin|rück|rueck|zurück|zurueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
+                  r"forward|reverse|backward|return|hin|rückwärts|rueckwaerts|vorwärts|vorwaerts|rück|rueck|zurück|"
+                  r"zurueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
                   re.IGNORECASE)
 
 
@@ -190,7 +191,7 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
                                 "(wide layout: target, run 1 +, run 1 -, ... or target, direction, run 1, run 2, ...; "
                                 "the words read after a run's number: +/-, up/down (dn), ↑/↓, pos/neg, "
                                 "increasing/decreasing as the axis direction, forward/reverse (fwd/rev/bwd, backward, "
-                                "hin/rück/zurück) as the run order)")
+                                "return, hin/rück/zurück, vorwärts/rückwärts) as the run order)")
         runs[k] = (int(m.group(1)), m.group(2))
     if not runs:
         return None

@@ -40,7 +40,8 @@ DOWN = {"-", "down", "dn", "d", "negative", "neg", "decreasing", "dec", "↓"}
 #: direction: what a forward run is depends on where the test started
 RUN_ORDER_TAGS = {"fwd": "forward", "forward": "forward", "hin": "forward",
                   "rev": "reverse", "reverse": "reverse", "bwd": "reverse", "backward": "reverse", "rück": "reverse",
-                  "rueck": "reverse", "zurück": "reverse", "zurueck": "reverse"}
+                  "rueck": "reverse", "zurück": "reverse", "zurueck": "reverse", "return": "reverse",
+                  "vorwärts": "forward", "vorwaerts": "forward", "rückwärts": "reverse", "rueckwaerts": "reverse"}
 
 
 class RunOrderNote(UserWarning):

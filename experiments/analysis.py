@@ -28,12 +28,12 @@ def analyse(study: Study, df: pd.DataFrame, cfg: dict, target: Path, log) -> tup
         if table and not cfg.get("tables"):
             analysis.tables.append(declared_table(df, table, cfg))
         if figure and not cfg.get("figures"):
-            analysis.figures.append(declared_figure(df, figure, target, 1))
+            analysis.figures.append(declared_figure(df, figure, target, 1, cfg))
     analysis.values = {"n_rows": len(df), "n_ok": int((df["status"] == "ok").sum()), **analysis.values}
     findings = json_value(json_text(analysis.values))  # what meta.json holds: plain values, as read back from it
     analysis.tables += [declared_table(df, t, cfg) for t in cfg.get("tables", [])]
     for f in cfg.get("figures", []):
-        analysis.figures.append(declared_figure(df, f, target, len(analysis.figures) + 1))
+        analysis.figures.append(declared_figure(df, f, target, len(analysis.figures) + 1, cfg))
     return findings, analysis
 
 

@@ -11,7 +11,7 @@ import pandas as pd
 from experiments.render import style
 from experiments.study import PLOT_COLUMNS, PLOTS, Figure, register_plot
 from experiments.tables import AGGREGATES, NO_VALUE, lacking_note, rows_where
-from experiments.units import aggregate_words, column_unit, readable
+from experiments.units import DATA_UNITS, aggregate_words, metric_unit, readable, value_unit
 
 
 def _aggregate(df, by, y, how):
@@ -78,19 +78,26 @@ def load_plotting_in_background() -> None:
     threading.Thread(target=load, daemon=True, name="fitbench-load-plotting").start()
 
 
-def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Figure:
+def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int, cfg: dict | None = None) -> Figure:
     """The figure a ``[[figures]]`` entry declares: its registered plot drawn from the ok rows and saved under
-    ``target`` as figure ``number`` (PNG and PDF), or the file the study's analysis wrote."""
+    ``target`` as figure ``number`` (PNG and PDF), or the file the study's analysis wrote. An axis the entry does not
+    label names its column and the unit of its values in the study ``cfg`` as the default figure's
+    (:func:`experiments.units.value_unit`: a length in mm for mm data, in the ``length_unit``, else in data units,
+    which the caption says how to name); a count has none."""
     if "file" in f:
         return Figure(caption=f["caption"], file=f["file"])
     plt = style.plotting()
     args = plot_arguments(f)
     accepted = inspect.signature(PLOTS[f["plot"]]).parameters
+    note = ""
     for axis, label in (("x", "xlabel"), ("y", "ylabel")):  # axes name their column and its unit
         if isinstance(args.get(axis), str) and label in accepted and label not in args:
-            unit = column_unit(args[axis])
-            what = readable(args[axis]) if axis == "x" else aggregate_words(args.get("aggregate", "mean"), args[axis])
+            how = args.get("aggregate", "mean")
+            unit = "" if axis == "y" and how == "count" else value_unit(cfg, args[axis])
+            what = readable(args[axis]) if axis == "x" else aggregate_words(how, args[axis])
             args[label] = f"{what} [{unit}]" if unit else what
+            if unit == DATA_UNITS:   # how to name the data's unit, as the default figure's caption says
+                note = metric_unit(cfg or {}, args[axis])[1]
     fig, ax = plt.subplots(figsize=(f.get("width", 6.4), f.get("height", 4.2)))
     plot = PLOTS[f["plot"]]
     if plot in (lines, bars):  # these read only the columns their arguments name: select the rows of those alone
@@ -98,14 +105,16 @@ def declared_figure(df: pd.DataFrame, f: dict, target: Path, number: int) -> Fig
                  ([args[a]] if isinstance(args.get(a), str) else list(args.get(a) or ()))]
         df = df[[c for c in dict.fromkeys([*named, "status", "dataset", *(f.get("where") or {})]) if c in df.columns]]
     shown = rows_where(df[df["status"] == "ok"], f.get("where"))
-    note = ""
     if plot is lines and isinstance(args.get("x"), str) and args["x"] in shown and shown[args["x"]].isna().any():
         # rows of data sets without the x parameter have no place on the axis: left out, and the caption says so
-        note = lacking_note(shown, [args["x"]], drawn=False)
+        note = lacking_note(shown, [args["x"]], drawn=False) + note
         shown = shown[shown[args["x"]].notna()]
     plot(shown, ax, **args)
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     name = f"figure_{number}_{f['plot']}.png"
     style.save(fig, target / name, dpi=110)
-    return Figure(caption=f["caption"] + note, file=name)
+    caption = f["caption"]
+    if note and not caption.rstrip().endswith((".", "!", "?")):
+        caption = caption.rstrip() + "."
+    return Figure(caption=caption + note, file=name)

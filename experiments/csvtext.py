@@ -141,7 +141,7 @@ def write_results(df, path, texts=None) -> str:
     try:
         with atomic_path(path, make_parents=True) as tmp, open(tmp, "wb") as fh:
             for text in texts:
-                data = text.encode("utf-8")
+                data = text.encode("utf-8", "backslashreplace")   # (a row's text is writable: experiments.rows)
                 digest.update(data)
                 fh.write(data)
             fh.flush()

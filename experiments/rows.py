@@ -452,10 +452,25 @@ MESSAGE_CHARS = 2000
 
 
 def bounded_message(message):
-    """``message`` cut to its first :data:`MESSAGE_CHARS` characters with a marker saying how long it was."""
-    if type(message) is str and len(message) > MESSAGE_CHARS:
-        return f"{message[:MESSAGE_CHARS]} ... [message cut: {len(message):,} characters in all]"
+    """``message`` made writable (:func:`writable_text`) and cut to its first :data:`MESSAGE_CHARS` characters with a
+    marker saying how long it was."""
+    if type(message) is str:
+        if not message.isascii():
+            message = writable_text(message)
+        if len(message) > MESSAGE_CHARS:
+            return f"{message[:MESSAGE_CHARS]} ... [message cut: {len(message):,} characters in all]"
     return message
+
+
+def writable_text(text: str) -> str:
+    """``text`` as UTF-8 can write it: what it cannot encode (a lone surrogate, from bytes decoded with
+    ``errors="surrogateescape"`` or a C extension's message) as Python's backslash escape (``\\ud800``), the rest
+    unchanged (every writer of a row, its CSV, JSON, report and row store, then takes it)."""
+    try:
+        text.encode("utf-8")
+        return text
+    except UnicodeEncodeError:
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 def _finished(row: dict, task: dict) -> dict:
@@ -465,7 +480,7 @@ def _finished(row: dict, task: dict) -> dict:
         row["status"] = "unavailable"
     message = row.get("message")
     if type(message) is str and len(message) > MESSAGE_CHARS:
-        row["message"] = bounded_message(message)
+        row["message"] = bounded_message(message)   # (a shorter one is made writable by _plain, as every text)
     row["task_index"] = task.get("index")
     return _plain(row)
 
@@ -595,8 +610,8 @@ def row_from_json(text: str) -> dict:
     """A stored row (JSON text; a NaN literal an older run wrote is read by :mod:`json`)."""
     try:
         return orjson.loads(text)
-    except orjson.JSONDecodeError:
-        return json.loads(text)
+    except orjson.JSONDecodeError:   # (orjson refuses a lone surrogate, which an older run may have stored: made writable)
+        return {k: writable_text(v) if type(v) is str and not v.isascii() else v for k, v in json.loads(text).items()}
 
 
 def _plain(row: dict) -> dict:
@@ -605,7 +620,11 @@ def _plain(row: dict) -> dict:
     isfinite = math.isfinite
     for k, v in row.items():
         t = type(v)
-        if t is str or t is int or t is bool or v is None:
+        if t is str:
+            if not v.isascii():
+                row[k] = writable_text(v)
+            continue
+        if t is int or t is bool or v is None:
             continue
         if t is float:
             if v - v != 0.0:  # inf - inf and NaN - NaN are NaN: not finite

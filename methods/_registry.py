@@ -184,8 +184,8 @@ def body_checks(func: Callable) -> dict[str, Callable]:
     so that a study's config (:meth:`MethodSpec.check_params`) refuses before any row what the method would refuse
     when its rows run (``backend="bogus"``: was a ``skipped`` row). Read from the source of ``func``: every call of
     ``check_choice``, ``check_positive`` or ``check_vector`` (:mod:`methods._validation`) on a parameter itself,
-    made by every call of the method (a statement of its body, not inside an ``if``, loop, ``try`` or ``with``),
-    or by a function of its own package that it so calls with the parameter (``_setup(points, name, backend,
+    made by every call of the method (a statement of its body, not inside an ``if``, loop, ``try`` or ``with``; a loop
+    over (name, parameter) pairs is read: ``for key, val in (("xtol", xtol), ...)``), or by a function of its own package that it so calls with the parameter (``_setup(points, name, backend,
     ...)``, two levels deep). Their other arguments (the choices, the length) are names and constants evaluated
     when checked; a call with others is not read. Nothing without readable source (a method made at run time)."""
     hit = _BODY_CHECKS.get(func)
@@ -212,33 +212,64 @@ def _read_checks(func: Callable, names: dict, found: dict, depth: int, package: 
         return
     env = getattr(func, "__globals__", {})
     for stmt in node.body:
-        if isinstance(stmt, (ast.If, ast.For, ast.AsyncFor, ast.While, ast.Try, ast.With, ast.AsyncWith,
-                             ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) or type(stmt).__name__ == "TryStar":
+        if isinstance(stmt, ast.For) and not stmt.orelse:   # for key, val in (("xtol", xtol), ...): check_positive(key, val)
+            for label, variable in _pairs_looped(stmt):
+                if variable in names:
+                    for inner in stmt.body:
+                        _read_statement(inner, env, {**names, stmt.target.elts[1].id: names[variable]}, found, depth,
+                                        package, {stmt.target.elts[0].id: label})
             continue
-        for call in _unconditional_calls(stmt):
-            callee = _resolve(call.func, env)
-            if callee is None:
-                continue
-            helper = getattr(callee, "__name__", "") in _CHECK_HELPERS and \
-                getattr(callee, "__module__", "") == "methods._validation"
-            try:
-                bound = inspect.signature(callee).bind(*call.args, **{k.arg: k.value for k in call.keywords
-                                                                      if k.arg is not None})
-            except (TypeError, ValueError):
-                continue
-            if any(isinstance(a, ast.Starred) for a in call.args) or any(k.arg is None for k in call.keywords):
-                continue
-            args = bound.arguments
-            if helper:
-                value = args.get("value")
-                if isinstance(value, ast.Name) and value.id in names and isinstance(args.get("name"), ast.Constant):
-                    rest = {k: v for k, v in args.items() if k not in ("name", "value", "method")}
-                    if all(_plain_expression(v) for v in rest.values()):
-                        found.setdefault(names[value.id], []).append((callee, args["name"].value, rest, env))
-            elif depth < 2 and inspect.isfunction(callee) and callee.__module__.split(".")[0] == package:
-                passed = {k: names[v.id] for k, v in args.items() if isinstance(v, ast.Name) and v.id in names}
-                if passed:
-                    _read_checks(callee, passed, found, depth + 1, package)
+        _read_statement(stmt, env, names, found, depth, package, {})
+
+
+def _pairs_looped(loop) -> list[tuple[str, str]]:
+    """(name, variable) of a loop ``for key, val in (("xtol", xtol), ("ftol", ftol)):``; [] for any other loop."""
+    import ast
+    target, items = loop.target, loop.iter
+    if not (isinstance(target, ast.Tuple) and len(target.elts) == 2 and all(isinstance(e, ast.Name) for e in target.elts)
+            and isinstance(items, (ast.Tuple, ast.List))):
+        return []
+    pairs = []
+    for item in items.elts:
+        if not (isinstance(item, ast.Tuple) and len(item.elts) == 2 and isinstance(item.elts[0], ast.Constant)
+                and isinstance(item.elts[0].value, str) and isinstance(item.elts[1], ast.Name)):
+            return []
+        pairs.append((item.elts[0].value, item.elts[1].id))
+    return pairs
+
+
+def _read_statement(stmt, env: dict, names: dict, found: dict, depth: int, package: str, labels: dict) -> None:
+    """The checks one statement always makes (none under an ``if``, a loop, ``try`` or ``with``); ``labels``: loop
+    variables holding a parameter's name."""
+    import ast
+    if isinstance(stmt, (ast.If, ast.For, ast.AsyncFor, ast.While, ast.Try, ast.With, ast.AsyncWith,
+                         ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) or type(stmt).__name__ == "TryStar":
+        return
+    for call in _unconditional_calls(stmt):
+        callee = _resolve(call.func, env)
+        if callee is None:
+            continue
+        helper = getattr(callee, "__name__", "") in _CHECK_HELPERS and \
+            getattr(callee, "__module__", "") == "methods._validation"
+        if any(isinstance(a, ast.Starred) for a in call.args) or any(k.arg is None for k in call.keywords):
+            continue
+        try:
+            bound = inspect.signature(callee).bind(*call.args, **{k.arg: k.value for k in call.keywords})
+        except (TypeError, ValueError):
+            continue
+        args = bound.arguments
+        if helper:
+            value, label = args.get("value"), args.get("name")
+            label = (label.value if isinstance(label, ast.Constant) else
+                     labels.get(label.id) if isinstance(label, ast.Name) else None)
+            if isinstance(value, ast.Name) and value.id in names and isinstance(label, str):
+                rest = {k: v for k, v in args.items() if k not in ("name", "value", "method")}
+                if all(_plain_expression(v) for v in rest.values()):
+                    found.setdefault(names[value.id], []).append((callee, label, rest, env))
+        elif depth < 2 and inspect.isfunction(callee) and callee.__module__.split(".")[0] == package:
+            passed = {k: names[v.id] for k, v in args.items() if isinstance(v, ast.Name) and v.id in names}
+            if passed:
+                _read_checks(callee, passed, found, depth + 1, package)
 
 
 def _unconditional_calls(node):

@@ -12,7 +12,7 @@ import methods
 from experiments import config as configs
 from experiments import run
 from experiments.study import ConfigError
-from methods._validation import check_choice, check_vector
+from methods._validation import check_choice, check_positive, check_vector
 
 STUDY = '''
 name = "{name}"
@@ -42,6 +42,8 @@ def _write(tmp_path, method, extra, name="choices"):
      "circle.gauss_newton: parameter start='centroid' is not a list of 3 numbers"),
     ("circle.nelder_mead", 'params = { step = [1e-3, 1e-3] }',
      "circle.nelder_mead: parameter step=[0.001, 0.001] needs 3 finite numbers"),
+    # checked in a loop over (name, parameter) pairs: circle.gauss_newton refuses xtol = 0 (the convention takes >= 0)
+    ("circle.gauss_newton", 'grid = { xtol = [1e-12, 0.0] }', "circle.gauss_newton: parameter xtol=0.0 must be a positive number"),
     # checked by a function the method calls (ellipse.geometric_nm's _setup), and after a return for partial arcs
     ("ellipse.geometric_nm", 'params = { backend = "NLopt" }', "parameter backend='NLopt' is not one of"),
     ("circle.max_inscribed", 'params = { global_search = "sometimes" }',
@@ -77,9 +79,14 @@ def _setup(name, mode):
     check_choice("mode", mode, ("fast", "exact"), name)
 
 
-def _choice_method(points, *, mode="fast", centre=None, limit=3):
+def _choice_method(points, *, mode="fast", centre=None, limit=3, gap=1.0):
     name = "circle.choicetest"
     _setup(name, mode)
+    for key, val in (("gap", gap),):
+        check_positive(key, val, name)
+    for key, val in (("gap", gap),):
+        if key:  # under an if: not read
+            check_choice(key, val, (1.0, 2.0), name)
     if limit > 5:  # a check under a condition on another parameter is not the parameter's own
         check_choice("centre", centre, ("a", "b"), name)
     check_vector("centre", centre, 2, name)
@@ -95,6 +102,8 @@ def test_a_method_of_any_package_gets_the_checks_its_code_makes():
             spec.check_params({"mode": "slow"})
         with pytest.raises(methods.InvalidInputError, match=r"parameter centre=\[1\] needs 2 finite numbers"):
             spec.check_params({"centre": [1]})
-        spec.check_params({"mode": "exact", "centre": [1.0, 2.0], "limit": 9})  # ('a', 'b') is a conditional check
+        with pytest.raises(methods.InvalidInputError, match=r"parameter gap=-1.0 must be a positive number$"):
+            spec.check_params({"gap": -1.0})
+        spec.check_params({"mode": "exact", "centre": [1.0, 2.0], "limit": 9, "gap": 3.0})  # conditional checks unread
     finally:
         _REGISTRY.pop("circle.choicetest", None)

@@ -66,3 +66,15 @@ def test_a_nominal_radius_typed_in_metres_is_blamed_on_the_option(tmp_path):
         assert ("warning: --nominal-radius 0.01 mm is implausibly small for these deviations (up to 2 µm, 20% of it); "
                 "is it in m? give --nominal-radius 10 (or 0.01m)") in out.stderr, (command, out.stderr)
         assert "--unit" not in out.stderr
+
+
+def test_a_roundness_part_of_micrometres_is_warned_about(tmp_path):
+    """An x, y file in mm read with --unit um (a part of radius 0.01 mm, RONt in nm) was evaluated without a word
+    (review16 V3)."""
+    path = profile(tmp_path, "xy")
+    path.write_text(path.read_text().replace("x [mm],y [mm]", "x,y"))     # no unit in the header
+    out = cli("roundness", path, "--unit", "um")
+    assert out.returncode == 0, out.stderr
+    assert ("warning: profile radii (half the points' span) of 0.01 mm (read as µm) are implausibly small for a "
+            "roundness part (below 0.05 mm); is the file in mm? (--unit mm)") in out.stderr
+    assert "warning" not in cli("roundness", path).stderr

@@ -417,6 +417,24 @@ def _polar_value(args) -> str | None:
                    args.plane).polar_value
 
 
+#: a roundness profile whose radius (half its span) is below this is implausible: roundness instruments take wires
+#: and pins down to about 0.1 mm in diameter, so a 10 mm part in mm read as µm (a radius of 0.01 "mm") is warned about
+ROUNDNESS_MIN_MM = 0.05
+
+
+def small_part_problem(half_mm: float, unit: str) -> str:
+    """The warning on a roundness profile of radius ``half_mm`` below :data:`ROUNDNESS_MIN_MM`, naming the unit
+    that would make its numbers a part's size (about 25 mm), as :func:`methods.units.warn_implausible` does for
+    too large profiles."""
+    from methods.units import mm_per
+    value = half_mm / mm_per(unit)               # the file's numbers, in their declared unit
+    fits = [u for u in ("mm", "in", "m") if u != canonical(unit) and ROUNDNESS_MIN_MM <= value * mm_per(u) <= ROUNDNESS_LIMIT_MM]
+    best = min(fits, key=lambda u: abs(np.log(value * mm_per(u) / 25.0)), default=None)
+    hint = f"; is the file in {best}? (--unit {best})" if best else ""
+    return (f"profile radii (half the points' span) of {half_mm:.3g} mm (read as {canonical(unit)}) are implausibly "
+            f"small for a roundness part (below {ROUNDNESS_MIN_MM:g} mm){hint}")
+
+
 def nominal_radius_problem(nominal_mm: float, limit_mm: float, deviation_mm: float | None = None) -> str:
     """The warning on a ``--nominal-radius`` no roundness part (or profile) has: above ``limit_mm`` (likely typed in
     µm), or, with ``deviation_mm``, so small that the deviations are a good part of it (likely typed in m); as
@@ -474,6 +492,9 @@ def read_profile_args(args, limit_mm: float = PROFILE_LIMIT_MM, refuse_flat: boo
         else:
             half = float(np.max(np.ptp(points, axis=0))) / 2
             warn_implausible("profile radii (half the points' span)", half, limit_mm, unit, typical_mm=25.0)
+            if limit_mm == ROUNDNESS_LIMIT_MM and 0 < half < ROUNDNESS_MIN_MM and not (
+                    got is not None and got.kind == "polar" and nominal and _polar_value(args) == "deviation"):
+                warn(small_part_problem(half, unit))
             if got is not None and got.kind == "polar" and nominal and _polar_value(args) == "deviation":
                 from datasets.io import ASSUMED_DEVIATION_LIMIT_MM
                 dev = float(np.max(np.abs(np.hypot(*points.T) - nominal)))

@@ -257,7 +257,8 @@ def _measured_row(task: dict, res, points, truth, sent: dict | None = None) -> d
                                  and k not in family and type(v) in (float, int)}}
     try:
         measured = metrics(res, truth, own)
-    except (TypeError, ValueError) as exc:  # fitbench's class on checked values: the truth is what it cannot take
+    except Exception as exc:  # fitbench's class on checked values: the truth is what it cannot take (a wrong type, a
+        # wrong shape: TypeError, ValueError, IndexError, KeyError)
         if not truth:
             raise
         metrics(res, None, own)  # without the truth it can: the data source is at fault

@@ -63,3 +63,11 @@ def test_a_truth_that_cannot_be_compared_is_the_source_s_error_not_the_methods(d
         with pytest.raises(DataSourceError, match=r"data set 'test_dtype_float32' \(source 'test_dtype_float32'\) gave a "
                                                   r"truth that cannot be compared .*TypeError.*not the methods"):
             fit_row(_task(method, "test_dtype_float32"), points, {"center": ("a", "b"), "radius": "x"})
+
+
+@pytest.mark.parametrize("truth, error", [({"center": (1200.0,), "radius": 299.0}, "IndexError"),
+                                          ({"center": {"x": 1200.0}, "radius": 299.0}, "KeyError")])
+def test_a_truth_of_the_wrong_shape_is_the_source_s_error_too(dtype_sources, truth, error):
+    points = load_data(_task("circle.kasa", "test_dtype_float32")["dataset"], 1, [0])[0]
+    with pytest.raises(DataSourceError, match=f"gave a truth that cannot be compared .*{error}.*not the methods"):
+        fit_row(_task("circle.kasa", "test_dtype_float32"), points, truth)

@@ -163,10 +163,12 @@ def _run_here(work, chunks: Chunks, store: RowStore, bar) -> None:
                 handler(signum, frame)
             raise KeyboardInterrupt
         previous = signal.signal(signal.SIGINT, on_sigint)
+    from fitbench.cli.guards import stdout_to_stderr   # a method's prints go to stderr, as in a worker (80 us a chunk)
     try:
         while (chunk := chunks.next()) is not None:
             raise_if_signalled()
-            out = work(chunk)
+            with stdout_to_stderr():
+                out = work(chunk)
             chunks.measured(len(chunk), out["seconds"])
             _store(store, out["columns"], chunk, bar)
     finally:

@@ -207,6 +207,8 @@ def _worker_main(conn, parent_pid: int, progress) -> None:
     """A local worker: receive chunks, send back their rows as columns, until told to stop."""
     _die_with_parent(parent_pid)  # first: a run killed while this worker imports takes it along
     _lead_own_group()  # what a method starts is in the worker's group, ended with it (_Worker.stop)
+    with contextlib.suppress(OSError, ValueError):  # a method's prints (print, os.write(1, ...), a solver's printf, a
+        os.dup2(2, 1)   # process it starts) go to the run's stderr: its stdout carries the run's own lines alone
     # the pipe to the run is this process's alone: a process a method starts (os.system's shell) inherited it (it came
     # through fd passing, inheritable) and kept it open after the worker died, so the run did not see the death
     with contextlib.suppress(OSError, AttributeError):

@@ -674,13 +674,14 @@ def committed_clash(out: Path, project: bool) -> str | None:
     here, report = Path(out).resolve(), default_out(out).resolve()
     for base in (REPO, Path(".").resolve()):
         paper, results = base / "paper", base / "results"
+        what = ("the committed report", "the committed results") if base == REPO else \
+            ("the report of results/ of the current folder", "reserved for the project's studies")
         if report == paper and not (project and here == results):
-            return ("would put the run's report into paper/, the committed report (the report of --out DIR goes to "
-                    "DIR/paper)")
+            return f"would put the run's report into paper/, {what[0]} (the report of --out DIR goes to DIR/paper)"
         if here.is_relative_to(paper):
-            return "lies inside paper/, the committed report"
+            return f"lies inside paper/, {what[0]}"
         if not project and here.is_relative_to(results) and not here.is_relative_to(results / "user"):
-            return "lies inside results/, the committed results (a personal study goes to results/user/)"
+            return f"lies inside results/, {what[1]} (a personal study goes to results/user/)"
     return None
 
 

@@ -63,3 +63,16 @@ def test_a_project_study_keeps_results_but_not_paper(checkout):
     for out in (repo, repo / "paper"):
         with pytest.raises(InvalidInputError, match="paper/"):
             output_folder(str(out), [project], False)
+
+
+def test_outside_the_checkout_the_words_say_reserved_not_committed(tmp_path, monkeypatch):
+    """The current folder's paper/ and results/ are where a run without --out writes there: refused alike, not called
+    committed."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mine.toml").write_text(STUDY, encoding="utf-8")
+    mine = configs.load(str(tmp_path / "mine.toml"))
+    for out, words in ((".", "the report of results/ of the current folder"), ("paper", "lies inside paper/"),
+                       ("results/x", "reserved for the project's studies")):
+        with pytest.raises(InvalidInputError) as info:
+            output_folder(out, [mine], False)
+        assert words in str(info.value) and "committed" not in str(info.value), str(info.value)

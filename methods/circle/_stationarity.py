@@ -14,6 +14,18 @@ have F ~ 0, where a relative test means nothing; ``ulp`` = eps max(1, |shift| / 
 on the unit or the position of the data. A point whose radius collapses (R < ``MIN_RADIUS`` of the
 data's size) or whose centre runs off to infinity (R > ``MAX_RADIUS``: the points are then a
 straight line to the precision of the fit) is reported as degenerate, never as converged.
+
+D is the same in every parametrisation of the circle (J -> J T, g -> T^T g for an invertible T), but not its
+rounding: for a centre far from the data (beyond ``FAR_CENTRE`` data sizes) the columns of J in (xc, yc, R)
+agree to O(1/R^2), J^T J has the condition number ~R^4, and its pseudo-inverse drops the direction of curvature
+along which the objective still falls (a Nelder–Mead simplex stranded at R = 1.6e7 on a 45-degree arc:
+D = 1e-16 in (xc, yc, R), 38 % of S_CG in the parametrisation below). There D is computed in a parametrisation
+that stays well conditioned up to the straight line: for S_CG the direction phi of the centre from the data's
+centroid, the distance d = |c| - R of the circle from it and the curvature k = 1/R, with the residual
+e_i = (k (w_i^2 + v_i^2) - 2 w_i) / (1 + sqrt((1 - k w_i)^2 + k^2 v_i^2)) (w_i, v_i the point's coordinates
+along and across phi, w_i from the circle's nearest point to the centroid; Karimäki, Nucl. Instrum. Methods
+A 305 (1991) 187-191; Chernov & Lesort, J. Math. Imaging Vision 23 (2005) 239-252, sec. 6); for S_CA the linear
+parameters (2 xc, 2 yc, R^2 - xc^2 - yc^2), J = -[x_i, y_i, 1] (Kåsa's).
 """
 from __future__ import annotations
 
@@ -31,6 +43,9 @@ REL_DECREASE = 1e-9
 MIN_RADIUS, MAX_RADIUS = 1e-8, 1e8
 #: a point this many ulps of the data (unit frame; 1024 eps = 2.3e-13 of its size) from the optimum counts as the optimum
 DATA_ULPS = 1024
+#: unit-frame distance of the centre from the data's centroid beyond which D is computed in the well-conditioned
+#: parametrisation (in (xc, yc, R) the direction of curvature is known to ~eps R^4 only: 2e-8 at 100)
+FAR_CENTRE = 1e2
 
 
 @dataclass(frozen=True)
@@ -60,7 +75,37 @@ def _degenerate(p) -> str | None:
     return None
 
 
-def _decide(g, jtj, f, noise, label, ulp, ck=None) -> Stationarity:
+def _far(p) -> bool:
+    """A centre beyond FAR_CENTRE data sizes, on the side of a positive radius (the objectives' valley towards
+    the straight line; a negative R is far from every data point's distance and well conditioned)."""
+    return float(p[2]) > 0 and math.hypot(float(p[0]), float(p[1])) > FAR_CENTRE
+
+
+def _curvature_geometric(x, y, p, noise, ulp) -> Stationarity:
+    """D of S_CG at a far centre in the parameters (d, phi, k) of the module docstring (one sweep, used
+    only there). dr_i/dd = (1 - k w_i) / s_i, dr_i/dphi = -(1 + k d) v_i / s_i,
+    dr_i/dk = v_i^2 / (s_i (s_i + 1 - k w_i)), s_i = sqrt((1 - k w_i)^2 + k^2 v_i^2): no cancellation as k -> 0."""
+    a, b, rr = (float(v) for v in p)
+    h = math.hypot(a, b)
+    cph, sph, k = a / h, b / h, 1.0 / rr
+    d = h - rr
+    w = x * cph + y * sph
+    w -= d
+    v = y * cph - x * sph
+    m = 1.0 - k * w
+    s = np.hypot(m, k * v)
+    e = (k * (w * w + v * v) - 2.0 * w) / (1.0 + s)
+    jd = m / s
+    jphi = (-(1.0 + k * d)) * v / s
+    with np.errstate(divide="ignore", invalid="ignore"):  # a point beyond the centre (m < 0): the other form
+        jk = np.where(m >= 0, v * v / (s * (s + m)), (s - m) / (s * k * k))
+    jtj = np.array([[dot(jd, jd), dot(jd, jphi), dot(jd, jk)], [dot(jd, jphi), dot(jphi, jphi), dot(jphi, jk)],
+                    [dot(jd, jk), dot(jphi, jk), dot(jk, jk)]])
+    g = np.array([dot(jd, e), dot(jphi, e), dot(jk, e)])
+    return _decide(g, jtj, dot(e, e), noise, "S_CG", ulp, frame="(d, phi, 1/R) frame: the centre is far")
+
+
+def _decide(g, jtj, f, noise, label, ulp, ck=None, frame="") -> Stationarity:
     # + the decrease of moving the circle by DATA_ULPS ulps of the data: below it the data, rounded to
     # float64, do not define the circle any better (exact data have F ~ 0, where 1e-9 F means nothing)
     tol = REL_DECREASE * f + noise + float(np.trace(jtj)) * (DATA_ULPS * ulp) ** 2
@@ -72,7 +117,7 @@ def _decide(g, jtj, f, noise, label, ulp, ck=None) -> Stationarity:
     ok = bool(np.isfinite(dec) and dec <= tol)
     word = "stationary" if ok else "NOT stationary"
     text = (f"{word}: Gauss–Newton decrease of {label} at the returned point {dec:.1e} "
-            f"{'<=' if ok else '>'} 1e-9 F + rounding + 1024 data ulps = {tol:.1e} (unit frame)")
+            f"{'<=' if ok else '>'} 1e-9 F + rounding + 1024 data ulps = {tol:.1e} (unit frame{'; ' + frame if frame else ''})")
     return Stationarity(ok, False, dec, tol, f, text)
 
 
@@ -100,6 +145,8 @@ def geometric(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity
     delta = np.add(r, abs(p[2]), out=r)
     delta *= 4 * EPS
     noise = 2 * dot(np.abs(d, out=c), delta) + dot(delta, delta)
+    if _far(p):
+        return _curvature_geometric(x, y, p, noise, ulp)
     return _decide(g, jtj, f, noise, "S_CG", ulp)
 
 
@@ -122,12 +169,17 @@ def algebraic(x: np.ndarray, y: np.ndarray, p, ulp: float = EPS) -> Stationarity
     delta = np.add(q, p[2] * p[2], out=q)
     delta *= 4 * EPS
     noise = 2 * dot(np.abs(e, out=du), delta) + dot(delta, delta)
+    if _far(p):  # Kåsa's linear parameters: J = -[x_i, y_i, 1], as well conditioned as the data
+        jtj = np.array([[dot(x, x), dot(x, y), x.sum()], [dot(x, y), dot(y, y), y.sum()], [x.sum(), y.sum(), float(len(x))]])
+        g = -np.array([dot(e, x), dot(e, y), e.sum()])
+        return _decide(g, jtj, f, noise, "S_CA", ulp, frame="(2 xc, 2 yc, R^2 - xc^2 - yc^2) frame: the centre is far")
     return _decide(g, jtj, f, noise, "S_CA", ulp)
 
 
-def geometric_from_state(p, state, ulp: float = EPS, ck=None) -> Stationarity:
+def geometric_from_state(p, state, ulp: float, ck, coordinates) -> Stationarity:
     """:func:`geometric` from the normal equations at p that an iteration already computed
-    (``methods.circle._frame.geometric_normal_equations``), so the check costs no extra sweep.
+    (``methods.circle._frame.geometric_normal_equations``), so the check costs no extra sweep, except for
+    a far centre (``coordinates()``: the unit-frame (x, y), then one sweep in the (d, phi, 1/R) frame).
     The rounding noise of F is bounded by Cauchy–Schwarz: 8 eps sqrt(F sum (r_i + R)^2) + 16 eps^2
     sum (r_i + R)^2, with sum (r_i + R)^2 = F + 4 R sum d_i + 4 N R^2."""
     reason = _degenerate(p)
@@ -139,4 +191,15 @@ def geometric_from_state(p, state, ulp: float = EPS, ck=None) -> Stationarity:
     rr = abs(float(p[2]))
     s2 = max(f - 4 * rr * float(jtd[2]) + 4 * jtj[2, 2] * rr * rr, 0.0)
     noise = 8 * EPS * math.sqrt(f * s2) + 16 * EPS * EPS * s2
+    if _far(p):
+        return _curvature_geometric(*coordinates(), p, noise, ulp)
     return _decide(-jtd, jtj, f, noise, "S_CG", ulp, ck)
+
+
+def unit_coordinates(points, frame, coordinates=None):
+    """For :func:`geometric_from_state`: a function giving the unit-frame (x, y) of ``points`` in ``frame`` (the
+    iteration's ``coordinates`` when it has them; on the compiled path, made only when a far centre needs them)."""
+    if coordinates is not None:
+        return lambda: coordinates
+    pts = np.asarray(points, dtype=np.float64)
+    return lambda: ((pts[:, 0] - frame.shift[0]) / frame.scale, (pts[:, 1] - frame.shift[1]) / frame.scale)

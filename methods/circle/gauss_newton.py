@@ -39,7 +39,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
         check_positive(key, val, name)
     max_iter = int(check_positive("max_iter", max_iter, name))
     p_start = check_vector("start", start, 3, name)
-    frame, p, sweep, _, ck = geometric_setup(points, p_start)  # compiled: no unit-frame copy, one sweep per state
+    frame, p, sweep, coordinates, ck = geometric_setup(points, p_start)  # compiled: no unit-frame copy, one sweep per state
     solve = solve_linear(ck)
     n = len(points)
     history, steps = [], []
@@ -89,7 +89,8 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
                        f"below its rounding noise (xtol={xtol:g} is below the resolution)")
             break
     if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
-        check = stationarity.geometric_from_state(p, state if all(map(math.isfinite, p)) else None, frame.ulp, ck)
+        check = stationarity.geometric_from_state(p, state if all(map(math.isfinite, p)) else None, frame.ulp, ck,
+                                                  stationarity.unit_coordinates(points, frame, coordinates))
         converged = check.ok
         message = f"{message}; {check.text}"
     else:
@@ -97,7 +98,7 @@ def gauss_newton(points, *, stop="step", xtol=1e-12, ftol=1e-14, gtol=1e-14, max
     center, radius = frame.circle_to_data(p)
     scale2 = frame.power(2)
     scale = frame.scale
-    del state, sweep, frame  # the result's residual sweep needs none of them
+    del state, sweep, frame, coordinates  # the result's residual sweep needs none of them
     extra = {"step_norms": [s * scale for s in steps], "stop": stop}
     if check is not None:
         extra.update(check.extra(scale2))

@@ -104,7 +104,8 @@ def levenberg_marquardt(points, *, xtol=1e-14, gtol=1e-14, tau=1e-3, max_iter=20
             mu, nu = mu * nu, 2 * nu
     extra = {"final_damping": mu}
     if converged:  # a flag is a promise: check first-order optimality of S_CG at the returned point
-        check = stationarity.geometric_from_state(p, (f, jtj, jtd, arrays), frame.ulp, ck)
+        check = stationarity.geometric_from_state(p, (f, jtj, jtd, arrays), frame.ulp, ck,
+                                                  stationarity.unit_coordinates(points, frame, coordinates))
         converged = check.ok
         message = f"{message}; {check.text}"
         extra.update(check.extra(frame.power(2)))

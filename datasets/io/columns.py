@@ -191,27 +191,32 @@ def _data_fields(layout: Layout, columns) -> list:
     return out
 
 
-def data_blocks(layout: Layout) -> list[tuple[int, int]]:
-    """(first, last) line of each block of data lines of ``layout``'s file, blocks being separated by blank lines
-    (comment lines neither end nor start one): CMM and form-tester exports list several features one after another
-    that way. A file without a blank line between two lines is one block, found by a regular-expression scan of 4 Mi
-    character blocks; else one pass over the lines, nothing kept but the blocks."""
-    if not _has_blank_line(layout.name, layout.skip_rows):
+def data_blocks(layout: Layout, gaps: list | None = None) -> list[tuple[int, int]]:
+    """(first, last) line of each block of data lines of ``layout``'s file, blocks being separated by blank lines,
+    lines holding only separators (``,``) or comment lines (``# second diameter``): CMM and form-tester exports list
+    several features one after another that way, each under its own label or after a blank line. Separators before
+    the first data line or after the last make no block. ``gaps``, if given, receives what separated the blocks
+    (:func:`_gap_kind`: 'blank', 'separators', or the first comment line as ``(line, text)``). A file without such a
+    line between two data lines is one block, found by a regular-expression scan of 4 Mi character blocks; else one
+    pass over the lines, nothing kept but the blocks."""
+    if not _has_gap_line(layout.name, layout.skip_rows, layout.sep):
         return [(layout.first_data_line, -1)]
-    blocks, start, last, blank = [], None, None, False
+    blocks, start, last, gap = [], None, None, []
+    seps = "".join(c for c in (layout.sep or "") if not c.isspace())
     with _open_text(layout.name, skip_rows=layout.skip_rows) as fh:
         for lineno, raw in iter_lines(fh, layout.name):
             if lineno < layout.first_data_line:
                 continue
             ln = raw.strip()
-            if not ln:
-                blank = start is not None
+            if not ln.strip(seps) or ln.startswith(COMMENT_PREFIXES) or ln.startswith(layout.comment):
+                if start is not None:
+                    gap.append(_gap_kind(lineno, ln, seps))
                 continue
-            if ln.startswith(COMMENT_PREFIXES) or ln.startswith(layout.comment):
-                continue
-            if blank:
+            if gap:
                 blocks.append((start, last))
-                start, blank = None, False
+                if gaps is not None:
+                    gaps.append(gap)
+                start, gap = None, []
             if start is None:
                 start = lineno
             last = lineno
@@ -220,18 +225,35 @@ def data_blocks(layout: Layout) -> list[tuple[int, int]]:
     return blocks
 
 
-_BLANK_LINE = re.compile(r"\n[ \t\r\f\v]*\n\s*\S")
+def _gap_kind(lineno: int, line: str, seps: str):
+    """What the line ``line`` (stripped) between two blocks of data is: 'blank', 'separators' or (line, text) of a
+    comment."""
+    return "blank" if not line else "separators" if not line.strip(seps) else (lineno, line)
 
 
-def _has_blank_line(path, skip_rows: int = 0) -> bool:
-    """Whether the text of ``path`` holds a blank line followed by more text (read in blocks of 4 Mi characters)."""
-    tail = ""
+_COMMENT_LINE = r"[ \t]*(?:#|%|//)[^\n]*\n"
+_DATA_START = r"[ \t\r\f\v]*[^\s#%/]"
+
+
+def _gap_pattern(sep: str | None) -> re.Pattern:
+    """A data line's start, then blank lines, lines of separators only or comment lines, then another data line's
+    start (any line not blank nor a comment: a header line too, which :func:`data_blocks` passes over)."""
+    seps = re.escape("".join(c for c in (sep or "") if not c.isspace()))
+    blank = rf"[ \t\r\f\v{seps}]*\n"
+    data = rf"[ \t\r\f\v]*[^\s#%/{seps}]" if seps else _DATA_START
+    return re.compile(rf"\n{data}[^\n]*\n(?:{blank}|{_COMMENT_LINE})+{data}")
+
+
+def _has_gap_line(path, skip_rows: int = 0, sep: str | None = None) -> bool:
+    """Whether the text of ``path`` holds a blank, separator-only or comment line between two lines that are neither
+    (read in blocks of 4 Mi characters, each searched with the last 64 Ki characters of the one before)."""
+    pattern, tail = _gap_pattern(sep), "\n"
     with _open_text(path, skip_rows=skip_rows) as fh:
         while block := fh.read(1 << 22):
             text = tail + block
-            if _BLANK_LINE.search(text):
+            if pattern.search(text):
                 return True
-            cut = text.rfind("\n", 0, max(text.rfind("\n"), 0))   # from the last line but one: across the boundary
+            cut = text.find("\n", max(len(text) - (1 << 16), 0))
             tail = text[cut:] if cut >= 0 else text
     return False
 

@@ -82,6 +82,8 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         lu = length_unit(layout, res.idx, unit)
         assumed = unit is None and all(column_unit(layout, k, "length") is None for k in res.idx)
     strings = (res.direction,) if res.direction is not None else ()
+    if res.direction is None and len(blocks := data_blocks(layout, gaps := [])) > 1:
+        raise DataFileError(two_blocks(layout, blocks, gaps))   # before the numbers: a line ',' is a separator
     cols = read_columns(layout, res.idx + (res.offsets or []), skip_rows=skip_rows, strings=strings)
     f = to_mm(1.0, lu)
     if res.kind == "polar":
@@ -113,8 +115,6 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
             pts *= f
         if (dev := read_offsets(layout, res, cols)) is not None:
             pts += dev
-    if res.direction is None and len(blocks := data_blocks(layout)) > 1:
-        raise DataFileError(two_blocks(layout, blocks))
     axes = _axes(layout, res, plane)
     if res.kind == "polar" and plane is not None:
         notes.append(f"angle + radial deviation in the {''.join(axes).upper()} plane (--plane {plane.lower()}): the "
@@ -183,14 +183,20 @@ def degrees_as_radians(layout: Layout, k: int, angles, angle_unit: str | None) -
             f"circular-test run turns about once): they look like degrees; {todo}")
 
 
-def two_blocks(layout: Layout, blocks: list) -> str:
-    """The error line of a file of one profile (or run) holding ``blocks`` of data lines separated by blank lines: two
-    diameters or heights of a part exported one after the other were read as one profile (RONt 3.01 µm 'ok' for two
-    circles 20 µm apart in radius: the 50-UPR filter removed the zigzag between them)."""
+def two_blocks(layout: Layout, blocks: list, gaps: list | None = None) -> str:
+    """The error line of a file of one profile (or run) holding ``blocks`` of data lines separated by blank lines,
+    lines of separators only or comment lines (``gaps``, :func:`datasets.io.columns.data_blocks`): two diameters or
+    heights of a part exported one after the other were read as one profile (RONt 3.01 µm 'ok' for two circles 20 µm
+    apart in radius: the 50-UPR filter removed the zigzag between them)."""
     shown = ", ".join(f"{a}-{b}" for a, b in blocks[:4]) + (", ..." if len(blocks) > 4 else "")
-    return (f"{layout.name}: {len(blocks)} blocks of points separated by blank lines (lines {shown}): one profile per "
-            "file (a part's diameters or heights one after the other?); save each block in its own file (a circular "
-            "test's two runs: or label them in a Direction column)")
+    kinds = [k for gap in (gaps or [["blank"]]) for k in gap]
+    comments = [k for k in kinds if isinstance(k, tuple)]
+    what = [w for w, there in (("blank lines", "blank" in kinds), ("lines of separators only", "separators" in kinds),
+                               ("comment lines", comments)) if there]
+    label = f" ({comments[0][1]!r}, line {comments[0][0]})" if comments else ""
+    return (f"{layout.name}: {len(blocks)} blocks of points separated by {' and '.join(what)}{label} (lines {shown}): "
+            "one profile per file (a part's diameters or heights one after the other?); save each block in its own "
+            "file (a circular test's two runs: or label them in a Direction column)")
 
 
 #: an angle within this of one revolution from the first point's (rad) is the first point's angle

@@ -1,0 +1,47 @@
+"""Two profiles in one file separated by a comment line or a line of separators only (review16 V2).
+
+A blank line between two blocks of points is refused since the blocks check landed; a comment line between them
+(``# second diameter``, as CMM and form-tester exports label each feature) was skipped like any comment and the two
+diameters were evaluated as one profile (RONt 3.01 µm 'ok'); a line holding only the separator (``,``) was refused
+as ``'' is not a number``, not named as what it is."""
+from __future__ import annotations
+
+import numpy as np
+
+from cli_calls import cli, one_error_line
+
+
+def circle_lines(radius, n=360, phase=0.0):
+    t = np.radians(np.arange(n) * 360.0 / n + phase)
+    r = radius + 0.0015 * np.cos(3 * t)
+    return [f"{x:.7f},{y:.7f}" for x, y in zip(r * np.cos(t), r * np.sin(t))]
+
+
+def two_profiles(tmp_path, name, between):
+    a, b = circle_lines(10.0), circle_lines(10.02, phase=0.5)
+    p = tmp_path / name
+    p.write_text("X [mm],Y [mm]\n" + "\n".join(a) + "\n" + between + "\n".join(b) + "\n")
+    return p, len(a), len(b)
+
+
+def test_a_comment_line_between_two_profiles_ends_a_block(tmp_path):
+    p, na, nb = two_profiles(tmp_path, "comment.csv", "# second diameter\n")
+    blocks = f"(lines 2-{na + 1}, {na + 3}-{na + nb + 2})"
+    for args in (("roundness", p), ("fit", "circle.minimum_zone", p)):
+        one_error_line(cli(*args), "comment.csv: 2 blocks of points separated by comment lines "
+                                   f"('# second diameter', line {na + 2}) {blocks}", "save each block in its own file")
+
+
+def test_a_line_of_separators_only_between_two_profiles_ends_a_block(tmp_path):
+    p, na, nb = two_profiles(tmp_path, "commas.csv", ",\n")
+    one_error_line(cli("roundness", p), "commas.csv: 2 blocks of points separated by lines of separators only "
+                                        f"(lines 2-{na + 1}, {na + 3}-{na + nb + 2})")
+
+
+def test_comments_around_the_data_make_no_block(tmp_path):
+    """Comment lines above the header, between the header and the data and after the last point: one profile."""
+    a = circle_lines(10.0)
+    p = tmp_path / "one.csv"
+    p.write_text("# part 17\n# operator: A\nX [mm],Y [mm]\n# first diameter\n" + "\n".join(a) + "\n# end\n")
+    code, out, err = cli("roundness", p)
+    assert code == 0 and "RONt" in out, err

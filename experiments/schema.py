@@ -552,6 +552,22 @@ def truth_problem(truth: dict) -> tuple[str, str] | None:
     if ("semi_axes" in truth) != ("angle" in truth):
         given, lacking = ("semi_axes", "angle") if "semi_axes" in truth else ("angle", "semi_axes")
         return given, f"needs {lacking} too (an ellipse's errors compare the semi-axes and the angle together)"
+    return ellipse_truth_problem(truth) if "semi_axes" in truth else None
+
+
+def ellipse_truth_problem(truth: dict) -> tuple[str, str] | None:
+    """(key, problem) of an ellipse truth the ellipse family's convention cannot compare (``EllipseFit``: a >= b, the
+    angle that of a in rad, its error taken modulo pi): ``semi_axes = [40.0, 50.0]`` compared a with b crosswise
+    (semi_axis_a_error 10 mm of an exact fit), ``angle = 30.0`` (degrees, as generators' ``angle_deg``) gave an angle
+    error of -0.60 rad. An angle beyond +-2 pi is no radian convention's (0..pi, -pi..pi, 0..2 pi)."""
+    (a, b), angle = truth["semi_axes"], truth["angle"]
+    if a < b:
+        turned = (angle + math.pi / 2) % math.pi
+        return "semi_axes", (f"a >= b (the semi-major axis first, at angle; the fits give a >= b), got [{a:g}, {b:g}]: "
+                             f"write semi_axes = [{b:g}, {a:g}], angle = {turned:.6g} (the angle of {b:g} in rad)")
+    if abs(angle) > 2 * math.pi:
+        return "angle", (f"{angle:g} is beyond ±2π: the angle is in rad (the direction of semi-axis a; "
+                         f"{angle:g}° is {math.radians(angle):.6g} rad)")
     return None
 
 

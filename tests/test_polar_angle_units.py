@@ -178,14 +178,20 @@ def test_one_closing_point_with_another_value_is_named_by_its_line(tmp_path):
 
 
 def test_an_xy_trace_over_more_than_one_revolution_names_both_points(tmp_path):
-    """x, y points have no angle column to count revolutions by: the evaluation's refusal names both points at one
-    angle, 1-based in the order given (was 'point 3666', a 0-based index of one of them)."""
+    """x, y points have no angle column: a trace over more than a revolution is refused by the reader naming the lines
+    to keep (their polar angles about their circle's centre); one closing point at the first one's angle with another
+    radius is left to the evaluation, whose refusal names both points 1-based in the order given (was 'point 3666',
+    a 0-based index of one of them)."""
     deg = np.round(np.arange(3700) * 0.1, 1)
     t = np.radians(deg)
     p = tmp_path / "xy.csv"
     p.write_text("X [mm],Y [mm]\n" + "".join(f"{10 * np.cos(a):.6f},{10 * np.sin(a):.6f}\n" for a in t))
-    twin = int(np.flatnonzero(deg == 360.0)[0]) + 1        # 360.0° is point 3601, at point 1's angle
-    one_error_line(cli("roundness", p), f"(points 1 and {twin} in the order given)", "keep one revolution")
+    one_error_line(cli("roundness", p), "covers 369.9° (the points' polar angles about their circle's centre)",
+                   "lines 3602-3701", "keep lines 2-3601")
+    q = tmp_path / "closed.csv"
+    q.write_text("X [mm],Y [mm]\n" + "".join(f"{10 * np.cos(a):.6f},{10 * np.sin(a):.6f}\n" for a in t[:3600])
+                 + "10.001000,0.000000\n")
+    one_error_line(cli("roundness", q), "(points 1 and 3601 in the order given)", "keep one revolution")
 
 
 def test_an_overlap_whose_angles_do_not_repeat_is_refused_too(tmp_path):

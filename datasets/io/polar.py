@@ -144,3 +144,75 @@ def warn_radius_like_deviation(layout: Layout, k: int, radii_mm, unit: str) -> b
                   f"path does; does the column hold radial deviations? name it 'Deviation [{canonical(unit)}]' (and "
                   "give --nominal-radius for circular-test)", UnitWarning, stacklevel=4)
     return True
+
+
+def circle_through(points) -> tuple[float, float, float]:
+    """(xc, yc, r) of the algebraic least-squares circle of ``points`` (Kåsa 1976: x² + y² = 2 xc x + 2 yc y + c,
+    about the centroid for conditioning): the centre the reader counts polar angles about and measures a radial
+    span from, not a fit result. NaNs when the points are collinear."""
+    p = np.asarray(points, dtype=float)
+    m = p.mean(axis=0)
+    q = p - m
+    a = np.column_stack([2 * q, np.ones(len(q))])
+    sol, *_ = np.linalg.lstsq(a, np.einsum("ij,ij->i", q, q), rcond=None)
+    r2 = sol[2] + sol[0] ** 2 + sol[1] ** 2
+    if not (np.isfinite(sol).all() and r2 > 0):
+        return np.nan, np.nan, np.nan
+    return float(m[0] + sol[0]), float(m[1] + sol[1]), float(np.sqrt(r2))
+
+
+def decimal_step(values) -> float:
+    """The largest power of ten of which every finite value is a whole multiple (0.001 for numbers written with three
+    decimals), i.e. the rounding step of the numbers as written; 0 when none up to 1e-15 is (full binary floats)."""
+    v = np.abs(np.asarray(values, dtype=float))
+    v = v[np.isfinite(v)]
+    if not v.size:
+        return 0.0
+    for d in range(-6, 16):
+        s = v * 10.0 ** d
+        if s.max() >= 2.0 ** 52:
+            break
+        if np.all(np.abs(s - np.rint(s)) <= 1e-6 + 8 * np.finfo(float).eps * s):
+            return 10.0 ** -d
+    return 0.0
+
+
+#: an x, y profile's radial span about its circle must be at least this many steps of the numbers' rounding to be a
+#: measured form (an exact circle written to 6 decimals spans 1 or 2 of them: a made-up profile, not a unit mistake)
+SPAN_ROUNDING_STEPS = 20
+
+
+def warn_too_small_xy(layout: Layout, idx, points_mm, written, unit: str, given: str | None,
+                      circle: tuple | None = None) -> bool:
+    """The x, y counterpart of :func:`warn_too_small`: warn (:class:`~methods.units.UnitWarning`) when the points'
+    radial distances from their circle (:func:`circle_through`) span less than :data:`SMALLEST_DEVIATION_SPAN_MM`, but
+    at least :data:`SPAN_ROUNDING_STEPS` steps of the rounding of the numbers ``written`` (the x and y columns as
+    read, in ``unit``: :func:`decimal_step`) and 1e-9 of the radius (an exact circle's are roundoff): a 10 mm part's
+    x, y in mm read as µm span 0.005 µm about a radius of 0.01 mm (RONt 0.0041 µm 'ok' was printed). Names the unit
+    1000 times larger and where to declare it. ``circle``: (xc, yc, r) of the points if already computed."""
+    from methods.units import UnitWarning, canonical
+    p = np.asarray(points_mm, dtype=float)
+    if p.ndim != 2 or len(p) < 4 or not np.isfinite(p).all():
+        return False
+    xc, yc, r = circle_through(p) if circle is None else circle
+    if not np.isfinite(r):
+        return False
+    span = float(np.ptp(np.hypot(p[:, 0] - xc, p[:, 1] - yc)))
+    if not (span < SMALLEST_DEVIATION_SPAN_MM and span > 1e-9 * r):
+        return False
+    from methods.units import to_mm
+    if span < SPAN_ROUNDING_STEPS * to_mm(max(decimal_step(c) for c in written), unit):
+        return False
+    cols = [repr(layout.header[k]) if layout.header else f"{k} (0-based)" for k in idx]
+    larger = {"nm": "µm", "µm": "mm", "mm": "m"}.get(canonical(unit))
+    if any(column_unit(layout, k, "length") is not None for k in idx):
+        source, todo = f"as the header of {' and '.join(cols)} says", f"correct the header to [{larger}]"
+    elif given is not None:
+        source, todo = "as --unit says", f"give --unit {(larger or '').replace('µ', 'u')}"
+    else:
+        source, todo = "the columns name no unit", f"give --unit {(larger or '').replace('µ', 'u')}"
+    ask = f"is the file in {larger}? ({todo})" if larger else "check the file's unit"
+    warnings.warn(f"the points' distances from the centre of their circle in {layout.name} span {span * 1e3:.3g} µm "
+                  f"about a radius of {r:.6g} mm (read as {canonical(unit)}, {source}): below the 10 nm a roundness "
+                  f"instrument, a CMM or a ballbar resolves, not a measured profile; {ask}", UnitWarning, stacklevel=4)
+    return True

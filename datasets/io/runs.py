@@ -14,8 +14,8 @@ from datasets.io.columns import data_blocks, read_columns
 from datasets.io.headers import column_unit, length_unit
 from datasets.io.layout import Layout, sniff
 from datasets.io.numbers import DataFileError
-from datasets.io.polar import (_unit_assumed, angle_unit_of, polar_to_points, warn_radius_like_deviation,
-                               warn_too_small)
+from datasets.io.polar import (_unit_assumed, angle_unit_of, circle_through, polar_to_points,
+                               warn_radius_like_deviation, warn_too_small, warn_too_small_xy)
 from datasets.io.roles import PLANES, Resolved, coordinate_kind, read_offsets, resolve
 from methods.units import to_mm
 
@@ -115,6 +115,10 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
             pts *= f
         if (dev := read_offsets(layout, res, cols)) is not None:
             pts += dev
+        circle = circle_through(pts) if len(pts) >= 4 and np.isfinite(pts).all() else None
+        if one_revolution and res.direction is None and (why := xy_beyond_one_revolution(layout, pts, circle)):
+            raise DataFileError(why)
+        warn_too_small_xy(layout, res.idx, pts, (cols[res.idx[0]], cols[res.idx[1]]), lu, unit, circle)
     axes = _axes(layout, res, plane)
     if res.kind == "polar" and plane is not None:
         notes.append(f"angle + radial deviation in the {''.join(axes).upper()} plane (--plane {plane.lower()}): the "
@@ -203,13 +207,31 @@ def two_blocks(layout: Layout, blocks: list, gaps: list | None = None) -> str:
 SAME_ANGLE_RAD = 1e-9
 
 
-def beyond_one_revolution(layout: Layout, k: int, angles_rad, values) -> str | None:
+def xy_beyond_one_revolution(layout: Layout, points, circle: tuple | None = None) -> str | None:
+    """:func:`beyond_one_revolution` of an x, y closed profile: the polar angles of its points about their circle's
+    centre (:func:`circle_through`), in the file's order. A trace recorded over 371.9° in steps of 0.10003° (no angle
+    repeated, so the evaluation's check of two points at one angle passed) was evaluated as one profile, RONt 4.3873
+    µm 'ok'. One point past (a closing point measured again) is left to :func:`drop_closing_repeat` and the
+    evaluation, as before: its polar angle about a fitted centre may fall either side of the first's. ``circle``:
+    (xc, yc, r) of the points if already computed."""
+    p = np.asarray(points, dtype=float)
+    if p.ndim != 2 or len(p) < 4 or not np.isfinite(p).all():
+        return None
+    xc, yc, _ = circle_through(p) if circle is None else circle
+    if not np.isfinite(xc):
+        return None
+    ang = np.arctan2(p[:, 1] - yc, p[:, 0] - xc)
+    return beyond_one_revolution(layout, None, ang, np.hypot(p[:, 0] - xc, p[:, 1] - yc), single=False)
+
+
+def beyond_one_revolution(layout: Layout, k: int | None, angles_rad, values, single: bool = True) -> str | None:
     """The error line when the angles of a closed profile (column ``k``, in radians, in the file's order) go on past
     one revolution from the first point: instruments record a little more than 360° to check closure (0 to 369.9°),
     and the roundness evaluation refused that as 'two points lie at the same polar angle (point 3666) ... (drop a
     repeated closing point)'. Names the file's lines beyond and the lines of the first revolution to keep; one point
     at the first one's angle with another value is named as such. None when the angles do not run one way (the
-    evaluation decides), or the only point past is the first repeated (:func:`drop_closing_repeat` drops it)."""
+    evaluation decides), or the only point past is the first repeated (:func:`drop_closing_repeat` drops it), or is
+    any single point without ``single`` (:func:`xy_beyond_one_revolution`); ``k`` None: x, y points, no column."""
     a = np.unwrap(np.asarray(angles_rad, dtype=float))
     if a.size < 4 or not np.isfinite(a).all():
         return None
@@ -220,14 +242,14 @@ def beyond_one_revolution(layout: Layout, k: int, angles_rad, values) -> str | N
     swept = (a - a[0]) * sign
     past = np.flatnonzero(swept >= 2 * np.pi - SAME_ANGLE_RAD)
     v = np.asarray(values, dtype=float)
-    if not past.size or (past.size == 1 and past[0] == a.size - 1 and v[-1] == v[0]):
+    if not past.size or (past.size == 1 and (not single or (past[0] == a.size - 1 and v[-1] == v[0]))):
         return None
     from datasets.io.columns import _data_fields
     lines = [n for n, _ in _data_fields(layout, [])]
     where = "line" if len(lines) == a.size else "point"
     if len(lines) != a.size:
         lines = list(range(1, a.size + 1))
-    col = layout.header[k] if layout.header else f"column {k}"
+    col = "" if k is None else layout.header[k] if layout.header else f"column {k}"
     first, keep = lines[0], lines[past[0] - 1]
     if past.size == 1:
         return (f"{layout.name} {where} {lines[past[0]]}: its angle ({col!r}) lies at the same polar angle as the first "
@@ -235,8 +257,9 @@ def beyond_one_revolution(layout: Layout, k: int, angles_rad, values) -> str | N
                 f"angle: drop {where} {lines[past[0]]}")
     covered, step = float(np.degrees(swept[-1])), float(np.degrees(np.median(np.abs(step))))
     gon = ("; if the angles are in gon (400 a revolution), multiply the column by 0.9 and name its unit deg"
-           if 400 - 3 * step <= covered < 400 + step else "")
-    return (f"{layout.name}: the profile covers {covered:.6g}°, more than one revolution ({past.size} "
+           if k is not None and 400 - 3 * step <= covered < 400 + step else "")
+    about = " (the points' polar angles about their circle's centre)" if k is None else ""
+    return (f"{layout.name}: the profile covers {covered:.6g}°{about}, more than one revolution ({past.size} "
             f"points at or beyond 360° from the first, {where}s {lines[past[0]]}-{lines[past[-1]]}); a roundness profile "
             f"is one revolution (ISO 12181-1): keep {where}s {first}-{keep}{gon}")
 

@@ -105,7 +105,7 @@ def ron_mzci(out):
     return next(ln.split()[4] for ln in out.splitlines() if ln.startswith("minimum zone circles (MZCI)"))
 
 
-@pytest.mark.parametrize("name", ["Drehwinkel [°]", "C [deg]", "Position [deg]", "Point angle [deg]", "Angle CW (deg)",
+@pytest.mark.parametrize("name", ["Drehwinkel [°]", "C [deg]", "Position [deg]", "Point angle [deg]", "Angle CCW (deg)",
                                   "Theta [rad]"])
 def test_a_column_in_an_angle_unit_is_the_angle_whatever_its_name(tmp_path, name):
     """Exports name the angle column as they like; its unit says what it is. Each is read as the same profile under

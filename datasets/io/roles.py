@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from datasets.io.delimiters import _split
-from datasets.io.headers import ANGLE_UNITS, CONVERT, LENGTH_UNITS, column_unit
+from datasets.io.headers import ANGLE_UNITS, CONVERT, LENGTH_UNITS, column_unit, parse_name
 from datasets.io.layout import Layout, one_column, skip_rows_hint
 from datasets.io.numbers import DataFileError, _field_number
 from methods import InvalidInputError
@@ -86,7 +86,44 @@ def column_roles(layout: Layout) -> list:
     return roles
 
 
+#: words of a header name saying its angles are measured clockwise / counter-clockwise (lower case, whole words;
+#: 'clockwise' and 'Uhrzeigersinn' after counter, anti, gegen or entgegen are counter-clockwise)
+_CW_WORDS = {"cw", "clockwise", "uhrzeigersinn", "uzs"}
+_CCW_WORDS = {"ccw", "acw", "counterclockwise", "anticlockwise", "guzs", "guz", "ccwise"}
+_NEGATE = {"counter", "anti", "gegen", "entgegen"}
+
+
+def clockwise_name(name: str) -> bool:
+    """Whether a header name says its angles are measured clockwise (``Angle CW (deg)``, ``CW angle [deg]``, ``Angle
+    (clockwise) [deg]``, ``Winkel im Uhrzeigersinn [°]``): by whole words, so ``CCW``, ``counter-clockwise``,
+    ``anticlockwise`` and ``gegen den Uhrzeigersinn`` are not."""
+    words = re.findall(r"[a-zäöüß]+", str(name).lower())
+    return any(w in _CW_WORDS and not _NEGATE.intersection(words[:i]) for i, w in enumerate(words))
+
+
+def _refuse_clockwise(layout: Layout, k: int) -> None:
+    """Refuse an angle column whose name says clockwise: fitbench's angles turn counter-clockwise (the mathematical
+    sense, ISO 230-4 and ISO 12181-1 polar profiles), and reading clockwise angles so mirrors the profile (the
+    roundness centre's y and a circular test's squareness change sign, the runs swap). A name may also mean the
+    clockwise RUN's angle, so the convention is the user's to say."""
+    if layout.header is None or not clockwise_name(layout.header[k]):
+        return
+    unit = parse_name(layout.header[k])[1] or "deg"
+    raise DataFileError(f"{layout.name}: column {layout.header[k].strip()!r} names a clockwise direction: fitbench "
+                        "reads angles counter-clockwise (mathematical sense); if they are measured clockwise, negate "
+                        f"them; either way name the column 'Angle [{unit}]'")
+
+
 def resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
+    """The instrument layout of a file (:func:`_resolve`); an angle column named clockwise is refused
+    (:func:`_refuse_clockwise`)."""
+    res = _resolve(layout, columns, plane)
+    if res.kind == "polar":
+        _refuse_clockwise(layout, res.idx[0])
+    return res
+
+
+def _resolve(layout: Layout, columns=None, plane: str | None = None) -> Resolved:
     """The instrument layout of a file, decided by its header where it can (:data:`ROLES`, :func:`parse_name`):
     angle + radial deviation (or radius) when the header names both, else x, y (``plane`` picks its named
     pair). ``columns`` names any layout's two columns (header names, case and spaces ignored, or 0-based

@@ -685,6 +685,22 @@ def committed_clash(out: Path, project: bool) -> str | None:
     return None
 
 
+def report_clash(results: Path, out: Path) -> str | None:
+    """Why the report of ``results`` must not go to ``out``, as words for a refusal, or None: ``out`` inside the
+    ``paper/`` of the repository (the committed report) or of the current folder, while ``results`` is not the
+    ``results/`` beside it: a user's study would replace the committed report (and its build delete the figures
+    the previous one listed). :func:`committed_clash` guards ``experiments.run --out`` the same way."""
+    here, source = Path(out).resolve(), Path(results).resolve()
+    for base in (REPO, Path(".").resolve()):
+        paper = base / "paper"
+        if here.is_relative_to(paper) and source != base / "results":
+            what = ("the committed report, built from the project's results/" if base == REPO else
+                    "the report of results/ of the current folder")
+            return (f"--out {out} writes into paper/, {what}, not the report of --results {results}; leave --out "
+                    f"out (the report then goes to {default_out(results)}/) or give another folder")
+    return None
+
+
 def main(argv=None, prog: str = "python -m experiments.report") -> int:
     parser = argparse.ArgumentParser(prog=prog, description="Build paper/ from results/.")
     from fitbench import __version__
@@ -695,6 +711,9 @@ def main(argv=None, prog: str = "python -m experiments.report") -> int:
     args = parser.parse_args(argv)
     if args.out is None:
         args.out = default_out(args.results)
+    if clash := report_clash(args.results, args.out):
+        print(f"experiments.report: error: {clash}", file=sys.stderr)
+        return 2
     if not args.results.is_dir():
         print(f"experiments.report: error: no results folder {args.results}; run python -m experiments.run first",
               file=sys.stderr)

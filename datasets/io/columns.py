@@ -44,10 +44,25 @@ def _diagnose(layout: Layout, idx, skip_rows: int):
                 if why:
                     raise NumberFormatError(f"{name} line {lineno}: {why}")
                 raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a number"
-                                    f"{skip_rows_hint(layout, before=lineno)}")
+                                    f"{skip_rows_hint(layout, before=lineno) or _header_below(layout, lineno, ln, toks)}")
             if not np.isfinite(_number(tok)):
                 raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a finite number; remove or repair the point")
     raise DataFileError(f"{name}: could not be parsed (unexpected format); use one row of numbers per line")
+
+
+def _header_below(layout: Layout, lineno: int, line: str, toks: list) -> str:
+    """The --skip-rows hint for a file without a header whose line ``lineno``, near the top, is a row of names
+    (``50;3600`` above ``Winkel [°];Abweichung [µm]``: an instrument's numeric preamble taken for data), else ''."""
+    if layout.header is not None or lineno > PREAMBLE_LINES or not all(t.strip() for t in toks) or \
+            any(_is_number(t.replace(",", ".")) for t in toks):
+        return ""
+    n = lineno - 1
+    return (f"; if {'line 1 is' if n == 1 else f'lines 1-{n} are'} an instrument's preamble above the header "
+            f"{line!r}, give --skip-rows {n}")
+
+
+#: the first lines of a file where a row of names under rows of numbers is taken for a header below a preamble
+PREAMBLE_LINES = 20
 
 
 def _check_last_line(layout: Layout, idx) -> None:

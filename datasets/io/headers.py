@@ -58,7 +58,8 @@ def column_unit(layout, k: int, kind: str) -> str | None:
         # an angle read as a length: naming its unit mm (unit_refusal's advice) would read the angles as lengths
         raise DataFileError(f"{layout.name}: column {layout.header[k]!r} is an angle ({unit}) where a length is read; "
                             "give --columns ANGLE DEVIATION (or X Y) naming the angle and a length column")
-    raise unit_refusal(layout.name, layout.header[k], unit, kind)
+    # the "header" may be an instrument's preamble line ('Cutoff (UPR);50') above the real one: said
+    raise DataFileError(f"{unit_refusal(layout.name, layout.header[k], unit, kind)}{layout.preamble_hint()}")
 
 
 #: length and angle units a header may give that fitbench does not read: what to multiply the column by, and the
@@ -99,6 +100,16 @@ def mixed_units(where, given: dict) -> DataFileError:
                          f"'{key} [{to}]'")
 
 
+#: units of other quantities a header may give, and what they measure: such a column is never advised to be
+#: renamed a length or an angle (a temperature named mm would be read as one)
+OTHER_QUANTITIES = {**dict.fromkeys(("°c", "°f", "degc", "degf", "℃", "k"), "a temperature"),
+                    **dict.fromkeys(("s", "ms", "min", "sec"), "a time"),
+                    **dict.fromkeys(("hz", "khz", "rpm", "1/min"), "a frequency"),
+                    **dict.fromkeys(("mm/min", "m/min", "mm/s", "in/min"), "a feed rate"),
+                    **dict.fromkeys(("ppm", "µm/m", "um/m"), "a ratio"),
+                    "upr": "undulations per revolution (a filter cutoff)"}
+
+
 def unit_refusal(where, column, unit: str, kind: str = "length") -> DataFileError:
     """The one-line refusal of a ``kind`` ('length' or 'angle') column whose header gives a unit fitbench does not
     read: the factor that converts it to one it reads when the unit is known (cm: x 10 to mm), else the units it
@@ -111,6 +122,10 @@ def unit_refusal(where, column, unit: str, kind: str = "length") -> DataFileErro
                              f"reads {reads}): {_scaling(factor, 'the column')} and name its unit {to} "
                              f"('{key} [{to}]')")
     what, example = ("a length", "mm") if kind == "length" else ("an angle", "deg")
+    if unit in OTHER_QUANTITIES:
+        return DataFileError(f"{where}: column {name!r} carries the unit {unit!r}, {OTHER_QUANTITIES[unit]}, not "
+                             f"{what}: fitbench does not evaluate such a column (it reads {reads} here); name the "
+                             "columns to read (--columns) or delete this one")
     return DataFileError(f"{where}: column {name!r} carries the unit {unit!r}, not {what} unit: name the column's "
                          f"unit in the header ({reads}; e.g. '{key} [{example}]')")
 

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 
 from datasets.io._pandas import pd
-from datasets.io.headers import LENGTH_UNITS, mixed_units, parse_name, unit_refusal
+from datasets.io.headers import ANGLE_UNITS, CONVERT, LENGTH_UNITS, mixed_units, parse_name, unit_refusal
 from datasets.io.layout import preamble_hint
 from datasets.io.numbers import DataFileError, NumberFormatError
 from datasets.io.tables import _numeric_column, read_table
@@ -287,6 +287,13 @@ def _header_unit(found: dict, given: str | None, option: str, name) -> str | Non
         raise DataFileError(f"{name}: the columns {', '.join(found)} are in different units "
                             f"({', '.join(sorted(units))}); convert them to one unit")
     header = units.pop() if units else None
+    if header is not None and (header in ANGLE_UNITS.values() or header in CONVERT["angle"]):
+        col = next(iter(found))
+        what = ("targets in an angle unit: a rotary axis" if option == "--unit" else
+                "deviations in an angle unit: a rotary axis, or the pitch or yaw of a linear one")
+        raise DataFileError(f"{name}: column {col!r} holds {what}; rotary axes and angular deviations are not "
+                            "supported: fitbench evaluates the positioning of linear axes (ISO 230-2, targets and "
+                            "deviations in nm, µm, mm, m or in)")
     if header is not None and header not in LENGTH_UNITS.values():
         raise unit_refusal(name, next(iter(found)), header)
     if header is not None and given is not None and canonical(given) != header:

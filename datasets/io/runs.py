@@ -94,10 +94,14 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
             notes.append(why)   # a fit of an arc: it may be one
         if au == "rad" and (why := degrees_as_radians(layout, res.idx[0], cols[res.idx[0]], angle_unit)):
             raise DataFileError(why)
+        hint = (round_degrees_as_radians(layout, res.idx[0], cols[res.idx[0]], angle_unit)
+                if au == "rad" and res.direction is None else None)
         ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
         if one_revolution and res.direction is None and (
                 why := beyond_one_revolution(layout, res.idx[0], ang, cols[res.idx[1]])):
-            raise DataFileError(why)
+            raise DataFileError(f"{why}; {hint}" if hint else why)
+        if hint:
+            notes.append(hint)
         if assumed and res.polar_value == "deviation":
             notes.append(_unit_assumed(layout, res.idx[1], cols[res.idx[1]]))
         if res.polar_value == "deviation":
@@ -185,6 +189,35 @@ def degrees_as_radians(layout: Layout, k: int, angles, angle_unit: str | None) -
             f"correct the header of {col!r} to [deg]")
     return (f"{layout.name}: the angles of {col!r} span {span:.6g} rad ({turns:.3g} revolutions; a profile or a "
             f"circular-test run turns about once): they look like degrees; {todo}")
+
+
+#: the round steps of degrees (°) an angle column is written in whose equal steps :func:`round_degrees_as_radians` names
+ROUND_DEGREE_STEPS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.25, 0.5, 1.0, 2.0, 2.5, 5.0, 10.0)
+
+
+def round_degrees_as_radians(layout: Layout, k: int, angles, angle_unit: str | None) -> str | None:
+    """A hint (asked, not an error) when the angle column ``k``, read as radians, turns more than once (an arc in
+    degrees between 6.3° and the 25.1° beyond which :func:`degrees_as_radians` refuses) in equal steps of a round
+    number of degrees (:data:`ROUND_DEGREE_STEPS`), every angle a whole multiple of it: 0, 0.1, ..., 20 under
+    'Angle [rad]' is a 20° arc read as 3.2 revolutions (fit: radius 50.00041 for 49.99716 mm, exit 0, no word).
+    Radian data over more than a revolution is sampled at 2 pi i / N, not at round decimals; one revolution or less
+    is not named (a revolution in steps of 0.1 rad looks the same). None otherwise."""
+    a = np.asarray(angles, dtype=float)
+    if a.size < 3 or not np.isfinite(a).all():
+        return None
+    d = np.abs(np.diff(a))
+    step = float(np.median(d))
+    lo, hi = float(a.min()), float(a.max())
+    if not hi - lo > 2 * np.pi + step:
+        return None
+    s = next((s for s in ROUND_DEGREE_STEPS if abs(step - s) <= 1e-9 * s), None)
+    if s is None or not np.all(np.abs(d - s) <= 1e-6 * s) or not np.all(np.abs(a / s - np.rint(a / s)) <= 1e-6):
+        return None
+    col = layout.header[k] if layout.header else f"column {k}"
+    todo = ("give --angle-unit deg, not rad" if column_unit(layout, k, "angle") is None else
+            f"correct the header of {col!r} to [deg]")
+    return (f"the angles of {col!r} run from {lo:g} to {hi:g} in equal steps of {s:g}: read as radians they turn "
+            f"{(hi - lo) / (2 * np.pi):.3g} times; if they are degrees (a {hi - lo:g}° arc), {todo}")
 
 
 def two_blocks(layout: Layout, blocks: list, gaps: list | None = None) -> str:

@@ -409,8 +409,8 @@ def _trailer(df, lines, empty, path, skip_rows: int = 0):
 
 def _trailing_separators(df, lines, path):
     """The table without the empty last column a separator after the last field of every line, header included,
-    gives (Excel's ``;`` at the end of each line when the sheet has an empty column to the right): an unnamed last
-    column whose every cell is empty. Rows that all have one field more than the header (pandas then takes their
+    gives (Excel's ``;`` at the end of each line when the sheet has an empty column to the right; ``; `` with a
+    space after it): an unnamed (or blank-named) last column whose every cell is empty. Rows that all have one field more than the header (pandas then takes their
     first field for the row index, shifting every column) are refused in one line saying so."""
     if not (isinstance(df.index, pd.RangeIndex) and df.index.start == 0 and df.index.step == 1):
         n = df.shape[1]
@@ -419,7 +419,7 @@ def _trailing_separators(df, lines, path):
                             f"{lines[0]})" + (": each data line ends with a separator and the header does not; delete "
                             "the separators after the last values, or end the header with one too" if ends else
                             ": name every column in the header"))
-    while df.shape[1] > 1 and str(df.columns[-1]).startswith("Unnamed: ") and \
+    while df.shape[1] > 1 and (str(df.columns[-1]).startswith("Unnamed: ") or not str(df.columns[-1]).strip()) and \
             df.iloc[:, -1].fillna("").astype(str).str.strip().eq("").all():
         df = df.iloc[:, :-1]
     return df

@@ -244,8 +244,8 @@ DOS_EOF = b"\x1a"
 
 
 def text_end(path) -> int | None:
-    """The size in bytes of ``path`` without the DOS end-of-file marks (:data:`DOS_EOF`) at its very end, or None
-    when it ends without one (or is UTF-16/32 text, or cannot be read). A Ctrl-Z anywhere else is data (refused as
+    """The size in bytes of ``path`` without the DOS end-of-file marks (:data:`DOS_EOF`) at its very end (and a line
+    end after them), or None when it ends without one (or is UTF-16/32 text, or cannot be read). A Ctrl-Z anywhere else is data (refused as
     such by the readers)."""
     name = os.fspath(path)
     if file_encoding(name) in CODE_UNIT_BYTES:
@@ -257,8 +257,10 @@ def text_end(path) -> int | None:
             tail = fh.read()
     except (OSError, InvalidInputError):
         return None
-    k = len(tail) - len(tail.rstrip(DOS_EOF))
-    return size - k if k else None
+    body = tail.rstrip(b"\r\n")              # a mark alone on the last line ('\x1a\r\n', as DOS tools write it)
+    if len(body) == len(body.rstrip(DOS_EOF)):
+        return None
+    return size - (len(tail) - len(body.rstrip(DOS_EOF)))
 
 
 class _UpTo(io.RawIOBase):

@@ -54,7 +54,15 @@ def run(args) -> int:
         params["selection"] = args.selection
     elif args.delta is not None:
         raise InvalidInputError("--delta is a parameter of --method offset")
-    res = methods.fit(f"magnify.{args.method}", data, **params)
+    try:
+        res = methods.fit(f"magnify.{args.method}", data, **params)
+    except InvalidInputError as exc:
+        if getattr(exc, "delta_emax", None) is None:
+            raise
+        delta, emax = (v * 1e3 for v in exc.delta_emax)   # mm -> µm
+        raise InvalidInputError(f"--delta {delta:.4g} µm must be larger than the largest contouring error "
+                                f"({emax:.4g} µm); choose a larger --delta (e.g. {2 * emax:.3g}um, twice it, "
+                                "the default)") from None
     said = cli_options.said_warnings()   # printed before the figures, written into the JSON
     if plot_path:
         from fitbench.plots.magnify import plot_magnified

@@ -409,12 +409,13 @@ def run(args) -> int:
                             input_deviation_unit=canonical(args.deviation_unit or args.unit),
                             polynomial="coefficients of increasing powers of the position P in mm: mm / mm^k")
         out["per_target"] = {k: v for k, v in res.per_target.items()}
-        # a model its lack-of-fit test rejects has no U(P): null, and lack_of_fit says why
+        # a model its lack-of-fit test rejects has no U(P): null, and lack_of_fit says why; no model at all (the
+        # notes say why): null, not an empty object
         out["polynomial"] = {d: {"coefficients": p["coefficients"], "covariance": p["covariance"],
                                  "degree": p["degree"], "k": p["k"],
                                  "U_at_targets": None if p["lack_of_fit"]["rejected"] else p["U_at_targets"],
                                  "lack_of_fit": p["lack_of_fit"]}
-                             for d, p in res.polynomial.items()}
+                             for d, p in res.polynomial.items()} or None
         out["u_delta"] = res.extra.get("u_delta")
         out["notes"] = notes
         out["warnings"] = said

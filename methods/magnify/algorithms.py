@@ -98,8 +98,10 @@ def offset(data, *, eta=1000.0, delta=None, delta_emax=None, selection="same_sid
     emax = float(err.max())
     delta = (2.0 if delta_emax is None else delta_emax) * emax if delta is None else float(delta)
     if not delta > emax:
-        raise InvalidInputError(f"magnify.offset: delta = {delta:g} must be larger than the largest contouring "
-                                f"error ({emax:g}); choose a larger --delta")
+        exc = InvalidInputError(f"magnify.offset: delta = {delta:g} must be larger than the largest contouring "
+                                f"error ({emax:g}, data units); choose a larger delta")
+        exc.delta_emax = (delta, emax)   # the CLI says them in its units
+        raise exc
     q_left = line.offset_curve(delta, join_style="round")
     q_right = line.offset_curve(-delta, join_style="round")
     for q_side, name in ((q_left, "left"), (q_right, "right")):

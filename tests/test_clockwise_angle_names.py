@@ -13,10 +13,10 @@ import pytest
 from cli_calls import cli, one_error_line
 
 CW_NAMES = ["Angle CW (deg)", "CW angle [deg]", "Angle (clockwise) [deg]", "Angle, clockwise [°]",
-            "Winkel im Uhrzeigersinn [°]", "Angle_CW [rad]"]
+            "Winkel im Uhrzeigersinn [°]", "Angle_CW [rad]", "AngleCW [deg]", "CWAngle [deg]"]
 CCW_NAMES = ["Angle CCW (deg)", "CCW angle [deg]", "Angle (counter-clockwise) [deg]", "Angle counter clockwise [deg]",
              "Anticlockwise angle [deg]", "Angle (anti-clockwise) [°]", "Winkel gegen den Uhrzeigersinn [°]",
-             "Cwt angle [deg]"]
+             "Cwt angle [deg]", "AngleCCW [deg]", "CounterClockwise angle [deg]", "WinkelGegenUhrzeigersinn [°]"]
 
 
 def profile_file(path, name):

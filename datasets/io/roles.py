@@ -91,13 +91,15 @@ def column_roles(layout: Layout) -> list:
 _CW_WORDS = {"cw", "clockwise", "uhrzeigersinn", "uzs"}
 _CCW_WORDS = {"ccw", "acw", "counterclockwise", "anticlockwise", "guzs", "guz", "ccwise"}
 _NEGATE = {"counter", "anti", "gegen", "entgegen"}
+#: a word of a header name, camel case split ('AngleCW' -> Angle, CW; 'CWAngle' -> CW, Angle)
+_WORD = r"[A-ZÄÖÜ]+(?=[A-ZÄÖÜ][a-zäöüß])|[A-ZÄÖÜ]+(?![a-zäöüß])|[A-ZÄÖÜ]?[a-zäöüß]+"
 
 
 def clockwise_name(name: str) -> bool:
     """Whether a header name says its angles are measured clockwise (``Angle CW (deg)``, ``CW angle [deg]``, ``Angle
-    (clockwise) [deg]``, ``Winkel im Uhrzeigersinn [°]``): by whole words, so ``CCW``, ``counter-clockwise``,
+    (clockwise) [deg]``, ``Winkel im Uhrzeigersinn [°]``, ``AngleCW [deg]``): by whole words, so ``CCW``, ``counter-clockwise``,
     ``anticlockwise`` and ``gegen den Uhrzeigersinn`` are not."""
-    words = re.findall(r"[a-zäöüß]+", str(name).lower())
+    words = [w.lower() for w in re.findall(_WORD, str(name))]
     return any(w in _CW_WORDS and not _NEGATE.intersection(words[:i]) for i, w in enumerate(words))
 
 

@@ -163,7 +163,7 @@ def _run_here(work, chunks: Chunks, store: RowStore, bar) -> None:
                 handler(signum, frame)
             raise KeyboardInterrupt
         previous = signal.signal(signal.SIGINT, on_sigint)
-    from fitbench.cli.guards import stdout_to_stderr   # a method's prints go to stderr, as in a worker (80 us a chunk)
+    from fitbench.streams import stdout_to_stderr   # a method's prints go to stderr, as in a worker (80 us a chunk)
     try:
         while (chunk := chunks.next()) is not None:
             raise_if_signalled()

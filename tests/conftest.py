@@ -62,10 +62,17 @@ def stop_processes(procs) -> None:
             p.kill()
 
 
-def run_python(*args, cwd=REPO, path_first=(), repo: Path = REPO, timeout=600, **variables):
+def run_python(*args, cwd=REPO, path_first=(), repo: Path = REPO, timeout=600, preexec_fn=None, **variables):
     """``python ARGS`` in ``cwd`` with :func:`subprocess_env`, output captured as text."""
     return subprocess.run([sys.executable, *map(str, args)], cwd=cwd, capture_output=True, text=True,
-                          timeout=timeout, env=subprocess_env(*path_first, repo=repo, **variables))
+                          timeout=timeout, env=subprocess_env(*path_first, repo=repo, **variables), preexec_fn=preexec_fn)
+
+
+def default_sigint() -> None:
+    """In a child before it runs (``preexec_fn``): SIGINT's default action, as in a terminal. A test run in the
+    background of a shell without job control inherits SIGINT ignored, and a Python started so never sees a Ctrl-C."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def stored_rows(db: Path) -> int:

@@ -7,7 +7,7 @@ import csv
 
 import pytest
 
-from conftest import install_plugin, run_python
+from conftest import default_sigint, install_plugin, run_python
 
 EXIT0 = '''
 import sys
@@ -134,7 +134,7 @@ def sigint_site(tmp_path_factory):
 def test_the_user_s_ctrl_c_while_a_plugin_loads_still_stops_the_command(sigint_site, command, line, swallow):
     """Also when the plugin catches the interrupt and exits (its SystemExit was raised while handling it), or
     catches it and goes on (the user's Ctrl-C is not lost)."""
-    out = run_python(*command, path_first=[sigint_site], FITBENCH_TEST_SWALLOW=swallow)
+    out = run_python(*command, path_first=[sigint_site], FITBENCH_TEST_SWALLOW=swallow, preexec_fn=default_sigint)
     assert out.returncode == 130, out.stdout + out.stderr
     assert line in out.stderr and "Traceback" not in out.stderr, out.stderr
     assert "failed to load" not in out.stderr, out.stderr

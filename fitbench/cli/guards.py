@@ -5,9 +5,8 @@ and results turned into JSON-ready values (:func:`jsonable`)."""
 from __future__ import annotations
 
 import contextlib
-import os
-import sys
 
+from fitbench.streams import stdout_to_stderr
 from fitbench.threads import one_thread_environment
 from methods import InvalidInputError, exception_call, exception_text
 
@@ -16,15 +15,6 @@ class MethodFailed(Exception):
     """A method raised an exception other than :class:`~methods.InvalidInputError` (its own bug, e.g. a
     plugin writing into its read-only input): printed as one line, exit status
     :data:`fitbench.cli.commands.EXIT_METHOD_FAILED`."""
-
-
-def _flush_c_stdio() -> None:
-    """Flush the C library's stdio buffers (what compiled code printed with printf is still in them)."""
-    try:
-        import ctypes
-        ctypes.CDLL(None).fflush(None)
-    except (OSError, AttributeError, TypeError):
-        pass   # no C library to reach (Windows): Python's prints are redirected all the same
 
 
 #: the variables BLAS and OpenMP libraries read their thread count from when they load (as the engine's workers)
@@ -43,29 +33,6 @@ def one_blas_thread():
                 yield
 
 
-@contextlib.contextmanager
-def stdout_to_stderr():
-    """Send what is printed to stdout to stderr inside the block: Python's prints (``sys.stdout``) and, when
-    stdout is a real file descriptor, what compiled code writes to descriptor 1 (a Fortran or C solver's
-    iteration log), whose C buffers are flushed before descriptor 1 is restored."""
-    with contextlib.redirect_stdout(sys.stderr):
-        try:
-            out_fd, err_fd = sys.__stdout__.fileno(), sys.__stderr__.fileno()
-        except (AttributeError, OSError, ValueError):
-            out_fd = None
-        if out_fd is None or out_fd == err_fd:
-            yield
-            return
-        sys.__stdout__.flush()
-        _flush_c_stdio()
-        saved = os.dup(out_fd)
-        try:
-            os.dup2(err_fd, out_fd)
-            yield
-        finally:
-            _flush_c_stdio()
-            os.dup2(saved, out_fd)
-            os.close(saved)
 
 
 def run_method(spec, data, **params):

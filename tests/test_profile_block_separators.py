@@ -45,3 +45,16 @@ def test_comments_around_the_data_make_no_block(tmp_path):
     p.write_text("# part 17\n# operator: A\nX [mm],Y [mm]\n# first diameter\n" + "\n".join(a) + "\n# end\n")
     code, out, err = cli("roundness", p)
     assert code == 0 and "RONt" in out, err
+
+
+def test_an_instrument_s_summary_after_a_blank_line_is_not_a_second_block(tmp_path):
+    """Lines of text after the points ('RONt [µm];4,0813', an instrument's summary) are not a block of points: the
+    refusal names the line that is not a number, not '2 blocks of points ... save each block in its own file'."""
+    from cli_calls import cli, one_error_line
+    t = np.linspace(0.0, 360.0, 360, endpoint=False)
+    lines = "".join(f"{a:.3f};{2.0 * np.cos(3 * np.radians(a)):.4f}\n".replace(".", ",") for a in t)
+    path = tmp_path / "summary.csv"
+    path.write_text("Angle [deg];Deviation [um]\n" + lines + "\nRONt [µm];4,0813\nRONp [µm];2,0\n", encoding="utf-8")
+    called = cli("roundness", path)
+    one_error_line(called, "line 363", "'RONt [µm]' is not a number")
+    assert "blocks" not in called.stderr

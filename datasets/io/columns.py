@@ -228,6 +228,8 @@ def data_blocks(layout: Layout, gaps: list | None = None) -> list[tuple[int, int
                     gap.append(_gap_kind(lineno, ln, seps))
                 continue
             if gap:
+                if not _NUMBER_START.match(ln):  # an instrument's summary after the points ('RONt [µm];4,0813'): no
+                    break                        # block of points (the reader names the line that is not a number)
                 blocks.append((start, last))
                 if gaps is not None:
                     gaps.append(gap)
@@ -238,6 +240,10 @@ def data_blocks(layout: Layout, gaps: list | None = None) -> list[tuple[int, int
     if start is not None:
         blocks.append((start, last))
     return blocks
+
+
+#: how a line of numbers starts (a sign, a digit, a decimal point or comma before a digit, inf or nan)
+_NUMBER_START = re.compile(r"[+\-]?(?:\d|[.,]\d|inf|nan)", re.IGNORECASE)
 
 
 def _gap_kind(lineno: int, line: str, seps: str):

@@ -131,7 +131,8 @@ def test_a_killed_run_leaves_no_dask_worker_nor_row_process(tmp_path, hostile_si
                and proc.poll() is None):  # both workers' row processes are running rows
             time.sleep(0.5)
         assert proc.poll() is None, proc.communicate()[1]
-        assert len(survivors(marker, wait_s=0, running="_child_main")) == 2
+        # the 2 workers' row processes, and the children they fork for the plugin's rows (one at a time each)
+        assert 2 <= len(survivors(marker, wait_s=0, running="_child_main")) <= 4
         assert len(survivors(marker, wait_s=0)) >= 5  # the run, 2 workers, 2 row processes
         time.sleep(2)  # the rows are sleeping in C
     finally:

@@ -172,6 +172,14 @@ def radians_as_degrees(layout: Layout, k: int, angles, angle_unit: str | None,
 MAX_RADIAN_REVOLUTIONS = 4
 
 
+def _degrees_fix(layout: Layout, k: int) -> tuple[str, str]:
+    """(the name of angle column ``k``, what to do to read it in degrees): the option when --angle-unit said
+    radians, else its header."""
+    col = layout.header[k] if layout.header else f"column {k}"
+    return col, ("give --angle-unit deg, not rad" if column_unit(layout, k, "angle") is None else
+                 f"correct the header of {col!r} to [deg]")
+
+
 def degrees_as_radians(layout: Layout, k: int, angles, angle_unit: str | None) -> str | None:
     """The error line when the angle column ``k``, read as radians (its header's unit or --angle-unit rad), spans
     more than :data:`MAX_RADIAN_REVOLUTIONS` revolutions: angles in degrees (0 to 359.9) read as radians wind the
@@ -184,9 +192,7 @@ def degrees_as_radians(layout: Layout, k: int, angles, angle_unit: str | None) -
     turns = span / (2 * np.pi)
     if turns <= MAX_RADIAN_REVOLUTIONS:
         return None
-    col = layout.header[k] if layout.header else f"column {k}"
-    todo = ("give --angle-unit deg, not rad" if column_unit(layout, k, "angle") is None else
-            f"correct the header of {col!r} to [deg]")
+    col, todo = _degrees_fix(layout, k)
     return (f"{layout.name}: the angles of {col!r} span {span:.6g} rad ({turns:.3g} revolutions; a profile or a "
             f"circular-test run turns about once): they look like degrees; {todo}")
 
@@ -213,9 +219,7 @@ def round_degrees_as_radians(layout: Layout, k: int, angles, angle_unit: str | N
     s = next((s for s in ROUND_DEGREE_STEPS if abs(step - s) <= 1e-9 * s), None)
     if s is None or not np.all(np.abs(d - s) <= 1e-6 * s) or not np.all(np.abs(a / s - np.rint(a / s)) <= 1e-6):
         return None
-    col = layout.header[k] if layout.header else f"column {k}"
-    todo = ("give --angle-unit deg, not rad" if column_unit(layout, k, "angle") is None else
-            f"correct the header of {col!r} to [deg]")
+    col, todo = _degrees_fix(layout, k)
     return (f"the angles of {col!r} run from {lo:g} to {hi:g} in equal steps of {s:g}: read as radians they turn "
             f"{(hi - lo) / (2 * np.pi):.3g} times; if they are degrees (a {hi - lo:g}° arc), {todo}")
 

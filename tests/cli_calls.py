@@ -25,9 +25,12 @@ def cli(*args) -> Called:
     return Called(code, out.getvalue(), err.getvalue())
 
 
-def one_error_line(called: Called, *words) -> None:
-    """``called`` refused its input: exit 2, one line on stderr holding each of ``words``, no traceback."""
+def one_error_line(called: Called, *words, absent=()) -> None:
+    """``called`` refused its input: exit 2, one line on stderr holding each of ``words`` and none of ``absent``,
+    no traceback."""
     assert called.returncode == 2, (called.stdout, called.stderr)
     assert "Traceback" not in called.stderr and len(called.stderr.strip().splitlines()) == 1, called.stderr
     for w in words:
         assert w in called.stderr, called.stderr
+    for w in absent:
+        assert w not in called.stderr, called.stderr

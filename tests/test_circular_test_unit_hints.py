@@ -6,32 +6,13 @@ from the declared unit), or a 'radius' that was the distance from the nominal ce
 the wrong order' warning judged about that far centre."""
 from __future__ import annotations
 
-import contextlib
-import io
-
 import numpy as np
 import pytest
 
+from cli_calls import cli, one_error_line
 from datasets.circular_test import circular_test, lola_hbg130
-from fitbench.cli.commands import main
 from methods import InvalidInputError
 from methods.circular_test import evaluate
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return code, out.getvalue(), err.getvalue()
-
-
-def one_line(code, err, *match, absent=()):
-    assert code == 2, err
-    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
-    for m in match:
-        assert m in err, err
-    for m in absent:
-        assert m not in err, err
 
 
 @pytest.fixture(scope="module")
@@ -47,46 +28,47 @@ def lola(tmp_path_factory):
 
 def test_nominal_radius_typed_in_micrometres_names_the_radius_not_the_file(lola):
     d, _, _ = lola
-    code, _, err = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298997)
-    one_line(code, err, "is --nominal-radius in µm?", "--nominal-radius 298.997", absent=("--unit m",))
+    called = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298997)
+    one_error_line(called, "is --nominal-radius in µm?", "--nominal-radius 298.997", absent=("--unit m",))
 
 
 def test_file_in_mm_read_as_micrometres_says_unit_mm(lola):
     d, _, _ = lola
-    code, _, err = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298.997, "--unit", "um")
-    one_line(code, err, "read as µm", "(--unit mm)", absent=("--unit m)",))
+    called = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298.997, "--unit", "um")
+    one_error_line(called, "read as µm", "(--unit mm)", absent=("--unit m)",))
 
 
 def test_far_nominal_centre_with_the_wrong_unit_is_said_before_any_run_swap(lola):
     d, _, _ = lola
-    code, _, err = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298.997, "--unit", "um",
-                       "--nominal-center", 1200, 650)
-    one_line(code, err, "from --nominal-center (1200, 650) mm", "(--unit mm)",
-             absent=("wrong order", "swapped", "the data's radius"))
+    called = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298.997, "--unit", "um",
+                 "--nominal-center", 1200, 650)
+    one_error_line(called, "from --nominal-center (1200, 650) mm", "(--unit mm)",
+                   absent=("wrong order", "swapped", "the data's radius"))
 
 
 def test_wrong_nominal_centre_with_the_right_radius_says_check_the_centre(lola):
     d, _, _ = lola
-    code, _, err = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298.997,
-                       "--nominal-center", 1200, 65)
-    one_line(code, err, "check --nominal-center", "centred at (1199.99, 650.01) mm", absent=("wrong order", "--unit"))
+    called = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298.997,
+                 "--nominal-center", 1200, 65)
+    one_error_line(called, "check --nominal-center", "centred at (1199.99, 650.01) mm",
+                   absent=("wrong order", "--unit"))
 
 
 def test_nominal_radius_and_centre_both_typed_in_micrometres(lola):
     d, _, _ = lola
-    code, _, err = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298997,
-                       "--nominal-center", 1200000, 650000)
-    one_line(code, err, "are --nominal-radius and --nominal-center in µm?",
-             "--nominal-radius 298.997 --nominal-center 1200 650")
+    called = cli("circular-test", d / "cw.csv", d / "ccw.csv", "--nominal-radius", 298997,
+                 "--nominal-center", 1200000, 650000)
+    one_error_line(called, "are --nominal-radius and --nominal-center in µm?",
+                   "--nominal-radius 298.997 --nominal-center 1200 650")
 
 
 def test_file_in_micrometres_read_as_mm_still_says_unit_um(lola, tmp_path):
     _, cw, ccw = lola
     for name, pts in (("cw", cw), ("ccw", ccw)):
         np.savetxt(tmp_path / f"{name}.csv", pts * 1e3, delimiter=",", header="x,y", comments="", fmt="%.6f")
-    code, _, err = cli("circular-test", tmp_path / "cw.csv", tmp_path / "ccw.csv", "--nominal-radius", 298.997,
-                       "--nominal-center", 1200, 650)
-    one_line(code, err, "is the file in µm? (--unit um)")
+    called = cli("circular-test", tmp_path / "cw.csv", tmp_path / "ccw.csv", "--nominal-radius", 298.997,
+                 "--nominal-center", 1200, 650)
+    one_error_line(called, "is the file in µm? (--unit um)")
 
 
 def test_api_hint_uses_the_declared_input_unit(lola):

@@ -4,34 +4,23 @@ Every format is read back by a strict parser of its grammar and applied by the m
 simulated controller (tests/compensation_controllers.py); the compensated axis is measured again."""
 from __future__ import annotations
 
-import contextlib
-import io
 import re
 from decimal import Decimal
-from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 import pytest
 
 import methods
+from cli_calls import cli
 from compensation_controllers import READERS, read_csv, read_fanuc, read_siemens, remeasure
 from datasets.positioning import axis_test, to_frame
-from fitbench.cli import main
 from fitbench.compensation import WRITERS, CompensationError, compensation_table, write_fanuc_pitch, write_siemens_eec
 from methods import InvalidInputError
 from methods.positioning.model import evaluate_band
 
 FORMATS = list(WRITERS)
 PITCH = (0.0, 0.030, -0.020, 0.010)     # mm over the relative position: a 30 um/m-ish scale error with curvature
-
-
-def cli(*args):
-    """``fitbench ARGS`` in this process."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
 
 
 def axis(seed=2, **kw):

@@ -6,23 +6,14 @@
 * The angle of an ellipse whose a - b is far below the residual RMS is undetermined: it was printed to 10 digits."""
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
 import pytest
 
 import methods
+from cli_calls import cli
 from datasets.synthetic import circle_points, ellipse_points
-from fitbench.cli.commands import main
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return code, out.getvalue(), err.getvalue()
 
 
 def arc_points(span_deg=90.0, n=181):

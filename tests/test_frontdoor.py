@@ -13,6 +13,7 @@ import pandas as pd
 import pytest
 
 import methods
+from cli_calls import cli, one_error_line  # in this process; the subprocess form: tests/test_cli.py, --version below
 from conftest import run_python
 from datasets.circular_test import MachineErrors, TestConditions, circular_test, lola_hbg130, trace
 from datasets.io import read_points, read_runs
@@ -27,24 +28,6 @@ COND = TestConditions(nominal_radius=150.0, nominal_center=(300.0, 200.0), feed_
                       start_angle_deg=17.0)
 ERR = MachineErrors(squareness=40e-6, scale_x=25e-6, scale_y=-5e-6, lag_x=0.002, lag_y=0.0012, backlash_x=0.005,
                     backlash_y=0.003, noise=0.0003)
-
-
-def cli(*args):
-    """``python -m methods ARGS`` in this process (an uncaught exception fails the test like a traceback would);
-    the subprocess form is covered by tests/test_cli.py and the --version test below."""
-    import contextlib
-    import io
-    from types import SimpleNamespace
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
-
-
-def one_error_line(out, match):
-    assert out.returncode == 2, (out.stdout, out.stderr)
-    assert "Traceback" not in out.stderr and match in out.stderr, out.stderr
-    assert len(out.stderr.strip().splitlines()) == 1, out.stderr
 
 
 def save_xy(path, pts, header="x,y", fmt="%.9f"):

@@ -3,28 +3,19 @@ deviation, units in the header), the same profile as x, y, units in headers and 
 naming any layout's columns, angle headers never read as x, y, plausibility warnings naming the likely unit."""
 from __future__ import annotations
 
-import contextlib
 import io
 import json
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 import methods
+from cli_calls import cli
 from datasets.circular_test import MachineErrors, TestConditions, circular_test
 from datasets.io import DataFileError, read_points, read_profile
-from fitbench.cli import main
 
 R = 20.0                                   # a Ø40 mm shaft
 LOBES = [(2, 0.9e-3, 0.3), (3, 1.5e-3, 1.1), (7, 0.3e-3, 2.0), (40, 0.2e-3, 0.7), (160, 0.05e-3, 1.5)]  # mm
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
 
 
 def shaft(n=1440, seed=4):

@@ -3,23 +3,14 @@ on exact lengths from a machine with errors, the default recovers the true volum
 motion self-located stations cannot observe); a two-step scheme chosen explicitly is warned about."""
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
 import pytest
 
+from cli_calls import cli
 from datasets.multilateration import simulate
-from fitbench.cli.commands import main
 from methods.multilateration.solvers import kabsch
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return code, out.getvalue(), err.getvalue()
 
 
 @pytest.fixture(scope="module")

@@ -3,23 +3,14 @@ coordinate columns to take, whether a spreadsheet is text. Each case through the
 process, as tests/test_frontdoor.py does) and, where the reader decides, through the API."""
 from __future__ import annotations
 
-import contextlib
 import io
 import json
 import re
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from fitbench.cli.commands import main
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return SimpleNamespace(returncode=code, stdout=out.getvalue(), stderr=err.getvalue())
+from cli_calls import cli
 
 
 def polar_file(path, dev_um, header="Angle [deg],Deviation", sep=","):

@@ -4,23 +4,14 @@ points lie at the same polar angle (point 0)'. A last point at the first one's a
 refused: that is two measurements at one angle, not a repeat."""
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import pytest
 
+from cli_calls import cli
 from conftest import REPO
-from fitbench.cli.commands import main
 
 EXAMPLES = REPO / "docs" / "examples"
-
-
-def cli(*args):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return code, out.getvalue(), err.getvalue()
 
 
 def closed_copy(src, dst, last_line):

@@ -54,13 +54,33 @@ class ColumnNote(UserWarning):
 
 
 def _header_names(columns) -> list[str]:
-    """The header's names as written: pandas renames a repeated name ``X`` to ``X.1``, ``X.2``, ..."""
+    """The header's names as written: pandas renames a repeated name ``X`` to ``X.1``, ``X.2``, ... and names a
+    header cell left empty ``Unnamed: N`` (N its 0-based position): that is '' here, as the file writes it
+    (messages name such a column by its position, :func:`_column_words`)."""
     names = [str(c) for c in columns]
     out = []
-    for c in names:
+    for k, c in enumerate(names):
         m = re.fullmatch(r"(.*)\.(\d+)", c)
-        out.append(m.group(1) if m and m.group(1) in names else c)
+        out.append("" if c == f"Unnamed: {k}" else m.group(1) if m and m.group(1) in names else c)
     return out
+
+
+def _spreadsheet_letters(k: int) -> str:
+    """The spreadsheet name of the 0-based column ``k``: A, B, ..., Z, AA, AB, ..."""
+    out = ""
+    k += 1
+    while k:
+        k, r = divmod(k - 1, 26)
+        out = chr(ord("A") + r) + out
+    return out
+
+
+def _column_words(names: list[str], k: int) -> str:
+    """A column of the user's file for a message: ``column 3 'Run 1 - (µm)'`` or, for a header cell left empty,
+    ``column 10 (K in a spreadsheet; no name in the header)``, never pandas' ``Unnamed: 10``."""
+    if names[k].strip():
+        return f"column {k} {names[k]!r}"
+    return f"column {k} ({_spreadsheet_letters(k)} in a spreadsheet; no name in the header)"
 
 
 def _column_index(names: list[str], role: str, given, path) -> int:
@@ -75,13 +95,13 @@ def _column_index(names: list[str], role: str, given, path) -> int:
             raise DataFileError(f"{path}: --column {role}={text}: there is no column {k} (the file has {len(names)} "
                                 "columns, numbered from 0)")
         return k
-    hits = [k for k, n in enumerate(low) if n == text.lower()]
+    hits = [k for k, n in enumerate(low) if n and n == text.lower()]
     if not hits:
         want = parse_name(text)[0]
         hits = [k for k, n in enumerate(names) if parse_name(n)[0] == want]
     if not hits:
         raise DataFileError(f"{path}: --column {role}={text}: no column {text!r} (columns: "
-                            f"{', '.join(repr(n) for n in names)})")
+                            f"{', '.join(repr(n) if n.strip() else _column_words(names, k) for k, n in enumerate(names))})")
     if len(hits) > 1:
         raise DataFileError(f"{path}: --column {role}={text}: columns {' and '.join(map(str, hits))} (numbered from 0) "
                             f"are both named {names[hits[0]]!r}: give --column {role}={hits[0]} or "
@@ -127,7 +147,7 @@ def _assign_roles(names: list[str], path, columns: dict | None) -> tuple[dict[in
     roles, notes = {k: role for role, k in chosen.items()}, []
     for role, k in chosen.items():
         rest = [j for j in candidates.get(role, ()) if j not in roles]
-        notes.append(f"{ROLE_WORDS[role]} read from column {k} {names[k]!r}, as --column {role}={columns[role]} says"
+        notes.append(f"{ROLE_WORDS[role]} read from {_column_words(names, k)}, as --column {role}={columns[role]} says"
                      + (f"; not read: {', '.join(f'column {j} {names[j]!r}' for j in rest)}" if rest else ""))
     for role, ks in candidates.items():
         rest = [k for k in ks if k not in roles]
@@ -181,6 +201,10 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
     for k, c in enumerate(cols):
         if k in (t, d_col):
             continue
+        if not c:
+            raise DataFileError(f"{name}: {_column_words(cols, k)} holds values: name it in the header as the other run "
+                                "columns are named ('Run N +' or 'Run N -' and the unit, e.g. 'Run 5 - (µm)'), or "
+                                "delete the column")
         if c in seen:
             raise DataFileError(f"{name}: the column {c!r} appears twice (columns {seen[c]} and {k}, numbered from 0): "
                                 "rename the one that is another run, or delete it")
@@ -383,15 +407,16 @@ def _trailer(df, lines, empty, path, skip_rows: int = 0):
     first = df.iloc[:, 0].fillna("").astype(str).str.strip()
     if first.iloc[k] and NUMBER.fullmatch(first.iloc[k]):           # a data row with a field missing
         names, row = _header_names(df.columns), df.iloc[k]
-        blank = [names[j] for j in range(df.shape[1]) if isinstance(row.iloc[j], str) and not row.iloc[j].strip()]
-        short = [names[j] for j in range(df.shape[1]) if not isinstance(row.iloc[j], str)]   # the line ends early
+        shown = [repr(n) if n.strip() else _column_words(names, j) for j, n in enumerate(names)]
+        blank = [shown[j] for j in range(df.shape[1]) if isinstance(row.iloc[j], str) and not row.iloc[j].strip()]
+        short = [shown[j] for j in range(df.shape[1]) if not isinstance(row.iloc[j], str)]   # the line ends early
         if blank:
-            raise DataFileError(f"{path} line {lines[k]}: missing field(s): {' and '.join(repr(n) for n in blank[:2])}"
+            raise DataFileError(f"{path} line {lines[k]}: missing field(s): {' and '.join(blank[:2])}"
                                 f"{f' (and {len(blank) - 2} more)' if len(blank) > 2 else ''} "
                                 f"{'is' if len(blank) == 1 else 'are'} empty: fill in the value, or delete the line "
                                 "(or the column)")
         raise DataFileError(f"{path} line {lines[k]}: missing field(s): {df.shape[1] - len(short)} where the header "
-                            f"has {df.shape[1]} (no {', '.join(repr(n) for n in short[:2])}"
+                            f"has {df.shape[1]} (no {', '.join(short[:2])}"
                             f"{', ...' if len(short) > 2 else ''})")
     text = read_lines(path, "", skip_rows)
     quoted = text[lines[k] - 1].strip()[:60]
@@ -419,7 +444,7 @@ def _trailing_separators(df, lines, path):
                             f"{lines[0]})" + (": each data line ends with a separator and the header does not; delete "
                             "the separators after the last values, or end the header with one too" if ends else
                             ": name every column in the header"))
-    while df.shape[1] > 1 and (str(df.columns[-1]).startswith("Unnamed: ") or not str(df.columns[-1]).strip()) and \
+    while df.shape[1] > 1 and not _header_names(df.columns)[-1].strip() and \
             df.iloc[:, -1].fillna("").astype(str).str.strip().eq("").all():
         df = df.iloc[:, :-1]
     return df
@@ -439,10 +464,13 @@ def _no_target(path, names: list[str], roles: dict, wide: bool) -> str:
     no run column) names its first column; a long table its own columns."""
     runs = [n for k, n in enumerate(names) if k not in roles and RUN_COLUMN.match(n)]
     if wide or ("run" not in roles.values() and runs):
-        first = next((n for k, n in enumerate(names) if k not in roles and not RUN_COLUMN.match(n)), None)
+        j = next((k for k, n in enumerate(names) if k not in roles and not RUN_COLUMN.match(n)), None)
+        first = None if j is None else names[j]
         which = (f"its first column {first!r} is not a name fitbench reads as the target ({_target_names()})"
+                 if first else f"its {_column_words(names, j)} is not named as the target ({_target_names()})"
                  if first is not None else f"the columns are all run columns ({runs[0]!r}, ...)")
-        how = (f"rename it 'Target (mm)' or give --column \"target={first}\"" if first is not None else
+        how = (f"rename it 'Target (mm)' or give --column \"target={first}\"" if first else
+               f"name it 'Target (mm)' or give --column target={j}" if first is not None else
                "add the target column first, named 'Target (mm)'")
         return f"{path}: no target column in this wide export (the targets, then one column per run): {which}; {how}"
     return (f"{path}: no target column (a long table has target, direction, run, and actual or deviation; the target "
@@ -484,7 +512,7 @@ def _unread_columns(df, names, roles, unread, path, columns, notes: list) -> Non
     taken = set(roles) | {k for k, c in enumerate(df.columns) if c in unread}
     other = []
     for k, n in enumerate(names):
-        if k in taken or not n.strip():
+        if k in taken:
             continue
         cells = df.iloc[:, k].fillna("").astype(str).str.strip()
         if len(cells) and cells.map(lambda v: NUMBER.fullmatch(v) is not None).all():
@@ -502,7 +530,7 @@ def _unread_columns(df, names, roles, unread, path, columns, notes: list) -> Non
                             f"{', '.join(repr(names[k]) for k in suspect)}, and fitbench does not guess which one holds "
                             f"the positioning deviations (another channel?): give --column \"{role}=NAME\" naming the "
                             "column to read (or its 0-based number), or delete the others")
-    notes.append(f"not read: {', '.join(f'column {k} {names[k]!r}' for k in other)}")
+    notes.append(f"not read: {', '.join(_column_words(names, k) for k in other)}")
 
 
 def _long_runs_and_directions(df, path, lines, run_directions, notes: list, to_um: float) -> bool:

@@ -1,6 +1,8 @@
 """A DOS end-of-file mark (Ctrl-Z, 0x1A) after a file's last line, as old instrument PCs write it, is ignored: the
 file reads as without it (small files by Python, large ones by pandas, tables line by line). Before: 'line 3602: 1
-field where the header (line 1) has 2: '\\x1a''. A Ctrl-Z elsewhere is still refused."""
+field where the header (line 1) has 2: '\\x1a''. So is the mark alone on the last line ('\\x1a\\r\\n' or
+'\\x1a\\n', as some DOS tools write it; it was refused the same way, and a positioning table's ''\\x1a' is not a
+data row'). A Ctrl-Z elsewhere is still refused."""
 from __future__ import annotations
 
 import json
@@ -26,11 +28,12 @@ def fitted(path):
 
 
 @pytest.mark.parametrize("n", [360, 3600])   # below and above the 64 KiB of the reader without pandas
-def test_a_trailing_ctrl_z_is_ignored(tmp_path, n):
+@pytest.mark.parametrize("end", [b"\x1a", b"\x1a\r\n", b"\x1a\n", b"\x1a\x1a\r\n"])   # the mark, or a line of it
+def test_a_trailing_ctrl_z_is_ignored(tmp_path, n, end):
     text = circle_text(n)
     plain, dos = tmp_path / "plain.csv", tmp_path / "dos.csv"
     plain.write_bytes(text.encode())
-    dos.write_bytes(text.encode() + b"\x1a")
+    dos.write_bytes(text.encode() + end)
     assert (dos.stat().st_size > 1 << 16) == (n > 1000)
     assert fitted(dos) == fitted(plain)
 
@@ -43,11 +46,12 @@ def test_a_ctrl_z_after_an_unterminated_last_line(tmp_path):
     assert fitted(dos) == fitted(plain)
 
 
-def test_a_positioning_table_with_a_trailing_ctrl_z(tmp_path):
+@pytest.mark.parametrize("end", [b"\x1a", b"\x1a\n"])
+def test_a_positioning_table_with_a_trailing_ctrl_z(tmp_path, end):
     data, _ = axis_test(rng=np.random.default_rng(1), pitch=(0.0, 0.01), reversal=-0.002)
     plain, dos = tmp_path / "plain.csv", tmp_path / "dos.csv"
     to_frame(data, actual=False).to_csv(plain, index=False)
-    dos.write_bytes(plain.read_bytes() + b"\x1a")
+    dos.write_bytes(plain.read_bytes() + end)
     a, b = (cli("positioning", p, "--json") for p in (plain, dos))
     assert b.returncode == 0, b.stderr
     da, db = json.loads(a.stdout), json.loads(b.stdout)

@@ -1,11 +1,17 @@
 """A file data set's ``truth`` table is checked when the study's config is loaded, against what the result classes
 compare (``experiments.schema.TRUTH_KEYS``): a shape no fit can be compared with (``center = [120.0]``: every row
 was ``error`` with ``IndexError: list index out of range``, blamed on the method and retried every run) or an
-unknown key (``centre``: silently no centre error) is one line naming ``datasets[0].truth.KEY``, exit 2."""
+unknown key (``centre``: silently no centre error) is one line naming ``datasets[0].truth.KEY``, exit 2.
+
+An ellipse truth is held to the convention the ellipse family's results follow (``EllipseFit``: a >= b, the angle
+the direction of a in rad, its error taken modulo pi): ``semi_axes = [40.0, 50.0]`` was accepted and compared
+crosswise (semi_axis_a_error 10 mm of an exact fit), ``angle = 30.0`` (degrees, as the generators' ``angle_deg``)
+gave an angle error of -0.60 rad. Both are one line when the study is loaded."""
 from __future__ import annotations
 
 import contextlib
 import io
+import math
 from types import SimpleNamespace
 
 import numpy as np
@@ -13,7 +19,7 @@ import pytest
 
 from experiments import config as configs
 from experiments import run
-from experiments.schema import FAMILY_TRUTH, TRUTH_KEYS
+from experiments.schema import FAMILY_TRUTH, TRUTH_KEYS, truth_problem
 from experiments.study import ConfigError
 from methods import results
 
@@ -50,6 +56,13 @@ def _write(tmp_path, truth, method="circle.kasa", extra=""):
      "datasets[0].truth.semi_axes: unknown key (the truth of a circle has: center, radius, family"),
     ('{ family = "ellipse", center = [120.0, 80.0], semi_axes = [50.0, 30.0] }',
      "datasets[0].truth.semi_axes: needs angle too"),
+    # an ellipse truth against the convention of the family's results
+    ('{ family = "ellipse", semi_axes = [40.0, 50.0], angle = 0.5 }',
+     "datasets[0].truth.semi_axes: a >= b (the semi-major axis first, at angle; the fits give a >= b), got [40, 50]: "
+     f"write semi_axes = [50, 40], angle = {0.5 + math.pi / 2:.6g} (the angle of 50 in rad)"),
+    ('{ family = "ellipse", semi_axes = [50.0, 40.0], angle = 30.0 }',
+     "datasets[0].truth.angle: 30 is beyond ±2π: the angle is in rad (the direction of semi-axis a; 30° is 0.523599 "
+     "rad)"),
 ])
 def test_a_truth_no_fit_can_be_compared_with_is_refused_in_one_line(tmp_path, truth, said):
     method = "ellipse.fitzgibbon" if "ellipse" in truth else "circle.kasa"
@@ -76,6 +89,28 @@ def test_sound_truths_load(tmp_path):
     # another family's truth is read by that family's own class, whatever its keys
     configs.load(str(_write(tmp_path, '{ family = "square", center = [120.0, 80.0], side = 2.0 }',
                             extra="any_family = true")))
+
+
+# ------------------------------------------------------------------- an ellipse truth's convention
+@pytest.mark.parametrize("angle", [0.0, -0.5, 3.5, -2 * math.pi])
+def test_an_angle_in_any_radian_convention_loads(tmp_path, angle):
+    configs.load(str(_write(tmp_path, f'{{ family = "ellipse", semi_axes = [50.0, 40.0], angle = {angle!r} }}',
+                            "ellipse.halir_flusser")))
+
+
+def test_the_rewritten_truth_gives_the_errors_of_the_same_ellipse():
+    """The rewrite the refusal suggests describes the same ellipse: an exact fit's errors against it are 0, where the
+    truth as given made a 10 mm semi-axis error of each."""
+    cls = results.contract("ellipse")
+    fitted = SimpleNamespace(center=np.array([0.0, 0.0]), semi_axes=np.array([50.0, 40.0]),
+                             angle=(0.5 + math.pi / 2) % math.pi)
+    given = {"center": [0.0, 0.0], "semi_axes": [40.0, 50.0], "angle": 0.5}
+    assert cls.truth_errors(fitted, given)["semi_axis_a_error"] == pytest.approx(10.0)
+    key, said = truth_problem({"family": "ellipse", **given})
+    rewritten = {"center": [0.0, 0.0], "semi_axes": [50.0, 40.0],
+                 "angle": float(said.split("angle = ")[1].split(" ")[0])}
+    errors = cls.truth_errors(fitted, rewritten)
+    assert max(abs(v) for v in errors.values()) < 1e-5, errors
 
 
 class _Recording(dict):

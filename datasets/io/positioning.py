@@ -533,6 +533,30 @@ def _unread_columns(df, names, roles, unread, path, columns, notes: list) -> Non
     notes.append(f"not read: {', '.join(_column_words(names, k) for k in other)}")
 
 
+def _equal_row_counts(targets: np.ndarray, directions, path, lines) -> None:
+    """A long table without a run column counts its runs by rows: a target with fewer (or more) rows in a direction
+    than the other targets is refused in those terms, naming its lines (a point missing or written twice), not as
+    the run its missing row would have been numbered (it said 'target 97.3 misses run(s) [5]' for a file without
+    runs when the target's 3rd point was missing)."""
+    frame = pd.DataFrame({"t": targets, "d": "" if directions is None else directions, "line": lines})
+    counts = frame.groupby(["d", "t"], sort=False).size()
+    for d in frame["d"].unique():
+        sub = counts.loc[d]
+        tally = sub.value_counts()
+        usual = int(tally[tally == tally.max()].index.max())          # the count most targets have
+        odd = sub[sub != usual]
+        if not len(odd):
+            continue
+        t, n = float(odd.index[0]), int(odd.iloc[0])
+        where = frame["line"][(frame["t"] == t) & (frame["d"] == d)].tolist()
+        shown = ", ".join(map(str, where[:12])) + (", ..." if len(where) > 12 else "")
+        way = f" with direction {d!r}" if directions is not None else ""
+        raise DataFileError(f"{path}: target {t + 0.0:g} has {n} row{'s' * (n != 1)}{way} (line{'s' * (n != 1)} "
+                            f"{shown}) and the other targets {usual}: the table has no run column, so its runs are "
+                            f"counted by rows, and a point is {'missing' if n < usual else 'written more than once'} "
+                            f"there; {'add it' if n < usual else 'delete the extra row'} (or add a Run column)")
+
+
 def _long_runs_and_directions(df, path, lines, run_directions, notes: list, to_um: float) -> bool:
     """Complete a long table in place: without a run column (laser software's capture order: target, direction,
     deviation per point, the runs one after the other) the k-th row of each target and direction is run k, said
@@ -550,6 +574,7 @@ def _long_runs_and_directions(df, path, lines, run_directions, notes: list, to_u
                             else [])
         df["run"] = pd.DataFrame({f"k{i}": k for i, k in enumerate(keys)}).groupby(
             [f"k{i}" for i in range(len(keys))], sort=False).cumcount().to_numpy() + 1
+        _equal_row_counts(targets, keys[1] if has_direction else None, path, lines)
         notes.append(f"the table has no run column: the k-th row of each target{' and direction' * has_direction} "
                      "is read as run k, in the order of the file (as laser software lists the runs one after the "
                      "other)")

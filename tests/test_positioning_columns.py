@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from cli_calls import cli, one_error_line
+from positioning_tables import iso_a_um
 
 TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7, 499.2])
 
@@ -23,14 +24,6 @@ def channels(seed=8, runs=5):
     straight = {d: rng.normal(0, 3.0, (len(TARGETS), runs)) for d in "+-"}
     return ({d: np.round(v, 4) for d, v in lin.items()},            # as written to the files
             {d: np.round(v, 4) for d, v in straight.items()})
-
-
-def iso_a_um(dev) -> float:
-    """ISO 230-2 bidirectional accuracy A (k = 2) by its definition: max(mean + 2 s) - min(mean - 2 s) over both
-    directions and every target, s with n - 1."""
-    hi = max(float(np.max(v.mean(axis=1) + 2 * v.std(axis=1, ddof=1))) for v in dev.values())
-    lo = min(float(np.min(v.mean(axis=1) - 2 * v.std(axis=1, ddof=1))) for v in dev.values())
-    return hi - lo
 
 
 def long_table(path, header, columns):

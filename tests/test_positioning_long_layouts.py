@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from cli_calls import cli, one_error_line
+from positioning_tables import iso_a_um
 
 TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7, 499.2])
 
@@ -22,13 +23,6 @@ def dev():
     rng = np.random.default_rng(11)
     return {d: np.round((6 * TARGETS / 500 + b)[:, None] + rng.normal(0, 0.6, (len(TARGETS), 5)), 3)
             for d, b in (("+", -1.8), ("-", 1.8))}
-
-
-def accuracy(dev, directions="+-") -> float:
-    """ISO 230-2 A (k = 2, s with n - 1) over the ``directions`` given: max(mean + 2 s) - min(mean - 2 s)."""
-    hi = max(np.max(dev[d].mean(axis=1) + 2 * dev[d].std(axis=1, ddof=1)) for d in directions)
-    lo = min(np.min(dev[d].mean(axis=1) - 2 * dev[d].std(axis=1, ddof=1)) for d in directions)
-    return float(hi - lo)
 
 
 def capture_order(path, dev, header, cells):
@@ -47,7 +41,7 @@ def test_a_table_without_a_run_column_numbers_the_runs_in_file_order(tmp_path, d
     out = cli("positioning", path, "--json")
     assert out.returncode == 0, out.stderr
     got = json.loads(out.stdout)
-    assert got["A"] * 1e3 == pytest.approx(accuracy(dev), abs=1e-9)
+    assert got["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9)
     assert any("no run column: the k-th row of each target and direction is read as run k" in n for n in got["notes"])
 
 
@@ -59,7 +53,7 @@ def test_a_table_without_run_or_direction_column_is_refused_as_alternating_or_re
     assert "neither the target" not in out.stderr
     told = cli("positioning", path, "--run-directions", "up,down", "--json")
     assert told.returncode == 0, told.stderr
-    assert json.loads(told.stdout)["A"] * 1e3 == pytest.approx(accuracy(dev), abs=1e-9)
+    assert json.loads(told.stdout)["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9)
 
 
 def test_a_table_without_a_direction_column_is_one_direction_not_given(tmp_path, dev):
@@ -69,7 +63,7 @@ def test_a_table_without_a_direction_column_is_one_direction_not_given(tmp_path,
     out = cli("positioning", path, "--json")
     assert out.returncode == 0, out.stderr
     got = json.loads(out.stdout)
-    assert got["A"] * 1e3 == pytest.approx(accuracy(dev, "+"), abs=1e-9)
+    assert got["A"] * 1e3 == pytest.approx(iso_a_um(dev, "+"), abs=1e-9)
     assert got["directions"] == "unidirectional (direction not given)"
     up = json.loads(cli("positioning", path, "--run-directions", "up", "--json").stdout)
     assert up["directions"] != got["directions"] and up["A"] == got["A"]
@@ -83,7 +77,7 @@ def test_alternating_runs_without_a_direction_column(tmp_path, dev):
     one_error_line(cli("positioning", path), "no direction column", "--run-directions up,down")
     told = cli("positioning", path, "--run-directions", "up,down", "--json")
     assert told.returncode == 0, told.stderr
-    assert json.loads(told.stdout)["A"] * 1e3 == pytest.approx(accuracy(dev), abs=1e-9)
+    assert json.loads(told.stdout)["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9)
     with_dirs = tmp_path / "dirs.csv"
     with_dirs.write_text("Target (mm),Direction,Run,Deviation (µm)\n0,+,1,1\n0,+,2,1.2\n100,+,1,2\n100,+,2,2.1\n")
     one_error_line(cli("positioning", with_dirs, "--run-directions", "up"), "a long table with a direction column",

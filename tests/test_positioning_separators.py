@@ -12,23 +12,9 @@ import numpy as np
 import pytest
 
 from cli_calls import cli, one_error_line
+from positioning_tables import TARGETS, iso_a_um, runs
 
-TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7])
 NAMES = ["Target (mm)"] + [f"Run {r} {d} (µm)" for r in (1, 2, 3) for d in "+-"]
-
-
-def runs(seed=4):
-    """{'+': (targets, runs), '-': ...} in µm to 3 decimals, as written."""
-    rng = np.random.default_rng(seed)
-    return {d: np.round((8 * TARGETS / 1000 + b)[:, None] + rng.normal(0, 0.6, (len(TARGETS), 3)), 3)
-            for d, b in (("+", -1.8), ("-", 1.8))}
-
-
-def iso_a_um(dev) -> float:
-    """ISO 230-2 bidirectional accuracy A (k = 2): max(mean + 2 s) - min(mean - 2 s), s with n - 1."""
-    hi = max(float(np.max(v.mean(axis=1) + 2 * v.std(axis=1, ddof=1))) for v in dev.values())
-    lo = min(float(np.min(v.mean(axis=1) - 2 * v.std(axis=1, ddof=1))) for v in dev.values())
-    return hi - lo
 
 
 def rows(dev):
@@ -44,7 +30,7 @@ def write(path, header, cells, end=""):
 
 
 def test_a_separator_after_every_line_header_included_is_read(tmp_path):
-    dev = runs()
+    dev = runs(seed=4)
     plain = write(tmp_path / "plain.csv", ";".join(NAMES), rows(dev))
     trail = write(tmp_path / "trail.csv", ";".join(NAMES) + ";", rows(dev), end=";")
     for path in (plain, trail):
@@ -54,14 +40,14 @@ def test_a_separator_after_every_line_header_included_is_read(tmp_path):
 
 
 def test_an_empty_cell_is_named_with_its_column_and_line(tmp_path):
-    cells = rows(runs())
+    cells = rows(runs(seed=4))
     cells[2][3] = ""                                   # line 4: 'Run 2 + (µm)'
     one_error_line(cli("positioning", write(tmp_path / "e.csv", ";".join(NAMES), cells)),
                    "line 4: missing field(s): 'Run 2 + (µm)' is empty", "fill in the value")
 
 
 def test_rows_with_one_field_more_than_the_header_are_refused(tmp_path):
-    dev = runs()
+    dev = runs(seed=4)
     only_rows = write(tmp_path / "rows.csv", ";".join(NAMES), rows(dev), end=";")
     one_error_line(cli("positioning", only_rows), "the header has 7 names but every data line has 8 fields",
                    "each data line ends with a separator and the header does not")
@@ -74,6 +60,6 @@ def test_a_run_column_named_twice_is_named_as_written(tmp_path):
     """Before: "column 'Run 1 + (µm).1' is neither the target, a direction nor a run" (pandas' renaming, not in
     the file)."""
     names = NAMES[:3] + ["Run 1 + (µm)"] + NAMES[4:]
-    out = cli("positioning", write(tmp_path / "dup.csv", ";".join(names), rows(runs())))
+    out = cli("positioning", write(tmp_path / "dup.csv", ";".join(names), rows(runs(seed=4))))
     one_error_line(out, "the column 'Run 1 + (µm)' appears twice (columns 1 and 3, numbered from 0)")
     assert ".1'" not in out.stderr

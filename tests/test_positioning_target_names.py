@@ -12,22 +12,7 @@ import numpy as np
 import pytest
 
 from cli_calls import cli, one_error_line
-
-TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7])
-
-
-def runs(seed=6):
-    """{'+': (targets, runs), '-': ...} in µm to 3 decimals, as written."""
-    rng = np.random.default_rng(seed)
-    return {d: np.round((8 * TARGETS / 1000 + b)[:, None] + rng.normal(0, 0.6, (len(TARGETS), 3)), 3)
-            for d, b in (("+", -1.8), ("-", 1.8))}
-
-
-def iso_a_um(dev) -> float:
-    """ISO 230-2 bidirectional accuracy A (k = 2): max(mean + 2 s) - min(mean - 2 s), s with n - 1."""
-    hi = max(float(np.max(v.mean(axis=1) + 2 * v.std(axis=1, ddof=1))) for v in dev.values())
-    lo = min(float(np.min(v.mean(axis=1) - 2 * v.std(axis=1, ddof=1))) for v in dev.values())
-    return hi - lo
+from positioning_tables import TARGETS, iso_a_um, runs
 
 
 def wide(path, first, dev):
@@ -40,14 +25,14 @@ def wide(path, first, dev):
 
 @pytest.mark.parametrize("first", ["Nominal position (mm)", "Commanded (mm)", "Ziel [mm]"])
 def test_other_names_of_the_target_column_are_read(tmp_path, first):
-    dev = runs()
+    dev = runs(seed=6)
     out = cli("positioning", wide(tmp_path / "w.csv", first, dev), "--json")
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-9)
 
 
 def test_a_wide_export_without_a_target_name_is_told_so_in_its_terms(tmp_path):
-    dev = runs()
+    dev = runs(seed=6)
     path = wide(tmp_path / "p.csv", "Point", dev)
     out = cli("positioning", path)
     one_error_line(out, "no target column in this wide export", "'Point' is not a name fitbench reads as the target",
@@ -68,7 +53,7 @@ def test_a_long_table_without_a_target_name_lists_the_names(tmp_path):
 
 
 def test_targets_with_readout_jitter_are_said_to_be_read_as_different_targets(tmp_path):
-    dev = runs()
+    dev = runs(seed=6)
     jitter = np.random.default_rng(1).choice([-0.001, 0.0, 0.001], size=(len(TARGETS), 3, 2))
     path = tmp_path / "j.csv"
     path.write_text("Target [mm],Direction,Run,Deviation [um]\n" + "".join(
@@ -89,7 +74,7 @@ def test_targets_with_readout_jitter_are_said_to_be_read_as_different_targets(tm
 def test_direction_and_run_order_words_of_run_columns(tmp_path, up, down):
     """Before: 'column 'Run 1 Bwd (µm)' is neither the target, a direction nor a run' (the words were not read, and
     the message did not list those that are)."""
-    dev = runs()
+    dev = runs(seed=6)
     head = ";".join(["Target (mm)"] + [f"Run {r} {w} (µm)" for r in (1, 2, 3) for w in (up, down)])
     rows = [";".join([f"{t:.4f}"] + [f"{dev[d][i, r]:.3f}" for r in range(3) for d in "+-"])
             for i, t in enumerate(TARGETS)]

@@ -1,0 +1,22 @@
+"""Positioning deviations as an export writes them and ISO 230-2's bidirectional accuracy A computed here by its
+definition (k = 2), for the positioning-table tests to check fitbench's figures against."""
+from __future__ import annotations
+
+import numpy as np
+
+TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7])
+
+
+def runs(seed):
+    """{'+': (targets, runs), '-': ...} in µm to 3 decimals, as written: 3 runs at :data:`TARGETS`."""
+    rng = np.random.default_rng(seed)
+    return {d: np.round((8 * TARGETS / 1000 + b)[:, None] + rng.normal(0, 0.6, (len(TARGETS), 3)), 3)
+            for d, b in (("+", -1.8), ("-", 1.8))}
+
+
+def iso_a_um(dev, directions="+-") -> float:
+    """ISO 230-2 bidirectional accuracy A (k = 2) by its definition: max(mean + 2 s) - min(mean - 2 s) over the
+    ``directions`` given and every target, s with n - 1 (``dev``: {direction: (targets, runs)} in µm)."""
+    hi = max(float(np.max(dev[d].mean(axis=1) + 2 * dev[d].std(axis=1, ddof=1))) for d in directions)
+    lo = min(float(np.min(dev[d].mean(axis=1) - 2 * dev[d].std(axis=1, ddof=1))) for d in directions)
+    return hi - lo

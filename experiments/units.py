@@ -100,11 +100,13 @@ def table_unit(cfg: dict | None, column: str, unit: str, how: str) -> tuple[str,
     180/π); one that names the values' own unit (``um`` for µm, ``deg`` for °) is kept as written. Raises ValueError
     (one line) for a unit of another dimension, and for a length unit of data whose lengths are in no known unit
     (a generator's: :data:`DATA_UNITS`; a ``length_unit`` such as R), which no factor converts, and for any unit on a
-    count of rows or a share of ok rows, which have none."""
+    count of rows, a share of ok rows or a column of :data:`UNITLESS_COLUMNS` (iterations), which have none."""
     if how in ("count", "ok_share"):
         what = "a count of rows" if how == "count" else "the share of ok rows (0 to 1)"
         return ("", 1.0) if not unit else _refuse(f"aggregate = {how!r} gives {what}, which has no unit: drop the "
                                                   f"unit {unit!r}")
+    if unit and column in UNITLESS_COLUMNS:
+        return _refuse(f"{column!r} is {UNITLESS_COLUMNS[column]}, which has no unit: drop the unit {unit!r}")
     own, values = column_unit(column), value_unit(cfg, column)
     if not unit or unit == values or (unit == DATA_UNITS and own in LENGTH_UNITS):   # the data's own unit, whatever
         return unit or values, 1.0
@@ -127,6 +129,11 @@ def table_unit(cfg: dict | None, column: str, unit: str, how: str) -> tuple[str,
         if unit in group and own and own not in group:
             return _refuse(f"{column!r} is in {own}, not {_WHAT[dimension]} ({unit!r})")
     return unit, 1.0   # a column of unknown unit (a study's own): the declared unit names it
+
+
+#: the row columns every study writes whose values have no unit (a table or ranking that declares one is refused)
+UNITLESS_COLUMNS = {"iterations": "a count (the method's iterations)", "nfev": "a count (function evaluations)",
+                    "repetition": "a number (the repetition's)", "seed": "a number (the data's seed)"}
 
 
 def _refuse(problem: str):

@@ -11,7 +11,10 @@ A study opts in with ``[[rankings]]`` entries in its TOML (kept in its ``meta.js
                                                         # in mm, else the study's length_unit or data units);
                                                         # another length unit converts mm (x 1000 for um);
                                                         # for a generator's lengths it names them ("R": unit circle)
-    floor = 1e-12                                       # costs below it are equal (default 1e-12; 0 for runtimes)
+    floor = 1e-12                                       # costs below it are equal, in the ranking's unit (that
+                                                        # of its costs: unit, else the values' own); default 0
+                                                        # for a time, else 1e-12 of the metric's own unit
+                                                        # (1e-12 mm on mm data, 1e-9 when ranked in um)
 
 The report names no study: it reads the declarations of whichever study folders exist. A problem is one
 (study, data set, data stream, repetition); a method is a method id with its parameters. Every method run on
@@ -80,6 +83,22 @@ def ranking_unit(study: str, decl: dict, cfg: dict | None = None) -> tuple[str, 
                          f"{decl['metric']!r}: {exc}") from None
 
 
+#: the default floor of a ranking of a metric other than a time, in the metric's own unit (costs below it are exact)
+DEFAULT_FLOOR = 1e-12
+
+
+def ranking_floor(decl: dict, factor: float) -> float:
+    """The floor of a declared ranking's costs (costs below it are equal, :func:`problem_table`), in the ranking's
+    unit, the unit its costs are in (``factor``: the values' own unit to it, :func:`ranking_unit`): its ``floor`` as
+    given, else 0 for a time (a runtime is never exact: every difference counts, whether ranked in s or ms) and
+    :data:`DEFAULT_FLOOR` of the metric's own unit for another metric, converted (1e-12 mm is 1e-9 in um), so the
+    default ties the same costs whatever unit they are shown in."""
+    from experiments.units import column_unit
+    if decl.get("floor") is not None:
+        return float(decl["floor"])
+    return 0.0 if column_unit(str(decl["metric"])) == "s" else DEFAULT_FLOOR * float(factor)
+
+
 def collect(studies: list[tuple[str, Path, dict]]) -> dict[str, Ranking]:
     """``studies``: (name, folder, meta) of every readable study. Returns the rankings by profile name;
     a study's unreadable rows raise ValueError naming the study."""
@@ -105,7 +124,7 @@ def collect(studies: list[tuple[str, Path, dict]]) -> dict[str, Ranking]:
                                  "dataset": sel["dataset"].astype(str) if "dataset" in sel else "",
                                  "method": sel["method"], "params": sel.get("params", pd.Series("", index=sel.index)),
                                  "status": sel["status"], "cost": pd.to_numeric(sel[metric], errors="coerce") * factor,
-                                 "floor": float(d.get("floor", 0.0 if d.get("unit") == "s" else 1e-12))})
+                                 "floor": ranking_floor(d, factor)})
             r = out.setdefault(d["profile"], Ranking(d["profile"], metric, unit))
             # a problem whose rows all finished without the metric does not measure it: not a problem here
             blank = (part["cost"].isna() & (part["status"] == "ok")).groupby(part["problem"]).transform("all")

@@ -194,55 +194,77 @@ KILL_GRACE_S = 2.0
 
 def map_in_idle_workers(func, arguments):
     """``func(*args)`` for each ``args`` of ``arguments``, in the run's idle local workers (:func:`kept_workers`),
-    yielded in order; what no worker makes (there is none, or one ended) is made in this process. The first calls
-    start at once, one per worker, so that the workers make them while this process does something else before it
-    reads the results; each worker has one call at a time (a worker never waits to send a result while this process
-    waits to send it the next). A generator: closed before its end (an error, Ctrl-C), it ends the workers that still
-    have a call, so that no result is left for the next use of the workers."""
-    import collections
-    free = [w for w in (_KEPT or []) if not w.stopping and w.chunk is None and not w.ended()]
-    todo = iter(arguments)
-    pending: collections.deque = collections.deque()  # (worker or None, args), in order
+    yielded in order (an iterator); what no worker makes (there is none, or one ended) is made in this process. The
+    first calls are sent now, one per worker, so that the workers make them while this process does something else
+    before it reads the results; each worker has one call at a time (a worker never waits to send a result while this
+    process waits to send it the next). Closed before its end (``close()``: an error, Ctrl-C), it ends the workers that
+    still have a call, so that no result is left for the next use of the workers."""
+    return _IdleWorkerMap(func, arguments)
 
-    def send_next() -> bool:
-        args = next(todo, None)
+
+class _IdleWorkerMap:
+    """The iterator of :func:`map_in_idle_workers`."""
+
+    def __init__(self, func, arguments):
+        import collections
+        self.func = func
+        self.free = [w for w in (_KEPT or []) if not w.stopping and w.chunk is None and not w.ended()]
+        self.todo = iter(arguments)
+        self.pending: collections.deque = collections.deque()  # (worker or None, args), in order
+        try:
+            while self.free and self._send_next():  # the first calls start at once
+                pass
+        except BaseException:
+            self.close()
+            raise
+
+    def _send_next(self) -> bool:
+        args = next(self.todo, None)
         if args is None:
             return False
-        worker = free.pop(0) if free else None
+        worker = self.free.pop(0) if self.free else None
         if worker is not None:
             try:
-                worker.conn.send((_CALL, func, args))
+                worker.conn.send((_CALL, self.func, args))
             except OSError:  # the worker has ended: this process makes it
                 worker = None
-        pending.append((worker, args))
+        self.pending.append((worker, args))
         return True
 
-    def gen():
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        if not self.pending and not self._send_next():
+            raise StopIteration
         try:
-            while free and send_next():
+            worker, args = self.pending.popleft()
+            done = False
+            if worker is not None:
+                try:
+                    done, value = worker.conn.recv()
+                except (EOFError, OSError):  # the worker ended: not one of the free workers any more
+                    worker = None
+                else:
+                    self.free.append(worker)
+            if not done:  # no worker, or it failed: made here (a failure of func raises here, as it would)
+                value = self.func(*args)
+            while self.free and self._send_next():
                 pass
-            while pending or send_next():
-                worker, args = pending.popleft()
-                done = False
-                if worker is not None:
-                    try:
-                        done, value = worker.conn.recv()
-                    except (EOFError, OSError):  # the worker ended: not one of the free workers any more
-                        worker = None
-                    else:
-                        free.append(worker)
-                if not done:  # no worker, or it failed: made here (a failure of func raises here, as it would)
-                    value = func(*args)
-                while free and send_next():
-                    pass
-                yield value
-        finally:
-            for worker, _ in pending:  # abandoned with a call running: its result must not reach the next user
-                if worker is not None:
-                    worker.stop(now=True)
-                    with contextlib.suppress(ValueError):
-                        _KEPT.remove(worker)
-    return gen()
+        except BaseException:
+            self.close()
+            raise
+        return value
+
+    def close(self) -> None:
+        """End the workers that still have a call (their result must not reach the next user of the workers)."""
+        pending, self.pending = self.pending, type(self.pending)()
+        self.todo = iter(())
+        for worker, _ in pending:
+            if worker is not None:
+                worker.stop(now=True)
+                with contextlib.suppress(ValueError):
+                    _KEPT.remove(worker)
 
 
 #: seconds after which a row running without a time limit is named in the run's output (once)

@@ -12,6 +12,7 @@ import json
 import sqlite3
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -944,6 +945,25 @@ def test_results_csv_made_by_idle_workers_is_the_file_made_here(tmp_path):
         assert workers[1] not in [w for w in executors._KEPT if w.proc.is_alive()]
         got = write_results(df, tmp_path / "workers.csv", executors.map_in_idle_workers(csv_text, blocks(df, 300)))
     assert got == expected and (tmp_path / "workers.csv").read_bytes() == (tmp_path / "here.csv").read_bytes()
+
+
+def _touch(path):
+    Path(path).touch()
+    return path
+
+
+def test_idle_workers_start_their_first_calls_before_the_results_are_read(tmp_path):
+    """map_in_idle_workers sends each idle worker its first call when it is made, not when its first result is read:
+    the run makes results.csv in its workers while it analyses the rows, and reads the texts only afterwards."""
+    with executors.kept_workers(2):
+        executors.start_kept_workers()
+        marks = [tmp_path / f"call{i}" for i in range(3)]
+        texts = executors.map_in_idle_workers(_touch, [(m,) for m in marks])
+        deadline = time.monotonic() + 30
+        while not (marks[0].exists() and marks[1].exists()) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert marks[0].exists() and marks[1].exists() and not marks[2].exists()  # one call a worker, none read
+        assert list(texts) == marks
 
 
 def _fails_on_second(frame, header):

@@ -51,6 +51,14 @@ def _alive(pid: int) -> bool:
         return False
 
 
+def _ended(member: int) -> bool:
+    """``member`` ends within 5 s."""
+    deadline = time.monotonic() + 5
+    while _alive(member) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return not _alive(member)
+
+
 @pytest.fixture
 def killpg_calls(monkeypatch):
     """os.killpg recorded with whether the group's leader (a child of this process) was reaped at the call; a call
@@ -111,10 +119,7 @@ def test_a_local_worker_reaped_before_it_is_stopped(tmp_path, killpg_calls, how)
         w.stop(now=True)
         assert not [c for c in killpg_calls if c[1]], f"a group signalled by the id of a reaped worker: {killpg_calls}"
         if how == "pidfd":
-            deadline = time.monotonic() + 5
-            while _alive(member) and time.monotonic() < deadline:
-                time.sleep(0.01)
-            assert not _alive(member), "what the worker's method started outlived it"
+            assert _ended(member), "what the worker's method started outlived it"
     finally:
         _end_member(member)
 
@@ -131,10 +136,7 @@ def test_a_local_worker_that_died_ends_its_group_before_it_is_reaped(tmp_path, k
         w.stop(now=True)
         assert _reaped(w.proc.pid)
         assert not [c for c in killpg_calls if c[1]], killpg_calls
-        deadline = time.monotonic() + 5
-        while _alive(member) and time.monotonic() < deadline:
-            time.sleep(0.01)
-        assert not _alive(member), "what the worker's method started outlived it"
+        assert _ended(member), "what the worker's method started outlived it"
     finally:
         _end_member(member)
 
@@ -149,19 +151,9 @@ def test_a_dask_row_process_that_died_ends_its_group_before_it_is_reaped(tmp_pat
         assert rp._died()[0] == "died"
         assert rp.proc.returncode == -signal.SIGKILL
         assert not [c for c in killpg_calls if c[1]], killpg_calls
-        deadline = time.monotonic() + 5
-        while _alive(member) and time.monotonic() < deadline:
-            time.sleep(0.01)
-        assert not _alive(member), "what the row process's method started outlived it"
+        assert _ended(member), "what the row process's method started outlived it"
     finally:
         _end_member(member)
-
-
-def _ended(member: int) -> bool:
-    deadline = time.monotonic() + 5
-    while _alive(member) and time.monotonic() < deadline:
-        time.sleep(0.01)
-    return not _alive(member)
 
 
 def test_a_dead_worker_reaped_by_the_start_of_another_has_its_group_ended(tmp_path, killpg_calls, how):

@@ -1,7 +1,9 @@
 """A method's exception is the method's failure, named by its own type: one raising a ``BaseException`` subclass of
 its own, or an exception whose ``str()`` raises, ends ``fitbench fit`` with one line and exit status 3 (it was a
 traceback), and makes an ``error`` row whose message names the exception the method raised (the message blamed the
-``RuntimeError`` its ``__str__`` raised, or the row crashed the worker)."""
+``RuntimeError`` its ``__str__`` raised, or the row crashed the worker). A method that raises SystemExit (sys.exit()
+in a plugin) is one too: `fitbench fit` printed nothing and exited 0 (a script reading --json got an empty output and
+success)."""
 import textwrap
 
 import numpy as np
@@ -11,6 +13,7 @@ import pytest
 import methods
 from conftest import install_plugin, run_python
 from fitbench.cli.commands import EXIT_METHOD_FAILED, main
+from methods import register
 
 RAISERS = '''
 from methods import InvalidInputError, register
@@ -82,6 +85,27 @@ def raisers():
         _registry._REGISTRY.pop(mid, None)
 
 
+def _exit_zero(points):
+    raise SystemExit(0)
+
+
+def _exit_none(points):
+    import sys
+    sys.exit()
+
+
+@pytest.fixture
+def exiting_methods():
+    """Methods that exit, registered from this module (not methods.*) for one test only."""
+    from methods import _registry
+    ids = {"circle.test_exit_zero": _exit_zero, "circle.test_exit_none": _exit_none}
+    for mid, func in ids.items():
+        register(mid, kind="closed form", summary="exits (test)", reference="a test")(func)
+    yield
+    for mid in ids:
+        _registry._REGISTRY.pop(mid, None)
+
+
 @pytest.fixture
 def circle_file(tmp_path):
     t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
@@ -97,14 +121,18 @@ def circle_file(tmp_path):
     ("circle.raise_weird_bad_str", "circle.raise_weird_bad_str failed: it raised WeirdBadStr(<Unrepresentable "
                                    "object>)"),
     ("circle.raise_bad_refusal", "circle.raise_bad_refusal failed: BadRefusal (its message cannot be printed: "
-                                 "RuntimeError: no refusal text)")])
+                                 "RuntimeError: no refusal text)"),
+    ("circle.test_exit_zero", "circle.test_exit_zero failed: it raised SystemExit(0)"),
+    ("circle.test_exit_none", "circle.test_exit_none failed: it raised SystemExit()")])
 @pytest.mark.parametrize("json", [False, True])
-def test_fit_names_the_exception_the_method_raised_in_one_line(raisers, circle_file, capsys, method, said, json):
+def test_fit_names_the_exception_the_method_raised_in_one_line(raisers, exiting_methods, circle_file, capsys, method,
+                                                               said, json):
     code = main(["fit", method, str(circle_file), *(["--json"] if json else [])])
     out, err = capsys.readouterr()
     assert code == EXIT_METHOD_FAILED and out == ""
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"fitbench: error: {said} (an error inside the method"), err
+    assert "Traceback" not in err
 
 
 def test_exception_text_never_raises_and_blames_the_raiser(raisers):

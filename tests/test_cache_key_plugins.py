@@ -3,13 +3,12 @@ a computed name, a data file beside a method of this repository, and the version
 imports (a plugin's dependencies, shapely, finufft). Each case: the resumed run recomputes the rows instead of
 serving the old ones as up to date."""
 import json
-import subprocess
-import sys
 import textwrap
 
 import pytest
 
 from conftest import REPO, install_plugin, run_python
+from pip_target import pip_install, write_pyproject
 from test_cache_key import STUDY, append, repo_copy, run  # noqa: F401  (repo_copy: a fixture)
 
 pytestmark = pytest.mark.slow  # each case installs a plugin or copies the repository and runs a study several times
@@ -48,15 +47,9 @@ def editable_plugin(tmp_path):
     (pkg / "fit.py").write_text(textwrap.dedent(FIT))
     (pkg / "helper.py").write_text("FACTOR = 1.0\n")
     (pkg / "data" / "coeffs.json").write_text('{"scale": 1.0}\n')
-    (src / "pyproject.toml").write_text(
-        '[build-system]\nrequires = ["setuptools>=61"]\nbuild-backend = "setuptools.build_meta"\n'
-        '[project]\nname = "fb-keyed-edit"\nversion = "0.1"\n'
-        '[project.entry-points."fitbench.methods"]\nkeyed = "fb_keyed_edit.fit"\n'
-        '[tool.setuptools]\npackages = ["fb_keyed_edit"]\n')
-    site = tmp_path / "site"
-    out = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
-                          "--quiet", "--target", str(site), "-e", str(src)], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
+    write_pyproject(src, "fb-keyed-edit", '[project.entry-points."fitbench.methods"]\nkeyed = "fb_keyed_edit.fit"\n'
+                                          '[tool.setuptools]\npackages = ["fb_keyed_edit"]\n')
+    site = pip_install(src, tmp_path / "site", editable=True)
     assert not [p for p in site.rglob("*.py") if "fb_keyed_edit" in p.parts]  # editable: the code stays in src
     return site, src, pkg
 
@@ -117,17 +110,26 @@ def keyed_dep(points):
 '''
 
 
-def test_the_version_of_a_library_the_method_imports_is_keyed(tmp_path):
-    plugin = install_plugin(tmp_path / "plugin", "fb-keyed-dep", {"fb_keyed_dep": DEP_PLUGIN},
-                            {"fitbench.methods": {"keyed_dep": "fb_keyed_dep"}})
-    old = install_plugin(tmp_path / "old", "fakedep-keyed", {"fakedep_keyed": FAKEDEP.format(scale=1.0)}, {}, "1.0")
-    new = install_plugin(tmp_path / "new", "fakedep-keyed", {"fakedep_keyed": FAKEDEP.format(scale=2.0)}, {}, "2.0")
+def upgraded(tmp_path, plugin, library: str, method: str, what: str):
+    """A study of ``method`` (its plugin installed in ``plugin``) run twice with version 1.0 of ``library`` (the
+    second run serves every row) and once with 2.0, which must recompute them (``what`` was upgraded);
+    (study, out folder, the site of 2.0)."""
+    module = library.replace("-", "_")
+    old = install_plugin(tmp_path / "old", library, {module: FAKEDEP.format(scale=1.0)}, {}, "1.0")
+    new = install_plugin(tmp_path / "new", library, {module: FAKEDEP.format(scale=2.0)}, {}, "2.0")
     study = tmp_path / "keyed.toml"
-    study.write_text(STUDY.format(kind="grid", method="circle.keyed_dep"))
+    study.write_text(STUDY.format(kind="grid", method=method))
     out = tmp_path / "out"
     assert run(REPO, study, out, [plugin, old]) == (2, 2)
     assert run(REPO, study, out, [plugin, old]) == (2, 0)
-    assert run(REPO, study, out, [plugin, new]) == (2, 2), "an upgraded library must recompute the rows"
+    assert run(REPO, study, out, [plugin, new]) == (2, 2), f"an upgraded {what} must recompute the rows"
+    return study, out, new
+
+
+def test_the_version_of_a_library_the_method_imports_is_keyed(tmp_path):
+    plugin = install_plugin(tmp_path / "plugin", "fb-keyed-dep", {"fb_keyed_dep": DEP_PLUGIN},
+                            {"fitbench.methods": {"keyed_dep": "fb_keyed_dep"}})
+    study, out, new = upgraded(tmp_path, plugin, "fakedep-keyed", "circle.keyed_dep", "library")
     # meta.json names the libraries of each study's rows: a study run after it in the same command has its own
     builtin = tmp_path / "builtin.toml"
     builtin.write_text(STUDY.format(kind="grid", method="circle.kasa").replace('name = "keyed"', 'name = "builtin"'))
@@ -176,23 +178,11 @@ def test_the_version_of_a_declared_requirement_is_keyed(tmp_path):
     src = tmp_path / "req_src"
     src.mkdir()
     (src / "fb_keyed_req.py").write_text(textwrap.dedent(REQ_PLUGIN))
-    (src / "pyproject.toml").write_text(
-        '[build-system]\nrequires = ["setuptools>=61"]\nbuild-backend = "setuptools.build_meta"\n'
-        '[project]\nname = "fb-keyed-req"\nversion = "0.1"\ndependencies = ["fakedep-declared>=1.0"]\n'
-        '[project.entry-points."fitbench.methods"]\nkeyed = "fb_keyed_req"\n'
-        '[tool.setuptools]\npy-modules = ["fb_keyed_req"]\n')
-    plugin = tmp_path / "plugin_site"
-    out = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
-                          "--quiet", "--target", str(plugin), str(src)], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    old = install_plugin(tmp_path / "old", "fakedep-declared", {"fakedep_declared": FAKEDEP.format(scale=1.0)}, {}, "1.0")
-    new = install_plugin(tmp_path / "new", "fakedep-declared", {"fakedep_declared": FAKEDEP.format(scale=2.0)}, {}, "2.0")
-    study = tmp_path / "keyed.toml"
-    study.write_text(STUDY.format(kind="grid", method="circle.keyed_req"))
-    out_dir = tmp_path / "out"
-    assert run(REPO, study, out_dir, [plugin, old]) == (2, 2)
-    assert run(REPO, study, out_dir, [plugin, old]) == (2, 0)
-    assert run(REPO, study, out_dir, [plugin, new]) == (2, 2), "an upgraded requirement must recompute the rows"
+    write_pyproject(src, "fb-keyed-req", 'dependencies = ["fakedep-declared>=1.0"]\n'
+                                         '[project.entry-points."fitbench.methods"]\nkeyed = "fb_keyed_req"\n'
+                                         '[tool.setuptools]\npy-modules = ["fb_keyed_req"]\n')
+    plugin = pip_install(src, tmp_path / "plugin_site")
+    upgraded(tmp_path, plugin, "fakedep-declared", "circle.keyed_req", "requirement")
 
 
 def test_a_virtual_environment_inside_the_checkout_holds_libraries_not_repository_code(monkeypatch):

@@ -142,21 +142,15 @@ def test_the_user_s_ctrl_c_while_a_plugin_loads_still_stops_the_command(sigint_s
 
 def install_package_plugin(workdir, init_code: str):
     """A plugin that is a package (entry point ``fitbench_exitpkg.methods``) whose ``__init__`` runs ``init_code``."""
-    import subprocess
-    import sys
-    src, site = workdir / "src", workdir / "site"
+    from pip_target import pip_install, write_pyproject
+    src = workdir / "src"
     (src / "fitbench_exitpkg").mkdir(parents=True)
     (src / "fitbench_exitpkg" / "__init__.py").write_text(init_code)
     (src / "fitbench_exitpkg" / "methods.py").write_text("X = 1\n")
-    (src / "pyproject.toml").write_text(
-        '[build-system]\nrequires = ["setuptools>=61"]\nbuild-backend = "setuptools.build_meta"\n'
-        '[project]\nname = "fitbench-exitpkg"\nversion = "0.1"\n'
-        '[project.entry-points."fitbench.methods"]\npkg = "fitbench_exitpkg.methods"\n'
-        '[tool.setuptools]\npackages = ["fitbench_exitpkg"]\n')
-    out = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
-                          "--quiet", "--target", str(site), str(src)], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    return site
+    write_pyproject(src, "fitbench-exitpkg",
+                    '[project.entry-points."fitbench.methods"]\npkg = "fitbench_exitpkg.methods"\n'
+                    '[tool.setuptools]\npackages = ["fitbench_exitpkg"]\n')
+    return pip_install(src, workdir / "site")
 
 
 @pytest.mark.slow

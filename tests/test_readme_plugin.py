@@ -3,14 +3,13 @@ installed package (offline), which imports no private module of fitbench, and wh
 study naming ``circle.*`` and reaches the report's cross-study rankings."""
 import ast
 import re
-import subprocess
-import sys
 import textwrap
 
 import pandas as pd
 import pytest
 
 from conftest import REPO, run_python
+from pip_target import pip_install, write_pyproject
 
 
 def recipe():
@@ -46,14 +45,8 @@ def test_the_recipe_installs_runs_and_reaches_the_rankings(tmp_path):
     (module.parent / "__init__.py").write_text("")
     module.write_text(code)
     package = module.parent.name
-    (src / "pyproject.toml").write_text(
-        '[build-system]\nrequires = ["setuptools>=61"]\nbuild-backend = "setuptools.build_meta"\n'
-        f'[project]\nname = "readme-recipe"\nversion = "0.1"\n{toml}\n'
-        f'[tool.setuptools]\npackages = ["{package}"]\n')
-    site = tmp_path / "site"
-    out = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--no-build-isolation", "--no-index",
-                          "--quiet", "--target", str(site), str(src)], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
+    write_pyproject(src, "readme-recipe", f'{toml}\n[tool.setuptools]\npackages = ["{package}"]\n')
+    site = pip_install(src, tmp_path / "site")
     method_id = re.search(r'@register\("([\w.]+)"', code).group(1)
     # loading the plugin imports no private module the recipe did not already need (the registry's own)
     probe = textwrap.dedent(f'''

@@ -434,14 +434,15 @@ def run_task(task: dict, row_timeout: float | None = None) -> dict:
 
 
 def _failure(task: dict, exc: BaseException) -> dict:
-    """The row of a task whose study code raised ``exc``: 'crashed' for SystemExit, GeneratorExit or a
-    KeyboardInterrupt that is not the run's own (which is raised again: the run stops), 'unavailable' for an
-    ImportError (a kernel or module that cannot be loaded), 'error' for any other exception."""
-    if isinstance(exc, (KeyboardInterrupt, SystemExit, GeneratorExit)):
+    """The row of a task whose study code raised ``exc``: 'crashed' for SystemExit or a KeyboardInterrupt that is
+    not the run's own (which is raised again: the run stops), 'unavailable' for an ImportError (a kernel or module
+    that cannot be loaded), 'error' for any other exception, GeneratorExit included (docs/results.md: a raised
+    exception, not a process ended)."""
+    if isinstance(exc, (KeyboardInterrupt, SystemExit)):
         if isinstance(exc, KeyboardInterrupt) and _SIGNALLED.is_set():
             raise exc  # the run was interrupted: stop
         return failed_row(task, "crashed", f"the row raised {exception_call(exc)}")
-    if not isinstance(exc, Exception):
+    if not isinstance(exc, (Exception, GeneratorExit)):
         raise exc
     status = "unavailable" if isinstance(exc, ImportError) else "error"
     return {**base_row(task), "status": status, "message": exception_text(exc)}

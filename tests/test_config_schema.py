@@ -144,18 +144,13 @@ def test_method_registry_parameter_hook():
 def test_a_study_declares_its_own_config_keys(tmp_path, monkeypatch):
     """A new study kind adds its own top-level key in its class (``config_schema``), with no edit under
     experiments/ elsewhere; the key is typed by that schema, and another kind still refuses it."""
-    import sys
-    import types
-
     from experiments import schema
     from experiments.study import Study
-    module = types.ModuleType("experiments.studies.study_with_own_key")
+    from study_kinds import plant
 
     class OwnKey(Study):
         config_schema = {"lobes": {"type": "array", "minItems": 1, "items": {"type": "integer", "minimum": 2}}}
-    OwnKey.__module__ = module.__name__
-    module.OwnKey = OwnKey
-    monkeypatch.setitem(sys.modules, module.__name__, module)
+    plant(monkeypatch, "study_with_own_key", OwnKey=OwnKey)
     own = GOOD.format(name="study").replace('kind = "grid"', 'kind = "study_with_own_key"\nlobes = [3, 5]')
     assert configs.load(str(write(tmp_path, own)))["lobes"] == [3, 5]
     with pytest.raises(ConfigError, match=r"study\.toml: lobes\[1\]: .*1.*minimum|study\.toml: lobes"):

@@ -2,30 +2,14 @@
 findings replace is said to be unused (it was ignored silently), and the summary table the report shows for a kind
 whose analysis gives no table names the units of its columns, as summary.md does (it had bare numbers)."""
 import json
-import sys
-import types
 
 import pandas as pd
 
 from experiments.run import run_study
 from experiments.study import Analysis, Study
+from study_kinds import plant, small_study
 
-TOML = '''name = "mine"
-title = "a study of my kind"
-kind = "zz_own_findings"
-seed = 3
-repetitions = 2
-
-[[datasets]]
-source = "circle"
-params = { center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }
-
-[[methods]]
-id = "circle.kasa"
-
-[report]
-findings = "{best_method} wins."
-'''
+TOML = small_study("mine", "a study of my kind", "zz_own_findings", findings="{best_method} wins.")
 
 
 class OwnFindings(Study):
@@ -37,10 +21,7 @@ class OwnFindings(Study):
 
 
 def test_unused_findings_are_said_and_the_fallback_table_has_units(tmp_path, monkeypatch, capsys):
-    module = types.ModuleType("experiments.studies.zz_own_findings")
-    OwnFindings.__module__ = module.__name__
-    module.OwnFindings = OwnFindings
-    monkeypatch.setitem(sys.modules, module.__name__, module)
+    plant(monkeypatch, "zz_own_findings", OwnFindings=OwnFindings)
     (tmp_path / "mine.toml").write_text(TOML, encoding="utf-8")
     target = run_study(str(tmp_path / "mine.toml"), tmp_path / "out", jobs=1, log=lambda *a: None)
     notes = [ln for ln in capsys.readouterr().err.splitlines() if "[report] findings is not used" in ln]

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import ast
 import pickle
-import sys
-import types
 from pathlib import Path
 
 import pandas as pd
@@ -15,36 +13,15 @@ import pytest
 from experiments import config as configs
 from experiments.run import run_study
 from experiments.study import Analysis, ConfigError, ConfigTable, Study, study_of
+from study_kinds import plant, small_study
 
 REPO = Path(__file__).resolve().parents[1]
-TOML = '''name = "{name}"
-title = "a small study"
-{kind}seed = 3
-repetitions = 2
-
-[[datasets]]
-source = "circle"
-params = {{ center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }}
-
-[[methods]]
-id = "circle.kasa"
-'''
 
 
 def write(tmp_path, name="study", kind=""):
     path = tmp_path / f"{name}.toml"
-    path.write_text(TOML.format(name=name, kind=kind), encoding="utf-8")
+    path.write_text(small_study(name, "a small study", kind), encoding="utf-8")
     return path
-
-
-def _module(monkeypatch, kind: str, **attrs) -> types.ModuleType:
-    module = types.ModuleType(f"experiments.studies.{kind}")
-    for k, v in attrs.items():
-        if isinstance(v, type):
-            v.__module__ = module.__name__
-        setattr(module, k, v)
-    monkeypatch.setitem(sys.modules, module.__name__, module)
-    return module
 
 
 def test_every_study_module_defines_one_study_class():
@@ -78,9 +55,9 @@ def test_a_subclass_overrides_only_what_differs(tmp_path, monkeypatch):
         def execute(self, task):
             return {"status": "ok", "message": "", "answer": 42}
 
-    _module(monkeypatch, "only_analysis", OnlyAnalysis=OnlyAnalysis)
-    _module(monkeypatch, "own_rows", OwnRows=OwnRows)
-    path = write(tmp_path, kind='kind = "only_analysis"\n')
+    plant(monkeypatch, "only_analysis", OnlyAnalysis=OnlyAnalysis)
+    plant(monkeypatch, "own_rows", OwnRows=OwnRows)
+    path = write(tmp_path, kind="only_analysis")
     path.write_text(path.read_text() + '[report]\nfindings = "mean radius {mean_radius:.3f} mm"\n')
     cfg = configs.load(str(path))
     study = study_of("only_analysis")
@@ -95,9 +72,9 @@ def test_a_subclass_overrides_only_what_differs(tmp_path, monkeypatch):
 def test_an_old_style_study_module_is_refused_in_one_line(tmp_path, monkeypatch):
     def analyse(df, cfg, target, log):
         return Analysis()
-    _module(monkeypatch, "old_style", analyse=analyse, CONFIG_SCHEMA={})
+    plant(monkeypatch, "old_style", analyse=analyse, CONFIG_SCHEMA={})
     with pytest.raises(ConfigError) as err:
-        configs.load(str(write(tmp_path, kind='kind = "old_style"\n')))
+        configs.load(str(write(tmp_path, kind="old_style")))
     msg = str(err.value)
     assert "\n" not in msg and msg.startswith("study.toml: kind: experiments/studies/old_style.py must define one "
                                               "subclass of experiments.study.Study")

@@ -5,30 +5,15 @@ from __future__ import annotations
 
 import json
 import math
-import sys
-import types
 
 import numpy as np
 
 from experiments.run import run_study
 from experiments.study import Analysis, Study
+from study_kinds import plant, small_study
 
-TOML = '''name = "nonfinite"
-title = "a study with infinite values"
-kind = "nonfinite_values"
-seed = 3
-repetitions = 2
-
-[[datasets]]
-source = "circle"
-params = {{ center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }}
-
-[[methods]]
-id = "circle.kasa"
-
-[report]
-findings = "the ratio is {{ratio:.3f}}, the spread {{spread}}"
-'''
+TOML = small_study("nonfinite", "a study with infinite values", "nonfinite_values",
+                   findings="the ratio is {ratio:.3f}, the spread {spread}")
 
 
 def strict(text: str):
@@ -47,12 +32,9 @@ class NonFinite(Study):
 
 
 def test_infinite_values_are_written_as_json_texts(tmp_path, monkeypatch):
-    module = types.ModuleType("experiments.studies.nonfinite_values")
-    NonFinite.__module__ = module.__name__
-    module.NonFinite = NonFinite
-    monkeypatch.setitem(sys.modules, module.__name__, module)
+    plant(monkeypatch, "nonfinite_values", NonFinite=NonFinite)
     path = tmp_path / "nonfinite.toml"
-    path.write_text(TOML.format(), encoding="utf-8")
+    path.write_text(TOML, encoding="utf-8")
     target = run_study(str(path), tmp_path / "out", jobs=1, log=lambda *a: None)
     report = strict((target / "report.json").read_text())
     meta = strict((target / "meta.json").read_text())
@@ -99,12 +81,9 @@ def test_report_and_meta_keep_texts_that_read_as_numbers(tmp_path, monkeypatch):
     """report.json and meta.json as the report reads them: a study value "NaN" and a data set labelled "Infinity" are
     texts, an infinite value a float."""
     from experiments.report import _read_json
-    module = types.ModuleType("experiments.studies.text_values")
-    TextValues.__module__ = module.__name__
-    module.TextValues = TextValues
-    monkeypatch.setitem(sys.modules, module.__name__, module)
+    plant(monkeypatch, "text_values", TextValues=TextValues)
     path = tmp_path / "textvalues.toml"
-    text = TOML.format().replace('"nonfinite"', '"textvalues"').replace('"nonfinite_values"', '"text_values"')
+    text = TOML.replace('"nonfinite"', '"textvalues"').replace('"nonfinite_values"', '"text_values"')
     text = text.replace('source = "circle"', 'source = "circle"\nlabel = "Infinity"')
     path.write_text(text.replace("the ratio is {ratio:.3f}, the spread {spread}", "{label}"), encoding="utf-8")
     target = run_study(str(path), tmp_path / "out", jobs=1, log=lambda *a: None)

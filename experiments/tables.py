@@ -83,6 +83,11 @@ def declared_table(df: pd.DataFrame, t: dict, cfg: dict | None = None) -> Table:
     out = out.rename(columns={c: f"{readable(c)} [{column_unit(c)}]" for c in rows
                               if column_unit(c) and c in numeric_keys})
     caption = t["caption"] + lacking_note(df, lacking)
+    if t.get("columns") and t.get("aggregate") in ("ok_share", "count"):
+        # a pivot's headers are the column key's values: the caption says what the cells count
+        caption = caption.rstrip() + ("" if caption.rstrip().endswith((".", "!", "?")) else ".")
+        caption += (" Values: the share of rows whose status is ok" + ("." if unit == "%" else " (0 to 1).")
+                    if t["aggregate"] == "ok_share" else f" Values: the count of ok rows with {readable(t['values'])}.")
     if unit == DATA_UNITS and not t.get("unit"):   # how to name the data's unit, as the default table says
         caption = caption.rstrip() + ("" if caption.rstrip().endswith((".", "!", "?")) else ".")
         caption += metric_unit(cfg or {}, t["values"])[1]

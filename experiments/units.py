@@ -100,11 +100,14 @@ def table_unit(cfg: dict | None, column: str, unit: str, how: str) -> tuple[str,
     180/π); one that names the values' own unit (``um`` for µm, ``deg`` for °) is kept as written. Raises ValueError
     (one line) for a unit of another dimension, and for a length unit of data whose lengths are in no known unit
     (a generator's: :data:`DATA_UNITS`; a ``length_unit`` such as R), which no factor converts, and for any unit on a
-    count of rows, a share of ok rows or a column of :data:`UNITLESS_COLUMNS` (iterations), which have none."""
+    count of rows, a share of ok rows (but ``%``: the share x 100) or a column of :data:`UNITLESS_COLUMNS`
+    (iterations), which have none."""
+    if how == "ok_share" and unit == "%":
+        return "%", 100.0        # the share of ok rows in per cent: 1 (every row ok) is 100 %
     if how in ("count", "ok_share"):
-        what = "a count of rows" if how == "count" else "the share of ok rows (0 to 1)"
-        return ("", 1.0) if not unit else _refuse(f"aggregate = {how!r} gives {what}, which has no unit: drop the "
-                                                  f"unit {unit!r}")
+        what = ("a count of rows, which has no unit" if how == "count" else
+                "the share of ok rows (0 to 1), which has no unit but % (unit = \"%\" shows it x 100)")
+        return ("", 1.0) if not unit else _refuse(f"aggregate = {how!r} gives {what}: drop the unit {unit!r}")
     if unit and column in UNITLESS_COLUMNS:
         return _refuse(f"{column!r} is {UNITLESS_COLUMNS[column]}, which has no unit: drop the unit {unit!r}")
     own, values = column_unit(column), value_unit(cfg, column)
@@ -116,6 +119,9 @@ def table_unit(cfg: dict | None, column: str, unit: str, how: str) -> tuple[str,
     if own in LENGTH_UNITS and values not in LENGTH_UNITS and dim in (None, "length"):
         if values == DATA_UNITS and dim == "length" and _factor(unit) == _factor(own):
             return unit, 1.0   # naming the data's lengths in the unit the columns declare (mm), as length_unit would
+        if dim is None and unit not in LENGTH_NAMES:   # no unit of length ('%', 'furlong'): no length_unit names it
+            return _refuse(f"{column!r} is a length, and {unit!r} is not a unit of length fitbench knows ({_KNOWN}): "
+                           "drop the table's unit")
         if values != DATA_UNITS:
             return _refuse(f"{column!r} is in {values} (the study's length_unit), which cannot be converted to "
                            f"{unit!r}: declare unit = {values!r}, or drop the table's unit")

@@ -6,19 +6,31 @@ from __future__ import annotations
 import pytest
 
 from cli_calls import cli, one_error_line
-from test_positioning_separators import NAMES, rows, runs, write
+
+NAMES = ["Target (mm)"] + [f"Run {r} {d} (µm)" for r in (1, 2, 3) for d in "+-"]
+
+
+def rows():
+    """A wide export's data rows (5 targets, 3 runs each way) as lists of cells."""
+    return [[f"{t:.4f}"] + [f"{(-1.8 if d == '+' else 1.8) + 0.1 * r + t / 500:.3f}" for r in range(3) for d in "+-"]
+            for t in (0.0, 97.3, 201.6, 298.1, 402.7)]
+
+
+def write(path, header, cells):
+    path.write_text("\n".join([header] + [";".join(c) for c in cells]) + "\n", encoding="utf-8")
+    return path
 
 
 def test_a_wide_run_column_without_name_is_named_by_its_place(tmp_path):
     header = ";".join(NAMES[:-1]) + ";"          # the last run column's name left out: column 6, G
-    out = cli("positioning", write(tmp_path / "w.csv", header, rows(runs())))
+    out = cli("positioning", write(tmp_path / "w.csv", header, rows()))
     one_error_line(out, "column 6 (G in a spreadsheet; no name in the header) holds values", "name it in the header")
     assert "Unnamed" not in out.stderr
 
 
 def test_a_wide_table_whose_target_column_has_no_name(tmp_path):
     header = ";" + ";".join(NAMES[1:])
-    out = cli("positioning", write(tmp_path / "t.csv", header, rows(runs())))
+    out = cli("positioning", write(tmp_path / "t.csv", header, rows()))
     one_error_line(out, "column 0 (A in a spreadsheet; no name in the header)", "--column target=0")
     assert "Unnamed" not in out.stderr
 

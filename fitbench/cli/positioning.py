@@ -13,7 +13,7 @@ import fitbench.cli.options as cli_options
 import methods
 from fitbench.cli.guards import jsonable
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
-                                  add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances,
+                                  add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances, quantity,
                                   refuse_decimal_comma, save_figure, test_conditions, verdict, verdict_lines,
                                   verdict_title, warn, warn_bare_tolerances, write_report, write_text_atomic)
 from methods import InvalidInputError
@@ -64,16 +64,18 @@ def add_parser(sub):
     pp.add_argument("--fanuc-increment", choices=("0.001", "0.0001"), default="0.001", metavar="MM",
                     help="fanuc-pitch: the axis' detection unit and least input increment in mm, 0.001 (IS-B, default) "
                          "or 0.0001 (IS-C)")
-    pp.add_argument("--interval", type=float, default=None, metavar="MM",
-                    help="compensation point spacing (mm; default: the target spacing)")
+    pp.add_argument("--interval", type=quantity("--interval"), default=None, metavar="MM",
+                    help="compensation point spacing (a bare number in mm, or with its unit: 10mm, 0.5in; default: "
+                         "the target spacing)")
     pp.add_argument("--compensation-from", choices=("model", "mean"), default=None,
                     help="compensation values from the GLS polynomial (default; refused when its lack-of-fit test "
                          "rejects it unless given explicitly) or the mean deviations at the targets")
     pp.add_argument("--axis", default=None, help="the axis tested: recorded in the JSON result (fitbench history trends "
                     "each machine's axes apart) and its name in the controller's table (required for siemens-eec; "
                     "csv and fanuc-pitch take it from an 'Axis;Z' line above the table, else say 'not given')")
-    pp.add_argument("--reference", type=float, metavar="MM", help="the machine's reference point, where the table "
-                    "holds 0 (mm; default 0 if the travel contains it, else the nearer end)")
+    pp.add_argument("--reference", type=quantity("--reference"), metavar="MM", help="the machine's reference point, "
+                    "where the table holds 0 (a bare number in mm, or with its unit: 250mm, 0.25m; default 0 if the "
+                    "travel contains it, else the nearer end)")
     pp.add_argument("--json", action="store_true", help="print one JSON object (mm; see its 'units')")
     pp.add_argument("--plot", metavar="FILE", help="write the plot (.png, .pdf, .svg)")
     pp.set_defaults(func=run)

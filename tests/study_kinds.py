@@ -1,5 +1,5 @@
-"""A study kind of a test's own, found as the project's are (a module ``experiments.studies.KIND``), and the TOML of a
-small study to run it on."""
+"""A study kind of a test's own, found as the project's are (a module ``experiments.studies.KIND``), and the TOML of
+the small studies the tests run."""
 from __future__ import annotations
 
 import sys
@@ -25,3 +25,14 @@ def small_study(name: str, title: str, kind: str = "", findings: str = "") -> st
             "repetitions = 2\n\n[[datasets]]\nsource = \"circle\"\n"
             "params = { center = [1.0, 2.0], radius = 5.0, noise = 0.01, n = 12 }\n\n"
             "[[methods]]\nid = \"circle.kasa\"\n" + (f'\n[report]\nfindings = "{findings}"\n' if findings else ""))
+
+
+def circle_study(folder, name: str, title: str, method_ids, repetitions: int, extra: str = ""):
+    """``folder/NAME.toml`` (its path): a grid study (seed 3) of ``repetitions`` of one generated circle (30 points,
+    radius 5 mm, noise 0.01 mm) with the methods ``method_ids``; ``extra``: more top-level lines
+    (``chunk_rows = 6``)."""
+    study = folder / f"{name}.toml"
+    study.write_text(f'name = "{name}"\ntitle = "{title}"\nkind = "grid"\nseed = 3\nrepetitions = {repetitions}\n'
+                     f'{extra}[[datasets]]\nsource = "circle"\nparams = {{ radius = 5.0, noise = 0.01, n = 30 }}\n'
+                     + "".join(f'[[methods]]\nid = "{m}"\n' for m in method_ids))
+    return study

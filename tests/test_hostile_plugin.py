@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 
 from conftest import REPO, install_plugin, run_python
+from study_kinds import circle_study
 
 HOSTILE = '''
 """A plugin that lies (every method claims converged=True) and misbehaves."""
@@ -132,19 +133,7 @@ def hostile_site(tmp_path_factory):
 
 def write_hostile_study(folder, name: str, method_ids) -> object:
     """A grid study of two repetitions of one generated circle with these methods."""
-    study = folder / f"{name}.toml"
-    ids = "\n".join(f'[[methods]]\nid = "{m}"' for m in method_ids)
-    study.write_text(textwrap.dedent(f'''
-        name = "{name}"
-        title = "Hostile plugin"
-        kind = "grid"
-        seed = 3
-        repetitions = 2
-        [[datasets]]
-        source = "circle"
-        params = {{ radius = 5.0, noise = 0.01, n = 30 }}
-    ''') + ids + "\n")
-    return study
+    return circle_study(folder, name, "Hostile plugin", method_ids, repetitions=2)
 
 
 @pytest.fixture(scope="module")

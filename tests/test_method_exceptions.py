@@ -4,8 +4,6 @@ traceback), and makes an ``error`` row whose message names the exception the met
 ``RuntimeError`` its ``__str__`` raised, or the row crashed the worker). A method that raises SystemExit (sys.exit()
 in a plugin) is one too: `fitbench fit` printed nothing and exited 0 (a script reading --json got an empty output and
 success)."""
-import textwrap
-
 import numpy as np
 import pandas as pd
 import pytest
@@ -14,6 +12,7 @@ import methods
 from conftest import install_plugin, run_python
 from fitbench.cli.commands import EXIT_METHOD_FAILED, main
 from methods import register
+from study_kinds import circle_study
 
 RAISERS = '''
 from methods import InvalidInputError, register
@@ -158,19 +157,9 @@ def test_a_row_names_the_exception_whose_str_raises(raisers):
 
 @pytest.mark.slow
 def test_a_study_s_rows_name_the_exceptions_the_methods_raised(site, tmp_path):
-    study = tmp_path / "raisers.toml"
     ids = ["circle.kasa", "circle.raise_weird", "circle.raise_bad_str", "circle.raise_weird_bad_str",
            "circle.raise_bad_refusal"]
-    study.write_text(textwrap.dedent('''
-        name = "raisers"
-        title = "Methods raising odd exceptions"
-        kind = "grid"
-        seed = 3
-        repetitions = 1
-        [[datasets]]
-        source = "circle"
-        params = { radius = 5.0, noise = 0.01, n = 30 }
-    ''') + "".join(f'[[methods]]\nid = "{m}"\n' for m in ids))
+    study = circle_study(tmp_path, "raisers", "Methods raising odd exceptions", ids, repetitions=1)
     out = tmp_path / "out"
     proc = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report", path_first=[site])
     assert proc.returncode == 0, proc.stderr

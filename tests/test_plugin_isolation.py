@@ -5,7 +5,6 @@ and gated and measured by the worker's own code; a method writing into its read-
 from __future__ import annotations
 
 import ctypes
-import textwrap
 
 import numpy as np
 import pandas as pd
@@ -16,6 +15,7 @@ from experiments import chunkrows, rows
 from methods import register
 from methods._registry import _REGISTRY
 from methods.results import circle_result
+from study_kinds import circle_study
 
 PATCHER = '''
 """A plugin whose methods patch fitbench in the process they run in."""
@@ -186,20 +186,8 @@ def site(tmp_path_factory):
 
 def _study(folder, name: str, method_ids, repetitions=3, chunk_rows=None):
     folder.mkdir(parents=True, exist_ok=True)
-    study = folder / f"{name}.toml"
-    ids = "\n".join(f'[[methods]]\nid = "{m}"' for m in method_ids)
-    study.write_text(textwrap.dedent(f'''
-        name = "{name}"
-        title = "Isolation"
-        kind = "grid"
-        seed = 3
-        repetitions = {repetitions}
-        {f"chunk_rows = {chunk_rows}" if chunk_rows else ""}
-        [[datasets]]
-        source = "circle"
-        params = {{ radius = 5.0, noise = 0.01, n = 30 }}
-        ''') + ids + "\n")
-    return study
+    return circle_study(folder, name, "Isolation", method_ids, repetitions,
+                        f"chunk_rows = {chunk_rows}\n" if chunk_rows else "")
 
 
 def _rows(out, name):

@@ -5,11 +5,11 @@ started started, were alive with parent 1 after the run had ended.)"""
 import contextlib
 import os
 import signal
-import textwrap
 
 import pytest
 
 from conftest import install_plugin, run_python
+from study_kinds import circle_study
 
 SPAWNER = '''
 import os
@@ -70,21 +70,7 @@ def _alive(pid: int) -> bool:
 
 
 def _run(site, tmp_path, method: str, *options):
-    study = tmp_path / "spawn.toml"
-    study.write_text(textwrap.dedent(f'''
-        name = "spawn"
-        title = "A method that starts processes"
-        kind = "grid"
-        seed = 3
-        repetitions = 1
-        [[datasets]]
-        source = "circle"
-        params = {{ radius = 5.0, noise = 0.01, n = 30 }}
-        [[methods]]
-        id = "circle.kasa"
-        [[methods]]
-        id = "{method}"
-    '''))
+    study = circle_study(tmp_path, "spawn", "A method that starts processes", ["circle.kasa", method], repetitions=1)
     pids_file = tmp_path / "pids"
     proc = run_python("-m", "experiments.run", study, "--out", tmp_path / "out", "--jobs", "1", "--no-report",
                       *options, path_first=[site], FITBENCH_TEST_PIDS=str(pids_file), timeout=120)

@@ -7,12 +7,13 @@ import json
 import pytest
 
 from cli_calls import cli
-from test_positioning_separators import NAMES, iso_a_um, rows, runs, write
+from positioning_tables import iso_a_um, runs
+from test_positioning_separators import NAMES, rows, write
 
 
 @pytest.mark.parametrize("end", ["; ", ";  ", ";\t"])
 def test_a_separator_and_a_space_after_every_line_is_read(tmp_path, end):
-    dev = runs()
+    dev = runs(seed=4)
     path = write(tmp_path / "ws.csv", ";".join(NAMES) + end, rows(dev), end=end)
     out = cli("positioning", path, "--json")
     assert out.returncode == 0 and not out.stderr, out.stderr

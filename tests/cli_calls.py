@@ -1,5 +1,6 @@
-"""The ``fitbench`` command called in the test's process (its console script's entry point, ``fitbench.cli.main``),
-and the check of a refusal: exit 2, one line on stderr, no traceback (the project's rule for bad input)."""
+"""The ``fitbench`` command called in the test's process (its console script's entry point, ``fitbench.cli.main``;
+another command's entry point by :func:`call`), and the check of a refusal: exit 2, one line on stderr, no traceback
+(the project's rule for bad input)."""
 from __future__ import annotations
 
 import contextlib
@@ -17,12 +18,17 @@ class Called(NamedTuple):
     stderr: str
 
 
-def cli(*args) -> Called:
-    """``fitbench ARGS...`` (each argument as ``str``), its stdout and stderr captured."""
+def call(entry, *args) -> Called:
+    """``entry([ARGS...])``, a command's entry point (each argument as ``str``), its stdout and stderr captured."""
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
+        code = entry([str(a) for a in args])
     return Called(code, out.getvalue(), err.getvalue())
+
+
+def cli(*args) -> Called:
+    """``fitbench ARGS...`` (each argument as ``str``), its stdout and stderr captured."""
+    return call(main, *args)
 
 
 def one_error_line(called: Called, *words, absent=()) -> None:

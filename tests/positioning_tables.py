@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from datasets.positioning import axis_test, to_frame
+
 TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7])
 
 
@@ -20,3 +22,12 @@ def iso_a_um(dev, directions="+-") -> float:
     hi = max(float(np.max(dev[d].mean(axis=1) + 2 * dev[d].std(axis=1, ddof=1))) for d in directions)
     lo = min(float(np.min(dev[d].mean(axis=1) - 2 * dev[d].std(axis=1, ddof=1))) for d in directions)
     return hi - lo
+
+
+def axis_csv(folder, seed=7):
+    """``folder/axis.csv``: a simulated axis test (``datasets.positioning.axis_test``, seed ``seed``) as its deviation
+    table (``to_frame(actual=False)``); (its path, the test's data)."""
+    data, _ = axis_test(rng=np.random.default_rng(seed))
+    path = folder / "axis.csv"
+    to_frame(data, actual=False).to_csv(path, index=False)
+    return path, data

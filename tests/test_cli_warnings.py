@@ -11,8 +11,9 @@ import matplotlib
 import numpy as np
 import pytest
 
-from datasets.positioning import axis_test, to_frame
+from cli_calls import cli
 from fitbench.cli import main
+from positioning_tables import axis_csv
 
 
 def terminal(*args):
@@ -25,10 +26,8 @@ def terminal(*args):
 
 def json_of(*args):
     """(exit status, the --json object, stderr)."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args] + ["--json"])
-    return code, json.loads(out.getvalue()), err.getvalue()
+    called = cli(*args, "--json")
+    return called.returncode, json.loads(called.stdout), called.stderr
 
 
 def report_text(tmp_path, *args) -> str:
@@ -42,10 +41,7 @@ def report_text(tmp_path, *args) -> str:
 
 @pytest.fixture(scope="module")
 def axis_file(tmp_path_factory):
-    data, _ = axis_test(rng=np.random.default_rng(7))
-    path = tmp_path_factory.mktemp("pos") / "axis.csv"
-    to_frame(data, actual=False).to_csv(path, index=False)
-    return path
+    return axis_csv(tmp_path_factory.mktemp("pos"))[0]
 
 
 @pytest.fixture(scope="module")

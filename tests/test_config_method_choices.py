@@ -3,12 +3,10 @@ study's config is loaded, by the checks the method's own code makes (``methods._
 one line and exit 2 before any row, never a ``skipped`` row (which is not run again) and exit 0."""
 from __future__ import annotations
 
-import contextlib
-import io
-
 import pytest
 
 import methods
+from cli_calls import call, one_error_line
 from experiments import config as configs
 from experiments import run
 from experiments.study import ConfigError
@@ -59,12 +57,8 @@ def test_a_value_the_method_refuses_is_refused_with_the_config(tmp_path, method,
 
 def test_the_run_refuses_it_in_one_line_before_any_row(tmp_path):
     path = _write(tmp_path, "circle.nelder_mead", 'grid = { backend = ["scipy", "bogus"] }')
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = run.main([str(path), "--out", str(tmp_path / "out"), "--no-report"])
-    assert code == 2, (out.getvalue(), err.getvalue())
-    lines = err.getvalue().strip().splitlines()
-    assert len(lines) == 1 and "backend='bogus' is not one of 'scipy', 'nlopt'" in lines[0], err.getvalue()
+    one_error_line(call(run.main, path, "--out", tmp_path / "out", "--no-report"),
+                   "backend='bogus' is not one of 'scipy', 'nlopt'")
     assert not (tmp_path / "out" / "choices" / "results.csv").exists()
 
 

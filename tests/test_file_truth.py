@@ -9,14 +9,13 @@ crosswise (semi_axis_a_error 10 mm of an exact fit), ``angle = 30.0`` (degrees, 
 gave an angle error of -0.60 rad. Both are one line when the study is loaded."""
 from __future__ import annotations
 
-import contextlib
-import io
 import math
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from cli_calls import call, one_error_line
 from experiments import config as configs
 from experiments import run
 from experiments.schema import FAMILY_TRUTH, TRUTH_KEYS, truth_problem
@@ -73,12 +72,8 @@ def test_a_truth_no_fit_can_be_compared_with_is_refused_in_one_line(tmp_path, tr
 
 def test_the_run_refuses_it_before_any_row(tmp_path):
     path = _write(tmp_path, '{ center = [120.0], radius = "50" }')
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = run.main([str(path), "--out", str(tmp_path / "out"), "--no-report"])
-    assert code == 2, (out.getvalue(), err.getvalue())
-    lines = err.getvalue().strip().splitlines()
-    assert len(lines) == 1 and "truthy.toml: datasets[0].truth.center: must be" in lines[0], err.getvalue()
+    one_error_line(call(run.main, path, "--out", tmp_path / "out", "--no-report"),
+                   "truthy.toml: datasets[0].truth.center: must be")
     assert not (tmp_path / "out" / "truthy" / "results.csv").exists()
 
 

@@ -1,21 +1,17 @@
 """``fitbench list`` shows what each method computes (its registered one-line summary: kasa/pratt/taubin/hyper
 algebraic, powell_hybrid Kåsa's objective, chebyshev_lp an algebraic Chebyshev fit), not only a citation; ``--long``
 adds the reference under each line."""
-import contextlib
-import io
-
 import pytest
 
+from cli_calls import cli
 from fitbench.cli import main
 from methods import describe_methods
 
 
 def listing(*args) -> list[str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        assert main(["list", *args]) == 0
-    assert err.getvalue() == ""
-    return out.getvalue().splitlines()
+    called = cli("list", *args)
+    assert called.returncode == 0 and called.stderr == "", called.stderr
+    return called.stdout.splitlines()
 
 
 def test_each_line_gives_the_id_kind_and_summary():

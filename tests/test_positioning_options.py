@@ -6,15 +6,13 @@ import json
 import numpy as np
 import pytest
 
-from datasets.positioning import axis_test, to_frame
 from fitbench.cli import main
+from positioning_tables import axis_csv
 
 
 @pytest.fixture(scope="module")
 def axis_file(tmp_path_factory):
-    data, _ = axis_test(rng=np.random.default_rng(7))
-    path = tmp_path_factory.mktemp("pos") / "axis.csv"
-    to_frame(data, actual=False).to_csv(path, index=False)
+    path, data = axis_csv(tmp_path_factory.mktemp("pos"))
     largest = max(np.abs(data.up).max(), np.abs(data.down).max())
     return str(path), largest
 

@@ -3,19 +3,15 @@ bare number far below the figure it judges is warned about, naming mm: a drawing
 0.01 µm gave "A 8.498 µm tolerance 0.01 µm FAIL" with no word, while ``A=10um`` was refused as "must be a number"."""
 import json
 
-import numpy as np
 import pytest
 
-from datasets.positioning import axis_test, to_frame
+from positioning_tables import axis_csv
 from test_cli_inputs import circular_runs_file, cli, one_error_line, profile_file
 
 
 @pytest.fixture(scope="module")
 def axis_file(tmp_path_factory):
-    data, _ = axis_test(rng=np.random.default_rng(7))
-    path = tmp_path_factory.mktemp("pos") / "axis.csv"
-    to_frame(data, actual=False).to_csv(path, index=False)
-    return path
+    return axis_csv(tmp_path_factory.mktemp("pos"))[0]
 
 
 def verdict_of(*args):

@@ -4,11 +4,9 @@ the close match: it gave an empty table and an empty figure, exit 0, without a w
 grid's identity columns are known from its config (``experiments.declarations.known_values``)."""
 from __future__ import annotations
 
-import contextlib
-import io
-
 import pytest
 
+from cli_calls import call, one_error_line
 from experiments import config as configs
 from experiments import run
 from experiments.declarations import known_values
@@ -76,12 +74,8 @@ def test_a_where_value_no_row_will_hold_is_refused(tmp_path, extra, said):
 
 def test_the_run_refuses_it_in_one_line(tmp_path):
     path = _write(tmp_path, TABLE.format(where='{ method = "circle.kasaa" }'))
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = run.main([str(path), "--out", str(tmp_path / "out"), "--no-report"])
-    assert code == 2, (out.getvalue(), err.getvalue())
-    lines = err.getvalue().strip().splitlines()
-    assert len(lines) == 1 and "wh.toml: tables[0].where.method: 'circle.kasaa' matches no row" in lines[0], lines
+    one_error_line(call(run.main, path, "--out", tmp_path / "out", "--no-report"),
+                   "wh.toml: tables[0].where.method: 'circle.kasaa' matches no row")
 
 
 def test_values_rows_will_hold_load_also_those_of_the_full_grid_in_a_quick_run(tmp_path):

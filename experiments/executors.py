@@ -302,7 +302,7 @@ def _lost_chunk(chunks: Chunks, store: RowStore, bar, chunk: list, pos: int, sta
 
 
 def _run_processes(work, chunks: Chunks, store: RowStore, jobs: int, bar, row_timeout) -> None:
-    """Chunks on ``jobs`` worker processes (spawned; one BLAS thread each). A worker that dies labels the
+    """Chunks on ``jobs`` worker processes (the run's early ones, else spawned; one BLAS thread each). A worker that dies labels the
     row it was running ``crashed``; a row past its limit by :data:`KILL_GRACE_S` gets its worker killed
     and is labelled ``timeout``; a new worker takes over and the study goes on."""
     import multiprocessing as mp

@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import fcntl
 import json
+import os
 import sqlite3
 import subprocess
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -670,14 +672,15 @@ def test_an_exceeded_file_size_limit_keeps_the_store(tmp_path):
 
 @pytest.mark.slow
 def test_workers_that_cannot_start_stop_the_run_in_one_line(tmp_path):
-    """Every spawned worker dies before its first row (here a sitecustomize ends each worker process as it starts):
-    the run stops after three such deaths with one line (it used to label every row crashed, starting a worker per
-    row)."""
+    """Every worker dies before its first row (here a sitecustomize ends each worker process as it starts: a copy
+    forked from the run, or a process spawned later): the run stops after three such deaths with one line (it used to
+    label every row crashed, starting a worker per row)."""
     study = write_study(tmp_path, reps=2)
     site = tmp_path / "site"
     site.mkdir()
     (site / "sitecustomize.py").write_text("import os, sys\n"
-                                           "if '--multiprocessing-fork' in sys.argv:\n    os._exit(7)\n")
+                                           "if '--multiprocessing-fork' in sys.argv:\n    os._exit(7)\n"
+                                           "os.register_at_fork(after_in_child=lambda: os._exit(7))\n")
     res = subprocess.run([sys.executable, "-m", "experiments.run", str(study), "--jobs", "2", "--no-report",
                           "--out", str(tmp_path / "o")], cwd=tmp_path, capture_output=True, text=True, timeout=300,
                          env=subprocess_env(site, OPENBLAS_NUM_THREADS="1"))
@@ -1014,6 +1017,37 @@ def test_the_command_starts_its_workers_before_its_own_imports_only_when_rows_wi
         assert not started[1].proc.is_alive()
     started[0].proc.join(5)
     assert not started[0].proc.is_alive()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked early on Linux only")
+def test_early_workers_are_forked_copies_of_a_run_without_threads_and_spawned_with_one(tmp_path):
+    """On Linux the command's early workers are copies of the run (fork, after it imported the rows' code: no worker
+    imports it again), made while the run has no other thread; with a thread running they are spawned. Either way they
+    make the rows a run makes in its own process."""
+    code = textwrap.dedent(f"""
+        import sys, threading
+        from experiments import localworkers
+        if sys.argv[1] == "thread":
+            threading.Thread(target=threading.Event().wait, daemon=True).start()
+        localworkers.start_early(["s.toml", "--jobs", "2", "--out", {str(tmp_path / "o")!r}, "--force"])
+        workers = localworkers.take_early(2)
+        from experiments.chunkrows import run_chunk
+        from experiments.engine import grid_tasks, prepare
+        cfg = {{"name": "w", "kind": "grid", "seed": 3, "repetitions": 2,
+               "datasets": [{{"source": "circle", "params": {{"n": 20}}}}], "methods": [{{"id": "circle.kasa"}}]}}
+        tasks = prepare(grid_tasks(cfg, "w"))
+        workers[0].send(0, tasks, None)
+        _, out = workers[0].conn.recv()
+        here = run_chunk(tasks)
+        print(sorted({{type(w.proc).__name__ for w in workers}}), out["columns"]["row"] == here["columns"]["row"])
+        for w in workers:
+            w.stop(now=True)
+        """)
+    for mode, kind in (("plain", "ForkProcess"), ("thread", "SpawnProcess")):
+        res = subprocess.run([sys.executable, "-c", code, mode], capture_output=True, text=True, timeout=120,
+                             env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
+        assert res.returncode == 0, res.stderr
+        assert res.stdout.split() == [f"['{kind}']", "True"], (mode, res.stdout, res.stderr)
 
 
 def test_the_run_collects_garbage_less_often_and_gives_the_caller_its_thresholds_back(tmp_path, monkeypatch):

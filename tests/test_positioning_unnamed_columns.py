@@ -68,3 +68,13 @@ def test_an_empty_cell_of_an_unnamed_column_is_named_by_its_place(tmp_path):
 def test_spreadsheet_letters(k, letters):
     from datasets.io.positioning import _spreadsheet_letters
     assert _spreadsheet_letters(k) == letters
+
+
+def test_the_place_is_the_file_s_when_a_column_before_it_is_not_read(tmp_path):
+    """Two target columns, --column choosing the second: the first is not read, and the unnamed run column is still
+    named by its place in the file (column 7, H), not in what is left of the table."""
+    cells = [[c[0]] + c for c in rows()]
+    header = "Nominal (mm);" + ";".join(NAMES[:-1]) + ";"
+    out = cli("positioning", write(tmp_path / "n.csv", header, cells), "--column", "target=1")
+    one_error_line(out, "column 7 (H in a spreadsheet; no name in the header) holds values")
+    assert "Unnamed" not in out.stderr

@@ -61,7 +61,7 @@ def _header_names(columns) -> list[str]:
     out = []
     for k, c in enumerate(names):
         m = re.fullmatch(r"(.*)\.(\d+)", c)
-        out.append("" if c == f"Unnamed: {k}" else m.group(1) if m and m.group(1) in names else c)
+        out.append("" if re.fullmatch(r"Unnamed: \d+", c) else m.group(1) if m and m.group(1) in names else c)
     return out
 
 
@@ -75,11 +75,14 @@ def _spreadsheet_letters(k: int) -> str:
     return out
 
 
-def _column_words(names: list[str], k: int) -> str:
+def _column_words(names: list[str], k: int, columns=None) -> str:
     """A column of the user's file for a message: ``column 3 'Run 1 - (µm)'`` or, for a header cell left empty,
-    ``column 10 (K in a spreadsheet; no name in the header)``, never pandas' ``Unnamed: 10``."""
+    ``column 10 (K in a spreadsheet; no name in the header)``, never pandas' ``Unnamed: 10``. ``columns``: the
+    frame's columns when some of the file's were dropped (pandas' name holds the file's position)."""
     if names[k].strip():
         return f"column {k} {names[k]!r}"
+    m = re.fullmatch(r"Unnamed: (\d+)", str(columns[k])) if columns is not None else None
+    k = int(m.group(1)) if m else k
     return f"column {k} ({_spreadsheet_letters(k)} in a spreadsheet; no name in the header)"
 
 
@@ -202,7 +205,7 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
         if k in (t, d_col):
             continue
         if not c:
-            raise DataFileError(f"{name}: {_column_words(cols, k)} holds values: name it in the header as the other run "
+            raise DataFileError(f"{name}: {_column_words(cols, k, df.columns)} holds values: name it in the header as the other run "
                                 "columns are named ('Run N +' or 'Run N -' and the unit, e.g. 'Run 5 - (µm)'), or "
                                 "delete the column")
         if c in seen:

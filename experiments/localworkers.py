@@ -391,7 +391,6 @@ def start_early(argv: list[str]) -> None:
             return
     except (SystemExit, Exception):  # an argument this cannot read: the run's own parser says what is wrong
         return
-    import multiprocessing as mp
     with _one_blas_thread_per_worker():
         ctx = _forking_context()
         with _workers_ignore_ctrl_c():

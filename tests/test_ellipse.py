@@ -1,7 +1,5 @@
 """Ellipse family: exact recovery, closest points, conversions, direct fits, objectives, invariance."""
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -10,7 +8,7 @@ from hypothesis import strategies as st
 from scipy.optimize import minimize_scalar
 
 import methods
-from conftest import REPO
+from cli_calls import cli
 from datasets.synthetic import ellipse_points
 from methods.ellipse._geometry import (canonical, closest_points, conic_to_params, orthogonal_residuals,
                                        paper_gamma_solutions, params_to_conic)
@@ -150,16 +148,14 @@ def test_bad_input(method_id, points, match):
 
 
 def test_cli_json_keys():
-    out = subprocess.run([sys.executable, "-m", "methods", "fit", "ellipse.orthogonal", "roundness_set2", "--json"],
-                         capture_output=True, text=True, cwd=REPO)
+    out = cli("fit", "ellipse.orthogonal", "roundness_set2", "--json")
     assert out.returncode == 0, out.stderr
     d = json.loads(out.stdout)
     for key in ("method", "center", "semi_axes", "angle", "conic", "form_error", "converged", "iterations", "nfev",
                 "runtime_s", "residuals"):
         assert key in d
     assert d["semi_axes"][0] >= d["semi_axes"][1] and 0 <= d["angle"] < np.pi
-    out = subprocess.run([sys.executable, "-m", "methods", "fit", "ellipse.halir_flusser", "roundness_set2"],
-                         capture_output=True, text=True, cwd=REPO)
+    out = cli("fit", "ellipse.halir_flusser", "roundness_set2")
     assert out.returncode == 0 and "semi-axes" in out.stdout
 
 

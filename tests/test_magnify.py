@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import methods
-from conftest import run_python
+from cli_calls import cli
 from datasets.contouring import EXAMPLES, circle_glitches, corner_path, free_form
 from methods import InvalidInputError
 from methods.magnify import MagnifyInput
@@ -95,16 +95,15 @@ def test_cli(tmp_path):
     ref, meas = corner_path("inside", "left", n=301)
     np.savetxt(tmp_path / "ref.csv", ref, delimiter=",", header="x,y", comments="")
     np.savetxt(tmp_path / "meas.csv", meas, delimiter=",", header="x,y", comments="")
-    out = run_python("-m", "methods", "magnify", tmp_path / "ref.csv", tmp_path / "meas.csv", "--eta", "200", "--json",
-                     "--plot", tmp_path / "m.png")
+    out = cli("magnify", tmp_path / "ref.csv", tmp_path / "meas.csv", "--eta", "200", "--json",
+              "--plot", tmp_path / "m.png")
     assert out.returncode == 0, out.stderr
     d = json.loads(out.stdout)
     assert len(d["points"]) == 301 and d["method"] == "magnify.offset"
     direct = methods.fit("magnify.offset", MagnifyInput(ref, meas), eta=200)
     np.testing.assert_allclose(d["points"], direct.points, atol=1e-12)
     assert (tmp_path / "m.png").stat().st_size > 5000
-    bad = run_python("-m", "methods", "magnify", tmp_path / "ref.csv", tmp_path / "meas.csv", "--eta", "200",
-                     "--delta", "0.001")
+    bad = cli("magnify", tmp_path / "ref.csv", tmp_path / "meas.csv", "--eta", "200", "--delta", "0.001")
     assert bad.returncode == 2 and "larger than the largest contouring error" in bad.stderr and "Traceback" not in bad.stderr
 
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import methods
-from conftest import run_python
+from cli_calls import cli, one_error_line
 from datasets.multilateration import simulate
 
 ALL = ["case_a_distance", "case_a_squared", "joint", "case_b_linear", "case_b_taylor", "case_b_centred"]
@@ -75,9 +75,7 @@ def test_cli_exit_2_for_collinear_stations(tmp_path):
     meas, st = tmp_path / "m.csv", tmp_path / "s.csv"
     data.to_frame().to_csv(meas, index=False, float_format="%.9f")
     data.with_stations(S).stations_frame().to_csv(st, index=False, float_format="%.9f")
-    out = run_python("-m", "methods", "multilaterate", meas, "--stations", st)
-    assert out.returncode == 2, (out.stdout, out.stderr)
-    assert "straight line" in out.stderr and "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1
+    one_error_line(cli("multilaterate", meas, "--stations", st), "straight line")
 
 
 @pytest.mark.parametrize("max_iter", [100, 1])

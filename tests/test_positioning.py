@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import methods
-from conftest import run_python
+from cli_calls import cli
 from datasets.positioning import axis_test, to_frame
 from methods import InvalidInputError
 from datasets.io import read_positioning as read_csv
@@ -163,7 +163,7 @@ def test_cli_json_keys_and_plot(tmp_path):
     data, _ = axis_test(rng=np.random.default_rng(2), mpe=0.002)
     p = tmp_path / "axis.csv"
     to_frame(data).to_csv(p, index=False)
-    out = run_python("-m", "methods", "positioning", p, "--mpe", "0.002", "--json", "--plot", tmp_path / "axis.png")
+    out = cli("positioning", p, "--mpe", "0.002", "--json", "--plot", tmp_path / "axis.png")
     assert out.returncode == 0, out.stderr
     d = json.loads(out.stdout)
     for key in ("A", "A_up", "A_down", "E", "E_up", "E_down", "M", "R", "R_up", "R_down", "B", "B_mean", "per_target",
@@ -173,5 +173,5 @@ def test_cli_json_keys_and_plot(tmp_path):
         assert len(d["polynomial"][direction]["coefficients"]) == 4
         assert np.array(d["polynomial"][direction]["covariance"]).shape == (4, 4)
     assert (tmp_path / "axis.png").stat().st_size > 10_000
-    bad = run_python("-m", "methods", "positioning", p, "--mpe", "1", "--instrument-u", "1")
+    bad = cli("positioning", p, "--mpe", "1", "--instrument-u", "1")
     assert bad.returncode == 2 and "Traceback" not in bad.stderr

@@ -163,11 +163,9 @@ def test_partial_arcs_mcc_and_mic(span_deg, rng):
 
 def test_contacts_and_json(tmp_path):
     import json
-    import subprocess
-    import sys
-    from conftest import REPO
-    out = subprocess.run([sys.executable, "-m", "methods", "fit", "circle.minimum_zone", "roundness_set2", "--json"],
-                         capture_output=True, text=True, cwd=REPO)
+
+    from cli_calls import cli
+    out = cli("fit", "circle.minimum_zone", "roundness_set2", "--json")
     assert out.returncode == 0, out.stderr
     d = json.loads(out.stdout)
     assert d["outer_radius"] - d["inner_radius"] == pytest.approx(d["form_error"], abs=1e-12)

@@ -1,7 +1,8 @@
 """The engine at scale: wall time and peak memory of ``experiments.run`` on the 40,000-row benchmark study
 (``engine_40k.toml``: 2 generated circles x circle.kasa, circle.gauss_newton x 10,000 repetitions) against
 the same fits in one Python loop, ``--jobs 1`` against ``--jobs 2``, a re-run with every row cached, and the
-peak memory at 40,000 and 160,000 rows (``engine_160k.toml``). Measured, printed, not asserted (speed targets
+peak memory at 40,000 and 160,000 rows (``engine_160k.toml``), and the same study with 400 rows (what a run costs
+besides its rows: the other 39,600 rows cost the difference, against their fits alone). Measured, printed, not asserted (speed targets
 live here, not in the tests; docs/engine.md lists the figures).
 
 Run from the repository root (about 2 minutes on 2 cores):
@@ -91,11 +92,16 @@ def main(argv=None) -> int:
     study = HERE / "engine_40k.toml"
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the start; "
           f"{args.repeat} interleaved rounds, medians quoted (each round's value in brackets)")
-    m = {k: [] for k in ("fits", "fits_cpu", "gen", "start", "j1", "j2", "again")}
+    m = {k: [] for k in ("fits", "fits_cpu", "gen", "start", "j1", "j2", "again", "small")}
     peaks = {1: [], 2: []}
     cpus = {1: [], 2: [], "again": []}
     run = [sys.executable, "-m", "experiments.run", study] + NO_REPORT
     with tempfile.TemporaryDirectory() as tmp:
+        # the same study with 100 repetitions (400 rows): what a run costs besides its rows (imports, tasks, the
+        # figure, the outputs), so that the cost of the other 39,600 rows is the difference of the two runs
+        small = Path(tmp) / "engine_400.toml"
+        small.write_text(study.read_text(encoding="utf-8").replace("repetitions = 10000", "repetitions = 100")
+                         .replace('name = "engine_40k"', 'name = "engine_400"'), encoding="utf-8")
         for r in range(args.repeat):
             out = subprocess.run([sys.executable, "-c", FITS_ALONE, str(study)], cwd=ROOT, env=env,
                                  capture_output=True, text=True, check=True).stdout.split()
@@ -103,6 +109,8 @@ def main(argv=None) -> int:
             m["gen"].append(float(out[1]))
             m["fits_cpu"].append(float(out[2]))
             m["start"].append(run_peak([sys.executable, "-c", "import experiments.run, methods.circle"], env)[0])
+            m["small"].append(run_peak([sys.executable, "-m", "experiments.run", small, *NO_REPORT, "--jobs", 1,
+                                        "--out", Path(tmp) / f"small-{r}"], env)[0])
             for jobs in (1, 2):
                 wall, peak, cpu = run_peak(run + ["--jobs", jobs, "--out", Path(tmp) / f"j{jobs}-{r}"], env)
                 m[f"j{jobs}"].append(wall)
@@ -130,6 +138,10 @@ def main(argv=None) -> int:
         print(f"ratios (medians; each round's in brackets): --jobs 1 / (fits + start-up) = {_median(r1):.2f} "
               f"[{' '.join(f'{x:.2f}' for x in r1)}]; --jobs 2 / --jobs 1 = {_median(r2):.2f} "
               f"[{' '.join(f'{x:.2f}' for x in r2)}]")
+        per_row = [(j - w) / (f * 0.99) for j, w, f in zip(m["j1"], m["small"], m["fits"])]
+        print(f"the same study with 400 rows, --jobs 1: {med['small']:.2f} s [{each['small']}]; the other 39,600 rows "
+              f"cost --jobs 1 (40,000 - 400 rows) / their fits alone = {_median(per_row):.2f} "
+              f"[{' '.join(f'{x:.2f}' for x in per_row)}] (the engine's cost a row against the fit's)")
         if not args.skip_160k:
             big = run_peak([sys.executable, "-m", "experiments.run", HERE / "engine_160k.toml", *NO_REPORT,
                             "--jobs", 2, "--out", Path(tmp) / "big"], env)

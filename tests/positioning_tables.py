@@ -7,6 +7,8 @@ import numpy as np
 from datasets.positioning import axis_test, to_frame
 
 TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7])
+#: the six targets of the long tables of 5 runs (mm)
+LONG_TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7, 499.2])
 
 
 def runs(seed):
@@ -31,3 +33,14 @@ def axis_csv(folder, seed=7):
     path = folder / "axis.csv"
     to_frame(data, actual=False).to_csv(path, index=False)
     return path, data
+
+
+def capture_order(path, dev, header, cells):
+    """A long table of 5 runs at :data:`LONG_TARGETS`, each run up then down, as laser software records it
+    (``dev``: {direction: (targets, runs)}; ``cells(target, direction, run, deviation)``: a line's text)."""
+    lines = [header]
+    for r in range(5):
+        lines += [cells(LONG_TARGETS[i], "+", r + 1, dev["+"][i, r]) for i in range(len(LONG_TARGETS))]
+        lines += [cells(LONG_TARGETS[i], "-", r + 1, dev["-"][i, r]) for i in reversed(range(len(LONG_TARGETS)))]
+    path.write_text("\n".join(lines) + "\n")
+    return path

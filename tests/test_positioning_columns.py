@@ -11,9 +11,7 @@ import numpy as np
 import pytest
 
 from cli_calls import cli, one_error_line
-from positioning_tables import iso_a_um
-
-TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7, 499.2])
+from positioning_tables import LONG_TARGETS as TARGETS, iso_a_um
 
 
 def channels(seed=8, runs=5):

@@ -13,9 +13,7 @@ import numpy as np
 import pytest
 
 from cli_calls import cli, one_error_line
-from positioning_tables import iso_a_um
-
-TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7, 499.2])
+from positioning_tables import LONG_TARGETS as TARGETS, capture_order, iso_a_um
 
 
 @pytest.fixture(scope="module")
@@ -23,16 +21,6 @@ def dev():
     rng = np.random.default_rng(11)
     return {d: np.round((6 * TARGETS / 500 + b)[:, None] + rng.normal(0, 0.6, (len(TARGETS), 5)), 3)
             for d, b in (("+", -1.8), ("-", 1.8))}
-
-
-def capture_order(path, dev, header, cells):
-    """Each run up then down, as laser software records it; ``cells(target, direction, run, deviation)``."""
-    lines = [header]
-    for r in range(5):
-        lines += [cells(TARGETS[i], "+", r + 1, dev["+"][i, r]) for i in range(len(TARGETS))]
-        lines += [cells(TARGETS[i], "-", r + 1, dev["-"][i, r]) for i in reversed(range(len(TARGETS)))]
-    path.write_text("\n".join(lines) + "\n")
-    return path
 
 
 def test_a_table_without_a_run_column_numbers_the_runs_in_file_order(tmp_path, dev):

@@ -6,18 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from cli_calls import cli, one_error_line
-
-TARGETS = np.array([0.0, 97.3, 201.6, 298.1, 402.7, 499.2])
-
-
-def capture_order(path, dev, header, cells):
-    """Each run up then down, as laser software records it; ``cells(target, direction, run, deviation)``."""
-    lines = [header]
-    for r in range(5):
-        lines += [cells(TARGETS[i], "+", r + 1, dev["+"][i, r]) for i in range(len(TARGETS))]
-        lines += [cells(TARGETS[i], "-", r + 1, dev["-"][i, r]) for i in reversed(range(len(TARGETS)))]
-    path.write_text("\n".join(lines) + "\n")
-    return path
+from positioning_tables import LONG_TARGETS as TARGETS, capture_order
 
 DEV = {d: np.round((6 * TARGETS / 500 + b)[:, None] + np.random.default_rng(3).normal(0, 0.6, (len(TARGETS), 5)), 3)
        for d, b in (("+", -1.8), ("-", 1.8))}

@@ -46,3 +46,23 @@ def test_a_declared_floor_is_in_the_ranking_s_unit(tmp_path):
     assert r.table.attrs["floor"] == 0.001
     floored = r.table.clip(lower=0.001)
     assert floored.div(floored.min(axis=1), axis=0)["circle.taubin"].tolist() == pytest.approx([1.0, 2.0])
+
+
+def test_pooled_studies_keep_each_its_own_floor(tmp_path):
+    """One study ranks form errors in mm (default floor 1e-12 mm), another in µm with floor = 0.001 µm: the µm
+    floor is not applied to the mm study's costs (1e-4 and 2e-4 mm stay a ratio of 2; the largest floor of the
+    pool, 0.001, made them a tie)."""
+    def study(name, costs, unit, floor=None):
+        decl = {"profile": "p", "metric": "form_error", "unit": unit, **({"floor": floor} if floor else {})}
+        folder = tmp_path / name
+        folder.mkdir()
+        pd.DataFrame([{"dataset": "trace", "data_stream": f"0.0.{i}", "repetition": 0, "method": m, "params": "{}",
+                       "status": "ok", "form_error": v} for m, values in costs.items() for i, v in enumerate(values)]
+                     ).to_csv(folder / "results.csv", index=False)
+        return name, folder, {"config": {"name": name, "datasets": [{"file": "trace.csv"}], "rankings": [decl]}}
+
+    r = collect([study("a", {"circle.kasa": [1e-4], "circle.taubin": [2e-4]}, "mm"),
+                 study("b", {"circle.kasa": [3e-7], "circle.taubin": [8e-7]}, "um", 0.001)])["p"]
+    costs = r.table.loc[["a | trace | 0.0.0 | 0", "b | trace | 0.0.0 | 0"]]
+    ratios = costs.div(costs.min(axis=1), axis=0)["circle.taubin"].tolist()
+    assert ratios == pytest.approx([2.0, 1.0])

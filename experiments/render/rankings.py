@@ -147,7 +147,10 @@ def _tabulate(r: Ranking) -> None:
         labelled.append(part)
     r.left_out = []
     rows = pd.concat(labelled, ignore_index=True)
-    floor = float(rows["floor"].max()) if len(rows) else 0.0
+    # each study's costs are floored in its own unit (pooled rankings may mix mm and µm rows): the largest floor
+    # of them all applied to every row would tie costs of another unit far above their own floor
+    rows = rows.assign(cost=np.maximum(rows["cost"].abs(), rows["floor"]))
+    floor = float(rows["floor"].min()) if len(rows) else 0.0
     rows = rows.assign(problem=rows["study"] + " | " + rows["problem"])
     table = problem_table(rows.assign(**{r.metric: rows["cost"]}).drop(columns=["method", "params"])
                           .rename(columns={"label": "method"}),

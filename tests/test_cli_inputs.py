@@ -146,14 +146,10 @@ def _chatty(points):
 @pytest.fixture
 def plugin_methods():
     """Methods of a plugin (registered from this module, not methods.*) for one test only."""
-    import methods
-    from methods import _registry
-    ids = {"circle.cli_raises": _raises, "circle.cli_writes": _writes, "circle.cli_chatty": _chatty}
-    for mid, func in ids.items():
-        methods.register(mid, kind="closed form", summary="CLI test plugin", reference="fitbench test")(func)
-    yield
-    for mid in ids:
-        _registry._REGISTRY.pop(mid, None)
+    from plugin_methods import registered
+    with registered({"circle.cli_raises": _raises, "circle.cli_writes": _writes, "circle.cli_chatty": _chatty},
+                    kind="closed form", summary="CLI test plugin", reference="fitbench test"):
+        yield
 
 
 def test_a_plugin_method_that_raises_is_one_line_naming_it(tmp_path, plugin_methods):

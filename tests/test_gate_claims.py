@@ -8,9 +8,9 @@ import pytest
 
 import methods
 from experiments.metrics import residual_rms
-from methods import register
 from methods import ResultContractError
 from methods.results import check_result, circle_result, zone_result
+from plugin_methods import registered
 
 
 def circle(n=40, radius=5.0, noise=0.001, seed=0):
@@ -39,13 +39,9 @@ def _fake_mz(points):
 @pytest.fixture
 def plugin_methods():
     """The methods of a plugin, registered from this module (not methods.*) for one test only."""
-    from methods import _registry
-    ids = {"torus.test_gate_fit": _torus, "circle.test_gate_fake_mz": _fake_mz}
-    for mid, func in ids.items():
-        register(mid, kind="closed form", summary="gate test", reference="a test")(func)
-    yield
-    for mid in ids:
-        _registry._REGISTRY.pop(mid, None)
+    with registered({"torus.test_gate_fit": _torus, "circle.test_gate_fake_mz": _fake_mz},
+                    kind="closed form", summary="gate test", reference="a test"):
+        yield
 
 
 def refused(method_id, words):

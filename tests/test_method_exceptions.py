@@ -11,7 +11,7 @@ import pytest
 import methods
 from conftest import install_plugin, run_python
 from fitbench.cli.commands import EXIT_METHOD_FAILED, main
-from methods import register
+from plugin_methods import plugin_here, registered
 from study_kinds import circle_study
 
 RAISERS = '''
@@ -75,13 +75,8 @@ def site(tmp_path_factory):
 @pytest.fixture
 def raisers():
     """The plugin's methods registered in this process for one test."""
-    from methods import _registry
-    namespace = {"__name__": "fitbench_raisers_test"}
-    exec(compile(RAISERS, "fitbench_raisers_test", "exec"), namespace)
-    ids = [k for k, v in _registry._REGISTRY.items() if v.func.__globals__ is namespace]
-    yield namespace
-    for mid in ids:
-        _registry._REGISTRY.pop(mid, None)
+    with plugin_here(RAISERS, "fitbench_raisers_test") as namespace:
+        yield namespace
 
 
 def _exit_zero(points):
@@ -96,13 +91,9 @@ def _exit_none(points):
 @pytest.fixture
 def exiting_methods():
     """Methods that exit, registered from this module (not methods.*) for one test only."""
-    from methods import _registry
-    ids = {"circle.test_exit_zero": _exit_zero, "circle.test_exit_none": _exit_none}
-    for mid, func in ids.items():
-        register(mid, kind="closed form", summary="exits (test)", reference="a test")(func)
-    yield
-    for mid in ids:
-        _registry._REGISTRY.pop(mid, None)
+    with registered({"circle.test_exit_zero": _exit_zero, "circle.test_exit_none": _exit_none},
+                    kind="closed form", summary="exits (test)", reference="a test"):
+        yield
 
 
 @pytest.fixture

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from experiments.rows import fit_row
-from methods import check_result, register, results
-from methods._registry import _REGISTRY
+from methods import check_result, results
+from plugin_methods import registered
 
 T = np.linspace(0.0, np.pi / 2, 30)
 ARC = np.c_[1.0 + 5.0 * np.cos(T), 2.0 + 5.0 * np.sin(T)]  # a 90-degree arc of a circle of radius 5 about (1, 2)
@@ -77,13 +77,8 @@ def methods_of_a_plugin():
         res.radius = LyingFloat(res.radius)
         return res
     ids["circle.pr_lying_float"] = lying
-    for mid, func in ids.items():
-        register(mid, kind="closed form", summary="a test plugin's centroid fit", reference="fitbench tests")(func)
-    try:
+    with registered(ids, kind="closed form", summary="a test plugin's centroid fit", reference="fitbench tests"):
         yield
-    finally:
-        for mid in ids:
-            _REGISTRY.pop(mid, None)
 
 
 def test_a_subclass_cannot_compute_its_own_errors_against_the_truth(methods_of_a_plugin):

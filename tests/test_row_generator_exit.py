@@ -4,6 +4,7 @@ whether the row runs alone (run_task) or in a batch (the generic rows of a chunk
 import pytest
 
 from experiments import rows
+from plugin_methods import plugin_here
 
 CODE = '''
 from methods import register
@@ -22,13 +23,8 @@ def raise_system_exit(points):
 
 @pytest.fixture
 def raisers():
-    from methods import _registry
-    namespace = {"__name__": "fitbench_generator_exit_test"}
-    exec(compile(CODE, "fitbench_generator_exit_test", "exec"), namespace)
-    ids = [k for k, v in _registry._REGISTRY.items() if v.func.__globals__ is namespace]
-    yield ids
-    for mid in ids:
-        _registry._REGISTRY.pop(mid, None)
+    with plugin_here(CODE, "fitbench_generator_exit_test") as namespace:
+        yield namespace
 
 
 def _task(method, index=0):

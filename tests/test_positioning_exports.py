@@ -104,14 +104,20 @@ def test_fanuc_is_c_from_the_command_line(tmp_path):
     assert after["M"] <= 0.5 * before["M"], (before["M"], after["M"])
 
 
-def test_a_space_aligned_table_whose_names_contain_spaces(tmp_path):
-    """A wide export aligned with spaces, header 'Target (mm)    Run 1 + (µm) ...': read by splitting the header at
-    runs of spaces (before: 'line 2: missing field(s); if line 1 is an instrument's preamble, give --skip-rows 1');
-    when that does not give the rows' field count either, one line says why."""
+def space_aligned(tmp_path):
+    """(the ';' export's lines, its lines aligned with spaces, as written to ``tmp_path/ws.txt``) of :func:`axis`."""
     data, _ = axis()
     semi = wide(data, decimal_comma=False).splitlines()
     aligned = ["    ".join(f"{c:>14}" for c in ln.split(";")) for ln in semi]
     (tmp_path / "ws.txt").write_text("\n".join(aligned) + "\n")
+    return semi, aligned
+
+
+def test_a_space_aligned_table_whose_names_contain_spaces(tmp_path):
+    """A wide export aligned with spaces, header 'Target (mm)    Run 1 + (µm) ...': read by splitting the header at
+    runs of spaces (before: 'line 2: missing field(s); if line 1 is an instrument's preamble, give --skip-rows 1');
+    when that does not give the rows' field count either, one line says why."""
+    semi, aligned = space_aligned(tmp_path)
     (tmp_path / "semi.csv").write_text("\n".join(semi) + "\n")
     got = json.loads(cli("positioning", tmp_path / "ws.txt", "--json").stdout)
     ref = json.loads(cli("positioning", tmp_path / "semi.csv", "--json").stdout)
@@ -130,10 +136,7 @@ def test_a_space_aligned_table_whose_names_contain_spaces(tmp_path):
 def test_a_space_aligned_table_with_spaces_in_its_names_and_a_trailer(tmp_path):
     """Both at once: the header split at runs of spaces is decided on the table's rows, not on the trailer after the
     blank line below it (it was refused: 'line 2: missing field(s); if line 1 is an instrument's preamble, ...')."""
-    data, _ = axis()
-    semi = wide(data, decimal_comma=False).splitlines()
-    aligned = ["    ".join(f"{c:>14}" for c in ln.split(";")) for ln in semi]
-    (tmp_path / "ws.txt").write_text("\n".join(aligned) + "\n")
+    _, aligned = space_aligned(tmp_path)
     (tmp_path / "trail.txt").write_text("\n".join(aligned) + "\n\nOperator: X\n")
     ref = json.loads(cli("positioning", tmp_path / "ws.txt", "--json").stdout)
     out = cli("positioning", tmp_path / "trail.txt", "--json")

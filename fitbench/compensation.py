@@ -347,6 +347,37 @@ FANUC_MAGNIFICATION = (1, 100)  # parameter 3623 (0 means 1)
 FANUC_INTERVAL_MAX = 99_999_999  # parameter 3624 (two-word, in the least input increment)
 
 
+def fanuc_point_numbers(table, first_number: int = 0) -> tuple[int, int, int]:
+    """(3621, 3620, 3622): the first, the reference position's and the last pitch-error point number a FANUC tape
+    of ``table`` fills when its points start at ``first_number``. The point numbers are one block shared by every
+    axis (0i-PB parameter manual B-63980EN/01 p. 99-100: a linear axis at 33 ... 56, a rotary axis at 60 ... 68), so
+    each axis' tape needs its own range; what does not fit 0 ... 1023 is refused."""
+    if isinstance(first_number, bool) or not isinstance(first_number, (int, np.integer)) or first_number < 0:
+        raise CompensationError(f"fanuc-pitch: the first point number {first_number!r} (parameter 3621) must be a "
+                                f"whole number 0 ... {FANUC_POINTS - 1}")
+    a = table.attrs
+    k_lo, k_hi = -a["reference_index"], len(table) - 1 - a["reference_index"]
+    lowest, highest = min(k_lo + 1, 0), max(k_hi, 1)     # sections covered, with R's point and one above it
+    n = highest - lowest + 1
+    ref_no = int(first_number) - lowest
+    if ref_no + highest > FANUC_POINTS - 1:
+        room = (f"give a first point number of at most {FANUC_POINTS - n} (--fanuc-first-point) or " if n <= FANUC_POINTS
+                else "")
+        raise CompensationError(f"fanuc-pitch: {n} points from number {first_number} do not fit the pitch block "
+                                f"0 ... {FANUC_POINTS - 1} (N10000 ... N{10000 + FANUC_POINTS - 1}); {room}choose a "
+                                f"coarser --interval (at least {_exact(_ceil_div(a['last_q'] - a['first_q'], (FANUC_POINTS - 2) * AUTO_QUANTUM) * AUTO_QUANTUM)} mm)")
+    return int(first_number), ref_no, ref_no + highest
+
+
+def fanuc_points_line(table, first_number: int = 0) -> str:
+    """What a FANUC tape of ``table`` fills, for its header and the command's output."""
+    first, ref, last = fanuc_point_numbers(table, first_number)
+    default = ", from the default first point 0" if first == 0 else ""
+    return (f"fills pitch-error points {first} ... {last}, N{10000 + first} ... N{10000 + last}{default}: 3621 = {first}, "
+            f"3620 = {ref}, 3622 = {last}; the points are one block for all axes, so another axis' tape must not overlap "
+            f"them: write it with --fanuc-first-point {last + 1} or higher")
+
+
 def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm: float = 0.001, increment_mm: float = 0.001,
                       first_number: int = 0, magnification: int | None = None) -> str:
     """FANUC pitch-error compensation data in the parameter-tape format: ``%``, comments ``(...)``, one
@@ -384,12 +415,7 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
     k = np.arange(len(table)) - k0                                            # grid index relative to R
     k_lo, k_hi = int(k[0]), int(k[-1])
     lowest, highest = min(k_lo + 1, 0), max(k_hi, 1)     # sections covered, with R's point and one above it
-    n = highest - lowest + 1
-    ref_no = first_number - lowest
-    if not (isinstance(first_number, (int, np.integer)) and first_number >= 0) or ref_no + highest > FANUC_POINTS - 1:
-        raise CompensationError(f"fanuc-pitch: {n} points from number {first_number} do not fit the pitch block "
-                                f"0 ... {FANUC_POINTS - 1} (N10000 ... N{10000 + FANUC_POINTS - 1}); choose a "
-                                f"coarser --interval (at least {_exact(_ceil_div(a['last_q'] - a['first_q'], (FANUC_POINTS - 2) * AUTO_QUANTUM) * AUTO_QUANTUM)} mm)")
+    first_number, ref_no, last_number = fanuc_point_numbers(table, first_number)
     step_mm = a["step_q"] * NM
     interval = step_mm / increment_mm
     if abs(interval - round(interval)) > 1e-6 or not 1 <= round(interval) <= FANUC_INTERVAL_MAX:
@@ -409,7 +435,7 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
     else:
         raise CompensationError(f"fanuc-pitch: a change of {np.abs(inc).max()} x {detection_unit_mm:g} mm x {m} over "
                                 f"one interval exceeds {FANUC_VALUE[1]} (per point); choose a finer --interval or a larger magnification")
-    values = np.zeros(n, dtype=np.int64)
+    values = np.zeros(highest - lowest + 1, dtype=np.int64)
     values[(k_lo + 1) - lowest:(k_hi + 1) - lowest] = inc
     numbers = ref_no + np.arange(lowest, highest + 1)
     def comment(text: str) -> str:
@@ -418,6 +444,8 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
                         f"X MAGNIFICATION {m}")]
     out += [comment(h) for h in _header(table, label, "increments of minus the deviation relative to the reference "
                                                        "point; a positive value moves the axis in the positive direction")]
+    out.append(comment("THIS TAPE " + fanuc_points_line(table, first_number).replace("'", "").replace(
+        "write it with --fanuc-first-point", "give it a first point number 3621 of")))
     out.append(comment(f"SET 3620 = {ref_no} REFERENCE POSITION AT {_exact(a['reference_q'])} MM, "
                        f"3621 = {numbers[0]}, 3622 = {numbers[-1]}, 3623 = {m}, 3624 = {interval} "
                        f"I.E. {_exact(a['step_q'])} MM IN UNITS OF {increment_mm:g} MM; RAPID TRAVERSE MM/MIN / 7500 "
@@ -498,7 +526,8 @@ def model_misfit(res) -> str | None:
 
 def write_tables(res, data, requests, *, interval=None, source="model", axis=None, write, reference_mm=None,
                  unit_confirmed: bool = False, unit_option: str = "--deviation-unit", on_confirmed=None,
-                 model_confirmed: bool = False, axis_hint: str = "", fanuc_unit_mm: float = 0.001):
+                 model_confirmed: bool = False, axis_hint: str = "", fanuc_unit_mm: float = 0.001,
+                 fanuc_first_number: int = 0):
     """Build the table once and write it in every requested ``(format, path)`` with ``write(path, text)``;
     every format is checked (name, axis, limits) before any file is written. A table implausible for a
     machine axis (:func:`magnitude_problem`: µm read as mm) is refused unless ``unit_confirmed`` (the
@@ -508,7 +537,9 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     ``on_confirmed`` is told and every file's header says so. ``axis`` None: a SINUMERIK table (whose entries name
     the machine axis they compensate) is refused, naming ``axis_hint`` (what the file says); the other formats say
     'axis not given' in their header. ``fanuc_unit_mm``: the FANUC axis' detection unit and least input increment
-    (0.001 mm IS-B, 0.0001 mm IS-C). Returns the table."""
+    (0.001 mm IS-B, 0.0001 mm IS-C); ``fanuc_first_number``: its first pitch-error point number (3621; each axis
+    needs its own range of the one block, :func:`fanuc_point_numbers`), said in ``attrs['fanuc_points']``. Returns the
+    table."""
     for fmt, _ in requests:
         if fmt not in WRITERS:
             raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
@@ -540,7 +571,9 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     if problem and on_confirmed is not None:
         on_confirmed(f"the compensation table holds {problem}, written as {unit_option} confirms the unit: "
                      "check it before loading it")
-    fanuc = {"detection_unit_mm": fanuc_unit_mm, "increment_mm": fanuc_unit_mm}
+    fanuc = {"detection_unit_mm": fanuc_unit_mm, "increment_mm": fanuc_unit_mm, "first_number": fanuc_first_number}
+    if any(fmt == "fanuc-pitch" for fmt, _ in requests):
+        table.attrs["fanuc_points"] = fanuc_points_line(table, fanuc_first_number)
     texts = [(path, WRITERS[fmt](table, axis=axis, **(fanuc if fmt == "fanuc-pitch" else {})))
              for fmt, path in requests]
     for path, text in texts:

@@ -64,6 +64,10 @@ def add_parser(sub):
     pp.add_argument("--fanuc-increment", choices=("0.001", "0.0001"), default="0.001", metavar="MM",
                     help="fanuc-pitch: the axis' detection unit and least input increment in mm, 0.001 (IS-B, default) "
                          "or 0.0001 (IS-C)")
+    pp.add_argument("--fanuc-first-point", type=int, default=0, metavar="N",
+                    help="fanuc-pitch: the axis' first pitch-error point number (parameter 3621, default 0); the points "
+                         "are one block for all axes, so each axis' tape needs its own range (the output says which it "
+                         "fills)")
     pp.add_argument("--interval", type=quantity("--interval"), default=None, metavar="MM",
                     help="compensation point spacing (a bare number in mm, or with its unit: 10mm, 0.5in; default: "
                          "the target spacing)")
@@ -373,7 +377,7 @@ def run(args) -> int:
                             reference_mm=finite("--reference", args.reference),
                             unit_confirmed=given_deviation_unit is not None, on_confirmed=warn,
                             model_confirmed=args.compensation_from == "model",
-                            fanuc_unit_mm=float(args.fanuc_increment))
+                            fanuc_unit_mm=float(args.fanuc_increment), fanuc_first_number=args.fanuc_first_point)
         if "in" in {canonical(u) for u in (args.unit, args.deviation_unit) if u}:   # read in inches, written in mm
             formats = {fmt for fmt, _ in args.compensation}
             inch = {"0.001": "0.0001 in (IS-B inch)", "0.0001": "0.00001 in (IS-C inch)"}[args.fanuc_increment]
@@ -432,5 +436,6 @@ def run(args) -> int:
         for fmt, path in args.compensation:
             print(f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
                   f"to {comp.position_mm.iloc[-1]:g} mm, from the {comp.attrs['source']}) written to {path}"
-                  + (f": {comp.attrs['chosen']}" if comp.attrs.get("chosen") else ""))
+                  + (f": {comp.attrs['chosen']}" if comp.attrs.get("chosen") else "")
+                  + (f"; {comp.attrs['fanuc_points']}" if fmt == "fanuc-pitch" else ""))
     return 0

@@ -58,6 +58,17 @@ def append(path, text="\n# edited by the cache-key test\n"):
     path.write_text(path.read_text() + text)
 
 
+def computed_then_served(repo, tmp_path, method, extra_path=()):
+    """The keyed study of ``method`` (``tmp_path/keyed.toml``) run twice in ``repo``: its 2 rows computed, then served
+    (the resumed run has nothing to do); (study, out folder)."""
+    study = tmp_path / "keyed.toml"
+    study.write_text(STUDY.format(kind="grid", method=method))
+    out = tmp_path / "out"
+    assert run(repo, study, out, extra_path) == (2, 2)
+    assert run(repo, study, out, extra_path) == (2, 0)
+    return study, out
+
+
 #: code every row of a Kåsa grid study depends on: each edit alone must recompute the rows
 ROW_CODE = ["experiments/metrics.py", "experiments/rows.py", "experiments/chunkrows.py", "datasets/synthetic.py",
             "experiments/studies/grid.py",
@@ -69,11 +80,7 @@ def test_editing_code_a_row_depends_on_recomputes_it(repo_copy, tmp_path):
     """One copy of the repository, edited one file at a time: after each edit the resumed run recomputes both rows
     (and stores them under the new key), so each file is checked on its own. An edited C kernel source is refused
     until its kernel is rebuilt (rows of the old binary would be stored under the new source's key)."""
-    study = tmp_path / "keyed.toml"
-    study.write_text(STUDY.format(kind="grid", method="circle.kasa"))
-    out = tmp_path / "out"
-    assert run(repo_copy, study, out) == (2, 2)
-    assert run(repo_copy, study, out) == (2, 0)  # resumed: nothing to do
+    study, out = computed_then_served(repo_copy, tmp_path, "circle.kasa")
     append(repo_copy / "experiments/report.py")  # not code of any row
     assert run(repo_copy, study, out) == (2, 0)
     for edited in ROW_CODE:
@@ -129,11 +136,7 @@ def test_editing_a_plugin_helper_module_recomputes(repo_copy, tmp_path):
     site = install_plugin(tmp_path, "fitbench-keyed-plugin",
                           {"fitbench_keyed_plugin": PLUGIN, "fitbench_keyed_helper": HELPER},
                           {"fitbench.methods": {"keyed": "fitbench_keyed_plugin"}})
-    study = tmp_path / "keyed.toml"
-    study.write_text(STUDY.format(kind="grid", method="circle.keyed_plugin"))
-    out = tmp_path / "out"
-    assert run(repo_copy, study, out, [site]) == (2, 2)
-    assert run(repo_copy, study, out, [site]) == (2, 0)
+    study, out = computed_then_served(repo_copy, tmp_path, "circle.keyed_plugin", [site])
     append(site / "fitbench_keyed_helper.py")  # the plugin module itself is unchanged
     assert run(repo_copy, study, out, [site]) == (2, 2)
 
@@ -178,10 +181,6 @@ def test_a_method_called_by_name_is_keyed(repo_copy, tmp_path):
     assert not any(f.startswith("methods/roundness/") for f in files)
     site = install_plugin(tmp_path, "fitbench-keyed-by-name", {"fitbench_keyed_by_name": BY_NAME},
                           {"fitbench.methods": {"keyed_by_name": "fitbench_keyed_by_name"}})
-    study = tmp_path / "keyed.toml"
-    study.write_text(STUDY.format(kind="grid", method="circle.keyed_by_name"))
-    out = tmp_path / "out"
-    assert run(repo_copy, study, out, [site]) == (2, 2)
-    assert run(repo_copy, study, out, [site]) == (2, 0)
+    study, out = computed_then_served(repo_copy, tmp_path, "circle.keyed_by_name", [site])
     append(repo_copy / "methods/circle/algebraic.py")  # circle.kasa's module; the plugin is unchanged
     assert run(repo_copy, study, out, [site]) == (2, 2)

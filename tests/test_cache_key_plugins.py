@@ -9,7 +9,7 @@ import pytest
 
 from conftest import REPO, install_plugin, run_python
 from pip_target import pip_install, write_pyproject
-from test_cache_key import STUDY, append, repo_copy, run  # noqa: F401  (repo_copy: a fixture)
+from test_cache_key import STUDY, append, computed_then_served, repo_copy, run  # noqa: F401  (repo_copy: a fixture)
 
 pytestmark = pytest.mark.slow  # each case installs a plugin or copies the repository and runs a study several times
 
@@ -56,11 +56,7 @@ def editable_plugin(tmp_path):
 
 def test_an_editable_plugins_data_file_and_dynamic_helper_are_keyed(tmp_path):
     site, src, pkg = editable_plugin(tmp_path)
-    study = tmp_path / "keyed.toml"
-    study.write_text(STUDY.format(kind="grid", method="circle.keyed_editable"))
-    out = tmp_path / "out"
-    assert run(REPO, study, out, [site, src]) == (2, 2)
-    assert run(REPO, study, out, [site, src]) == (2, 0)
+    study, out = computed_then_served(REPO, tmp_path, "circle.keyed_editable", [site, src])
     (src / "README.md").write_text("not the package's\n")  # beside the package, not in it
     assert run(REPO, study, out, [site, src]) == (2, 0)
     (pkg / "data" / "coeffs.json").write_text('{"scale": 2.0}\n')
@@ -117,11 +113,7 @@ def upgraded(tmp_path, plugin, library: str, method: str, what: str):
     module = library.replace("-", "_")
     old = install_plugin(tmp_path / "old", library, {module: FAKEDEP.format(scale=1.0)}, {}, "1.0")
     new = install_plugin(tmp_path / "new", library, {module: FAKEDEP.format(scale=2.0)}, {}, "2.0")
-    study = tmp_path / "keyed.toml"
-    study.write_text(STUDY.format(kind="grid", method=method))
-    out = tmp_path / "out"
-    assert run(REPO, study, out, [plugin, old]) == (2, 2)
-    assert run(REPO, study, out, [plugin, old]) == (2, 0)
+    study, out = computed_then_served(REPO, tmp_path, method, [plugin, old])
     assert run(REPO, study, out, [plugin, new]) == (2, 2), f"an upgraded {what} must recompute the rows"
     return study, out, new
 

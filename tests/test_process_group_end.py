@@ -104,14 +104,24 @@ def _end_member(pid: int) -> None:
         os.kill(pid, signal.SIGKILL)
 
 
+@contextlib.contextmanager
+def _killed_leaving_a_member(process, tmp_path):
+    """``process`` (a local worker or a Dask row process) made to leave a member in its group (:func:`_start_member`),
+    then killed (SIGKILL); the member's id while in the block, the member killed after it."""
+    member = _start_member(process.conn.send, process.conn.recv, tmp_path)
+    try:
+        os.kill(process.proc.pid, signal.SIGKILL)
+        yield member
+    finally:
+        _end_member(member)
+
+
 def test_a_local_worker_reaped_before_it_is_stopped(tmp_path, killpg_calls, how):
     """A worker that died is reaped (multiprocessing's join or is_alive) before the run stops it: its group is never
     signalled by its number then, and (pidfd) what its method left in it is still ended."""
     import multiprocessing as mp
     w = localworkers._Worker(mp.get_context("spawn"))
-    member = _start_member(w.conn.send, w.conn.recv, tmp_path)
-    try:
-        os.kill(w.proc.pid, signal.SIGKILL)
+    with _killed_leaving_a_member(w, tmp_path) as member:
         deadline = time.monotonic() + 10
         while w.proc.is_alive() and time.monotonic() < deadline:   # reaps it: the worker's id is free from here
             time.sleep(0.01)
@@ -120,8 +130,6 @@ def test_a_local_worker_reaped_before_it_is_stopped(tmp_path, killpg_calls, how)
         assert not [c for c in killpg_calls if c[1]], f"a group signalled by the id of a reaped worker: {killpg_calls}"
         if how == "pidfd":
             assert _ended(member), "what the worker's method started outlived it"
-    finally:
-        _end_member(member)
 
 
 def test_a_local_worker_that_died_ends_its_group_before_it_is_reaped(tmp_path, killpg_calls, how):
@@ -129,31 +137,23 @@ def test_a_local_worker_that_died_ends_its_group_before_it_is_reaped(tmp_path, k
     its id only while the worker is not reaped."""
     import multiprocessing as mp
     w = localworkers._Worker(mp.get_context("spawn"))
-    member = _start_member(w.conn.send, w.conn.recv, tmp_path)
-    try:
-        os.kill(w.proc.pid, signal.SIGKILL)
+    with _killed_leaving_a_member(w, tmp_path) as member:
         assert w.ended(10.0) and not _reaped(w.proc.pid)   # told without reaping it
         w.stop(now=True)
         assert _reaped(w.proc.pid)
         assert not [c for c in killpg_calls if c[1]], killpg_calls
         assert _ended(member), "what the worker's method started outlived it"
-    finally:
-        _end_member(member)
 
 
 def test_a_dask_row_process_that_died_ends_its_group_before_it_is_reaped(tmp_path, killpg_calls, how):
     """A Dask worker's row process that died: its group is ended (by its id only while it is not reaped)."""
     from experiments.dask_executor import _RowProcess
     rp = _RowProcess()
-    member = _start_member(rp.conn.send, rp.conn.recv, tmp_path)
-    try:
-        os.kill(rp.proc.pid, signal.SIGKILL)
+    with _killed_leaving_a_member(rp, tmp_path) as member:
         assert rp._died()[0] == "died"
         assert rp.proc.returncode == -signal.SIGKILL
         assert not [c for c in killpg_calls if c[1]], killpg_calls
         assert _ended(member), "what the row process's method started outlived it"
-    finally:
-        _end_member(member)
 
 
 def test_a_dead_worker_reaped_by_the_start_of_another_has_its_group_ended(tmp_path, killpg_calls, how):
@@ -164,20 +164,18 @@ def test_a_dead_worker_reaped_by_the_start_of_another_has_its_group_ended(tmp_pa
     import multiprocessing as mp
     ctx = mp.get_context("spawn")
     w = localworkers._Worker(ctx)
-    member = _start_member(w.conn.send, w.conn.recv, tmp_path)
     other = None
-    try:
-        os.kill(w.proc.pid, signal.SIGKILL)
-        assert w.ended(10.0) and not _reaped(w.proc.pid)
-        other = localworkers._Worker(ctx)   # the replacement of another worker
-        w.stop(now=True)
-        assert not [c for c in killpg_calls if c[1]], killpg_calls
-        assert _ended(member), "what the dead worker's method started outlived it"
-        assert w.proc.exitcode == -signal.SIGKILL
-    finally:
-        _end_member(member)
-        if other is not None:
-            other.stop(now=True)
+    with _killed_leaving_a_member(w, tmp_path) as member:
+        try:
+            assert w.ended(10.0) and not _reaped(w.proc.pid)
+            other = localworkers._Worker(ctx)   # the replacement of another worker
+            w.stop(now=True)
+            assert not [c for c in killpg_calls if c[1]], killpg_calls
+            assert _ended(member), "what the dead worker's method started outlived it"
+            assert w.proc.exitcode == -signal.SIGKILL
+        finally:
+            if other is not None:
+                other.stop(now=True)
 
 
 @pytest.fixture
@@ -194,9 +192,7 @@ def test_without_waitid_a_dead_workers_group_is_ended_before_it_is_reaped(tmp_pa
     not reaped it (the run finds a dead worker by its pipe, which reaps nothing)."""
     import multiprocessing as mp
     w = localworkers._Worker(mp.get_context("spawn"))
-    member = _start_member(w.conn.send, w.conn.recv, tmp_path)
-    try:
-        os.kill(w.proc.pid, signal.SIGKILL)
+    with _killed_leaving_a_member(w, tmp_path) as member:
         assert w.conn.poll(10)
         with pytest.raises(EOFError):
             w.conn.recv()
@@ -204,16 +200,12 @@ def test_without_waitid_a_dead_workers_group_is_ended_before_it_is_reaped(tmp_pa
         assert _reaped(w.proc.pid) and w.proc.exitcode == -signal.SIGKILL
         assert killpg_calls and not [c for c in killpg_calls if c[1]], killpg_calls
         assert _ended(member), "what the dead worker's method started outlived it"
-    finally:
-        _end_member(member)
 
 
 def test_without_waitid_a_dask_row_process_that_died_ends_its_group(tmp_path, killpg_calls, no_waitid):
     from experiments.dask_executor import _RowProcess
     rp = _RowProcess()
-    member = _start_member(rp.conn.send, rp.conn.recv, tmp_path)
-    try:
-        os.kill(rp.proc.pid, signal.SIGKILL)
+    with _killed_leaving_a_member(rp, tmp_path) as member:
         deadline = time.monotonic() + 10
         while not rp.conn.poll(0.05) and time.monotonic() < deadline:   # its socket closes: found without reaping
             pass
@@ -221,5 +213,3 @@ def test_without_waitid_a_dask_row_process_that_died_ends_its_group(tmp_path, ki
         assert rp.proc.returncode == -signal.SIGKILL
         assert killpg_calls and not [c for c in killpg_calls if c[1]], killpg_calls
         assert _ended(member), "what the row process's method started outlived it"
-    finally:
-        _end_member(member)

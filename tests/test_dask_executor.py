@@ -8,9 +8,7 @@ PYTHONPATH)."""
 from __future__ import annotations
 
 import os
-import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -23,7 +21,7 @@ import pytest
 
 from conftest import stop_processes, subprocess_env
 from test_engine import hostile_methods, hostile_site, write_study  # noqa: F401 (hostile_site: a fixture)
-from test_dask_cluster import wait_listening
+from test_dask_cluster import DASK, free_port, wait_listening
 
 pytestmark = pytest.mark.skipif(not Path("/proc/self/environ").exists(), reason="looks for processes in /proc")
 
@@ -177,15 +175,6 @@ def test_ctrl_c_of_a_dask_run_prints_one_line_and_leaves_no_process(tmp_path, ho
                                         f"{tmp_path / 'out' / 'dk' / 'rows.sqlite'}; run the same command again to "
                                         f"resume"], err
     assert not left
-
-
-DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.mark.system

@@ -86,6 +86,12 @@ def _ceil_div(a: int, b: int) -> int:
     return -((-a) // b)
 
 
+def _grid_range(ref_q: int, lo_q: int, hi_q: int, step_q: int) -> tuple[int, int]:
+    """(k_lo, k_hi): the grid R + k step (k_lo <= 0 <= k_hi) from the first point at or before the first target
+    to the first at or after the last, always holding R, also when R lies outside the measured travel."""
+    return min(0, -_ceil_div(ref_q - lo_q, step_q)), max(0, _ceil_div(hi_q - ref_q, step_q))
+
+
 def compensation_table(res, data, *, interval: float | None = None, source: str = "model",
                        reference_mm: float | None = None):
     """The table (see the module docstring) as a DataFrame with columns position_mm, deviation_mm,
@@ -103,9 +109,8 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     if reference_mm is None:
         reference_mm = 0.0 if first <= 0.0 <= last else (first if abs(first) <= abs(last) else last)
     ref = float(reference_mm)
-    if not (np.isfinite(ref) and first - 1e-9 <= ref <= last + 1e-9):
-        raise InvalidInputError(f"the reference point ({ref:g} mm) must lie within the measured travel "
-                                f"{first:g} to {last:g} mm; measure from the reference point or give a target")
+    if not np.isfinite(ref):
+        raise InvalidInputError(f"the reference point must be a finite position in mm, got {reference_mm!r}")
     ref_q = int(round(ref / NM))
     lo_q, hi_q = math.floor(first / NM + 1e-3), math.ceil(last / NM - 1e-3)
     if interval is None:
@@ -120,7 +125,7 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
         if step_q < 1 or abs(step_q * NM - interval) > 1e-9 * max(1.0, interval):
             raise InvalidInputError(f"--interval {interval!r} mm is not a whole number of 0.000001 mm; "
                                     "round it to 6 decimals")
-    k_lo, k_hi = -_ceil_div(ref_q - lo_q, step_q), _ceil_div(hi_q - ref_q, step_q)
+    k_lo, k_hi = _grid_range(ref_q, lo_q, hi_q, step_q)
     n = k_hi - k_lo + 1
     if n > MAX_POINTS:
         raise CompensationError(f"--interval {step_q * NM:g} mm gives {n} points over {last - first:g} mm "
@@ -203,7 +208,7 @@ def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q) -> 
         q = int(travel / k / NM) // AUTO_QUANTUM * AUTO_QUANTUM
         if q <= 0 or q * NM >= step:
             continue
-        grid_q = ref_q + q * np.arange(-_ceil_div(ref_q - lo_q, q), _ceil_div(hi_q - ref_q, q) + 1, dtype=np.int64)
+        grid_q = ref_q + q * np.arange(*np.add(_grid_range(ref_q, lo_q, hi_q, q), (0, 1)), dtype=np.int64)
         g = grid_q * NM
         m = np.mean(list(_curves(res, data, source, g).values()), axis=0)
         if _miss(res, data, source, g, m)[0] <= tol:
@@ -238,10 +243,29 @@ def _header(table, axis: str, values: str) -> list[str]:
             f"covers {_exact(a['first_q'])} to {_exact(a['last_q'])} mm: {len(table)} points every "
             f"{_exact(a['step_q'])} mm; measured travel {first:.6g} to {last:.6g} mm; {ext}",
             f"reference point at {_exact(a['reference_q'])} mm holds 0: deviations taken relative to the "
-            f"{a['deviation_at_reference_mm'] * 1e3:.3f} um there",
+            f"{a['deviation_at_reference_mm'] * 1e3:.3f} um there" + (f"; {outside_reference(table)}"
+                                                                      if outside_reference(table) else ""),
             f"values: {values}",
             _backlash_line(table),
             "check the result with a verification run after loading"]
+
+
+def outside_reference(table) -> str | None:
+    """What the table assumes when the reference point R lies outside the measured travel (ISO 230-2 leaves the
+    travel ends out, where the reference point of a machine usually is), or None: nothing was measured between R
+    and the nearer end target, so the deviation there is held at that target's value (the model is not
+    extrapolated) and the table holds 0 from R to that target; FANUC anchors its sections at R (0i-PB parameter
+    manual B-63980EN/01 p. 99-100), SINUMERIK holds its end values beyond MIN / MAX."""
+    a = table.attrs
+    first, last = a["measured_mm"]
+    ref = a["reference_q"] * NM
+    if first - 1e-9 <= ref <= last + 1e-9:
+        return None
+    gap, end, side = (first - ref, first, "before the first") if ref < first else (ref - last, last, "after the last")
+    held = "the model's value" if a["source"] == "model" else "the mean"
+    return (f"the reference point lies {gap:.6g} mm {side} target, outside the measured travel: nothing was measured "
+            f"from {min(ref, end):.6g} to {max(ref, end):.6g} mm, where the deviation is held at {held} at the "
+            f"{end:.6g} mm target (not extrapolated), so the table holds 0 from the reference point to that target")
 
 
 def _backlash_line(table) -> str:
@@ -476,7 +500,7 @@ def _fitting_default(res, data, table, limit: int, fmt: str, source: str, refere
     first, last = a["measured_mm"]
     ref_q, lo_q, hi_q = a["reference_q"], math.floor(first / NM + 1e-3), math.ceil(last / NM - 1e-3)
     step_q = _ceil_div(_ceil_div(hi_q - lo_q, max(limit - 1, 1)), AUTO_QUANTUM) * AUTO_QUANTUM
-    while _ceil_div(ref_q - lo_q, step_q) + _ceil_div(hi_q - ref_q, step_q) + 1 > limit:
+    while np.subtract(*_grid_range(ref_q, lo_q, hi_q, step_q)[::-1]) + 1 > limit:
         step_q += AUTO_QUANTUM
     try:
         chosen = compensation_table(res, data, interval=step_q * NM, source=source, reference_mm=reference_mm)
@@ -572,6 +596,15 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
         on_confirmed(f"the compensation table holds {problem}, written as {unit_option} confirms the unit: "
                      "check it before loading it")
     fanuc = {"detection_unit_mm": fanuc_unit_mm, "increment_mm": fanuc_unit_mm, "first_number": fanuc_first_number}
+    if outside_reference(table):
+        table.attrs["reference_note"] = outside_reference(table) + "; every file's header says so"
+    first, last = table.attrs["measured_mm"]
+    if reference_mm is None and not first <= 0.0 <= last and any(fmt == "fanuc-pitch" for fmt, _ in requests):
+        table.attrs["reference_note"] = (
+            f"no reference point given and the measured travel ({first:g} to {last:g} mm) does not hold 0 mm: the "
+            f"reference point is taken at the nearer end target, {table.attrs['reference_q'] * NM:g} mm; a FANUC table's "
+            "sections start at the machine's reference position (3620), so give --reference where it is if it is "
+            "elsewhere (outside the measured travel too, e.g. --reference 0 at the travel end)")
     if any(fmt == "fanuc-pitch" for fmt, _ in requests):
         table.attrs["fanuc_points"] = fanuc_points_line(table, fanuc_first_number)
     texts = [(path, WRITERS[fmt](table, axis=axis, **(fanuc if fmt == "fanuc-pitch" else {})))

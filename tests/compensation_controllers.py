@@ -87,14 +87,15 @@ FANUC_SET = re.compile(r"\(SET 3620 = (\d+) REFERENCE POSITION AT (-?\d+\.\d{6})
                        r"3623 = (\d+), 3624 = (\d+) I\.E\. (\d+\.\d{6}) MM IN UNITS OF ([0-9.]+) MM;[^()]*\)")
 
 
-def read_fanuc(text: str, detection_unit_mm: float = 0.001):
+def read_fanuc(text: str, detection_unit_mm: float = 0.001, machine_reference_mm: float | None = None):
     """FANUC parameter tape of pitch-error data: '%', comments '(...)' of upper-case ASCII without
     parentheses inside, 'N<10000 + number> P<integer>' for consecutive numbers 0 ... 1023, '%'. The
     parameters 3620-3624 and the reference position are those the operator sets from the SET comment.
     Applied: the increments (x detection unit x 3623) are summed from the reference position, point
     3620 + k holding the change over (R + (k-1) d, R + k d]; the compensation is output with the command
     (encoder = P + C(P)), stepwise: the increment of a point is output when the axis reaches the end of
-    its section seen from R."""
+    its section seen from R. ``machine_reference_mm``: where the machine's reference position really is (the
+    controller anchors the table there whatever the tape's comment says); default: the position the comment names."""
     assert text.endswith("\n") and "\r" not in text
     lines = text[:-1].split("\n")
     assert lines[0] == "%" and lines[-1] == "%"
@@ -116,6 +117,8 @@ def read_fanuc(text: str, detection_unit_mm: float = 0.001):
     ref_no, r_mm, p21, p22, mag, p24 = (int(params.group(1)), float(params.group(2)), int(params.group(3)),
                                         int(params.group(4)), int(params.group(5)), int(params.group(6)))
     inc_mm = float(params.group(8))
+    if machine_reference_mm is not None:
+        r_mm = float(machine_reference_mm)
     assert p21 == points[0][0] and p22 == points[-1][0] and p21 <= ref_no < p22
     assert 1 <= mag <= 100 and 1 <= p24 <= 99_999_999
     d = p24 * inc_mm

@@ -141,8 +141,11 @@ def test_reference_point_holds_zero_in_every_format():
     assert csv["values"][t.attrs["reference_index"]] == 0.0
     enc, fan = read_fanuc(write_fanuc_pitch(t, axis="X"))
     assert enc(np.array([0.0]), "up")[0] - enc(np.array([0.0]), "down")[0] == pytest.approx(-t.attrs["backlash_mm"], abs=0.5e-6)
+    outside = compensation_table(res, data, reference_mm=900.0)       # beyond the last target: held, 0 from R on
+    assert outside.position_mm.iloc[outside.attrs["reference_index"]] == 900.0
+    np.testing.assert_array_equal(outside.compensation_mm[outside.position_mm >= data.targets[-1]], 0.0)
     with pytest.raises(InvalidInputError, match="reference point"):
-        compensation_table(res, data, reference_mm=900.0)
+        compensation_table(res, data, reference_mm=float("nan"))
 
 
 # ------------------------------------------------------------------------------------------ limits
@@ -250,7 +253,7 @@ def test_unidirectional_test_gives_the_table_of_its_direction():
 
 def test_reference_option_moves_the_zero_and_the_fanuc_reference_point(tmp_path):
     """--reference R: the table holds 0 at R in every format, FANUC's 3620 is R's point, and a reference
-    outside the measured travel is refused in one line."""
+    outside the measured travel is taken, and said (tests/test_compensation_reference.py)."""
     data, truth, _ = axis(6, irregular=0.3)
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
     out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--reference", 1000, "--axis", "X1", "--compensation", "siemens-eec", tmp_path / "e.mpf",
@@ -263,8 +266,8 @@ def test_reference_option_moves_the_zero_and_the_fanuc_reference_point(tmp_path)
     assert "REFERENCE POSITION AT 1000.000000 MM" in ftext and fan["numbers"][-1] == fan["reference_number"] + 1
     after = methods.fit("positioning.iso230_2", remeasure(data, truth, enc, np.random.default_rng(1))).figures
     assert after["E"] <= 0.5 * methods.fit("positioning.iso230_2", data).figures["E"]
-    bad = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--reference", 1200, "--compensation", "csv", tmp_path / "c.csv")
-    assert bad.returncode == 2 and "must lie within the measured travel" in bad.stderr and not (tmp_path / "c.csv").exists()
+    beyond = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--reference", 1200, "--compensation", "csv", tmp_path / "c.csv")
+    assert beyond.returncode == 0 and "the reference point lies 200 mm after the last target" in beyond.stdout
 
 
 def test_targets_must_increase():

@@ -378,6 +378,8 @@ def run(args) -> int:
                             unit_confirmed=given_deviation_unit is not None, on_confirmed=warn,
                             model_confirmed=args.compensation_from == "model",
                             fanuc_unit_mm=float(args.fanuc_increment), fanuc_first_number=args.fanuc_first_point)
+        if comp.attrs.get("reference_note"):
+            notes.append(comp.attrs["reference_note"])
         if "in" in {canonical(u) for u in (args.unit, args.deviation_unit) if u}:   # read in inches, written in mm
             formats = {fmt for fmt, _ in args.compensation}
             inch = {"0.001": "0.0001 in (IS-B inch)", "0.0001": "0.00001 in (IS-C inch)"}[args.fanuc_increment]

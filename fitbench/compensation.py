@@ -205,7 +205,8 @@ def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q) -> 
     spacing = np.diff(P)
     ok = None
     for k in range(1, 4 * P.size + 1):        # candidate steps, coarse to fine (a few dozen tables of few points)
-        q = int(travel / k / NM) // AUTO_QUANTUM * AUTO_QUANTUM
+        q = math.ceil(travel / k / NM / AUTO_QUANTUM - 1e-6) * AUTO_QUANTUM     # rounded up: the grid reaches the
+        # last target at its k-th step (within k x 0.001 mm), not one step beyond it
         if q <= 0 or q * NM >= step:
             continue
         grid_q = ref_q + q * np.arange(*np.add(_grid_range(ref_q, lo_q, hi_q, q), (0, 1)), dtype=np.int64)

@@ -114,3 +114,24 @@ def test_the_default_table_of_irregular_targets_fits_the_sinumerik(tmp_path):
     before = methods.fit("positioning.iso230_2", data).figures
     after = methods.fit("positioning.iso230_2", remeasure(data, truth, encoder, np.random.default_rng(9))).figures
     assert after["M"] <= 0.5 * before["M"], (before["M"], after["M"])
+
+
+def test_the_named_interval_ends_the_table_at_the_travel_end(tmp_path):
+    """The interval a refusal names is travel / k rounded up to 0.001 mm, so its table reaches the last target at
+    its k-th step (within k x 0.001 mm). Before it was rounded down (47.619 for 1000 / 21): the grid stopped
+    0.021 mm short of the last target and the table added a point 47.6 mm beyond the travel."""
+    data, _ = axis_test(rng=np.random.default_rng(0), irregular=0.4, periodic_amplitude=0.002, periodic_period=130)
+    to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
+    args = ("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--axis", "X1", "--compensation-from", "mean")
+    out = cli(*args, "--interval", "300", "--compensation", "csv", tmp_path / "t.csv")
+    one_error_line(out, "--interval 300 mm is too coarse", "or finer")
+    named = float(re.search(r"give --interval (\S+) or finer", out.stderr).group(1))
+    assert cli(*args, "--interval", named, "--compensation", "csv", tmp_path / "t.csv").returncode == 0
+    grid = read_csv_table(tmp_path / "t.csv")
+    steps = len(grid) - 1
+    assert grid[0] == data.targets[0] and 0.0 <= grid[-1] - data.targets[-1] <= steps * 0.001 + 1e-9, (named, grid[-1])
+
+
+def read_csv_table(path):
+    import pandas as pd
+    return pd.read_csv(path, comment="#").position_mm.to_numpy()

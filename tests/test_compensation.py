@@ -254,7 +254,7 @@ def test_unidirectional_test_gives_the_table_of_its_direction():
 def test_reference_option_moves_the_zero_and_the_fanuc_reference_point(tmp_path):
     """--reference R: the table holds 0 at R in every format, FANUC's 3620 is R's point, and a reference
     outside the measured travel is taken, and said (tests/test_compensation_reference.py)."""
-    data, truth, _ = axis(6, irregular=0.3)
+    data, truth, _ = axis(7, irregular=0.3)    # seed 6: its ↓ cubic is one of the 5 % a 5 % lack-of-fit test rejects
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
     out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--reference", 1000, "--axis", "X1", "--compensation", "siemens-eec", tmp_path / "e.mpf",
               "--compensation", "fanuc-pitch", tmp_path / "f.txt")

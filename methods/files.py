@@ -7,6 +7,8 @@ method manifest): only regular files, written atomically.
   replaced and the link stays. A target that exists and is not a regular file (a FIFO, a device such as
   ``/dev/null``, a folder) is refused in one line (:class:`NotRegularFileError`). A new file gets the mode
   ``open()`` would give it (0666 less the umask); an existing file keeps its mode.
+* :class:`StagedFiles`: the same for several files written together (a command's outputs): no target is
+  replaced before every one was written.
 * :func:`open_regular`: a file opened for reading after checking, on the open descriptor, that it is a
   regular file: a FIFO or a device is refused without blocking (``O_NONBLOCK`` on the open).
 
@@ -63,11 +65,9 @@ def writable_target(path) -> Path:
     return target
 
 
-@contextlib.contextmanager
-def atomic_path(path, *, make_parents: bool = False):
-    """``with atomic_path(p) as tmp:`` write the new file to ``tmp`` (a path in the target's folder with the
-    target's suffix, for writers that take a file name such as ``savefig``); when the block ends without
-    error ``tmp`` replaces the target (:func:`writable_target`), else it is removed."""
+def _temporary_beside(path, make_parents: bool) -> tuple[Path, Path, int]:
+    """(a new empty temporary file in the target's folder with the target's suffix, the target
+    (:func:`writable_target`), the mode the target gets: its own if it exists, else the umask's)."""
     target = writable_target(path)
     folder = target.parent if str(target.parent) else Path(".")
     if make_parents:
@@ -78,13 +78,77 @@ def atomic_path(path, *, make_parents: bool = False):
         mode = _new_file_mode()
     fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{target.name}.", suffix=f".tmp{target.suffix}")
     os.close(fd)
+    return Path(tmp), target, mode
+
+
+def _remove(tmp) -> None:
+    if os.path.lexists(tmp):
+        os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def atomic_path(path, *, make_parents: bool = False):
+    """``with atomic_path(p) as tmp:`` write the new file to ``tmp`` (a path in the target's folder with the
+    target's suffix, for writers that take a file name such as ``savefig``); when the block ends without
+    error ``tmp`` replaces the target (:func:`writable_target`), else it is removed."""
+    tmp, target, mode = _temporary_beside(path, make_parents)
     try:
-        yield Path(tmp)
+        yield tmp
         os.chmod(tmp, mode)
         os.replace(tmp, target)
     finally:
-        if os.path.lexists(tmp):
-            os.unlink(tmp)
+        _remove(tmp)
+
+
+class StagedFiles:
+    """Several files replaced together (a command's outputs), as :func:`atomic_path` replaces one:
+    ``with staged.path(p) as tmp:`` write ``p``'s new content to ``tmp``; nothing replaces a target until
+    :meth:`commit`, which moves every temporary onto its target once all were written; :meth:`discard`
+    removes the temporaries, leaving every target as it was. ``written`` lists the paths committed."""
+
+    def __init__(self):
+        self._staged: list[tuple[str, Path, Path, int]] = []   # (path as given, temporary, target, mode)
+        self.written: list[str] = []
+
+    @contextlib.contextmanager
+    def path(self, path, *, make_parents: bool = False):
+        tmp, target, mode = _temporary_beside(path, make_parents)
+        try:
+            yield tmp
+        except BaseException:
+            _remove(tmp)
+            raise
+        for i, (_, old, t, _) in enumerate(self._staged):   # written again: the last content counts
+            if t == target:
+                _remove(old)
+                del self._staged[i]
+                break
+        self._staged.append((str(path), tmp, target, mode))
+
+    def pending(self) -> list[str]:
+        """The paths written to temporaries and not yet moved onto their targets."""
+        return [given for given, *_ in self._staged]
+
+    def commit(self) -> None:
+        """Move every temporary onto its target, in the order written; an OSError names the path it failed on
+        in ``filename`` and leaves ``written`` (the paths replaced before it) and :meth:`pending` (it and the
+        rest) for the caller to say."""
+        while self._staged:
+            given, tmp, target, mode = self._staged[0]
+            try:
+                os.chmod(tmp, mode)
+                os.replace(tmp, target)
+            except OSError as exc:
+                exc.filename = given
+                raise
+            self._staged.pop(0)
+            self.written.append(given)
+
+    def discard(self) -> None:
+        """Remove the temporaries not committed (every target stays as it was)."""
+        for _, tmp, _, _ in self._staged:
+            _remove(tmp)
+        self._staged.clear()
 
 
 def write_atomic(path, data, *, make_parents: bool = True, fsync: bool = True) -> None:

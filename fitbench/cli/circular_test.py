@@ -10,7 +10,7 @@ import numpy as np
 
 import fitbench.cli.options as cli_options
 import methods
-from fitbench.cli.guards import jsonable
+from fitbench.cli.guards import check_outputs, jsonable, written_files
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
                                   add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances,
                                   save_figure, verdict, verdict_lines, verdict_title, warn, warn_bare_tolerances,
@@ -153,6 +153,7 @@ def run(args) -> int:
     arc = finite("--arc", args.arc, positive=True)
     plot_path = check_plot_path(args.plot)
     report_path = check_plot_path(args.report, "--report")
+    check_outputs(args.files, [("--plot", args.plot, "plot"), ("--report", args.report, "test report")])
     tolerances = parse_tolerances(args.tolerance, ("G", "G_cw", "G_ccw", "G_b", "H"))
     runs, first, labelled = _read_circular_runs(args)
     args.unit = first.unit
@@ -257,6 +258,7 @@ def run(args) -> int:
             out["verdict"] = check
         if dg:
             out["details"]["diagnostics_model"] = model_json(dg["_model"], conditions["plane"])
+        out["files_written"] = written_files()
         cli_options.print_json(json.dumps(jsonable(out)))
         return 0
     print("\n".join(lines))

@@ -25,8 +25,8 @@ import fitbench.cli.options as cli_options
 from methods import InvalidInputError
 from fitbench.cli.options import version, warn
 # the guards, and the names other modules and tests import from here
-from fitbench.cli.guards import (MethodFailed, jsonable as _jsonable, one_blas_thread, run_method,  # noqa: F401
-                                 stdout_to_stderr)
+from fitbench.cli.guards import (MethodFailed, commit_outputs, jsonable as _jsonable, one_blas_thread,  # noqa: F401
+                                 run_method, staged_outputs, stdout_to_stderr)
 
 EXIT_BAD_INPUT = 2
 #: the subcommands of ``fitbench`` that run the experiment modules (fitbench.cli.DELEGATED), absent from
@@ -140,6 +140,7 @@ def _json_only(args) -> int:
             code = args.func(args)
     finally:
         cli_options.JSON_PENDING = saved
+    commit_outputs()   # the files the JSON lists are written before it is printed
     for text in pending:
         print(text)
     return code
@@ -164,7 +165,7 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
                     raise InvalidInputError(f"'{argv[0]}' is a subcommand of fitbench, not of {prog}: use "
                                             f"'fitbench {argv[0]} ...' or 'python -m experiments.{argv[0]} ...'")
                 args = build_parser(prog, extra_commands).parse_args(argv)
-                with one_blas_thread():
+                with one_blas_thread(), staged_outputs():   # the output files: written together at the end
                     if not getattr(args, "json", False):
                         return args.func(args)
                     return _json_only(args)

@@ -9,7 +9,7 @@ import numpy as np
 
 import fitbench.cli.options as cli_options
 import methods
-from fitbench.cli.guards import run_method
+from fitbench.cli.guards import check_outputs, run_method, written_files
 from fitbench.cli.options import add_reader_options, check_plot_path, read_profile_args, save_figure
 from fitbench.cli.options import quantity
 from fitbench.cli.roundness import limacon_warning
@@ -102,6 +102,7 @@ def run(args) -> int:
                                     f"{', '.join(spec.defaults) or 'none'}")
         params[key] = parse_value(key, text, spec.defaults[key], spec.id)
     plot_path = check_plot_path(args.plot)
+    check_outputs([args.file], [("--plot", args.plot, "plot")])
     source, points, unit, notes, axes = read_profile_args(args)
     result = run_method(spec, points, **params)
     notes = [*notes, *(n for n in (result.extra or {}).get("notes", []) if isinstance(n, str))]  # the result's own
@@ -124,6 +125,7 @@ def run(args) -> int:
         if notes:
             d["notes"] = notes
         d["warnings"] = list(dict.fromkeys([*d.get("warnings", []), *said]))
+        d["files_written"] = written_files()
         cli_options.print_json(json.dumps(d))
         return 0
     print(f"input unit {canonical(unit)}{' (converted to mm)' if canonical(unit) != 'mm' else ''}; "

@@ -1,14 +1,19 @@
 """The guards a ``fitbench`` subcommand runs under (:func:`fitbench.cli.commands.main` sets them up; the subcommand
 modules call :func:`run_method`): one BLAS/OpenMP thread, what is printed to stdout sent to stderr (a method's
 prints, a ``--json`` command's stray output), a method's own exception turned into one line (:class:`MethodFailed`),
-and results turned into JSON-ready values (:func:`jsonable`)."""
+the output files checked before anything is computed (:func:`check_outputs`: none may be an input or another
+output) and written together when the command has ended (:func:`staged_outputs`), and results turned into JSON-ready
+values (:func:`jsonable`)."""
 from __future__ import annotations
 
 import contextlib
+import os
+from pathlib import Path
 
 from fitbench.streams import stdout_to_stderr
 from fitbench.threads import one_thread_environment
 from methods import InvalidInputError, exception_call, exception_text
+from methods.files import StagedFiles, atomic_path, writable_target
 
 
 class MethodFailed(Exception):
@@ -66,6 +71,119 @@ def run_method(spec, data, **params):
         else:
             what = f"it raised {' '.join(exception_call(exc).split())[:300]}"
         raise MethodFailed(f"{spec.id} failed: {what} ({hint})") from None
+
+
+# ------------------------------------------------------------------------------------------ output files
+class Outputs:
+    """The files the running command writes: each declared by :func:`check_outputs` (option, path, what it is)
+    and written to a temporary (:class:`methods.files.StagedFiles`) that :func:`staged_outputs` moves into place
+    when the command has ended without error."""
+
+    def __init__(self):
+        self.files = StagedFiles()
+        self.declared: list[tuple[str, str, str]] = []
+
+
+#: the running command's :class:`Outputs` (:func:`staged_outputs` sets it, None outside a command: written at once)
+OUTPUTS: Outputs | None = None
+
+
+def _same_file(a, b) -> bool:
+    """``a`` and ``b`` name one file: :func:`os.path.samefile` when both exist (a symlink, a hard link, ``./x``
+    and ``x``), else their resolved paths are equal (an output not written yet)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def check_outputs(inputs, outputs) -> None:
+    """Refuse, before anything is computed or written, an output that is one of the command's ``inputs`` (the
+    files it reads; None skipped) or that another output names too (a symlink, a hard link or another spelling
+    included), a special file (:func:`methods.files.writable_target`) or a file in a missing folder.
+    ``outputs``: (option as typed, path or None, what the file is) of each output file; the written ones are
+    listed by :func:`written_files`."""
+    inputs = [i for i in inputs if i is not None]
+    seen = []
+    for option, path, what in outputs:
+        if path is None:
+            continue
+        for i in inputs:
+            if _same_file(path, i):
+                via = "" if str(path) == str(i) else f" ({i}, the same file by another name)"
+                raise InvalidInputError(f"{option} {path}: this is the command's input file{via}; writing the {what} "
+                                        "there would destroy the data read: give the output another file name")
+        for other_option, other in seen:
+            if _same_file(path, other):
+                via = "" if str(path) == str(other) else " (by two names)"
+                raise InvalidInputError(f"{other_option} {other} and {option} {path} name the same file{via}: the "
+                                        "second would overwrite the first; give each output its own file name")
+        target = writable_target(path)   # a FIFO, a device, a folder: refused now
+        parent = target.parent if str(target.parent) else Path(".")
+        if not parent.is_dir():
+            raise InvalidInputError(f"{option} {path}: the folder {parent} does not exist; create it first")
+        seen.append((option, path))
+        if OUTPUTS is not None:
+            OUTPUTS.declared.append((option, str(path), what))
+
+
+@contextlib.contextmanager
+def output_path(path):
+    """``with output_path(p) as tmp:`` write output ``p`` to ``tmp``: staged until the running command ends
+    (:func:`staged_outputs`), else :func:`methods.files.atomic_path`."""
+    if OUTPUTS is None:
+        with atomic_path(path) as tmp:
+            yield tmp
+    else:
+        with OUTPUTS.files.path(path) as tmp:
+            yield tmp
+
+
+def written_files() -> list[dict]:
+    """The running command's output files written so far (``path``, ``option``, ``what``), for its JSON: they
+    are on disk once it has printed it (:func:`commit_outputs`)."""
+    if OUTPUTS is None:
+        return []
+    staged = [os.path.realpath(p) for p in OUTPUTS.files.pending() + OUTPUTS.files.written]
+    return [{"path": path, "option": option, "what": what} for option, path, what in OUTPUTS.declared
+            if os.path.realpath(path) in staged]
+
+
+def commit_outputs() -> None:
+    """Move the running command's outputs into place (all written); a failure is one line saying which were
+    written and which not."""
+    if OUTPUTS is None:
+        return
+    files = OUTPUTS.files
+    try:
+        files.commit()
+    except OSError as exc:
+        left = files.pending()
+        files.discard()
+        raise InvalidInputError(f"cannot write {exc.filename}: {exc.strerror or exc}; "
+                                + (f"written: {', '.join(files.written)}; " if files.written else "")
+                                + f"not written: {', '.join(left)}") from None
+
+
+@contextlib.contextmanager
+def staged_outputs():
+    """Run a command with its output files staged (:data:`OUTPUTS`): they replace their targets only when it ends
+    without an error, all together (:func:`commit_outputs`); an error leaves every target as it was and says
+    which files were not written."""
+    global OUTPUTS
+    saved, OUTPUTS = OUTPUTS, Outputs()
+    outputs = OUTPUTS
+    try:
+        yield outputs
+        commit_outputs()
+    except InvalidInputError as exc:
+        left = outputs.files.pending()
+        if not left:
+            raise
+        raise InvalidInputError(f"{exc}; not written: {', '.join(left)}") from None
+    finally:
+        outputs.files.discard()
+        OUTPUTS = saved
 
 
 def jsonable(v):

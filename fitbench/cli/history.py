@@ -11,6 +11,7 @@ differs, and a warning says so: pooled, k = 3 beside k = 2 read as R growing 24 
 from __future__ import annotations
 
 import fitbench.cli.options as cli_options
+from fitbench.cli.guards import check_outputs, written_files
 
 import datetime as _dt
 import json
@@ -268,6 +269,7 @@ def add_parser(sub):
 
 def run(args) -> int:
     plot_path = check_plot_path(args.plot)
+    check_outputs([args.folder], [("--plot", args.plot, "plot")])
     history = collect(args.folder)
     for line in mixed_settings_warnings(history):
         _warn(line)

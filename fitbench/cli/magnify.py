@@ -7,6 +7,7 @@ import json
 import numpy as np
 
 import fitbench.cli.options as cli_options
+from fitbench.cli.guards import check_outputs, written_files
 import methods
 from fitbench.cli.options import (PROFILE_LIMIT_MM, add_reader_options, check_plot_path, finite, header_line,
                                   save_figure)
@@ -38,6 +39,7 @@ def run(args) -> int:
 
     eta = finite("--eta", args.eta, positive=True, allow_none=False)
     plot_path = check_plot_path(args.plot)
+    check_outputs([args.reference, args.measured], [("--plot", args.plot, "plot")])
     cols = tuple(args.columns) if args.columns else None   # x, y from the header (x, y, z: --plane or --columns)
     from datasets.io import points_unit
     # each file in its header's unit (or --unit, else mm), converted to mm as every reader does
@@ -71,6 +73,7 @@ def run(args) -> int:
         d = res.to_dict(residuals=not args.no_residuals)
         d["units"] = {"length": "mm", "input_unit": canonical(meas_unit), "reference_unit": canonical(ref_unit)}
         d["warnings"] = list(dict.fromkeys([*d.get("warnings", []), *said]))
+        d["files_written"] = written_files()
         cli_options.print_json(json.dumps(d))
         return 0
     both = "" if canonical(ref_unit) == canonical(meas_unit) else f"; reference in {canonical(ref_unit)}"

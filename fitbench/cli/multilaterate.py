@@ -8,7 +8,7 @@ import numpy as np
 
 import fitbench.cli.options as cli_options
 import methods
-from fitbench.cli.guards import jsonable, run_method
+from fitbench.cli.guards import check_outputs, jsonable, run_method, written_files
 from fitbench.cli.options import add_reader_options, header_line, warn, write_text_atomic
 from methods import InvalidInputError
 from methods.units import canonical, warn_implausible
@@ -101,6 +101,7 @@ def run(args) -> int:
                                 f"got {args.degree}")
     if args.errors_csv and not args.identify:
         raise InvalidInputError("--errors-csv needs --identify (the 21 errors come from the identification)")
+    check_outputs([args.file, args.stations], [("--errors-csv", args.errors_csv, "geometric errors (CSV)")])
     data, units = read_multilateration(args.file, args.stations, unit=args.unit, skip_rows=args.skip_rows,
                                        with_units=True)
     args.unit = units["x"] if len(set(units.values())) == 1 else args.unit or "mm"  # the header's, else --unit / mm
@@ -160,6 +161,7 @@ def run(args) -> int:
                                      "basis": "coefficient of (axis position / travel)^j; E[XYZ]* and T* in mm, "
                                               "E[ABC]*, squareness and R* in rad",
                                      "parameters": ident.as_table(), "residual_rms": ident.residual_rms}
+        d["files_written"] = written_files()
         cli_options.print_json(json.dumps(jsonable(d)))
         return 0 if res.converged else 1
     vol = np.linalg.norm(res.volumetric_errors, axis=1)

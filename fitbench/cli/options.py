@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from methods import InvalidInputError
-from methods.files import writable_target, write_atomic
+from methods.files import writable_target
 from methods.units import UNIT_CHOICES, canonical, warn_implausible
 
 
@@ -107,22 +107,28 @@ def check_plot_path(path, option: str = "--plot") -> Path | None:
 
 
 def save_figure(fig, path, dpi=120) -> None:
-    """Write a matplotlib figure atomically (:func:`fitbench.plots.save_atomic`); a failed write is one line."""
+    """Write a matplotlib figure atomically (:func:`fitbench.plots.save_atomic`), with the command's other outputs
+    (:func:`fitbench.cli.guards.output_path`); a failed write is one line."""
+    from fitbench.cli.guards import output_path
     from fitbench.plots import save_atomic
     try:
-        save_atomic(fig, path, dpi=dpi)
+        with output_path(path) as tmp:
+            save_atomic(fig, tmp, dpi=dpi)
     except OSError as exc:
         raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
 def write_text_atomic(path, text: str) -> None:
-    """Write a text output file (:func:`methods.files.write_atomic`) into an existing folder; one line on failure."""
+    """Write a text output file atomically into an existing folder, with the command's other outputs
+    (:func:`fitbench.cli.guards.output_path`); one line on failure."""
+    from fitbench.cli.guards import output_path
     path = Path(path)
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise InvalidInputError(f"{path}: the folder {parent} does not exist; create it first")
     try:
-        write_atomic(path, text, make_parents=False, fsync=False)
+        with output_path(path) as tmp:
+            Path(tmp).write_bytes(text.encode("utf-8"))
     except OSError as exc:
         raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
 

@@ -11,7 +11,7 @@ import numpy as np
 
 import fitbench.cli.options as cli_options
 import methods
-from fitbench.cli.guards import jsonable
+from fitbench.cli.guards import check_outputs, jsonable, written_files
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
                                   add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances, quantity,
                                   refuse_decimal_comma, save_figure, test_conditions, verdict, verdict_lines,
@@ -233,6 +233,9 @@ def run(args) -> int:
 
     plot_path = check_plot_path(args.plot)
     report_path = check_plot_path(args.report, "--report")
+    check_outputs([args.file], [("--plot", args.plot, "plot"), ("--report", args.report, "test report"),
+                                *((f"--compensation {fmt}", path, f"compensation table ({fmt})")
+                                  for fmt, path in args.compensation or [])])
     instrument_u, u_explicit = instrument_length("--instrument-u", args.instrument_u)
     mpe, mpe_explicit = instrument_length("--mpe", args.mpe)
     if args.degree < 0:
@@ -431,6 +434,14 @@ def run(args) -> int:
             out["iso230_2_conformity"] = {"meets_minimum": not lacks, "lacks": lacks}
         # the axis as given (--axis; '' if not): fitbench history keeps each machine's axes apart
         out["details"] = {"conditions": test_conditions(args, axis=args.axis or "", files=[str(args.file)])}
+        if comp is not None:   # the table written (what the text's "compensation table ... written to" lines say)
+            out["compensation"] = {
+                "tables": [{"format": fmt, "path": path} for fmt, path in args.compensation],
+                "source": comp.attrs["source"], "interval_mm": comp.attrs["interval_mm"], "points": len(comp),
+                "first_mm": float(comp.position_mm.iloc[0]), "last_mm": float(comp.position_mm.iloc[-1]),
+                "reference_mm": float(comp.position_mm.iloc[comp.attrs["reference_index"]]),
+                "chosen": comp.attrs.get("chosen"), "warning": comp.attrs.get("warning")}
+        out["files_written"] = written_files()
         cli_options.print_json(json.dumps(jsonable(out)))
         return 0
     print("\n".join(lines))

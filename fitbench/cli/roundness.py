@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import fitbench.cli.options as cli_options
+from fitbench.cli.guards import check_outputs, written_files
 
 import json
 import warnings
@@ -50,6 +51,7 @@ def run(args) -> int:
     cutoff = parse_cutoff(args.cutoff, "--cutoff")
     plot_path = check_plot_path(args.plot)
     report_path = check_plot_path(args.report, "--report")
+    check_outputs([args.file], [("--plot", args.plot, "plot"), ("--report", args.report, "test report")])
     tolerances = parse_tolerances(args.tolerance, ("RONt", "RONp", "RONv", "RONq"))
     source, points, unit, notes, axes = read_profile_args(args, limit_mm=ROUNDNESS_LIMIT_MM, refuse_flat=True,
                                                         min_arc_deg=360.0)   # a closed profile
@@ -87,6 +89,7 @@ def run(args) -> int:
         d.pop("extra", None)
         d["warnings"] = list(dict.fromkeys([*d.get("warnings", []), *said]))
         d["details"] = {"conditions": test_conditions(args, files=[source])}
+        d["files_written"] = written_files()
         cli_options.print_json(json.dumps(d))
         return 0 if res.converged else 1
     print("\n".join(lines))

@@ -1,0 +1,184 @@
+"""The output files of a command (``--plot``, ``--report``, ``--compensation``, ``--errors-csv``): one that is an input
+file (by any name: ``./x``, a symlink, a hard link) or that another output names too is refused in one line before
+anything is computed or written; the outputs are written together once the command has ended, so a failure leaves
+every one as it was and says which were not written; ``--json`` lists the files written."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+
+import numpy as np
+import pytest
+
+from cli_calls import cli, one_error_line
+from conftest import REPO
+
+EXAMPLES = REPO / "docs" / "examples"
+
+
+def digest(path) -> str:
+    return hashlib.md5(path.read_bytes()).hexdigest()
+
+
+@pytest.fixture
+def axis(tmp_path):
+    """The example positioning test (deviations in µm, stated in its header) as tmp_path/in.csv."""
+    shutil.copy(EXAMPLES / "positioning.csv", tmp_path / "in.csv")
+    return tmp_path / "in.csv"
+
+
+@pytest.fixture(scope="module")
+def campaign(tmp_path_factory):
+    from datasets.multilateration import write_example
+    return write_example(tmp_path_factory.mktemp("ml"))
+
+
+def refused_untouched(called, files: dict, folder, *words) -> None:
+    """``called`` refused in one line holding ``words``; every file of ``files`` ({path: digest before}) is
+    unchanged and no other file appeared in ``folder``."""
+    one_error_line(called, *words)
+    assert called.stdout == ""
+    for path, before in files.items():
+        assert digest(path) == before, f"{path} was overwritten"
+    assert sorted(p.name for p in folder.iterdir()) == sorted(p.name for p in files if p.parent == folder)
+
+
+@pytest.mark.parametrize("name", ["in.csv", "./in.csv", "link.csv", "hard.csv"])
+def test_a_compensation_table_onto_the_measurement_is_refused(axis, name, monkeypatch):
+    # R7: `--compensation csv in.csv` with in.csv the laser test wrote the table over it, exit 0
+    folder = axis.parent
+    monkeypatch.chdir(folder)
+    if name == "link.csv":
+        (folder / name).symlink_to(axis)
+    elif name == "hard.csv":
+        os.link(axis, folder / name)
+    files = {axis: digest(axis)} | ({folder / name: digest(axis)} if name in ("link.csv", "hard.csv") else {})
+    got = cli("positioning", "in.csv", "--axis", "X1", "--compensation", "csv", name)
+    refused_untouched(got, files, folder, f"--compensation csv {name}", "input file", "another file name")
+
+
+def test_multilaterate_errors_csv_onto_a_data_file_is_refused(campaign):
+    meas, stations = campaign
+    files = {meas: digest(meas), stations: digest(stations)}
+    for target in (meas, stations):
+        got = cli("multilaterate", meas, "--stations", stations, "--identify", "--errors-csv", target)
+        refused_untouched(got, files, meas.parent, f"--errors-csv {target}", "input file")
+
+
+@pytest.mark.parametrize("command", ["fit", "roundness", "circular-test", "magnify"])
+def test_a_plot_onto_an_input_file_is_refused(tmp_path, command):
+    # a points file whose name has an image suffix is read all the same: the plot went over it
+    data = tmp_path / "data.svg"
+    files = {data: None}
+    if command == "magnify":   # a straight path and a trajectory 2 µm about it
+        x = np.linspace(0.0, 100.0, 201)
+        np.savetxt(data, np.c_[x, 0 * x], delimiter=",", header="x,y", comments="")
+        np.savetxt(tmp_path / "meas.csv", np.c_[x, 0.002 * np.sin(x / 10)], delimiter=",", header="x,y", comments="")
+        files[tmp_path / "meas.csv"] = None
+    else:
+        shutil.copy(EXAMPLES / {"fit": "trace.csv", "circular-test": "ballbar.csv"}.get(command, "roundness.csv"), data)
+    args = {"fit": ["fit", "circle.kasa", data], "roundness": ["roundness", data],
+            "circular-test": ["circular-test", data, "--nominal-radius", "150"],
+            "magnify": ["magnify", data, tmp_path / "meas.csv", "--eta", "100"]}[command]
+    got = cli(*args, "--plot", data)
+    refused_untouched(got, {f: digest(f) for f in files}, tmp_path, f"--plot {data}", "input file")
+
+
+def test_two_outputs_to_one_file_are_refused(axis):
+    # R7: two tables to one path kept only the second while both were reported written
+    folder = axis.parent
+    got = cli("positioning", axis, "--axis", "X1", "--compensation", "csv", folder / "same.txt",
+              "--compensation", "siemens-eec", folder / "same.txt")
+    refused_untouched(got, {axis: digest(axis)}, folder, "name the same file", "its own file name")
+    (folder / "link.pdf").symlink_to(folder / "r.pdf")
+    got = cli("positioning", axis, "--plot", folder / "r.pdf", "--report", folder / "link.pdf")
+    one_error_line(got, "--plot", "--report", "name the same file (by two names)")
+    assert not (folder / "r.pdf").exists()
+
+
+def test_an_output_in_a_missing_folder_is_refused_before_any_is_written(axis):
+    # R10: the second table's missing folder ended the command after the first was written, without a word
+    folder = axis.parent
+    (folder / "ok1.csv").write_text("an older table\n")
+    got = cli("positioning", axis, "--axis", "X1", "--compensation", "csv", folder / "ok1.csv",
+              "--compensation", "siemens-eec", folder / "nonexist" / "x.mpf")
+    one_error_line(got, "nonexist", "does not exist")
+    assert (folder / "ok1.csv").read_text() == "an older table\n"
+
+
+def test_a_failed_write_leaves_every_output_as_it_was_and_says_so(axis, monkeypatch):
+    import fitbench.cli.options as options
+    import fitbench.cli.positioning as positioning
+    from methods import InvalidInputError
+    real = options.write_text_atomic
+
+    def disk_full_for_mpf(path, text):
+        if str(path).endswith(".mpf"):
+            raise InvalidInputError(f"cannot write {path}: No space left on device")
+        real(path, text)
+
+    monkeypatch.setattr(positioning, "write_text_atomic", disk_full_for_mpf)
+    folder = axis.parent
+    (folder / "ok1.csv").write_text("an older table\n")
+    got = cli("positioning", axis, "--axis", "X1", "--plot", folder / "p.png", "--compensation", "csv",
+              folder / "ok1.csv", "--compensation", "siemens-eec", folder / "x.mpf")
+    one_error_line(got, "No space left", f"not written: {folder / 'ok1.csv'}")
+    assert (folder / "ok1.csv").read_text() == "an older table\n"
+    assert sorted(p.name for p in folder.iterdir()) == ["in.csv", "ok1.csv"]     # no temporary left
+
+
+def test_a_failed_move_into_place_names_what_was_written(tmp_path):
+    from fitbench.cli import guards
+    with pytest.raises(guards.InvalidInputError) as err:
+        with guards.staged_outputs():
+            for name in ("a.csv", "b.csv"):
+                guards.check_outputs([], [("--out", tmp_path / name, "table")])
+                with guards.output_path(tmp_path / name) as tmp:
+                    tmp.write_text(name)
+            (tmp_path / "b.csv").mkdir()        # b.csv became a folder since it was checked
+    assert f"written: {tmp_path / 'a.csv'}; not written: {tmp_path / 'b.csv'}" in str(err.value)
+    assert (tmp_path / "a.csv").read_text() == "a.csv"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv"]
+
+
+def test_json_lists_the_files_written(axis, campaign):
+    # R10: with --json the tables were written and the JSON said nothing of them
+    folder = axis.parent
+    got = cli("positioning", EXAMPLES / "positioning_periodic.csv", "--axis", "X1", "--compensation-from", "mean",
+              "--compensation", "siemens-eec", folder / "pj.mpf", "--compensation", "csv", folder / "pj.csv",
+              "--plot", folder / "p.png", "--json")
+    assert got.returncode == 0, got.stderr
+    d = json.loads(got.stdout)
+    written = {f["path"]: f for f in d["files_written"]}
+    assert set(written) == {str(folder / n) for n in ("pj.mpf", "pj.csv", "p.png")}
+    assert all((folder / n).is_file() for n in ("pj.mpf", "pj.csv", "p.png"))
+    assert written[str(folder / "pj.mpf")]["option"] == "--compensation siemens-eec"
+    comp = d["compensation"]
+    assert [t["format"] for t in comp["tables"]] == ["siemens-eec", "csv"] and comp["source"] == "mean"
+    assert comp["points"] <= 200 and comp["chosen"].startswith(f"every {comp['interval_mm']:g} mm")
+    meas, stations = campaign
+    got = cli("multilaterate", meas, "--stations", stations, "--identify", "--errors-csv", folder / "e.csv", "--json")
+    d = json.loads(got.stdout)
+    assert [f["path"] for f in d["files_written"]] == [str(folder / "e.csv")] and (folder / "e.csv").is_file()
+
+
+def test_every_output_option_is_checked():
+    """Every option of a subcommand that names a file to write is one the tests above refuse onto an input (a new
+    output option must be passed to fitbench.cli.guards.check_outputs and added here)."""
+    from fitbench.cli import build_parser
+    parser = build_parser()
+    found = set()
+    for name, sub in parser.subcommands.items():
+        for action in sub._actions:
+            metavar = " ".join(action.metavar) if isinstance(action.metavar, tuple) else str(action.metavar or "")
+            if action.option_strings and any(w in metavar for w in ("FILE", "PNG", ".pdf")):
+                found.add((name, action.option_strings[0]))
+    inputs = {("multilaterate", "--stations")}
+    # history's --plot: its input is a folder (a plot onto it is refused as a folder)
+    covered = {("fit", "--plot"), ("roundness", "--plot"), ("roundness", "--report"), ("circular-test", "--plot"),
+               ("circular-test", "--report"), ("magnify", "--plot"), ("positioning", "--plot"),
+               ("positioning", "--report"), ("positioning", "--compensation"), ("multilaterate", "--errors-csv"),
+               ("history", "--plot")}
+    assert found - inputs == covered

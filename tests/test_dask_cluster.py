@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 
 from conftest import stop_processes, subprocess_env
+from results_csv import non_timing
 
 pytestmark = pytest.mark.system  # starts a Dask scheduler and workers as separate processes
 
@@ -56,11 +57,6 @@ def wait_listening(proc: subprocess.Popen, port: int, timeout: float = 300.0) ->
         except OSError:
             time.sleep(0.1)
     raise AssertionError(f"the scheduler did not listen on port {port} within {timeout:.0f} s")
-
-
-def non_timing(path: Path) -> pd.DataFrame:
-    df = pd.read_csv(path)
-    return df[[c for c in df.columns if not c.startswith("time_")]]
 
 
 @pytest.mark.skipif(DASK is None, reason="the dask command line (package distributed) is not installed")

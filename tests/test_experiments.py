@@ -12,6 +12,7 @@ import pytest
 
 import methods
 from conftest import REPO, quick_study, while_storing_rows
+from results_csv import non_timing
 from experiments import config as configs
 from experiments.study import ConfigError
 from experiments.run import main, run_study
@@ -50,8 +51,7 @@ def tiny(tmp_path, name="tiny", reps=3, extra=""):
 
 
 def table(out, name="tiny"):
-    df = pd.read_csv(out / name / "results.csv")
-    return df[[c for c in df.columns if not c.startswith("time_")]]
+    return non_timing(out / name / "results.csv")
 
 
 def test_list_and_defaults(capsys):

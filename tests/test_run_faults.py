@@ -17,6 +17,7 @@ import pandas as pd
 import pytest
 
 from conftest import stored_rows, subprocess_env, while_storing_rows
+from results_csv import non_timing
 
 pytestmark = pytest.mark.slow  # kills, interrupts and restarts whole study runs
 
@@ -109,11 +110,6 @@ def wait_rows(proc, db: Path, at_least: int, timeout=120):
         time.sleep(0.05)
     raise AssertionError("no rows were stored in time")
 
-
-
-def non_timing(path: Path) -> pd.DataFrame:
-    df = pd.read_csv(path)
-    return df[[c for c in df.columns if not c.startswith("time_")]]
 
 
 def no_survivors(pids, within=60.0):

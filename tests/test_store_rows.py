@@ -8,7 +8,8 @@ import pandas as pd
 import pytest
 
 from experiments.store import RowStore
-from test_run_faults import non_timing, run_here, study
+from results_csv import non_timing
+from test_run_faults import run_here, study
 
 
 @pytest.mark.parametrize("text", ["[]", "1", '"ok"', "null", " [1, 2]", "\n{}", "NaN", "[NaN]"])

@@ -539,6 +539,15 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     return out
 
 
+def first_clause(findings: str) -> str:
+    """A findings text's first sentence, or its part before the first '; ' when that part is a statement of its own;
+    a '; ' after a ':' separates the items of a list ("...: nearest: 3 of 8; offset ...: 4 of 4."), which ends with the
+    sentence, not at its first item."""
+    sentence = re.split(r"(?<=\.)\s", findings.strip(), maxsplit=1)[0]
+    head = sentence.split("; ", 1)[0]
+    return (sentence if ":" in head else head).rstrip(".;")
+
+
 def _abstract(entries, verdicts, carried: dict | None = None, run_date: str | None = None) -> str:
     """What was compared, the main numbers (each study's findings, first sentence) and what reproduced: the verdicts
     the last run made apart from those it carried over from an earlier one (``carried``: study -> verdict entry,
@@ -552,7 +561,7 @@ def _abstract(entries, verdicts, carried: dict | None = None, run_date: str | No
     for e in done:
         findings = str((e[5] or {}).get("findings") or "").strip()
         if findings:
-            first = re.split(r"(?<=[.;])\s", findings, maxsplit=1)[0].rstrip(".;")
+            first = first_clause(findings)
             parts.append(f"{e[3].split(':')[0].strip()}: {first}.")
     judged = {k: lines[0][0] for k, lines in verdicts.items() if lines[0][0].startswith("Reproducibility")
               and not lines[0][0].endswith("out of date")}

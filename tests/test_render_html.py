@@ -69,11 +69,12 @@ def test_coloured_table():
     assert ratio_colour(1.0) != ratio_colour(3.0) != ratio_colour(np.inf)
     colours = cell_colours(html)
     assert len(colours) == 9
-    assert colours[1, 2] == dict(BANDS)[5.0] and ">8.00<br><small>4×</small>" in html       # p2: 8 = 4 x the best
+    assert colours[1, 2] == dict(BANDS)[5.0] and ">8.0<br><small>4×</small>" in html        # p2: 8 = 4 x the best
     assert colours[0, 0] == colours[0, 2] == dict(BANDS)[1.0]                            # p1: a tie for the best
     assert colours[2, 0] == FAIL_COLOUR                                                   # p3: kasa failed
     big = coloured_table(pd.DataFrame({"a": [4.07e8, 2.5], "b": [1.5e-5, 1e-4]}), digits=3)
-    assert "4.07×10⁸" in big and "1.50×10⁻⁵" in big       # one format per column (experiments.render.numbers)
+    assert "4.07×10⁸" in big and "1.5×10⁻⁵" in big        # one format per column (experiments.render.numbers),
+    assert "1.0×10⁻⁴" in big                               # with no more digits than its values carry
     with pytest.raises(ValueError):
         coloured_table(pd.DataFrame({"a": [-1.0]}))
 

@@ -14,7 +14,9 @@ its values lie beyond: then every cell is scientific (one exponent per cell, one
 when the largest magnitude is below 1e-3. Never ×10⁰: a mantissa whose exponent is 0 prints alone (as
 siunitx prints ``2.229e0`` in the PDF), which only a column spanning more than about six decades can show. ``table_formats`` chooses the
 format jointly for the columns that share a unit (semi-axes a and b of 299.024 and 299.002 mm stay apart even
-though each column alone has no spread) and gives every one of them that format.
+though each column alone has no spread) and gives every one of them that format. No format prints more decimals
+or significant digits than the values carry (``within_given``): a column a study rounded to 95.5 prints 95.5, not
+95.50, since the renderer alone decides the digits shown and a padding zero would claim a digit the data lost.
 """
 from __future__ import annotations
 
@@ -74,10 +76,42 @@ def _distinct(v: np.ndarray, scale: float) -> int:
     return 1 + int(np.sum(np.diff(q) > MATTERS))
 
 
+def given_digits(values) -> tuple[int, int]:
+    """(decimals, significant digits) the numbers carry: the most of either in the shortest decimal that gives
+    back each value (95.5 -> 1 decimal, 3 digits; 0.348 -> 3, 3; an unrounded mean 95.48213... -> 14, 16). A value
+    rounded before it reached the renderer has no digit beyond these: printing more would pad it with zeros that
+    claim digits the data does not have (95.50 for a coverage of 95.48 % rounded to 95.5)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v) & (v != 0)]
+    decimals = significant = 0
+    for x in v:
+        text = np.format_float_positional(abs(float(x)), trim="-")
+        whole, _, frac = text.partition(".")
+        decimals = max(decimals, len(frac))
+        significant = max(significant, len((whole + frac).lstrip("0")))
+    return decimals, significant
+
+
+def within_given(fmt: NumberFormat, values) -> NumberFormat:
+    """``fmt`` with no more decimals (fixed) or significant digits (significant, exponent) than the ``values``
+    carry (:func:`given_digits`): a printed digit is a digit of the data, never a padding zero."""
+    if fmt.kind not in ("fixed", "significant", "exponent"):
+        return fmt
+    decimals, significant = given_digits(values)
+    if fmt.kind == "fixed":
+        return NumberFormat("fixed", min(fmt.decimals, decimals))
+    return NumberFormat(fmt.kind, max(0, min(fmt.decimals, significant - 1)))
+
+
 def column_format(values, digits: int = 3) -> NumberFormat:
-    """The format of a column of numbers (see the module docstring)."""
+    """The format of a column of numbers (see the module docstring), never with more digits than the values
+    carry (:func:`within_given`)."""
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
+    return within_given(_column_format(v, digits), v)
+
+
+def _column_format(v: np.ndarray, digits: int) -> NumberFormat:
     digits = max(1, int(digits))
     if v.size == 0:
         return NumberFormat("fixed", 0)
@@ -142,7 +176,9 @@ def table_formats(df, columns, units: dict, digits: int = 3, declared: dict | No
         shared = joint.kind == "fixed" and all(f.kind in ("fixed", "integer") for f in alone.values())
         for c in cols:
             out[c] = joint if shared else alone[c]
-    out.update({c: f for c, f in declared.items() if c in columns})
+    # a declared number of decimals too is never more than the values carry
+    out.update({c: within_given(f, pd.to_numeric(df[c], errors="coerce").to_numpy(float))
+                for c, f in declared.items() if c in columns})
     return {c: out[c] for c in columns}
 
 

@@ -198,7 +198,7 @@ class CircularTestStudy(Study):
         polar_plot(cw, ccw, ev, target / "polar.png", title="LOLA HBG 130 (synthetic scenario)",
                    save=lambda fig, path: style.save(fig, path, dpi=120))      # PNG and the vector PDF
         write_atomic(target / "tables.txt", "\n".join(lines) + "\n")
-        iso_rows = pd.DataFrame([{"figure": k, "synthetic scenario": round(v * 1e3, 2), "published": PAPER_ISO.get(k, np.nan)}
+        iso_rows = pd.DataFrame([{"figure": k, "synthetic scenario": v * 1e3, "published": PAPER_ISO.get(k, np.nan)}
                                  for k, v in iso.items()])
         diag_rows = pd.DataFrame([{"source": k, "estimate": v["value"], "u": v["u"], "unit": v["unit"],
                                    "injected": injected.get(k, np.nan)} for k, v in diagnostics.items()])
@@ -206,7 +206,7 @@ class CircularTestStudy(Study):
         t = (_um(truth["circle_center"][0], xc0), _um(truth["circle_center"][1], yc0))
         centre_err = np.hypot(_um(circ["center_x"], xc0) - t[0], _um(circ["center_y"], yc0) - t[1])
         fits = df[["method", "path", "status", "center_x", "center_y", "radius", "semi_axis_a", "semi_axis_b"]].copy()
-        fits["center_x"], fits["center_y"] = _um(fits["center_x"], xc0).round(2), _um(fits["center_y"], yc0).round(2)
+        fits["center_x"], fits["center_y"] = _um(fits["center_x"], xc0), _um(fits["center_y"], yc0)
         fits = fits.rename(columns={"center_x": "x_c - nominal [µm]", "center_y": "y_c - nominal [µm]", "radius": "R [mm]",
                                     "semi_axis_a": "a [mm]", "semi_axis_b": "b [mm]"})
         values = {"iso230_4_um": {k: v * 1e3 for k, v in iso.items()}, "iso230_4_published_um": PAPER_ISO,
@@ -223,8 +223,9 @@ class CircularTestStudy(Study):
         scen = "synthetic LOLA HBG 130 circular test (R 299 mm, the paper's scenario; measured data not published)"
         tables = [Table(caption=f"Fitted centres (about the nominal centre) and radii or semi-axes of each method and path, {scen}",
                         data=fits, unit="µm, mm",   # radii and axes to 0.1 µm, as the paper prints them (299.0132 mm)
-                        decimals={"R [mm]": 4, "a [mm]": 4, "b [mm]": 4}),
-                  Table(caption=f"ISO 230-4 figures of the {scen}, and the published values", data=iso_rows, unit="µm"),
+                        decimals={"x_c - nominal [µm]": 2, "y_c - nominal [µm]": 2, "R [mm]": 4, "a [mm]": 4, "b [mm]": 4}),
+                  Table(caption=f"ISO 230-4 figures of the {scen}, and the published values", data=iso_rows, unit="µm",
+                        decimals={"synthetic scenario": 2}),
                   Table(caption=f"Error sources estimated from the two runs (cw, ccw) of the {scen}, with their standard "
                                 "uncertainty u, against the injected values", data=diag_rows)]
         fig = Figure(caption=f"Magnified radial deviation of both runs [µm] in polar form with the fitted circles, {scen}",

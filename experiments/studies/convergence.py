@@ -131,7 +131,7 @@ class ConvergenceStudy(Study):
             log(f"  {arc:.0f}° arc " + " " * 28 + "".join(f"{c:>7g}" for c in piv.columns))
             for (m, p), vals in piv.iterrows():
                 log(f"    {_label(m, p):<40}" + "".join(f"{v:7.2f}" for v in vals))
-            shown = (piv * 100).round(1)
+            shown = piv * 100
             shown.columns = [f"{c:g} R" for c in piv.columns]
             shown.index = [_label(m, p) for m, p in piv.index]
             shown = shown.rename_axis("method").reset_index()

@@ -141,7 +141,8 @@ class MagnificationStudy(Study):
                    f"{len(cfg['examples'])} contouring examples (eta 50 to 1000, dimensionless); 'skipped': the algorithm "
                    "does not apply")
         figs = [Figure(caption="Continuity (left, log scale) and loops (right) of the magnified trajectory per contouring "
-                               "example and algorithm variant", file="magnification_continuity.png")]
+                               "example and algorithm variant; a variant that does not apply to an example (skipped) "
+                               "has no value and no marker: its row says 'skipped'", file="magnification_continuity.png")]
         if panels:
             figs.append(Figure(caption="Magnified trajectories (positions in mm, errors magnified by η) by the conventional "
                                        "nearest-point rule and by offset-algorithm variants", file="magnification.png"))
@@ -152,7 +153,7 @@ class MagnificationStudy(Study):
 def continuity_figure(results: pd.DataFrame, path, *, threshold: float = 1.0):
     """Continuity (largest magnified step / (η × largest measured step); about 1 or less: continuous, left
     panel) and loops of the magnified trajectory (right panel) per example and algorithm as dot charts;
-    a run the algorithm does not apply to is marked 'skipped'.
+    a run the algorithm does not apply to has no marker: the word 'skipped' at the left edge of its row.
     ``results``: results/magnification/results.csv (dataset, method, status, continuity, loops)."""
     from experiments.render import style
     plt = style.plotting()
@@ -174,12 +175,11 @@ def continuity_figure(results: pd.DataFrame, path, *, threshold: float = 1.0):
             loops = np.array([rows.at[ex, "loops"] if o else np.nan for ex, o in zip(examples, ok)], float)
             ax.plot(cont, yy, kw["marker"], color=kw["color"], ms=5, ls="none", label=label)
             axl.plot(loops, yy, kw["marker"], color=kw["color"], ms=5, ls="none")
-            if (~ok).any():
-                for axis in (ax, axl):
-                    axis.plot(np.full((~ok).sum(), np.nan), yy[~ok], "x")   # keeps the limits
-                ax.plot(np.full((~ok).sum(), threshold), yy[~ok], "x", color=kw["color"], ms=5, mew=1.2,
-                        label="_skipped")
-        ax.plot([], [], "x", color="0.3", label="skipped (not applicable)")
+            # a variant that does not apply to an example has no value: no marker on either axis (at 1 it would read
+            # as continuity 1), a word at the panel's left edge in the variant's colour
+            for yk in yy[~ok]:
+                ax.text(0.01, yk, "skipped", transform=ax.get_yaxis_transform(), ha="left", va="center",
+                        color=kw["color"], fontsize=style.MIN_FONT_PT, fontstyle="italic")
         ax.axvline(threshold, color="0.2", lw=0.9, ls="--", label="continuous (≤ 1)")
         ax.set_xscale("log")
         style.plain_log_ticks(ax, "x")

@@ -369,7 +369,7 @@ class MultilaterationStudy(Study):
         if len(st):
             tables.append(Table(caption=f"Stations located by each scheme in one simulated campaign ({scen_label}): "
                                         "difference from the true station and dead path (the paper's tables 5-9; the "
-                                        "joint adjustment in its gauge)", data=st.round(3), unit="µm"))
+                                        "joint adjustment in its gauge)", data=st, unit="µm"))
         keep = ["dataset", "stations", "method", "runs", "station_error_um", "volumetric_error_rms_um",
                 "aligned_error_rms_um", "model_error_rms_um"]
         tables.append(Table(caption=f"Median over {runs} simulated LaserTRACER campaigns of the MCV 754 per scenario: largest "
@@ -388,15 +388,29 @@ class MultilaterationStudy(Study):
                                     f"after alignment over {runs} simulated campaigns; schemes whose medians lie within "
                                     f"verify's tolerance ({tie} each) of the lowest tie and are named together (by name), "
                                     "the runner-up is the most accurate scheme outside the tie",
-                            data=win.round(3).rename(columns={"best": "most accurate", "tied": "n tied", "best_rms_um": "median RMS [µm]",
+                            data=win.rename(columns={"best": "most accurate", "tied": "n tied", "best_rms_um": "median RMS [µm]",
                                                      "runner_up": "runner-up", "runner_up_rms_um": "runner-up RMS [µm]"}),
                             unit="µm", digits=3))
         if len(check):
+            spec = cfg.get("conditioning_check") or {}
+            pub, same, ref = (str(spec.get(k, d)).removeprefix("multilateration.") for k, d in (
+                ("published", "case B"), ("same_estimator", "centred"), ("reference", "case A")))
             chk = check[["dataset", "stations", "published_vs_centred_um", "kappa_points_published", "kappa_points_centred",
-                         "case_b_vs_truth_um", "case_a_vs_truth_um"]]
-            tables.append(Table(caption="Exact lengths (simulated, no noise): what the published Case B's conditioning costs "
-                                        "in double precision (its points against the centred solution of the same "
-                                        "equations) and its error against the truth [µm]; condition numbers dimensionless",
+                         "case_b_vs_truth_um", "case_a_vs_truth_um"]].rename(columns={
+                             "published_vs_centred_um": f"{pub} vs {same}, largest [µm]",
+                             "kappa_points_published": f"kappa points {pub}", "kappa_points_centred": f"kappa points {same}",
+                             "case_b_vs_truth_um": f"{pub} vs truth, largest [µm]",
+                             "case_a_vs_truth_um": f"{ref} vs truth, largest [µm]"})
+            tables.append(Table(caption=f"Exact lengths (simulated, no noise): what the published Case B's ({pub}) "
+                                        "conditioning costs in double precision (the largest coordinate difference "
+                                        f"between its points and those of the centred form of the same equations, {same}), "
+                                        f"and the error against the truth of {pub} and of Case A with the distance residuals "
+                                        f"({ref}, eq. 7): the largest coordinate error max |X - X_true| over all points "
+                                        "and x, y, z, without alignment [µm]. With located stations it holds the rigid "
+                                        "motion that self-located stations cannot observe and the error of step 1 (the "
+                                        "stations fitted to the nominal points), so it is not the RMS (raw or after the best "
+                                        "rigid alignment) of the accuracy table; with known stations the frame is the "
+                                        "truth's. Condition numbers dimensionless",
                                 data=chk, unit="µm", digits=3))
         counts = winner_counts(win)
         values = {"winners": win.to_dict(orient="records"), "best_counts": counts.to_dict(),

@@ -143,8 +143,8 @@ class PositioningStudy(Study):
                     + f"; lowest coverage: {100 * low:.1f} % ({joined(b for b, v in worst.items() if v == low)}).")
         reps = int(df.groupby(["dataset", "method"]).size().max())
         shown = table.rename(columns={"dataset": "scenario", "method": "band", "halfwidth_um": "mean half-width [µm]",
-                                      "error_rms_um": "RMS error [µm]"}).round(3)
-        shown["coverage"] = (shown["coverage"] * 100).round(1)
+                                      "error_rms_um": "RMS error [µm]"})
+        shown["coverage"] = shown["coverage"] * 100   # unrounded: the report chooses the digits shown
         shown = shown.rename(columns={"coverage": "coverage [%]"})
         caption = (f"Coverage of the true deviation curve (approach +) by each band at {cfg.get('positions_per_test', 50)} "
                    f"random positions per test, mean band half-width and RMS error of the band's centre line; "

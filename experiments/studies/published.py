@@ -154,7 +154,7 @@ class PublishedStudy(Study):
                        if len(comp) > n else "") + ".")
         shown = pd.DataFrame({"set": comp["dataset"] + comp["variant"].map(lambda v: "" if v == "as published" else f" ({v})"),
                               "column": comp["column"], "published": comp["published"],
-                              "reproduced": comp["reproduced_value"].round(7), "difference": comp["difference"].round(7),
+                              "reproduced": comp["reproduced_value"], "difference": comp["difference"],
                               "explanation": [_explanation(r) for r in comp.to_dict(orient="records")]})
         caption = ("Circularity of the roundness paper's published profiles (table 1, roundness sets 1-3): published "
                    "against reproduced from the printed coordinates, and where not reproduced the 99 % range that "
@@ -163,8 +163,8 @@ class PublishedStudy(Study):
                              "printed digits allow, relative to the published value [µm]; the axis is symmetric "
                              "logarithmic (linear within ±1 µm, logarithmic beyond: equal steps are 1, 3, 10 µm)",
                      file="published.png")
-        # the paper's values as printed (0.029807, not 0.0298); reproduced and difference to the 7 decimals they are
-        # rounded to, so that published - reproduced reads as the difference column says
+        # the paper's values as printed (0.029807, not 0.0298); reproduced and difference shown to 7 decimals (the
+        # report rounds the unrounded values), so that published - reproduced reads as the difference column says
         table = Table(caption=caption, data=shown, unit="mm", exact=("published",),
                       decimals={"reproduced": 7, "difference": 7})
         return Analysis(tables=[table], figures=[fig], values=values,

@@ -206,7 +206,7 @@ class RoundnessStudy(Study):
                     "points per cut-off wavelength (ISO 12181-2).")
         shown = table.copy()
         for k in REFS:
-            shown[f"certified_{k}"] = (100 * shown[f"certified_{k}"]).round(0)
+            shown[f"certified_{k}"] = 100 * shown[f"certified_{k}"]
         shown = shown.rename(columns={"dataset": "profile", "cutoff_upr": "cut-off [UPR]",
                                       **{f"RONt_{k}_um": f"RONt {k.upper()} [µm]" for k in REFS},
                                       **{f"certified_{k}": f"{k.upper()} certified [%]" for k in REFS}})

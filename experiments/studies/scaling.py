@@ -78,5 +78,5 @@ class ScalingStudy(Study):
                    "against N, and the log-log slope for N >= 1000")
         fig = Figure(caption="Median runtime per fit [ms] against the number of points N, per method family (log-log), "
                              "synthetic circles and ellipses; the log-log slope for N >= 1000 in the legend", file="scaling.png")
-        return Analysis(tables=[Table(caption=caption, data=shown.round(3), unit="ms")], figures=[fig], values=values,
+        return Analysis(tables=[Table(caption=caption, data=shown, unit="ms")], figures=[fig], values=values,
                         findings=findings)

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from cli_calls import cli, one_error_line
+from profile_lines import circle_lines
 
 
 def polar_file(path, angles, deviation_um, header="Angle,Radial deviation [um]", direction=None):
@@ -212,12 +213,6 @@ def test_an_overlap_whose_angles_do_not_repeat_is_refused_too(tmp_path):
     gon = np.arange(4000) * 0.1
     q = polar_file(tmp_path / "gon.csv", gon, 2.0 * np.cos(np.radians(3 * 0.9 * gon)), header="Angle [deg],Deviation [um]")
     one_error_line(cli("roundness", q), "covers 399.9°", "in gon (400 a revolution), multiply the column by 0.9")
-
-
-def circle_lines(radius, n=360, phase=0.0):
-    t = np.radians(np.arange(n) * 360.0 / n + phase)
-    r = radius + 0.0015 * np.cos(3 * t)
-    return [f"{x:.7f},{y:.7f}" for x, y in zip(r * np.cos(t), r * np.sin(t))]
 
 
 def test_two_profiles_separated_by_a_blank_line_are_refused(tmp_path):

@@ -9,12 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from cli_calls import cli, one_error_line
-
-
-def circle_lines(radius, n=360, phase=0.0):
-    t = np.radians(np.arange(n) * 360.0 / n + phase)
-    r = radius + 0.0015 * np.cos(3 * t)
-    return [f"{x:.7f},{y:.7f}" for x, y in zip(r * np.cos(t), r * np.sin(t))]
+from profile_lines import circle_lines
 
 
 def two_profiles(tmp_path, name, between):

@@ -8,7 +8,8 @@ The table (``compensation_table``) is one equally spaced grid for every format:
   ``interval`` the step is chosen so that the longer side of the travel from R is a whole number of steps
   (within 0.001 mm, the step being a multiple of 0.001 mm, no coarser than the smallest target spacing);
   with ``interval`` the table goes on to the first grid point at or beyond each end, and must reproduce the
-  curve at the targets as the controller interpolates it (``_check_represents``: a coarser step is refused).
+  curve at the targets as each format's controller applies it (``APPLIED``: linearly, or stepwise for FANUC;
+  ``_check_represents``: a coarser step is refused).
   Beyond the targets the values are held at those of the end targets (the model is never extrapolated); the
   header of every file says what range it covers and how far it was extended.
 * values are the mean bidirectional deviation x(P) (ISO 230-2: deviation = reached - target; the mean of
@@ -93,10 +94,12 @@ def _grid_range(ref_q: int, lo_q: int, hi_q: int, step_q: int) -> tuple[int, int
 
 
 def compensation_table(res, data, *, interval: float | None = None, source: str = "model",
-                       reference_mm: float | None = None):
+                       reference_mm: float | None = None, formats=()):
     """The table (see the module docstring) as a DataFrame with columns position_mm, deviation_mm,
     deviation_up_mm, deviation_down_mm, compensation_mm and the grid in ``.attrs``. ``res`` is a
-    positioning.gls_polynomial result (or positioning.iso230_2 with ``source='mean'``), ``data`` its input."""
+    positioning.gls_polynomial result (or positioning.iso230_2 with ``source='mean'``), ``data`` its input.
+    ``formats``: the formats it is written in; the coarse-interval guard checks the table as each one's controller
+    applies it (:data:`APPLIED`; none given: linearly)."""
     import pandas as pd  # loaded when a table is made (the fitbench command stays light)
     P = np.asarray(data.targets, float)
     if P.size < 2 or not np.all(np.diff(P) > 0):
@@ -137,10 +140,11 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     up = curves.get("up", np.full_like(pos, np.nan))
     down = curves.get("down", np.full_like(pos, np.nan))
     mean = np.mean([curves[d] for d in dirs], axis=0)
+    rules = sorted({APPLIED.get(f, "linear") for f in formats} or {"linear"})
     if interval is not None:
-        _check_represents(res, data, source, pos, mean, step_q * NM, ref_q, lo_q, hi_q)
+        _check_represents(res, data, source, pos, mean, step_q * NM, ref_q, lo_q, hi_q, rules, formats)
     else:
-        _warn_if_missed(res, data, source, pos, mean, step_q * NM)
+        _warn_if_missed(res, data, source, pos, mean, step_q * NM, -k_lo, rules, formats)
     at_ref = float(mean[-k_lo])
     table = pd.DataFrame({"position_mm": pos, "deviation_mm": mean, "deviation_up_mm": up,
                           "deviation_down_mm": down, "compensation_mm": -(mean - at_ref)})
@@ -152,11 +156,21 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     return table
 
 
-#: a table given by --interval must reproduce the curve at the targets, interpolated linearly between its points
-#: as the SINUMERIK does, within this share of the curve's span (or REPRESENT_FLOOR_MM); a default table that
-#: does not is warned about (the model's default table misses by about 1 %)
+#: a table given by --interval must reproduce the curve at the targets, as each requested format's controller applies
+#: it, within this share of the curve's span (or REPRESENT_FLOOR_MM); a default table that does not is warned about
+#: (the model's default table misses by about 1 %)
 REPRESENT_SHARE = 0.1
 REPRESENT_FLOOR_MM = 0.0005
+#: how each format's controller applies the table between its points. SINUMERIK LEC: linear interpolation between
+#: the interpolation points (840D sl Function Manual 01/2008 p. 355); the CSV's reader is told the same. FANUC pitch
+#: error compensation: stepwise, one increment per section output as the axis passes the point, so between two
+#: points the compensation stays at the value of the point on the reference position's side (0i-PB parameter manual
+#: B-63980EN/01 p. 99-100: "the compensation value is output at the compensation position No. corresponding to each
+#: section"; the write_fanuc_pitch docstring)
+APPLIED = {"csv": "linear", "siemens-eec": "linear", "fanuc-pitch": "stepwise"}
+HOW_APPLIED = {"linear": "interpolated linearly between its points as the SINUMERIK does",
+               "stepwise": "applied stepwise as the FANUC does, each point's value held over the interval after it "
+                           "seen from the reference point"}
 
 
 def _curves(res, data, source: str, pos) -> dict:
@@ -169,55 +183,78 @@ def _curves(res, data, source: str, pos) -> dict:
     return {d: np.interp(x, P, res.per_target[f"mean_{d}"]) for d in data.directions}
 
 
-def _miss(res, data, source: str, pos, mean) -> tuple[float, float]:
-    """(largest miss at the targets of the table interpolated linearly between its points, the span of the
-    curve there), mm."""
+def applied(pos, values, x, rule: str, ref_index: int):
+    """The table (``values`` at the grid ``pos``) at positions ``x`` as a controller applies it: ``linear``
+    interpolation (the end values beyond), or ``stepwise`` (FANUC): at x the value of the last grid point reached
+    from the reference point pos[ref_index], the end values beyond."""
+    if rule == "linear":
+        return np.interp(x, pos, values)
+    step = pos[1] - pos[0] if len(pos) > 1 else 1.0
+    t = (np.asarray(x, float) - pos[ref_index]) / step
+    k = np.trunc(t + np.sign(t) * 1e-9).astype(np.int64) + ref_index    # a point reached exactly counts (1e-9 step)
+    return np.asarray(values)[np.clip(k, 0, len(pos) - 1)]
+
+
+def _miss(res, data, source: str, pos, mean, rule: str = "linear", ref_index: int = 0) -> tuple[float, float]:
+    """(largest miss at the targets of the table as a controller applies it by ``rule`` (:func:`applied`), the
+    span of the curve there), mm."""
     P = np.asarray(data.targets, float)
     curves = _curves(res, data, source, P)
     truth = np.mean([curves[d] for d in data.directions], axis=0)
-    return float(np.max(np.abs(np.interp(P, pos, mean) - truth))), float(np.ptp(truth))
+    return float(np.max(np.abs(applied(pos, mean, P, rule, ref_index) - truth))), float(np.ptp(truth))
 
 
-def _warn_if_missed(res, data, source, pos, mean, step) -> None:
+def _worst_miss(res, data, source, pos, mean, ref_index, rules):
+    """(miss, span, rule) of the rule under which the table misses the curve at the targets most."""
+    return max((*_miss(res, data, source, pos, mean, r, ref_index), r) for r in rules)
+
+
+def _formats_of(rule: str, formats) -> str:
+    names = [f for f in formats if APPLIED.get(f, "linear") == rule]
+    return f" for {', '.join(names)}" if names else ""
+
+
+def _warn_if_missed(res, data, source, pos, mean, step, ref_index=0, rules=("linear",), formats=()) -> None:
     """The default table is not refused (no step is asked for), but a table that misses the curve at the targets
     beyond the bound of ``_check_represents`` is warned about: means at irregular targets with a periodic error
     are a broken line that an equally spaced grid cannot pass through (up to 36 % of the span)."""
     import warnings
-    miss, span = _miss(res, data, source, pos, mean)
+    miss, span, rule = _worst_miss(res, data, source, pos, mean, ref_index, rules)
     if miss > max(REPRESENT_SHARE * span, REPRESENT_FLOOR_MM):
         what = "the model" if source == "model" else "the means"
-        warnings.warn(f"the compensation table (every {step:g} mm, equally spaced as the controllers require) misses "
-                      f"{what} at the targets by up to {miss * 1e3:.3g} µm of the {span * 1e3:.3g} µm the curve spans: "
+        warnings.warn(f"the compensation table{_formats_of(rule, formats)} (every {step:g} mm, equally spaced as the "
+                      f"controllers require), {HOW_APPLIED[rule]}, misses {what} at the targets by up to {miss * 1e3:.3g} µm of the {span * 1e3:.3g} µm the curve spans: "
                       "the controller will not reproduce the measured curve there; a finer --interval follows it "
                       "closer", UserWarning, stacklevel=3)
 
 
-def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q) -> None:
+def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q, rules=("linear",), formats=()) -> None:
     """Refuse an ``--interval`` whose table, as the controller interpolates it, misses the measured curve at the
     targets by more than REPRESENT_SHARE of its span (a coarse step: --interval 700 left 15.6 of 22.6 µm),
     naming the coarsest step of the form travel / k that would do."""
     P = np.asarray(data.targets, float)
-    miss, span = _miss(res, data, source, pos, mean)
+    ref_index = int(round((ref_q * NM - pos[0]) / step))
+    miss, span, rule = _worst_miss(res, data, source, pos, mean, ref_index, rules)
     tol = max(REPRESENT_SHARE * span, REPRESENT_FLOOR_MM)
     travel = float(P[-1] - P[0])
     if miss <= tol and step <= travel:
         return
     spacing = np.diff(P)
     ok = None
-    for k in range(1, 4 * P.size + 1):        # candidate steps, coarse to fine (a few dozen tables of few points)
+    for k in range(1, 20 * P.size + 1):       # candidate steps, coarse to fine (a few hundred small tables at most)
         q = math.ceil(travel / k / NM / AUTO_QUANTUM - 1e-6) * AUTO_QUANTUM     # rounded up: the grid reaches the
         # last target at its k-th step (within k x 0.001 mm), not one step beyond it
         if q <= 0 or q * NM >= step:
             continue
-        grid_q = ref_q + q * np.arange(*np.add(_grid_range(ref_q, lo_q, hi_q, q), (0, 1)), dtype=np.int64)
-        g = grid_q * NM
+        k_lo, k_hi = _grid_range(ref_q, lo_q, hi_q, q)
+        g = (ref_q + q * np.arange(k_lo, k_hi + 1, dtype=np.int64)) * NM
         m = np.mean(list(_curves(res, data, source, g).values()), axis=0)
-        if _miss(res, data, source, g, m)[0] <= tol:
+        if _worst_miss(res, data, source, g, m, -k_lo, rules)[0] <= tol:
             ok = q * NM
             break
     what = "the model" if source == "model" else "the means"
     why = (f"longer than the measured travel ({travel:g} mm)" if step > travel else
-           f"too coarse: the table, interpolated between its points as the controller does, misses {what} at the "
+           f"too coarse: the table{_formats_of(rule, formats)}, {HOW_APPLIED[rule]}, misses {what} at the "
            f"targets by up to {miss * 1e3:.3g} µm of the {span * 1e3:.3g} µm the curve spans (at most "
            f"{tol * 1e3:.3g} µm, {REPRESENT_SHARE:.0%})")
     advice = (f"give --interval {ok:g} or finer" if ok else "give a finer --interval")
@@ -469,6 +506,10 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
                         f"X MAGNIFICATION {m}")]
     out += [comment(h) for h in _header(table, label, "increments of minus the deviation relative to the reference "
                                                        "point; a positive value moves the axis in the positive direction")]
+    lag = int(np.abs(inc).max()) if inc.size else 0
+    out.append(comment(f"APPLIED STEPWISE: BETWEEN TWO POINTS THE COMPENSATION STAYS AT THE VALUE OF THE POINT ON THE "
+                       f"REFERENCE POSITION S SIDE, UP TO {lag * detection_unit_mm * m * 1e3:g} UM, THE LARGEST CHANGE "
+                       f"OVER ONE INTERVAL, OFF THE CURVE BETWEEN THE POINTS; A FINER INTERVAL FOLLOWS IT CLOSER"))
     out.append(comment("THIS TAPE " + fanuc_points_line(table, first_number).replace("'", "").replace(
         "write it with --fanuc-first-point", "give it a first point number 3621 of")))
     out.append(comment(f"SET 3620 = {ref_no} REFERENCE POSITION AT {_exact(a['reference_q'])} MM, "
@@ -491,7 +532,7 @@ WRITERS = {"csv": write_csv, "siemens-eec": write_siemens_eec, "fanuc-pitch": wr
 POINT_LIMITS = {"siemens-eec": SINUMERIK_MAX_POINTS, "fanuc-pitch": FANUC_POINTS - 1, "csv": MAX_POINTS}
 
 
-def _fitting_default(res, data, table, limit: int, fmt: str, source: str, reference_mm):
+def _fitting_default(res, data, table, limit: int, fmt: str, source: str, reference_mm, formats=()):
     """The default table (at the smallest target spacing) has more points than ``fmt`` takes: the finest step (a
     multiple of 0.001 mm) whose table, anchored at the reference point, has at most ``limit`` points, if that table
     still reproduces the curve at the targets (the ``--interval`` rule, :func:`_check_represents`); the choice is
@@ -504,7 +545,8 @@ def _fitting_default(res, data, table, limit: int, fmt: str, source: str, refere
     while np.subtract(*_grid_range(ref_q, lo_q, hi_q, step_q)[::-1]) + 1 > limit:
         step_q += AUTO_QUANTUM
     try:
-        chosen = compensation_table(res, data, interval=step_q * NM, source=source, reference_mm=reference_mm)
+        chosen = compensation_table(res, data, interval=step_q * NM, source=source, reference_mm=reference_mm,
+                                    formats=formats)
     except CompensationError as exc:
         raise CompensationError(f"{fmt}: the default table (at the smallest target spacing, {a['interval_mm']:g} mm) "
                                 f"has {len(table)} points, more than the controller's {limit}, and the finest step that "
@@ -578,10 +620,11 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
                                 "would leave that misfit in the machine: give --compensation-from mean (the measured "
                                 "means at the targets) or another --degree, or --compensation-from model to write the "
                                 "model's table anyway")
-    table = compensation_table(res, data, interval=interval, source=source, reference_mm=reference_mm)
+    formats = tuple(dict.fromkeys(fmt for fmt, _ in requests))
+    table = compensation_table(res, data, interval=interval, source=source, reference_mm=reference_mm, formats=formats)
     limit, fmt = min((POINT_LIMITS.get(f, MAX_POINTS), f) for f, _ in requests)
     if interval is None and len(table) > limit:
-        table = _fitting_default(res, data, table, limit, fmt, source, reference_mm)
+        table = _fitting_default(res, data, table, limit, fmt, source, reference_mm, formats)
     if misfit:
         table.attrs["warning"] = (f"WARNING: {misfit}; written from the model as asked: the table leaves that misfit "
                                   "uncompensated (--compensation-from mean follows the measured means)")

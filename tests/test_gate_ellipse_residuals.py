@@ -7,7 +7,7 @@ import pytest
 import methods
 from experiments.rows import fit_row
 from methods import check_result, results
-from methods._registry import _REGISTRY
+from plugin_methods import registered
 
 T = np.linspace(0.0, 2 * np.pi, 60, endpoint=False)
 CENTER, AXES, ANGLE = (1200.0, 650.0), (299.0243, 299.0022), np.radians(32.04)   # the paper's ellipse, mm
@@ -38,10 +38,9 @@ def _forged(points, *, lie="zeros"):
 @pytest.fixture
 def forging_plugin():
     methods.list_methods()
-    methods.register("ellipse.test_gate_forged", kind="closed form", summary="forged residuals",
-                     reference="gate test")(_forged)
-    yield "ellipse.test_gate_forged"
-    _REGISTRY.pop("ellipse.test_gate_forged", None)
+    with registered({"ellipse.test_gate_forged": _forged}, kind="closed form", summary="forged residuals",
+                    reference="gate test"):
+        yield "ellipse.test_gate_forged"
 
 
 @pytest.mark.parametrize("lie", ["zeros", "halved", "one point off"])

@@ -9,7 +9,7 @@ import pytest
 import methods
 from experiments.rows import fit_row
 from methods import check_result, results
-from methods._registry import _REGISTRY
+from plugin_methods import registered
 
 T = np.linspace(0.0, 2 * np.pi, 30, endpoint=False)
 PTS = np.column_stack([2.0 * np.cos(T), 2.0 * np.sin(T)]) + np.random.default_rng(3).normal(scale=0.01, size=(30, 2))
@@ -45,9 +45,8 @@ LIES = {"radii": "inner_radius = ", "outer radius": "outer_radius = ",
 @pytest.fixture
 def zone_plugin():
     methods.list_methods()
-    methods.register("circle.test_gate_zone", kind="closed form", summary="a zone", reference="gate test")(_zone)
-    yield "circle.test_gate_zone"
-    _REGISTRY.pop("circle.test_gate_zone", None)
+    with registered({"circle.test_gate_zone": _zone}, kind="closed form", summary="a zone", reference="gate test"):
+        yield "circle.test_gate_zone"
 
 
 def _task(method, **params):

@@ -276,7 +276,7 @@ def _header(table, axis: str, values: str) -> list[str]:
     what = ("mean bidirectional deviation" if len(a["directions"]) == 2
             else f"deviation of the one direction measured, "
                  f"{a['directions'][0] if a.get('direction_given', True) else 'direction not given'},")
-    return ([a["warning"]] if a.get("warning") else []) + [
+    return ([a["warning"]] if a.get("warning") else []) + ([a["reversal_note"]] if a.get("reversal_note") else []) + [
             f"fitbench pitch-error compensation table, axis {axis}, from the {a['source']} of the {what}",
             f"covers {_exact(a['first_q'])} to {_exact(a['last_q'])} mm: {len(table)} points every "
             f"{_exact(a['step_q'])} mm; measured travel {first:.6g} to {last:.6g} mm; {ext}",
@@ -591,6 +591,26 @@ def model_misfit(res) -> str | None:
     return f"the {name} is rejected by its lack of fit ({parts})"
 
 
+def varying_reversal(data) -> str | None:
+    """What a table of the mean bidirectional deviation with one backlash leaves when the reversal B_i varies
+    along the travel (:func:`methods.positioning.iso230_2.reversal_variation`: significant against the scatter of
+    the means), and what to do, or None. Controllers with a curve per direction: FANUC bidirectional pitch-error
+    compensation (technical report A-77810E, 3605#0, 3620-3627), SINUMERIK direction-dependent LEC (840C/611D
+    manual sec. 12.1.2: a second curve per direction), HEIDENHAIN .COM tables (a BACKLASH column)."""
+    from methods.positioning.iso230_2 import reversal_variation
+    rv = reversal_variation(data)
+    if not rv or not rv["significant"]:
+        return None
+    p = f"p = {rv['p_value']:.2g}" if rv["p_value"] >= 1e-4 else "p below 0.0001"
+    return (f"the reversal B_i varies along the travel from {rv['B_i_min'] * 1e3:.3f} to {rv['B_i_max'] * 1e3:.3f} um "
+            f"(mean {rv['B_mean'] * 1e3:.3f} um; F = {rv['F']:.3g} on {rv['dof'][0]} and {rv['dof'][1]} degrees of "
+            f"freedom, {p}: more than the scatter of the means explains): this table of the mean bidirectional "
+            f"deviation with one backlash (-B mean) leaves (B_i - B mean)/2 in each direction: up to "
+            f"{rv['left'] * 1e3:.3f} um, of opposite sign in the two ({2 * rv['left'] * 1e3:.3f} um between them); where the controller takes a curve per "
+            "direction (FANUC bidirectional pitch-error compensation 3605#0, SINUMERIK direction-dependent LEC), "
+            "load the deviation_up_mm and deviation_down_mm curves of the csv table instead")
+
+
 def write_tables(res, data, requests, *, interval=None, source="model", axis=None, write, reference_mm=None,
                  unit_confirmed: bool = False, unit_option: str = "--deviation-unit", on_confirmed=None,
                  model_confirmed: bool = False, axis_hint: str = "", fanuc_unit_mm: float = 0.001,
@@ -639,6 +659,9 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     if problem and on_confirmed is not None:
         on_confirmed(f"the compensation table holds {problem}, written as {unit_option} confirms the unit: "
                      "check it before loading it")
+    reversal = varying_reversal(data)
+    if reversal:
+        table.attrs["reversal_note"] = f"NOTE: {reversal}"
     fanuc = {"detection_unit_mm": fanuc_unit_mm, "increment_mm": fanuc_unit_mm, "first_number": fanuc_first_number}
     if outside_reference(table):
         table.attrs["reference_note"] = outside_reference(table) + "; every file's header says so"

@@ -383,6 +383,8 @@ def run(args) -> int:
                             fanuc_unit_mm=float(args.fanuc_increment), fanuc_first_number=args.fanuc_first_point)
         if comp.attrs.get("reference_note"):
             notes.append(comp.attrs["reference_note"])
+        if comp.attrs.get("reversal_note"):     # the reversal varies along the travel: the table cannot remove it
+            warn(comp.attrs["reversal_note"].removeprefix("NOTE: ") + "; every file's header says so")
         if "in" in {canonical(u) for u in (args.unit, args.deviation_unit) if u}:   # read in inches, written in mm
             formats = {fmt for fmt, _ in args.compensation}
             inch = {"0.001": "0.0001 in (IS-B inch)", "0.0001": "0.00001 in (IS-C inch)"}[args.fanuc_increment]

@@ -52,6 +52,37 @@ def figures(data: PositioningData, standard: str = "iso230-2:2014") -> tuple[dic
     return fig, per
 
 
+#: significance level of the test of a reversal that varies along the travel (:func:`reversal_variation`)
+REVERSAL_LEVEL = 0.05
+
+
+def reversal_variation(data: PositioningData, level: float = REVERSAL_LEVEL) -> dict | None:
+    """Does the reversal B_i = x_i up - x_i down vary along the travel more than the scatter of the means explains?
+    A compensation table of the mean bidirectional deviation with one backlash (-B mean, ISO 230-2's mean reversal
+    value) leaves (B_i - B mean) / 2 in each direction, of opposite sign. One-way analysis of variance of the B_i:
+    each is a difference of two means of n runs, var(B_i) = (s_i up^2 + s_i down^2) / n, so with a constant reversal
+    and the same scatter at every target F = [sum (B_i - B mean)^2 / (m - 1)] / [mean_i (s_i up^2 + s_i down^2) / n]
+    is F(m - 1, 2m(n - 1)) distributed. Returns B_i's least and largest value, B mean, ``left`` = max |B_i - B mean|
+    / 2 (what each direction keeps, input unit), F, dof, p_value and ``significant`` (p < ``level``); None for a
+    unidirectional or one-run test, or when every run reads the same (no scatter to judge by)."""
+    if len(data.directions) != 2 or data.runs < 2 or len(data.targets) < 2:
+        return None
+    from scipy import stats
+    n, m = data.runs, len(data.targets)
+    B_i = data.up.mean(axis=1) - data.down.mean(axis=1)
+    var_b = (data.up.var(axis=1, ddof=1) + data.down.var(axis=1, ddof=1)) / n
+    between = float(np.sum((B_i - B_i.mean()) ** 2) / (m - 1))
+    within = float(np.mean(var_b))
+    if not within > 0:
+        return None
+    F = between / within
+    dof = (m - 1, 2 * m * (n - 1))
+    p = float(stats.f.sf(F, *dof))
+    return {"B_i_min": float(B_i.min()), "B_i_max": float(B_i.max()), "B_mean": float(B_i.mean()),
+            "left": float(np.max(np.abs(B_i - B_i.mean())) / 2), "F": F, "dof": dof, "p_value": p,
+            "level": float(level), "significant": bool(p < level)}
+
+
 def _unidirectional(data: PositioningData, standard: str, k: float) -> tuple[dict, dict]:
     """ISO 230-2 unidirectional figures of the one direction measured: A, E, R of that direction (and
     the same values under the axis keys A, E, R); M and B need both directions and are absent. A file that names

@@ -12,10 +12,11 @@ import pytest
 
 import methods
 from conftest import REPO, quick_study, while_storing_rows
-from results_csv import non_timing
 from experiments import config as configs
 from experiments.study import ConfigError
 from experiments.run import main, run_study
+from plugin_methods import registered
+from results_csv import non_timing
 
 TINY = """
 name = "{name}"
@@ -163,11 +164,9 @@ def _flaky(points):
 @pytest.fixture
 def flaky_method():
     """A method registered for one test only (it must not leak into 'circle.*' of other tests)."""
-    from methods import _registry
-    methods.register("circle.test_flaky", kind="closed form", summary="crashes while _crash['on'] (test)",
-                     reference="fitbench test")(_flaky)
-    yield
-    _registry._REGISTRY.pop("circle.test_flaky", None)
+    with registered({"circle.test_flaky": _flaky}, kind="closed form", summary="crashes while _crash['on'] (test)",
+                    reference="fitbench test"):
+        yield
 
 
 def test_crashed_rows_are_recorded_and_retried(tmp_path, flaky_method):

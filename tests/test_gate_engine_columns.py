@@ -11,7 +11,7 @@ import pytest
 import methods
 from experiments.rows import _finished, fit_row
 from methods import result_base, results
-from methods._registry import _REGISTRY
+from plugin_methods import registered
 
 T = np.linspace(0.0, 2 * np.pi, 40, endpoint=False)
 PTS = np.column_stack([3.0 + 2.0 * np.cos(T), -1.0 + 2.0 * np.sin(T)]) + np.random.default_rng(5).normal(
@@ -92,12 +92,10 @@ def _status_circle(points):
 @pytest.fixture
 def plugin_methods():
     methods.list_methods()
-    methods.register("enginecols.tile", kind="closed form", summary="bbox", reference="test")(_tile)
-    methods.register("circle.test_status_column", kind="closed form", summary="centroid", reference="test")(
-        _status_circle)
-    yield
-    _REGISTRY.pop("enginecols.tile", None)
-    _REGISTRY.pop("circle.test_status_column", None)
+    with registered({"enginecols.tile": _tile}, kind="closed form", summary="bbox", reference="test"), \
+            registered({"circle.test_status_column": _status_circle}, kind="closed form", summary="centroid",
+                       reference="test"):
+        yield
 
 
 @pytest.mark.parametrize("method", ["enginecols.tile", "circle.test_status_column"])

@@ -7,8 +7,8 @@ import pytest
 
 from experiments.rows import MESSAGE_CHARS, bounded_message, failed_row
 from experiments.run import main as run_main
-from methods import register
 from methods.results import circle_result
+from plugin_methods import registered
 
 
 def _chatty(points):
@@ -24,11 +24,9 @@ STUDY = ('name = "chatty"\ntitle = "a chatty method"\nseed = 1\nrepetitions = 2\
 @pytest.fixture
 def chatty():
     """A plugin's method, registered from this module for one test only."""
-    from methods import _registry
-    register("circle.test_chatty", kind="closed form", summary="a fit whose message is a huge log (test)",
-             reference="a test")(_chatty)
-    yield
-    _registry._REGISTRY.pop("circle.test_chatty", None)
+    with registered({"circle.test_chatty": _chatty}, kind="closed form",
+                    summary="a fit whose message is a huge log (test)", reference="a test"):
+        yield
 
 
 def test_results_csv_with_a_huge_message_reads_with_the_csv_module(tmp_path, chatty):

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import methods
-from methods import register
 from methods.results import circle_result
+from plugin_methods import registered
 
 HERE = Path(__file__).parent
 #: the test modules that parametrise over a family's methods, and their lists of method ids
@@ -27,12 +27,10 @@ def _centroid(points):
 
 @pytest.fixture
 def plugin_method():
-    from methods import _registry
     methods.list_methods()
-    register(PLUGIN, kind="closed form", summary="centroid and mean distance", reference="a test")(_centroid)
-    assert not methods.get(PLUGIN).builtin
-    yield PLUGIN
-    _registry._REGISTRY.pop(PLUGIN, None)
+    with registered({PLUGIN: _centroid}, kind="closed form", summary="centroid and mean distance", reference="a test"):
+        assert not methods.get(PLUGIN).builtin
+        yield PLUGIN
 
 
 def _fresh(name):

@@ -12,7 +12,8 @@ import pytest
 
 import methods
 from experiments.run import main as run_main
-from methods import _registry, results
+from methods import results
+from plugin_methods import registered
 
 WEIRD = "ok\x00nul\r\n\"q\",c\u2028\ud800end é"
 WRITTEN = "ok\x00nul\r\n\"q\",c\u2028\\ud800end é"   # the surrogate as its backslash escape, the rest as it was
@@ -32,11 +33,9 @@ def _raises(points):
 def weird_methods():
     """Methods registered for this test only (a plugin's: not built-in)."""
     methods.list_methods()
-    methods.register("circle.test_weird_message", kind="closed form", summary="t", reference="test")(_weird)
-    methods.register("circle.test_weird_error", kind="closed form", summary="t", reference="test")(_raises)
-    yield
-    _registry._REGISTRY.pop("circle.test_weird_message", None)
-    _registry._REGISTRY.pop("circle.test_weird_error", None)
+    with registered({"circle.test_weird_message": _weird, "circle.test_weird_error": _raises}, kind="closed form",
+                    summary="t", reference="test"):
+        yield
 
 
 STUDY = textwrap.dedent('''

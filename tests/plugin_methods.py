@@ -1,9 +1,11 @@
-"""A plugin's methods registered in the test's process for one test, then taken out of the registry again (they must
-not leak into ``circle.*`` of another test): given as functions, or as a plugin module's source run here."""
+"""A plugin's methods (and data sources) registered in the test's process for one test, then taken out of their
+registry again (they must not leak into ``circle.*`` of another test): given as functions, or as a plugin module's
+source run here."""
 from __future__ import annotations
 
 import contextlib
 
+from datasets import sources
 from methods import _registry, register
 
 
@@ -31,3 +33,16 @@ def plugin_here(code: str, name: str):
     finally:
         for mid in ids:
             _registry._REGISTRY.pop(mid, None)
+
+
+@contextlib.contextmanager
+def sources_registered(funcs: dict, **spec):
+    """``{name: function}`` registered as data sources (``datasets.sources.register_source(name, **spec)``) while in
+    the block."""
+    for name, func in funcs.items():
+        sources.register_source(name, **spec)(func)
+    try:
+        yield
+    finally:
+        for name in funcs:
+            sources._REGISTRY.pop(name, None)

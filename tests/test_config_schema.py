@@ -11,6 +11,7 @@ from pydantic import Field
 from experiments import config as configs
 from experiments import run as runner
 from experiments.study import ConfigError
+from plugin_methods import sources_registered
 
 GOOD = '''name = "{name}"
 title = "a small study"
@@ -245,7 +246,6 @@ def test_data_source_parameter_types_are_checked_before_any_row(tmp_path, capsys
 @pytest.fixture
 def plugin_scene():
     """A data source registered as a plugin registers it (``register_source``), with and without annotations."""
-    from datasets import sources
 
     def scene(rng, *, n=40, share=0.1, mode: Literal["inside", "outside"] = "inside", scale: float = 1,
               offset=(0.0, 0.0), tag=None):
@@ -258,12 +258,9 @@ def plugin_scene():
     def unresolvable(rng, *, x: "NoSuchType" = 1):  # noqa: F821
         return np.zeros((3, 2)), None
 
-    names = {"test_scene": scene, "test_needs_name": needs_name, "test_unresolvable": unresolvable}
-    for name, func in names.items():
-        sources.register_source(name, random=True, summary="plugin test source")(func)
-    yield
-    for name in names:
-        sources._REGISTRY.pop(name, None)
+    with sources_registered({"test_scene": scene, "test_needs_name": needs_name, "test_unresolvable": unresolvable},
+                            random=True, summary="plugin test source"):
+        yield
 
 
 @pytest.mark.parametrize("source, params, problem", [
@@ -437,7 +434,6 @@ def test_a_data_source_count_is_bounded_with_the_config(tmp_path, capsys):
     """n = 10^9 points tried to allocate 16 GB in the row (a MemoryError row, exit 0): a data source's integer
     parameter without a declared bound is at most MAX_COUNT, checked with the config; a source declares a larger
     bound by annotation."""
-    from datasets import sources
     from experiments import schema
     path = write(tmp_path, SOURCE_STUDY.format(source="circle", params="radius = 5.0, noise = 0.01", grid=(
         f"grid = {{ n = [30, {schema.MAX_COUNT + 1}] }}")))
@@ -451,13 +447,10 @@ def test_a_data_source_count_is_bounded_with_the_config(tmp_path, capsys):
 
     def big(rng, *, n: Annotated[int, Field(ge=1, le=10 ** 9)] = 10, k=3):
         return np.zeros((n, 2)), None
-    try:
-        sources.register_source("test_big", random=True, summary="plugin test", gives=np.ndarray)(big)
+    with sources_registered({"test_big": big}, random=True, summary="plugin test", gives=np.ndarray):
         configs.load(str(write(tmp_path, SOURCE_STUDY.format(source="test_big", params="n = 100000000", grid=""))))
         with pytest.raises(ConfigError, match=r"params.k = 100000000 must be an integer <= 10000000 \(the bound"):
             configs.load(str(write(tmp_path, SOURCE_STUDY.format(source="test_big", params="k = 100000000", grid=""))))
-    finally:
-        sources._REGISTRY.pop("test_big", None)
 
 
 def _collinear_study(folder, extra=""):

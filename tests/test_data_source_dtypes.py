@@ -4,9 +4,8 @@ array with masked points is refused naming the source."""
 import numpy as np
 import pytest
 
-from datasets import sources
-from datasets.sources import register_source
 from experiments.rows import DataSourceError, fit_row, load_data
+from plugin_methods import sources_registered
 
 T = np.linspace(0.0, 2 * np.pi, 30, endpoint=False)
 CIRCLE = np.c_[1200.0 + 299.0 * np.cos(T), 650.0 + 299.0 * np.sin(T)] + 0.003 * np.cos(5 * T)[:, None]
@@ -29,12 +28,10 @@ def _masked(rng):
 
 @pytest.fixture
 def dtype_sources():
-    named = {"test_dtype_float32": _float32, "test_dtype_masked_clean": _masked_clean, "test_dtype_masked": _masked}
-    for name, func in named.items():
-        register_source(name, random=False, summary="a circle in another array type (dtype test)")(func)
-    yield
-    for name in named:
-        sources._REGISTRY.pop(name, None)
+    with sources_registered({"test_dtype_float32": _float32, "test_dtype_masked_clean": _masked_clean,
+                             "test_dtype_masked": _masked}, random=False,
+                            summary="a circle in another array type (dtype test)"):
+        yield
 
 
 def _task(method, source):

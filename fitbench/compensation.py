@@ -152,7 +152,7 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     table.attrs.update(interval_mm=step_q * NM, step_q=int(step_q), first_q=int(pos_q[0]), last_q=int(pos_q[-1]),
                        reference_q=ref_q, reference_index=int(-k_lo), measured_mm=(first, last), source=source,
                        deviation_at_reference_mm=at_ref, backlash_mm=backlash, directions=tuple(dirs),
-                       direction_given=bool(getattr(data, "direction_given", True)))
+                       direction_given=bool(getattr(data, "direction_given", True)), thermal_note=thermal_line(data))
     return table
 
 
@@ -276,7 +276,8 @@ def _header(table, axis: str, values: str) -> list[str]:
     what = ("mean bidirectional deviation" if len(a["directions"]) == 2
             else f"deviation of the one direction measured, "
                  f"{a['directions'][0] if a.get('direction_given', True) else 'direction not given'},")
-    return ([a["warning"]] if a.get("warning") else []) + ([a["reversal_note"]] if a.get("reversal_note") else []) + [
+    return ([a["warning"]] if a.get("warning") else []) + ([a["thermal_note"]] if a.get("thermal_note") else []) + \
+        ([a["reversal_note"]] if a.get("reversal_note") else []) + [
             f"fitbench pitch-error compensation table, axis {axis}, from the {a['source']} of the {what}",
             f"covers {_exact(a['first_q'])} to {_exact(a['last_q'])} mm: {len(table)} points every "
             f"{_exact(a['step_q'])} mm; measured travel {first:.6g} to {last:.6g} mm; {ext}",
@@ -609,6 +610,24 @@ def varying_reversal(data) -> str | None:
             f"{rv['left'] * 1e3:.3f} um, of opposite sign in the two ({2 * rv['left'] * 1e3:.3f} um between them); where the controller takes a curve per "
             "direction (FANUC bidirectional pitch-error compensation 3605#0, SINUMERIK direction-dependent LEC), "
             "load the deviation_up_mm and deviation_down_mm curves of the csv table instead")
+
+
+def thermal_line(data) -> str | None:
+    """What a table from temperature-corrected deviations (:func:`methods.positioning.data.thermal_correction`)
+    holds, or None: the correction was computed from two numbers given, not measured, and decides which machine the
+    table suits (one working at 20 °C or with its own temperature compensation, not one working at the test's
+    temperature with its scale at that temperature)."""
+    th = getattr(data, "thermal", None)
+    if not th:
+        return None
+    (p0, c0), (p1, c1) = th["correction_at_ends_mm"]
+    t = th["material_temperature_c"]
+    return (f"TEMPERATURE-CORRECTED: the deviations were corrected to 20 C from a material temperature of {t:.4g} C with "
+            f"an expansion coefficient of {th['expansion_coefficient_um_per_m_k']:g} um/(m K), by "
+            f"{th['correction_um_per_m']:+.4g} um/m x position ({c0 * 1e3:+.3f} um at {p0:g} mm, {c1 * 1e3:+.3f} um at "
+            f"{p1:g} mm), given, not measured; the values are the axis error at 20 C: for a machine that works at 20 C "
+            f"or compensates temperature itself; a machine working at {t:.4g} C with its scale at {t:.4g} C needs the "
+            "table without the correction")
 
 
 def write_tables(res, data, requests, *, interval=None, source="model", axis=None, write, reference_mm=None,

@@ -316,11 +316,14 @@ def run(args) -> int:
     if temperature is not None:
         from methods.positioning.data import thermal_correction
         data = thermal_correction(data, temperature, alpha)
+        (p0, c0), (p1, c1) = data.thermal["correction_at_ends_mm"]
         thermal = {"material_temperature_c": temperature, "expansion_coefficient_um_per_m_k": alpha,
-                   "correction_um_per_m": -alpha * (temperature - 20.0)}
+                   "correction_um_per_m": -alpha * (temperature - 20.0),
+                   "correction_at_ends": [{"target": p0, "correction": c0}, {"target": p1, "correction": c1}]}
         thermal_text = (f"temperature correction (ISO 230-2 nominal differential expansion): material at "
                         f"{temperature:.4g} °C{given_as}, expansion coefficient {alpha:g} µm/(m·K): deviations corrected by "
-                        f"{-alpha * (temperature - 20.0):+.4g} µm/m x target position, to 20 °C")
+                        f"{-alpha * (temperature - 20.0):+.4g} µm/m x target position ({c0 * 1e3:+.3f} µm at {p0:g} mm, "
+                        f"{c1 * 1e3:+.3f} µm at {p1:g} mm), to 20 °C")
     if data.runs == 1:
         # ISO 230-2's test of axes over 2000 mm: one approach per direction gives E, M, B, not s, R, A nor the model
         from methods.positioning.iso230_2 import SINGLE_RUN_WITHOUT
@@ -383,6 +386,12 @@ def run(args) -> int:
                             fanuc_unit_mm=float(args.fanuc_increment), fanuc_first_number=args.fanuc_first_point)
         if comp.attrs.get("reference_note"):
             notes.append(comp.attrs["reference_note"])
+        if comp.attrs.get("thermal_note"):      # a correction computed from two given numbers goes into the machine
+            notes.append(f"the compensation tables hold the deviations corrected to 20 °C from {temperature:.4g} °C with "
+                         f"{alpha:g} µm/(m·K) ({c0 * 1e3:+.3f} µm at {p0:g} mm, {c1 * 1e3:+.3f} µm at {p1:g} mm), "
+                         f"given, not measured: for a machine that works at 20 °C or compensates temperature itself; one working at "
+                         f"{temperature:.4g} °C with its scale at {temperature:.4g} °C needs them without "
+                         "--material-temperature; every file's header says so")
         if comp.attrs.get("reversal_note"):     # the reversal varies along the travel: the table cannot remove it
             warn(comp.attrs["reversal_note"].removeprefix("NOTE: ") + "; every file's header says so")
         if "in" in {canonical(u) for u in (args.unit, args.deviation_unit) if u}:   # read in inches, written in mm

@@ -56,7 +56,7 @@ class RunOrderNote(UserWarning):
 def swap_directions(data: "PositioningData") -> "PositioningData":
     """The test with its ↑ and ↓ runs exchanged (a run-order mapping corrected by the user)."""
     return PositioningData(targets=data.targets, up=data.down, down=data.up, unit=data.unit,
-                           direction_given=data.direction_given)
+                           direction_given=data.direction_given, thermal=data.thermal)
 
 
 @dataclass(frozen=True)
@@ -69,6 +69,8 @@ class PositioningData:
     down: np.ndarray | None   # (m, n) deviations approaching in the - direction (None: unidirectional test, + only)
     unit: str = ""
     direction_given: bool = True
+    #: the temperature correction applied (:func:`thermal_correction`), None: the deviations as measured
+    thermal: dict | None = None
 
     @property
     def runs(self) -> int:
@@ -172,12 +174,20 @@ def thermal_correction(data: PositioningData, material_temperature_c: float,
     workpiece) was at ``material_temperature_c`` instead of the reference temperature 20 °C (ISO 1): a length
     P measured at T stands for P (1 + alpha (T - 20)) at 20 °C, so each deviation loses alpha (T - 20) P,
     P the target position as given (mm) and alpha the expansion coefficient (µm/(m·K) = 1e-6 / K). A pure
-    thermal slope alpha (T - 20) P is removed exactly."""
+    thermal slope alpha (T - 20) P is removed exactly. The result's ``thermal`` says what was done:
+    material_temperature_c, expansion_coefficient_um_per_m_k, correction_um_per_m (-alpha (T - 20)) and
+    correction_at_ends_mm ((first target, its correction), (last target, its correction)), so what is made from it
+    (a controller table) can say so."""
     slope = float(expansion_coefficient_um_per_m_k) * 1e-6 * (float(material_temperature_c) - 20.0)
-    shift = slope * np.asarray(data.targets, dtype=float)[:, None]
+    P = np.asarray(data.targets, dtype=float)
+    shift = slope * P[:, None]
+    done = {"material_temperature_c": float(material_temperature_c),
+            "expansion_coefficient_um_per_m_k": float(expansion_coefficient_um_per_m_k),
+            "correction_um_per_m": -slope * 1e6,
+            "correction_at_ends_mm": ((float(P[0]), float(-slope * P[0]) + 0.0), (float(P[-1]), float(-slope * P[-1]) + 0.0))}
     return PositioningData(targets=data.targets, up=None if data.up is None else data.up - shift,
                            down=None if data.down is None else data.down - shift, unit=data.unit,
-                           direction_given=data.direction_given)
+                           direction_given=data.direction_given, thermal=done)
 
 
 def validate(data, method_id="") -> PositioningData:

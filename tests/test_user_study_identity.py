@@ -3,12 +3,18 @@
 28,800-row noise study, and the report said ``python -m experiments.run noise``); the TOML is recorded relative to
 the results folder when it lies beside it (no folder of the author's machine in a committed meta.json), and found
 again after both are moved. The report's commands are code spans shown literally: a folder named ``R&D #1 [a] ~{b}!``
-is not Markdown-escaped inside them (before: ``'R\\&D...'``, a path that does not exist)."""
+is not Markdown-escaped inside them (before: ``'R\\&D...'``, a path that does not exist).
+
+The commands that report suggests for a user's own studies work: such a study is named by its TOML file
+(``meta.json`` records it: ``config_file``), and ``python -m experiments.verify --results OUT`` checks it by running
+that TOML (before: "unknown study 'my_study'", exit 2, for both commands the report gave)."""
 import html
 import json
 import re
 import shlex
 import shutil
+
+import pytest
 
 from experiments import config as configs
 from experiments import report, verify
@@ -17,6 +23,7 @@ from experiments.verdict import is_project_study, recorded_config
 
 STUDY = ('name = "{name}"\ntitle = "a personal study"\nseed = 1\nrepetitions = 1\n[[datasets]]\nsource = "circle"\n'
          'label = "mine"\nparams = {{ radius = 5.0, noise = 0.01, n = 12 }}\n[[methods]]\nid = "circle.kasa"\n')
+UNLABELLED = STUDY.replace('label = "mine"\n', "")   # its data set named by its source
 
 
 def _run(*args):
@@ -146,3 +153,37 @@ def test_a_symlinked_toml_of_another_name_is_recorded_as_the_link_given(tmp_path
     cfg = configs.load(str(tmp_path / "proj" / "noise.toml"))
     assert runner.config_file(cfg, tmp_path / "elsewhere" / "res") == {
         "config_file": str(tmp_path.resolve() / "proj" / "noise.toml")}
+
+
+@pytest.mark.slow
+def test_the_commands_of_a_user_study_s_report_run(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "studies").mkdir()
+    for name in ("my_study", "plug"):
+        (tmp_path / "studies" / f"{name}.toml").write_text(UNLABELLED.format(name=name), encoding="utf-8")
+    _run("studies/my_study.toml", "--out", "out")
+    _run("studies/plug.toml", "--out", "out")
+    assert recorded_config(tmp_path / "out" / "my_study") == (tmp_path / "studies" / "my_study.toml").resolve()
+    report.build(tmp_path / "out", tmp_path / "out" / "paper", log=lambda *a: None)
+    text = (tmp_path / "out" / "paper" / "report.md").read_text(encoding="utf-8")
+    rerun = re.search(r"rerun it with (python -m experiments\.run [^\n]*?)\.(?:\n|$)", text)
+    assert rerun and rerun.group(1) == "python -m experiments.run studies/my_study.toml --out out", text
+    check = re.search(r"No current reproducibility verdict: run `([^`]*)`", text)
+    assert check and check.group(1) == "python -m experiments.verify --results out --write-verdict", text
+    capsys.readouterr()
+    assert runner.main([*shlex.split(rerun.group(1))[3:], "--jobs", "1", "--no-report"]) == 0
+    assert verify.main(shlex.split(check.group(1))[3:]) == 0, capsys.readouterr()
+    verdict = json.loads((tmp_path / "out" / "verify.json").read_text(encoding="utf-8"))
+    assert verdict["agree"] is True and sorted(s["study"] for s in verdict["studies"]) == ["my_study", "plug"]
+
+
+def test_a_user_study_whose_toml_is_gone_is_one_line(tmp_path, capsys):
+    """verify cannot rerun a user's study whose recorded TOML is not there: one line saying so and what to give."""
+    folder = tmp_path / "out" / "gone"
+    folder.mkdir(parents=True)
+    (folder / "results.csv").write_text("study,status\ngone,ok\n", encoding="utf-8")
+    (folder / "meta.json").write_text(json.dumps({"quick": False, "config_file": str(tmp_path / "gone.toml")}),
+                                      encoding="utf-8")
+    assert verify.main(["gone", "--results", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "which is not there" in err[0] and "PATH/gone.toml --results" in err[0], err

@@ -42,6 +42,7 @@ from methods.positioning.model import evaluate_band
 
 NM = 1e-6                 # grid positions are whole multiples of 1e-6 mm (printed exactly with 6 decimals)
 AUTO_QUANTUM = 1000       # an automatic step is a multiple of 0.001 mm (1000 x 1e-6 mm)
+INCH_MM = 25.4
 MAX_POINTS = 100_000      # a generic table longer than this is certainly a mistaken --interval
 #: a compensation value beyond this share of the measured travel (and beyond VALUE_FLOOR_MM) is not a machine
 #: axis' pitch error but a unit mistake: the positioning reader's plausibility bound (0.1 % of the travel, at
@@ -94,12 +95,13 @@ def _grid_range(ref_q: int, lo_q: int, hi_q: int, step_q: int) -> tuple[int, int
 
 
 def compensation_table(res, data, *, interval: float | None = None, source: str = "model",
-                       reference_mm: float | None = None, formats=()):
+                       reference_mm: float | None = None, formats=(), quantum_q: int = AUTO_QUANTUM):
     """The table (see the module docstring) as a DataFrame with columns position_mm, deviation_mm,
     deviation_up_mm, deviation_down_mm, compensation_mm and the grid in ``.attrs``. ``res`` is a
     positioning.gls_polynomial result (or positioning.iso230_2 with ``source='mean'``), ``data`` its input.
     ``formats``: the formats it is written in; the coarse-interval guard checks the table as each one's controller
-    applies it (:data:`APPLIED`; none given: linearly)."""
+    applies it (:data:`APPLIED`; none given: linearly). ``quantum_q``: an automatic or suggested step is a multiple
+    of it (x 1e-6 mm; 0.001 mm, or 0.0001 in = 2540 for a FANUC inch machine, whose 3624 counts 0.0001 in)."""
     import pandas as pd  # loaded when a table is made (the fitbench command stays light)
     P = np.asarray(data.targets, float)
     if P.size < 2 or not np.all(np.diff(P) > 0):
@@ -120,7 +122,7 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
         spacing = float(np.min(np.diff(P)))
         longest = max(hi_q - ref_q, ref_q - lo_q)
         steps = max(1, math.ceil(longest * NM / spacing - 1e-9))
-        step_q = _ceil_div(_ceil_div(longest, steps), AUTO_QUANTUM) * AUTO_QUANTUM
+        step_q = _ceil_div(_ceil_div(longest, steps), quantum_q) * quantum_q
     else:
         if not (np.isfinite(interval) and interval > 0):
             raise InvalidInputError(f"--interval must be a positive length in mm, got {interval!r}")
@@ -142,7 +144,7 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     mean = np.mean([curves[d] for d in dirs], axis=0)
     rules = sorted({APPLIED.get(f, "linear") for f in formats} or {"linear"})
     if interval is not None:
-        _check_represents(res, data, source, pos, mean, step_q * NM, ref_q, lo_q, hi_q, rules, formats)
+        _check_represents(res, data, source, pos, mean, step_q * NM, ref_q, lo_q, hi_q, rules, formats, quantum_q)
     else:
         _warn_if_missed(res, data, source, pos, mean, step_q * NM, -k_lo, rules, formats)
     at_ref = float(mean[-k_lo])
@@ -152,7 +154,8 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     table.attrs.update(interval_mm=step_q * NM, step_q=int(step_q), first_q=int(pos_q[0]), last_q=int(pos_q[-1]),
                        reference_q=ref_q, reference_index=int(-k_lo), measured_mm=(first, last), source=source,
                        deviation_at_reference_mm=at_ref, backlash_mm=backlash, directions=tuple(dirs),
-                       direction_given=bool(getattr(data, "direction_given", True)), thermal_note=thermal_line(data))
+                       direction_given=bool(getattr(data, "direction_given", True)), thermal_note=thermal_line(data),
+                       quantum_q=int(quantum_q))
     return table
 
 
@@ -228,7 +231,8 @@ def _warn_if_missed(res, data, source, pos, mean, step, ref_index=0, rules=("lin
                       "closer", UserWarning, stacklevel=3)
 
 
-def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q, rules=("linear",), formats=()) -> None:
+def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q, rules=("linear",), formats=(),
+                      quantum_q: int = AUTO_QUANTUM) -> None:
     """Refuse an ``--interval`` whose table, as the controller interpolates it, misses the measured curve at the
     targets by more than REPRESENT_SHARE of its span (a coarse step: --interval 700 left 15.6 of 22.6 µm),
     naming the coarsest step of the form travel / k that would do."""
@@ -242,8 +246,8 @@ def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q, rul
     spacing = np.diff(P)
     ok = None
     for k in range(1, 20 * P.size + 1):       # candidate steps, coarse to fine (a few hundred small tables at most)
-        q = math.ceil(travel / k / NM / AUTO_QUANTUM - 1e-6) * AUTO_QUANTUM     # rounded up: the grid reaches the
-        # last target at its k-th step (within k x 0.001 mm), not one step beyond it
+        q = math.ceil(travel / k / NM / quantum_q - 1e-6) * quantum_q     # rounded up: the grid reaches the last
+        # target at its k-th step (within k quanta, k x 0.001 mm), not one step beyond it
         if q <= 0 or q * NM >= step:
             continue
         k_lo, k_hi = _grid_range(ref_q, lo_q, hi_q, q)
@@ -428,7 +432,7 @@ def fanuc_point_numbers(table, first_number: int = 0) -> tuple[int, int, int]:
                 else "")
         raise CompensationError(f"fanuc-pitch: {n} points from number {first_number} do not fit the pitch block "
                                 f"0 ... {FANUC_POINTS - 1} (N10000 ... N{10000 + FANUC_POINTS - 1}); {room}choose a "
-                                f"coarser --interval (at least {_exact(_ceil_div(a['last_q'] - a['first_q'], (FANUC_POINTS - 2) * AUTO_QUANTUM) * AUTO_QUANTUM)} mm)")
+                                f"coarser --interval (at least {_exact(_ceil_div(a['last_q'] - a['first_q'], (FANUC_POINTS - 2) * a.get('quantum_q', AUTO_QUANTUM)) * a.get('quantum_q', AUTO_QUANTUM))} mm)")
     return int(first_number), ref_no, ref_no + highest
 
 
@@ -442,7 +446,7 @@ def fanuc_points_line(table, first_number: int = 0) -> str:
 
 
 def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm: float = 0.001, increment_mm: float = 0.001,
-                      first_number: int = 0, magnification: int | None = None) -> str:
+                      first_number: int = 0, magnification: int | None = None, machine_unit: str = "mm") -> str:
     """FANUC pitch-error compensation data in the parameter-tape format: ``%``, comments ``(...)``, one
     line ``N<10000 + point number> P<value>`` per compensation point, ``%`` (FANUC Series 0i-PB
     parameter manual B-63980EN/01 sec. 4, parameters 3620-3624 and the linear-axis example p. 99-100;
@@ -464,9 +468,20 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
     7500, which the header states); 3623 in 1 ... 100, by default the smallest that keeps every value
     within -128 ... 127. What does not fit is refused.
 
+    ``machine_unit``: "mm" (a metric machine) or "in" (an inch machine, parameter 1001#0 INM = 1: its detection
+    unit and least input increment are 0.0001 in for IS-B, 0.00001 in for IS-C; ``detection_unit_mm`` and
+    ``increment_mm`` are still given in mm, 0.00254 for 0.0001 in): the values, 3624 and 1851 are counts of the
+    machine's units, computed from the whole table in mm and rounded on the absolute curve, and the comments name
+    the units in inches.
+
     ``axis`` (required): the axis the table is for, named in the comments (the tape itself names none: the
     parameters 3620-3624 are set per axis); None: the comments say 'axis not given' (``--axis`` left out on the
     command line). A missing axis is refused (:class:`CompensationError`)."""
+    if machine_unit not in ("mm", "in"):
+        raise CompensationError(f"fanuc-pitch: machine_unit must be 'mm' or 'in', got {machine_unit!r}")
+
+    def unit(mm: float) -> str:           # a unit of the machine, as the tape names it
+        return f"{mm:g} MM" if machine_unit == "mm" else f"{round(mm / INCH_MM, 8):g} IN"
     if axis is AXIS_REQUIRED:
         raise CompensationError("fanuc-pitch: no axis is given: give axis=NAME (e.g. write_fanuc_pitch(table, "
                                 "axis='X')), the axis whose parameters 3620-3624 take the table, or axis=None for "
@@ -483,8 +498,8 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
     interval = step_mm / increment_mm
     if abs(interval - round(interval)) > 1e-6 or not 1 <= round(interval) <= FANUC_INTERVAL_MAX:
         raise CompensationError(f"fanuc-pitch: the point interval {_exact(a['step_q'])} mm is not a whole number "
-                                f"1 ... {FANUC_INTERVAL_MAX} of {increment_mm:g} mm (parameter 3624); "
-                                f"choose --interval as a multiple of {increment_mm:g} mm")
+                                f"1 ... {FANUC_INTERVAL_MAX} of {unit(increment_mm).lower()} (parameter 3624); "
+                                f"choose --interval as a multiple of {unit(increment_mm).lower()}")
     interval = int(round(interval))
     mags = range(FANUC_MAGNIFICATION[0], FANUC_MAGNIFICATION[1] + 1) if magnification is None else [magnification]
     for m in mags:
@@ -496,14 +511,14 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
         if inc.size == 0 or (inc.min() >= FANUC_VALUE[0] and inc.max() <= FANUC_VALUE[1]):
             break
     else:
-        raise CompensationError(f"fanuc-pitch: a change of {np.abs(inc).max()} x {detection_unit_mm:g} mm x {m} over "
+        raise CompensationError(f"fanuc-pitch: a change of {np.abs(inc).max()} x {unit(detection_unit_mm).lower()} x {m} over "
                                 f"one interval exceeds {FANUC_VALUE[1]} (per point); choose a finer --interval or a larger magnification")
     values = np.zeros(highest - lowest + 1, dtype=np.int64)
     values[(k_lo + 1) - lowest:(k_hi + 1) - lowest] = inc
     numbers = ref_no + np.arange(lowest, highest + 1)
     def comment(text: str) -> str:
         return "(" + re.sub(r"[^A-Z0-9 .,:;=+\-/*]", " ", text.upper()).strip() + ")"
-    out = ["%", comment(f"FANUC PITCH ERROR COMPENSATION AXIS {label} VALUES INCREMENTAL IN {detection_unit_mm:g} MM "
+    out = ["%", comment(f"FANUC PITCH ERROR COMPENSATION AXIS {label} VALUES INCREMENTAL IN {unit(detection_unit_mm)} "
                         f"X MAGNIFICATION {m}")]
     out += [comment(h) for h in _header(table, label, "increments of minus the deviation relative to the reference "
                                                        "point; a positive value moves the axis in the positive direction")]
@@ -515,14 +530,16 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
         "write it with --fanuc-first-point", "give it a first point number 3621 of")))
     out.append(comment(f"SET 3620 = {ref_no} REFERENCE POSITION AT {_exact(a['reference_q'])} MM, "
                        f"3621 = {numbers[0]}, 3622 = {numbers[-1]}, 3623 = {m}, 3624 = {interval} "
-                       f"I.E. {_exact(a['step_q'])} MM IN UNITS OF {increment_mm:g} MM; RAPID TRAVERSE MM/MIN / 7500 "
+                       f"I.E. {_exact(a['step_q'])} MM"
+                       + (f", {a['step_q'] * NM / INCH_MM:.6f} IN," if machine_unit == "in" else "")
+                       + f" IN UNITS OF {unit(increment_mm)}; RAPID TRAVERSE MM/MIN / 7500 "
                        f"MUST NOT EXCEED {_exact(a['step_q'])} MM"))
     if np.isfinite(a["backlash_mm"]):
         units = int(np.rint(-a["backlash_mm"] / detection_unit_mm))
         if abs(units) > 9999:
             raise CompensationError(f"fanuc-pitch: the backlash -B = {-a['backlash_mm']:g} mm is {units} detection "
                                     "units, beyond parameter 1851's -9999 ... 9999")
-        out.append(comment(f"BACKLASH: SET 1851 = {units} DETECTION UNITS OF {detection_unit_mm:g} MM, I.E. -B"))
+        out.append(comment(f"BACKLASH: SET 1851 = {units} DETECTION UNITS OF {unit(detection_unit_mm)}, I.E. -B"))
     out += [f"N{10000 + int(no)} P{int(v)}" for no, v in zip(numbers, values)]
     out.append("%")
     return "\n".join(out) + "\n"
@@ -542,12 +559,13 @@ def _fitting_default(res, data, table, limit: int, fmt: str, source: str, refere
     a = table.attrs
     first, last = a["measured_mm"]
     ref_q, lo_q, hi_q = a["reference_q"], math.floor(first / NM + 1e-3), math.ceil(last / NM - 1e-3)
-    step_q = _ceil_div(_ceil_div(hi_q - lo_q, max(limit - 1, 1)), AUTO_QUANTUM) * AUTO_QUANTUM
+    quantum_q = a.get("quantum_q", AUTO_QUANTUM)
+    step_q = _ceil_div(_ceil_div(hi_q - lo_q, max(limit - 1, 1)), quantum_q) * quantum_q
     while np.subtract(*_grid_range(ref_q, lo_q, hi_q, step_q)[::-1]) + 1 > limit:
-        step_q += AUTO_QUANTUM
+        step_q += quantum_q
     try:
         chosen = compensation_table(res, data, interval=step_q * NM, source=source, reference_mm=reference_mm,
-                                    formats=formats)
+                                    formats=formats, quantum_q=quantum_q)
     except CompensationError as exc:
         raise CompensationError(f"{fmt}: the default table (at the smallest target spacing, {a['interval_mm']:g} mm) "
                                 f"has {len(table)} points, more than the controller's {limit}, and the finest step that "
@@ -633,7 +651,7 @@ def thermal_line(data) -> str | None:
 def write_tables(res, data, requests, *, interval=None, source="model", axis=None, write, reference_mm=None,
                  unit_confirmed: bool = False, unit_option: str = "--deviation-unit", on_confirmed=None,
                  model_confirmed: bool = False, axis_hint: str = "", fanuc_unit_mm: float = 0.001,
-                 fanuc_first_number: int = 0):
+                 fanuc_first_number: int = 0, fanuc_machine_unit: str = "mm"):
     """Build the table once and write it in every requested ``(format, path)`` with ``write(path, text)``;
     every format is checked (name, axis, limits) before any file is written. A table implausible for a
     machine axis (:func:`magnitude_problem`: µm read as mm) is refused unless ``unit_confirmed`` (the
@@ -643,7 +661,8 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     ``on_confirmed`` is told and every file's header says so. ``axis`` None: a SINUMERIK table (whose entries name
     the machine axis they compensate) is refused, naming ``axis_hint`` (what the file says); the other formats say
     'axis not given' in their header. ``fanuc_unit_mm``: the FANUC axis' detection unit and least input increment
-    (0.001 mm IS-B, 0.0001 mm IS-C); ``fanuc_first_number``: its first pitch-error point number (3621; each axis
+    in mm (0.001 mm IS-B, 0.0001 mm IS-C; an inch machine, ``fanuc_machine_unit='in'``: 0.00254 mm = 0.0001 in
+    IS-B, 0.000254 mm IS-C, and the automatic step is a multiple of it); ``fanuc_first_number``: its first pitch-error point number (3621; each axis
     needs its own range of the one block, :func:`fanuc_point_numbers`), said in ``attrs['fanuc_points']``. Returns the
     table."""
     for fmt, _ in requests:
@@ -660,7 +679,10 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
                                 "means at the targets) or another --degree, or --compensation-from model to write the "
                                 "model's table anyway")
     formats = tuple(dict.fromkeys(fmt for fmt, _ in requests))
-    table = compensation_table(res, data, interval=interval, source=source, reference_mm=reference_mm, formats=formats)
+    unit_q = int(round(fanuc_unit_mm / NM))
+    quantum_q = (unit_q if "fanuc-pitch" in formats and unit_q > 0 and AUTO_QUANTUM % unit_q else AUTO_QUANTUM)
+    table = compensation_table(res, data, interval=interval, source=source, reference_mm=reference_mm, formats=formats,
+                               quantum_q=quantum_q)
     limit, fmt = min((POINT_LIMITS.get(f, MAX_POINTS), f) for f, _ in requests)
     if interval is None and len(table) > limit:
         table = _fitting_default(res, data, table, limit, fmt, source, reference_mm, formats)
@@ -681,7 +703,8 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     reversal = varying_reversal(data)
     if reversal:
         table.attrs["reversal_note"] = f"NOTE: {reversal}"
-    fanuc = {"detection_unit_mm": fanuc_unit_mm, "increment_mm": fanuc_unit_mm, "first_number": fanuc_first_number}
+    fanuc = {"detection_unit_mm": fanuc_unit_mm, "increment_mm": fanuc_unit_mm, "first_number": fanuc_first_number,
+             "machine_unit": fanuc_machine_unit}
     if outside_reference(table):
         table.attrs["reference_note"] = outside_reference(table) + "; every file's header says so"
     first, last = table.attrs["measured_mm"]

@@ -84,10 +84,12 @@ def read_siemens(text: str):
 
 
 FANUC_SET = re.compile(r"\(SET 3620 = (\d+) REFERENCE POSITION AT (-?\d+\.\d{6}) MM, 3621 = (\d+), 3622 = (\d+), "
-                       r"3623 = (\d+), 3624 = (\d+) I\.E\. (\d+\.\d{6}) MM IN UNITS OF ([0-9.]+) MM;[^()]*\)")
+                       r"3623 = (\d+), 3624 = (\d+) I\.E\. (\d+\.\d{6}) MM(?:, \d+\.\d{6} IN,)? IN UNITS OF ([0-9.]+) "
+                       r"(MM|IN);[^()]*\)")
 
 
-def read_fanuc(text: str, detection_unit_mm: float = 0.001, machine_reference_mm: float | None = None):
+def read_fanuc(text: str, detection_unit_mm: float = 0.001, machine_reference_mm: float | None = None,
+               increment_mm: float | None = None):
     """FANUC parameter tape of pitch-error data: '%', comments '(...)' of upper-case ASCII without
     parentheses inside, 'N<10000 + number> P<integer>' for consecutive numbers 0 ... 1023, '%'. The
     parameters 3620-3624 and the reference position are those the operator sets from the SET comment.
@@ -95,7 +97,9 @@ def read_fanuc(text: str, detection_unit_mm: float = 0.001, machine_reference_mm
     3620 + k holding the change over (R + (k-1) d, R + k d]; the compensation is output with the command
     (encoder = P + C(P)), stepwise: the increment of a point is output when the axis reaches the end of
     its section seen from R. ``machine_reference_mm``: where the machine's reference position really is (the
-    controller anchors the table there whatever the tape's comment says); default: the position the comment names."""
+    controller anchors the table there whatever the tape's comment says); default: the position the comment names.
+    ``increment_mm``: the machine's least input increment, the unit of 3624 (an inch machine's 0.0001 in = 0.00254
+    mm, whatever the tape's comment says); default: the unit the comment names."""
     assert text.endswith("\n") and "\r" not in text
     lines = text[:-1].split("\n")
     assert lines[0] == "%" and lines[-1] == "%"
@@ -116,7 +120,9 @@ def read_fanuc(text: str, detection_unit_mm: float = 0.001, machine_reference_mm
     assert params and points
     ref_no, r_mm, p21, p22, mag, p24 = (int(params.group(1)), float(params.group(2)), int(params.group(3)),
                                         int(params.group(4)), int(params.group(5)), int(params.group(6)))
-    inc_mm = float(params.group(8))
+    inc_mm = float(params.group(8)) * (25.4 if params.group(9) == "IN" else 1.0)
+    if increment_mm is not None:
+        inc_mm = float(increment_mm)
     if machine_reference_mm is not None:
         r_mm = float(machine_reference_mm)
     assert p21 == points[0][0] and p22 == points[-1][0] and p21 <= ref_no < p22

@@ -40,9 +40,12 @@ def test_an_inch_test_writing_tables_in_mm_says_so(tmp_path):
     text = cli("positioning", inch, "--compensation-from", "mean", "--compensation", "csv", tmp_path / "t.csv")
     assert "the compensation tables are in mm, the input in inches" in text.stdout
     assert "the csv values are mm: divide them by 25.4 for inches" in text.stdout and "fanuc" not in text.stdout
-    # a FANUC table holds counts of the detection unit: 0.001 mm -> 0.0001 in is a factor 2.54, not 25.4
-    fanuc = cli("positioning", inch, "--compensation-from", "mean", "--compensation", "fanuc-pitch", tmp_path / "f.txt")
-    assert ("the fanuc-pitch values are counts of 0.001 mm: divide them by 2.54 for counts of 0.0001 in (IS-B inch)"
-            in fanuc.stdout), fanuc.stdout + fanuc.stderr
+    # a FANUC tape holds counts of the machine's own unit, which the file does not tell: asked for, then said
+    # (tests/test_compensation_inch.py checks the inch tape itself)
+    args = ("positioning", inch, "--compensation-from", "mean", "--compensation", "fanuc-pitch", tmp_path / "f.txt")
+    one_error_line(cli(*args), "the test is in inches", "--fanuc-increment 0.0001in")
+    fanuc = cli(*args, "--fanuc-increment", "0.0001in")
+    assert ("the fanuc-pitch tape is for an inch machine, as --fanuc-increment 0.0001in says: its values, 3624 and "
+            "1851 are counts of 0.0001 in" in fanuc.stdout), fanuc.stdout + fanuc.stderr
     plain = cli("positioning", inch)
     assert "inch machine" not in plain.stdout + plain.stderr   # no table written, no note

@@ -61,9 +61,10 @@ def add_parser(sub):
                          "which holds the positioning deviations?), repeatable")
     pp.add_argument("--compensation", nargs=2, action="append", metavar=("FORMAT", "FILE"),
                     help="write a compensation table: FORMAT csv, siemens-eec or fanuc-pitch (repeatable)")
-    pp.add_argument("--fanuc-increment", choices=("0.001", "0.0001"), default="0.001", metavar="MM",
-                    help="fanuc-pitch: the axis' detection unit and least input increment in mm, 0.001 (IS-B, default) "
-                         "or 0.0001 (IS-C)")
+    pp.add_argument("--fanuc-increment", default=None, metavar="UNIT",
+                    help="fanuc-pitch: the machine's detection unit and least input increment: 0.001mm (IS-B, default) "
+                         "or 0.0001mm (IS-C) for a metric machine, 0.0001in (IS-B) or 0.00001in (IS-C) for an inch "
+                         "machine (its tape in counts of inches); a bare number is mm; required for an inch test")
     pp.add_argument("--fanuc-first-point", type=int, default=0, metavar="N",
                     help="fanuc-pitch: the axis' first pitch-error point number (parameter 3621, default 0); the points "
                          "are one block for all axes, so each axis' tape needs its own range (the output says which it "
@@ -107,6 +108,32 @@ def model_unavailable(data, degree: int, instrument: float | None) -> tuple[str,
                 return why + " (with more than one such target no instrument uncertainty makes its covariance regular)", None
             return why, "the instrument's uncertainty (--mpe or --instrument-u)"
     return None
+
+
+#: --fanuc-increment: the FANUC systems' detection unit / least input increment (metric IS-B / IS-C, inch IS-B / IS-C)
+FANUC_INCREMENTS = {("0.001", "mm"): 0.001, ("0.0001", "mm"): 0.0001, ("0.0001", "in"): 0.00254,
+                    ("0.00001", "in"): 0.000254}
+
+
+def fanuc_increment(text, required: bool, paths) -> tuple[float, str, str]:
+    """(mm, machine unit 'mm' or 'in', label) of ``--fanuc-increment``: 0.001mm / 0.0001mm (metric IS-B / IS-C, a
+    bare number is mm) or 0.0001in / 0.00001in (inch IS-B / IS-C). An inch test writing a FANUC tape must say which
+    the machine is (``required``): the tape's values, 3624 and 1851 are counts of the machine's own unit, which the
+    file's unit does not tell."""
+    import re
+    if text is None:
+        if required:
+            raise InvalidInputError(f"not writing {', '.join(str(p) for p in paths)}: the test is in inches and a FANUC "
+                                    "tape's values, interval (3624) and backlash (1851) are counts of the machine's own "
+                                    "unit: give --fanuc-increment 0.0001in for an inch machine (IS-B; 0.00001in IS-C) or "
+                                    "--fanuc-increment 0.001mm for a metric one (IS-B; 0.0001mm IS-C)")
+        text = "0.001"
+    m = re.fullmatch(r"\s*(0?\.0*1)\s*(mm|in)?\s*", str(text))
+    key = (m.group(1).lstrip("0") and "0" + m.group(1).lstrip("0") if m else None, (m.group(2) or "mm") if m else None)
+    if key not in FANUC_INCREMENTS:
+        raise InvalidInputError(f"--fanuc-increment {text!r}: give 0.001mm or 0.0001mm (a metric machine, IS-B or "
+                                "IS-C; a bare number is mm) or 0.0001in or 0.00001in (an inch machine)")
+    return FANUC_INCREMENTS[key], key[1], f"{key[0]} {key[1]}"
 
 
 def column_choices(items) -> dict[str, str] | None:
@@ -377,13 +404,16 @@ def run(args) -> int:
             table_axis = found[0]
             notes.append(f"compensation table for axis {table_axis!r}, from line {found[1]} of {args.file} "
                          f"({found[2]!r}); --axis names another")
+        inch_input = "in" in {canonical(u) for u in (args.unit, args.deviation_unit) if u}
+        fanuc_mm, fanuc_unit, fanuc_label = fanuc_increment(args.fanuc_increment, inch_input and any(
+            fmt == "fanuc-pitch" for fmt, _ in args.compensation), [p for _, p in args.compensation])
         comp = write_tables(res, data, args.compensation, interval=finite("--interval", args.interval, positive=True),
                             source=args.compensation_from or "model", axis=table_axis, axis_hint=hint,
                             write=write_text_atomic,
                             reference_mm=finite("--reference", args.reference),
                             unit_confirmed=given_deviation_unit is not None, on_confirmed=warn,
                             model_confirmed=args.compensation_from == "model",
-                            fanuc_unit_mm=float(args.fanuc_increment), fanuc_first_number=args.fanuc_first_point)
+                            fanuc_unit_mm=fanuc_mm, fanuc_machine_unit=fanuc_unit, fanuc_first_number=args.fanuc_first_point)
         if comp.attrs.get("reference_note"):
             notes.append(comp.attrs["reference_note"])
         if comp.attrs.get("thermal_note"):      # a correction computed from two given numbers goes into the machine
@@ -394,15 +424,17 @@ def run(args) -> int:
                          "--material-temperature; every file's header says so")
         if comp.attrs.get("reversal_note"):     # the reversal varies along the travel: the table cannot remove it
             warn(comp.attrs["reversal_note"].removeprefix("NOTE: ") + "; every file's header says so")
-        if "in" in {canonical(u) for u in (args.unit, args.deviation_unit) if u}:   # read in inches, written in mm
+        if inch_input:   # read in inches: the csv / SINUMERIK tables are in mm, the FANUC tape in the machine's unit
             formats = {fmt for fmt, _ in args.compensation}
-            inch = {"0.001": "0.0001 in (IS-B inch)", "0.0001": "0.00001 in (IS-C inch)"}[args.fanuc_increment]
             how = ([f"the {' and '.join(f for f in ('csv', 'siemens-eec') if f in formats)} values are mm: divide them "
-                    "by 25.4 for inches"] if formats & {"csv", "siemens-eec"} else []) + \
-                  ([f"the fanuc-pitch values are counts of {args.fanuc_increment} mm: divide them by 2.54 for counts "
-                    f"of {inch}"] if "fanuc-pitch" in formats else [])
-            notes.append("the compensation tables are in mm, the input in inches: an inch machine (SINUMERIK basic "
-                         f"system inch, FANUC inch detection unit) needs them in its own unit: {'; '.join(how)}")
+                    "by 25.4 for inches"] if formats & {"csv", "siemens-eec"} else [])
+            if how:
+                notes.append("the compensation tables are in mm, the input in inches: an inch machine (SINUMERIK basic "
+                             f"system inch) needs them in its own unit: {'; '.join(how)}")
+            if "fanuc-pitch" in formats:
+                notes.append(f"the fanuc-pitch tape is for {'an inch' if fanuc_unit == 'in' else 'a metric'} machine, "
+                             f"as --fanuc-increment {args.fanuc_increment} says: its values, 3624 and 1851 are counts of "
+                             f"{fanuc_label}, rounded on the whole curve")
     missing = [n for n in tolerances if n not in res.figures]
     if missing:
         raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "

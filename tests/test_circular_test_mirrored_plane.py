@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 
-from test_cli_inputs import cli
+from cli_calls import cli
 
 R, ZC, XC = 150.0, 500.0, -300.0
 

@@ -7,8 +7,8 @@ import re
 
 import numpy as np
 
+from cli_calls import cli
 from fitbench.plots.circular_test import SHORT, meaning
-from test_cli_inputs import cli
 
 WORDS = {w for pair in SHORT.values() for w in pair}
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cli_calls import cli, one_error_line
 from datasets.positioning import axis_test
-from test_cli_inputs import cli, one_error_line
 
 
 def z_export(path):

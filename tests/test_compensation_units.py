@@ -9,9 +9,9 @@ import json
 import numpy as np
 import pytest
 
+from cli_calls import cli, one_error_line
 from compensation_controllers import READERS
 from fitbench.compensation import WRITERS
-from test_cli_inputs import cli, one_error_line
 
 RUNS = 5
 

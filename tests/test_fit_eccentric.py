@@ -9,7 +9,7 @@ import re
 
 import pytest
 
-from test_cli_inputs import cli
+from cli_calls import cli
 from test_roundness_eccentric import R, instrument_file, limacon
 
 

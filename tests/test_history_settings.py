@@ -9,8 +9,9 @@ import json
 
 import numpy as np
 
+from cli_calls import cli
 from datasets.positioning import axis_test, to_frame
-from test_cli_inputs import cli, profile_file
+from test_cli_inputs import profile_file
 
 
 def _save(folder, name, *args):

@@ -9,7 +9,7 @@ import json
 
 import numpy as np
 
-from test_cli_inputs import cli, one_error_line
+from cli_calls import cli, one_error_line
 
 S = np.array([[-200, -300, 200.], [800, -250, 150], [850, 650, -600], [-250, 700, -500], [300, 200, 300]])
 L = np.array([150., 160, 170, 180, 190])

@@ -9,9 +9,9 @@ import json
 import numpy as np
 import pytest
 
+from cli_calls import cli
 from datasets.positioning import axis_test, to_frame
 from methods.positioning.iso230_2 import conformity
-from test_cli_inputs import cli
 
 
 def axis_file(path, **kw):

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import methods
+from cli_calls import cli, one_error_line
 from compensation_controllers import read_fanuc, remeasure
 from datasets.positioning import axis_test
-from test_cli_inputs import cli, one_error_line
 
 
 def axis(seed=3):

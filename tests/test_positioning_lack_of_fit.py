@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import methods
+from cli_calls import cli, one_error_line
 from datasets.positioning import axis_test
 from methods.positioning.model import lack_of_fit
-from test_cli_inputs import cli, one_error_line
 
 
 def periodic_file(path):

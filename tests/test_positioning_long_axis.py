@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from test_cli_inputs import cli, one_error_line
+from cli_calls import cli, one_error_line
 
 
 def long_axis(path, seed=7):

@@ -11,9 +11,9 @@ import warnings
 import numpy as np
 import pytest
 
+from cli_calls import cli, one_error_line
 from datasets.io import read_positioning
 from methods.positioning.data import RunOrderNote
-from test_cli_inputs import cli, one_error_line
 
 LOST_MOTION = 0.005   # mm: moving down the axis stops 2.5 µm above the target, moving up 2.5 µm below
 

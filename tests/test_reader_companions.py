@@ -9,8 +9,8 @@ import json
 import numpy as np
 import pytest
 
+from cli_calls import cli, one_error_line
 from datasets.io import DataFileError, read_points, read_profile, read_runs
-from test_cli_inputs import cli, one_error_line
 
 
 N, R = 360, 100.0

@@ -10,9 +10,9 @@ import json
 import numpy as np
 import pytest
 
+from cli_calls import cli, one_error_line  # the CLI in this process, and its one-line error
 from datasets.io import (SMALL_FILE_BYTES, DataFileError, decimal_marks, read_multilateration, read_points,
                          read_positioning, read_profile)
-from test_cli_inputs import cli, one_error_line  # the CLI in this process, and its one-line error
 
 
 def circle(n, r=20.0, cx=0.0, cy=0.0):

@@ -12,7 +12,7 @@ import re
 import numpy as np
 import pytest
 
-from test_cli_inputs import cli
+from cli_calls import cli
 
 R = 5.0            # mm
 LOBES = ((3, 1.5e-3, 0.4), (2, 0.6e-3, 1.0), (15, 0.4e-3, 2.0))     # (UPR, amplitude mm, phase rad)

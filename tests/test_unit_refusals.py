@@ -7,7 +7,7 @@ import re
 import numpy as np
 import pytest
 
-from test_cli_inputs import cli, one_error_line
+from cli_calls import cli, one_error_line
 
 
 def ring(n=120, r=5.0, cx=2.0, cy=-1.0, lobes=0.0004):

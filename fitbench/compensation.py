@@ -716,6 +716,8 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
             "elsewhere (outside the measured travel too, e.g. --reference 0 at the travel end)")
     if any(fmt == "fanuc-pitch" for fmt, _ in requests):
         table.attrs["fanuc_points"] = fanuc_points_line(table, fanuc_first_number)
+        table.attrs["fanuc_numbers"] = dict(zip(("p3621", "p3620", "p3622"),
+                                                fanuc_point_numbers(table, fanuc_first_number)))
     texts = [(path, WRITERS[fmt](table, axis=axis, **(fanuc if fmt == "fanuc-pitch" else {})))
              for fmt, path in requests]
     for path, text in texts:

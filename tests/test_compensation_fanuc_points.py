@@ -4,6 +4,7 @@ Before: every tape started at point 0 and the command line could not move it; th
 overwrote X's points, and X was compensated with Z's increments."""
 from __future__ import annotations
 
+import json
 import re
 
 import numpy as np
@@ -47,6 +48,10 @@ def test_two_axes_tapes_fill_separate_points_and_both_compensate(tmp_path):
               "--fanuc-first-point", last_x + 1, "--compensation", "fanuc-pitch", tmp_path / "z.tap")
     assert out.returncode == 0, out.stderr
     tapes = {n: (tmp_path / f"{n.lower()}.tap").read_text() for n in tests}
+    js = cli("positioning", tmp_path / "Z.csv", "--deviation-unit", "mm", "--axis", "Z", "--json",
+             "--fanuc-first-point", last_x + 1, "--compensation", "fanuc-pitch", tmp_path / "z.tap")
+    points = json.loads(js.stdout)["compensation"]["tables"][0]["fanuc_points"]
+    assert points["p3621"] == last_x + 1 and points["p3621"] <= points["p3620"] < points["p3622"]
     assert re.search(rf"3621 = {last_x + 1}, ", tapes["Z"])
     assert re.search(rf"THIS TAPE FILLS PITCH-ERROR POINTS {last_x + 1} \.\.\. \d+", tapes["Z"])
     # loaded one after the other into the controller's one block, each axis keeps its own increments

@@ -479,7 +479,9 @@ def run(args) -> int:
         out["details"] = {"conditions": test_conditions(args, axis=args.axis or "", files=[str(args.file)])}
         if comp is not None:   # the table written (what the text's "compensation table ... written to" lines say)
             out["compensation"] = {
-                "tables": [{"format": fmt, "path": path} for fmt, path in args.compensation],
+                "tables": [{"format": fmt, "path": path, **({"fanuc_points": comp.attrs["fanuc_numbers"]}
+                                                             if fmt == "fanuc-pitch" else {})}
+                           for fmt, path in args.compensation],
                 "source": comp.attrs["source"], "interval_mm": comp.attrs["interval_mm"], "points": len(comp),
                 "first_mm": float(comp.position_mm.iloc[0]), "last_mm": float(comp.position_mm.iloc[-1]),
                 "reference_mm": float(comp.position_mm.iloc[comp.attrs["reference_index"]]),

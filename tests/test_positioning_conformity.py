@@ -38,7 +38,7 @@ def test_text_and_json_say_what_the_test_lacks(tmp_path, kw, lacks):
         assert out.stdout.index(note[0]) < out.stdout.index("ISO 230-2:2014 (k = 2)")   # before the figures
         assert any(n.startswith("not an ISO 230-2 test") for n in got["notes"])
     else:
-        assert note == [] and got["notes"] == []
+        assert note == [] and not any(n.startswith("not an ISO 230-2 test") for n in got["notes"])
 
 
 def test_the_other_standards_carry_no_iso_note(tmp_path):

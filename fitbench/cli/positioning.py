@@ -376,6 +376,15 @@ def run(args) -> int:
                                     f"the targets){f', or {remedy}' if remedy else ''}")
     else:
         res = methods.fit("positioning.gls_polynomial", data, degree=args.degree, instrument_u=instrument_u, mpe=mpe)
+    given = [p for p in (getattr(res, "polynomial", None) or {}).values() if not p["lack_of_fit"]["rejected"]]
+    if given and not res.extra.get("u_delta"):   # a U(P) is printed, from the scatter of the means alone
+        k = given[0]["k"]
+        why = ("neither --mpe nor --instrument-u is given" if instrument_u is None and mpe is None else "given as 0")
+        notes.append(f"U(P) includes the scatter of the means only (u(P_i) = s_i/√n, the positioning paper's eq. 10), "
+                     f"not the instrument's error u(δ) ({why}: u(δ) = 0), which the "
+                     "paper's model exists to include: it is not the uncertainty of the measured deviation; give the "
+                     f"instrument's MPE (e.g. --mpe 2um) or standard uncertainty (--instrument-u) to add it: "
+                     f"U(P)² + ({k:g} u(δ))²")
     from fitbench.compensation import model_misfit
     misfit = model_misfit(res)
     if misfit:

@@ -60,10 +60,13 @@ def text(res, degree: int | None = None) -> str:
         for key, label in names.items():
             if key in f:
                 lines.append(f"  {key:<7} {label:<{width}} {f[key] * um:10.3f}")
-    lines.append("per target (µm; target in mm)")
+    vdi = "Ps_i" in per     # VDI/DGQ 3441's per-position figures, not ISO 230-2's B_i and R_i
+    lines.append("per target (µm; target in mm" + ("; VDI/DGQ 3441: reversal span U_i = |mean ↑ - mean ↓|, positional "
+                                                   "scatter Ps_i = 6 s_i, s_i pooled over both directions)" if vdi else ")"))
     cols = [(f"mean {ARROW[d]}", f"mean_{d}", 9) for d in ("up", "down") if f"mean_{d}" in per] + \
            [(f"s {ARROW[d]}", f"s_{d}", 7) for d in ("up", "down") if f"s_{d}" in per] + \
-           [(n, k, 8) for n, k in (("B_i", "B_i"), ("R_i", "R_i"), ("x̄_i", "mean_bidirectional")) if k in per]
+           [(n, k, 8) for n, k in ((("U_i", "U_i"), ("Ps_i", "Ps_i")) if vdi else (("B_i", "B_i"), ("R_i", "R_i")))
+            + (("x̄_i", "mean_bidirectional"),) if k in per]
     if "R_i" not in per:
         cols += [(f"R_i {ARROW[d]}", f"R_i_{d}", 8) for d in ("up", "down") if f"R_i_{d}" in per]
     lines.append(f"  {'target':>10} " + " ".join(f"{n:>{w}}" for n, _, w in cols))
@@ -78,7 +81,8 @@ def text(res, degree: int | None = None) -> str:
             coefs = ", ".join(f"{c:+.4g} {u}" for _, c, u in coefficients_readable(p))
             lof = p.get("lack_of_fit") or {}
             band = (f"U(P) not given: the model is rejected by its lack of fit" if lof.get("rejected") else
-                    f"max U(P_i) = {p['U_at_targets'].max() * um:.3f} µm (k = {p['k']:g})")
+                    f"max U(P_i) = {p['U_at_targets'].max() * um:.3f} µm (k = {p['k']:g})"
+                    + (", without the instrument's error (u(delta) = 0)" if not ud else ""))
             lines.append(f"  {ARROW.get(d, d)} {coefs}; {band}")
         lines += lack_of_fit_lines(res.polynomial, ARROW)
     return "\n".join(lines)
@@ -165,7 +169,8 @@ def plot(result, path, title: str = "", *, data=None, save=None, into=None) -> d
                              label=f"degree-{result.polynomial[d]['degree']} fit {ARROW[d]}")
                 if d not in rejected:     # a rejected model's U(P) is not the uncertainty of the deviation
                     axes[1].fill_between(grid, (v - U) * um, (v + U) * um, color=colours[d], alpha=0.2,
-                                         label=f"U(P), k = {result.polynomial[d]['k']:g}")
+                                         label=f"U(P), k = {result.polynomial[d]['k']:g}"
+                                               + ("" if result.extra.get("u_delta") else ", no instrument error"))
         lofs = {d: p["lack_of_fit"] for d, p in (result.polynomial or {}).items() if p.get("lack_of_fit")}
         chi = ", ".join(f"{lof['chi2_per_dof']:.3g} {ARROW[d]}" for d, lof in lofs.items() if lof["tested"])
         if rejected:

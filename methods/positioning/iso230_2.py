@@ -49,6 +49,8 @@ def figures(data: PositioningData, standard: str = "iso230-2:2014") -> tuple[dic
         fig.update(Ps=float(Ps_i.max()), U=float(U_i.max()), Pa=float(np.ptp(xm)),
                    P=float(np.max(xm + half) - np.min(xm - half)))
         per.update(Ps_i=Ps_i, U_i=U_i)
+        for key in ("R_i", "R_i_up", "R_i_down"):      # ISO 230-2's repeatability at a target: not a VDI figure
+            del per[key]
     return fig, per
 
 

@@ -570,9 +570,13 @@ def _fitting_default(res, data, table, limit: int, fmt: str, source: str, refere
         raise CompensationError(f"{fmt}: the default table (at the smallest target spacing, {a['interval_mm']:g} mm) "
                                 f"has {len(table)} points, more than the controller's {limit}, and the finest step that "
                                 f"fits, {step_q * NM:g} mm, is refused: {exc}") from None
+    roomier = [f for f in formats if f != fmt and POINT_LIMITS.get(f, MAX_POINTS) > limit]
+    alone = (f"; one table serves every format, so {' and '.join(roomier)} {'gets' if len(roomier) == 1 else 'get'} "
+             f"{fmt}'s step: written without {fmt}, {'it takes' if len(roomier) == 1 else 'they take'} a finer one"
+             if roomier else "")
     chosen.attrs["chosen"] = (f"every {step_q * NM:g} mm, the finest step whose table fits {fmt}'s {limit} points (the "
                               f"smallest target spacing, {a['interval_mm']:g} mm, gave {len(table)}); --interval sets "
-                              "another")
+                              f"another{alone}")
     return chosen
 
 

@@ -109,6 +109,11 @@ def test_the_default_table_of_irregular_targets_fits_the_sinumerik(tmp_path):
               "--compensation", "siemens-eec", tmp_path / "t.mpf", "--compensation", "fanuc-pitch", tmp_path / "t.tap")
     assert out.returncode == 0, out.stderr
     step = float(re.search(r"every (\S+) mm, the finest step whose table fits siemens-eec's 200 points", out.stdout).group(1))
+    # the FANUC tape gets the SINUMERIK's step, and the output says a finer one is there for it alone
+    assert "so fanuc-pitch gets siemens-eec's step: written without siemens-eec, it takes a finer one" in out.stdout
+    alone = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--axis", "X1",
+                "--compensation", "fanuc-pitch", tmp_path / "t.tap")
+    assert float(re.search(r"fanuc-pitch, every (\S+) mm", alone.stdout).group(1)) < step
     encoder, info = READERS["siemens-eec"]((tmp_path / "t.mpf").read_text())
     assert len(info["values"]) <= 200 and abs(step * 199 - 1000.0) < 1.0           # 200 points, no coarser than needed
     before = methods.fit("positioning.iso230_2", data).figures

@@ -3,7 +3,8 @@
 The table (``compensation_table``) is one equally spaced grid for every format:
 
 * it is anchored at the machine's **reference point** R (a grid point; default: position 0 when the
-  measured travel contains it, else the end of the travel nearer 0) and **covers the measured travel**:
+  measured travel contains it, else the end of the travel nearer 0; it may lie outside the travel, where the
+  deviation is held at the nearer target's, ``outside_reference``) and **covers the measured travel** and R:
   its first point is at or before the first target, its last point at or after the last target. Without
   ``interval`` the step is chosen so that the longer side of the travel from R is a whole number of steps
   (within 0.001 mm, the step being a multiple of 0.001 mm, no coarser than the smallest target spacing);

@@ -10,25 +10,9 @@ import json
 import numpy as np
 import pytest
 
-from datasets.circular_test import MachineErrors, TestConditions, circular_test
-from datasets.positioning import axis_test, to_frame
 from cli_calls import cli, one_error_line
-
-
-def profile_file(path, n=3600, seed=3):
-    """A Ø40 mm shaft with three lobes and noise, x, y in mm."""
-    t = 2 * np.pi * np.arange(n) / n
-    r = 20.0 + 1.5e-3 * np.cos(3 * t + 0.4) + 2e-5 * np.random.default_rng(seed).standard_normal(n)
-    np.savetxt(path, np.c_[r * np.cos(t), r * np.sin(t)], delimiter=",", header="x,y", comments="", fmt="%.9f")
-    return path
-
-
-def circular_runs_file(path, seed=0):
-    cond = TestConditions(nominal_radius=100.0, nominal_center=(0.0, 0.0), sampling_hz=50.0)
-    cw, ccw, _ = circular_test(cond, MachineErrors(squareness=20e-6, noise=0.0002), seed=seed)
-    path.write_text("run,x,y\n" + "".join(f"{lab},{x:.7f},{y:.7f}\n" for lab, pts in (("cw", cw), ("ccw", ccw))
-                                          for x, y in pts))
-    return path
+from datasets.positioning import axis_test, to_frame
+from profile_lines import circular_runs_file, profile_file
 
 
 # ------------------------------------------------------------------------------------------ history

@@ -103,7 +103,7 @@ def test_the_implausible_deviation_warning_of_roundness_is_in_its_report_and_jso
 
 
 def test_a_circular_test_warning_is_in_its_json_and_report(tmp_path):
-    from test_cli_inputs import circular_runs_file
+    from profile_lines import circular_runs_file
     runs = circular_runs_file(tmp_path / "runs.csv")
     args = ("circular-test", runs, "--nominal-radius", 100, "--feed", 1)
     code, d, err = json_of(*args)

@@ -11,7 +11,7 @@ import numpy as np
 
 from cli_calls import cli
 from datasets.positioning import axis_test, to_frame
-from test_cli_inputs import profile_file
+from profile_lines import profile_file
 
 
 def _save(folder, name, *args):

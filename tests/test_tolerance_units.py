@@ -7,7 +7,7 @@ import pytest
 
 from cli_calls import cli, one_error_line
 from positioning_tables import axis_csv
-from test_cli_inputs import circular_runs_file, profile_file
+from profile_lines import circular_runs_file, profile_file
 
 
 @pytest.fixture(scope="module")

@@ -20,6 +20,10 @@ from experiments.rows import base_row
 from experiments.study import Analysis, ConfigError, ConfigTable, Figure, Study, Table
 
 
+#: the nominal coverage of a k = 2 band, and how many standard errors of the Monte-Carlo mean decide above / below it
+NOMINAL, NOMINAL_SE = 0.95, 2.0
+
+
 def example(cfg, target) -> str:
     """The paper's figures 2 and 3 for one synthetic axis with the periodic error; returns what the figure's right
     panel shows: the model's band, or the lack-of-fit test that rejects the model (then no band is drawn)."""
@@ -115,8 +119,9 @@ class PositioningStudy(Study):
                 "band_halfwidth_mean": float(np.mean(U)), "error_rms": float(np.sqrt(np.mean(err ** 2)))}
 
     def analyse(self, df, cfg, target, log):
-        """Coverage table (coverage.csv), the redrawn coverage figure, the example axis; findings: which band
-        reaches the nominal 95 % in every scenario."""
+        """Coverage table (coverage.csv), the redrawn coverage figure, the example axis; findings: per band, in how
+        many scenarios its mean coverage is above, below or (within NOMINAL_SE standard errors of the mean over the
+        tests) undecided against the nominal 95 %."""
         table = df.groupby(["dataset", "method"], sort=False).agg(coverage=("coverage", "mean"),
                                                                   halfwidth_um=("band_halfwidth_mean", "mean"),
                                                                   error_rms_um=("error_rms", "mean")).reset_index()
@@ -128,18 +133,34 @@ class PositioningStudy(Study):
         coverage_figure(table, target / "positioning.png")
         shows = example(cfg, target) if cfg.get("example_band") else None
         worst = table.groupby("method", sort=False)["coverage"].min()
-        reaching = [b for b, v in worst.items() if v >= 0.95]
-        values = {"lowest_coverage": {b: float(v) for b, v in worst.items()}, "bands_at_nominal": reaching,
-                  "mean_halfwidth_um": table.groupby("method", sort=False)["halfwidth_um"].mean().to_dict()}
+        # a band's mean coverage against the nominal 95 %, counted only beyond NOMINAL_SE standard errors of the mean
+        # over the tests (the noise study's rule): 95.48 % of 1000 tests is 95.5 +- 1.2 % (2 s.e.), undecided
+        per_test = df.groupby(["dataset", "method"], sort=False)["coverage"]
+        se = (per_test.std(ddof=1) / np.sqrt(per_test.count())).to_numpy()
+        side = np.where(table["coverage"] - NOMINAL_SE * se >= NOMINAL, "above",
+                        np.where(table["coverage"] + NOMINAL_SE * se < NOMINAL, "below", "undecided"))
+        verdicts = table.assign(se=se, side=side)
         n_sc = table["dataset"].nunique()
-        reached = (table["coverage"] >= 0.95).groupby(table["method"], sort=False).sum()
-        values["scenarios_at_nominal"] = {b: int(k) for b, k in reached.items()}
+        counts = {b: {k: int((g["side"] == k).sum()) for k in ("above", "undecided", "below")}
+                  for b, g in verdicts.groupby("method", sort=False)}
+        values = {"lowest_coverage": {b: float(v) for b, v in worst.items()},
+                  "bands_at_nominal": [b for b, c in counts.items() if c["below"] == 0],
+                  "mean_halfwidth_um": table.groupby("method", sort=False)["halfwidth_um"].mean().to_dict(),
+                  "scenarios_vs_nominal": counts,
+                  "coverage_se": {f"{r.dataset} | {r.method}": float(r.se) for r in verdicts.itertuples()}}
         low = worst.min()
-        order = reached.sort_values(ascending=False, kind="stable")
-        zeros = [b for b, k in order.items() if k == 0]
-        findings = (f"Over {n_sc} scenarios, bands covering the true deviation curve at the nominal 95 % or more: "
-                    + ", ".join([f"{b} in {k} of {n_sc}" for b, k in order.items() if k]
-                                + ([f"{joined(zeros)} in none"] if zeros else []))
+        reps = int(per_test.count().max())
+
+        def band_part(b, g):
+            und = g[g["side"] == "undecided"]
+            parts = [f"{k} in {counts[b][k]}" + (f" ({' and '.join(f'{100 * r.coverage:.1f} ± {100 * NOMINAL_SE * r.se:.1f} %' for r in und.itertuples())})"
+                                                 if k == "undecided" else "")
+                     for k in ("above", "undecided", "below") if counts[b][k]]
+            return f"{b} {', '.join(parts)}"
+        findings = (f"Over {n_sc} scenarios ({reps} simulated tests each), the mean coverage of the true deviation curve "
+                    f"against the nominal 95 %, counted above or below only beyond {NOMINAL_SE:g} standard errors "
+                    f"(± {NOMINAL_SE:g} s.e. shown): "
+                    + " / ".join(band_part(b, g) for b, g in verdicts.groupby("method", sort=False))
                     + f"; lowest coverage: {100 * low:.1f} % ({joined(b for b, v in worst.items() if v == low)}).")
         reps = int(df.groupby(["dataset", "method"]).size().max())
         shown = table.rename(columns={"dataset": "scenario", "method": "band", "halfwidth_um": "mean half-width [µm]",

@@ -153,7 +153,7 @@ class PositioningStudy(Study):
 
         def band_part(b, g):
             und = g[g["side"] == "undecided"]
-            parts = [f"{k} in {counts[b][k]}" + (f" ({' and '.join(f'{100 * r.coverage:.1f} ± {100 * NOMINAL_SE * r.se:.1f} %' for r in und.itertuples())})"
+            parts = [f"{k} in {counts[b][k]}" + (f" ({joined(f'{100 * r.coverage:.1f} ± {100 * NOMINAL_SE * r.se:.1f} %' for r in und.itertuples())})"
                                                  if k == "undecided" else "")
                      for k in ("above", "undecided", "below") if counts[b][k]]
             return f"{b} {', '.join(parts)}"

@@ -1,5 +1,6 @@
 """The cache key covers all code a row depends on: edit a copy of the repository (or of a plugin) and
 the resumed run recomputes the rows, instead of serving stale ones; an edit elsewhere recomputes nothing."""
+import json
 import re
 import shutil
 
@@ -75,25 +76,47 @@ ROW_CODE = ["experiments/metrics.py", "experiments/rows.py", "experiments/chunkr
             "methods/circle/algebraic.py", "methods/circle/results.py", "methods/result_base.py",
             "methods/circle/_ckernels.c", "setup.py"]
 
+#: ``python -c EDITS STUDY OUT FILE...`` in a copy of the repository: each FILE edited in turn, then the keyed study
+#: run again (``experiments.run.main``) in this one interpreter, the code hashes forgotten first
+#: (``codekeys.reset_caches``: a new process starts without them); one JSON line per FILE: [FILE, exit status,
+#: rows, rows to run]. One interpreter for every edit, not one per edit: 13 starts of experiments.run were 9 s of CPU.
+EDITS = """
+import contextlib, io, json, re, sys
+from pathlib import Path
+from experiments import codekeys, run
+study, out, *edited = sys.argv[1:]
+for path in edited:
+    Path(path).write_text(Path(path).read_text() + "\\n# edited by the cache-key test\\n")
+    codekeys.reset_caches()
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        code = run.main([study, "--out", out, "--jobs", "1", "--no-report"])
+    m = re.search(r"(\\d+) rows: (\\d+) already stored, (\\d+) to run", printed.getvalue())
+    print(json.dumps([path, code, *(map(int, m.group(1, 3)) if m else [printed.getvalue()])]), flush=True)
+"""
+
 
 def test_editing_code_a_row_depends_on_recomputes_it(repo_copy, tmp_path):
     """One copy of the repository, edited one file at a time: after each edit the resumed run recomputes both rows
-    (and stores them under the new key), so each file is checked on its own. An edited C kernel source is refused
-    until its kernel is rebuilt (rows of the old binary would be stored under the new source's key)."""
+    (and stores them under the new key), so each file is checked on its own; an edit of code no row runs recomputes
+    nothing. An edited C kernel source is refused until its kernel is rebuilt (rows of the old binary would be stored
+    under the new source's key): that run starts a new process (a process checks its kernels once)."""
     study, out = computed_then_served(repo_copy, tmp_path, "circle.kasa")
-    append(repo_copy / "experiments/report.py")  # not code of any row
-    assert run(repo_copy, study, out) == (2, 0)
-    for edited in ROW_CODE:
-        if edited.endswith(".c"):   # a kernel's source: its binary is refused until rebuilt, then the rows recomputed
-            append(repo_copy / edited, "\n/* edited by the cache-key test */\n")
-            stale = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report",
-                               cwd=repo_copy, repo=repo_copy, timeout=300)
-            assert stale.returncode == 2 and "is stale" in stale.stderr and "Traceback" not in stale.stderr, stale.stderr
-            built = run_python("setup.py", "build_ext", "--inplace", "-q", cwd=repo_copy, repo=repo_copy, timeout=600)
-            assert built.returncode == 0, built.stderr
-        else:
-            append(repo_copy / edited)
-        assert run(repo_copy, study, out) == (2, 2), f"editing {edited} must recompute the rows"
+    python_files = [f for f in ROW_CODE if not f.endswith(".c")]
+    proc = run_python("-c", EDITS, study, out, "experiments/report.py", *python_files, cwd=repo_copy, repo=repo_copy,
+                      timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    runs = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert runs[0] == ["experiments/report.py", 0, 2, 0]  # not code of any row
+    assert runs[1:] == [[edited, 0, 2, 2] for edited in python_files], "each edit must recompute the rows"
+    for kernel in [f for f in ROW_CODE if f.endswith(".c")]:  # its binary is refused until rebuilt, then the rows run
+        append(repo_copy / kernel, "\n/* edited by the cache-key test */\n")
+        stale = run_python("-m", "experiments.run", study, "--out", out, "--jobs", "1", "--no-report",
+                           cwd=repo_copy, repo=repo_copy, timeout=300)
+        assert stale.returncode == 2 and "is stale" in stale.stderr and "Traceback" not in stale.stderr, stale.stderr
+        built = run_python("setup.py", "build_ext", "--inplace", "-q", cwd=repo_copy, repo=repo_copy, timeout=600)
+        assert built.returncode == 0, built.stderr
+        assert run(repo_copy, study, out) == (2, 2), f"editing {kernel} must recompute the rows"
 
 
 def test_editing_a_file_source_recomputes(repo_copy, tmp_path):

@@ -76,15 +76,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
-import pandas as pd
 from pydantic import BaseModel, ConfigDict
 
 from experiments import studies
 from experiments.rows import fit_row, task_data
 from methods import InvalidInputError, results
 from methods.plugins import add_entry
+
+if TYPE_CHECKING:  # pandas is imported where a table is checked: a row's process (a worker) needs none of it
+    import pandas as pd
 
 
 class ConfigError(InvalidInputError):
@@ -112,6 +114,7 @@ class Table:
     exact: tuple = ()
 
     def __post_init__(self):
+        import pandas as pd
         declared = [*self.decimals, *self.exact]
         bad = [c for c in declared if c not in self.data.columns or not pd.api.types.is_numeric_dtype(self.data[c])]
         if bad or not all(isinstance(n, int) and 0 <= n <= 15 for n in self.decimals.values()):

@@ -110,6 +110,7 @@ def test_sample_report_passes(tmp_path):
     assert shot.stat().st_size > 10_000
 
 
+@pytest.mark.slow  # a report built and three Chromium checks: 3.3 s
 @needs_chromium
 def test_checks_can_fail(tmp_path):
     problems = check_html_report(build_sample_report(tmp_path / "bad", broken_image=True, unnumbered=True))

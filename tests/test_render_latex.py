@@ -182,6 +182,7 @@ def test_ordinal():
         ordinal(-1)
 
 
+@pytest.mark.slow  # a figure drawn and two pdflatex runs: 3.1 s
 @needs_pdflatex
 def test_report_tex_includes_fragments_and_figures_and_compiles(tmp_path):
     """paper/report.tex from the jinja2 template: sections, findings text with maths, \\input tables,

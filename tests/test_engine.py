@@ -688,6 +688,7 @@ def test_workers_that_cannot_start_stop_the_run_in_one_line(tmp_path):
     assert "worker processes end before running a row (exit code 7" in res.stderr.strip().splitlines()[-1]
 
 
+@pytest.mark.slow
 def test_a_script_without_the_main_guard_runs_on_several_workers(tmp_path):
     """Workers do not import the script that started the run, so a script without the ``if __name__ ==
     "__main__"`` guard that multiprocessing usually asks for runs its study on several workers."""
@@ -870,6 +871,7 @@ def _script_run(tmp_path, program, *args):
                           env=subprocess_env(OPENBLAS_NUM_THREADS="1"))
 
 
+@pytest.mark.slow
 def test_a_method_a_script_registers_is_keyed_by_the_script_and_refused_on_workers(tmp_path):
     """A method registered by the program that runs (the documented run.main API) was keyed by no code at all: an edit
     of it kept the old rows ("up to date"); with --jobs 2 every row was 'skipped: unknown method id' (workers do not
@@ -890,6 +892,7 @@ def test_a_method_a_script_registers_is_keyed_by_the_script_and_refused_on_worke
     assert "--jobs 2" in lines[0] and "run with --jobs 1" in lines[0], lines
 
 
+@pytest.mark.slow
 def test_a_method_of_a_program_without_a_file_is_never_reused(tmp_path):
     """python -c (or a notebook) has no file to key its methods by: their rows are computed again by every run."""
     write_study(tmp_path, name="sc", reps=2, methods='[[methods]]\nid = "circle.script_fit"\n')

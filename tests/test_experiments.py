@@ -113,15 +113,6 @@ def test_every_method_sees_the_same_noise(tmp_path):
 
 
 @pytest.mark.slow
-def test_dask_local_cluster_gives_the_same_rows(tmp_path):
-    pytest.importorskip("distributed")
-    cfg = tiny(tmp_path, reps=2)
-    run_study(str(cfg), tmp_path / "local", jobs=1, log=lambda *a: None)
-    run_study(str(cfg), tmp_path / "dask", jobs=2, executor="dask", log=lambda *a: None)
-    pd.testing.assert_frame_equal(table(tmp_path / "local"), table(tmp_path / "dask"))
-
-
-@pytest.mark.slow
 def test_interrupted_run_resumes_to_the_uninterrupted_rows(tmp_path):
     """Ctrl-C (SIGINT) in the middle of a run; the next run finishes without redoing or duplicating."""
     cfg = tiny(tmp_path, reps=25)

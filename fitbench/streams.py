@@ -1,9 +1,11 @@
 """Standard streams, below every layer (the standard library only, as :mod:`fitbench.threads`): what a method prints
 to stdout sent to stderr, for the command line (a ``--json`` command's output stays one JSON object) and for the
-engine's rows (the run's stdout carries its own lines alone)."""
+engine's rows (the run's stdout carries its own lines alone); and a command's standard streams kept writable once their
+reader has gone (``fitbench positioning ... | head -1``), so the command still ends and writes its files."""
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 import sys
 
@@ -40,3 +42,73 @@ def stdout_to_stderr():
             _flush_c_stdio()
             os.dup2(saved, out_fd)
             os.close(saved)
+
+
+class _ReaderMayGo(io.RawIOBase):
+    """Descriptor ``fd`` written to until its reader has gone (EPIPE: ``| head -1`` read what it wanted), then
+    :data:`os.devnull` in its place (``os.dup2``: what is still buffered, compiled code's writes to the descriptor and
+    the interpreter's flush at exit go nowhere), so a write never raises :class:`BrokenPipeError`."""
+
+    def __init__(self, fd: int):
+        super().__init__()
+        self._fd = fd
+        self.gone = False
+
+    def writable(self) -> bool:
+        return True
+
+    def fileno(self) -> int:
+        return self._fd
+
+    def write(self, b) -> int:
+        if not self.gone:
+            try:
+                return os.write(self._fd, b)
+            except BrokenPipeError:
+                self.gone = True
+                _sink(self._fd)
+        return memoryview(b).nbytes
+
+
+def _sink(fd: int) -> None:
+    """:data:`os.devnull` in place of descriptor ``fd``."""
+    sink = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(sink, fd)
+    finally:
+        os.close(sink)
+
+
+@contextlib.contextmanager
+def readers_may_go():
+    """Inside the block, ``sys.stdout`` and ``sys.stderr`` (when they are the process's own, on a descriptor) write
+    through :class:`_ReaderMayGo`: a reader closing the pipe early (``| head -1``, ``2>&1 | head``) ends what the
+    command prints, not the command (its computation and output files go on; Python would raise
+    :class:`BrokenPipeError` at whichever print flushed next). The old streams are back when it ends."""
+    swapped = []
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if stream is None or stream is not getattr(sys, f"__{name}__"):
+            continue   # already replaced (a test capturing it, a caller's redirection): left as it is
+        try:
+            fd = stream.fileno()
+        except (AttributeError, OSError, ValueError):
+            continue
+        try:
+            stream.flush()
+        except BrokenPipeError:   # printed before and its reader gone already: that goes to the sink
+            _sink(fd)
+            stream.flush()
+        raw = _ReaderMayGo(fd)
+        guarded = io.TextIOWrapper(io.BufferedWriter(raw), encoding=stream.encoding, errors=stream.errors,
+                                   line_buffering=stream.line_buffering, write_through=stream.write_through)
+        setattr(sys, name, guarded)
+        swapped.append((name, stream, guarded))
+    try:
+        yield
+    finally:
+        for name, stream, guarded in reversed(swapped):
+            try:
+                guarded.flush()
+            finally:
+                setattr(sys, name, stream)

@@ -182,3 +182,31 @@ def test_every_output_option_is_checked():
                ("positioning", "--report"), ("positioning", "--compensation"), ("multilaterate", "--errors-csv"),
                ("history", "--plot")}
     assert found - inputs == covered
+
+
+@pytest.mark.parametrize("streams", ["stdout", "stdout and stderr"])
+def test_a_reader_closing_the_pipe_early_still_gets_the_files(axis, streams):
+    """`fitbench positioning in.csv --compensation csv t.csv ... | head -1` (also `2>&1 | head -1`): the reader has gone,
+    the command still ends and writes every output (the same bytes as a run printing everything), exit 0 and quiet as
+    for a closed pipe elsewhere (`experiments.run --list | head -1`). The print that met the closed pipe discarded
+    the staged tables and the command said nothing, exit 0."""
+    import subprocess
+    import sys
+    from conftest import subprocess_env
+    folder = axis.parent
+    tables = ["--compensation", "csv", "t.csv", "--compensation", "siemens-eec", "t.mpf"]
+    (folder / "ref").mkdir()
+    got = cli("positioning", axis, "--axis", "X1", *[str(folder / "ref" / a) if "." in a else a for a in tables])
+    assert got.returncode == 0, got.stderr
+    read, write = os.pipe()
+    os.close(read)   # the reader has gone before the command prints
+    try:
+        done = subprocess.run([sys.executable, "-m", "fitbench", "positioning", "in.csv", "--axis", "X1", *tables],
+                              cwd=folder, env=subprocess_env(), stdout=write,
+                              stderr=write if streams != "stdout" else subprocess.PIPE, timeout=120)
+    finally:
+        os.close(write)
+    assert done.returncode == 0 and not done.stderr, done.stderr
+    for name in ("t.csv", "t.mpf"):
+        assert (folder / name).read_bytes() == (folder / "ref" / name).read_bytes(), name
+    assert sorted(p.name for p in folder.iterdir()) == ["in.csv", "ref", "t.csv", "t.mpf"]   # no temporary left

@@ -22,6 +22,7 @@ import sys
 import warnings
 
 import fitbench.cli.options as cli_options
+from fitbench.streams import readers_may_go
 from methods import InvalidInputError
 from fitbench.cli.options import version, warn
 # the guards, and the names other modules and tests import from here
@@ -150,6 +151,11 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
     """The command ``prog`` (``fitbench``, or ``python -m methods`` without the experiment subcommands): error
     and warning lines start with ``prog`` (:data:`fitbench.cli.options.PROGRAM`)."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    with readers_may_go():   # `fitbench ... | head -1`: the command still ends, its files written, exit 0
+        return _main(argv, prog, extra_commands)
+
+
+def _main(argv, prog, extra_commands) -> int:
     saved = cli_options.PROGRAM, cli_options.CAUGHT, cli_options.SAID
     cli_options.PROGRAM = prog
     try:
@@ -185,8 +191,9 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
     except MethodFailed as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return EXIT_METHOD_FAILED
-    except BrokenPipeError:
-        return 0
+    except BrokenPipeError as exc:   # not stdout's or stderr's reader (readers_may_go): a pipe the command wrote to
+        print(f"{prog}: error: {exc.strerror or exc}; no output file was written", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except KeyboardInterrupt:   # Ctrl-C: one line and the shell's status for SIGINT, as experiments.run ends
         print(f"\n{prog}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

@@ -53,39 +53,3 @@ def test_an_instrument_s_summary_after_a_blank_line_is_not_a_second_block(tmp_pa
     called = cli("roundness", path)
     one_error_line(called, "line 363", "'RONt [µm]' is not a number")
     assert "blocks" not in called.stderr
-
-
-def _without_notes(text):
-    """The output without its notes, the file's name and the fit's runtime."""
-    return "\n".join(ln for ln in text.splitlines() if not ln.startswith(("note:", "data ", "runtime"))
-                      and "profile.csv" not in ln and "plain.csv" not in ln)
-
-
-def test_a_comment_line_within_one_profile_is_a_remark(tmp_path):
-    """'# probe re-seated' between two points of one revolution (no blank line): the points go on across it, so
-    it is skipped as comment lines are elsewhere (point-file importers ignore them), with a note; the figures are
-    those of the file without it (it was refused as '2 blocks of points separated by comment lines')."""
-    a = circle_lines(10.0)
-    t = np.arange(3600) * 0.1
-    polar = [f"{x:.1f};{2 * np.cos(3 * np.radians(x)) + 0.3 * np.sin(7 * np.radians(x)):.4f}" for x in t]
-    for header, lines, k, args in (("X [mm],Y [mm]", a, 180, ()), ("Angle [deg];Deviation [um]", polar, 1234, ())):
-        plain, marked = tmp_path / "plain.csv", tmp_path / "profile.csv"
-        plain.write_text(header + "\n" + "\n".join(lines) + "\n")
-        marked.write_text(header + "\n" + "\n".join(lines[:k]) + "\n# probe re-seated\n" + "\n".join(lines[k:]) + "\n")
-        for command in (("roundness",), ("fit", "circle.minimum_zone")):
-            got, want = cli(*command, marked, *args), cli(*command, plain, *args)
-            assert got.returncode == 0 and want.returncode == 0, got.stderr
-            assert f"comment line '# probe re-seated' (line {k + 2}) within the points read as a remark" in got.stdout
-            assert _without_notes(got.stdout) == _without_notes(want.stdout)
-
-
-def test_a_comment_after_which_the_points_start_again_or_jump_ends_a_block(tmp_path):
-    """A second height recorded from the same start angle, and a second profile starting half a turn on, after a
-    comment line: two blocks, refused."""
-    t = np.arange(360) * 1.0
-    lines = [f"{x:.1f};{np.cos(3 * np.radians(x)):.4f}" for x in t]
-    for name, second in (("again.csv", lines), ("jump.csv", lines[180:] + lines[:180])):
-        p = tmp_path / name
-        p.write_text("Angle [deg];Deviation [um]\n" + "\n".join(lines) + "\n# next\n" + "\n".join(second) + "\n")
-        one_error_line(cli("roundness", p), f"{name}: 2 blocks of points separated by comment lines ('# next', line "
-                                            "362) (lines 2-361, 363-722)")

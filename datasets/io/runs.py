@@ -82,13 +82,8 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         lu = length_unit(layout, res.idx, unit)
         assumed = unit is None and all(column_unit(layout, k, "length") is None for k in res.idx)
     strings = (res.direction,) if res.direction is not None else ()
-    split = None      # blocks separated by comment lines only: decided from the points (:func:`comment_blocks`)
     if res.direction is None and len(blocks := data_blocks(layout, gaps := [])) > 1:
-        # before the numbers: a line ',' is a separator; a comment the reader does not pass over ('//' in a file of
-        # '#' comments) is no remark either
-        if not all(isinstance(k, tuple) and k[1].startswith(layout.comment) for gap in gaps for k in gap):
-            raise DataFileError(two_blocks(layout, blocks, gaps))
-        split = (blocks, gaps)
+        raise DataFileError(two_blocks(layout, blocks, gaps))   # before the numbers: a line ',' is a separator
     cols = read_columns(layout, res.idx + (res.offsets or []), skip_rows=skip_rows, strings=strings)
     f = to_mm(1.0, lu)
     if res.kind == "polar":
@@ -102,8 +97,6 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         hint = (round_degrees_as_radians(layout, res.idx[0], cols[res.idx[0]], angle_unit)
                 if au == "rad" and res.direction is None else None)
         ang = cols[res.idx[0]] if au == "rad" else np.radians(cols[res.idx[0]])
-        if split is not None:
-            comment_blocks(layout, *split, ang, notes)
         if one_revolution and res.direction is None and (
                 why := beyond_one_revolution(layout, res.idx[0], ang, cols[res.idx[1]])):
             raise DataFileError(f"{why}; {hint}" if hint else why)
@@ -127,9 +120,6 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
         if (dev := read_offsets(layout, res, cols)) is not None:
             pts += dev
         circle = circle_through(pts) if len(pts) >= 4 and np.isfinite(pts).all() else None
-        if split is not None:
-            xc, yc = (np.nan, np.nan) if circle is None else circle[:2]
-            comment_blocks(layout, *split, np.arctan2(pts[:, 1] - yc, pts[:, 0] - xc), notes)
         if one_revolution and res.direction is None and (why := xy_beyond_one_revolution(layout, pts, circle)):
             raise DataFileError(why)
         warn_too_small_xy(layout, res.idx, pts, (cols[res.idx[0]], cols[res.idx[1]]), lu, unit, circle)
@@ -248,48 +238,6 @@ def two_blocks(layout: Layout, blocks: list, gaps: list | None = None) -> str:
     return (f"{layout.name}: {len(blocks)} blocks of points separated by {' and '.join(what)}{label} (lines {shown}): "
             "one profile per file (a part's diameters or heights one after the other?); save each block in its own "
             "file (a circular test's two runs: or label them in a Direction column)")
-
-
-#: a step of the angle across a comment line larger than this many times the profile's median step is a jump: the
-#: points after it are another profile's (a re-seated probe's remark sits between points one step apart)
-JUMP_STEPS = 5.0
-#: the first point after a comment line within this many median steps of the profile's first point starts again:
-#: another diameter or height, recorded from the same start angle
-RESTART_STEPS = 1.5
-
-
-def comment_blocks(layout: Layout, blocks: list, gaps: list, angles, notes: list) -> None:
-    """Blocks of points separated by comment lines only (no blank line: :func:`datasets.io.columns.data_blocks`),
-    decided from their polar ``angles`` (rad, in file order; an angle column, or x, y points' polar angles about
-    their circle's centre): a comment after which the points go on (the angle steps on by about the profile's
-    usual step, the same way, and does not come back to the first point's) is a remark within one profile
-    (``# probe re-seated``), skipped as comment lines are anywhere else (instrument and CAD point-file importers
-    ignore them: their lines are no points), and named in a note; after any other (``# second diameter``, the next
-    profile starting again at the first angle, or jumping) the blocks are refused as :func:`two_blocks` says."""
-    sizes = np.array([b - a + 1 for a, b in blocks])
-    a = np.asarray(angles, dtype=float)
-    if sizes.sum() != len(a) or len(a) < 4 or not np.isfinite(a).all():
-        raise DataFileError(two_blocks(layout, blocks, gaps))   # the points cannot tell: as before
-    step = np.angle(np.exp(1j * np.diff(a)))                     # wrapped to (-pi, pi]
-    ends = np.cumsum(sizes)[:-1]                                 # the index of each block's first point
-    inside = np.delete(step, ends - 1)
-    usual = float(np.median(np.abs(inside))) if inside.size else 0.0
-    sense = np.sign(np.median(inside)) if inside.size else 0.0
-    parts, start = [], 0
-    for k, j in enumerate(ends):
-        across = step[j - 1]
-        back = abs(np.angle(np.exp(1j * (a[j] - a[0]))))
-        if (usual <= 0 or abs(across) > JUMP_STEPS * usual or np.sign(across) != sense
-                or back <= RESTART_STEPS * usual):
-            parts.append(k)
-    if parts:                                                    # the blocks the restarting comments separate
-        cut = [0, *[p + 1 for p in parts], len(blocks)]
-        merged = [(blocks[i][0], blocks[j - 1][1]) for i, j in zip(cut[:-1], cut[1:])]
-        raise DataFileError(two_blocks(layout, merged, [gaps[p] for p in parts]))
-    remarks = [k for gap in gaps for k in gap]
-    shown = ", ".join(f"{text!r} (line {line})" for line, text in remarks[:3]) + (", ..." if len(remarks) > 3 else "")
-    notes.append(f"comment line{'s' * (len(remarks) > 1)} {shown} within the points read as a remark: the points "
-                 "go on across it (another profile would start again at the first point's angle, or jump)")
 
 
 #: an angle within this of one revolution from the first point's (rad) is the first point's angle

@@ -53,3 +53,29 @@ def test_an_instrument_s_summary_after_a_blank_line_is_not_a_second_block(tmp_pa
     called = cli("roundness", path)
     one_error_line(called, "line 363", "'RONt [µm]' is not a number")
     assert "blocks" not in called.stderr
+
+
+def test_a_comment_line_where_the_angle_goes_on_still_ends_a_block(tmp_path):
+    """A comment line between points whose angle goes on is not taken for a remark inside one profile: across it the
+    values may jump, and the file then holds two things (two sections of a shaft 0.2 mm apart in radius, two bores of
+    other centres, a probe re-seated with a new zero 12 µm off), which evaluated as one profile gave RONt 175.7, 73.7 and
+    11.3 µm 'ok' (the form is 3 µm). Refused as two blocks, as blank and separator lines are."""
+    deg = np.arange(360.0)
+    lobes = 0.0015 * np.cos(3 * np.radians(deg))
+    halves = ["angle_deg,radius_mm", "# section A (z = 10 mm)"]
+    halves += [f"{a:.1f},{20.0 + (0.2 if a >= 180 else 0.0) + d:.6f}" for a, d in zip(deg, lobes)]
+    halves.insert(2 + 180, "# section B (z = 40 mm)")
+    reseat = ["angle_deg,deviation_um"] + [f"{a:.1f},{1000 * d + (12.0 if a >= 200 else 0.0):.4f}"
+                                           for a, d in zip(deg, lobes)]
+    reseat.insert(1 + 200, "# probe re-seated")
+    t = np.radians(deg)
+    centre = np.where(deg >= 200, 0.05, 0.0)[:, None] * [1.0, 0.0]
+    r = np.where(deg >= 200, 20.03, 20.0) + lobes
+    bores = ["x,y"] + [f"{x:.6f},{y:.6f}" for x, y in np.c_[r * np.cos(t), r * np.sin(t)] + centre]
+    bores.insert(1 + 200, "# bore 2")
+    for name, lines, extra in (("halves.csv", halves, ()), ("reseat.csv", reseat, ("--nominal-radius", "20")),
+                               ("bores.csv", bores, ())):
+        p = tmp_path / name
+        p.write_text("\n".join(lines) + "\n")
+        one_error_line(cli("roundness", p, *extra), f"{name}: 2 blocks of points separated by comment lines",
+                       "save each block in its own file")

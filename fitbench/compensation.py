@@ -618,17 +618,22 @@ def model_misfit(res) -> str | None:
 def varying_reversal(data) -> str | None:
     """What a table of the mean bidirectional deviation with one backlash leaves when the reversal B_i varies
     along the travel (:func:`methods.positioning.iso230_2.reversal_variation`: significant against the scatter of
-    the means), and what to do, or None. Controllers with a curve per direction: FANUC bidirectional pitch-error
+    the run-by-run differences x_up - x_down at each target), and what to do; that the variation could not be tested
+    and why; or None. Controllers with a curve per direction: FANUC bidirectional pitch-error
     compensation (technical report A-77810E, 3605#0, 3620-3627), SINUMERIK direction-dependent LEC (840C/611D
     manual sec. 12.1.2: a second curve per direction), HEIDENHAIN .COM tables (a BACKLASH column)."""
     from methods.positioning.iso230_2 import reversal_variation
     rv = reversal_variation(data)
+    if rv and not rv["tested"]:
+        return (f"whether the reversal B_i varies along the travel (from {rv['B_i_min'] * 1e3:.3f} to "
+                f"{rv['B_i_max'] * 1e3:.3f} um) was not tested: {rv['reason']}")
     if not rv or not rv["significant"]:
         return None
     p = f"p = {rv['p_value']:.2g}" if rv["p_value"] >= 1e-4 else "p below 0.0001"
     return (f"the reversal B_i varies along the travel from {rv['B_i_min'] * 1e3:.3f} to {rv['B_i_max'] * 1e3:.3f} um "
-            f"(mean {rv['B_mean'] * 1e3:.3f} um; F = {rv['F']:.3g} on {rv['dof'][0]} and {rv['dof'][1]} degrees of "
-            f"freedom, {p}: more than the scatter of the means explains): this table of the mean bidirectional "
+            f"(mean {rv['B_mean'] * 1e3:.3f} um; chi2/nu = {rv['chi2_per_dof']:.3g} on {rv['dof']} degrees of freedom, "
+            f"above the limit {rv['critical']:.3g} of a {100 * rv['level']:g} % test, {p}: more than the run-to-run scatter of "
+            f"x_up - x_down at each target explains, runs paired {rv['pairing']}): this table of the mean bidirectional "
             f"deviation with one backlash (-B mean) leaves (B_i - B mean)/2 in each direction: up to "
             f"{rv['left'] * 1e3:.3f} um, of opposite sign in the two ({2 * rv['left'] * 1e3:.3f} um between them); where the controller takes a curve per "
             "direction (FANUC bidirectional pitch-error compensation 3605#0, SINUMERIK direction-dependent LEC), "

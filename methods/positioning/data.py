@@ -20,7 +20,7 @@ the travel and 0.1 mm, or all below 10 nm) give a warning naming the likely unit
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -55,14 +55,15 @@ class RunOrderNote(UserWarning):
 
 def swap_directions(data: "PositioningData") -> "PositioningData":
     """The test with its ↑ and ↓ runs exchanged (a run-order mapping corrected by the user)."""
-    return PositioningData(targets=data.targets, up=data.down, down=data.up, unit=data.unit,
-                           direction_given=data.direction_given, thermal=data.thermal)
+    return replace(data, up=data.down, down=data.up)
 
 
 @dataclass(frozen=True)
 class PositioningData:
     """Deviations x[i, j] (target i, run j) for each direction, in the input unit. ``direction_given`` False: a
-    unidirectional test whose file names no approach direction (held in ``up``, labelled 'direction not given')."""
+    unidirectional test whose file names no approach direction (held in ``up``, labelled 'direction not given').
+    ``runs_numbered_alike`` False: the file numbers its up and down runs differently (e.g. odd runs up, even runs
+    down), so ``up[:, j]`` and ``down[:, j]`` are the j-th run of each direction in the order of their numbers."""
 
     targets: np.ndarray   # (m,)
     up: np.ndarray | None     # (m, n) deviations approaching in the + direction (None: unidirectional test, - only)
@@ -71,6 +72,8 @@ class PositioningData:
     direction_given: bool = True
     #: the temperature correction applied (:func:`thermal_correction`), None: the deviations as measured
     thermal: dict | None = None
+    #: the up and down runs carry the same run numbers (column j of each is run j)
+    runs_numbered_alike: bool = True
 
     @property
     def runs(self) -> int:
@@ -146,6 +149,7 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
         raise InvalidInputError(f"{name}: needs at least two target positions, got {targets.size}")
     runs = None
     arrays = {"up": None, "down": None}
+    numbers = []
     present = [d for d in ("up", "down") if (table["direction"] == d).any()]
     for d in present:
         sub = table[table["direction"] == d]
@@ -164,8 +168,10 @@ def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = 
             raise InvalidInputError(f"{name}: unequal coverage: {runs} runs up but {piv.shape[1]} runs down")
         runs = piv.shape[1]
         arrays[d] = piv.to_numpy(dtype=float)
+        numbers.append(tuple(piv.columns))
     return PositioningData(targets=targets, up=arrays["up"], down=arrays["down"], unit="mm",
-                           direction_given=direction_given or arrays["down"] is not None)
+                           direction_given=direction_given or arrays["down"] is not None,
+                           runs_numbered_alike=len(set(numbers)) <= 1)
 
 
 def thermal_correction(data: PositioningData, material_temperature_c: float,
@@ -185,9 +191,8 @@ def thermal_correction(data: PositioningData, material_temperature_c: float,
             "expansion_coefficient_um_per_m_k": float(expansion_coefficient_um_per_m_k),
             "correction_um_per_m": -slope * 1e6,
             "correction_at_ends_mm": ((float(P[0]), float(-slope * P[0]) + 0.0), (float(P[-1]), float(-slope * P[-1]) + 0.0))}
-    return PositioningData(targets=data.targets, up=None if data.up is None else data.up - shift,
-                           down=None if data.down is None else data.down - shift, unit=data.unit,
-                           direction_given=data.direction_given, thermal=done)
+    return replace(data, up=None if data.up is None else data.up - shift,
+                   down=None if data.down is None else data.down - shift, thermal=done)
 
 
 def validate(data, method_id="") -> PositioningData:

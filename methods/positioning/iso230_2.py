@@ -61,28 +61,56 @@ REVERSAL_LEVEL = 0.05
 def reversal_variation(data: PositioningData, level: float = REVERSAL_LEVEL) -> dict | None:
     """Does the reversal B_i = x_i up - x_i down vary along the travel more than the scatter of the means explains?
     A compensation table of the mean bidirectional deviation with one backlash (-B mean, ISO 230-2's mean reversal
-    value) leaves (B_i - B mean) / 2 in each direction, of opposite sign. One-way analysis of variance of the B_i:
-    each is a difference of two means of n runs, var(B_i) = (s_i up^2 + s_i down^2) / n, so with a constant reversal
-    and the same scatter at every target F = [sum (B_i - B mean)^2 / (m - 1)] / [mean_i (s_i up^2 + s_i down^2) / n]
-    is F(m - 1, 2m(n - 1)) distributed. Returns B_i's least and largest value, B mean, ``left`` = max |B_i - B mean|
-    / 2 (what each direction keeps, input unit), F, dof, p_value and ``significant`` (p < ``level``); None for a
-    unidirectional or one-run test, or when every run reads the same (no scatter to judge by)."""
+    value) leaves (B_i - B mean) / 2 in each direction, of opposite sign.
+
+    The test works on the paired differences d_ij = x_ij up - x_ij down of run j (ISO 230-2's test cycle approaches
+    every target up and down in each run): B_i = mean_j d_ij, and s^2(d_i) / n estimates var(B_i) free of what a
+    run shares between its two approaches (the thermal drift of a laser test: s_up, s_down hold it, B_i does not).
+    Statistic chi2 = sum_i (B_i - B_w)^2 / (s^2(d_i) / n), B_w the mean weighted by n / s^2(d_i), on m - 1 degrees
+    of freedom: each term is standardised by its own target's scatter (Welch 1951, Biometrika 38, 330: the
+    weighted sum of squares of his ANOVA for unequal variances), so its distribution hardly depends on how the
+    scatter varies along the travel. Its limit comes from its simulated null distribution, the lack-of-fit test's
+    with one coefficient (:func:`methods.positioning.model.lack_of_fit_null`: fixed seed, cached per m and n), not
+    from Welch's F approximation, which needs more runs per target than a positioning test has (simulated level
+    8.7 % for 11 targets x 5 runs, 30 % for 21 x 3) nor from F(m - 1, 2m(n - 1)) of the pooled scatter (12-16 %
+    with the scatter varying along the travel, and blind to a variation under run-to-run drift). Simulated level
+    (docs/positioning.md): 4.6-5.6 % for 5 runs with equal scatter, s.d. 0.3-3 um along the travel, one target with
+    5x or 10x the scatter, 2 um of run-to-run drift. A file whose up and down runs are numbered differently
+    (``runs_numbered_alike`` False) is paired by the order of the run numbers; if those pairs are not one cycle's,
+    a drift between them is common to every target, drops out of B_i - B_w and only widens s(d_i): the test keeps
+    its level and loses power (``pairing`` says which).
+
+    Returns B_i's least and largest value, B mean (unweighted, ISO's), ``left`` = max |B_i - B mean| / 2 (what each
+    direction keeps, input unit), chi2, dof, chi2_per_dof, critical (of chi2 / dof), p_value, level, significant,
+    pairing, tested and reason (a target whose differences do not scatter, e.g. quantised readings, cannot be
+    weighted: not tested); None for a unidirectional or one-run test, or when no difference scatters anywhere."""
     if len(data.directions) != 2 or data.runs < 2 or len(data.targets) < 2:
         return None
-    from scipy import stats
+    from methods.positioning.model import lack_of_fit_null, null_limit
     n, m = data.runs, len(data.targets)
-    B_i = data.up.mean(axis=1) - data.down.mean(axis=1)
-    var_b = (data.up.var(axis=1, ddof=1) + data.down.var(axis=1, ddof=1)) / n
-    between = float(np.sum((B_i - B_i.mean()) ** 2) / (m - 1))
-    within = float(np.mean(var_b))
-    if not within > 0:
+    d = data.up - data.down
+    B_i = d.mean(axis=1)
+    var_b = d.var(axis=1, ddof=1) / n
+    if not np.any(var_b > 0):
         return None
-    F = between / within
-    dof = (m - 1, 2 * m * (n - 1))
-    p = float(stats.f.sf(F, *dof))
-    return {"B_i_min": float(B_i.min()), "B_i_max": float(B_i.max()), "B_mean": float(B_i.mean()),
-            "left": float(np.max(np.abs(B_i - B_i.mean())) / 2), "F": F, "dof": dof, "p_value": p,
-            "level": float(level), "significant": bool(p < level)}
+    pairing = ("by run number" if getattr(data, "runs_numbered_alike", True) else
+               "by the order of the run numbers (the file numbers its up and down runs differently)")
+    out = {"B_i_min": float(B_i.min()), "B_i_max": float(B_i.max()), "B_mean": float(B_i.mean()),
+           "left": float(np.max(np.abs(B_i - B_i.mean())) / 2), "dof": m - 1, "level": float(level),
+           "pairing": pairing, "chi2": float("nan"), "chi2_per_dof": float("nan"), "critical": float("nan"),
+           "p_value": float("nan"), "significant": False, "tested": False, "reason": ""}
+    flat = np.flatnonzero(~(var_b > 0))
+    if flat.size:
+        out["reason"] = (f"x_up - x_down is the same in every run at target {data.targets[flat[0]]:g} "
+                         f"({data.unit or 'input unit'}){' and ' + str(flat.size - 1) + ' more' if flat.size > 1 else ''}: "
+                         "no scatter to weigh it by (quantised readings?)")
+        return out
+    w = 1.0 / var_b
+    chi2 = float(np.sum(w * (B_i - np.sum(w * B_i) / np.sum(w)) ** 2))
+    crit, p = null_limit(lack_of_fit_null(m, n, 1), chi2, level)
+    out.update(chi2=chi2, chi2_per_dof=chi2 / (m - 1), critical=crit / (m - 1), p_value=p,
+               significant=bool(chi2 > crit), tested=True)
+    return out
 
 
 def _unidirectional(data: PositioningData, standard: str, k: float) -> tuple[dict, dict]:

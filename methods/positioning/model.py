@@ -110,6 +110,16 @@ def lack_of_fit_null(m: int, n: int, n_coef: int, simulations: int = LACK_OF_FIT
     return np.sort(np.concatenate(out))
 
 
+def null_limit(null: np.ndarray, chi2: float, level: float) -> tuple[float, float]:
+    """(limit, p_value) of ``chi2`` against a sorted simulated null sample: the (1 - level) quantile (linear
+    between order statistics) and the share of the sample at or above chi2, (count + 1) / (size + 1)."""
+    h = (null.size - 1) * (1.0 - level)
+    lo = int(h)
+    crit = float(null[lo] + (h - lo) * (null[min(lo + 1, null.size - 1)] - null[lo]))
+    above = null.size - int(np.searchsorted(null, chi2, side="left"))
+    return crit, (above + 1) / (null.size + 1)
+
+
 def lack_of_fit(x, s, n, value, n_coef, level=LACK_OF_FIT_LEVEL) -> dict:
     """Lack-of-fit test of the model ``value`` at the targets against the mean deviations ``x``: the weighted
     chi-square chi2 = sum_i ((x_i - x(P_i)) / u(x_i))^2 with u(x_i) = s_i / sqrt(n), the paper's type A
@@ -139,12 +149,9 @@ def lack_of_fit(x, s, n, value, n_coef, level=LACK_OF_FIT_LEVEL) -> dict:
         out["reason"] = "zero scatter at a target"
         return out
     chi2 = float(np.sum((r / u) ** 2))
-    null = lack_of_fit_null(len(x), int(n), int(n_coef))
-    h = (null.size - 1) * (1.0 - level)            # the (1 - level) quantile of the sorted sample (linear)
-    lo = int(h)
-    crit = float(null[lo] + (h - lo) * (null[min(lo + 1, null.size - 1)] - null[lo])) / dof
-    above = null.size - int(np.searchsorted(null, chi2, side="left"))
-    out.update(chi2=chi2, chi2_per_dof=chi2 / dof, p_value=(above + 1) / (null.size + 1), critical=crit,
+    crit, p_value = null_limit(lack_of_fit_null(len(x), int(n), int(n_coef)), chi2, level)
+    crit /= dof
+    out.update(chi2=chi2, chi2_per_dof=chi2 / dof, p_value=p_value, critical=crit,
                reference=f"its simulated null distribution ({len(x)} targets, {int(n)} runs)",
                rejected=bool(chi2 / dof > crit), tested=True, max_abs_residual=float(np.max(np.abs(r))))
     return out

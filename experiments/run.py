@@ -27,6 +27,14 @@ if __name__ == "__main__":  # the command: its local workers start now and impor
     from experiments.localworkers import start_early
     start_early(sys.argv[1:])
 
+    def _stopped_while_starting(signum, frame):
+        """Ctrl-C or SIGTERM while the command imports its modules (before main's handlers): one line, no traceback."""
+        what = "terminated (SIGTERM)" if signum == signal.SIGTERM else "interrupted"
+        os.write(2, f"\nexperiments.run: {what} while starting; no rows had run\n".encode())
+        os._exit(143 if signum == signal.SIGTERM else 130)
+    for _sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(_sig, _stopped_while_starting)
+
 from experiments import compare  # the verdict on every run: fresh results against the committed ones
 from experiments import config as configs
 from experiments import codekeys, engine
@@ -639,4 +647,6 @@ def _run(args) -> int:
 
 if __name__ == "__main__":  # the command ends once its outputs are written, without the interpreter's teardown
     from experiments.localworkers import exit_now
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # main's own handling from here (_interrupts_are_the_run_s)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     exit_now(main(), as_python_does=True)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import fcntl
 import json
 import os
+import signal
 import sqlite3
 import subprocess
 import sys
@@ -1207,3 +1208,37 @@ def test_summary_by_may_name_a_column_of_a_result_class_loaded_after_the_engine(
     cfg = configs.load(str(study))
     run.check_summary_by(cfg, study_of(cfg["kind"]), list(cfg.grid_tasks()))  # raised 'no row will have' before
     assert "late_class_lobes" in engine.result_columns() and LateFit
+
+
+@pytest.mark.parametrize("signum, status, what", [(signal.SIGINT, 130, "interrupted"),
+                                                  (signal.SIGTERM, 143, "terminated (SIGTERM)")])
+def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path, signum, status, what):
+    """Ctrl-C (or SIGTERM) while ``python -m experiments.run`` still imports its modules, before its main function
+    handles signals: one line and 130 (143), no traceback (it printed the KeyboardInterrupt's traceback of the import
+    and ended by the signal). An import hook holds the run in its imports until the signal comes."""
+    from conftest import default_sigint, subprocess_env
+    site = tmp_path / "site"
+    site.mkdir()
+    mark = tmp_path / "importing"
+    (site / "sitecustomize.py").write_text(textwrap.dedent(f"""
+        import sys, time
+        class _Hold:
+            def find_spec(self, name, path=None, target=None):
+                if name == "experiments.compare":
+                    open({str(mark)!r}, "w").close()
+                    time.sleep(30)
+                return None
+        if sys.argv[:1] != ["-c"]:
+            sys.meta_path.insert(0, _Hold())
+        """))
+    study = write_study(tmp_path, reps=1)
+    proc = subprocess.Popen([sys.executable, "-m", "experiments.run", str(study), "--jobs", "1", "--out",
+                             str(tmp_path / "o")], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=subprocess_env(site, OPENBLAS_NUM_THREADS="1"), preexec_fn=default_sigint)
+    deadline = time.monotonic() + 60
+    while not mark.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.02)
+    proc.send_signal(signum)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == status, err
+    assert err.strip().splitlines() == [f"experiments.run: {what} while starting; no rows had run"], err

@@ -65,10 +65,12 @@ def main_file() -> Path | None:
     return path if path.is_file() else None
 
 
+@lru_cache(maxsize=None)
 def _origin(name: str) -> Path | None:
     """The source file of module ``name`` (None: not found, built in, or a namespace package). A module of fitbench's
     own packages is found by its path under its package's folder, without importing its parent packages; the running
-    program's ``__main__`` by its file (:func:`main_file`: code a script registers is keyed by the script)."""
+    program's ``__main__`` by its file (:func:`main_file`: code a script registers is keyed by the script). Found once
+    a process (the closures of a run's modules share most of their names; ``codekeys.reset_caches`` forgets it)."""
     if name == "__main__":
         return main_file()
     top, _, rest = name.partition(".")

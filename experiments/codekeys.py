@@ -75,6 +75,7 @@ def reset_caches() -> None:
     codehash.code_hash.cache_clear()
     codehash.libraries_of.cache_clear()
     codehash.module_closure.cache_clear()
+    codehash._origin.cache_clear()
     codehash._file_hash.cache_clear()
     codehash._packages_distributions.cache_clear()
     codehash._library.cache_clear()

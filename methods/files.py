@@ -108,22 +108,26 @@ class StagedFiles:
 
     def __init__(self):
         self._staged: list[tuple[str, Path, Path, int]] = []   # (path as given, temporary, target, mode)
+        self._writing: list[Path] = []   # temporaries being written: :meth:`discard` removes them too
         self.written: list[str] = []
 
     @contextlib.contextmanager
     def path(self, path, *, make_parents: bool = False):
         tmp, target, mode = _temporary_beside(path, make_parents)
+        self._writing.append(tmp)   # known from now on: an exception anywhere (a signal's) cannot lose it
         try:
             yield tmp
+            for i, (_, old, t, _) in enumerate(self._staged):   # written again: the last content counts
+                if t == target:
+                    _remove(old)
+                    del self._staged[i]
+                    break
+            self._staged.append((str(path), tmp, target, mode))
         except BaseException:
             _remove(tmp)
             raise
-        for i, (_, old, t, _) in enumerate(self._staged):   # written again: the last content counts
-            if t == target:
-                _remove(old)
-                del self._staged[i]
-                break
-        self._staged.append((str(path), tmp, target, mode))
+        finally:
+            self._writing.remove(tmp)
 
     def pending(self) -> list[str]:
         """The paths written to temporaries and not yet moved onto their targets."""
@@ -145,8 +149,8 @@ class StagedFiles:
             self.written.append(given)
 
     def discard(self) -> None:
-        """Remove the temporaries not committed (every target stays as it was)."""
-        for _, tmp, _, _ in self._staged:
+        """Remove the temporaries not committed, those still being written included (every target stays as it was)."""
+        for tmp in [t for _, t, _, _ in self._staged] + self._writing:
             _remove(tmp)
         self._staged.clear()
 

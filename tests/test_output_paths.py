@@ -210,3 +210,101 @@ def test_a_reader_closing_the_pipe_early_still_gets_the_files(axis, streams):
     for name in ("t.csv", "t.mpf"):
         assert (folder / name).read_bytes() == (folder / "ref" / name).read_bytes(), name
     assert sorted(p.name for p in folder.iterdir()) == ["in.csv", "ref", "t.csv", "t.mpf"]   # no temporary left
+
+
+def _staged_table_appears(proc, folder, timeout=120.0) -> bool:
+    """Wait until ``proc`` has staged t.csv (a hidden temporary beside it); False if it ended first."""
+    import time
+    end = time.monotonic() + timeout
+    while proc.poll() is None and time.monotonic() < end:
+        if any(p.name.startswith(".t.csv.") for p in folder.iterdir()):
+            return True
+        time.sleep(0.002)
+    return False
+
+
+@pytest.mark.parametrize("name", ["SIGTERM", "SIGHUP"])
+def test_sigterm_and_sighup_remove_the_staged_outputs(axis, name):
+    """A job scheduler's kill (SIGTERM) or a closed terminal (SIGHUP) once the tables are staged, while the plot is
+    drawn: one line, exit 128 + the signal, every target as it was and no temporary left, as Ctrl-C. The default
+    action ended the process at once and left the complete tables under hidden names for good."""
+    import signal
+    import subprocess
+    import sys
+    from conftest import subprocess_env
+    num = getattr(signal, name)
+    folder = axis.parent
+    for old in ("t.csv", "t.mpf"):
+        (folder / old).write_text("OLD\n")
+    proc = subprocess.Popen([sys.executable, "-m", "fitbench", "positioning", "in.csv", "--axis", "X1", "--compensation",
+                             "csv", "t.csv", "--compensation", "siemens-eec", "t.mpf", "--plot", "p.png"],
+                            cwd=folder, env=subprocess_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True, preexec_fn=lambda: signal.signal(num, signal.SIG_DFL))   # as from a terminal
+    try:
+        assert _staged_table_appears(proc, folder), "the command ended before its tables were staged"
+        proc.send_signal(num)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 128 + num and err.strip() == f"fitbench: terminated ({name})", (proc.returncode, err)
+    assert sorted(p.name for p in folder.iterdir()) == ["in.csv", "t.csv", "t.mpf"]
+    assert (folder / "t.csv").read_text() == (folder / "t.mpf").read_text() == "OLD\n"
+
+
+def test_a_signal_while_the_outputs_move_into_place_waits_for_all(axis):
+    """SIGTERM as the first staged output replaces its target: the others follow (all or none), then the command
+    stops with its line and exit 143; before, the process ended between two replacements, temporaries left."""
+    import subprocess
+    import sys
+    from conftest import subprocess_env
+    script = ("import os, signal, sys\n"
+              "signal.signal(signal.SIGTERM, signal.SIG_DFL)\n"
+              "real = os.replace\n"
+              "def replace(a, b):\n"
+              "    os.replace = real\n"
+              "    os.kill(os.getpid(), signal.SIGTERM)\n"
+              "    real(a, b)\n"
+              "os.replace = replace\n"
+              "from fitbench.cli import main\n"
+              "sys.exit(main(sys.argv[1:]))\n")
+    folder = axis.parent
+    for old in ("t.csv", "t.mpf"):
+        (folder / old).write_text("OLD\n")
+    done = subprocess.run([sys.executable, "-c", script, "positioning", "in.csv", "--axis", "X1", "--compensation",
+                           "csv", "t.csv", "--compensation", "siemens-eec", "t.mpf"], cwd=folder, env=subprocess_env(),
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, timeout=120)
+    assert done.returncode == 143 and done.stderr.strip() == "fitbench: terminated (SIGTERM)", done
+    assert sorted(p.name for p in folder.iterdir()) == ["in.csv", "t.csv", "t.mpf"]
+    assert (folder / "t.csv").read_text().startswith("#") and (folder / "t.mpf").read_text().startswith("%")
+
+
+def test_an_exception_compiled_code_made_of_the_signal_still_stops_the_command():
+    """matplotlib's renderer turns an exception raised in it (the signal's) into ValueError('Invalid bounding box'):
+    it is reported as the signal (one line, 143), not as a traceback with exit 1."""
+    import signal
+    from fitbench.cli import guards
+    with pytest.raises(guards.Terminated) as stopped:
+        with guards.stopping_signals():
+            try:
+                guards._stop(signal.SIGTERM, None)
+            except guards.Terminated:
+                raise ValueError("Invalid bounding box") from None
+    assert stopped.value.signum == signal.SIGTERM
+
+
+def test_a_plot_is_staged_once(axis, monkeypatch):
+    """The plot goes to one temporary beside p.png (the staged one), not to a second atomic write nested in it
+    ('..p.png.X.tmp.png.Y.tmp.png', one more file a kill could leave)."""
+    from methods import files
+    real, made = files._temporary_beside, []
+
+    def recording(path, make_parents):
+        made.append(os.path.basename(path))
+        return real(path, make_parents)
+
+    monkeypatch.setattr(files, "_temporary_beside", recording)
+    folder = axis.parent
+    got = cli("positioning", axis, "--axis", "X1", "--compensation", "csv", folder / "t.csv", "--plot", folder / "p.png")
+    assert got.returncode == 0, got.stderr
+    assert sorted(made) == ["p.png", "t.csv"]
+    assert sorted(p.name for p in folder.iterdir()) == ["in.csv", "p.png", "t.csv"]

@@ -26,8 +26,8 @@ from fitbench.streams import readers_may_go
 from methods import InvalidInputError
 from fitbench.cli.options import version, warn
 # the guards, and the names other modules and tests import from here
-from fitbench.cli.guards import (MethodFailed, commit_outputs, jsonable as _jsonable, one_blas_thread,  # noqa: F401
-                                 run_method, staged_outputs, stdout_to_stderr)
+from fitbench.cli.guards import (MethodFailed, Terminated, commit_outputs, jsonable as _jsonable,  # noqa: F401
+                                 one_blas_thread, run_method, staged_outputs, stdout_to_stderr, stopping_signals)
 
 EXIT_BAD_INPUT = 2
 #: the subcommands of ``fitbench`` that run the experiment modules (fitbench.cli.DELEGATED), absent from
@@ -171,7 +171,8 @@ def _main(argv, prog, extra_commands) -> int:
                     raise InvalidInputError(f"'{argv[0]}' is a subcommand of fitbench, not of {prog}: use "
                                             f"'fitbench {argv[0]} ...' or 'python -m experiments.{argv[0]} ...'")
                 args = build_parser(prog, extra_commands).parse_args(argv)
-                with one_blas_thread(), staged_outputs():   # the output files: written together at the end
+                # the output files: written together at the end; SIGTERM and SIGHUP stop it as Ctrl-C does
+                with one_blas_thread(), stopping_signals(), staged_outputs():
                     if not getattr(args, "json", False):
                         return args.func(args)
                     return _json_only(args)
@@ -194,6 +195,10 @@ def _main(argv, prog, extra_commands) -> int:
     except BrokenPipeError as exc:   # not stdout's or stderr's reader (readers_may_go): a pipe the command wrote to
         print(f"{prog}: error: {exc.strerror or exc}; no output file was written", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except Terminated as exc:   # SIGTERM, SIGHUP: as Ctrl-C, one line and the shell's status for the signal
+        import signal
+        print(f"{prog}: terminated ({signal.Signals(exc.signum).name})", file=sys.stderr)
+        return 128 + exc.signum
     except KeyboardInterrupt:   # Ctrl-C: one line and the shell's status for SIGINT, as experiments.run ends
         print(f"\n{prog}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

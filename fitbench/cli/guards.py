@@ -135,7 +135,9 @@ def output_path(path):
         with atomic_path(path) as tmp:
             yield tmp
     else:
-        with OUTPUTS.files.path(path) as tmp:
+        with contextlib.ExitStack() as stack:
+            with _signals_held():   # the temporary is made and known to OUTPUTS before a signal can stop the command
+                tmp = stack.enter_context(OUTPUTS.files.path(path))
             yield tmp
 
 
@@ -156,13 +158,92 @@ def commit_outputs() -> None:
         return
     files = OUTPUTS.files
     try:
-        files.commit()
+        with _signals_held():   # all moved into place or none, whenever a signal comes
+            files.commit()
     except OSError as exc:
         left = files.pending()
         files.discard()
         raise InvalidInputError(f"cannot write {exc.filename}: {exc.strerror or exc}; "
                                 + (f"written: {', '.join(files.written)}; " if files.written else "")
                                 + f"not written: {', '.join(left)}") from None
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP (a job scheduler's kill, a closed terminal) while a command runs, taken as Ctrl-C is
+    (:func:`stopping_signals`): ``signum``, the signal's number."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+#: the signals that stop a command as Ctrl-C does (its staged outputs removed on the way out)
+STOPPING_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
+#: while outputs are moved into place or removed (:func:`_signals_held`): the stopping signals that arrived, else None
+_HELD: list | None = None
+#: the stopping signal that was raised as an exception in the running command (:func:`stopping_signals`), else None
+_STOPPED_BY: int | None = None
+
+
+def _interruption(signum: int) -> KeyboardInterrupt:
+    import signal
+    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+
+
+def _stop(signum, frame):
+    global _STOPPED_BY
+    if _HELD is not None:   # the outputs are being moved or removed: that ends first, then the command stops
+        _HELD.append(signum)
+        return
+    _STOPPED_BY = signum
+    raise _interruption(signum)
+
+
+@contextlib.contextmanager
+def stopping_signals():
+    """Inside the block, SIGTERM and SIGHUP raise :class:`Terminated` where the command is, as SIGINT raises
+    KeyboardInterrupt, so :func:`staged_outputs` removes the temporaries on the way out (the default action of both
+    ends the process at once and left them in the user's folder); a signal arriving while the outputs are moved
+    into place or removed waits until that is done. A signal the process ignores (``nohup``'s SIGHUP) or has its
+    own handler for stays as it is; outside the main thread nothing changes (only it may set handlers)."""
+    global _STOPPED_BY
+    import signal
+    import threading
+    saved = {}
+    if threading.current_thread() is threading.main_thread():
+        for name in STOPPING_SIGNALS:
+            num = getattr(signal, name, None)
+            if num is not None and signal.getsignal(num) in (signal.SIG_DFL, signal.default_int_handler):
+                saved[num] = signal.signal(num, _stop)
+    stopped, _STOPPED_BY = _STOPPED_BY, None
+    try:
+        yield
+    except Exception as exc:
+        if _STOPPED_BY is None:
+            raise
+        # compiled code the signal's exception was raised in turned it into its own (matplotlib's renderer: a
+        # ValueError 'Invalid bounding box'): the command was stopped all the same
+        raise _interruption(_STOPPED_BY) from exc
+    finally:
+        _STOPPED_BY = stopped
+        for num, old in saved.items():
+            signal.signal(num, old)
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Inside the block a stopping signal (:func:`stopping_signals`) is held; at its end it stops the command
+    (unless the block failed: that failure is what the command reports)."""
+    global _HELD
+    saved, _HELD = _HELD, []
+    try:
+        yield
+    finally:
+        held, _HELD = _HELD, saved
+    if held and saved is not None:
+        saved.extend(held)
+    elif held:
+        _stop(held[0], None)
 
 
 @contextlib.contextmanager
@@ -182,8 +263,11 @@ def staged_outputs():
             raise
         raise InvalidInputError(f"{exc}; not written: {', '.join(left)}") from None
     finally:
-        outputs.files.discard()
-        OUTPUTS = saved
+        try:
+            with _signals_held():
+                outputs.files.discard()
+        finally:
+            OUTPUTS = saved
 
 
 def jsonable(v):

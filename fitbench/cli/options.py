@@ -107,13 +107,14 @@ def check_plot_path(path, option: str = "--plot") -> Path | None:
 
 
 def save_figure(fig, path, dpi=120) -> None:
-    """Write a matplotlib figure atomically (:func:`fitbench.plots.save_atomic`), with the command's other outputs
-    (:func:`fitbench.cli.guards.output_path`); a failed write is one line."""
+    """Write a matplotlib figure (:func:`fitbench.plots.write_figure`) with the command's other outputs, to the one
+    temporary :func:`fitbench.cli.guards.output_path` gives (no atomic write nested inside it); a failed write is one
+    line."""
     from fitbench.cli.guards import output_path
-    from fitbench.plots import save_atomic
+    from fitbench.plots import write_figure
     try:
         with output_path(path) as tmp:
-            save_atomic(fig, tmp, dpi=dpi)
+            write_figure(fig, tmp, dpi=dpi)
     except OSError as exc:
         raise InvalidInputError(f"cannot write {path}: {exc.strerror or exc}") from None
 

@@ -35,11 +35,11 @@ def pyplot():
 REPRODUCIBLE_METADATA = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}
 
 
-def save_atomic(fig, path, *, dpi: float | None = None) -> None:
-    """Write ``fig`` to ``path`` (format from the suffix; ``dpi`` None: matplotlib's ``savefig.dpi``)
-    through :func:`methods.files.atomic_path`: the whole figure or the old file, through a symlink to its
-    regular target, a FIFO or a device refused; a new file gets the umask's mode. No creation date is
-    written (``REPRODUCIBLE_METADATA``): saving the same figure again gives the same bytes."""
+def write_figure(fig, path, *, dpi: float | None = None) -> None:
+    """Write ``fig`` straight to ``path`` (format from the suffix; ``dpi`` None: matplotlib's ``savefig.dpi``), for a
+    caller whose ``path`` is already a temporary (a command's staged output, :func:`fitbench.cli.options.save_figure`;
+    :func:`save_atomic` otherwise). No creation date is written (``REPRODUCIBLE_METADATA``): saving the same figure
+    again gives the same bytes."""
     path = Path(path)
     fmt = path.suffix.lower().lstrip(".") or "png"
     extra = {} if dpi is None else {"dpi": dpi}
@@ -47,8 +47,16 @@ def save_atomic(fig, path, *, dpi: float | None = None) -> None:
         extra["metadata"] = REPRODUCIBLE_METADATA[fmt]
     import matplotlib
     # SVG ids are random unless salted (matplotlib's svg.hashsalt)
-    with atomic_path(path) as tmp, matplotlib.rc_context({"svg.hashsalt": "fitbench"} if fmt == "svg" else {}):
-        fig.savefig(tmp, format=fmt, **extra)
+    with matplotlib.rc_context({"svg.hashsalt": "fitbench"} if fmt == "svg" else {}):
+        fig.savefig(path, format=fmt, **extra)
+
+
+def save_atomic(fig, path, *, dpi: float | None = None) -> None:
+    """Write ``fig`` to ``path`` (:func:`write_figure`) through :func:`methods.files.atomic_path`: the whole figure or
+    the old file, through a symlink to its regular target, a FIFO or a device refused; a new file gets the umask's
+    mode."""
+    with atomic_path(path) as tmp:
+        write_figure(fig, tmp, dpi=dpi)
 
 
 def tight(fig) -> None:

@@ -308,3 +308,28 @@ def test_a_plot_is_staged_once(axis, monkeypatch):
     assert got.returncode == 0, got.stderr
     assert sorted(made) == ["p.png", "t.csv"]
     assert sorted(p.name for p in folder.iterdir()) == ["in.csv", "p.png", "t.csv"]
+
+
+def test_written_to_lines_follow_the_files(axis, monkeypatch):
+    """The 'compensation table ... written to PATH' lines are printed once the tables are in place, and only for the
+    ones that are: a table the move into place failed on is not said written (stdout said it, then stderr said
+    'not written')."""
+    real = os.replace
+
+    def no_mpf(src, dst):
+        if str(dst).endswith(".mpf"):
+            raise PermissionError(13, "Permission denied")
+        real(src, dst)
+
+    folder = axis.parent
+    monkeypatch.setattr(os, "replace", no_mpf)
+    got = cli("positioning", axis, "--axis", "X1", "--compensation", "csv", folder / "t.csv",
+              "--compensation", "siemens-eec", folder / "t.mpf")
+    one_error_line(got, f"written: {folder / 't.csv'}; not written: {folder / 't.mpf'}")
+    said = [line for line in got.stdout.splitlines() if "written to" in line]
+    assert len(said) == 1 and said[0].endswith(f"written to {folder / 't.csv'}"), said
+    monkeypatch.setattr(os, "replace", real)
+    got = cli("positioning", axis, "--axis", "X1", "--compensation", "csv", folder / "t.csv",
+              "--compensation", "siemens-eec", folder / "t.mpf")
+    assert got.returncode == 0 and got.stdout.rstrip().endswith(f"written to {folder / 't.mpf'}"), got
+    assert len([line for line in got.stdout.splitlines() if "written to" in line]) == 2

@@ -82,6 +82,7 @@ class Outputs:
     def __init__(self):
         self.files = StagedFiles()
         self.declared: list[tuple[str, str, str]] = []
+        self.said: list[tuple[str, str]] = []   # (path, its "... written to PATH" line): :func:`say_written`
 
 
 #: the running command's :class:`Outputs` (:func:`staged_outputs` sets it, None outside a command: written at once)
@@ -149,6 +150,16 @@ def written_files() -> list[dict]:
     staged = [os.path.realpath(p) for p in OUTPUTS.files.pending() + OUTPUTS.files.written]
     return [{"path": path, "option": option, "what": what} for option, path, what in OUTPUTS.declared
             if os.path.realpath(path) in staged]
+
+
+def say_written(path, line: str) -> None:
+    """Print ``line`` (``... written to PATH``) once ``path`` is on disk: at once outside a command, else when the
+    command's outputs have moved into place (:func:`staged_outputs`), and only if ``path`` has: stdout never says
+    a file was written that a failure then left as it was."""
+    if OUTPUTS is None:
+        print(line)
+    else:
+        OUTPUTS.said.append((str(path), line))
 
 
 def commit_outputs() -> None:
@@ -264,6 +275,10 @@ def staged_outputs():
         raise InvalidInputError(f"{exc}; not written: {', '.join(left)}") from None
     finally:
         try:
+            done = {os.path.realpath(p) for p in outputs.files.written}
+            for path, line in outputs.said:
+                if os.path.realpath(path) in done:
+                    print(line)
             with _signals_held():
                 outputs.files.discard()
         finally:

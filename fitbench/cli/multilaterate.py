@@ -8,7 +8,7 @@ import numpy as np
 
 import fitbench.cli.options as cli_options
 import methods
-from fitbench.cli.guards import check_outputs, jsonable, run_method, written_files
+from fitbench.cli.guards import check_outputs, jsonable, run_method, say_written, written_files
 from fitbench.cli.options import add_reader_options, header_line, warn, write_text_atomic
 from methods import InvalidInputError
 from methods.units import canonical, warn_implausible
@@ -199,7 +199,7 @@ def run(args) -> int:
             unit, scale = ("µm", 1e3) if linear else ("µrad", 1e6)
             print(f"  {row['parameter']:<7} {row['value'] * scale:12.4f} +- {row['u'] * scale:.4f} {unit}")
         if args.errors_csv:
-            print(f"the 21 errors written to {args.errors_csv}")
+            say_written(args.errors_csv, f"the 21 errors written to {args.errors_csv}")
     return 0 if res.converged else 1
 
 

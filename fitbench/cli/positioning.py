@@ -11,7 +11,7 @@ import numpy as np
 
 import fitbench.cli.options as cli_options
 import methods
-from fitbench.cli.guards import check_outputs, jsonable, written_files
+from fitbench.cli.guards import check_outputs, jsonable, say_written, written_files
 from fitbench.cli.options import (add_reader_options, add_report_option, add_test_identity_options,
                                   add_tolerance_option, check_plot_path, finite, header_line, parse_tolerances, quantity,
                                   refuse_decimal_comma, save_figure, test_conditions, verdict, verdict_lines,
@@ -501,7 +501,7 @@ def run(args) -> int:
     print("\n".join(lines))
     if comp is not None:
         for fmt, path in args.compensation:
-            print(f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
+            say_written(path, f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
                   f"to {comp.position_mm.iloc[-1]:g} mm, from the {comp.attrs['source']}) written to {path}"
                   + (f": {comp.attrs['chosen']}" if comp.attrs.get("chosen") else "")
                   + (f"; {comp.attrs['fanuc_points']}" if fmt == "fanuc-pitch" else ""))

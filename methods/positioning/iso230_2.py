@@ -9,6 +9,7 @@ from methods._registry import register
 from methods.positioning.results import PositioningFit
 from methods._validation import check_choice
 from methods.positioning.data import PositioningData, validate
+from methods.positioning.nulls import lack_of_fit_null, null_limit
 
 STANDARDS = ("iso230-2:2014", "iso230-2:1988", "vdi3441")
 
@@ -70,7 +71,7 @@ def reversal_variation(data: PositioningData, level: float = REVERSAL_LEVEL) -> 
     of freedom: each term is standardised by its own target's scatter (Welch 1951, Biometrika 38, 330: the
     weighted sum of squares of his ANOVA for unequal variances), so its distribution hardly depends on how the
     scatter varies along the travel. Its limit comes from its simulated null distribution, the lack-of-fit test's
-    with one coefficient (:func:`methods.positioning.model.lack_of_fit_null`: fixed seed, cached per m and n), not
+    with one coefficient (:func:`methods.positioning.nulls.lack_of_fit_null`: fixed seed, cached per m and n), not
     from Welch's F approximation, which needs more runs per target than a positioning test has (simulated level
     8.7 % for 11 targets x 5 runs, 30 % for 21 x 3) nor from F(m - 1, 2m(n - 1)) of the pooled scatter (12-16 %
     with the scatter varying along the travel, and blind to a variation under run-to-run drift). Simulated level
@@ -86,7 +87,6 @@ def reversal_variation(data: PositioningData, level: float = REVERSAL_LEVEL) -> 
     weighted: not tested); None for a unidirectional or one-run test, or when no difference scatters anywhere."""
     if len(data.directions) != 2 or data.runs < 2 or len(data.targets) < 2:
         return None
-    from methods.positioning.model import lack_of_fit_null, null_limit
     n, m = data.runs, len(data.targets)
     d = data.up - data.down
     B_i = d.mean(axis=1)

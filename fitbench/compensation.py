@@ -415,26 +415,73 @@ FANUC_MAGNIFICATION = (1, 100)  # parameter 3623 (0 means 1)
 FANUC_INTERVAL_MAX = 99_999_999  # parameter 3624 (two-word, in the least input increment)
 
 
-def fanuc_point_numbers(table, first_number: int = 0) -> tuple[int, int, int]:
+def _fanuc_sections(ref_q: int, lo_q: int, hi_q: int, step_q: int) -> tuple[int, int]:
+    """(lowest, highest): the FANUC sections (relative to the reference position's point) a table every ``step_q``
+    anchored at R covers, with R's point and one above it."""
+    k_lo, k_hi = _grid_range(ref_q, lo_q, hi_q, step_q)
+    return min(k_lo + 1, 0), max(k_hi, 1)
+
+
+def fanuc_fitting_step(table, first_number: int = 0) -> int | None:
+    """The finest step (x 1e-6 mm, a multiple of the table's quantum) whose table, anchored at the reference point
+    over the measured travel, fills no more than the points left from ``first_number`` to 1023; None when fewer
+    than two are left (every table fills R's point and the one above it). The count falls as the step grows."""
+    room = FANUC_POINTS - int(first_number)
+    if room < 2:
+        return None
+    a = table.attrs
+    first, last = a["measured_mm"]
+    ref_q, lo_q, hi_q = a["reference_q"], math.floor(first / NM + 1e-3), math.ceil(last / NM - 1e-3)
+    quantum_q = a.get("quantum_q", AUTO_QUANTUM)
+    lo, hi = 1, max(1, _ceil_div(max(ref_q - lo_q, hi_q - ref_q), quantum_q))   # hi: one section each side, 2 points
+    while lo < hi:
+        mid = (lo + hi) // 2
+        lowest, highest = _fanuc_sections(ref_q, lo_q, hi_q, mid * quantum_q)
+        if highest - lowest + 1 <= room:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo * quantum_q
+
+
+def fanuc_point_numbers(table, first_number: int = 0, check_interval=None) -> tuple[int, int, int]:
     """(3621, 3620, 3622): the first, the reference position's and the last pitch-error point number a FANUC tape
     of ``table`` fills when its points start at ``first_number``. The point numbers are one block shared by every
     axis (0i-PB parameter manual B-63980EN/01 p. 99-100: a linear axis at 33 ... 56, a rotary axis at 60 ... 68), so
-    each axis' tape needs its own range; what does not fit 0 ... 1023 is refused."""
-    if isinstance(first_number, bool) or not isinstance(first_number, (int, np.integer)) or first_number < 0:
+    each axis' tape needs its own range; what does not fit 0 ... 1023 is refused, naming the largest first number
+    that fits and the finest --interval whose points fit (:func:`fanuc_fitting_step`) if ``check_interval(step_mm)``
+    (makes that step's table; raises CompensationError) accepts it."""
+    if (isinstance(first_number, bool) or not isinstance(first_number, (int, np.integer))
+            or not 0 <= first_number <= FANUC_POINTS - 1):
         raise CompensationError(f"fanuc-pitch: the first point number {first_number!r} (parameter 3621) must be a "
                                 f"whole number 0 ... {FANUC_POINTS - 1}")
     a = table.attrs
-    k_lo, k_hi = -a["reference_index"], len(table) - 1 - a["reference_index"]
-    lowest, highest = min(k_lo + 1, 0), max(k_hi, 1)     # sections covered, with R's point and one above it
+    lowest, highest = min(-a["reference_index"] + 1, 0), max(len(table) - 1 - a["reference_index"], 1)
     n = highest - lowest + 1
     ref_no = int(first_number) - lowest
-    if ref_no + highest > FANUC_POINTS - 1:
-        room = (f"give a first point number of at most {FANUC_POINTS - n} (--fanuc-first-point) or " if n <= FANUC_POINTS
-                else "")
-        raise CompensationError(f"fanuc-pitch: {n} points from number {first_number} do not fit the pitch block "
-                                f"0 ... {FANUC_POINTS - 1} (N10000 ... N{10000 + FANUC_POINTS - 1}); {room}choose a "
-                                f"coarser --interval (at least {_exact(_ceil_div(a['last_q'] - a['first_q'], (FANUC_POINTS - 2) * a.get('quantum_q', AUTO_QUANTUM)) * a.get('quantum_q', AUTO_QUANTUM))} mm)")
-    return int(first_number), ref_no, ref_no + highest
+    if ref_no + highest <= FANUC_POINTS - 1:
+        return int(first_number), ref_no, ref_no + highest
+    room = FANUC_POINTS - int(first_number)
+    advice = [f"give a first point number of at most {FANUC_POINTS - n} (--fanuc-first-point)"] if n <= FANUC_POINTS else []
+    step_q = fanuc_fitting_step(table, first_number)
+    why = (f"{room} point is left from {first_number} and every table fills at least 2 (the reference position's and "
+           "the one above it)" if step_q is None else "")
+    if step_q is not None:
+        try:
+            if check_interval is not None:
+                check_interval(step_q * NM)
+            advice.append(f"choose a coarser --interval (at least {_exact(step_q)} mm, the finest whose points fit "
+                          f"the {room} from {first_number})")
+        except CompensationError:
+            why = (f"no coarser --interval helps: {_exact(step_q)} mm, the finest whose points fit the {room} from "
+                   f"{first_number}, is refused as too coarse for the curve")
+    if not advice:
+        from_zero = fanuc_fitting_step(table, 0)
+        advice.append(f"give a lower first point number (--fanuc-first-point) and a coarser --interval (from point 0: "
+                      f"at least {_exact(from_zero)} mm)")
+    raise CompensationError(f"fanuc-pitch: {n} points from number {first_number} do not fit the pitch block "
+                            f"0 ... {FANUC_POINTS - 1} (N10000 ... N{10000 + FANUC_POINTS - 1})"
+                            f"{'; ' + why if why else ''}; {' or '.join(advice)}")
 
 
 def fanuc_points_line(table, first_number: int = 0) -> str:
@@ -443,7 +490,9 @@ def fanuc_points_line(table, first_number: int = 0) -> str:
     default = ", from the default first point 0" if first == 0 else ""
     return (f"fills pitch-error points {first} ... {last}, N{10000 + first} ... N{10000 + last}{default}: 3621 = {first}, "
             f"3620 = {ref}, 3622 = {last}; the points are one block for all axes, so another axis' tape must not overlap "
-            f"them: write it with --fanuc-first-point {last + 1} or higher")
+            + (f"them: write it with --fanuc-first-point {last + 1} or higher" if last < FANUC_POINTS - 1 else
+               f"them: this one ends the block at {last}, so another axis' tape must end below {first}" if first > 0 else
+               "them: this one fills the whole block, leaving no point for another axis"))
 
 
 def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm: float = 0.001, increment_mm: float = 0.001,
@@ -725,9 +774,10 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
             "sections start at the machine's reference position (3620), so give --reference where it is if it is "
             "elsewhere (outside the measured travel too, e.g. --reference 0 at the travel end)")
     if any(fmt == "fanuc-pitch" for fmt, _ in requests):
+        numbers = fanuc_point_numbers(table, fanuc_first_number, check_interval=lambda step: compensation_table(
+            res, data, interval=step, source=source, reference_mm=reference_mm, formats=formats, quantum_q=quantum_q))
         table.attrs["fanuc_points"] = fanuc_points_line(table, fanuc_first_number)
-        table.attrs["fanuc_numbers"] = dict(zip(("p3621", "p3620", "p3622"),
-                                                fanuc_point_numbers(table, fanuc_first_number)))
+        table.attrs["fanuc_numbers"] = dict(zip(("p3621", "p3620", "p3622"), numbers))
     texts = [(path, WRITERS[fmt](table, axis=axis, **(fanuc if fmt == "fanuc-pitch" else {})))
              for fmt, path in requests]
     for path, text in texts:

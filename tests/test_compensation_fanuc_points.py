@@ -66,8 +66,44 @@ def test_a_first_point_that_does_not_fit_is_refused(tmp_path):
     data, _ = axis_test(rng=np.random.default_rng(5), pitch=PITCH)
     to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
     for first, words in (("1020", ("do not fit the pitch block", "at most 1013 (--fanuc-first-point)")),
-                         ("-1", ("first point number -1", "0 ... 1023"))):
+                         ("-1", ("first point number -1", "0 ... 1023")),
+                         ("2000", ("first point number 2000", "0 ... 1023"))):
         out = cli("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--axis", "X", "--fanuc-first-point",
                   first, "--compensation", "fanuc-pitch", tmp_path / "t.tap")
         one_error_line(out, *words)
         assert not (tmp_path / "t.tap").exists()
+
+
+def test_the_advice_for_a_first_point_without_room_can_be_followed(tmp_path):
+    """A first point that leaves too few points: following the advice writes the tape. Before, the coarser --interval
+    advised was the one that fits from point 0 (0.979 mm for 1000 mm, whatever the first point: still refused), and
+    it was advised also where no interval fits the room or the one that fits is refused as too coarse for the curve."""
+    data, _ = axis_test(rng=np.random.default_rng(5), pitch=PITCH)
+    to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
+    args = ("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--axis", "X", "--compensation-from", "mean",
+            "--compensation", "fanuc-pitch", tmp_path / "t.tap")
+    seen = set()
+    for first, interval in ((990, ("--interval", "10")), (1013, ("--interval", "10")), (1014, ()), (1023, ())):
+        out = cli(*args, "--fanuc-first-point", first, *interval)
+        one_error_line(out, f"points from number {first} do not fit the pitch block")
+        lower = re.search(r"first point number of at most (\d+) \(--fanuc-first-point\)", out.stderr).group(1)
+        assert int(lower) < first
+        ok = cli(*args, "--fanuc-first-point", lower, *interval)
+        assert ok.returncode == 0 and "3622 = 1023;" in ok.stdout, ok.stderr
+        assert f"tape must end below {lower}" in ok.stdout and "--fanuc-first-point 1024" not in ok.stdout
+        coarser = re.search(r"coarser --interval \(at least ([\d.]+) mm", out.stderr)
+        refused = re.search(r"no coarser --interval helps: ([\d.]+) mm", out.stderr)
+        if coarser:                                   # the finest interval whose points fit from this first point
+            seen.add("interval")
+            step = float(coarser.group(1))
+            ok = cli(*args, "--fanuc-first-point", first, "--interval", coarser.group(1))
+            assert ok.returncode == 0 and "3622 = 1023;" in ok.stdout, ok.stderr
+            one_error_line(cli(*args, "--fanuc-first-point", first, "--interval", f"{step - 0.001:.3f}"),
+                           "do not fit the pitch block")
+        elif refused:                                 # it fits but misses the curve: said, not advised
+            seen.add("refused")
+            one_error_line(cli(*args, "--fanuc-first-point", first, "--interval", refused.group(1)), "too coarse")
+        else:                                         # one point left: no table fits
+            seen.add("none")
+            assert "1 point is left" in out.stderr and "--interval" not in out.stderr
+    assert seen == {"interval", "refused", "none"}

@@ -107,3 +107,23 @@ def test_the_advice_for_a_first_point_without_room_can_be_followed(tmp_path):
             seen.add("none")
             assert "1 point is left" in out.stderr and "--interval" not in out.stderr
     assert seen == {"interval", "refused", "none"}
+
+
+def test_fanuc_options_without_a_fanuc_tape_are_refused(tmp_path):
+    """--fanuc-first-point / --fanuc-increment with no --compensation fanuc-pitch (forgotten, or another format) were
+    read and ignored, exit 0, nothing said; now refused in one line, nothing written."""
+    data, _ = axis_test(rng=np.random.default_rng(5), pitch=PITCH)
+    to_frame(data, actual=False).to_csv(tmp_path / "a.csv", index=False)
+    base = ("positioning", tmp_path / "a.csv", "--deviation-unit", "mm", "--axis", "X", "--compensation-from", "mean")
+    table = ("--compensation", "csv", tmp_path / "d.csv")
+    for extra, named in ((("--fanuc-first-point", "50"), "--fanuc-first-point applies"),
+                         (("--fanuc-first-point", "0"), "--fanuc-first-point applies"),
+                         (("--fanuc-increment", "0.0001mm"), "--fanuc-increment applies"),
+                         (("--fanuc-first-point", "50", "--fanuc-increment", "0.0001in"),
+                          "--fanuc-first-point and --fanuc-increment apply")):
+        for tables in ((), table):
+            one_error_line(cli(*base, *tables, *extra), named, "add --compensation fanuc-pitch FILE or drop")
+            assert not (tmp_path / "d.csv").exists()
+    ok = cli(*base, *table, "--compensation", "fanuc-pitch", tmp_path / "t.tap", "--fanuc-first-point", "50",
+             "--fanuc-increment", "0.0001mm")
+    assert ok.returncode == 0 and "3621 = 50," in ok.stdout, ok.stderr

@@ -65,7 +65,7 @@ def add_parser(sub):
                     help="fanuc-pitch: the machine's detection unit and least input increment: 0.001mm (IS-B, default) "
                          "or 0.0001mm (IS-C) for a metric machine, 0.0001in (IS-B) or 0.00001in (IS-C) for an inch "
                          "machine (its tape in counts of inches); a bare number is mm; required for an inch test")
-    pp.add_argument("--fanuc-first-point", type=int, default=0, metavar="N",
+    pp.add_argument("--fanuc-first-point", type=int, default=None, metavar="N",
                     help="fanuc-pitch: the axis' first pitch-error point number (parameter 3621, default 0); the points "
                          "are one block for all axes, so each axis' tape needs its own range (the output says which it "
                          "fills)")
@@ -272,6 +272,12 @@ def run(args) -> int:
     if (temperature is None) != (alpha is None):
         raise InvalidInputError("the temperature correction needs both --material-temperature (°C) and "
                                 "--expansion-coefficient (µm/(m·K), e.g. 11.5 for steel)")
+    fanuc_only = [o for o, v in (("--fanuc-first-point", args.fanuc_first_point),
+                                 ("--fanuc-increment", args.fanuc_increment)) if v is not None]
+    if fanuc_only and not any(fmt == "fanuc-pitch" for fmt, _ in args.compensation or []):
+        raise InvalidInputError(f"{' and '.join(fanuc_only)} {'apply' if len(fanuc_only) > 1 else 'applies'} to a "
+                                "FANUC tape and no --compensation fanuc-pitch is given: add --compensation fanuc-pitch "
+                                f"FILE or drop {'them' if len(fanuc_only) > 1 else 'the option'}")
     given_deviation_unit = args.deviation_unit
     with warnings.catch_warnings(record=True) as read_warnings:
         warnings.simplefilter("always")
@@ -422,7 +428,7 @@ def run(args) -> int:
                             reference_mm=finite("--reference", args.reference),
                             unit_confirmed=given_deviation_unit is not None, on_confirmed=warn,
                             model_confirmed=args.compensation_from == "model",
-                            fanuc_unit_mm=fanuc_mm, fanuc_machine_unit=fanuc_unit, fanuc_first_number=args.fanuc_first_point)
+                            fanuc_unit_mm=fanuc_mm, fanuc_machine_unit=fanuc_unit, fanuc_first_number=args.fanuc_first_point or 0)
         if comp.attrs.get("reference_note"):
             notes.append(comp.attrs["reference_note"])
         if comp.attrs.get("thermal_note"):      # a correction computed from two given numbers goes into the machine

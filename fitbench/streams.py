@@ -44,30 +44,37 @@ def stdout_to_stderr():
             os.close(saved)
 
 
-class _ReaderMayGo(io.RawIOBase):
-    """Descriptor ``fd`` written to until its reader has gone (EPIPE: ``| head -1`` read what it wanted), then
-    :data:`os.devnull` in its place (``os.dup2``: what is still buffered, compiled code's writes to the descriptor and
-    the interpreter's flush at exit go nowhere), so a write never raises :class:`BrokenPipeError`."""
+class _ReaderMayGo(io.TextIOWrapper):
+    """A text stream on descriptor ``fd`` written to until its reader has gone (EPIPE: ``| head -1`` read what it
+    wanted), then :data:`os.devnull` in its place (``os.dup2``: what is still buffered, compiled code's writes to the
+    descriptor and the interpreter's flush at exit go nowhere), so a write never raises :class:`BrokenPipeError`.
+    The layers below are the interpreter's own (compiled: a Ctrl-C arriving as a write returns cannot leave bytes
+    already written in the buffer, to be written a second time; a raw layer in Python could)."""
 
-    def __init__(self, fd: int):
-        super().__init__()
+    def __init__(self, fd: int, like):
+        super().__init__(io.BufferedWriter(io.FileIO(fd, "w", closefd=False)), encoding=like.encoding,
+                         errors=like.errors, line_buffering=like.line_buffering, write_through=like.write_through)
         self._fd = fd
         self.gone = False
 
-    def writable(self) -> bool:
-        return True
-
-    def fileno(self) -> int:
-        return self._fd
-
-    def write(self, b) -> int:
+    def _reader_gone(self) -> None:
         if not self.gone:
-            try:
-                return os.write(self._fd, b)
-            except BrokenPipeError:
-                self.gone = True
-                _sink(self._fd)
-        return memoryview(b).nbytes
+            self.gone = True
+            _sink(self._fd)
+
+    def write(self, s) -> int:
+        try:
+            return super().write(s)
+        except BrokenPipeError:   # what is still buffered goes to the sink at the next flush
+            self._reader_gone()
+            return len(s)
+
+    def flush(self) -> None:
+        try:
+            super().flush()
+        except BrokenPipeError:
+            self._reader_gone()
+            super().flush()
 
 
 def _sink(fd: int) -> None:
@@ -99,9 +106,7 @@ def readers_may_go():
         except BrokenPipeError:   # printed before and its reader gone already: that goes to the sink
             _sink(fd)
             stream.flush()
-        raw = _ReaderMayGo(fd)
-        guarded = io.TextIOWrapper(io.BufferedWriter(raw), encoding=stream.encoding, errors=stream.errors,
-                                   line_buffering=stream.line_buffering, write_through=stream.write_through)
+        guarded = _ReaderMayGo(fd, stream)
         setattr(sys, name, guarded)
         swapped.append((name, stream, guarded))
     try:

@@ -53,7 +53,8 @@ def _md_table(md: str, caption_words: str) -> pd.DataFrame:
 def _committed(*paths: Path):
     for p in paths:
         if not p.exists():
-            pytest.skip(f"{p.relative_to(REPO)} is missing: run python -m experiments.run and experiments.report")
+            pytest.fail(f"{p.relative_to(REPO)} is missing (committed with the project): run python -m experiments.run "
+                        f"and experiments.report")
 
 
 def test_the_committed_coverage_table_prints_true_digits_of_the_rows():

@@ -400,8 +400,8 @@ def start_early(argv: list[str]) -> None:
 def _forking_context():
     """The start method of the workers :func:`start_early` starts. On Linux: ``fork``, after this process imported the
     rows' code (which it needs too): the workers are copies of it, ready at once, instead of each importing NumPy, the
-    methods and the data sources again (0.3 s of CPU a worker, while this process imports its own modules on the same
-    cores). This process has no other thread yet (the command calls this first), so the copies hold no lock another
+    methods, the data sources and pandas again (0.6 s of CPU a worker, while this process imports its own modules on
+    the same cores). This process has no other thread yet (the command calls this first), so the copies hold no lock another
     thread took; the BLAS libraries load here with one thread (:func:`_one_blas_thread_per_worker`, around the call),
     as a spawned worker's would. Elsewhere (macOS: fork is unsafe with its system libraries), and for workers started
     later (the run has threads then), ``spawn``."""
@@ -411,6 +411,8 @@ def _forking_context():
     import experiments.chunkrows  # noqa: F401 (the rows' code, imported once here for every worker)
     import experiments.rows  # noqa: F401
     import methods.plugins  # noqa: F401
+    import pandas  # noqa: F401 (a chunk's columns, experiments.rowframe.part_of: the run imports it anyway; each
+    # worker imported it again on its first chunk, 0.27 s of CPU a worker while the run imports its own modules)
     for stream in (sys.stdout, sys.stderr):  # nothing buffered here is written again by a copy
         with contextlib.suppress(Exception):
             stream.flush()

@@ -1027,16 +1027,20 @@ def test_the_command_starts_its_workers_before_its_own_imports_only_when_rows_wi
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked early on Linux only")
 def test_early_workers_are_forked_copies_of_a_run_without_threads_and_spawned_with_one(tmp_path):
-    """On Linux the command's early workers are copies of the run (fork, after it imported the rows' code: no worker
-    imports it again), made while the run has no other thread; with a thread running they are spawned. Either way they
-    make the rows a run makes in its own process."""
+    """On Linux the command's early workers are copies of the run (fork, after it imported the rows' code and pandas,
+    which a chunk's columns need: no worker imports them again), made while the run has no other thread; with a thread
+    running they are spawned. Either way they make the rows a run makes in its own process."""
     code = textwrap.dedent(f"""
         import sys, threading
         from experiments import localworkers
+        from loaded_probe import loaded
         if sys.argv[1] == "thread":
             threading.Thread(target=threading.Event().wait, daemon=True).start()
         localworkers.start_early(["s.toml", "--jobs", "2", "--out", {str(tmp_path / "o")!r}, "--force"])
         workers = localworkers.take_early(2)
+        if sys.argv[1] == "plain":
+            workers[0].conn.send((localworkers._CALL, loaded, ()))
+            assert workers[0].conn.recv() == (True, ["pandas", "experiments.chunkrows", "experiments.rowframe"])
         from experiments.chunkrows import run_chunk
         from experiments.engine import grid_tasks, prepare
         cfg = {{"name": "w", "kind": "grid", "seed": 3, "repetitions": 2,
@@ -1049,9 +1053,13 @@ def test_early_workers_are_forked_copies_of_a_run_without_threads_and_spawned_wi
         for w in workers:
             w.stop(now=True)
         """)
+    (tmp_path / "loaded_probe.py").write_text(  # asked in a forked worker: the modules a chunk needs, already there
+        "import sys\n\ndef loaded():\n    return [m for m in ('pandas', 'experiments.chunkrows', "
+        "'experiments.rowframe') if m in sys.modules]\n", encoding="utf-8")
+    path = os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")]))
     for mode, kind in (("plain", "ForkProcess"), ("thread", "SpawnProcess")):
         res = subprocess.run([sys.executable, "-c", code, mode], capture_output=True, text=True, timeout=120,
-                             env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
+                             env={**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONPATH": path})
         assert res.returncode == 0, res.stderr
         assert res.stdout.split() == [f"['{kind}']", "True"], (mode, res.stdout, res.stderr)
 

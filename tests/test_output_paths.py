@@ -164,6 +164,24 @@ def test_json_lists_the_files_written(axis, campaign):
     assert [f["path"] for f in d["files_written"]] == [str(folder / "e.csv")] and (folder / "e.csv").is_file()
 
 
+def test_history_json_lists_the_files_written(tmp_path):
+    """``history --json`` lists its --plot in ``files_written``, as every other command's JSON lists its files (it
+    had no such field); without --plot the list is empty. The trends stay keyed by test beside it."""
+    from profile_lines import profile_file
+    folder = tmp_path / "machine"
+    folder.mkdir()
+    done = cli("roundness", profile_file(tmp_path / "shaft.csv", n=720), "--date", "2026-11-02", "--json")
+    assert done.returncode == 0, done.stderr
+    (folder / "r.json").write_text(done.stdout)
+    got = cli("history", folder, "--json", "--plot", tmp_path / "trend.png")
+    assert got.returncode == 0, got.stderr
+    d = json.loads(got.stdout)
+    assert d["files_written"] == [{"path": str(tmp_path / "trend.png"), "option": "--plot", "what": "plot"}]
+    assert (tmp_path / "trend.png").is_file() and [t["file"] for t in d["roundness"]["tests"]] == ["r.json"]
+    got = cli("history", folder, "--json")
+    assert got.returncode == 0 and json.loads(got.stdout)["files_written"] == [], got.stderr
+
+
 def test_every_output_option_is_checked():
     """Every option of a subcommand that names a file to write is one the tests above refuse onto an input (a new
     output option must be passed to fitbench.cli.guards.check_outputs and added here)."""

@@ -261,7 +261,8 @@ def add_parser(sub):
                                        "saved --json results")
     p.add_argument("folder", metavar="DIR", help="folder of JSON results (fitbench circular-test|positioning|roundness --json)")
     p.add_argument("--json", action="store_true", help="print the trends as one JSON object (values in the printed "
-                   "units; per test its 'trends', one per machine and plane or axis, and all its 'tests')")
+                   "units; per test its 'trends', one per machine and plane or axis, and all its 'tests'; "
+                   "'files_written': the --plot written, as every command's JSON lists its files)")
     p.add_argument("--plot", metavar="FILE", help="write the trend plot (.png, .pdf, .svg)")
     p.set_defaults(func=run)
     return p
@@ -275,8 +276,8 @@ def run(args) -> int:
         _warn(line)
     if plot_path:
         plot(history, plot_path, save_figure)
-    if args.json:
-        cli_options.print_json(json.dumps(as_json(history)))
+    if args.json:   # the trends by test, and the files written (as every command's JSON lists them)
+        cli_options.print_json(json.dumps({**as_json(history), "files_written": written_files()}))
         return 0
     print(table(history))
     return 0

@@ -161,6 +161,17 @@ def circle_through(points) -> tuple[float, float, float]:
     return float(m[0] + sol[0]), float(m[1] + sol[1]), float(np.sqrt(r2))
 
 
+def profile_circle(points, circle: tuple | None = None) -> tuple[np.ndarray, tuple] | None:
+    """(the points as an (N, 2) float array, (xc, yc, r) of their circle: ``circle`` when already computed, else
+    :func:`circle_through`) of an x, y profile a reader checks further, or None when there is nothing to check: not
+    (N, 2), fewer than 4 points, a value that is not finite, or no circle (NaNs)."""
+    p = np.asarray(points, dtype=float)
+    if p.ndim != 2 or len(p) < 4 or not np.isfinite(p).all():
+        return None
+    circle = circle_through(p) if circle is None else circle
+    return (p, circle) if np.isfinite(circle).all() else None
+
+
 def decimal_step(values) -> float:
     """The largest power of ten of which every finite value is a whole multiple (0.001 for numbers written with three
     decimals), i.e. the rounding step of the numbers as written; 0 when none up to 1e-15 is (full binary floats)."""
@@ -191,12 +202,9 @@ def warn_too_small_xy(layout: Layout, idx, points_mm, written, unit: str, given:
     x, y in mm read as µm span 0.005 µm about a radius of 0.01 mm (RONt 0.0041 µm 'ok' was printed). Names the unit
     1000 times larger and where to declare it. ``circle``: (xc, yc, r) of the points if already computed."""
     from methods.units import UnitWarning, canonical
-    p = np.asarray(points_mm, dtype=float)
-    if p.ndim != 2 or len(p) < 4 or not np.isfinite(p).all():
+    if (profile := profile_circle(points_mm, circle)) is None:
         return False
-    xc, yc, r = circle_through(p) if circle is None else circle
-    if not np.isfinite(r):
-        return False
+    p, (xc, yc, r) = profile
     span = float(np.ptp(np.hypot(p[:, 0] - xc, p[:, 1] - yc)))
     if not (span < SMALLEST_DEVIATION_SPAN_MM and span > 1e-9 * r):
         return False

@@ -14,7 +14,7 @@ from datasets.io.columns import data_blocks, read_columns
 from datasets.io.headers import column_unit, length_unit
 from datasets.io.layout import Layout, sniff
 from datasets.io.numbers import DataFileError
-from datasets.io.polar import (_unit_assumed, angle_unit_of, circle_through, polar_to_points,
+from datasets.io.polar import (_unit_assumed, angle_unit_of, polar_to_points, profile_circle,
                                warn_radius_like_deviation, warn_too_small, warn_too_small_xy)
 from datasets.io.roles import PLANES, Resolved, coordinate_kind, read_offsets, resolve
 from methods.units import to_mm
@@ -119,7 +119,7 @@ def read_runs(path, *, columns=None, plane=None, unit: str | None = None, skip_r
             pts *= f
         if (dev := read_offsets(layout, res, cols)) is not None:
             pts += dev
-        circle = circle_through(pts) if len(pts) >= 4 and np.isfinite(pts).all() else None
+        circle = profile[1] if (profile := profile_circle(pts)) else None   # fitted once for both checks
         if one_revolution and res.direction is None and (why := xy_beyond_one_revolution(layout, pts, circle)):
             raise DataFileError(why)
         warn_too_small_xy(layout, res.idx, pts, (cols[res.idx[0]], cols[res.idx[1]]), lu, unit, circle)
@@ -251,12 +251,9 @@ def xy_beyond_one_revolution(layout: Layout, points, circle: tuple | None = None
     µm 'ok'. One point past (a closing point measured again) is left to :func:`drop_closing_repeat` and the
     evaluation, as before: its polar angle about a fitted centre may fall either side of the first's. ``circle``:
     (xc, yc, r) of the points if already computed."""
-    p = np.asarray(points, dtype=float)
-    if p.ndim != 2 or len(p) < 4 or not np.isfinite(p).all():
+    if (profile := profile_circle(points, circle)) is None:
         return None
-    xc, yc, _ = circle_through(p) if circle is None else circle
-    if not np.isfinite(xc):
-        return None
+    p, (xc, yc, _) = profile
     ang = np.arctan2(p[:, 1] - yc, p[:, 0] - xc)
     return beyond_one_revolution(layout, None, ang, np.hypot(p[:, 0] - xc, p[:, 1] - yc), single=False)
 

@@ -315,7 +315,20 @@ _SIGNALLED = threading.Event()
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread so that the run stops the way Ctrl-C stops it."""
+    """SIGTERM, raised in the main thread so that the run stops the way Ctrl-C stops it; ``signum``: the signal."""
+
+    signum = signal.SIGTERM
+
+
+class HungUp(Terminated):
+    """SIGHUP (the terminal of the run closed, a session ended), taken as SIGTERM."""
+
+    signum = getattr(signal, "SIGHUP", 1)
+
+
+#: the signals that stop a run as Ctrl-C does, and the exception each raises in its main thread
+STOPPING_SIGNALS = {signal.SIGINT: KeyboardInterrupt, signal.SIGTERM: Terminated,
+                    **({signal.SIGHUP: HungUp} if hasattr(signal, "SIGHUP") else {})}
 
 
 _RECEIVED: list = []  # the exception of the first interrupt the run received (KeyboardInterrupt or Terminated)

@@ -28,12 +28,14 @@ if __name__ == "__main__":  # the command: its local workers start now and impor
     start_early(sys.argv[1:])
 
     def _stopped_while_starting(signum, frame):
-        """Ctrl-C or SIGTERM while the command imports its modules (before main's handlers): one line, no traceback."""
-        what = "terminated (SIGTERM)" if signum == signal.SIGTERM else "interrupted"
+        """Ctrl-C, SIGTERM or SIGHUP while the command imports its modules (before main's handlers): one line, no
+        traceback."""
+        what = "interrupted" if signum == signal.SIGINT else f"terminated ({signal.Signals(signum).name})"
         os.write(2, f"\nexperiments.run: {what} while starting; no rows had run\n".encode())
-        os._exit(143 if signum == signal.SIGTERM else 130)
-    for _sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(_sig, _stopped_while_starting)
+        os._exit(128 + signum)
+    for _sig in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        if _sig is not None and signal.getsignal(_sig) is not signal.SIG_IGN:   # nohup's SIGHUP stays ignored
+            signal.signal(_sig, _stopped_while_starting)
 
 from experiments import compare  # the verdict on every run: fresh results against the committed ones
 from experiments import config as configs
@@ -44,8 +46,8 @@ from experiments.csvtext import blocks, csv_text, write_results
 from experiments.jsontext import json_text, json_value
 from experiments.executors import kept_workers, last_study, map_in_idle_workers, start_kept_workers, workers_done
 from experiments.provenance import collect, write_atomic
-from experiments.rows import (ENVIRONMENT_STATUSES, Terminated, base_row, clear_signal, fewer_collections, note_signal,
-                              raise_if_signalled, signalled)
+from experiments.rows import (ENVIRONMENT_STATUSES, STOPPING_SIGNALS, Terminated, base_row, clear_signal,
+                              fewer_collections, note_signal, raise_if_signalled, signalled)
 from experiments.summary import summarise, summary_units, to_markdown, with_units
 from fitbench import __version__
 import methods
@@ -438,21 +440,24 @@ def lock_out(out: Path):
 
 
 def _on_signal(signum, frame):
-    """SIGINT (Ctrl-C) and SIGTERM: recorded, then raised in the main thread (KeyboardInterrupt, ``Terminated``);
-    :func:`experiments.rows.raise_if_signalled` raises it again at the run's safe points if code swallowed it."""
-    exc_type = Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+    """SIGINT (Ctrl-C), SIGTERM and SIGHUP: recorded, then raised in the main thread (KeyboardInterrupt, ``Terminated``,
+    ``HungUp``: :data:`experiments.rows.STOPPING_SIGNALS`); :func:`experiments.rows.raise_if_signalled` raises it again
+    at the run's safe points if code swallowed it."""
+    exc_type = STOPPING_SIGNALS.get(signum, KeyboardInterrupt)
     note_signal(exc_type)
     raise exc_type()
 
 
 @contextlib.contextmanager
 def _interrupts_are_the_run_s():
-    """The run's own handlers for SIGINT and SIGTERM (main thread only), and quiet about an interrupt an exception
-    callback swallowed (``Exception ignored in: ... KeyboardInterrupt``): the run raises it again itself."""
+    """The run's own handlers for SIGINT, SIGTERM and SIGHUP (main thread only; a SIGHUP ignored, as under ``nohup``,
+    stays ignored), and quiet about an interrupt an exception callback swallowed (``Exception ignored in: ...
+    KeyboardInterrupt``): the run raises it again itself."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+    previous = {sig: signal.signal(sig, _on_signal) for sig in STOPPING_SIGNALS
+                if sig == signal.SIGINT or signal.getsignal(sig) is not signal.SIG_IGN}
     hook = sys.unraisablehook
 
     def unraisable(info):
@@ -521,9 +526,10 @@ def main(argv=None, prog: str = "python -m experiments.run") -> int:
     """The command line as a function (exit status returned; ``prog``: the command named in its usage, ``fitbench
     run`` from fitbench); the ``--out`` lock it takes is released when it returns, however it ends, so a second call
     in the same process can write to the same folder."""
+    from fitbench.streams import readers_may_go
     held = len(_LOCKS)
-    try:
-        with plugin_warnings_once(), fewer_collections():
+    try:   # `... | head -1`: the reader going ends what the run prints, not the run (its rows and outputs, exit 0)
+        with readers_may_go(), plugin_warnings_once(), fewer_collections():
             return _main(argv, prog)
     finally:
         release_locks(held)
@@ -637,16 +643,19 @@ def _run(args) -> int:
               f"fix the cause and run the same command again", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        signum = exc.signum if isinstance(exc, Terminated) else signal.SIGINT
+        what = f"terminated ({signal.Signals(signum).name})" if isinstance(exc, Terminated) else "interrupted"
         store = _CURRENT.get("store")
         kept = f"finished rows are kept in {store}" if store else "no rows had run"
         print(f"\nexperiments.run: {what}; {kept}; run the same command again to resume", file=sys.stderr)
-        return 143 if isinstance(exc, Terminated) else 130
+        return 128 + signum
     return 0
 
 
 if __name__ == "__main__":  # the command ends once its outputs are written, without the interpreter's teardown
     from experiments.localworkers import exit_now
     signal.signal(signal.SIGINT, signal.default_int_handler)  # main's own handling from here (_interrupts_are_the_run_s)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    for _sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        if _sig is not None and signal.getsignal(_sig) is _stopped_while_starting:
+            signal.signal(_sig, signal.SIG_DFL)
     exit_now(main(), as_python_does=True)

@@ -1221,7 +1221,8 @@ def test_summary_by_may_name_a_column_of_a_result_class_loaded_after_the_engine(
 
 
 @pytest.mark.parametrize("signum, status, what", [(signal.SIGINT, 130, "interrupted"),
-                                                  (signal.SIGTERM, 143, "terminated (SIGTERM)")])
+                                                  (signal.SIGTERM, 143, "terminated (SIGTERM)"),
+                                                  (signal.SIGHUP, 129, "terminated (SIGHUP)")])
 def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path, signum, status, what):
     """Ctrl-C (or SIGTERM) while ``python -m experiments.run`` still imports its modules, before its main function
     handles signals: one line and 130 (143), no traceback (it printed the KeyboardInterrupt's traceback of the import

@@ -137,8 +137,10 @@ def interrupted_among_rows(tmp_path, act, reps=400, ns="[50, 200]", attempts=3):
     raise AssertionError(f"the run stored all its {total} rows before this test could act, {attempts} times")
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP], ids=lambda s: s.name)
 def test_sigterm_and_ctrl_c_print_one_line_and_leave_no_process(tmp_path, sig):
+    """Ctrl-C, SIGTERM and SIGHUP (a closed terminal, an ended session) among the rows: one line naming the signal and
+    where the finished rows are, the shell's status for it (128 + the signal's number), no worker left."""
     kids = set()
 
     def interrupt(proc):
@@ -147,11 +149,50 @@ def test_sigterm_and_ctrl_c_print_one_line_and_leave_no_process(tmp_path, sig):
     proc = interrupted_among_rows(tmp_path, interrupt)
     assert kids, "the run started no worker"
     out, err = proc.communicate(timeout=60)
-    assert proc.returncode == (143 if sig == signal.SIGTERM else 130), err
+    assert proc.returncode == 128 + sig, err
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert len(lines) == 1 and "Traceback" not in err, err
+    what = "interrupted" if sig == signal.SIGINT else f"terminated ({signal.Signals(sig).name})"
+    assert lines[0].startswith(f"experiments.run: {what}; finished rows are kept in "), lines
     assert "rows.sqlite" in lines[0] and "resume" in lines[0]
     assert not no_survivors(kids), "worker or resource tracker outlived the run"
+
+
+def test_a_sighup_the_run_was_started_to_ignore_does_not_stop_it(tmp_path):
+    """``nohup python -m experiments.run ...``: the SIGHUP the run was started to ignore stays ignored (the run's own
+    handlers take SIGINT and SIGTERM only then), and the run ends with all its rows."""
+    cfg = study(tmp_path, reps=40, ns="[50, 200]")
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "experiments.run", str(cfg), "--jobs", "1", "--no-report", "--out",
+                             str(out)], cwd=tmp_path, env=subprocess_env(OPENBLAS_NUM_THREADS="1"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN))
+    deadline = time.monotonic() + 120
+    while proc.poll() is None and not stored_rows(out / "faults" / "rows.sqlite") and time.monotonic() < deadline:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGHUP)
+    stdout, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0 and "Traceback" not in err, err
+    assert len(pd.read_csv(out / "faults" / "results.csv")) == 40 * 2 * 3
+
+
+def test_a_reader_that_goes_ends_what_the_run_prints_not_the_run(tmp_path):
+    """``python -m experiments.run A B | head -1``: the reader of stdout (and of stderr, ``2>&1 | head``) closing the
+    pipe ends what the run prints, not the run: both studies are run and written, the report too, and the exit status
+    is 0 (the run stopped with 'cannot write: Broken pipe' at its second line, exit 2, without its outputs)."""
+    first, second = study(tmp_path, name="first", reps=2), study(tmp_path, name="second", reps=2)
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "experiments.run", str(first), str(second), "--jobs", "1",
+                             "--out", str(out)], cwd=tmp_path, env=subprocess_env(OPENBLAS_NUM_THREADS="1"),
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    line = proc.stdout.readline()
+    proc.stdout.close()   # the reader has what it wanted
+    assert proc.wait(timeout=300) == 0
+    assert line.startswith(b"== first")
+    for name in ("first", "second"):
+        assert len(pd.read_csv(out / name / "results.csv")) == 2 * 2 * 3
+        assert (out / name / "meta.json").is_file()
+    assert (out / "paper" / "report.md").is_file()
 
 
 def test_sigkill_of_the_parent_ends_workers_and_resource_tracker(tmp_path):

@@ -694,19 +694,80 @@ def committed_clash(out: Path, project: bool) -> str | None:
     return None
 
 
+def _holds_study(folder: Path) -> bool:
+    """A folder the runner wrote a study into: its row store (a run under way or interrupted), or its ``meta.json``
+    and ``results.csv`` (finished). Stricter than :func:`is_study_folder`: a folder the user keeps a ``results.csv``
+    in is no study to keep a report out of."""
+    try:
+        return (folder / "rows.sqlite").exists() or ((folder / "meta.json").is_file()
+                                                     and (folder / "results.csv").exists())
+    except OSError:
+        return False
+
+
+def _holds_studies(folder: Path) -> bool:
+    """A results folder: a folder holding a study folder (:func:`_holds_study`)."""
+    try:
+        return folder.is_dir() and any(_holds_study(p) for p in folder.iterdir() if p.is_dir())
+    except OSError:
+        return False
+
+
+def _named(path: Path) -> str:
+    """A folder as a refusal names it: relative to the current folder when inside it, else as it is."""
+    try:
+        return path.relative_to(Path.cwd().resolve()).as_posix() or "."
+    except ValueError:
+        return str(path)
+
+
 def report_clash(results: Path, out: Path) -> str | None:
-    """Why the report of ``results`` must not go to ``out``, as words for a refusal, or None: ``out`` inside the
-    ``paper/`` of the repository (the committed report) or of the current folder, while ``results`` is not the
-    ``results/`` beside it: a user's study would replace the committed report (and its build delete the figures
-    the previous one listed). :func:`committed_clash` guards ``experiments.run --out`` the same way."""
-    here, source = Path(out).resolve(), Path(results).resolve()
-    for base in (REPO, Path(".").resolve()):
-        paper = base / "paper"
-        if here.is_relative_to(paper) and source != base / "results":
-            what = ("the committed report, built from the project's results/" if base == REPO else
-                    "the report of results/ of the current folder")
-            return (f"--out {out} writes into paper/, {what}, not the report of --results {results}; leave --out "
-                    f"out (the report then goes to {default_out(results)}/) or give another folder")
+    """Why the report of ``results`` must not go to ``out``, as words for a refusal, or None (checked before anything
+    is written; every path resolved, so a symlink is the folder it names):
+
+    * ``out`` inside a ``paper/`` that is the report of another results folder: the repository's or the current
+      folder's (the committed report) or one with a ``results/`` beside it (another checkout), while ``results`` is
+      not that ``results/``: a user's study would replace that report (and its build delete the figures the previous
+      one listed). :func:`committed_clash` guards ``experiments.run --out`` the same way;
+    * ``out``, or a folder above it, that exists and is not a folder (``--out report.md``);
+    * ``out`` in a study folder (``--out results/noise``): the report's tables, figures and pages among the study's;
+    * ``out`` inside the results folder read other than its report folder (:func:`default_out`: ``RESULTS/paper``),
+      or the results folder read itself: the report's files beside the studies, where a study's folder goes;
+    * ``out`` that is another results folder (a folder holding a study) or lies in one beside its studies (its
+      ``paper/``: the report of those results)."""
+    given, here, source = out, Path(out).resolve(), Path(results).resolve()
+    leave = f"leave --out out (the report then goes to {default_out(results)}/) or give another folder"
+    bases = [(REPO, "the committed report, built from the project's results/"),
+             (Path(".").resolve(), "the report of results/ of the current folder")]
+    bases += [(p.parent, f"the report of {_named(p.parent / 'results')}/ beside it")
+              for p in (here, *here.parents) if p.name == "paper" and (p.parent / "results").is_dir()]
+    for base, what in bases:
+        if here.is_relative_to(base / "paper") and source != base / "results":
+            return f"--out {given} writes into paper/, {what}, not the report of --results {results}; {leave}"
+    for p in (here, *here.parents):
+        if p.exists() or p.is_symlink():
+            if not p.is_dir():
+                kind = "a file" if p.is_file() else "not a folder"
+                where = "" if p == here else f" ({_named(p)} is {kind})"
+                return (f"--out {given} is {kind if p == here else 'no folder'}{where}: the report is a folder of "
+                        f"files (report.md, report.html, report.tex, tables/, figures/); {leave}")
+            break
+    def alias(p: Path) -> str:   # the folder's name when --out names it otherwise (a symlink, another spelling)
+        return "" if _named(p) == str(given) else f" ({_named(p)})"
+    study = next((p for p in (here, *here.parents) if _holds_study(p)), None)
+    if study is not None:
+        where = f"is a study folder{alias(here)}" if study == here else f"lies in the study folder {_named(study)}"
+        return f"--out {given} {where}: the report's pages, tables/ and figures/ would mix with its files; {leave}"
+    if here == source or here.is_relative_to(source):
+        if here == default_out(results).resolve():
+            return None
+        where = "is the results folder read" if here == source else "lies inside the results folder read"
+        return f"--out {given} {where} (--results {results}), where the studies' folders are; {leave}"
+    if _holds_studies(here):
+        return f"--out {given} is the results folder of other studies{alias(here)}; {leave}"
+    if _holds_studies(here.parent):
+        return (f"--out {given} lies in {_named(here.parent)}, the results folder of other studies, beside their folders"
+                f"{' (its paper/ is their report)' if here.name == 'paper' else ''}; {leave}")
     return None
 
 

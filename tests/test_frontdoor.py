@@ -587,7 +587,10 @@ def test_fitbench_run_and_report_default_folders_are_relative_to_the_cwd(monkeyp
     assert fc.main(["run", "published"]) == 0 and seen.pop("argv") == ["published"]
     assert fc.main(["run", "--quick"]) == 0 and seen.pop("argv") == ["--quick"]
     assert fc.main(["run", "published", "--out=X"]) == 0 and seen.pop("argv") == ["published", "--out=X"]
-    assert fc.main(["report"]) == 0 and seen.pop("argv") == ["--results", "results", "--out", "paper"]
+    assert fc.main(["report"]) == 0 and seen.pop("argv") == ["--results", "results"]
+    # report's --out follows its --results (experiments.report.default_out): a fixed `--out paper` sent the report
+    # of `--results mine` into paper/, which experiments.report refuses
+    assert fc.main(["report", "--results", "mine"]) == 0 and seen.pop("argv") == ["--results", "mine"]
 
 
 def test_fit_help_docs_and_output_agree_on_the_printed_unit(lola, capsys, tmp_path):

@@ -7,9 +7,10 @@ every other subcommand is in :mod:`fitbench.cli.commands` (one argparse tree, :f
 subcommand in its own module, ``fitbench/cli/NAME.py``).
 ``--version`` works everywhere.
 
-Output folders not given on the command line are relative to the current directory (``results/`` for
-``run``; ``results/`` and ``paper/`` for ``report``), never inside the installed package (the
-``python -m experiments.*`` forms default to the repository's folders).
+Folders not given on the command line are relative to the current directory, never inside the installed package:
+``run`` writes ``results/`` (``results/quick/``, ``results/user/``), ``report`` reads ``results/`` and writes where
+``python -m experiments.report`` does (``experiments.report.default_out``: ``paper/`` for ``results/``, else
+``RESULTS/paper``).
 """
 from __future__ import annotations
 
@@ -19,9 +20,9 @@ import sys
 from fitbench import __version__
 
 #: folders a delegated subcommand gets relative to the current directory unless given: name -> [(option, folder)]
-#: (``run`` chooses its own: results/, results/quick/ with --quick, results/user/ for a study not the project's,
-#: all relative to the current directory)
-CWD_DEFAULTS = {"report": [("--results", "results"), ("--out", "paper")]}
+#: (``run`` chooses its own: results/, results/quick/ with --quick, results/user/ for a study not the project's;
+#: ``report`` its --out from its --results, ``experiments.report.default_out``; all relative to the current directory)
+CWD_DEFAULTS = {"report": [("--results", "results")]}
 
 #: subcommands delegated to the experiment modules: name -> (module, one-line help)
 DELEGATED = {"run": ("experiments.run", "run studies (python -m experiments.run)"),

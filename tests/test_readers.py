@@ -62,6 +62,27 @@ def test_a_line_longer_than_the_cap_is_refused_in_one_line(tmp_path):
             read_points(path)
 
 
+@pytest.mark.parametrize("end", ["\r", "\r\n"], ids=["CR", "CRLF"])
+def test_a_large_file_with_cr_or_crlf_line_ends_is_read_and_its_long_line_found(tmp_path, end):
+    """An old Mac export ends its lines with CR alone: a file of them above 64 KiB was one 'line' longer than the cap
+    and refused as not a table; its points are those of the same file with LF, and a line over the cap is still
+    found, on its line (with CR LF too, one pair of which is split between the check's first two 4 MiB blocks)."""
+    lines = ["x,y"] + circle_lines(5000)
+    lf, other = tmp_path / "lf.csv", tmp_path / "other.csv"
+    lf.write_text("\n".join(lines) + "\n", newline="")
+    other.write_text(end.join(lines) + end, newline="")
+    assert other.stat().st_size > 1 << 16
+    np.testing.assert_array_equal(read_points(other), read_points(lf))
+    big = tmp_path / "big.csv"
+    filler = ["1.000000000000,2.000000000000"] * ((1 << 22) // 30 + 7)
+    big.write_text(end.join(["x,y"] + filler + ["0" * (3 * MAX_LINE_CHARS)]) + end, newline="")
+    with big.open("rb") as fh:
+        fh.seek((1 << 22) - 1)
+        assert fh.read(2) == (b"\r\n" if end == "\r\n" else b"\r1")   # a CR LF across the blocks
+    with pytest.raises(DataFileError, match=f"line {len(filler) + 2}: longer than {MAX_LINE_CHARS} characters"):
+        read_points(big)
+
+
 def test_headerless_tab_separated_decimal_commas(tmp_path):
     """'1,5<TAB>2,25' was sniffed as comma-separated (three fields) and refused."""
     t = np.linspace(0, 2 * np.pi, 30, endpoint=False)

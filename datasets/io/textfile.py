@@ -340,18 +340,24 @@ def read_lines(path, missing_hint: str = "give a path or a data set name from 'd
 
 def check_line_lengths(path, skip_rows: int = 0) -> None:
     """Refuse a file holding a line longer than :data:`MAX_LINE_CHARS` bytes (vectorised over 4 MiB blocks),
-    before a parser that reads a whole line into memory sees it (``skip_rows``: as :func:`read_lines`)."""
+    before a parser that reads a whole line into memory sees it (``skip_rows``: as :func:`read_lines`). Lines end
+    as the readers' universal newlines end them: LF, CR LF or a lone CR (an old Mac export)."""
     name = os.fspath(path)
     limit = (MAX_LINE_CHARS + 1) * CODE_UNIT_BYTES.get(file_encoding(name), 1)   # bytes; + 1: a CR before the LF
     with _open_text(name, skip_rows=skip_rows) as text:
         fh = text.buffer
-        lineno, run = 1, 0
+        lineno, run, after_cr = 1, 0, False
         while True:
             block = fh.read(1 << 22)
             if not block:
                 return
             a = np.frombuffer(block, dtype=np.uint8)
-            nl = np.flatnonzero(a == 10)
+            ends = (a == 10) | (a == 13)
+            ends[1:] &= ~((a[1:] == 10) & (a[:-1] == 13))   # CR LF ends one line, at its CR
+            if after_cr and a[0] == 10:   # the LF of a CR LF split between two blocks
+                ends[0] = False
+            after_cr = bool(a[-1] == 13)
+            nl = np.flatnonzero(ends)
             if nl.size == 0:
                 run += a.size
                 if run > limit:

@@ -97,3 +97,22 @@ def test_run_order_words_in_a_long_tables_direction_column_name_the_run_order(tm
     path.write_text("Target (mm),Direction,Run,Deviation (µm)\n" + "".join(
         f"{t:.1f},{w},{r},0.{r}\n" for w in (reverse, forward) for r in (1, 2) for t in TARGETS))
     one_error_line(cli("positioning", path), f"direction {reverse!r} names the run order", "write + or -")
+
+
+@pytest.mark.parametrize("target, run", [("Target / mm", "Run {r} {d} / µm"), ("Target/mm", "Run {r} {d}/um"),
+                                         ("Target in mm", "Run {r} {d} in µm"), ("Position in mm", "Run {r} {d} in nm")])
+def test_din_1313_unit_forms_of_a_wide_export_are_read(tmp_path, target, run):
+    """DIN 1313 writes a unit after '/' or 'in' ('Run 1 + / µm', 'Position in mm'): a wide export named so was
+    refused ('column 'Run 1 + / µm' is neither the target, a direction nor a run'; with 'in', 'the table has the
+    length column(s) 'Target in mm'', blaming the target). Its deviations are read in the header's unit: A equals
+    ISO 230-2's from the runs, computed here."""
+    dev = runs(seed=6)
+    scale = 1e3 if run.endswith("nm") else 1.0
+    head = ";".join([target] + [run.format(r=r, d=d) for r in (1, 2, 3) for d in "+-"])
+    rows = [";".join([f"{t:.4f}"] + [f"{dev[d][i, r] * scale:.3f}" for r in range(3) for d in "+-"])
+            for i, t in enumerate(TARGETS)]
+    path = tmp_path / "din.csv"
+    path.write_text(head + "\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    out = cli("positioning", path, "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-6)

@@ -20,15 +20,19 @@ ANGLE_UNITS = {"deg": "deg", "degree": "deg", "degrees": "deg", "°": "deg", "ra
 
 
 def parse_name(name: str) -> tuple[str, str | None]:
-    """(key, unit) of a header name: the unit in ``()``, ``[]`` or ``{}``, after ``/``, or as a ``_um``-style suffix
-    (``Radial deviation (um)``, ``angle[deg]``, ``dr/µm``, ``radial_deviation_um`` -> ``radialdeviation``,
+    """(key, unit) of a header name: the unit in ``()``, ``[]`` or ``{}``, after ``/`` or a known unit after ``in``
+    (DIN 1313's forms), or as a ``_um``-style suffix (``Radial deviation (um)``, ``angle[deg]``, ``dr/µm``,
+    ``Position in mm``, ``radial_deviation_um`` -> ``radialdeviation``,
     ``µm``); the key in lower case without spaces, ``_``, ``-`` or ``.``. The unit is canonical (``µm``,
     ``deg``) when fitbench knows it, else as written."""
     n = str(name).strip().lower().replace("μ", "µ")
     unit = None
     m = re.fullmatch(r"(.*?)\s*[(\[{]\s*([^)\]}]*?)\s*[)\]}]", n) or re.fullmatch(r"(.*?)\s*/\s*([^/\s]+)", n)
+    in_unit = re.fullmatch(r"(.*?)\s+in\s+([a-zµ°]+)", n)   # DIN 1313's 'Position in mm'
     if m and m.group(1):
         n, unit = m.group(1), m.group(2)
+    elif in_unit and in_unit.group(1) and (in_unit.group(2) in LENGTH_UNITS or in_unit.group(2) in ANGLE_UNITS):
+        n, unit = in_unit.group(1), in_unit.group(2)
     else:
         m = re.fullmatch(r"(.*?)[\s_\-]+([a-zµ°]+)", n)
         if m and m.group(1) and (m.group(2) in LENGTH_UNITS or m.group(2) in ANGLE_UNITS):

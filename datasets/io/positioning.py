@@ -37,7 +37,7 @@ ROLE_WORDS = {"target": "the target positions", "direction": "the approach direc
 RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[]*"
                   r"(\+|-|up|down|dn|u|d|increasing|decreasing|inc|dec|positive|negative|pos|neg|↑|↓|fwd|rev|bwd|"
                   r"forward|reverse|backward|return|hin|rückwärts|rueckwaerts|vorwärts|vorwaerts|rück|rueck|zurück|"
-                  r"zurueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\))?\s*$",
+                  r"zurueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\)|/\s*[^/\s]+|in\s+[a-zµμ°]+)?\s*$",
                   re.IGNORECASE)
 
 

@@ -13,8 +13,14 @@ reproducibility verdict (``experiments.verdict``). Also run at the end of ``pyth
 User text (titles, sections, captions, findings, labels) is text: it never names a file (figures are embedded
 from the files this builder wrote), it is escaped for Markdown, HTML and LaTeX (``experiments.render.page``,
 ``experiments.render.text``). A build deletes only the files its previous build listed in ``.report-build.json``.
+The report is built in a hidden folder and moved into place whole (:func:`build`): an error, Ctrl-C, SIGTERM or SIGHUP
+leaves the folder as it was.
 """
 from __future__ import annotations
+
+if __name__ == "__main__":   # Ctrl-C, SIGTERM, SIGHUP while the command imports its modules: one line, no traceback
+    from fitbench.stopping import quiet_while_starting
+    quiet_while_starting("experiments.report")
 
 import argparse
 import hashlib
@@ -277,20 +283,52 @@ def _previous_build(out: Path) -> list[str]:
     return [f for f in listed if isinstance(f, str) and re.fullmatch(r"(tables|figures)/[\w.-]+|report\.\w+|explorer\.html", f)]
 
 
-def _clear_previous_build(out: Path) -> None:
-    """Remove what the previous build wrote (listed in its manifest) and nothing else: a user's file in
-    ``tables/`` or ``figures/`` is never touched, nor a study's own files when --out is a study folder; a
-    listed name that is now a link or not a regular file is left alone."""
+def _clear_previous_build(out: Path, listed: list[str], keep=()) -> None:
+    """Remove what the previous build wrote (``listed`` in its manifest: :func:`_previous_build`) but ``keep`` (the new
+    build's files) and nothing else: a user's file in ``tables/`` or ``figures/`` is never touched; a listed name that
+    is now a link or not a regular file is left alone."""
     root = out.resolve()
-    for rel in _previous_build(out):
+    for rel in listed:
         p = out / rel
-        if not p.is_symlink() and p.is_file() and root in p.resolve().parents:
+        if rel not in keep and not p.is_symlink() and p.is_file() and root in p.resolve().parents:
             p.unlink()
 
 
 def _write_build_manifest(out: Path, files: list[str]) -> None:
     write_atomic(out / BUILD_MANIFEST, json.dumps({"written_by": "python -m experiments.report", "files": sorted(files)},
                                                   indent=1) + "\n")
+
+
+def _move_into_place(stage: Path, out: Path, files: list[str], done: list) -> None:
+    """Move the build in ``stage`` (``files``, relative paths, and its manifest, last) onto ``out``, then remove what
+    the previous build listed and this one did not write, with the stopping signals deferred until all is done
+    (:func:`fitbench.stopping.signals_deferred`): the folder holds the previous report or the whole new one. Each
+    file replaces its target as :func:`methods.files.write_atomic` does (through a symlink to a regular file, keeping
+    an existing file's mode; a target that is not a regular file is refused). ``done`` gets True once all is in place,
+    before a deferred signal stops the command."""
+    import errno
+    import os
+    import stat
+    from fitbench.stopping import signals_deferred
+    from methods.files import writable_target
+    previous, moves = _previous_build(out), []   # the manifest is replaced below
+    for rel in [*files, BUILD_MANIFEST]:   # every target checked before the first is replaced
+        (out / rel).parent.mkdir(exist_ok=True)
+        moves.append((stage / rel, writable_target(out / rel)))
+    with signals_deferred():
+        for src, target in moves:
+            try:
+                os.chmod(src, stat.S_IMODE(os.stat(target).st_mode))
+            except OSError:
+                pass   # a new file: the mode it was written with
+            try:
+                os.replace(src, target)
+            except OSError as exc:
+                if exc.errno != errno.EXDEV:   # a symlink to another file system: copied there, atomically
+                    raise
+                write_atomic(target, src.read_bytes())
+        _clear_previous_build(out, previous, set(files))
+        done.append(True)
 
 
 def is_default_results(results: Path) -> bool:
@@ -307,7 +345,36 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
 
     Writes report.md, report.html (numbered <figcaption>/<caption>, nav#toc, images embedded), report.tex
     (every table fragment and figure) with tables/*.tex and figures/*.{png,pdf}, and the manifest of what it
-    wrote (the next build deletes only those files). User text is text: see ``experiments.render.page``."""
+    wrote (the next build deletes only those files). User text is text: see ``experiments.render.page``.
+
+    The whole report is built in a hidden folder in ``out`` and moved into place when it is complete
+    (:func:`_move_into_place`): an error, Ctrl-C or SIGTERM before leaves ``out`` as it was (a folder it created
+    removed again); the exception then says whether the report was in place (``report_written``)."""
+    import tempfile
+    out = Path(out)
+    made, done = not out.exists(), []
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        with tempfile.TemporaryDirectory(prefix=".report-build-", dir=out) as stage:
+            written, n_table, n_figure = _build(results, Path(stage), render_latex, render_md)
+            _write_build_manifest(Path(stage), written)
+            _move_into_place(Path(stage), out, written, done)
+    except BaseException as exc:
+        exc.report_written = bool(done)   # a signal deferred while the report moved into place: it is all there
+        if made and not done:
+            for folder in (out / "tables", out / "figures", out):
+                try:
+                    folder.rmdir()   # only when nothing else is in it
+                except OSError:
+                    pass
+        raise
+    log(f"report: {out / 'report.md'}, {out / 'report.html'}, {out / 'report.tex'}, {n_table} tables, {n_figure} figures")
+    return out
+
+
+def _build(results: Path, out: Path, render_latex, render_md) -> tuple[list[str], int, int]:
+    """The report of ``results`` written into the empty folder ``out`` (:func:`build`): (the files written, relative
+    to ``out``; the number of tables; of figures)."""
     from markupsafe import Markup
     from experiments.render.document import write_report_tex
     from experiments.render.markdown import md_code
@@ -316,8 +383,6 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     from experiments.verdict import study_verdicts
 
     render_md = render_md or markdown_table
-    out.mkdir(parents=True, exist_ok=True)
-    _clear_previous_build(out)
     (out / "tables").mkdir(exist_ok=True)
     written: list[str] = []
     known = {}
@@ -534,9 +599,7 @@ def build(results: Path, out: Path, log=print, *, render_latex=latex_fragments, 
     write_report_tex(out, tex_sections, provenance=provenance_text, abstract=abstract, note=quick_note,
                      title="fitbench: comparison report" + (" (quick run, reduced grid)" if folder_quick else ""))
     written += ["report.md", "report.html", "report.tex"]
-    _write_build_manifest(out, written)
-    log(f"report: {out / 'report.md'}, {out / 'report.html'}, {out / 'report.tex'}, {n_table} tables, {n_figure} figures")
-    return out
+    return sorted(set(written)), n_table, n_figure
 
 
 def first_clause(findings: str) -> str:
@@ -772,6 +835,26 @@ def report_clash(results: Path, out: Path) -> str | None:
 
 
 def main(argv=None, prog: str = "python -m experiments.report") -> int:
+    """The command (``prog``: the command named in its usage, ``fitbench report`` from fitbench). A reader of its
+    output that goes (``| head -1``) ends what it prints, not the build (:func:`fitbench.streams.readers_may_go`);
+    Ctrl-C, SIGTERM and SIGHUP end it with one line and 128 + the signal (:func:`fitbench.stopping.stopping_signals`),
+    the report folder as it was (:func:`build`)."""
+    from fitbench.stopping import stopped_status, stopping_signals
+    from fitbench.streams import readers_may_go
+    with readers_may_go():
+        try:
+            with stopping_signals():
+                return _main(argv, prog)
+        except KeyboardInterrupt as exc:
+            what, status = stopped_status(exc)
+            state = ("after the report was written" if getattr(exc, "report_written", False) else
+                     "; no report written (the folder is as it was)")
+            print(f"{chr(10) if status == 130 else ''}experiments.report: {what}{' ' if state[0] != ';' else ''}{state}",
+                  file=sys.stderr)
+            return status
+
+
+def _main(argv, prog: str) -> int:
     parser = argparse.ArgumentParser(prog=prog, description="Build paper/ from results/.")
     from fitbench import __version__
     parser.add_argument("--version", action="version", version=f"%(prog)s (fitbench {__version__})")
@@ -799,9 +882,18 @@ def main(argv=None, prog: str = "python -m experiments.report") -> int:
               f"results.csv or rows.sqlite); give --results the folder python -m experiments.run wrote (its --out)",
               file=sys.stderr)
         return 2
-    build(args.results, args.out)
+    try:
+        build(args.results, args.out)
+    except (OSError, InvalidInputError) as exc:   # a folder not writable, a full disk, a target not a regular file
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        why = (exc.strerror or exc) if isinstance(exc, OSError) else exc
+        print(f"experiments.report: error: cannot write the report into {args.out}: {where}{why}; no report written "
+              "(the folder is as it was)", file=sys.stderr)
+        return 2
     return 0
 
 
 if __name__ == "__main__":
+    from fitbench.stopping import started
+    started()
     sys.exit(main())

@@ -17,9 +17,14 @@ neither folder: only with ``--write-verdict`` is the verdict recorded (atomicall
 the file the report of RESULTS shows (:func:`last_verdict` reads it; ``python -m experiments.run`` records
 its own verdict in ``OUT/verify.json``).
 The comparison itself is :mod:`experiments.compare` (the end of ``python -m experiments.run`` uses it too).
-Exit status: 0 all agree, 1 some values differ, 2 bad input (missing folder or study, unreadable table).
+Exit status: 0 all agree, 1 some values differ, 2 bad input (missing folder or study, unreadable table), 130 / 143 /
+129 stopped by Ctrl-C / SIGTERM / SIGHUP (one line, no verdict written).
 """
 from __future__ import annotations
+
+if __name__ == "__main__":   # Ctrl-C, SIGTERM, SIGHUP while the command imports its modules: one line, no traceback
+    from fitbench.stopping import quiet_while_starting
+    quiet_while_starting("experiments.verify")
 
 import argparse
 import sys
@@ -33,7 +38,9 @@ from experiments.compare import (IDENTITY, WORST_ROWS, compare_study, identity_c
                                  reference_snapshot, verdict_after_run, verify)
 from experiments.verdict import VERDICT_FILE, last_verdict, results_sha256, verdict_markdown  # noqa: F401  (the report's reading side)
 from experiments.verdict import is_project_study, recorded_config
+from experiments.rows import clear_signal
 from fitbench import __version__
+from fitbench.stopping import stopped_status
 from methods import InvalidInputError
 
 
@@ -55,9 +62,16 @@ def config_of(study: str, results: Path, known: dict) -> str:
 
 
 def main(argv=None, prog: str = "python -m experiments.verify") -> int:
-    """The command; a plugin that fails to load is reported in one line, once, as by ``experiments.run``."""
-    with runner.plugin_warnings_once():
-        return _main(argv, prog)
+    """The command; a plugin that fails to load is reported in one line, once, as by ``experiments.run``. A reader
+    of its output that goes (``| head -1``) ends what it prints, not the check (:func:`fitbench.streams.readers_may_go`:
+    the verdict is still written with ``--write-verdict``, exit status as the verdict); Ctrl-C, SIGTERM and SIGHUP
+    stop it as they stop a run (``experiments.run``'s handlers: the studies it runs stop between rows) with one line
+    and 128 + the signal, the temporary run removed."""
+    from fitbench.streams import readers_may_go
+    with readers_may_go(), runner.plugin_warnings_once():
+        clear_signal()   # a new check in this process: no interrupt received yet
+        with runner._interrupts_are_the_run_s():
+            return _main(argv, prog)
 
 
 def _main(argv, prog: str) -> int:
@@ -76,6 +90,7 @@ def _main(argv, prog: str) -> int:
                              "(default: print it, write nothing)")
     args = parser.parse_args(argv)
     results = args.results or (Path("results/quick") if args.quick else Path("results"))
+    verdict_before = _stat(results / VERDICT_FILE)
     try:
         if not results.is_dir():
             raise InvalidInputError(f"--results {results} is not a folder of committed results"
@@ -130,11 +145,26 @@ def _main(argv, prog: str) -> int:
     except InvalidInputError as exc:
         print(f"experiments.verify: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("\nexperiments.verify: interrupted; no verdict written", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:   # Ctrl-C, SIGTERM, SIGHUP
+        what, status = stopped_status(exc)
+        written = args.write_verdict and _stat(results / VERDICT_FILE) != verdict_before
+        print(f"{chr(10) if status == 130 else ''}experiments.verify: {what}"
+              + (f" after the verdict was written to {results / VERDICT_FILE}" if written else "; no verdict written"),
+              file=sys.stderr)
+        return status
     return 0 if verdict["agree"] else 1
 
 
+def _stat(path: Path) -> tuple | None:
+    """(inode, modification time, size) of ``path``, None when it is not there: a verdict written since differs."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return st.st_ino, st.st_mtime_ns, st.st_size
+
+
 if __name__ == "__main__":
+    from fitbench.stopping import started
+    started()
     sys.exit(main())

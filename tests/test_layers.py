@@ -7,8 +7,9 @@ call), and ``methods`` imports no argparse, matplotlib, datasets, experiments or
 ``fitbench.plots`` (matplotlib figures of results) sits below ``experiments`` because the studies draw their
 example figures with it; it imports nothing above ``datasets``. The ``fitbench`` package module itself holds
 the one version number and imports nothing, so every layer may read ``fitbench.__version__``; ``fitbench.threads``
-(the numerical libraries' thread count) and ``fitbench.streams`` (stdout sent to stderr), the standard library only,
-sit below every layer likewise, for the CLI and the engine. A ``__main__`` module is a program (``python -m
+(the numerical libraries' thread count), ``fitbench.streams`` (stdout sent to stderr) and ``fitbench.stopping`` (SIGTERM
+and SIGHUP stopping a command as Ctrl-C does), the standard library only, sit below every layer likewise, for the CLI,
+the engine and the experiment commands. A ``__main__`` module is a program (``python -m
 methods`` runs the fitbench command line), not a module anything imports, so it is not part of the graph.
 """
 from __future__ import annotations
@@ -20,7 +21,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ("methods", "datasets", "experiments", "fitbench")
 #: layer of a module: the longest matching prefix decides
-LAYERS = {"fitbench.threads": -1, "fitbench.streams": -1, "methods": 0, "datasets": 1, "fitbench.plots": 2, "experiments": 3, "fitbench": 4}
+LAYERS = {"fitbench.threads": -1, "fitbench.streams": -1, "fitbench.stopping": -1, "methods": 0, "datasets": 1, "fitbench.plots": 2, "experiments": 3, "fitbench": 4}
 FORBIDDEN_IN_METHODS = {"argparse", "matplotlib", "datasets", "experiments", "fitbench"}
 
 

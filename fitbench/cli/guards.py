@@ -2,14 +2,16 @@
 modules call :func:`run_method`): one BLAS/OpenMP thread, what is printed to stdout sent to stderr (a method's
 prints, a ``--json`` command's stray output), a method's own exception turned into one line (:class:`MethodFailed`),
 the output files checked before anything is computed (:func:`check_outputs`: none may be an input or another
-output) and written together when the command has ended (:func:`staged_outputs`), and results turned into JSON-ready
-values (:func:`jsonable`)."""
+output) and written together when the command has ended (:func:`staged_outputs`; SIGTERM and SIGHUP stop it as
+Ctrl-C does: :func:`fitbench.stopping.stopping_signals`), and results turned into JSON-ready values
+(:func:`jsonable`)."""
 from __future__ import annotations
 
 import contextlib
 import os
 from pathlib import Path
 
+from fitbench.stopping import STOPPING_SIGNALS, Terminated, _signals_held, _stop, stopping_signals  # noqa: F401
 from fitbench.streams import stdout_to_stderr
 from fitbench.threads import one_thread_environment
 from methods import InvalidInputError, exception_call, exception_text
@@ -177,84 +179,6 @@ def commit_outputs() -> None:
         raise InvalidInputError(f"cannot write {exc.filename}: {exc.strerror or exc}; "
                                 + (f"written: {', '.join(files.written)}; " if files.written else "")
                                 + f"not written: {', '.join(left)}") from None
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM or SIGHUP (a job scheduler's kill, a closed terminal) while a command runs, taken as Ctrl-C is
-    (:func:`stopping_signals`): ``signum``, the signal's number."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
-
-
-#: the signals that stop a command as Ctrl-C does (its staged outputs removed on the way out)
-STOPPING_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
-#: while outputs are moved into place or removed (:func:`_signals_held`): the stopping signals that arrived, else None
-_HELD: list | None = None
-#: the stopping signal that was raised as an exception in the running command (:func:`stopping_signals`), else None
-_STOPPED_BY: int | None = None
-
-
-def _interruption(signum: int) -> KeyboardInterrupt:
-    import signal
-    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
-
-
-def _stop(signum, frame):
-    global _STOPPED_BY
-    if _HELD is not None:   # the outputs are being moved or removed: that ends first, then the command stops
-        _HELD.append(signum)
-        return
-    _STOPPED_BY = signum
-    raise _interruption(signum)
-
-
-@contextlib.contextmanager
-def stopping_signals():
-    """Inside the block, SIGTERM and SIGHUP raise :class:`Terminated` where the command is, as SIGINT raises
-    KeyboardInterrupt, so :func:`staged_outputs` removes the temporaries on the way out (the default action of both
-    ends the process at once and left them in the user's folder); a signal arriving while the outputs are moved
-    into place or removed waits until that is done. A signal the process ignores (``nohup``'s SIGHUP) or has its
-    own handler for stays as it is; outside the main thread nothing changes (only it may set handlers)."""
-    global _STOPPED_BY
-    import signal
-    import threading
-    saved = {}
-    if threading.current_thread() is threading.main_thread():
-        for name in STOPPING_SIGNALS:
-            num = getattr(signal, name, None)
-            if num is not None and signal.getsignal(num) in (signal.SIG_DFL, signal.default_int_handler):
-                saved[num] = signal.signal(num, _stop)
-    stopped, _STOPPED_BY = _STOPPED_BY, None
-    try:
-        yield
-    except Exception as exc:
-        if _STOPPED_BY is None:
-            raise
-        # compiled code the signal's exception was raised in turned it into its own (matplotlib's renderer: a
-        # ValueError 'Invalid bounding box'): the command was stopped all the same
-        raise _interruption(_STOPPED_BY) from exc
-    finally:
-        _STOPPED_BY = stopped
-        for num, old in saved.items():
-            signal.signal(num, old)
-
-
-@contextlib.contextmanager
-def _signals_held():
-    """Inside the block a stopping signal (:func:`stopping_signals`) is held; at its end it stops the command
-    (unless the block failed: that failure is what the command reports)."""
-    global _HELD
-    saved, _HELD = _HELD, []
-    try:
-        yield
-    finally:
-        held, _HELD = _HELD, saved
-    if held and saved is not None:
-        saved.extend(held)
-    elif held:
-        _stop(held[0], None)
 
 
 @contextlib.contextmanager

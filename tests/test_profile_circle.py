@@ -41,3 +41,13 @@ def test_the_points_and_their_circle():
     layout = Layout(name="p.csv", sep=",", decimal_comma=False, header=["x", "y"], header_line=1, first_data_line=2,
                     ncol=2, comment="#")
     assert xy_beyond_one_revolution(layout, ring(), (np.nan, np.nan, np.nan)) is None
+
+
+@pytest.mark.parametrize("points", [np.c_[np.arange(10.0), 2 * np.arange(10.0)], np.ones((6, 2))],
+                         ids=["collinear", "coincident"])
+def test_points_on_a_line_have_no_circle(points):
+    """Exactly collinear (or coincident) points have no circle: the least-squares system is rank-deficient, and its
+    minimum-norm solution was a finite made-up circle ((i, 2i): centre (2.5, 5), r 3.82) that the checks measured
+    the profile about."""
+    assert np.isnan(circle_through(points)).all()
+    assert profile_circle(points) is None

@@ -154,9 +154,9 @@ def circle_through(points) -> tuple[float, float, float]:
     m = p.mean(axis=0)
     q = p - m
     a = np.column_stack([2 * q, np.ones(len(q))])
-    sol, *_ = np.linalg.lstsq(a, np.einsum("ij,ij->i", q, q), rcond=None)
+    sol, _, rank, _ = np.linalg.lstsq(a, np.einsum("ij,ij->i", q, q), rcond=None)
     r2 = sol[2] + sol[0] ** 2 + sol[1] ** 2
-    if not (np.isfinite(sol).all() and r2 > 0):
+    if rank < 3 or not (np.isfinite(sol).all() and r2 > 0):   # collinear (or coincident) points: no circle
         return np.nan, np.nan, np.nan
     return float(m[0] + sol[0]), float(m[1] + sol[1]), float(np.sqrt(r2))
 

@@ -117,6 +117,22 @@ def test_servo_mismatch_without_feed_is_a_radial_amplitude():
     assert dg["cyclic_error"]["value"] is None and "pitch" in dg["cyclic_error"]["note"]
 
 
+def test_servo_mismatch_contributes_its_lag_length_with_or_without_the_feed():
+    """A servo mismatch d = v (tau_x - tau_y) makes the radial deviation (d / 2) sin 2 theta: its contribution (the
+    ranking's peak-to-valley) is |d| whether it is given in µm (no feed) or in ms (with the feed), and equals the
+    radial span of noise-free runs with that lag alone about the nominal centre. Without the feed it was 2 |d|
+    (13.3 µm for a 0.2 ms mismatch at 2000 mm/min, whose runs span 6.7 µm)."""
+    from fitbench.plots.circular_test import contribution_um
+    cw, ccw, _ = circular_test(COND, MachineErrors(lag_x=0.0001, lag_y=-0.0001), seed=7)  # no common lag
+    d_um = 2000.0 / 60.0 * 0.0002 * 1e3
+    span_um = ptp_about(cw, COND.nominal_center) * 1e3
+    assert span_um == pytest.approx(d_um, rel=0.01)
+    for feed in (None, 2000.0):
+        dg = diagnose(cw, ccw, 150.0, COND.nominal_center, feed_mm_min=feed)
+        got = contribution_um("servo_mismatch", dg["servo_mismatch"], 150.0, feed)
+        assert got == pytest.approx(d_um, rel=0.01), (feed, got, dg["servo_mismatch"])
+
+
 def test_lola_scenario_paths_are_the_papers_ellipse():
     """Tables 3-5: p_x - p_y = 22.1 um, inclination 32.04 deg, the same in both directions."""
     import methods

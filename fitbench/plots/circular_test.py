@@ -70,9 +70,10 @@ TO_JSON = {"um": (1e-3, "mm"), "urad": (1e-6, "rad"), "um/m": (1e-6, "1 (m/m)"),
 
 def contribution_um(name: str, item: dict, R_mm: float, feed_mm_min: float | None) -> float | None:
     """Peak-to-valley of the radial deviation a source causes on the circle (µm): the ranking of the report.
-    Squareness a and scale mismatch s give R a / 2 and R s / 2 amplitude (peak-to-valley R a, R s); servo
-    mismatch tau gives w R tau (w = feed / R) peak-to-valley; backlash b of an axis a step of b; a spike or
-    cyclic error of amplitude h about h (spike) and 2 h (cyclic)."""
+    Squareness a and scale mismatch s give R a / 2 and R s / 2 amplitude (peak-to-valley R a, R s); a servo
+    mismatch d = l_x - l_y of the axes' lag lengths (given in µm, or as tau in ms with the feed v: d = v tau) gives
+    (d / 2) sin 2 theta (``methods.circular_test.diagnostics``), peak-to-valley |d|; backlash b of an axis a step of
+    b; a spike or cyclic error of amplitude h about h (spike) and 2 h (cyclic)."""
     v = item.get("value")
     if v is None:
         return None
@@ -83,7 +84,7 @@ def contribution_um(name: str, item: dict, R_mm: float, feed_mm_min: float | Non
     if name == "servo_mismatch":
         if item["unit"] == "ms" and feed_mm_min:
             return abs(v) * 1e-3 * (feed_mm_min / 60.0) * 1e3
-        return 2 * abs(v)
+        return abs(v)   # the lag length difference itself
     if name == "cyclic_error":
         return 2 * abs(v)
     return abs(v)

@@ -840,18 +840,22 @@ def main(argv=None, prog: str = "python -m experiments.report") -> int:
     Ctrl-C, SIGTERM and SIGHUP end it with one line and 128 + the signal (:func:`fitbench.stopping.stopping_signals`),
     the report folder as it was (:func:`build`)."""
     from fitbench.stopping import stopped_status, stopping_signals
-    from fitbench.streams import readers_may_go
-    with readers_may_go():
-        try:
-            with stopping_signals():
-                return _main(argv, prog)
-        except KeyboardInterrupt as exc:
-            what, status = stopped_status(exc)
-            state = ("after the report was written" if getattr(exc, "report_written", False) else
-                     "; no report written (the folder is as it was)")
-            print(f"{chr(10) if status == 130 else ''}experiments.report: {what}{' ' if state[0] != ';' else ''}{state}",
-                  file=sys.stderr)
-            return status
+    from fitbench.streams import OutputError, readers_may_go
+    try:
+        with readers_may_go():
+            try:
+                with stopping_signals():
+                    return _main(argv, prog)
+            except KeyboardInterrupt as exc:
+                what, status = stopped_status(exc)
+                state = ("after the report was written" if getattr(exc, "report_written", False) else
+                         "; no report written (the folder is as it was)")
+                print(f"{chr(10) if status == 130 else ''}experiments.report: {what}"
+                      f"{' ' if state[0] != ';' else ''}{state}", file=sys.stderr)
+                return status
+    except OutputError as exc:   # `> /dev/full`: what it printed is lost, the report is as the build left it
+        print(f"experiments.report: error: cannot write {exc.filename}: {exc.strerror}", file=sys.stderr)
+        return 2
 
 
 def _main(argv, prog: str) -> int:

@@ -526,11 +526,15 @@ def main(argv=None, prog: str = "python -m experiments.run") -> int:
     """The command line as a function (exit status returned; ``prog``: the command named in its usage, ``fitbench
     run`` from fitbench); the ``--out`` lock it takes is released when it returns, however it ends, so a second call
     in the same process can write to the same folder."""
-    from fitbench.streams import readers_may_go
+    from fitbench.streams import OutputError, readers_may_go
     held = len(_LOCKS)
     try:   # `... | head -1`: the reader going ends what the run prints, not the run (its rows and outputs, exit 0)
         with readers_may_go(), plugin_warnings_once(), fewer_collections():
             return _main(argv, prog)
+    except OutputError as exc:   # `> /dev/full`, found when the last lines are written
+        print(f"experiments.run: error: cannot write {exc.filename}: {exc.strerror}; the finished rows and outputs are "
+              f"kept", file=sys.stderr)
+        return 2
     finally:
         release_locks(held)
 

@@ -67,11 +67,15 @@ def main(argv=None, prog: str = "python -m experiments.verify") -> int:
     the verdict is still written with ``--write-verdict``, exit status as the verdict); Ctrl-C, SIGTERM and SIGHUP
     stop it as they stop a run (``experiments.run``'s handlers: the studies it runs stop between rows) with one line
     and 128 + the signal, the temporary run removed."""
-    from fitbench.streams import readers_may_go
-    with readers_may_go(), runner.plugin_warnings_once():
-        clear_signal()   # a new check in this process: no interrupt received yet
-        with runner._interrupts_are_the_run_s():
-            return _main(argv, prog)
+    from fitbench.streams import OutputError, readers_may_go
+    try:
+        with readers_may_go(), runner.plugin_warnings_once():
+            clear_signal()   # a new check in this process: no interrupt received yet
+            with runner._interrupts_are_the_run_s():
+                return _main(argv, prog)
+    except OutputError as exc:   # `> /dev/full`: the verdict is not told, so the check does not pass
+        print(f"experiments.verify: error: cannot write {exc.filename}: {exc.strerror}", file=sys.stderr)
+        return 2
 
 
 def _main(argv, prog: str) -> int:

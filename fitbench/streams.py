@@ -68,6 +68,8 @@ class _ReaderMayGo(io.TextIOWrapper):
         except BrokenPipeError:   # what is still buffered goes to the sink at the next flush
             self._reader_gone()
             return len(s)
+        except OSError as exc:
+            raise self._cannot_write(exc) from None
 
     def flush(self) -> None:
         try:
@@ -75,6 +77,25 @@ class _ReaderMayGo(io.TextIOWrapper):
         except BrokenPipeError:
             self._reader_gone()
             super().flush()
+        except OSError as exc:
+            raise self._cannot_write(exc) from None
+
+    def _cannot_write(self, exc: OSError) -> "OutputError":
+        """The descriptor refuses what is written (a full disk, ``> /dev/full``, an I/O error): not a reader that went.
+        What is buffered goes to the sink (it cannot be written; the interpreter's flush at exit would fail again)
+        and the caller is told (:class:`OutputError`)."""
+        if not self.gone:
+            self.gone = True
+            _sink(self._fd)
+            with contextlib.suppress(OSError):
+                super().flush()
+        return OutputError(exc.errno, exc.strerror or str(exc), f"standard {'output' if self._fd == 1 else 'error'}")
+
+
+class OutputError(OSError):
+    """Standard output or error could not be written (a full disk, ``> /dev/full``, an I/O error), unlike a reader
+    that went (:func:`readers_may_go`): the command ends with one line and a non-zero status (``filename``: which
+    stream)."""
 
 
 def _sink(fd: int) -> None:
@@ -91,7 +112,9 @@ def readers_may_go():
     """Inside the block, ``sys.stdout`` and ``sys.stderr`` (when they are the process's own, on a descriptor) write
     through :class:`_ReaderMayGo`: a reader closing the pipe early (``| head -1``, ``2>&1 | head``) ends what the
     command prints, not the command (its computation and output files go on; Python would raise
-    :class:`BrokenPipeError` at whichever print flushed next). The old streams are back when it ends."""
+    :class:`BrokenPipeError` at whichever print flushed next). The old streams are back when it ends. A stream that
+    cannot be written for another reason (``> /dev/full``) raises :class:`OutputError` where it is written, or when
+    the block ends."""
     swapped = []
     for name in ("stdout", "stderr"):
         stream = getattr(sys, name)
@@ -109,11 +132,16 @@ def readers_may_go():
         guarded = _ReaderMayGo(fd, stream)
         setattr(sys, name, guarded)
         swapped.append((name, stream, guarded))
+    failed = None
     try:
         yield
     finally:
         for name, stream, guarded in reversed(swapped):
             try:
                 guarded.flush()
+            except OutputError as exc:   # raised when the block ends (an exception of the block's own goes first)
+                failed = failed or exc
             finally:
                 setattr(sys, name, stream)
+    if failed is not None:
+        raise failed

@@ -22,7 +22,7 @@ import sys
 import warnings
 
 import fitbench.cli.options as cli_options
-from fitbench.streams import readers_may_go
+from fitbench.streams import OutputError, readers_may_go
 from methods import InvalidInputError
 from fitbench.cli.options import version, warn
 # the guards, and the names other modules and tests import from here
@@ -151,8 +151,12 @@ def main(argv=None, prog: str = "fitbench", extra_commands: dict | None = None) 
     """The command ``prog`` (``fitbench``, or ``python -m methods`` without the experiment subcommands): error
     and warning lines start with ``prog`` (:data:`fitbench.cli.options.PROGRAM`)."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    with readers_may_go():   # `fitbench ... | head -1`: the command still ends, its files written, exit 0
-        return _main(argv, prog, extra_commands)
+    try:
+        with readers_may_go():   # `fitbench ... | head -1`: the command still ends, its files written, exit 0
+            return _main(argv, prog, extra_commands)
+    except OutputError as exc:   # `> /dev/full`: its staged output files are not written
+        print(f"{prog}: error: cannot write {exc.filename}: {exc.strerror}", file=sys.stderr)
+        return EXIT_BAD_INPUT
 
 
 def _main(argv, prog, extra_commands) -> int:

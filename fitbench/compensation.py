@@ -24,6 +24,10 @@ The table (``compensation_table``) is one equally spaced grid for every format:
 * the mean reversal value B = mean over the targets of (x_up - x_down) (ISO 230-2:2014 sec. 2.17, exactly
   the figure of the ISO table) is not in the table: controllers take the backlash as a separate parameter,
   and the header says what to enter (-B; see ``_backlash_line``).
+* ``per_direction`` (``--compensation-directions both``, a bidirectional test): a table per direction as well,
+  compensation_up_mm / compensation_down_mm = -(x_up / x_down(P) - x(R)), which hold the reversal B_i at every point
+  (no backlash with them): for a reversal that varies along the travel, which the mean table with one backlash
+  leaves as (B_i - B)/2 in each direction. csv columns, a FANUC bidirectional pitch-error tape; no SINUMERIK file.
 
 Formats (``WRITERS``; each checks the axis name against its grammar and its controller's limits, and
 refuses what does not fit with one line saying what to change): ``csv``, ``siemens-eec``, ``fanuc-pitch``.
@@ -96,13 +100,18 @@ def _grid_range(ref_q: int, lo_q: int, hi_q: int, step_q: int) -> tuple[int, int
 
 
 def compensation_table(res, data, *, interval: float | None = None, source: str = "model",
-                       reference_mm: float | None = None, formats=(), quantum_q: int = AUTO_QUANTUM):
+                       reference_mm: float | None = None, formats=(), quantum_q: int = AUTO_QUANTUM,
+                       per_direction: bool = False):
     """The table (see the module docstring) as a DataFrame with columns position_mm, deviation_mm,
     deviation_up_mm, deviation_down_mm, compensation_mm and the grid in ``.attrs``. ``res`` is a
     positioning.gls_polynomial result (or positioning.iso230_2 with ``source='mean'``), ``data`` its input.
     ``formats``: the formats it is written in; the coarse-interval guard checks the table as each one's controller
     applies it (:data:`APPLIED`; none given: linearly). ``quantum_q``: an automatic or suggested step is a multiple
-    of it (x 1e-6 mm; 0.001 mm, or 0.0001 in = 2540 for a FANUC inch machine, whose 3624 counts 0.0001 in)."""
+    of it (x 1e-6 mm; 0.001 mm, or 0.0001 in = 2540 for a FANUC inch machine, whose 3624 counts 0.0001 in).
+    ``per_direction`` (a bidirectional test only): also the columns compensation_up_mm = -(x_up(P) - x(R)) and
+    compensation_down_mm = -(x_down(P) - x(R)), a table per direction relative to the mean deviation at R (their
+    mean is compensation_mm), from the model's curve of each direction or each direction's means at the targets;
+    the interval guard then checks every curve written (mean, up, down)."""
     import pandas as pd  # loaded when a table is made (the fitbench command stays light)
     P = np.asarray(data.targets, float)
     if P.size < 2 or not np.all(np.diff(P) > 0):
@@ -112,6 +121,8 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
         raise InvalidInputError(f"--compensation-from must be 'model' or 'mean', got {source!r}")
     if source == "model" and not getattr(res, "polynomial", None):
         raise InvalidInputError("--compensation-from model needs the GLS polynomial (positioning.gls_polynomial)")
+    if per_direction and len(data.directions) != 2:
+        raise InvalidInputError(one_direction_refusal(data))
     if reference_mm is None:
         reference_mm = 0.0 if first <= 0.0 <= last else (first if abs(first) <= abs(last) else last)
     ref = float(reference_mm)
@@ -144,20 +155,34 @@ def compensation_table(res, data, *, interval: float | None = None, source: str 
     down = curves.get("down", np.full_like(pos, np.nan))
     mean = np.mean([curves[d] for d in dirs], axis=0)
     rules = sorted({APPLIED.get(f, "linear") for f in formats} or {"linear"})
+    which = ("mean", "up", "down") if per_direction else ("mean",)
+    tables = {"mean": mean, "up": up, "down": down}
     if interval is not None:
-        _check_represents(res, data, source, pos, mean, step_q * NM, ref_q, lo_q, hi_q, rules, formats, quantum_q)
+        _check_represents(res, data, source, pos, tables, step_q * NM, ref_q, lo_q, hi_q, rules, formats, quantum_q,
+                          which)
     else:
-        _warn_if_missed(res, data, source, pos, mean, step_q * NM, -k_lo, rules, formats)
+        _warn_if_missed(res, data, source, pos, tables, step_q * NM, -k_lo, rules, formats, which)
     at_ref = float(mean[-k_lo])
     table = pd.DataFrame({"position_mm": pos, "deviation_mm": mean, "deviation_up_mm": up,
                           "deviation_down_mm": down, "compensation_mm": -(mean - at_ref)})
+    if per_direction:
+        table["compensation_up_mm"] = -(up - at_ref)
+        table["compensation_down_mm"] = -(down - at_ref)
     backlash = (float(np.mean(data.up.mean(axis=1) - data.down.mean(axis=1))) if len(dirs) == 2 else float("nan"))
     table.attrs.update(interval_mm=step_q * NM, step_q=int(step_q), first_q=int(pos_q[0]), last_q=int(pos_q[-1]),
                        reference_q=ref_q, reference_index=int(-k_lo), measured_mm=(first, last), source=source,
                        deviation_at_reference_mm=at_ref, backlash_mm=backlash, directions=tuple(dirs),
                        direction_given=bool(getattr(data, "direction_given", True)), thermal_note=thermal_line(data),
-                       quantum_q=int(quantum_q))
+                       quantum_q=int(quantum_q), per_direction=bool(per_direction))
     return table
+
+
+def one_direction_refusal(data) -> str:
+    """The one line refusing per-direction tables for a unidirectional test."""
+    d = data.directions[0] if data.directions else "one"
+    return (f"--compensation-directions both needs a bidirectional test and this one has only the "
+            f"{d if getattr(data, 'direction_given', True) else 'one'} direction: drop --compensation-directions "
+            "(its table is that direction's)")
 
 
 #: a table given by --interval must reproduce the curve at the targets, as each requested format's controller applies
@@ -199,18 +224,28 @@ def applied(pos, values, x, rule: str, ref_index: int):
     return np.asarray(values)[np.clip(k, 0, len(pos) - 1)]
 
 
-def _miss(res, data, source: str, pos, mean, rule: str = "linear", ref_index: int = 0) -> tuple[float, float]:
-    """(largest miss at the targets of the table as a controller applies it by ``rule`` (:func:`applied`), the
-    span of the curve there), mm."""
+def _miss(res, data, source: str, pos, values, rule: str = "linear", ref_index: int = 0,
+          curve: str = "mean") -> tuple[float, float]:
+    """(largest miss at the targets of the table ``values`` of ``curve`` (mean, up or down) as a controller applies it
+    by ``rule`` (:func:`applied`), the span of that curve there), mm."""
     P = np.asarray(data.targets, float)
     curves = _curves(res, data, source, P)
-    truth = np.mean([curves[d] for d in data.directions], axis=0)
-    return float(np.max(np.abs(applied(pos, mean, P, rule, ref_index) - truth))), float(np.ptp(truth))
+    truth = np.mean([curves[d] for d in data.directions], axis=0) if curve == "mean" else curves[curve]
+    return float(np.max(np.abs(applied(pos, values, P, rule, ref_index) - truth))), float(np.ptp(truth))
 
 
-def _worst_miss(res, data, source, pos, mean, ref_index, rules):
-    """(miss, span, rule) of the rule under which the table misses the curve at the targets most."""
-    return max((*_miss(res, data, source, pos, mean, r, ref_index), r) for r in rules)
+def _worst_miss(res, data, source, pos, tables, ref_index, rules, which=("mean",)):
+    """(miss, span, rule, curve) of the rule and curve under which the table misses the curve at the targets most,
+    relative to the bound (``tables``: {curve: values}; a bare array is the mean table)."""
+    if not isinstance(tables, dict):
+        tables = {"mean": tables}
+    found = [(*_miss(res, data, source, pos, tables[c], r, ref_index, c), r, c) for r in rules for c in which]
+    return max(found, key=lambda f: (f[0] / max(REPRESENT_SHARE * f[1], REPRESENT_FLOOR_MM), f[0], f[1], f[2]))
+
+
+def _curve_name(curve: str) -> str:
+    """'' for the mean table (its messages as they were), ' of the up direction' for a direction's."""
+    return "" if curve == "mean" else f" of the {curve} direction"
 
 
 def _formats_of(rule: str, formats) -> str:
@@ -218,28 +253,29 @@ def _formats_of(rule: str, formats) -> str:
     return f" for {', '.join(names)}" if names else ""
 
 
-def _warn_if_missed(res, data, source, pos, mean, step, ref_index=0, rules=("linear",), formats=()) -> None:
+def _warn_if_missed(res, data, source, pos, mean, step, ref_index=0, rules=("linear",), formats=(),
+                    which=("mean",)) -> None:
     """The default table is not refused (no step is asked for), but a table that misses the curve at the targets
     beyond the bound of ``_check_represents`` is warned about: means at irregular targets with a periodic error
     are a broken line that an equally spaced grid cannot pass through (up to 36 % of the span)."""
     import warnings
-    miss, span, rule = _worst_miss(res, data, source, pos, mean, ref_index, rules)
+    miss, span, rule, curve = _worst_miss(res, data, source, pos, mean, ref_index, rules, which)
     if miss > max(REPRESENT_SHARE * span, REPRESENT_FLOOR_MM):
         what = "the model" if source == "model" else "the means"
-        warnings.warn(f"the compensation table{_formats_of(rule, formats)} (every {step:g} mm, equally spaced as the "
+        warnings.warn(f"the compensation table{_curve_name(curve)}{_formats_of(rule, formats)} (every {step:g} mm, equally spaced as the "
                       f"controllers require), {HOW_APPLIED[rule]}, misses {what} at the targets by up to {miss * 1e3:.3g} µm of the {span * 1e3:.3g} µm the curve spans: "
                       "the controller will not reproduce the measured curve there; a finer --interval follows it "
                       "closer", UserWarning, stacklevel=3)
 
 
 def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q, rules=("linear",), formats=(),
-                      quantum_q: int = AUTO_QUANTUM) -> None:
+                      quantum_q: int = AUTO_QUANTUM, which=("mean",)) -> None:
     """Refuse an ``--interval`` whose table, as the controller interpolates it, misses the measured curve at the
     targets by more than REPRESENT_SHARE of its span (a coarse step: --interval 700 left 15.6 of 22.6 µm),
     naming the coarsest step of the form travel / k that would do."""
     P = np.asarray(data.targets, float)
     ref_index = int(round((ref_q * NM - pos[0]) / step))
-    miss, span, rule = _worst_miss(res, data, source, pos, mean, ref_index, rules)
+    miss, span, rule, curve = _worst_miss(res, data, source, pos, mean, ref_index, rules, which)
     tol = max(REPRESENT_SHARE * span, REPRESENT_FLOOR_MM)
     travel = float(P[-1] - P[0])
     if miss <= tol and step <= travel:
@@ -253,13 +289,15 @@ def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q, rul
             continue
         k_lo, k_hi = _grid_range(ref_q, lo_q, hi_q, q)
         g = (ref_q + q * np.arange(k_lo, k_hi + 1, dtype=np.int64)) * NM
-        m = np.mean(list(_curves(res, data, source, g).values()), axis=0)
-        if _worst_miss(res, data, source, g, m, -k_lo, rules)[0] <= tol:
+        cv = _curves(res, data, source, g)
+        m = {"mean": np.mean(list(cv.values()), axis=0), **cv}
+        worst = _worst_miss(res, data, source, g, m, -k_lo, rules, which)
+        if worst[0] <= max(REPRESENT_SHARE * worst[1], REPRESENT_FLOOR_MM):
             ok = q * NM
             break
     what = "the model" if source == "model" else "the means"
     why = (f"longer than the measured travel ({travel:g} mm)" if step > travel else
-           f"too coarse: the table{_formats_of(rule, formats)}, {HOW_APPLIED[rule]}, misses {what} at the "
+           f"too coarse: the table{_curve_name(curve)}{_formats_of(rule, formats)}, {HOW_APPLIED[rule]}, misses {what} at the "
            f"targets by up to {miss * 1e3:.3g} µm of the {span * 1e3:.3g} µm the curve spans (at most "
            f"{tol * 1e3:.3g} µm, {REPRESENT_SHARE:.0%})")
     advice = (f"give --interval {ok:g} or finer" if ok else "give a finer --interval")
@@ -268,7 +306,7 @@ def _check_represents(res, data, source, pos, mean, step, ref_q, lo_q, hi_q, rul
 
 
 # --------------------------------------------------------------------------------------------- header
-def _header(table, axis: str, values: str) -> list[str]:
+def _header(table, axis: str, values: str, backlash: str | None = None) -> list[str]:
     """The lines every format carries (ASCII, without the comment mark): what the table covers, the
     reference point, the sign of the values, the backlash to enter and the verification run."""
     a = table.attrs
@@ -278,7 +316,8 @@ def _header(table, axis: str, values: str) -> list[str]:
            + ("held at the model's values at the end targets" if a["source"] == "model"
               else "held at the end targets' means")
            if (lo < first - 1e-9 or hi > last + 1e-9) else "no point beyond the targets")
-    what = ("mean bidirectional deviation" if len(a["directions"]) == 2
+    what = ("deviation of each direction and the mean bidirectional deviation" if a.get("per_direction") else
+            "mean bidirectional deviation" if len(a["directions"]) == 2
             else f"deviation of the one direction measured, "
                  f"{a['directions'][0] if a.get('direction_given', True) else 'direction not given'},")
     return ([a["warning"]] if a.get("warning") else []) + ([a["thermal_note"]] if a.get("thermal_note") else []) + \
@@ -290,7 +329,7 @@ def _header(table, axis: str, values: str) -> list[str]:
             f"{a['deviation_at_reference_mm'] * 1e3:.3f} um there" + (f"; {outside_reference(table)}"
                                                                       if outside_reference(table) else ""),
             f"values: {values}",
-            _backlash_line(table),
+            backlash or _backlash_line(table),
             "check the result with a verification run after loading"]
 
 
@@ -347,13 +386,29 @@ def write_csv(table, axis: str | None = "X") -> str:
     deviation_mm, deviation_up_mm, deviation_down_mm (ISO 230-2 deviations as measured; empty for a
     direction not measured) and compensation_mm = -(deviation_mm - deviation at the reference point), the
     value to **add to the commanded position** (a controller that adds it reaches the target). Numbers
-    with 6 decimals in mm, never -0.000000. ``axis`` None: the header says 'axis not given'."""
+    with 6 decimals in mm, never -0.000000. ``axis`` None: the header says 'axis not given'.
+
+    A per-direction table (``compensation_table(per_direction=True)``) adds compensation_up_mm and
+    compensation_down_mm, what to add in travel in the positive / negative direction: minus each direction's
+    deviation relative to the mean deviation at the reference point, so that they hold the reversal B_i at every
+    point (their mean is compensation_mm); with them no backlash is entered, with compensation_mm alone -B."""
     axis = NOT_GIVEN if axis is None else check_axis(axis, "csv")
-    lines = ["# " + h for h in _header(table, axis, "compensation_mm is added to the commanded position; "
-                                                    "it is minus the deviation relative to the reference point")]
-    lines.append("position_mm,deviation_mm,deviation_up_mm,deviation_down_mm,compensation_mm")
     a = table.attrs
-    cols = [table[c].to_numpy() for c in ("deviation_mm", "deviation_up_mm", "deviation_down_mm", "compensation_mm")]
+    names = ["deviation_mm", "deviation_up_mm", "deviation_down_mm", "compensation_mm"]
+    values = "compensation_mm is added to the commanded position; it is minus the deviation relative to the reference point"
+    backlash = None
+    if a.get("per_direction"):
+        names += ["compensation_up_mm", "compensation_down_mm"]
+        values += ("; compensation_up_mm / compensation_down_mm are added in travel in the positive / negative "
+                   "direction: minus that direction's deviation relative to the mean deviation at the reference point, "
+                   "a table per direction that holds the reversal B_i at every point")
+        b = a["backlash_mm"]
+        backlash = (f"mean reversal value B = {b * 1e3:.3f} um, ISO 230-2: mean of x_up - x_down over the targets; with "
+                    f"compensation_mm (the mean) enter the backlash as -B = {-b * 1e3:.3f} um; with compensation_up_mm "
+                    "and compensation_down_mm (a table per direction) enter none: they hold the reversal at every point")
+    lines = ["# " + h for h in _header(table, axis, values, backlash)]
+    lines.append("position_mm," + ",".join(names))
+    cols = [table[c].to_numpy() for c in names]
     for k in range(len(table)):
         cells = [_exact(a["first_q"] + k * a["step_q"])]
         cells += ["" if not np.isfinite(c[k]) else _fixed6(c[k]) for c in cols]
@@ -362,6 +417,13 @@ def write_csv(table, axis: str | None = "X") -> str:
 
 
 SINUMERIK_MAX_POINTS = 200
+#: why no SINUMERIK table per direction is written (docs/compensation.md): the LEC table ($AA_ENC_COMP) has one curve;
+#: direction-dependent compensation is the CEC tables' $AN_CEC_DIRECTION (K3 Function Manual 03/2013 sec. 4.4, p. 249), whose
+#: sign relative to the LEC table and the backlash MD32450 were not confirmed here from a manual page
+SIEMENS_PER_DIRECTION = ("siemens-eec: a SINUMERIK LEC table ($AA_ENC_COMP) holds one curve for both directions; "
+                         "direction-dependent compensation goes through CEC tables ($AN_CEC_DIRECTION), which fitbench "
+                         "does not write: write siemens-eec without --compensation-directions both (the mean table with "
+                         "a backlash), or the per-direction csv and enter its columns by hand")
 
 
 def write_siemens_eec(table, axis: str = AXIS_REQUIRED, max_points: int = SINUMERIK_MAX_POINTS) -> str:
@@ -388,6 +450,8 @@ def write_siemens_eec(table, axis: str = AXIS_REQUIRED, max_points: int = SINUME
                                 "($AA_ENC_COMP[0,N,AXIS], MD10000 $MN_AXCONF_MACHAX_NAME_TAB) and no axis is given: "
                                 "give axis=NAME, e.g. write_siemens_eec(table, axis='X1')")
     axis = check_axis(axis, "siemens-eec")
+    if table.attrs.get("per_direction"):
+        raise CompensationError(SIEMENS_PER_DIRECTION)
     n = len(table)
     if n > max_points:
         raise CompensationError(f"siemens-eec: {n} points do not fit the controller's {max_points} "
@@ -422,12 +486,19 @@ def _fanuc_sections(ref_q: int, lo_q: int, hi_q: int, step_q: int) -> tuple[int,
     return min(k_lo + 1, 0), max(k_hi, 1)
 
 
+def _blocks(table) -> int:
+    """How many point blocks a FANUC tape of ``table`` fills: 2 for a table per direction (bidirectional pitch-error
+    compensation: the positive direction's 3621 ... 3622, the negative direction's from 3626), else 1."""
+    return 2 if table.attrs.get("per_direction") else 1
+
+
 def fanuc_fitting_step(table, first_number: int = 0) -> int | None:
     """The finest step (x 1e-6 mm, a multiple of the table's quantum) whose table, anchored at the reference point
     over the measured travel, fills no more than the points left from ``first_number`` to 1023; None when fewer
     than two are left (every table fills R's point and the one above it). The count falls as the step grows."""
+    blocks = _blocks(table)
     room = FANUC_POINTS - int(first_number)
-    if room < 2:
+    if room < 2 * blocks:
         return None
     a = table.attrs
     first, last = a["measured_mm"]
@@ -437,7 +508,7 @@ def fanuc_fitting_step(table, first_number: int = 0) -> int | None:
     while lo < hi:
         mid = (lo + hi) // 2
         lowest, highest = _fanuc_sections(ref_q, lo_q, hi_q, mid * quantum_q)
-        if highest - lowest + 1 <= room:
+        if blocks * (highest - lowest + 1) <= room:
             hi = mid
         else:
             lo = mid + 1
@@ -456,16 +527,17 @@ def fanuc_point_numbers(table, first_number: int = 0, check_interval=None) -> tu
         raise CompensationError(f"fanuc-pitch: the first point number {first_number!r} (parameter 3621) must be a "
                                 f"whole number 0 ... {FANUC_POINTS - 1}")
     a = table.attrs
+    blocks = _blocks(table)
     lowest, highest = min(-a["reference_index"] + 1, 0), max(len(table) - 1 - a["reference_index"], 1)
-    n = highest - lowest + 1
+    n = blocks * (highest - lowest + 1)      # a table per direction: the negative direction's block follows (3626)
     ref_no = int(first_number) - lowest
-    if ref_no + highest <= FANUC_POINTS - 1:
+    if int(first_number) + n - 1 <= FANUC_POINTS - 1:
         return int(first_number), ref_no, ref_no + highest
     room = FANUC_POINTS - int(first_number)
     advice = [f"give a first point number of at most {FANUC_POINTS - n} (--fanuc-first-point)"] if n <= FANUC_POINTS else []
     step_q = fanuc_fitting_step(table, first_number)
-    why = (f"{room} point is left from {first_number} and every table fills at least 2 (the reference position's and "
-           "the one above it)" if step_q is None else "")
+    why = (f"{room} point is left from {first_number} and every table fills at least {2 * blocks} (the reference "
+           f"position's and the one above it{', for each direction' if blocks == 2 else ''})" if step_q is None else "")
     if step_q is not None:
         try:
             if check_interval is not None:
@@ -479,24 +551,29 @@ def fanuc_point_numbers(table, first_number: int = 0, check_interval=None) -> tu
         from_zero = fanuc_fitting_step(table, 0)
         advice.append(f"give a lower first point number (--fanuc-first-point) and a coarser --interval (from point 0: "
                       f"at least {_exact(from_zero)} mm)")
-    raise CompensationError(f"fanuc-pitch: {n} points from number {first_number} do not fit the pitch block "
+    raise CompensationError(f"fanuc-pitch: {n} points{' (a block per direction)' if blocks == 2 else ''} from number "
+                            f"{first_number} do not fit the pitch block "
                             f"0 ... {FANUC_POINTS - 1} (N10000 ... N{10000 + FANUC_POINTS - 1})"
                             f"{'; ' + why if why else ''}; {' or '.join(advice)}")
 
 
 def fanuc_points_line(table, first_number: int = 0) -> str:
     """What a FANUC tape of ``table`` fills, for its header and the command's output."""
-    first, ref, last = fanuc_point_numbers(table, first_number)
+    first, ref, p22 = fanuc_point_numbers(table, first_number)
+    last = p22 + (_blocks(table) - 1) * (p22 - first + 1)
     default = ", from the default first point 0" if first == 0 else ""
+    negative = (f", 3626 = {p22 + 1} (the points of the negative direction, {p22 + 1} ... {last})" if _blocks(table) == 2
+                else "")
     return (f"fills pitch-error points {first} ... {last}, N{10000 + first} ... N{10000 + last}{default}: 3621 = {first}, "
-            f"3620 = {ref}, 3622 = {last}; the points are one block for all axes, so another axis' tape must not overlap "
+            f"3620 = {ref}, 3622 = {p22}{negative}; the points are one block for all axes, so another axis' tape must not overlap "
             + (f"them: write it with --fanuc-first-point {last + 1} or higher" if last < FANUC_POINTS - 1 else
                f"them: this one ends the block at {last}, so another axis' tape must end below {first}" if first > 0 else
                "them: this one fills the whole block, leaving no point for another axis"))
 
 
 def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm: float = 0.001, increment_mm: float = 0.001,
-                      first_number: int = 0, magnification: int | None = None, machine_unit: str = "mm") -> str:
+                      first_number: int = 0, magnification: int | None = None, machine_unit: str = "mm",
+                      reference_return: str = "up") -> str:
     """FANUC pitch-error compensation data in the parameter-tape format: ``%``, comments ``(...)``, one
     line ``N<10000 + point number> P<value>`` per compensation point, ``%`` (FANUC Series 0i-PB
     parameter manual B-63980EN/01 sec. 4, parameters 3620-3624 and the linear-axis example p. 99-100;
@@ -526,7 +603,19 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
 
     ``axis`` (required): the axis the table is for, named in the comments (the tape itself names none: the
     parameters 3620-3624 are set per axis); None: the comments say 'axis not given' (``--axis`` left out on the
-    command line). A missing axis is refused (:class:`CompensationError`)."""
+    command line). A missing axis is refused (:class:`CompensationError`).
+
+    A table per direction (``compensation_table(per_direction=True)``) gives a tape for **bidirectional pitch-error
+    compensation** (technical report A-77810E, parameter table: 3605#0 = 1 enables it; 3620-3624 as above for travel in
+    the positive direction; 3626 the most negative point of the table for travel in the negative direction; 3627 the
+    compensation, absolute, at the reference position when it is approached opposite to the reference-return
+    direction): the positive direction's increments of -(x_up(P) - x_ret(R)) at 3621 ... 3622, then the negative
+    direction's of -(x_down(P) - x_ret(R)) from 3626 = 3622 + 1 over the same sections, x_ret being the deviation of
+    the ``reference_return`` direction ('up': the reference position is returned to in the positive direction), whose
+    table holds 0 at R; 3627 the other direction's value at R in detection units; backlash 1851 = 0 (the tables hold
+    the reversal). Not confirmed from a manual page, and said in the tape: that the negative direction's table has the
+    sections and incremental sense of the positive one and starts from 3627 at R, and the unit of 3627 (detection
+    units; written with magnification 3623 = 1 only, so that the two readings agree)."""
     if machine_unit not in ("mm", "in"):
         raise CompensationError(f"fanuc-pitch: machine_unit must be 'mm' or 'in', got {machine_unit!r}")
 
@@ -539,7 +628,18 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
     label = NOT_GIVEN.upper() if axis is None else check_axis(axis, "fanuc-pitch").upper()
     a = table.attrs
     k0 = a["reference_index"]
-    rel = -(table.deviation_mm.to_numpy() - a["deviation_at_reference_mm"])      # what to add, mm, 0 at R
+    both = bool(a.get("per_direction"))
+    if reference_return not in ("up", "down"):
+        raise CompensationError(f"fanuc-pitch: reference_return must be 'up' or 'down', got {reference_return!r}")
+    if both:                  # each direction's table relative to the reference-return direction's deviation at R
+        at_r = float(table[f"deviation_{reference_return}_mm"].iloc[k0])
+        rels = [-(table[f"deviation_{d}_mm"].to_numpy() - at_r) for d in ("up", "down")]
+        if magnification not in (None, 1):
+            raise CompensationError(f"fanuc-pitch: magnification {magnification!r}: a bidirectional tape is written "
+                                    "with 3623 = 1 only (whether 3627 is scaled by 3623 is not confirmed)")
+        magnification = 1
+    else:
+        rels = [-(table.deviation_mm.to_numpy() - a["deviation_at_reference_mm"])]     # what to add, mm, 0 at R
     k = np.arange(len(table)) - k0                                            # grid index relative to R
     k_lo, k_hi = int(k[0]), int(k[-1])
     lowest, highest = min(k_lo + 1, 0), max(k_hi, 1)     # sections covered, with R's point and one above it
@@ -556,22 +656,33 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
         if not (isinstance(m, (int, np.integer)) and FANUC_MAGNIFICATION[0] <= m <= FANUC_MAGNIFICATION[1]):
             raise CompensationError(f"fanuc-pitch: magnification {m!r} (parameter 3623) must be a whole number "
                                     f"{FANUC_MAGNIFICATION[0]} ... {FANUC_MAGNIFICATION[1]}")
-        absolute = np.rint(rel / (detection_unit_mm * m)).astype(np.int64)
-        inc = np.diff(absolute)                                  # section k (k_lo < k <= k_hi) -> inc[k - k_lo - 1]
+        absolutes = [np.rint(r / (detection_unit_mm * m)).astype(np.int64) for r in rels]
+        inc = np.concatenate([np.diff(ab) for ab in absolutes])  # section k (k_lo < k <= k_hi) -> [k - k_lo - 1]
         if inc.size == 0 or (inc.min() >= FANUC_VALUE[0] and inc.max() <= FANUC_VALUE[1]):
             break
     else:
         raise CompensationError(f"fanuc-pitch: a change of {np.abs(inc).max()} x {unit(detection_unit_mm).lower()} x {m} over "
-                                f"one interval exceeds {FANUC_VALUE[1]} (per point); choose a finer --interval or a larger magnification")
-    values = np.zeros(highest - lowest + 1, dtype=np.int64)
-    values[(k_lo + 1) - lowest:(k_hi + 1) - lowest] = inc
+                                f"one interval exceeds {FANUC_VALUE[1]} (per point); choose a finer --interval"
+                                + ("" if both else " or a larger magnification"))
     numbers = ref_no + np.arange(lowest, highest + 1)
+    values = np.zeros((len(absolutes), highest - lowest + 1), dtype=np.int64)
+    for row, ab in zip(values, absolutes):
+        row[(k_lo + 1) - lowest:(k_hi + 1) - lowest] = np.diff(ab)
     def comment(text: str) -> str:
         return "(" + re.sub(r"[^A-Z0-9 .,:;=+\-/*]", " ", text.upper()).strip() + ")"
     out = ["%", comment(f"FANUC PITCH ERROR COMPENSATION AXIS {label} VALUES INCREMENTAL IN {unit(detection_unit_mm)} "
                         f"X MAGNIFICATION {m}")]
-    out += [comment(h) for h in _header(table, label, "increments of minus the deviation relative to the reference "
-                                                       "point; a positive value moves the axis in the positive direction")]
+    if both:
+        b = a["backlash_mm"]
+        what = (f"increments of minus the deviation of each direction relative to that of the {reference_return} direction at the "
+                "reference point; a positive value moves the axis in the positive direction")
+        held = (f"mean reversal value B = {b * 1e3:.3f} um, ISO 230-2: mean of x_up - x_down over the targets; the tables "
+                "of the two directions hold the reversal at every point (3627 at the reference position): no backlash, "
+                "1851 = 0")
+        out += [comment(h) for h in _header(table, label, what, held)]
+    else:
+        out += [comment(h) for h in _header(table, label, "increments of minus the deviation relative to the reference "
+                                                           "point; a positive value moves the axis in the positive direction")]
     lag = int(np.abs(inc).max()) if inc.size else 0
     out.append(comment(f"APPLIED STEPWISE: BETWEEN TWO POINTS THE COMPENSATION STAYS AT THE VALUE OF THE POINT ON THE "
                        f"REFERENCE POSITION S SIDE, UP TO {lag * detection_unit_mm * m * 1e3:g} UM, THE LARGEST CHANGE "
@@ -584,13 +695,29 @@ def write_fanuc_pitch(table, axis: str | None = AXIS_REQUIRED, detection_unit_mm
                        + (f", {a['step_q'] * NM / INCH_MM:.6f} IN," if machine_unit == "in" else "")
                        + f" IN UNITS OF {unit(increment_mm)}; RAPID TRAVERSE MM/MIN / 7500 "
                        f"MUST NOT EXCEED {_exact(a['step_q'])} MM"))
-    if np.isfinite(a["backlash_mm"]):
+    if both:
+        other = "down" if reference_return == "up" else "up"
+        p26 = int(numbers[-1]) + 1
+        p27 = int(absolutes[0 if other == "up" else 1][k0])
+        out.append(comment(f"SET 3605 BIT 0 = 1 BIDIRECTIONAL PITCH ERROR COMPENSATION, 3626 = {p26}, 3627 = {p27} "
+                           f"IN UNITS OF {unit(detection_unit_mm)}; POSITIVE DIRECTION TABLE {numbers[0]} ... "
+                           f"{numbers[-1]}, NEGATIVE DIRECTION TABLE {p26} ... {p26 + len(numbers) - 1}; REFERENCE RETURN "
+                           f"IN THE {'POSITIVE' if reference_return == 'up' else 'NEGATIVE'} DIRECTION: 3627 IS THE "
+                           f"{'NEGATIVE' if other == 'down' else 'POSITIVE'} DIRECTION S VALUE AT THE REFERENCE POSITION"))
+        out.append(comment("NOT CONFIRMED FROM A MANUAL PAGE: THAT THE NEGATIVE DIRECTION TABLE HAS THE SECTIONS AND THE "
+                           "INCREMENTAL SENSE OF THE POSITIVE ONE AND STARTS FROM 3627 AT THE REFERENCE POSITION, AND THE "
+                           "UNIT OF 3627; CHECK THEM IN A-77810E FOR YOUR SERIES AND WITH A VERIFICATION RUN IN BOTH "
+                           "DIRECTIONS"))
+        out.append(comment("BACKLASH: SET 1851 = 0, THE TABLES OF THE TWO DIRECTIONS HOLD THE REVERSAL"))
+        numbers = np.concatenate([numbers, p26 + np.arange(len(numbers))])
+        values = values.ravel()
+    elif np.isfinite(a["backlash_mm"]):
         units = int(np.rint(-a["backlash_mm"] / detection_unit_mm))
         if abs(units) > 9999:
             raise CompensationError(f"fanuc-pitch: the backlash -B = {-a['backlash_mm']:g} mm is {units} detection "
                                     "units, beyond parameter 1851's -9999 ... 9999")
         out.append(comment(f"BACKLASH: SET 1851 = {units} DETECTION UNITS OF {unit(detection_unit_mm)}, I.E. -B"))
-    out += [f"N{10000 + int(no)} P{int(v)}" for no, v in zip(numbers, values)]
+    out += [f"N{10000 + int(no)} P{int(v)}" for no, v in zip(numbers, np.ravel(values))]
     out.append("%")
     return "\n".join(out) + "\n"
 
@@ -600,7 +727,8 @@ WRITERS = {"csv": write_csv, "siemens-eec": write_siemens_eec, "fanuc-pitch": wr
 POINT_LIMITS = {"siemens-eec": SINUMERIK_MAX_POINTS, "fanuc-pitch": FANUC_POINTS - 1, "csv": MAX_POINTS}
 
 
-def _fitting_default(res, data, table, limit: int, fmt: str, source: str, reference_mm, formats=()):
+def _fitting_default(res, data, table, limit: int, fmt: str, source: str, reference_mm, formats=(),
+                     per_direction: bool = False):
     """The default table (at the smallest target spacing) has more points than ``fmt`` takes: the finest step (a
     multiple of 0.001 mm) whose table, anchored at the reference point, has at most ``limit`` points, if that table
     still reproduces the curve at the targets (the ``--interval`` rule, :func:`_check_represents`); the choice is
@@ -615,7 +743,7 @@ def _fitting_default(res, data, table, limit: int, fmt: str, source: str, refere
         step_q += quantum_q
     try:
         chosen = compensation_table(res, data, interval=step_q * NM, source=source, reference_mm=reference_mm,
-                                    formats=formats, quantum_q=quantum_q)
+                                    formats=formats, quantum_q=quantum_q, per_direction=per_direction)
     except CompensationError as exc:
         raise CompensationError(f"{fmt}: the default table (at the smallest target spacing, {a['interval_mm']:g} mm) "
                                 f"has {len(table)} points, more than the controller's {limit}, and the finest step that "
@@ -636,7 +764,8 @@ def magnitude_problem(table) -> str | None:
     BACKLASH_LIMIT_MM."""
     first, last = table.attrs["measured_mm"]
     limit = max(VALUE_FLOOR_MM, VALUE_PER_TRAVEL * (last - first))
-    peak = float(np.max(np.abs(table.compensation_mm.to_numpy())))
+    peak = float(max(np.max(np.abs(table[c].to_numpy())) for c in ("compensation_mm", "compensation_up_mm",
+                                                                    "compensation_down_mm") if c in table))
     backlash = abs(float(table.attrs["backlash_mm"]))
     found = []
     if peak > limit:
@@ -664,13 +793,14 @@ def model_misfit(res) -> str | None:
     return f"the {name} is rejected by its lack of fit ({parts})"
 
 
-def varying_reversal(data) -> str | None:
+def varying_reversal(data, per_direction: bool = False) -> str | None:
     """What a table of the mean bidirectional deviation with one backlash leaves when the reversal B_i varies
     along the travel (:func:`methods.positioning.iso230_2.reversal_variation`: significant against the scatter of
     the run-by-run differences x_up - x_down at each target), and what to do; that the variation could not be tested
     and why; or None. Controllers with a curve per direction: FANUC bidirectional pitch-error
     compensation (technical report A-77810E, 3605#0, 3620-3627), SINUMERIK direction-dependent LEC (840C/611D
-    manual sec. 12.1.2: a second curve per direction), HEIDENHAIN .COM tables (a BACKLASH column)."""
+    manual sec. 12.1.2: a second curve per direction), HEIDENHAIN .COM tables (a BACKLASH column). ``per_direction``:
+    the tables written hold a curve per direction, which takes the variation in."""
     from methods.positioning.iso230_2 import reversal_variation
     rv = reversal_variation(data)
     if rv and not rv["tested"]:
@@ -679,14 +809,20 @@ def varying_reversal(data) -> str | None:
     if not rv or not rv["significant"]:
         return None
     p = f"p = {rv['p_value']:.2g}" if rv["p_value"] >= 1e-4 else "p below 0.0001"
+    if per_direction:
+        return (f"the reversal B_i varies along the travel from {rv['B_i_min'] * 1e3:.3f} to {rv['B_i_max'] * 1e3:.3f} "
+                f"um (mean {rv['B_mean'] * 1e3:.3f} um; chi2/nu = {rv['chi2_per_dof']:.3g} on {rv['dof']} degrees of "
+                f"freedom, above the limit {rv['critical']:.3g} of a {100 * rv['level']:g} % test, {p}): the tables of "
+                f"the two directions hold it; the mean table with one backlash would leave up to "
+                f"{rv['left'] * 1e3:.3f} um in each direction")
     return (f"the reversal B_i varies along the travel from {rv['B_i_min'] * 1e3:.3f} to {rv['B_i_max'] * 1e3:.3f} um "
             f"(mean {rv['B_mean'] * 1e3:.3f} um; chi2/nu = {rv['chi2_per_dof']:.3g} on {rv['dof']} degrees of freedom, "
             f"above the limit {rv['critical']:.3g} of a {100 * rv['level']:g} % test, {p}: more than the run-to-run scatter of "
             f"x_up - x_down at each target explains, runs paired {rv['pairing']}): this table of the mean bidirectional "
             f"deviation with one backlash (-B mean) leaves (B_i - B mean)/2 in each direction: up to "
             f"{rv['left'] * 1e3:.3f} um, of opposite sign in the two ({2 * rv['left'] * 1e3:.3f} um between them); where the controller takes a curve per "
-            "direction (FANUC bidirectional pitch-error compensation 3605#0, SINUMERIK direction-dependent LEC), "
-            "load the deviation_up_mm and deviation_down_mm curves of the csv table instead")
+            "direction (FANUC bidirectional pitch-error compensation 3605#0), write a table per direction with "
+            "--compensation-directions both (csv, fanuc-pitch)")
 
 
 def thermal_line(data) -> str | None:
@@ -710,7 +846,8 @@ def thermal_line(data) -> str | None:
 def write_tables(res, data, requests, *, interval=None, source="model", axis=None, write, reference_mm=None,
                  unit_confirmed: bool = False, unit_option: str = "--deviation-unit", on_confirmed=None,
                  model_confirmed: bool = False, axis_hint: str = "", fanuc_unit_mm: float = 0.001,
-                 fanuc_first_number: int = 0, fanuc_machine_unit: str = "mm"):
+                 fanuc_first_number: int = 0, fanuc_machine_unit: str = "mm", per_direction: bool = False,
+                 fanuc_reference_return: str = "up"):
     """Build the table once and write it in every requested ``(format, path)`` with ``write(path, text)``;
     every format is checked (name, axis, limits) before any file is written. A table implausible for a
     machine axis (:func:`magnitude_problem`: µm read as mm) is refused unless ``unit_confirmed`` (the
@@ -722,11 +859,17 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     'axis not given' in their header. ``fanuc_unit_mm``: the FANUC axis' detection unit and least input increment
     in mm (0.001 mm IS-B, 0.0001 mm IS-C; an inch machine, ``fanuc_machine_unit='in'``: 0.00254 mm = 0.0001 in
     IS-B, 0.000254 mm IS-C, and the automatic step is a multiple of it); ``fanuc_first_number``: its first pitch-error point number (3621; each axis
-    needs its own range of the one block, :func:`fanuc_point_numbers`), said in ``attrs['fanuc_points']``. Returns the
-    table."""
+    needs its own range of the one block, :func:`fanuc_point_numbers`), said in ``attrs['fanuc_points']``.
+    ``per_direction``: a table per direction (a bidirectional test; csv columns compensation_up_mm / _down_mm, a FANUC
+    bidirectional tape, :func:`write_fanuc_pitch`; SINUMERIK is refused), ``fanuc_reference_return`` the direction of
+    the FANUC axis' reference return ('up' or 'down'). Returns the table."""
     for fmt, _ in requests:
         if fmt not in WRITERS:
             raise InvalidInputError(f"--compensation {fmt}: unknown format; use one of {', '.join(WRITERS)}")
+    if per_direction and any(fmt == "siemens-eec" for fmt, _ in requests):
+        raise CompensationError(SIEMENS_PER_DIRECTION)
+    if per_direction and len(data.directions) != 2:
+        raise InvalidInputError(one_direction_refusal(data))
     if axis is None and any(fmt == "siemens-eec" for fmt, _ in requests):
         raise CompensationError("siemens-eec: a SINUMERIK table names the machine axis it compensates "
                                 "($AA_ENC_COMP[0,N,AXIS], MD10000 $MN_AXCONF_MACHAX_NAME_TAB) and --axis is not given: "
@@ -741,10 +884,11 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     unit_q = int(round(fanuc_unit_mm / NM))
     quantum_q = (unit_q if "fanuc-pitch" in formats and unit_q > 0 and AUTO_QUANTUM % unit_q else AUTO_QUANTUM)
     table = compensation_table(res, data, interval=interval, source=source, reference_mm=reference_mm, formats=formats,
-                               quantum_q=quantum_q)
-    limit, fmt = min((POINT_LIMITS.get(f, MAX_POINTS), f) for f, _ in requests)
+                               quantum_q=quantum_q, per_direction=per_direction)
+    limit, fmt = min((POINT_LIMITS.get(f, MAX_POINTS) // (2 if per_direction and f == "fanuc-pitch" else 1), f)
+                     for f, _ in requests)
     if interval is None and len(table) > limit:
-        table = _fitting_default(res, data, table, limit, fmt, source, reference_mm, formats)
+        table = _fitting_default(res, data, table, limit, fmt, source, reference_mm, formats, per_direction)
     if misfit:
         table.attrs["warning"] = (f"WARNING: {misfit}; written from the model as asked: the table leaves that misfit "
                                   "uncompensated (--compensation-from mean follows the measured means)")
@@ -759,11 +903,11 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
     if problem and on_confirmed is not None:
         on_confirmed(f"the compensation table holds {problem}, written as {unit_option} confirms the unit: "
                      "check it before loading it")
-    reversal = varying_reversal(data)
+    reversal = varying_reversal(data, per_direction)
     if reversal:
         table.attrs["reversal_note"] = f"NOTE: {reversal}"
     fanuc = {"detection_unit_mm": fanuc_unit_mm, "increment_mm": fanuc_unit_mm, "first_number": fanuc_first_number,
-             "machine_unit": fanuc_machine_unit}
+             "machine_unit": fanuc_machine_unit, **({"reference_return": fanuc_reference_return} if per_direction else {})}
     if outside_reference(table):
         table.attrs["reference_note"] = outside_reference(table) + "; every file's header says so"
     first, last = table.attrs["measured_mm"]
@@ -775,9 +919,12 @@ def write_tables(res, data, requests, *, interval=None, source="model", axis=Non
             "elsewhere (outside the measured travel too, e.g. --reference 0 at the travel end)")
     if any(fmt == "fanuc-pitch" for fmt, _ in requests):
         numbers = fanuc_point_numbers(table, fanuc_first_number, check_interval=lambda step: compensation_table(
-            res, data, interval=step, source=source, reference_mm=reference_mm, formats=formats, quantum_q=quantum_q))
+            res, data, interval=step, source=source, reference_mm=reference_mm, formats=formats, quantum_q=quantum_q,
+            per_direction=per_direction))
         table.attrs["fanuc_points"] = fanuc_points_line(table, fanuc_first_number)
         table.attrs["fanuc_numbers"] = dict(zip(("p3621", "p3620", "p3622"), numbers))
+        if per_direction:
+            table.attrs["fanuc_numbers"]["p3626"] = numbers[2] + 1
     texts = [(path, WRITERS[fmt](table, axis=axis, **(fanuc if fmt == "fanuc-pitch" else {})))
              for fmt, path in requests]
     for path, text in texts:

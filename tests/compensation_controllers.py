@@ -83,6 +83,8 @@ def read_siemens(text: str):
     return _with_backlash(position, _backlash("\n".join(header))), {"grid": grid, "values": c, "axis": axis}
 
 
+FANUC_BIDIRECTIONAL = re.compile(r"\(SET 3605 BIT 0 = 1 BIDIRECTIONAL PITCH ERROR COMPENSATION, 3626 = (\d+), "
+                                 r"3627 = (-?\d+) IN UNITS OF ([0-9.]+) (MM|IN);[^()]*\)")
 FANUC_SET = re.compile(r"\(SET 3620 = (\d+) REFERENCE POSITION AT (-?\d+\.\d{6}) MM, 3621 = (\d+), 3622 = (\d+), "
                        r"3623 = (\d+), 3624 = (\d+) I\.E\. (\d+\.\d{6}) MM(?:, \d+\.\d{6} IN,)? IN UNITS OF ([0-9.]+) "
                        r"(MM|IN);[^()]*\)")
@@ -99,16 +101,27 @@ def read_fanuc(text: str, detection_unit_mm: float = 0.001, machine_reference_mm
     its section seen from R. ``machine_reference_mm``: where the machine's reference position really is (the
     controller anchors the table there whatever the tape's comment says); default: the position the comment names.
     ``increment_mm``: the machine's least input increment, the unit of 3624 (an inch machine's 0.0001 in = 0.00254
-    mm, whatever the tape's comment says); default: the unit the comment names."""
+    mm, whatever the tape's comment says); default: the unit the comment names.
+
+    Bidirectional pitch-error compensation (technical report A-77810E: 3605#0 = 1, 3626 the most negative point of
+    the table for travel in the negative direction, 3627 the absolute compensation at the reference position for the
+    direction opposite to the reference return), when the tape's SET 3605 comment asks for it: the table for travel
+    in the negative direction is the points 3626 ... 3626 + (3622 - 3621), with the sections of the positive one, its
+    increments summed from 3627 at the reference position; each direction's table is applied when the axis
+    approaches in that direction. The reference return's direction is the one whose table holds 0 at R (the comment
+    says which)."""
     assert text.endswith("\n") and "\r" not in text
     lines = text[:-1].split("\n")
     assert lines[0] == "%" and lines[-1] == "%"
-    params, header, points = None, [], []
+    params, bidir, header, points = None, None, [], []
     for line in lines[1:-1]:
         if line.startswith("("):
             assert re.fullmatch(r"\([A-Z0-9 .,:;=+\-/*]*\)", line), line
             if line.startswith("(SET 3620"):
                 params = FANUC_SET.fullmatch(line)
+            if line.startswith("(SET 3605"):
+                bidir = FANUC_BIDIRECTIONAL.fullmatch(line)
+                assert bidir, line
             header.append(line)
             continue
         m = re.fullmatch(r"N1(\d{4}) P(-?\d+)", line)
@@ -125,56 +138,102 @@ def read_fanuc(text: str, detection_unit_mm: float = 0.001, machine_reference_mm
         inc_mm = float(increment_mm)
     if machine_reference_mm is not None:
         r_mm = float(machine_reference_mm)
-    assert p21 == points[0][0] and p22 == points[-1][0] and p21 <= ref_no < p22
+    n = p22 - p21 + 1
+    p26 = int(bidir.group(1)) if bidir else None
+    if bidir:                      # the negative direction's block after (or before) the positive one, no overlap
+        assert p26 > p22 or p26 + n - 1 < p21, "the two blocks must not overlap"
+        assert {p[0] for p in points} == set(range(p21, p22 + 1)) | set(range(p26, p26 + n)), "both blocks, whole"
+        assert float(bidir.group(3)) > 0 and bidir.group(4) == params.group(9)
+    else:
+        assert p21 == points[0][0] and p22 == points[-1][0]
+    assert p21 <= ref_no < p22
     assert 1 <= mag <= 100 and 1 <= p24 <= 99_999_999
     d = p24 * inc_mm
     unit = detection_unit_mm * mag
     nos = np.array([p[0] for p in points])
     vals = np.array([p[1] for p in points], float) * unit
-    k_of = nos - ref_no                                    # point ref + k covers (R + (k-1) d, R + k d]
-    ks = np.arange(k_of[0] - 1, k_of[-1] + 1)              # grid indices with an absolute value
-    absolute = np.zeros(ks.size)
-    for j, k in enumerate(ks):
-        if k > 0:
-            absolute[j] = vals[(k_of >= 1) & (k_of <= k)].sum()
-        elif k < 0:
-            absolute[j] = -vals[(k_of >= k + 1) & (k_of <= 0)].sum()
 
-    def compensation(P):
-        t = (np.asarray(P, float) - r_mm) / d
-        k = np.trunc(t + np.sign(t) * 1e-9)                # the last grid point reached from R
-        k = np.clip(k, ks[0], ks[-1])
-        return absolute[(k - ks[0]).astype(int)]
+    def table(first: int, at_reference: float):
+        """The absolute compensation of the block first ... first + n - 1 (laid out as 3621 ... 3622) at every grid
+        index it covers, and those indices."""
+        sel = (nos >= first) & (nos < first + n)
+        k_of = nos[sel] - first + p21 - ref_no                 # point ref + k covers (R + (k-1) d, R + k d]
+        v = vals[sel]
+        ks = np.arange(k_of[0] - 1, k_of[-1] + 1)              # grid indices with an absolute value
+        absolute = np.full(ks.size, at_reference)
+        for j, k in enumerate(ks):
+            if k > 0:
+                absolute[j] += v[(k_of >= 1) & (k_of <= k)].sum()
+            elif k < 0:
+                absolute[j] -= v[(k_of >= k + 1) & (k_of <= 0)].sum()
+        return ks, absolute
 
-    def position(P):
-        return np.asarray(P, float) + compensation(P)
+    def applied(ks, absolute):
+        def compensation(P):
+            t = (np.asarray(P, float) - r_mm) / d
+            k = np.trunc(t + np.sign(t) * 1e-9)                # the last grid point reached from R
+            k = np.clip(k, ks[0], ks[-1])
+            return absolute[(k - ks[0]).astype(int)]
+        return compensation
+
     head = "\n".join(header).lower().replace("  ", " ")
     m = re.search(r"enter the backlash as -b = (-?\d+\.\d{3}) um", head)
     beta = float(m.group(1)) * 1e-3 if m else 0.0
-    return _with_backlash(position, beta), {"reference_number": ref_no, "magnification": mag, "p3624": p24,
-                                            "numbers": nos, "values": vals}
+    if not bidir:
+        ks, absolute = table(p21, 0.0)
+        compensation = applied(ks, absolute)
+
+        def position(P):
+            return np.asarray(P, float) + compensation(P)
+        return _with_backlash(position, beta), {"reference_number": ref_no, "magnification": mag, "p3624": p24,
+                                                "numbers": nos, "values": vals}
+    assert "set 1851 = 0" in head and not m, "a tape per direction holds the reversal: no backlash"
+    p27 = int(bidir.group(2)) * detection_unit_mm          # detection units (the tape has 3623 = 1)
+    assert mag == 1
+    returns_up = "reference return in the positive direction" in head
+    assert returns_up or "reference return in the negative direction" in head
+    comp = {"up": applied(*table(p21, 0.0 if returns_up else p27)),
+            "down": applied(*table(p26, p27 if returns_up else 0.0))}
+
+    def encoder(P, direction):
+        return np.asarray(P, float) + comp[direction](P)
+    return encoder, {"reference_number": ref_no, "magnification": mag, "p3624": p24, "numbers": nos, "values": vals,
+                     "p3626": p26, "p3627": int(bidir.group(2))}
 
 
-def read_csv(text: str):
+def read_csv(text: str, per_direction: bool = False):
     """The generic CSV: '# ' header lines, the column line, rows of 6-decimal numbers (the up / down
     columns may be empty), equally spaced positions. Applied: compensation_mm is added to the commanded
-    position (linear between rows, the end values beyond)."""
+    position (linear between rows, the end values beyond), with the backlash the header asks for.
+    ``per_direction``: a controller taking a table per direction applies compensation_up_mm in travel in the positive
+    direction and compensation_down_mm in the negative, with no backlash (the header says so)."""
     assert text.endswith("\n")
     lines = text[:-1].split("\n")
     header = [l for l in lines if l.startswith("# ")]
     body = lines[len(header):]
     assert lines[:len(header)] == header, "header lines come first"
-    assert body[0] == "position_mm,deviation_mm,deviation_up_mm,deviation_down_mm,compensation_mm"
+    columns = "position_mm,deviation_mm,deviation_up_mm,deviation_down_mm,compensation_mm"
+    assert body[0] in (columns, columns + ",compensation_up_mm,compensation_down_mm"), body[0]
+    width = body[0].count(",") + 1
+    assert width == 7 or not per_direction, "no per-direction columns"
     rows = []
     for line in body[1:]:
         cells = line.split(",")
-        assert len(cells) == 5, line
+        assert len(cells) == width, line
         rows.append([_value(c) if (c or k not in (2, 3)) else None for k, c in enumerate(cells)])
     pos = [r[0] for r in rows]
     steps = {b - a for a, b in zip(pos, pos[1:])}
     assert len(steps) == 1 and steps.pop() > 0, "positions equally spaced, increasing"
     grid = np.array([float(p) for p in pos])
     comp = np.array([float(r[4]) for r in rows])
+
+    if per_direction:
+        assert "with compensation_up_mm and compensation_down_mm (a table per direction) enter none" in "\n".join(header)
+        tables = {"up": np.array([float(r[5]) for r in rows]), "down": np.array([float(r[6]) for r in rows])}
+
+        def encoder(P, direction):
+            return np.asarray(P, float) + np.interp(P, grid, tables[direction])
+        return encoder, {"grid": grid, "values": comp, **tables}
 
     def position(P):
         return np.asarray(P, float) + np.interp(P, grid, comp)

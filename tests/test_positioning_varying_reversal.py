@@ -63,7 +63,7 @@ def test_a_varying_reversal_is_warned_with_its_figures_in_the_output_and_every_h
     assert "of a 5 % test" in line
     assert "runs paired by run number" in line
     left = np.max(np.abs(B_i - B_i.mean())) / 2
-    assert f"up to {left:.3f} um, of opposite sign" in line and "deviation_up_mm and deviation_down_mm" in line
+    assert f"up to {left:.3f} um, of opposite sign" in line and "with --compensation-directions both" in line
     for name in ("t.tap", "t.mpf", "t.csv"):
         head = (tmp_path / name).read_text().upper()
         assert f"VARIES ALONG THE TRAVEL FROM {B_i.min():.3f} TO {B_i.max():.3f} UM" in head, name

@@ -75,6 +75,14 @@ def add_parser(sub):
     pp.add_argument("--compensation-from", choices=("model", "mean"), default=None,
                     help="compensation values from the GLS polynomial (default; refused when its lack-of-fit test "
                          "rejects it unless given explicitly) or the mean deviations at the targets")
+    pp.add_argument("--compensation-directions", choices=("mean", "both"), default=None,
+                    help="mean (default): one table of the mean bidirectional deviation and a backlash value; both: a "
+                         "table per direction as well (csv columns compensation_up_mm / compensation_down_mm, a FANUC "
+                         "bidirectional pitch-error tape; not siemens-eec), for a reversal that varies along the travel")
+    pp.add_argument("--fanuc-reference-return", choices=("up", "down"), default=None,
+                    help="fanuc-pitch with --compensation-directions both: the direction in which the axis returns to "
+                         "its reference position (default up, the positive direction); that direction's table holds 0 "
+                         "there and 3627 the other's value")
     pp.add_argument("--axis", default=None, help="the axis tested: recorded in the JSON result (fitbench history trends "
                     "each machine's axes apart) and its name in the controller's table (required for siemens-eec; "
                     "csv and fanuc-pitch take it from an 'Axis;Z' line above the table, else say 'not given')")
@@ -274,6 +282,14 @@ def run(args) -> int:
                                 "--expansion-coefficient (µm/(m·K), e.g. 11.5 for steel)")
     fanuc_only = [o for o, v in (("--fanuc-first-point", args.fanuc_first_point),
                                  ("--fanuc-increment", args.fanuc_increment)) if v is not None]
+    if args.compensation_directions is not None and not args.compensation:
+        raise InvalidInputError("--compensation-directions applies to a compensation table and no --compensation is "
+                                "given: add --compensation FORMAT FILE or drop the option")
+    if args.fanuc_reference_return is not None and args.compensation_directions != "both":
+        raise InvalidInputError("--fanuc-reference-return applies to a FANUC tape per direction: add "
+                                "--compensation-directions both (and --compensation fanuc-pitch FILE) or drop the option")
+    if args.fanuc_reference_return is not None:
+        fanuc_only.append("--fanuc-reference-return")
     if fanuc_only and not any(fmt == "fanuc-pitch" for fmt, _ in args.compensation or []):
         raise InvalidInputError(f"{' and '.join(fanuc_only)} {'apply' if len(fanuc_only) > 1 else 'applies'} to a "
                                 "FANUC tape and no --compensation fanuc-pitch is given: add --compensation fanuc-pitch "
@@ -428,7 +444,9 @@ def run(args) -> int:
                             reference_mm=finite("--reference", args.reference),
                             unit_confirmed=given_deviation_unit is not None, on_confirmed=warn,
                             model_confirmed=args.compensation_from == "model",
-                            fanuc_unit_mm=fanuc_mm, fanuc_machine_unit=fanuc_unit, fanuc_first_number=args.fanuc_first_point or 0)
+                            fanuc_unit_mm=fanuc_mm, fanuc_machine_unit=fanuc_unit, fanuc_first_number=args.fanuc_first_point or 0,
+                            per_direction=args.compensation_directions == "both",
+                            fanuc_reference_return=args.fanuc_reference_return or "up")
         if comp.attrs.get("reference_note"):
             notes.append(comp.attrs["reference_note"])
         if comp.attrs.get("thermal_note"):      # a correction computed from two given numbers goes into the machine
@@ -437,7 +455,9 @@ def run(args) -> int:
                          f"given, not measured: for a machine that works at 20 °C or compensates temperature itself; one working at "
                          f"{temperature:.4g} °C with its scale at {temperature:.4g} °C needs them without "
                          "--material-temperature; every file's header says so")
-        if comp.attrs.get("reversal_note"):     # the reversal varies along the travel: the table cannot remove it
+        if comp.attrs.get("reversal_note") and comp.attrs.get("per_direction"):   # the tables per direction hold it
+            notes.append(comp.attrs["reversal_note"].removeprefix("NOTE: ").replace(" um", " µm"))
+        elif comp.attrs.get("reversal_note"):     # the reversal varies along the travel: the table cannot remove it
             warn(comp.attrs["reversal_note"].removeprefix("NOTE: ") + "; every file's header says so")
         if inch_input:   # read in inches: the csv / SINUMERIK tables are in mm, the FANUC tape in the machine's unit
             formats = {fmt for fmt, _ in args.compensation}
@@ -500,14 +520,15 @@ def run(args) -> int:
                 "source": comp.attrs["source"], "interval_mm": comp.attrs["interval_mm"], "points": len(comp),
                 "first_mm": float(comp.position_mm.iloc[0]), "last_mm": float(comp.position_mm.iloc[-1]),
                 "reference_mm": float(comp.position_mm.iloc[comp.attrs["reference_index"]]),
-                "chosen": comp.attrs.get("chosen"), "warning": comp.attrs.get("warning")}
+                "chosen": comp.attrs.get("chosen"), "warning": comp.attrs.get("warning"),
+                **({"directions": "both"} if comp.attrs.get("per_direction") else {})}
         out["files_written"] = written_files()
         cli_options.print_json(json.dumps(jsonable(out)))
         return 0
     print("\n".join(lines))
     if comp is not None:
         for fmt, path in args.compensation:
-            say_written(path, f"compensation table ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
+            say_written(path, f"compensation table{'s per direction' if comp.attrs.get('per_direction') else ''} ({fmt}, every {comp.attrs['interval_mm']:g} mm from {comp.position_mm.iloc[0]:g} "
                   f"to {comp.position_mm.iloc[-1]:g} mm, from the {comp.attrs['source']}) written to {path}"
                   + (f": {comp.attrs['chosen']}" if comp.attrs.get("chosen") else "")
                   + (f"; {comp.attrs['fanuc_points']}" if fmt == "fanuc-pitch" else ""))

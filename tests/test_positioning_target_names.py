@@ -116,3 +116,19 @@ def test_din_1313_unit_forms_of_a_wide_export_are_read(tmp_path, target, run):
     out = cli("positioning", path, "--json")
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["A"] * 1e3 == pytest.approx(iso_a_um(dev), abs=1e-6)
+
+
+@pytest.mark.parametrize("run, words", [("Run {r} {d} in cm", "carries the unit 'cm'"),
+                                        ("Run {r} {d} in mrad", "angle unit"),
+                                        ("Run {r} {d} in X", "is neither the target, a direction nor a run"),
+                                        ("Run {r} {d} in s", "is neither the target, a direction nor a run")])
+def test_a_word_after_in_that_is_no_unit_read_is_refused(tmp_path, run, words):
+    """After 'in' a unit fitbench does not read (cm, mrad) is refused as in brackets, and a word that is no unit
+    ('in X', 'in s') makes no run column: each was read as a run in mm, exit 0 (A 0.850 µm for deviations in cm)."""
+    dev = runs(seed=6)
+    head = ";".join(["Target in mm"] + [run.format(r=r, d=d) for r in (1, 2, 3) for d in "+-"])
+    rows = [";".join([f"{t:.4f}"] + [f"{dev[d][i, r]:.3f}" for r in range(3) for d in "+-"])
+            for i, t in enumerate(TARGETS)]
+    path = tmp_path / "in.csv"
+    path.write_text(head + "\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    one_error_line(cli("positioning", path), words)

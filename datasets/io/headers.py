@@ -20,18 +20,18 @@ ANGLE_UNITS = {"deg": "deg", "degree": "deg", "degrees": "deg", "°": "deg", "ra
 
 
 def parse_name(name: str) -> tuple[str, str | None]:
-    """(key, unit) of a header name: the unit in ``()``, ``[]`` or ``{}``, after ``/`` or a known unit after ``in``
-    (DIN 1313's forms), or as a ``_um``-style suffix (``Radial deviation (um)``, ``angle[deg]``, ``dr/µm``,
+    """(key, unit) of a header name: the unit in ``()``, ``[]`` or ``{}``, after ``/`` or a unit word after ``in``
+    (DIN 1313's forms; :func:`unit_words`), or as a ``_um``-style suffix (``Radial deviation (um)``, ``angle[deg]``, ``dr/µm``,
     ``Position in mm``, ``radial_deviation_um`` -> ``radialdeviation``,
     ``µm``); the key in lower case without spaces, ``_``, ``-`` or ``.``. The unit is canonical (``µm``,
     ``deg``) when fitbench knows it, else as written."""
     n = str(name).strip().lower().replace("μ", "µ")
     unit = None
     m = re.fullmatch(r"(.*?)\s*[(\[{]\s*([^)\]}]*?)\s*[)\]}]", n) or re.fullmatch(r"(.*?)\s*/\s*([^/\s]+)", n)
-    in_unit = re.fullmatch(r"(.*?)\s+in\s+([a-zµ°]+)", n)   # DIN 1313's 'Position in mm'
+    in_unit = re.fullmatch(r"(.*?)\s+in\s+(\S+)", n)   # DIN 1313's 'Position in mm'
     if m and m.group(1):
         n, unit = m.group(1), m.group(2)
-    elif in_unit and in_unit.group(1) and (in_unit.group(2) in LENGTH_UNITS or in_unit.group(2) in ANGLE_UNITS):
+    elif in_unit and in_unit.group(1) and in_unit.group(2) in unit_words():   # a unit read or refused by name
         n, unit = in_unit.group(1), in_unit.group(2)
     else:
         m = re.fullmatch(r"(.*?)[\s_\-]+([a-zµ°]+)", n)
@@ -160,6 +160,14 @@ def _names_above(skip_rows: int) -> str:
 #: units a units row or a header may name that fitbench does not read: refused by name, never taken as a column
 OTHER_UNITS = {"cm", "dm", "km", "mil", "mils", "thou", "ft", "gon", "grad", "mrad", "µrad", "urad", "arcsec", "arcmin",
                "ms", "min", "%", "ppm", "µm/m", "um/m", "mm/min", "°c", "hz"}
+
+
+def unit_words() -> frozenset:
+    """Every unit word a header may name, in lower case: those fitbench reads and those it refuses by name
+    (:data:`OTHER_UNITS`, :data:`CONVERT`): after ``in`` (``Run 1 + in µm``) only such a word is a unit, so that
+    ``in cm`` is refused as ``[cm]`` is and ``Zoom in x`` stays a name."""
+    return frozenset(LENGTH_UNITS) | frozenset(ANGLE_UNITS) | OTHER_UNITS | frozenset(CONVERT["length"]) | \
+        frozenset(CONVERT["angle"])
 
 
 def _unit_word(token: str) -> str | None:

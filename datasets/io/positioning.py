@@ -12,7 +12,8 @@ import warnings
 import numpy as np
 
 from datasets.io._pandas import pd
-from datasets.io.headers import ANGLE_UNITS, CONVERT, LENGTH_UNITS, mixed_units, parse_name, unit_refusal
+from datasets.io.headers import (ANGLE_UNITS, CONVERT, LENGTH_UNITS, mixed_units, parse_name, unit_refusal,
+                                 unit_words)
 from datasets.io.layout import preamble_hint
 from datasets.io.numbers import DataFileError, NumberFormatError
 from datasets.io.tables import _numeric_column, read_table
@@ -34,10 +35,13 @@ ROLE_NAMES = {"actual": ("actual", "actual position", "measured position", "meas
 COLUMN_ROLES = ("target", "direction", "run", "actual", "deviation")
 ROLE_WORDS = {"target": "the target positions", "direction": "the approach directions", "run": "the run numbers",
               "actual": "the actual (measured) positions", "deviation": "the positioning deviations"}
+#: the unit words a run column may give after 'in' (DIN 1313: ``Run 1 + in µm``; any other word is no unit)
+_IN_UNITS = "|".join(sorted({re.escape(w) for u in unit_words() for w in (u, u.replace("µ", "μ"))}, key=len,
+                            reverse=True))
 RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[]*"
                   r"(\+|-|up|down|dn|u|d|increasing|decreasing|inc|dec|positive|negative|pos|neg|↑|↓|fwd|rev|bwd|"
                   r"forward|reverse|backward|return|hin|rückwärts|rueckwaerts|vorwärts|vorwaerts|rück|rueck|zurück|"
-                  r"zurueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\)|/\s*[^/\s]+|in\s+[a-zµμ°]+)?\s*$",
+                  r"zurueck)?\s*[)\]]?\s*(?:\[.*\]|\(.*\)|/\s*[^/\s]+|in\s+(?:" + _IN_UNITS + r"))?\s*$",
                   re.IGNORECASE)
 
 

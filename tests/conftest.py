@@ -166,8 +166,14 @@ def quick_run_on(tmp_path_factory, machine: str) -> Path:
 
 
 def quick_study(tmp_path_factory, name: str) -> Path:
-    """The folder of the shipped study ``name`` run on its quick grid with one job in this process
-    (``run_study(name, OUT, quick=True, jobs=1)``), once per test session (:func:`once_per_session`); read only."""
+    """The folder of the shipped study ``name`` run on its quick grid, once per test session; read only. Without
+    ``--system``: run with one job in this process (``run_study(name, OUT, quick=True, jobs=1)``,
+    :func:`once_per_session`). With ``--system``: the study's folder of the session's whole quick run on the simulated
+    AVX2 machine (:func:`quick_run_on`, which the system tier runs anyway: tests/test_cpu_independence.py,
+    tests/test_verify.py), the same study's quick grid and outputs, checked against results/quick by that run; not
+    a second run of the same rows (~40 s of CPU for these studies in this process)."""
+    if SYSTEM_TIER:
+        return quick_run_on(tmp_path_factory, "avx2_fma") / name
     from experiments.run import run_study
     def make(folder):
         run_study(name, folder / "results", quick=True, jobs=1, log=lambda *a: None)
@@ -222,6 +228,16 @@ def install_plugin(workdir: Path, name: str, modules: dict, entry_points: dict, 
         record.append(f"{rel},sha256={digest},{len(data)}\n")
     (site / info / "RECORD").write_text("".join(sorted(record + [f"{info}/RECORD,,\n"])))
     return site
+
+
+#: whether this session runs the system tier (``--system``); set by :func:`pytest_configure` in every process of a
+#: session (pytest-xdist's workers included)
+SYSTEM_TIER = False
+
+
+def pytest_configure(config):
+    global SYSTEM_TIER
+    SYSTEM_TIER = bool(config.getoption("--system"))
 
 
 def pytest_addoption(parser):

@@ -305,11 +305,11 @@ def test_main_releases_its_out_lock_when_it_returns(tmp_path, capsys):
     assert main(args) == 0
 
 
-# The quick studies run with one job, in this process, once per test session (conftest.quick_study; the report's,
-# the multilateration and the study contract's tests read the same runs): the same rows as with --jobs 2 (the
-# executors' equality is test_two_runs_identical_and_rows_complete's and test_engine's; every default quick study
-# with --jobs 2 is tests/test_cpu_independence.py's, compared with results/quick), without two more processes
-# importing fitbench.
+# The quick studies run once per test session (conftest.quick_study; the report's, the multilateration and the study
+# contract's tests read the same runs): with one job in this process, or, with --system, the session's whole quick run
+# with --jobs 2 (tests/test_cpu_independence.py's, compared with results/quick) rather than the same rows a second
+# time; the same rows either way (the executors' equality is test_two_runs_identical_and_rows_complete's and
+# test_engine's).
 @pytest.mark.slow
 def test_quick_published_study(tmp_path_factory):
     target = quick_study(tmp_path_factory, "published")

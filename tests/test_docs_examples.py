@@ -1,8 +1,10 @@
 """The how-to pages run as written: every command of their ``sh`` blocks that reads a shipped example
 (docs/examples/) runs from a folder holding only those files, and the output a page pastes after it (the ``text``
 block that follows, or ``$ command`` lines inside a ``text`` block) is what the command prints, number for number
-(to one unit of the last digit shown; lines of ``...`` and the runtime are not compared). Marked slow: it runs with
-the whole suite, not in the inner loop."""
+(to one unit of the last digit shown; lines of ``...`` and the runtime are not compared). A ``fitbench`` command runs
+in the test's process through its console script's entry point (tests/cli_calls.py; a child Python for each spent
+~1 s of CPU importing the command again), a ``python`` command in a child Python. Marked slow: it runs with the whole
+suite, not in the inner loop."""
 import re
 import shlex
 import shutil
@@ -11,6 +13,7 @@ import sys
 
 import pytest
 
+from cli_calls import cli
 from conftest import REPO, subprocess_env
 
 PAGES = ("cli.md", "roundness.md", "circular-test.md", "positioning.md")
@@ -40,10 +43,13 @@ def _examples(page: str) -> list[tuple[list[str], list[str]]]:
 CASES = [(page, commands, expected) for page in PAGES for commands, expected in _examples(page)]
 
 
-def _argv(command: str) -> list[str]:
+def _run(command: str, folder):
+    """``command`` run in ``folder``: its exit status and its two streams (``returncode``, ``stdout``, ``stderr``)."""
     words = shlex.split(command, comments=True)
-    head = [sys.executable, "-m", "fitbench"] if words[0] == "fitbench" else [sys.executable]
-    return head + words[1:]
+    if words[0] == "fitbench":
+        return cli(*words[1:])  # the test has made ``folder`` its working directory
+    return subprocess.run([sys.executable, *words[1:]], cwd=folder, env=subprocess_env(), capture_output=True,
+                          text=True, timeout=300)
 
 
 def _same(expected: str, got: str) -> bool:
@@ -66,15 +72,15 @@ def test_every_page_has_a_runnable_example():
     assert {page for page, _, _ in CASES} == set(PAGES)
 
 
-@pytest.mark.slow  # 15 CLI runs, 25 s on 2 cores
+@pytest.mark.slow  # 15 command runs
 @pytest.mark.parametrize("page,commands,expected", CASES,
                          ids=[f"{p}:{' '.join(c[-1].split()[1:3])}" for p, c, _ in CASES])
-def test_the_example_prints_what_the_page_says(page, commands, expected, tmp_path):
+def test_the_example_prints_what_the_page_says(page, commands, expected, tmp_path, monkeypatch):
     shutil.copytree(REPO / "docs" / "examples", tmp_path / "docs" / "examples")
+    monkeypatch.chdir(tmp_path)
     refused = any(line.startswith("fitbench: error:") for line in expected)
     for command in commands:
-        out = subprocess.run(_argv(command), cwd=tmp_path, env=subprocess_env(), capture_output=True, text=True,
-                             timeout=300)
+        out = _run(command, tmp_path)
         assert out.returncode == (2 if refused and command == commands[-1] else 0), (command, out.stderr[-2000:])
         assert "Traceback" not in out.stderr, out.stderr
     printed = (out.stdout + out.stderr).splitlines()

@@ -263,3 +263,17 @@ def test_windows_exports_in_utf16_and_cp1252_are_read(tmp_path, encoding, noted)
     np.testing.assert_allclose(np.hypot(*got.runs[0][1].T) - 20.0, 3e-3 * np.cos(2 * t), atol=2e-7)   # 4 decimals written
     notes = [str(w.message) for w in caught if "Windows-1252" in str(w.message)]
     assert bool(notes) == noted, [str(w.message) for w in caught]
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-16-be", "utf-32"])
+@pytest.mark.parametrize("end", ["\n", "\r", "\r\n"], ids=["LF", "CR", "CRLF"])
+def test_a_long_line_of_a_utf16_or_utf32_file_is_named_on_its_line(tmp_path, encoding, end):
+    """The line-length check compares the code units of a UTF-16 or UTF-32 file, not its bytes: in UTF-16 a CR LF
+    is 0D 00 0A 00, whose CR and LF bytes are not adjacent, and each CR LF counted two line ends (line 5999 named for
+    line 3000)."""
+    lines = ["x,y"] + circle_lines(3600)
+    lines[2999] = "0" * (MAX_LINE_CHARS + 50)
+    path = tmp_path / "wide.csv"
+    path.write_bytes((end.join(lines) + end).encode(encoding))
+    with pytest.raises(DataFileError, match=f"line 3000: longer than {MAX_LINE_CHARS} characters"):
+        read_points(path)

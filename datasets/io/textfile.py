@@ -339,19 +339,23 @@ def read_lines(path, missing_hint: str = "give a path or a data set name from 'd
 
 
 def check_line_lengths(path, skip_rows: int = 0) -> None:
-    """Refuse a file holding a line longer than :data:`MAX_LINE_CHARS` bytes (vectorised over 4 MiB blocks),
-    before a parser that reads a whole line into memory sees it (``skip_rows``: as :func:`read_lines`). Lines end
-    as the readers' universal newlines end them: LF, CR LF or a lone CR (an old Mac export)."""
+    """Refuse a file holding a line longer than :data:`MAX_LINE_CHARS` characters (code units of its encoding,
+    vectorised over 4 MiB blocks), before a parser that reads a whole line into memory sees it (``skip_rows``: as
+    :func:`read_lines`). Lines end as the readers' universal newlines end them: LF, CR LF or a lone CR (an old Mac
+    export), in UTF-16 and UTF-32 files too (their code units are compared, not their bytes)."""
     name = os.fspath(path)
-    limit = (MAX_LINE_CHARS + 1) * CODE_UNIT_BYTES.get(file_encoding(name), 1)   # bytes; + 1: a CR before the LF
+    dtype = _code_unit(name)
+    limit = MAX_LINE_CHARS + 1   # code units; + 1: a CR LF's LF, counted in the next line
     with _open_text(name, skip_rows=skip_rows) as text:
         fh = text.buffer
-        lineno, run, after_cr = 1, 0, False
+        lineno, run, after_cr, rest = 1, 0, False, b""
         while True:
-            block = fh.read(1 << 22)
+            block = rest + fh.read(1 << 22)
+            cut = len(block) - len(block) % dtype.itemsize
+            block, rest = block[:cut], block[cut:]
             if not block:
                 return
-            a = np.frombuffer(block, dtype=np.uint8)
+            a = np.frombuffer(block, dtype=dtype)
             ends = (a == 10) | (a == 13)
             ends[1:] &= ~((a[1:] == 10) & (a[:-1] == 13))   # CR LF ends one line, at its CR
             if after_cr and a[0] == 10:   # the LF of a CR LF split between two blocks
@@ -372,6 +376,22 @@ def check_line_lengths(path, skip_rows: int = 0) -> None:
             run = a.size - 1 - int(nl[-1])
             if run > limit:
                 raise _too_long(name, lineno)
+
+
+def _code_unit(name: str) -> np.dtype:
+    """The code unit of ``name``'s encoding as a NumPy type: a byte, or UTF-16's or UTF-32's unit in the file's
+    byte order (its byte-order mark, else the encoding's name)."""
+    enc = file_encoding(name)
+    size = CODE_UNIT_BYTES.get(enc, 1)
+    if size == 1:
+        return np.dtype(np.uint8)
+    if enc.endswith(("-le", "-be")):
+        order = "<" if enc.endswith("-le") else ">"
+    else:   # the byte-order mark says
+        with open(name, "rb") as fh:
+            head = fh.read(size)
+        order = "<" if head[:2] == b"\xff\xfe" else ">"
+    return np.dtype(f"{order}u{size}")
 
 
 def unterminated_last_line(path, skip_rows: int = 0) -> tuple[int, str] | None:

@@ -207,6 +207,10 @@ _CALL = "call"  # the first item of a message that asks a worker for func(*args)
 def _worker_main(conn, parent_pid: int, progress) -> None:
     """A local worker: receive chunks, send back their rows as columns, until told to stop."""
     _die_with_parent(parent_pid)  # first: a run killed while this worker imports takes it along
+    for name in ("SIGTERM", "SIGHUP"):   # a copy of a starting run has its handlers: a worker's are the defaults
+        sig = getattr(signal, name, None)
+        if sig is not None and callable(signal.getsignal(sig)):
+            signal.signal(sig, signal.SIG_DFL)
     _lead_own_group()  # what a method starts is in the worker's group, ended with it (_Worker.stop)
     with contextlib.suppress(OSError, ValueError):  # a method's prints (print, os.write(1, ...), a solver's printf, a
         os.dup2(2, 1)   # process it starts) go to the run's stderr: its stdout carries the run's own lines alone

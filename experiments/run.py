@@ -24,18 +24,18 @@ from itertools import islice
 from pathlib import Path
 
 if __name__ == "__main__":  # the command: its local workers start now and import while this process imports its own
-    from experiments.localworkers import start_early
-    start_early(sys.argv[1:])
-
     def _stopped_while_starting(signum, frame):
-        """Ctrl-C, SIGTERM or SIGHUP while the command imports its modules (before main's handlers): one line, no
-        traceback."""
+        """Ctrl-C, SIGTERM or SIGHUP while the command imports its modules and starts its workers (before main's
+        handlers): one line, no traceback (the workers end with it: they die with their parent)."""
         what = "interrupted" if signum == signal.SIGINT else f"terminated ({signal.Signals(signum).name})"
         os.write(2, f"\nexperiments.run: {what} while starting; no rows had run\n".encode())
         os._exit(128 + signum)
     for _sig in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)):
         if _sig is not None and signal.getsignal(_sig) is not signal.SIG_IGN:   # nohup's SIGHUP stays ignored
             signal.signal(_sig, _stopped_while_starting)
+
+    from experiments.localworkers import start_early
+    start_early(sys.argv[1:])
 
 from experiments import compare  # the verdict on every run: fresh results against the committed ones
 from experiments import config as configs

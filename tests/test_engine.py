@@ -1223,10 +1223,13 @@ def test_summary_by_may_name_a_column_of_a_result_class_loaded_after_the_engine(
 @pytest.mark.parametrize("signum, status, what", [(signal.SIGINT, 130, "interrupted"),
                                                   (signal.SIGTERM, 143, "terminated (SIGTERM)"),
                                                   (signal.SIGHUP, 129, "terminated (SIGHUP)")])
-def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path, signum, status, what):
-    """Ctrl-C (or SIGTERM) while ``python -m experiments.run`` still imports its modules, before its main function
-    handles signals: one line and 130 (143), no traceback (it printed the KeyboardInterrupt's traceback of the import
-    and ended by the signal). An import hook holds the run in its imports until the signal comes."""
+@pytest.mark.parametrize("held, jobs", [("experiments.compare", "1"), ("pandas", "2")],
+                         ids=["its-own-modules", "starting-its-workers"])
+def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path, signum, status, what, held, jobs):
+    """Ctrl-C (or SIGTERM, SIGHUP) while ``python -m experiments.run`` still imports its modules, or imports what its
+    early workers need before it forks them (``--jobs 2``: NumPy, the methods, pandas), before its main function
+    handles signals: one line and 130 (143, 129), no traceback (it printed the KeyboardInterrupt's traceback of the
+    import and ended by the signal). An import hook holds the run in that import until the signal comes."""
     from conftest import default_sigint, subprocess_env
     site = tmp_path / "site"
     site.mkdir()
@@ -1235,7 +1238,7 @@ def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path, signum, status, 
         import sys, time
         class _Hold:
             def find_spec(self, name, path=None, target=None):
-                if name == "experiments.compare":
+                if name == {held!r}:
                     open({str(mark)!r}, "w").close()
                     time.sleep(30)
                 return None
@@ -1243,7 +1246,7 @@ def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path, signum, status, 
             sys.meta_path.insert(0, _Hold())
         """))
     study = write_study(tmp_path, reps=1)
-    proc = subprocess.Popen([sys.executable, "-m", "experiments.run", str(study), "--jobs", "1", "--out",
+    proc = subprocess.Popen([sys.executable, "-m", "experiments.run", str(study), "--jobs", jobs, "--out",
                              str(tmp_path / "o")], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, env=subprocess_env(site, OPENBLAS_NUM_THREADS="1"), preexec_fn=default_sigint)
     deadline = time.monotonic() + 60

@@ -35,8 +35,12 @@ def _diagnose(layout: Layout, idx, skip_rows: int):
         toks = _split(ln, layout.sep)
         if len(toks) != layout.ncol:
             where = f"the header (line {layout.header_line})" if layout.header else "the first line"
+            what = skip_rows_hint(layout, before=lineno)
+            if not what and len(toks) > layout.ncol:   # never read from its first fields
+                what = ("; correct the line, or delete it" if not layout.header else
+                        "; correct the line, or delete it (if such lines hold a column more, name it in the header)")
             raise DataFileError(f"{name} line {lineno}: {len(toks)} field{'s' if len(toks) != 1 else ''} where {where} "
-                                f"has {layout.ncol}: {ln!r}{skip_rows_hint(layout, before=lineno)}")
+                                f"has {layout.ncol}: {ln!r}{what}")
         for j in idx:
             tok = toks[j].replace(",", ".") if layout.decimal_comma else toks[j]
             if not _is_number(tok) or (layout.decimal_comma and "." in toks[j]):

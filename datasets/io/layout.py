@@ -145,9 +145,47 @@ def sniff(path, skip_rows: int = 0) -> Layout:
         hint = preamble_hint(name, body[0][0], skip_rows=skip_rows)
         raise DataFileError(f"{name} line {lineno}: {k} field{'s' if k != 1 else ''} where the header (line "
                             f"{body[0][0]}) has {len(head)}: {ln!r}{hint}")
+    if (longer := longer_rows(name, head, named, body, sep, comment, skip_rows)) is not None:
+        raise DataFileError(longer)
     decimal_comma = _marks(name, body[1:], sep, decimal_comma)
     return Layout(name, sep, decimal_comma, head, body[0][0], body[1][0], len(head), comment, preamble, body[1:],
                   units_line, skip_rows)
+
+
+def longer_rows(name, head: list, named: int, body: list, sep, comment: str, skip_rows: int = 0) -> str | None:
+    """The refusal of data rows with more fields than the header names (``body``: the header's (line, text), then
+    the first data lines'), or None. Read from their first fields, a point number before x, y was read as x and
+    the x as y (a circle of R 99.5 mm for one of 50 mm), and ``170,80,000`` (decimal commas in a comma-separated
+    file) as x 170, y 80, its third field dropped. Fields after the named ones that are all empty (a separator
+    at the end of each data line) are not refused; nor is an inline comment, nor a line that is no row of data
+    (a header below a preamble line taken for the header, which the readers name)."""
+    where = None
+    widths = []
+    for lineno, ln in body[1:]:
+        toks = _split(ln.split(comment, 1)[0].strip(), sep)
+        longer = len(toks) > named and any(toks[named:]) and _numeric_fields(ln) is not None   # a row of data
+        widths.append(len(toks) if longer else named)
+        if longer and where is None:
+            where = (lineno, ln, len(toks))
+    if where is None:
+        return None
+    lineno, ln, k = where
+    header_line = body[0][0]
+    names = ", ".join(repr(h) for h in head[:named])
+    hint = preamble_hint(name, header_line, skip_rows=skip_rows) if _numeric_fields(body[1][1]) is None else ""
+    if hint:          # the "header" is an instrument's preamble line above the table (no numbers below it)
+        return f"{name} line {lineno}: {k} fields where the header (line {header_line}) has {named}: {ln!r}{hint}"
+    every = len(set(widths)) == 1
+    what = (f"every data line has {k} fields (line {lineno}: {ln!r})" if every
+            else f"line {lineno} has {k} fields: {ln!r}")
+    comma = ""
+    if sep == "," and not any("." in t for _, t in body[1:]):
+        comma = ("; if the numbers are written with decimal commas, the commas between the fields split them: "
+                 "export with ';' or tabs between the fields")
+    return (f"{name}: the header (line {header_line}) names {named} column{'s' * (named != 1)} ({names}) but "
+            f"{what}; fitbench does not guess which fields the names belong to: name every column in the header, or give "
+            f"--skip-rows {header_line} and --columns I J (fields counted from 0; --unit if they are not in mm) to "
+            f"read the fields without the header{comma}")
 
 
 def _marks(name, body, sep, decimal_comma: bool) -> bool:

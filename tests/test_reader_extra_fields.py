@@ -1,0 +1,102 @@
+"""The x, y reader (fit, roundness, circular-test, magnify) and what a table's rows hold beyond its header.
+
+* Rows with more fields than the header names were read from their first fields, silently: a point number before
+  x, y (``x,y`` over ``1,170.001533,80.000000``) gave a circle of R 99.487 mm about (120.82, 182.84) for one of
+  R 50 about (120, 80), exit 0; a decimal-comma file written with ',' between the fields (``170,80,000``) lost its
+  third field. Such rows are refused in one line saying how many columns the header names and how many fields
+  the rows have, and what to do; the way out it gives reads the circle.
+
+The expected figures are the circle the points were made from (centre (120, 80) mm, R 50 mm), never fitbench's
+own output."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from cli_calls import cli, one_error_line
+from datasets.io import read_points
+from datasets.io.columns import SMALL_FILE_BYTES
+from datasets.io.numbers import DataFileError
+
+REPO = __import__("pathlib").Path(__file__).resolve().parents[1]
+CENTRE, RADIUS = (120.0, 80.0), 50.0
+
+
+def _circle(n):
+    """``n`` points of the circle about CENTRE of RADIUS (mm), exact to the 6 decimals written."""
+    t = 2 * np.pi * np.arange(n) / n
+    return np.c_[CENTRE[0] + RADIUS * np.cos(t), CENTRE[1] + RADIUS * np.sin(t)]
+
+
+def _write(path, header, rows):
+    path.write_text(header + "\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    return path
+
+
+def _fit(*args):
+    """centre x, centre y, radius (mm) of ``fitbench fit circle.gauss_newton ARGS --json``."""
+    code, out, err = cli("fit", "circle.gauss_newton", *args, "--json")
+    assert code == 0, err
+    got = json.loads(out)
+    return (*got["center"], got["radius"])
+
+
+# ------------------------------------------------------------------ rows longer than the header
+LONGER = {   # header, one row of the circle's point (i, x, y) as a file with an unnamed column writes it
+    "point number first": ("x,y", lambda i, x, y: f"{i + 1},{x:.6f},{y:.6f}"),
+    "unnamed z last": ("x [mm],y [mm]", lambda i, x, y: f"{x:.6f},{y:.6f},0.0"),
+    "3-D export, z between": ("x [mm],y [mm]", lambda i, x, y: f"{x:.6f},250.000,{y:.6f}"),
+    "decimal commas, ',' between the fields": ("x,y", lambda i, x, y: f"{x:.3f}".replace(".", ",") + ","
+                                               + f"{y:.3f}".replace(".", ",")),
+}
+
+
+@pytest.mark.parametrize("n", [240, 20000], ids=["small file", "large file (pandas)"])
+@pytest.mark.parametrize("case", list(LONGER))
+def test_rows_with_more_fields_than_the_header_names_are_refused(tmp_path, case, n):
+    header, row = LONGER[case]
+    path = _write(tmp_path / "extra.csv", header, [row(i, x, y) for i, (x, y) in enumerate(_circle(n))])
+    assert (path.stat().st_size > SMALL_FILE_BYTES) == (n == 20000)
+    fields = len(row(0, 170.0, 80.0).split(","))
+    with pytest.raises(DataFileError, match=f"names 2 columns .* but every data line has {fields} fields "
+                                            r"\(line 2: .*name every column in the header, or give --skip-rows 1"):
+        read_points(path)
+    for command in (("fit", "circle.gauss_newton", path), ("roundness", path),
+                    ("circular-test", path, path, "--nominal-radius", RADIUS),
+                    ("magnify", path, path, "--eta", 100)):
+        one_error_line(cli(*command), "extra.csv: the header (line 1) names 2 columns",
+                       f"every data line has {fields} fields", "--columns I J")
+    if "decimal commas" in case:
+        one_error_line(cli("fit", "circle.gauss_newton", path), "export with ';' or tabs between the fields")
+
+
+def test_the_way_out_the_refusal_gives_reads_the_circle(tmp_path):
+    header, row = LONGER["point number first"]
+    path = _write(tmp_path / "extra.csv", header, [row(i, x, y) for i, (x, y) in enumerate(_circle(240))])
+    cx, cy, r = _fit(path, "--skip-rows", 1, "--columns", 1, 2)
+    assert np.allclose([cx, cy, r], [*CENTRE, RADIUS], atol=1e-6)
+    named = _write(tmp_path / "named.csv", "Nr,x,y", [row(i, x, y) for i, (x, y) in enumerate(_circle(240))])
+    assert np.allclose(_fit(named), [*CENTRE, RADIUS], atol=1e-6)
+
+
+def test_a_longer_row_below_the_first_lines_is_refused_naming_it(tmp_path):
+    for n in (400, 20000):
+        rows = [f"{x:.6f},{y:.6f}" for x, y in _circle(n)]
+        rows[300] = "301," + rows[300]
+        path = _write(tmp_path / f"late{n}.csv", "x,y", rows)
+        one_error_line(cli("fit", "circle.gauss_newton", path), "line 302: 3 fields where the header (line 1) has 2",
+                       "correct the line, or delete it")
+
+
+@pytest.mark.parametrize("n", [240, 20000])
+@pytest.mark.parametrize("ending", [",", ", ", ",  # probe 1"])
+def test_separators_at_the_end_of_the_data_lines_and_inline_comments_are_still_read(tmp_path, n, ending):
+    path = _write(tmp_path / "ends.csv", "x,y", [f"{x:.6f},{y:.6f}{ending}" for x, y in _circle(n)])
+    assert np.allclose(read_points(path), _circle(n), atol=1e-6)
+
+
+def test_the_shipped_examples_are_still_read():
+    for name in ("trace.csv", "cw.csv", "ccw.csv", "roundness.csv"):
+        assert len(read_points(REPO / "docs/examples" / name)) > 100

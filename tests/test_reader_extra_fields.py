@@ -5,12 +5,16 @@
   R 50 about (120, 80), exit 0; a decimal-comma file written with ',' between the fields (``170,80,000``) lost its
   third field. Such rows are refused in one line saying how many columns the header names and how many fields
   the rows have, and what to do; the way out it gives reads the circle.
+* A units row with a placeholder for a column without a unit (``Nr;X;Y`` over ``[-];[µm];[µm]``, ``-``, ``[1]``)
+  was not taken for a units row ('[µm]' is not a number); it is, and the values are read in its units (also in a
+  positioning long table: ``[mm],[-],[-],[µm]``).
 
-The expected figures are the circle the points were made from (centre (120, 80) mm, R 50 mm), never fitbench's
-own output."""
+The expected figures are the circle the points were made from (centre (120, 80) mm, R 50 mm) and ISO 230-2's A
+computed here from the deviations by the standard's definitions, never fitbench's own output."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -100,3 +104,42 @@ def test_separators_at_the_end_of_the_data_lines_and_inline_comments_are_still_r
 def test_the_shipped_examples_are_still_read():
     for name in ("trace.csv", "cw.csv", "ccw.csv", "roundness.csv"):
         assert len(read_points(REPO / "docs/examples" / name)) > 100
+
+
+# ------------------------------------------------------------------ a units row with placeholders
+@pytest.mark.parametrize("placeholder", ["[-]", "-", "[1]", "1", "(-)", "[]"])
+def test_a_units_row_with_a_placeholder_for_a_unitless_column_is_read_in_its_units(tmp_path, placeholder):
+    rows = [f"{i + 1};{1000 * x:.3f};{1000 * y:.3f}" for i, (x, y) in enumerate(_circle(240))]
+    path = _write(tmp_path / "units.csv", f"Nr;X;Y\n{placeholder};[µm];[µm]", rows)
+    assert np.allclose(read_points(path, ("X", "Y")), _circle(240), atol=1e-6)      # µm read as µm: mm out
+    assert np.allclose(_fit(path, "--columns", "X", "Y"), [*CENTRE, RADIUS], atol=1e-6)
+
+
+def _iso_230_2_accuracy(table):
+    """ISO 230-2:2014 A (µm) of a long table's rows (target, direction, run, deviation in µm), from the
+    standard's definitions: per target and direction the mean and the standard deviation s of the runs; A is the
+    largest mean + 2s minus the smallest mean - 2s over both directions."""
+    up, down = [], []
+    for target in sorted({t for t, _, _, _ in table}):
+        for direction, out in (("+", up), ("-", down)):
+            d = np.array([v for t, s, _, v in table if t == target and s == direction])
+            out.append((d.mean() + 2 * d.std(ddof=1), d.mean() - 2 * d.std(ddof=1)))
+    return max(hi for hi, _ in up + down) - min(lo for _, lo in up + down)
+
+
+@pytest.mark.parametrize("units", ["[mm],[-],[-],[µm]", "mm,-,-,µm", "[mm],[1],[1],[µm]", "[mm],[-],[-],[mm]"])
+def test_a_positioning_long_table_s_units_row_with_placeholders_is_read(tmp_path, units):
+    lines = (REPO / "docs/examples/positioning.csv").read_text(encoding="utf-8").splitlines()
+    names = lines[0].split(";")[1:]
+    table = []
+    for line in lines[1:]:
+        values = line.split(";")
+        for name, v in zip(names, values[1:]):
+            run, direction = re.search(r"Run (\d+) ([+-])", name).groups()
+            table.append((float(values[0]), direction, int(run), float(v)))
+    scale = 1e-3 if units.endswith("[mm]") else 1.0
+    rows = [f"{t:.3f},{s},{run},{v * scale:.9f}" for t, s, run, v in table]
+    path = _write(tmp_path / "long.csv", f"Target,Direction,Run,Deviation\n{units}", rows)
+    code, out, err = cli("positioning", path, "--json")
+    assert code == 0, err
+    assert json.loads(out)["A"] == pytest.approx(_iso_230_2_accuracy(table) * 1e-3, abs=1e-9)   # --json: mm

@@ -172,19 +172,24 @@ def unit_words() -> frozenset:
 
 def _unit_word(token: str) -> str | None:
     """The unit a field of a units row names (``µm``, ``[mm]``, ``(deg)``), canonical when fitbench reads it,
-    else as written when it is a unit it does not read (:data:`OTHER_UNITS`); None when it is no unit."""
+    else as written when it is a unit it does not read (:data:`OTHER_UNITS`); '' for the placeholder of a column
+    without a unit (``-``, ``[-]``, ``[1]``, ``1``, ``[]``: a point number, a direction, a run); None when it is no
+    unit."""
     t = str(token).strip().lower().replace("μ", "µ")
     t = re.sub(r"^[\[({]\s*(.*?)\s*[\])}]$", r"\1", t)
+    if t in ("", "-", "\u2013", "\u2014", "1"):
+        return ""
     return LENGTH_UNITS.get(t, ANGLE_UNITS.get(t, t if t in OTHER_UNITS else None))
 
 
 def _units_row(tokens) -> list | None:
-    """The units of a units row (``µm;µm``, ``;deg;µm``: one per field, None for an empty field), or None when
-    ``tokens`` is not one (every non-empty field a unit, at least one)."""
-    units = [_unit_word(t) if t.strip() else None for t in tokens]
-    if not any(units) or any(u is None and t.strip() for u, t in zip(units, tokens)):
+    """The units of a units row (``µm;µm``, ``;deg;µm``, ``[-];[µm];[µm]``: one per field, None for an empty field
+    or a unitless column's placeholder, :func:`_unit_word`), or None when ``tokens`` is not one (every non-empty
+    field a unit or a placeholder, at least one a unit)."""
+    words = [_unit_word(t) if t.strip() else "" for t in tokens]
+    if any(w is None for w in words) or not any(words):
         return None
-    return units
+    return [w or None for w in words]
 
 
 def _with_units(name, header: list, units: list, lineno: int) -> list:

@@ -8,6 +8,8 @@
 * A units row with a placeholder for a column without a unit (``Nr;X;Y`` over ``[-];[µm];[µm]``, ``-``, ``[1]``)
   was not taken for a units row ('[µm]' is not a number); it is, and the values are read in its units (also in a
   positioning long table: ``[mm],[-],[-],[µm]``).
+* An empty cell, a totals line, a summary after a blank line: the refusal says what to do; two blocks of points
+  are still named as blocks.
 
 The expected figures are the circle the points were made from (centre (120, 80) mm, R 50 mm) and ISO 230-2's A
 computed here from the deviations by the standard's definitions, never fitbench's own output."""
@@ -143,3 +145,40 @@ def test_a_positioning_long_table_s_units_row_with_placeholders_is_read(tmp_path
     code, out, err = cli("positioning", path, "--json")
     assert code == 0, err
     assert json.loads(out)["A"] == pytest.approx(_iso_230_2_accuracy(table) * 1e-3, abs=1e-9)   # --json: mm
+
+
+# ------------------------------------------------------------------ empty cells, totals, summaries
+def test_an_empty_cell_and_a_totals_line_say_what_to_do(tmp_path):
+    rows = [f"{x:.6f},{y:.6f}" for x, y in _circle(240)]
+    empty = _write(tmp_path / "empty.csv", "x [mm],y [mm]", rows[:4] + [rows[4].split(",")[0] + ","] + rows[5:])
+    totals = _write(tmp_path / "totals.csv", "x,y", rows + ["Mean,120.0"])
+    for command in ("fit", "roundness"):
+        args = ("circle.gauss_newton",) if command == "fit" else ()
+        one_error_line(cli(command, *args, empty), "empty.csv line 6: missing field: 'y [mm]' is empty: fill in the "
+                                                   "value, or delete the line")
+        one_error_line(cli(command, *args, totals), "totals.csv line 242: 'Mean' is not a number: correct the value, "
+                                                    "or delete the line", "prefix it with #")
+
+
+def test_a_summary_after_a_blank_line_is_named_as_lines_below_the_points(tmp_path):
+    rows = [f"{x:.6f},{y:.6f}" for x, y in _circle(240)]
+    summary = _write(tmp_path / "summary.csv", "x,y", rows + ["", "Max deviation,0.0034", "Count,240"])
+    excel = _write(tmp_path / "excel.csv", "x,y", rows + [",", "Count,240"])
+    for command in ("fit", "roundness"):
+        args = ("circle.gauss_newton",) if command == "fit" else ()
+        one_error_line(cli(command, *args, summary), "summary.csv line 243: 'Max deviation' is not a number: lines "
+                                                     "243-244, below the points, are not points",
+                       "delete them, or prefix them with #", absent=("blocks",))
+        one_error_line(cli(command, *args, excel), "excel.csv line 242: holds only separators (','), no values: "
+                                                   "lines 242-243, below the points, are not points")
+    commented = _write(tmp_path / "commented.csv", "x,y", rows + ["", "# Max deviation,0.0034", "# Count,240"])
+    assert np.allclose(_fit(commented), [*CENTRE, RADIUS], atol=1e-6)
+
+
+def test_two_blocks_of_points_are_still_named_as_blocks(tmp_path):
+    rows = [f"{x:.6f},{y:.6f}" for x, y in _circle(240)]
+    path = _write(tmp_path / "two.csv", "x,y", rows[:120] + [""] + rows[120:])
+    one_error_line(cli("roundness", path), "2 blocks of points separated by blank lines")
+    second = _write(tmp_path / "second.csv", "x,y", rows[:120] + ["", "x,y"] + rows[120:])
+    one_error_line(cli("magnify", second, second, "--eta", 10), "line 123: 'x' is not a number: rows of numbers "
+                                                               "follow again from line 124", "second table")

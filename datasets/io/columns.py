@@ -15,7 +15,7 @@ import numpy as np
 
 from datasets.io._pandas import pd
 from datasets.io.delimiters import COMMENT_PREFIXES, _split
-from datasets.io.layout import Layout, skip_rows_hint
+from datasets.io.layout import Layout, _numeric_fields, skip_rows_hint
 from datasets.io.numbers import (_COMMA_GROUPED, _COMMA_NUMBER, DataFileError, NumberFormatError, _AsciiMinus,
                                  _field_number, _is_number, _number, decimal_marks, number_problem)
 from datasets.io.textfile import (_open_text, check_line_lengths, file_encoding, iter_lines, read_lines,
@@ -25,14 +25,23 @@ from datasets.io.textfile import (_open_text, check_line_lengths, file_encoding,
 def _diagnose(layout: Layout, idx, skip_rows: int):
     """Locate the first bad line (runs only after the fast parser failed)."""
     name = layout.name
-    for lineno, ln in enumerate(read_lines(name, skip_rows=layout.skip_rows), start=1):
+    text = read_lines(name, skip_rows=layout.skip_rows)
+    seps = "".join(c for c in (layout.sep or "") if not c.isspace())
+    gap = None   # the first blank, separator-only or comment line after the last data line
+    for lineno, ln in enumerate(text, start=1):
         ln = ln.strip()
-        if lineno < layout.first_data_line or not ln or ln.startswith(COMMENT_PREFIXES):
+        if lineno < layout.first_data_line:
+            continue
+        if not ln or ln.startswith(COMMENT_PREFIXES):
+            gap = gap or lineno
             continue
         if "\x00" in ln:
             raise DataFileError(f"{name} line {lineno}: holds NUL bytes, so it is not a text table; if it is UTF-16 or "
                                 "UTF-32 text, save it as UTF-8 (or with a byte-order mark)")
         toks = _split(ln, layout.sep)
+        if seps and not ln.strip(seps):          # ',' or ';;': a spreadsheet's empty row
+            raise DataFileError(f"{name} line {lineno}: holds only separators ({ln!r}), no values: "
+                                f"{_after_table(text, lineno, separators=True)}")
         if len(toks) != layout.ncol:
             where = f"the header (line {layout.header_line})" if layout.header else "the first line"
             what = skip_rows_hint(layout, before=lineno)
@@ -47,11 +56,41 @@ def _diagnose(layout: Layout, idx, skip_rows: int):
                 why = number_problem(toks[j], layout.decimal_comma)
                 if why:
                     raise NumberFormatError(f"{name} line {lineno}: {why}")
-                raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a number"
-                                    f"{skip_rows_hint(layout, before=lineno) or _header_below(layout, lineno, ln, toks)}")
+                hint = skip_rows_hint(layout, before=lineno) or _header_below(layout, lineno, ln, toks)
+                if not hint and not toks[j]:
+                    column = repr(layout.header[j]) if layout.header else f"column {j}"
+                    raise DataFileError(f"{name} line {lineno}: missing field: {column} is empty: fill in the value, "
+                                        "or delete the line")
+                if not hint:
+                    after = _after_table(text, lineno) if gap else ""
+                    hint = (f": {after}" if after else
+                            ": correct the value, or delete the line (a totals or summary line: delete it, or "
+                            "prefix it with #)")
+                raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a number{hint}")
             if not np.isfinite(_number(tok)):
                 raise DataFileError(f"{name} line {lineno}: {toks[j]!r} is not a finite number; remove or repair the point")
+        gap = None
     raise DataFileError(f"{name}: could not be parsed (unexpected format); use one row of numbers per line")
+
+
+def _after_table(text: list, lineno: int, separators: bool = False) -> str:
+    """What to do with line ``lineno`` of ``text`` (the file's lines), not a data row, below a blank line or a line
+    of separators (``separators``: it is one): when no row of numbers follows (a summary after the points: 'Max
+    deviation,0.0034', Excel's 'Count,240'), delete the lines or comment them out; when one does, the file holds
+    a second table (under its own header) or block of points, and each is to be read on its own."""
+    rest = [(k, ln.strip()) for k, ln in enumerate(text[lineno:], start=lineno + 1)
+            if ln.strip() and not ln.strip().startswith(COMMENT_PREFIXES)]
+    numbers = next((k for k, ln in rest if (got := _numeric_fields(ln)) is not None and got[1] >= 2), None)
+    if numbers is not None:
+        if separators:
+            return (f"delete the line; if the rows from line {numbers} are another profile, save each profile in a "
+                    "file of its own")
+        return (f"rows of numbers follow again from line {numbers}: the file holds a second table; save each table "
+                f"in a file of its own (or delete the lines not to be read)")
+    last = rest[-1][0] if rest else lineno
+    if last == lineno:
+        return f"line {lineno}, below the points, is not a point (a summary?): delete it, or prefix it with #"
+    return f"lines {lineno}-{last}, below the points, are not points (a summary?): delete them, or prefix them with #"
 
 
 def _header_below(layout: Layout, lineno: int, line: str, toks: list) -> str:

@@ -405,22 +405,28 @@ PRESENTATION = frozenset({"title", "description", "default", "report", "tables",
                           "max_jobs", "chunk_rows", "row_timeout"})
 
 
-def _data_files(cfg: dict) -> dict[str, str]:
-    """{"datasets[i] NAME": SHA-256} of the files the study's data sets read (a ``file`` source, a published set;
-    ``Study.data_sets``: its ``[[datasets]]`` unless its own tasks read others), named without the folders of this
-    machine."""
+def study_data_files(cfg: dict) -> list[tuple[str, str]]:
+    """[("datasets[i]", path)] of the files the study's data sets read (a ``file`` source, a published set;
+    ``Study.data_sets``: its ``[[datasets]]`` unless its own tasks read others)."""
     from experiments.codekeys import data_files
     from experiments.engine import expand_datasets
     from experiments.studies import study_of
     specs = study_of(cfg["kind"]).data_sets(cfg)
+    return [(f"datasets[{spec['entry']}]", f)
+            for spec in (specs if specs is not None else expand_datasets(cfg, getattr(cfg, "where", cfg.get("name", "?"))))
+            for f in data_files(spec)]
+
+
+def _data_files(cfg: dict) -> dict[str, str]:
+    """{"datasets[i] NAME": SHA-256} of the files the study's data sets read (:func:`study_data_files`), named without
+    the folders of this machine."""
     out = {}
-    for spec in specs if specs is not None else expand_datasets(cfg, getattr(cfg, "where", cfg.get("name", "?"))):
-        for f in data_files(spec):
-            digest = hashlib.sha256()
-            with open(f, "rb") as fh:
-                for block in iter(lambda: fh.read(1 << 20), b""):
-                    digest.update(block)
-            out[f"datasets[{spec['entry']}] {Path(f).name}"] = digest.hexdigest()
+    for where, f in study_data_files(cfg):
+        digest = hashlib.sha256()
+        with open(f, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+        out[f"{where} {Path(f).name}"] = digest.hexdigest()
     return out
 
 

@@ -407,6 +407,24 @@ def check_outputs(out: Path, study_names: list[str]) -> None:
                                     f"--out") from None
 
 
+def check_inputs_not_written(out: Path, cfgs: list, report: bool) -> None:
+    """Refuse, before any row, a study whose data file lies where the run writes: a study's folder ``OUT/STUDY``
+    (results.csv, tables, figures), the report's ``OUT/paper`` (unless ``--no-report``) or the run's own files in
+    ``OUT``. A data set at ``OUT/STUDY/results.csv`` had the measurement replaced by the results table, and the run
+    then blamed the columns of the file it had written."""
+    from experiments.compare import study_data_files
+    places = [out.resolve() / cfg["name"] for cfg in cfgs] + ([out.resolve() / "paper"] if report else [])
+    own = {(out / n).resolve() for n in OUT_FILES}
+    for cfg in cfgs:
+        for where, path in study_data_files(cfg):
+            f = Path(path).resolve()
+            place = next((p for p in places if f == p or p in f.parents), None)
+            if place is not None or f in own:
+                raise InvalidInputError(f"{getattr(cfg, 'where', cfg['name'])} {where}: {path} is a data file in "
+                                        f"{place or out}, which this run writes (--out {out}): move the data out of "
+                                        f"it, or give another --out")
+
+
 def lock_out(out: Path):
     """Hold an exclusive lock on ``out`` for the rest of the run (``fcntl.flock``: :func:`main` releases it when it
     returns, and the kernel when the process ends, however it ends); a second run into the same folder gets one
@@ -605,6 +623,7 @@ def _run(args) -> int:
             confined(args.out, cfg["name"])
         check_out(args.out)
         check_outputs(args.out, [cfg["name"] for cfg in checked])
+        check_inputs_not_written(args.out, checked, report=not args.no_report)
         lock_out(args.out)
         jobs = args.jobs if args.scheduler else usable_jobs(args.jobs)
         t0 = time.perf_counter()

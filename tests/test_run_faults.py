@@ -324,3 +324,45 @@ def test_version(module, tmp_path):
                          capture_output=True, text=True, timeout=120)
     from importlib import metadata
     assert res.returncode == 0 and metadata.version("fitbench") in res.stdout
+
+
+FILE_STUDY = '''name = "{name}"
+title = "a study of a file"
+kind = "grid"
+seed = 1
+repetitions = 1
+
+[[datasets]]
+file = "{file}"
+
+[[methods]]
+id = "circle.kasa"
+'''
+
+
+@pytest.mark.parametrize("place, extra, refused", [("out/filed/results.csv", [], True),
+                                                   ("out/filed/figures/trace.csv", [], True),
+                                                   ("out/paper/trace.csv", [], True),
+                                                   ("out/paper/trace.csv", ["--no-report"], False),
+                                                   ("out/data/trace.csv", ["--no-report"], False)])
+def test_a_data_file_where_the_run_writes_is_refused_before_any_row(tmp_path, monkeypatch, capsys, place, extra,
+                                                                    refused):
+    """A study's data file in the folder the run writes (``OUT/STUDY``, ``OUT/paper`` when the report is built) is
+    refused in one line before any row, the file unchanged: at ``OUT/STUDY/results.csv`` the measurement was replaced
+    by the results table and the run then blamed the file's columns. Elsewhere in ``--out`` it is read."""
+    trace = Path(__file__).resolve().parents[1] / "docs" / "examples" / "trace.csv"
+    data = tmp_path / place
+    data.parent.mkdir(parents=True)
+    data.write_bytes(trace.read_bytes())
+    (tmp_path / "filed.toml").write_text(FILE_STUDY.format(name="filed", file=place), encoding="utf-8")
+    done = run_here(["filed.toml", "--jobs", "1", "--out", "out", *extra], tmp_path, monkeypatch, capsys)
+    assert data.read_bytes() == trace.read_bytes()
+    if refused:
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.strip().splitlines() == [
+            f"experiments.run: error: filed.toml datasets[0]: {data} is a data file in "
+            f"{tmp_path / ('out/paper' if 'paper' in place else 'out/filed')}, which this run writes (--out out): "
+            f"move the data out of it, or give another --out"], done.stderr
+        assert not (tmp_path / "out" / "filed" / "rows.sqlite").exists()
+    else:
+        assert done.returncode == 0, done.stderr

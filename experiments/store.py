@@ -205,10 +205,11 @@ class RowStore:
 
     @staticmethod
     def holds_complete(path: Path, fingerprint: str) -> int | None:
-        """:meth:`complete` of the store at ``path``, read without opening it for writing (a store that cannot be read
-        as a row store: None; the run that opens it says why)."""
-        try:
-            db = sqlite3.connect(f"file:{quote(Path(path).resolve().as_posix())}?mode=ro", uri=True)
+        """:meth:`complete` of the store at ``path``, read without changing it (a store that cannot be read as a row
+        store: None; the run that opens it says why)."""
+        try:   # read and write, never create: as the last connection it removes the WAL's -wal and -shm files, which
+            # a read-only one leaves beside the store of a run that had nothing to do
+            db = sqlite3.connect(f"file:{quote(Path(path).resolve().as_posix())}?mode=rw", uri=True)
         except sqlite3.Error:
             return None
         try:

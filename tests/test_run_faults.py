@@ -366,3 +366,12 @@ def test_a_data_file_where_the_run_writes_is_refused_before_any_row(tmp_path, mo
         assert not (tmp_path / "out" / "filed" / "rows.sqlite").exists()
     else:
         assert done.returncode == 0, done.stderr
+
+
+def test_a_run_with_nothing_to_do_leaves_no_wal_files(tmp_path, monkeypatch, capsys):
+    """A run into a folder whose rows and outputs are up to date reads its row store and leaves it as it was: no
+    empty ``rows.sqlite-wal`` and ``rows.sqlite-shm`` beside it (a read-only connection left them after exit 0)."""
+    cfg = study(tmp_path, reps=1, ns="[10]")
+    for _ in range(2):
+        assert run_here([cfg, "--jobs", "1", "--no-report", "--out", "out"], tmp_path, monkeypatch, capsys).returncode == 0
+    assert sorted(p.name for p in (tmp_path / "out" / "faults").glob("rows.sqlite*")) == ["rows.sqlite"]

@@ -45,6 +45,18 @@ RUN_COLUMN = re.compile(r"^\s*(?:run|lauf|messung|r)?\s*[_#.]?\s*(\d+)\s*[_\s(\[
                   re.IGNORECASE)
 
 
+#: header names (their :func:`parse_name` key) of a wide export's point-number column (``Point``, ``Target No.``,
+#: ``Target number``, ``Nr.``): laser software numbers its targets beside them; not read when it counts them
+POINT_NUMBER_KEYS = frozenset({
+    "point", "pointno", "pointnr", "pointnumber", "pointindex", "pt", "ptno", "targetno", "targetnr", "targetnumber",
+    "targetindex", "positionno", "positionnr", "positionnumber", "posno", "posnr", "no", "nr", "number", "index",
+    "idx", "#", "punkt", "punktnr", "messpunkt", "zielpunkt", "zielnr", "step"})
+#: units of the environment columns an export writes beside the runs (temperature, pressure, humidity): not lengths
+ENVIRONMENT_UNITS = frozenset({"°c", "°f", "degc", "degf", "k", "pa", "hpa", "kpa", "mbar", "bar", "mmhg", "inhg",
+                               "psi", "torr", "%", "%rh", "% rh", "rh", "% r.h.", "%r.h."})
+#: words in a column's name (its :func:`parse_name` key) that say it holds an environment reading, not a run
+ENVIRONMENT_WORDS = ("temp", "pressure", "humid", "druck", "feuchte")
+
 #: run columns without directions whose odd and even runs differ by more than this Welch t-test on the runs' means
 #: over the targets allows (two-sided p) are two approach directions, not one
 ALTERNATING_P = 1e-3
@@ -190,10 +202,51 @@ def alternating_runs(values: np.ndarray) -> tuple[float, float, float] | None:
     return float(odd.mean() - even.mean()), float(t), float(p)
 
 
-def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None = None, to_um: float = 1e3
-                  ) -> tuple[pd.DataFrame, np.ndarray, bool] | None:
+def _not_a_run(df: pd.DataFrame, k: int, name: str, t: int, d_col: int | None = None) -> str | None:
+    """Why the wide export's column ``k`` (header ``name``, not a run's) is clearly not a run, or None: a point
+    number (:data:`POINT_NUMBER_KEYS`, no unit) whose values count the targets (column ``t``): 1, 2, ..., n or 0, 1,
+    ..., n-1 (either way) over the rows, over the distinct targets with one number per target, or over each
+    direction's rows (a direction column ``d_col`` lists each target twice); or an environment reading (an :data:`ENVIRONMENT_UNITS` unit, or an :data:`ENVIRONMENT_WORDS` name without a
+    length or angle unit). A point-number name over other values is refused: the column may hold something else."""
+    from datasets.io.numbers import NUMBER
+    key, unit = parse_name(name)
+    if unit is not None and unit.replace(" ", "") in {u.replace(" ", "") for u in ENVIRONMENT_UNITS}:
+        return "environment"
+    if unit is None or (unit not in LENGTH_UNITS.values() and unit not in ANGLE_UNITS.values()
+                        and unit not in CONVERT["angle"]):
+        if any(w in key for w in ENVIRONMENT_WORDS):
+            return "environment"
+    if key in POINT_NUMBER_KEYS and unit is None:
+        cells = df.iloc[:, k].fillna("").astype(str).str.strip()
+        targets = df.iloc[:, t].fillna("").astype(str).str.strip()
+        n_targets = targets.nunique()
+        if cells.map(lambda v: NUMBER.fullmatch(v) is not None).all():
+            values = cells.astype(float).to_numpy()
+            pairs = pd.DataFrame({"p": values, "t": targets.to_numpy()})
+            one_to_one = (pairs.groupby("p")["t"].nunique() == 1).all() and (pairs.groupby("t")["p"].nunique() == 1).all()
+            groups = [values, pd.unique(values) if one_to_one else None]
+            if d_col is not None:
+                way = df.iloc[:, d_col].fillna("").astype(str).str.strip().to_numpy()
+                groups += [values[way == w] for w in pd.unique(way)]
+
+            def counts(v) -> bool:
+                return v is not None and v.size > 0 and any(
+                    np.array_equal(v, c) or np.array_equal(v, c[::-1]) for c in (np.arange(v.size), 1 + np.arange(v.size)))
+            if counts(groups[0]) or counts(groups[1]) or (len(groups) > 2 and all(counts(g) for g in groups[2:])):
+                return "point numbers"
+        shown = ", ".join(cells.iloc[:4]) + (", ..." if len(cells) > 4 else "")
+        raise DataFileError(f"{name!r} has a point number's name, but its values ({shown}) do not count the "
+                            f"{n_targets} targets (1, 2, ..., {n_targets} or from 0): delete the column if it holds "
+                            "no deviations, or name it as a run ('Run 3 + (µm)') if it does")
+    return None
+
+
+def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None = None, to_um: float = 1e3,
+                  notes: list | None = None) -> tuple[pd.DataFrame, np.ndarray, bool] | None:
     """A wide export (one column per run) as the long table and whether the file gave the directions; None when
-    ``df`` is not wide. Run columns without any direction are read by ``run_directions`` ('+', '-', or '+-' / '-+':
+    ``df`` is not wide. Columns that are clearly not runs (:func:`_not_a_run`: a point-number column counting the
+    targets, temperature, pressure or humidity) are not read, and ``notes`` names them (``not read: column 0
+    'Point'``); any other column that is not a run's is refused, since it may be a run whose name has a typo. Run columns without any direction are read by ``run_directions`` ('+', '-', or '+-' / '-+':
     odd runs in the first direction, even runs in the other), else as one direction that is not given, unless the
     odd and even runs differ as two directions do (:func:`alternating_runs`): that is refused naming the option.
     ``to_um``: µm per unit of the deviations (for the message)."""
@@ -204,7 +257,7 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
     if t is None or "run" in low or "deviation" in low or "actual" in low:   # a long table (with or without runs)
         return None
     d_col = low.index("direction") if "direction" in low else None
-    runs, seen = {}, {}
+    runs, seen, skipped = {}, {}, []
     for k, c in enumerate(cols):
         if k in (t, d_col):
             continue
@@ -218,14 +271,26 @@ def _wide_to_long(df: pd.DataFrame, name: str, lines, run_directions: str | None
         seen[c] = k
         m = RUN_COLUMN.match(c)
         if not m:
+            try:
+                why = _not_a_run(df, k, c, t, d_col)
+            except DataFileError as exc:
+                raise DataFileError(f"{name}: column {k} {exc}") from None
+            if why is not None:
+                skipped.append(k)
+                continue
             raise DataFileError(f"{name}: column {c!r} is neither the target, a direction nor a run "
                                 "(wide layout: target, run 1 +, run 1 -, ... or target, direction, run 1, run 2, ...; "
                                 "the words read after a run's number: +/-, up/down (dn), ↑/↓, pos/neg, "
                                 "increasing/decreasing as the axis direction, forward/reverse (fwd/rev/bwd, backward, "
-                                "return, hin/rück/zurück, vorwärts/rückwärts) as the run order)")
+                                "return, hin/rück/zurück, vorwärts/rückwärts) as the run order): name it as a run "
+                                "('Run 3 + (µm)') if it holds a run's deviations, else delete the column (a point "
+                                "number counting the targets and temperature, pressure or humidity columns are not "
+                                "read)")
         runs[k] = (int(m.group(1)), m.group(2))
     if not runs:
         return None
+    if skipped and notes is not None:
+        notes.append(f"not read: {', '.join(_column_words(cols, k, df.columns) for k in skipped)}")
     # 'Forward'/'Reverse' ('Hin'/'Rück') are the laser software's run order, not the axis direction (ISO 230-2: ↑ is
     # an approach in the + direction): the forward runs pass the targets in the order the file lists them
     from methods.positioning.data import RUN_ORDER_TAGS, UP, RunOrderNote
@@ -655,7 +720,8 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
                             f"(target, direction, run, deviation or actual), and this file has run columns "
                             f"({run_columns[0]!r}, ...: a wide export, read without --column): drop the option")
     from methods.units import to_mm
-    wide = _wide_to_long(df, str(path), lines, run_directions, to_um=float(to_mm(1.0, deviation_unit)) * 1e3)
+    wide = _wide_to_long(df, str(path), lines, run_directions, to_um=float(to_mm(1.0, deviation_unit)) * 1e3,
+                         notes=column_notes)
     given = True
     if wide is not None:
         df, lines, given = wide

@@ -504,6 +504,46 @@ def _trailer(df, lines, empty, path, skip_rows: int = 0):
                         "after the table, or prefix them with #")
 
 
+#: the first cell of a row of statistics an export writes below the table (``Mean;0.1;...``, ``Max``, ``Sigma``)
+STATISTICS_ROW = re.compile(r"(mean|average|avg|max|maximum|min|minimum|sum|total|std|stdev|stddev|std\.?\s*dev|"
+                            r"standard deviation|sigma|σ|range|median|rms|mittelwert|mittel|summe|spannweite|"
+                            r"standardabweichung)\b.*", re.IGNORECASE)
+
+
+def _second_table_or_totals(df, names: list[str], lines, path, skip_rows: int) -> None:
+    """Refuse, in its own terms, a row that repeats the header (a second table: another axis or test written below
+    the first, usually after a blank line) or a row of statistics (``Mean;0.1;...``: a totals row), each a complete
+    row the number check would only call 'not a finite number'; the message says what to do."""
+    named = [j for j, n in enumerate(names) if n.strip()]
+    if not len(df) or not named:
+        return
+
+    def column(j):
+        return df.iloc[:, j].fillna("").astype(str).str.strip()
+    first = column(0)
+    header = (column(named[0]) == names[named[0]].strip()).to_numpy().copy()
+    for j in named[1:] if header.any() else ():
+        header &= (column(j) == names[j].strip()).to_numpy()
+    stats = first.str.fullmatch(STATISTICS_ROW.pattern, case=False).to_numpy(dtype=bool)
+    hit = np.flatnonzero(header | stats)
+    if not hit.size:
+        return
+    from datasets.io.textfile import read_lines
+    k = int(hit[0])
+    text = read_lines(path, "", skip_rows)
+    quoted = text[lines[k] - 1].strip()
+    quoted = quoted if len(quoted) <= 60 else quoted[:57] + "..."
+    if header[k]:
+        blank = k > 0 and any(not text[i].strip() for i in range(lines[k - 1], lines[k] - 1))
+        raise DataFileError(f"{path} line {lines[k]}: {quoted!r} repeats the header: a second table"
+                            f"{' after a blank line' if blank else ''} (lines {lines[k]}-{lines[-1]}; another axis or "
+                            "test?); fitbench reads one table per file: put each table in a file of its own, or delete "
+                            f"the lines from {lines[k]} on (or prefix them with #)")
+    raise DataFileError(f"{path} line {lines[k]}: {quoted!r} is a row of statistics ({first.iloc[k]!r}), not a "
+                        "target's row: fitbench computes the figures from the runs; delete the line (and any others "
+                        "below the table), or prefix it with #")
+
+
 def _trailing_separators(df, lines, path):
     """The table without the empty last column a separator after the last field of every line, header included,
     gives (Excel's ``;`` at the end of each line when the sheet has an empty column to the right; ``; `` with a
@@ -696,6 +736,7 @@ def _read_positioning(path, *, unit, deviation_unit, skip_rows, with_units, run_
         df, lines = _trailer(df, lines, empty, path, skip_rows)
     lines = np.array(lines)
     names = _header_names(df.columns)
+    _second_table_or_totals(df, names, lines, path, skip_rows)
     roles, column_notes = _assign_roles(names, path, columns)
     # columns named for a role that --column gave another column: not read
     unread = [df.columns[k] for k, n in enumerate(names) if k not in roles and _role_name(n) is not None]

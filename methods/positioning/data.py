@@ -20,6 +20,7 @@ the travel and 0.1 mm, or all below 10 nm) give a warning naming the likely unit
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -32,8 +33,10 @@ pd = lazy_module("pandas")
 
 
 MAX_ABS_DEVIATION_MM = 1e6     # larger deviations are not measurements (and overflow the statistics)
-UP = {"+", "up", "u", "positive", "pos", "increasing", "inc", "↑"}
-DOWN = {"-", "down", "dn", "d", "negative", "neg", "decreasing", "dec", "↓"}
+#: the words read as the + (↑) and - (↓) approach directions, in the order a message lists them
+UP_WORDS = ("+", "up", "u", "pos", "positive", "inc", "increasing", "↑")
+DOWN_WORDS = ("-", "down", "dn", "d", "neg", "negative", "dec", "decreasing", "↓")
+UP, DOWN = set(UP_WORDS), set(DOWN_WORDS)
 
 
 #: column words of wide laser exports that name the run order (the first and second run of a pair), not the axis
@@ -94,7 +97,12 @@ def _direction(value, lineno, name):
     if v in RUN_ORDER_TAGS:   # the laser software's run order (docs/positioning.md), which way the axis moved unknown
         raise InvalidInputError(f"{name} line {lineno}: direction {value!r} names the run order, not the axis direction: "
                                 "write + or - (the direction the axis moved to the targets in that run)")
-    raise InvalidInputError(f"{name} line {lineno}: direction {value!r} is not one of +, -, up, down")
+    numbered = (" (a number does not say which way the axis moved: the software that wrote the file says which of its "
+                "numbers is the + direction)") if re.fullmatch(r"[+-]?\d+", v) else ""
+    raise InvalidInputError(f"{name} line {lineno}: direction {value!r} is not a direction fitbench reads{numbered}: "
+                            f"write + for the runs that approached the targets in the + direction (also read: "
+                            f"{', '.join(UP_WORDS[1:])}) and - for those in the - direction "
+                            f"({', '.join(DOWN_WORDS[1:])}); case is ignored")
 
 
 def from_frame(df: pd.DataFrame, name: str = "data", lines=None, *, unit: str = "mm",

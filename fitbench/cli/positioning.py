@@ -32,7 +32,8 @@ def add_parser(sub):
     g.add_argument("--mpe", metavar="MPE", help="the instrument's maximum permissible error (rectangular, u = MPE/√3): a "
                    "length with its unit (2um, 0.002mm); a bare number is mm (unlike --tolerance, in µm)")
     pp.add_argument("--standard", choices=("iso230-2:2014", "iso230-2:1988", "vdi3441"), default="iso230-2:2014")
-    add_tolerance_option(pp, "A, E, R, B, M, A_up, ...")
+    add_tolerance_option(pp, "A, E, R, B, M, the directional A_up, A_down, E_up, E_down, R_up, R_down, and B_mean, "
+                             "judged by its magnitude |B_mean|")
     add_report_option(pp)
     add_test_identity_options(pp)
     pp.add_argument("--material-temperature", metavar="DEG_C",
@@ -117,6 +118,10 @@ def model_unavailable(data, degree: int, instrument: float | None) -> tuple[str,
             return why, "the instrument's uncertainty (--mpe or --instrument-u)"
     return None
 
+
+#: --tolerance figures that carry a sign (B_mean, the mean reversal value): judged by their magnitude, which the
+#: verdict line and the JSON check (``judged``) name |B_mean|
+SIGNED_FIGURES = ("B_mean",)
 
 #: --fanuc-increment: the FANUC systems' detection unit / least input increment (metric IS-B / IS-C, inch IS-B / IS-C)
 FANUC_INCREMENTS = {("0.001", "mm"): 0.001, ("0.0001", "mm"): 0.0001, ("0.0001", "in"): 0.00254,
@@ -475,15 +480,19 @@ def run(args) -> int:
         raise InvalidInputError(f"--tolerance {missing[0]}: this test has no figure {missing[0]} "
                                 f"({res.figures.get('directions', 'bidirectional')}, {args.standard})")
     check = verdict({n: abs(res.figures[n]) for n in tolerances}, tolerances)
+    for c in (check or {}).get("checks", ()):
+        if c["figure"] in SIGNED_FIGURES:       # judged by its magnitude: said so, the figure table keeps the sign
+            c["judged"] = f"|{c['figure']}|"
+    shown = check and dict(check, checks=[dict(c, figure=c.get("judged", c["figure"])) for c in check["checks"]])
     warn_bare_tolerances(tolerances, {n: abs(res.figures[n]) for n in tolerances})
     said = cli_options.said_warnings()   # printed before the figures, written into the report and the JSON
     if plot_path:
         title = str(args.file) + (f"; corrected to 20 °C from {temperature:g} °C, {alpha:g} µm/(m·K)" if thermal else "")
-        title += verdict_title(check)
+        title += verdict_title(shown)
         plot(res, plot_path, title=title, data=data, save=save_figure)
     lines = [header_line("positioning", args.unit, deviation_unit=args.deviation_unit)]
     lines += [f"note: {n}" for n in notes]
-    lines += ([thermal_text] if thermal else []) + [text(res, degree=args.degree)] + verdict_lines(check)
+    lines += ([thermal_text] if thermal else []) + [text(res, degree=args.degree)] + verdict_lines(shown)
     if report_path:
         write_report(report_path, f"ISO 230-2 positioning test{': ' + args.machine if args.machine else ''}",
                      [f"file         {args.file}", f"date         {args.date or '-'}", *lines],

@@ -69,10 +69,13 @@ def run_python(*args, cwd=REPO, path_first=(), repo: Path = REPO, timeout=600, p
 
 
 def default_sigint() -> None:
-    """In a child before it runs (``preexec_fn``): SIGINT's default action, as in a terminal. A test run in the
-    background of a shell without job control inherits SIGINT ignored, and a Python started so never sees a Ctrl-C."""
+    """In a child before it runs (``preexec_fn``): SIGINT's and SIGHUP's default actions, as in a terminal. A test run
+    in the background of a shell without job control inherits SIGINT ignored, and one run under ``nohup`` SIGHUP
+    ignored: a Python started so never sees a Ctrl-C, and a run keeps SIGHUP ignored (as it should under nohup)."""
     import signal
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+    if hasattr(signal, "SIGHUP"):
+        signal.signal(signal.SIGHUP, signal.SIG_DFL)
 
 
 def stored_rows(db: Path) -> int:

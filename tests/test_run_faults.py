@@ -16,7 +16,7 @@ from types import SimpleNamespace
 import pandas as pd
 import pytest
 
-from conftest import stored_rows, subprocess_env, while_storing_rows
+from conftest import default_sigint, stored_rows, subprocess_env, while_storing_rows
 from results_csv import non_timing
 
 pytestmark = pytest.mark.slow  # kills, interrupts and restarts whole study runs
@@ -65,7 +65,8 @@ def run_here(args, cwd, monkeypatch, capsys):
 
 def start(args, cwd):
     return subprocess.Popen([sys.executable, "-m", "experiments.run", *map(str, args)], cwd=cwd, env=subprocess_env(),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=default_sigint)
 
 
 def children(pid: int) -> set[int]:
